@@ -1,0 +1,229 @@
+//! Structure-of-arrays tables. Each table is a set of equally long columns; row `i` of every
+//! column describes item `i`. Systems take the columns they need as slices, so their hot loops
+//! run over contiguous memory.
+
+use crate::{LobeSampled, Rgb, VolumeStack};
+use glam::Vec3;
+
+/// Marks a miss in [`Hits::prim`].
+pub const NO_HIT: u32 = u32::MAX;
+
+/// Declares an SoA table `$name` with its columns and a row type `$row` holding one item.
+macro_rules! soa_table {
+    (
+        $(#[$meta:meta])* $name:ident, $(#[$rmeta:meta])* $row:ident {
+            $( $(#[$fmeta:meta])* $field:ident : $ty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug, Default)]
+        pub struct $name {
+            $( $(#[$fmeta])* pub $field: Vec<$ty>, )*
+        }
+
+        $(#[$rmeta])*
+        #[derive(Clone, Debug, Default)]
+        pub struct $row {
+            $( $(#[$fmeta])* pub $field: $ty, )*
+        }
+
+        impl $name {
+            /// An empty table with room for `n` rows in every column.
+            pub fn with_capacity(n: usize) -> Self {
+                Self { $( $field: Vec::with_capacity(n), )* }
+            }
+            /// Number of rows.
+            pub fn len(&self) -> usize {
+                self.first_len()
+            }
+            /// True when the table has no rows.
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
+            }
+            /// Removes every row, keeping the columns' allocations.
+            pub fn clear(&mut self) {
+                $( self.$field.clear(); )*
+            }
+            /// Appends one row.
+            pub fn push(&mut self, row: $row) {
+                $( self.$field.push(row.$field); )*
+            }
+            /// Copies row `i` out.
+            pub fn row(&self, i: usize) -> $row {
+                $row { $( $field: self.$field[i].clone(), )* }
+            }
+            /// Appends a copy of row `i` of `other`.
+            pub fn push_from(&mut self, other: &Self, i: usize) {
+                $( self.$field.push(other.$field[i].clone()); )*
+            }
+            /// Debug check that every column has the same length.
+            pub fn is_consistent(&self) -> bool {
+                let n = self.len();
+                true $( && self.$field.len() == n )*
+            }
+            fn first_len(&self) -> usize {
+                soa_table!(@first self $( $field )*)
+            }
+        }
+    };
+    (@first $self:ident $first:ident $( $rest:ident )*) => { $self.$first.len() };
+}
+
+soa_table! {
+    /// A batch of rays in flight (camera rays or the next bounce of paths).
+    Rays,
+    /// One ray of a [`Rays`] table.
+    RayRow {
+        /// World-space origin.
+        origin: Vec3,
+        /// Unit direction.
+        direction: Vec3,
+        /// Smallest accepted hit distance.
+        tmin: f32,
+        /// Largest accepted hit distance (`f32::INFINITY` for unbounded rays).
+        tmax: f32,
+        /// Index of the path (camera sample) this ray belongs to, in the batch's [`Paths`].
+        path: u32,
+        /// Path throughput carried by this ray (includes Russian-roulette `1/q` factors).
+        throughput: Rgb,
+        /// Lobe that produced the ray ([`LobeSampled::NONE`] for camera rays).
+        lobe: LobeSampled,
+        /// Scattering bounces so far (camera rays: 0). Pass-throughs do not count.
+        depth: u16,
+        /// Pass-throughs (index-matched and false boundaries) so far; bounded separately.
+        passes: u16,
+        /// Solid-angle pdf of the direction sampling that produced the ray (for MIS when it
+        /// hits an emitter); 0 for specular lobes and camera rays.
+        pdf: f32,
+        /// Product of squared relative IORs crossed (for Russian roulette, as pbrt-v4's
+        /// `etaScale`).
+        eta_scale: f32,
+        /// Next sampler dimension of this path.
+        dimension: u32,
+        /// Index of the shading point this ray left from, in the group that produced it
+        /// (RIS `shadingCtxIndex`); `u32::MAX` for camera rays.
+        shading_ctx_index: u32,
+        /// Volumes the ray travels in.
+        volume_stack: VolumeStack,
+    }
+}
+
+soa_table! {
+    /// The state of every camera sample (path) of a batch.
+    Paths,
+    /// One path of a [`Paths`] table.
+    PathRow {
+        /// Pixel index `y * width + x` in the film.
+        pixel: u32,
+        /// Sample index within the pixel (the Sobol index).
+        sample: u32,
+        /// Radiance gathered so far; splatted when the path ends.
+        radiance: Rgb,
+        /// First-hit albedo (AOV).
+        albedo: Rgb,
+        /// First-hit shading normal (AOV).
+        normal: Vec3,
+        /// First-hit distance from the camera (AOV); infinity on a miss.
+        depth: f32,
+    }
+}
+
+soa_table! {
+    /// Nearest-hit results, one row per ray of the [`Rays`] table they answer.
+    Hits,
+    /// One row of a [`Hits`] table.
+    HitRow {
+        /// Hit distance along the ray.
+        t: f32,
+        /// Primitive index in the compiled scene, or [`NO_HIT`].
+        prim: u32,
+        /// First barycentric (triangles) or surface parameter (spheres).
+        b1: f32,
+        /// Second barycentric (triangles) or surface parameter (spheres).
+        b2: f32,
+    }
+}
+
+soa_table! {
+    /// Shading points (RIS shading-context builtins), grouped so that points of one shading
+    /// context are contiguous.
+    ShadingPoints,
+    /// One row of a [`ShadingPoints`] table.
+    ShadingPointRow {
+        /// Position `P`.
+        p: Vec3,
+        /// Geometric normal `Ng` (outward for closed shapes).
+        ng: Vec3,
+        /// Shading normal `Nn`, on the same side as `ng`.
+        nn: Vec3,
+        /// Unit vector towards the viewer `Vn` (`-ray direction`).
+        vn: Vec3,
+        /// Length of the incident ray segment `VLen`.
+        vlen: f32,
+        /// Surface (or volume) parameter `u`.
+        u: f32,
+        /// Surface (or volume) parameter `v`.
+        v: f32,
+        /// Volume parameter `w` (0 on surfaces).
+        w: f32,
+        /// Transmission over the incident segment, written by the volume integrator that
+        /// returned this point; the global integrator multiplies it into the path.
+        transmission: Rgb,
+        /// Index of the ray (in the table passed to `nearest_hits`) that produced the point.
+        ray_id: u32,
+        /// Material (Bxdf factory) index.
+        material: u32,
+        /// Shape index (`u32::MAX` for points inside a volume).
+        shape: u32,
+        /// The ray arrived against `ng` (from outside a closed shape).
+        front_face: bool,
+    }
+}
+
+soa_table! {
+    /// Shadow (transmission) rays: straight, never bending segments towards light samples.
+    ShadowRays,
+    /// One row of a [`ShadowRays`] table.
+    ShadowRayRow {
+        /// Origin (already offset from the surface).
+        origin: Vec3,
+        /// Unit direction.
+        direction: Vec3,
+        /// Distance to the light sample (slightly shortened); infinity for distant lights.
+        tmax: f32,
+        /// Unoccluded contribution `throughput * f * Le * mis / pdf`.
+        contribution: Rgb,
+        /// Path the contribution is added to.
+        path: u32,
+        /// Volumes the shadow ray starts in.
+        volume_stack: VolumeStack,
+    }
+}
+
+impl Rays {
+    /// Asserts the table invariants in debug builds.
+    pub fn debug_check(&self) {
+        debug_assert!(self.is_consistent());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_and_row_round_trip() {
+        let mut h = Hits::default();
+        h.push(HitRow {
+            t: 2.0,
+            prim: 3,
+            b1: 0.25,
+            b2: 0.5,
+        });
+        assert_eq!(h.len(), 1);
+        assert!(h.is_consistent());
+        assert_eq!(h.row(0).prim, 3);
+        h.clear();
+        assert!(h.is_empty());
+    }
+}

@@ -1,0 +1,209 @@
+//! The per-ray volume stack: which volumes a ray is inside.
+//!
+//! The renderer, not the volume integrators, keeps this bookkeeping (the seed: "the renderer
+//! has automatically kept track of the fact that a volume has been entered, but has not yet
+//! been exited"). A ray that crosses a surface with the transmit bit set *enters* the surface's
+//! interior when it crosses the front face and *leaves* it when it crosses the back face;
+//! reflected rays keep the stack they had.
+//!
+//! Nested dielectrics follow priorities (Schmidt and Budge, "Simple Nested Dielectrics in Ray
+//! Traced Images", JGT 2002): the *innermost* volume is the one of highest priority, the most
+//! recently entered among equals. A boundary whose priority is lower than the innermost
+//! volume's is a *false boundary*: the ray crosses it without refraction or shading (the stack
+//! still records the crossing so that leaving later is matched).
+
+use smallvec::SmallVec;
+
+/// One volume a ray is inside: the interior of `shape`, owned by `material`'s factory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct VolumeEntry {
+    /// Index of the material (Bxdf factory) whose `begin_interior` creates this volume's
+    /// integrator.
+    pub material: u32,
+    /// Index of the shape whose closed surface bounds the volume.
+    pub shape: u32,
+    /// Priority of the material; higher wins where volumes overlap.
+    pub priority: i32,
+}
+
+/// What happened to a stack when a ray crossed a boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StackEvent {
+    /// The ray entered the interior of the crossed shape.
+    Entered,
+    /// The ray left the interior of the crossed shape.
+    Exited,
+    /// The ray crossed a back face of a shape it was not inside: the boundary is not closed,
+    /// or the ray started inside without the renderer knowing. Nothing was removed.
+    UnmatchedExit,
+}
+
+/// The volumes a ray is inside, in the order they were entered. Stored inline for up to four
+/// nested volumes (no heap allocation on the common path).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct VolumeStack {
+    entries: SmallVec<[VolumeEntry; 4]>,
+}
+
+impl VolumeStack {
+    /// An empty stack (the ray is in no volume: vacuum).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// True when the ray is in no volume.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Number of volumes the ray is inside.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// The volumes, oldest first.
+    pub fn entries(&self) -> &[VolumeEntry] {
+        &self.entries
+    }
+
+    /// The innermost volume: highest priority, most recently entered among equals.
+    pub fn innermost(&self) -> Option<VolumeEntry> {
+        self.innermost_index().map(|i| self.entries[i])
+    }
+
+    /// True when a boundary of `priority` is a false boundary for a ray with this stack: the
+    /// ray is inside a volume of strictly higher priority, so the boundary neither refracts nor
+    /// shades. A boundary of a shape the ray is inside is judged against the *other* volumes,
+    /// so that leaving the innermost volume is never false.
+    pub fn is_false_boundary(&self, shape: u32, priority: i32) -> bool {
+        self.entries
+            .iter()
+            .any(|e| e.shape != shape && e.priority > priority)
+    }
+
+    /// True when the ray is inside the interior of `shape`.
+    pub fn contains_shape(&self, shape: u32) -> bool {
+        self.entries.iter().any(|e| e.shape == shape)
+    }
+
+    /// Records that the ray entered `entry`'s volume.
+    pub fn enter(&mut self, entry: VolumeEntry) -> StackEvent {
+        self.entries.push(entry);
+        StackEvent::Entered
+    }
+
+    /// Records that the ray left the interior of `shape` (the most recent entry of it).
+    pub fn exit(&mut self, shape: u32) -> StackEvent {
+        match self.entries.iter().rposition(|e| e.shape == shape) {
+            Some(i) => {
+                self.entries.remove(i);
+                StackEvent::Exited
+            }
+            None => StackEvent::UnmatchedExit,
+        }
+    }
+
+    /// Applies a transmit crossing of `entry.shape`'s surface: entering on a front face,
+    /// leaving on a back face.
+    pub fn cross(&mut self, entry: VolumeEntry, front_face: bool) -> StackEvent {
+        if front_face {
+            self.enter(entry)
+        } else {
+            self.exit(entry.shape)
+        }
+    }
+
+    /// Index (into [`entries`](Self::entries)) of the innermost volume.
+    pub fn innermost_index(&self) -> Option<usize> {
+        let mut best: Option<usize> = None;
+        for (i, e) in self.entries.iter().enumerate() {
+            // `>=` so that a later entry of equal priority wins.
+            if best.is_none_or(|b| e.priority >= self.entries[b].priority) {
+                best = Some(i);
+            }
+        }
+        best
+    }
+
+    /// The volumes other than the innermost, oldest first (RIS `GetOverlappingVolumes`).
+    pub fn overlapping(&self) -> impl Iterator<Item = VolumeEntry> + '_ {
+        let inner = self.innermost_index();
+        self.entries
+            .iter()
+            .enumerate()
+            .filter(move |(i, _)| Some(*i) != inner)
+            .map(|(_, e)| *e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(material: u32, shape: u32, priority: i32) -> VolumeEntry {
+        VolumeEntry {
+            material,
+            shape,
+            priority,
+        }
+    }
+
+    #[test]
+    fn enter_then_exit_returns_to_empty() {
+        let mut s = VolumeStack::new();
+        assert_eq!(s.cross(e(1, 7, 0), true), StackEvent::Entered);
+        assert_eq!(s.innermost(), Some(e(1, 7, 0)));
+        assert_eq!(s.cross(e(1, 7, 0), false), StackEvent::Exited);
+        assert!(s.is_empty());
+    }
+
+    #[test]
+    fn exit_without_enter_is_unmatched_and_harmless() {
+        let mut s = VolumeStack::new();
+        s.enter(e(1, 1, 0));
+        assert_eq!(s.exit(9), StackEvent::UnmatchedExit);
+        assert_eq!(s.len(), 1);
+    }
+
+    #[test]
+    fn innermost_is_highest_priority_then_latest() {
+        let mut s = VolumeStack::new();
+        s.enter(e(1, 1, 5)); // glass, high priority
+        s.enter(e(2, 2, 1)); // liquid, lower priority, entered later
+        assert_eq!(s.innermost().map(|v| v.shape), Some(1));
+        s.enter(e(3, 3, 5)); // equal priority, later: wins
+        assert_eq!(s.innermost().map(|v| v.shape), Some(3));
+    }
+
+    #[test]
+    fn lower_priority_boundary_inside_higher_volume_is_false() {
+        let mut s = VolumeStack::new();
+        s.enter(e(1, 1, 2)); // inside glass (priority 2)
+        assert!(s.is_false_boundary(2, 1)); // liquid surface (priority 1) inside the glass
+        assert!(!s.is_false_boundary(1, 2)); // the glass's own boundary: leaving is real
+        assert!(!s.is_false_boundary(3, 2)); // equal priority: real boundary
+    }
+
+    #[test]
+    fn overlapping_excludes_exactly_the_innermost() {
+        let mut s = VolumeStack::new();
+        s.enter(e(1, 1, 0));
+        s.enter(e(2, 2, 0));
+        s.enter(e(3, 3, 0));
+        let o: Vec<u32> = s.overlapping().map(|v| v.shape).collect();
+        assert_eq!(o, vec![1, 2]);
+    }
+
+    #[test]
+    fn coincident_surfaces_enter_and_leave_in_any_order() {
+        // Two shapes sharing a boundary: the ray enters both at one point and can leave them
+        // in either order without corrupting the stack.
+        let mut s = VolumeStack::new();
+        s.cross(e(1, 1, 0), true);
+        s.cross(e(2, 2, 0), true);
+        s.cross(e(1, 1, 0), false);
+        assert_eq!(s.entries(), &[e(2, 2, 0)]);
+        s.cross(e(2, 2, 0), false);
+        assert!(s.is_empty());
+    }
+}

@@ -1,0 +1,2 @@
+//! The `risotto` driver.
+fn main() {}

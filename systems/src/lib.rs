@@ -1,0 +1,1 @@
+//! risotto systems.
