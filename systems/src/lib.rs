@@ -1,1 +1,7 @@
-//! risotto systems.
+//! risotto's systems: plain functions over table columns. Each takes the slices it reads and
+//! the slices it writes, knows nothing of the scene world, the scheduler or the global
+//! integrator, and can be benchmarked alone.
+
+pub mod camera;
+pub mod film;
+pub mod sampler;

@@ -1,0 +1,132 @@
+//! The film and the splat system.
+//!
+//! Per pixel the film keeps the sum of sample radiance, the sum of squares and the sample
+//! count, so the mean and the variance of the mean can be reported. Non-finite samples (NaN,
+//! infinity) are never splatted: they are counted and dropped (the sample still counts as
+//! taken, with zero radiance, so the estimator stays unbiased for the finite ones).
+
+use risotto_components::Rgb;
+
+/// Accumulated samples for a rectangle of pixels (a whole image or one tile).
+#[derive(Clone, Debug)]
+pub struct Film {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Sum of sample radiance per pixel.
+    pub sum: Vec<Rgb>,
+    /// Sum of squared sample radiance per pixel (per channel).
+    pub sum_sq: Vec<Rgb>,
+    /// Number of samples per pixel.
+    pub count: Vec<u32>,
+    /// Samples dropped because they were not finite.
+    pub nan_dropped: u64,
+}
+
+impl Film {
+    /// An empty film.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = (width as usize) * (height as usize);
+        Film {
+            width,
+            height,
+            sum: vec![Rgb::BLACK; n],
+            sum_sq: vec![Rgb::BLACK; n],
+            count: vec![0; n],
+            nan_dropped: 0,
+        }
+    }
+
+    /// Mean radiance of pixel `i`.
+    pub fn mean(&self, i: usize) -> Rgb {
+        if self.count[i] == 0 {
+            Rgb::BLACK
+        } else {
+            self.sum[i] / self.count[i] as f32
+        }
+    }
+
+    /// Variance of the mean estimate of pixel `i` (sample variance / n), per channel.
+    pub fn variance_of_mean(&self, i: usize) -> Rgb {
+        let n = self.count[i] as f64;
+        if n < 2.0 {
+            return Rgb::BLACK;
+        }
+        let var = |s: f32, s2: f32| -> f32 {
+            let (s, s2) = (s as f64, s2 as f64);
+            let v = (s2 - s * s / n) / (n - 1.0);
+            (v.max(0.0) / n) as f32
+        };
+        let (s, s2) = (self.sum[i], self.sum_sq[i]);
+        Rgb::new(var(s.r, s2.r), var(s.g, s2.g), var(s.b, s2.b))
+    }
+
+    /// Adds another film of the same size (used to gather tiles).
+    pub fn add_tile(&mut self, tile: &Film, x0: u32, y0: u32) {
+        for ty in 0..tile.height {
+            for tx in 0..tile.width {
+                let src = (ty * tile.width + tx) as usize;
+                let dst = ((y0 + ty) * self.width + (x0 + tx)) as usize;
+                self.sum[dst] += tile.sum[src];
+                self.sum_sq[dst] += tile.sum_sq[src];
+                self.count[dst] += tile.count[src];
+            }
+        }
+        self.nan_dropped += tile.nan_dropped;
+    }
+}
+
+/// Splats finished samples: `pixel[i]` (an index into `film`) receives `radiance[i]`.
+/// Returns how many samples were dropped as non-finite.
+pub fn splat(film: &mut Film, pixel: &[u32], radiance: &[Rgb]) -> u64 {
+    let mut dropped = 0;
+    for (&p, &l) in pixel.iter().zip(radiance) {
+        let p = p as usize;
+        film.count[p] += 1;
+        if l.is_finite() {
+            film.sum[p] += l;
+            film.sum_sq[p] += l * l;
+        } else {
+            dropped += 1;
+        }
+    }
+    film.nan_dropped += dropped;
+    dropped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_and_variance_match_direct_computation() {
+        let mut f = Film::new(2, 1);
+        let vals = [1.0f32, 2.0, 4.0, 7.0];
+        let rad: Vec<Rgb> = vals.iter().map(|&v| Rgb::splat(v)).collect();
+        splat(&mut f, &[1, 1, 1, 1], &rad);
+        assert_eq!(f.mean(1), Rgb::splat(3.5));
+        // sample variance of {1,2,4,7} = 7, variance of the mean = 7/4.
+        assert!((f.variance_of_mean(1).r - 1.75).abs() < 1e-6);
+        assert_eq!(f.count[0], 0);
+    }
+
+    #[test]
+    fn non_finite_samples_are_counted_not_splatted() {
+        let mut f = Film::new(1, 1);
+        let d = splat(
+            &mut f,
+            &[0, 0, 0],
+            &[
+                Rgb::splat(1.0),
+                Rgb::new(f32::NAN, 0.0, 0.0),
+                Rgb::splat(f32::INFINITY),
+            ],
+        );
+        assert_eq!(d, 2);
+        assert_eq!(f.nan_dropped, 2);
+        assert!(f.sum[0].is_finite());
+        assert_eq!(f.sum[0], Rgb::splat(1.0));
+        assert_eq!(f.count[0], 3);
+    }
+}
