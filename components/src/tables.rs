@@ -103,6 +103,10 @@ soa_table! {
         /// Index of the shading point this ray left from, in the group that produced it
         /// (RIS `shadingCtxIndex`); `u32::MAX` for camera rays.
         shading_ctx_index: u32,
+        /// Position of the last scattering vertex (the camera for camera rays). Pass-throughs
+        /// keep it, so the light pdf of an emitter hit after them is measured from the vertex
+        /// that sampled the direction (for MIS).
+        prev_p: Vec3,
         /// Volumes the ray travels in.
         volume_stack: VolumeStack,
     }
@@ -177,6 +181,10 @@ soa_table! {
         shape: u32,
         /// The ray arrived against `ng` (from outside a closed shape).
         front_face: bool,
+        /// Index of refraction of the medium outside this shape's interior at the point (the
+        /// renderer derives it from the ray's volume stack; 1 in vacuum). Dielectrics refract
+        /// with `eta = ior_inside / ior_outside`, so liquid in glass gets the right ratio.
+        ior_outside: f32,
     }
 }
 

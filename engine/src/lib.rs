@@ -1,1 +1,9 @@
-//! risotto engine.
+//! risotto's engine: the scene world, scene loading and compilation, the plug-in traits
+//! (Bxdf factories, Bxdfs, volume integrators), the scheduler and global integrators, output.
+
+pub mod builtin;
+pub mod context;
+pub mod integrator;
+pub mod plugin;
+pub mod scene;
+pub mod transmission;

@@ -4,4 +4,6 @@
 
 pub mod camera;
 pub mod film;
+pub mod lights;
+pub mod partition;
 pub mod sampler;

@@ -1,0 +1,469 @@
+//! Built-in materials (factories), their Bxdf closures, the phase function and the built-in
+//! interiors (`null`, `beer`).
+//!
+//! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`, `interface`.
+//! Any of them may carry an `interior = { type = "null" | "beer", ... }` table that makes the
+//! shape's inside a volume with that integrator (see `docs/scene-format.md`).
+
+use crate::context::IntegratorContext;
+use crate::plugin::*;
+use bumpalo::Bump;
+use glam::Vec3;
+use risotto_components::{LobeSampled, Rays, Rgb};
+use risotto_systems::bxdf;
+use risotto_systems::sampler::PathSampler;
+
+/// Lambertian reflection (one-sided: black seen from behind).
+#[derive(Clone, Copy, Debug)]
+pub struct DiffuseBxdf {
+    /// Reflectance (albedo) per channel, in [0, 1].
+    pub reflectance: Rgb,
+}
+
+/// Local direction `w` relative to a frame whose normal is the point's shading normal, flipped
+/// to the side the viewer is on only for two-sided lobes (callers decide).
+#[inline]
+fn frame(n: Vec3) -> bxdf::Frame {
+    bxdf::Frame::from_normal(n)
+}
+
+impl Bxdf for DiffuseBxdf {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::DIFFUSE
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let (nn, vn) = (ctx.nn(), ctx.vn());
+        for i in 0..ctx.num_points() {
+            let u = samplers[i].next_2d();
+            let f = frame(nn[i]);
+            if let Some(s) = bxdf::diffuse_sample(self.reflectance, f.to_local(vn[i]), u) {
+                out.wi[i] = f.to_world(s.wi);
+                out.weight[i] = s.weight;
+                out.pdf[i] = s.pdf;
+                out.lobe[i] = s.lobe;
+                out.eta[i] = 1.0;
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        let (nn, vn) = (ctx.nn(), ctx.vn());
+        for i in 0..ctx.num_points() {
+            let f = frame(nn[i]);
+            let (v, p) = bxdf::diffuse_eval(self.reflectance, f.to_local(vn[i]), f.to_local(wi[i]));
+            value[i] = v;
+            pdf[i] = p;
+        }
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(self.reflectance);
+    }
+}
+
+/// Smooth dielectric boundary: Fresnel chooses reflection or refraction.
+#[derive(Clone, Copy, Debug)]
+pub struct DielectricBxdf {
+    /// Index of refraction of the interior.
+    pub ior: f32,
+    /// Colour multiplying refracted light.
+    pub tint: Rgb,
+}
+
+impl Bxdf for DielectricBxdf {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::TRANSMIT | LobeSampled::SPECULAR
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let (ng, vn, ior_out) = (ctx.ng(), ctx.vn(), ctx.ior_outside());
+        for i in 0..ctx.num_points() {
+            let u = samplers[i].next_2d();
+            // The frame follows the outward geometric normal so `eta` keeps its meaning
+            // (inside / outside) whichever side the ray arrives from.
+            let f = frame(ng[i]);
+            let eta = self.ior / ior_out[i].max(1e-6);
+            if let Some(s) = bxdf::dielectric_sample(eta, self.tint, f.to_local(vn[i]), u) {
+                out.wi[i] = f.to_world(s.wi);
+                out.weight[i] = s.weight;
+                out.pdf[i] = s.pdf;
+                out.lobe[i] = s.lobe;
+                out.eta[i] = s.eta;
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        _ctx: &ShadingContext<'_>,
+        _wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        value.fill(Rgb::BLACK);
+        pdf.fill(0.0);
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(Rgb::WHITE);
+    }
+}
+
+/// Perfect specular reflection weighted by a reflectance.
+#[derive(Clone, Copy, Debug)]
+pub struct MirrorBxdf {
+    /// Reflectance per channel.
+    pub reflectance: Rgb,
+}
+
+impl Bxdf for MirrorBxdf {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::SPECULAR
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        _samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let (nn, vn) = (ctx.nn(), ctx.vn());
+        for i in 0..ctx.num_points() {
+            // Two-sided mirror: reflect about the normal facing the viewer.
+            let n = if nn[i].dot(vn[i]) >= 0.0 { nn[i] } else { -nn[i] };
+            let f = frame(n);
+            if let Some(s) = bxdf::mirror_sample(self.reflectance, f.to_local(vn[i])) {
+                out.wi[i] = f.to_world(s.wi);
+                out.weight[i] = s.weight;
+                out.pdf[i] = s.pdf;
+                out.lobe[i] = s.lobe;
+                out.eta[i] = 1.0;
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        _ctx: &ShadingContext<'_>,
+        _wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        value.fill(Rgb::BLACK);
+        pdf.fill(0.0);
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(self.reflectance);
+    }
+}
+
+/// Henyey-Greenstein phase function as a Bxdf for volume points (`vn` = towards where the ray
+/// came from). `albedo` (single-scattering albedo) weights every sample.
+#[derive(Clone, Copy, Debug)]
+pub struct HenyeyGreensteinPhase {
+    /// Mean cosine, in (-1, 1).
+    pub g: f32,
+    /// Single-scattering albedo `sigma_s / sigma_t`.
+    pub albedo: Rgb,
+}
+
+impl Bxdf for HenyeyGreensteinPhase {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::SCATTER | LobeSampled::DIFFUSE
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let vn = ctx.vn();
+        for i in 0..ctx.num_points() {
+            let u = samplers[i].next_2d();
+            let (wi, pdf) = bxdf::hg_sample(self.g, vn[i], u);
+            if pdf > 0.0 {
+                out.wi[i] = wi;
+                // p / pdf = 1 for exact sampling.
+                out.weight[i] = self.albedo;
+                out.pdf[i] = pdf;
+                out.lobe[i] = LobeSampled::SCATTER | LobeSampled::DIFFUSE;
+                out.eta[i] = 1.0;
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        let vn = ctx.vn();
+        for i in 0..ctx.num_points() {
+            let p = bxdf::hg_eval(self.g, vn[i], wi[i]);
+            value[i] = self.albedo * p;
+            pdf[i] = p;
+        }
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(self.albedo);
+    }
+}
+
+/// A Bxdf that never scatters (index-matched boundaries are never shaded; this closure exists
+/// so that a factory always has one).
+#[derive(Clone, Copy, Debug)]
+pub struct NullBxdf;
+
+impl Bxdf for NullBxdf {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::NONE
+    }
+    fn generate_samples(
+        &mut self,
+        _ctx: &ShadingContext<'_>,
+        _samplers: &mut [PathSampler],
+        _out: &mut BxdfSamples,
+    ) {
+    }
+    fn evaluate_samples(
+        &mut self,
+        _ctx: &ShadingContext<'_>,
+        _wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        value.fill(Rgb::BLACK);
+        pdf.fill(0.0);
+    }
+}
+
+/// The seed's `NullInterior`: passes hits through, transmission 1.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NullInterior;
+
+impl VolumeIntegrator for NullInterior {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        _samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        ictx: &mut IntegratorContext<'_>,
+        _lighting: Option<&mut dyn LightingDelegate>,
+        out: &mut ShadeGroups,
+    ) {
+        ictx.nearest_hits(rays, out);
+    }
+    fn transmission(
+        &self,
+        _segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        trans.fill(Rgb::WHITE);
+        emission.fill(Rgb::BLACK);
+    }
+}
+
+/// The seed's `GlassInterior`: Beer-Lambert absorption, `T = exp(-sigma_a * d)` per channel,
+/// on the hits it returns and on shadow segments. No scattering.
+#[derive(Clone, Copy, Debug)]
+pub struct BeerInterior {
+    /// Absorption coefficient per channel (per world unit), >= 0.
+    pub sigma_a: Rgb,
+}
+
+impl BeerInterior {
+    /// Transmittance over a distance.
+    #[inline]
+    pub fn transmittance(&self, distance: f32) -> Rgb {
+        beer(self.sigma_a, distance)
+    }
+}
+
+/// `exp(-sigma * d)` per channel; an infinite distance through a non-absorbing channel gives 1
+/// (not NaN: `0 * inf` is defined as 0 here).
+#[inline]
+pub fn beer(sigma: Rgb, distance: f32) -> Rgb {
+    sigma.map(|s| if s == 0.0 { 1.0 } else { (-s * distance).exp() })
+}
+
+impl VolumeIntegrator for BeerInterior {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        _samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        ictx: &mut IntegratorContext<'_>,
+        _lighting: Option<&mut dyn LightingDelegate>,
+        out: &mut ShadeGroups,
+    ) {
+        ictx.nearest_hits(rays, out);
+        for g in 0..out.groups.len() {
+            let r = out.groups[g].range.clone();
+            for i in r {
+                out.points.transmission[i] *= self.transmittance(out.points.vlen[i]);
+            }
+        }
+        for (k, &ray) in out.misses.iter().enumerate() {
+            out.miss_transmission[k] *= self.transmittance(rays.tmax[ray as usize]);
+        }
+    }
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        for i in 0..segments.len() {
+            trans[i] = self.transmittance(segments.length[i]);
+        }
+        emission.fill(Rgb::BLACK);
+    }
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
+}
+
+/// Which built-in interior a material has.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Interior {
+    /// No volume inside.
+    None,
+    /// Pass-through volume (transmission 1).
+    Null,
+    /// Beer-Lambert absorber.
+    Beer {
+        /// Absorption coefficient per channel.
+        sigma_a: Rgb,
+    },
+}
+
+impl Interior {
+    fn hints(self) -> InstanceHints {
+        match self {
+            Interior::None => InstanceHints::NONE,
+            _ => InstanceHints::COMPUTES_INTERIOR | InstanceHints::INTERIOR_TRANSMISSION,
+        }
+    }
+    fn begin<'a>(self, arena: &'a Bump) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        match self {
+            Interior::None => None,
+            Interior::Null => Some(arena.alloc(NullInterior)),
+            Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a })),
+        }
+    }
+}
+
+/// The surface part of a built-in material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Surface {
+    /// Lambertian.
+    Diffuse {
+        /// Reflectance.
+        reflectance: Rgb,
+    },
+    /// Smooth dielectric.
+    Dielectric {
+        /// Interior IOR.
+        ior: f32,
+        /// Refraction tint.
+        tint: Rgb,
+        /// Shadow rays pass (attenuated by `tint`) instead of being blocked: the seed's cheap
+        /// non-refracting glass shadows.
+        cheap_shadows: bool,
+    },
+    /// Perfect mirror / smooth conductor.
+    Mirror {
+        /// Reflectance.
+        reflectance: Rgb,
+    },
+    /// Index-matched boundary: rays pass unchanged.
+    Interface,
+}
+
+/// A built-in material: a surface and an optional interior.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuiltinMaterial {
+    /// Surface scattering.
+    pub surface: Surface,
+    /// Interior volume.
+    pub interior: Interior,
+}
+
+impl BxdfFactory for BuiltinMaterial {
+    fn instance_hints(&self) -> InstanceHints {
+        let surface = match self.surface {
+            Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
+            Surface::Dielectric { cheap_shadows, .. } => {
+                let h = InstanceHints::TRANSMITS;
+                if cheap_shadows {
+                    h | InstanceHints::TRANSMISSION_SHADOWS
+                } else {
+                    h
+                }
+            }
+            Surface::Interface => {
+                InstanceHints::INDEX_MATCHED
+                    | InstanceHints::TRANSMISSION_SHADOWS
+                    | InstanceHints::TRANSMITS
+            }
+        };
+        surface | self.interior.hints()
+    }
+
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        match self.surface {
+            Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
+            Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
+            Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
+            Surface::Interface => arena.alloc(NullBxdf),
+        }
+    }
+
+    fn begin_interior<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        self.interior.begin(arena)
+    }
+
+    fn shadow_transmittance(&self) -> Rgb {
+        match self.surface {
+            Surface::Interface => Rgb::WHITE,
+            Surface::Dielectric {
+                tint,
+                cheap_shadows: true,
+                ..
+            } => tint,
+            _ => Rgb::BLACK,
+        }
+    }
+
+    fn ior(&self) -> f32 {
+        match self.surface {
+            Surface::Dielectric { ior, .. } => ior,
+            _ => 1.0,
+        }
+    }
+}

@@ -1,0 +1,920 @@
+//! The global integrator (a path tracer) and the per-batch scheduler that pipes tables between
+//! the systems.
+//!
+//! One batch goes through, per bounce (compare pbrt-v4's wavefront integrator):
+//! `trace` (partition -> nearest hits or a volume integrator's `nearest_hits`, repeated for
+//! pass-throughs) -> `escaped` (environment) -> `shade` (emission, Bxdf, direct lighting,
+//! Russian roulette, next rays) -> `transmission` (shadow rays) -> next bounce; finished paths
+//! are splatted. Stages a scene does not need (volumes, partitioning, transmission walks
+//! through surfaces) are skipped according to the compiled scene's [`Features`].
+//!
+//! Depth convention (Mitsuba's `max_depth`): a path of `k` segments has `k - 1` scattering
+//! vertices; emitters seen along segment `k` count only if `k <= max_depth`.
+
+use crate::context::IntegratorContext;
+use crate::plugin::*;
+use crate::scene::CompiledScene;
+use crate::stats::{System, SystemStats, Termination};
+use bumpalo::Bump;
+use glam::Vec3;
+use risotto_components::*;
+use risotto_systems::camera::{generate_camera_rays, FIRST_PATH_DIMENSION};
+use risotto_systems::film::{splat, Film};
+use risotto_systems::lights::{power_heuristic, LightSample};
+use risotto_systems::partition::partition_by_key;
+use risotto_systems::sampler::{pixel_seed, PathSampler};
+
+/// How direct lighting is estimated; a named technique so its cost and error can be compared.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightingTechnique {
+    /// Light sampling and Bxdf sampling combined with the power heuristic (Veach 1997).
+    #[default]
+    Mis,
+    /// Light sampling only (emitters hit by Bxdf-sampled rays after a non-specular bounce are
+    /// ignored).
+    NeeOnly,
+    /// Bxdf sampling only (no shadow rays; Dirac lights are invisible).
+    BxdfOnly,
+}
+
+/// Sampler dimensions each scattering vertex reserves: light selection (0), light position
+/// (1, 2), Russian roulette (3), Bxdf (4..8).
+const DIMS_PER_VERTEX: u32 = 8;
+
+/// Offset for spawning rays off a surface, relative to the coordinates' magnitude so that tiny
+/// and huge scenes both work (a few dozen ulps of the largest coordinate).
+#[inline]
+pub fn ray_offset(p: Vec3) -> f32 {
+    p.abs().max_element() * 4e-6 + 1e-9
+}
+
+/// Per-worker reusable tables for one batch.
+#[derive(Default)]
+pub struct BatchTables {
+    paths: Paths,
+    rays: Rays,
+    pending: Rays,
+    incoming: Rays,
+    bundle: Rays,
+    next: Rays,
+    groups: ShadeGroups,
+    tmp: ShadeGroups,
+    shadow: ShadowRays,
+    samples: BxdfSamples,
+    samplers: Vec<PathSampler>,
+    seeds: Vec<u32>,
+    pixel_tmp: Vec<u32>,
+    sample_tmp: Vec<u32>,
+    light_samples: Vec<Option<LightSample>>,
+    eval_value: Vec<Rgb>,
+    eval_pdf: Vec<f32>,
+    wi_tmp: Vec<Vec3>,
+    keys: Vec<u32>,
+    order: Vec<u32>,
+    runs: Vec<(u32, std::ops::Range<usize>)>,
+    albedo_tmp: Vec<Rgb>,
+}
+
+/// Film plus optional AOV accumulators for one tile.
+pub struct TileFilm {
+    /// Beauty.
+    pub film: Film,
+    /// Sum of first-hit albedo.
+    pub albedo: Vec<Rgb>,
+    /// Sum of first-hit normals.
+    pub normal: Vec<Vec3>,
+    /// Sum of first-hit depths.
+    pub depth: Vec<f32>,
+    /// Tile origin in the image.
+    pub x0: u32,
+    /// Tile origin in the image.
+    pub y0: u32,
+}
+
+impl TileFilm {
+    /// An empty tile.
+    pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
+        let n = (w * h) as usize;
+        TileFilm {
+            film: Film::new(w, h),
+            albedo: vec![Rgb::BLACK; n],
+            normal: vec![Vec3::ZERO; n],
+            depth: vec![0.0; n],
+            x0,
+            y0,
+        }
+    }
+    fn local(&self, pixel: u32, image_width: u32) -> u32 {
+        let (x, y) = (pixel % image_width, pixel / image_width);
+        (y - self.y0) * self.film.width + (x - self.x0)
+    }
+}
+
+/// The path tracer.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PathTracer {
+    /// Direct-lighting technique.
+    pub technique: LightingTechnique,
+}
+
+/// Lighting delegate the path tracer hands to volume integrators: it samples lights at
+/// volume points and queues shadow rays, traced with all others in the batch's transmission
+/// stage.
+struct DirectLighting<'a> {
+    scene: &'a CompiledScene,
+    shadow: &'a mut ShadowRays,
+    light_samples: Vec<Option<LightSample>>,
+    wi: Vec<Vec3>,
+    value: Vec<Rgb>,
+    pdf: Vec<f32>,
+}
+
+impl LightingDelegate for DirectLighting<'_> {
+    fn perform_direct_lighting(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        bxdf: &mut dyn Bxdf,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        weight: &[Rgb],
+    ) {
+        let n = ctx.num_points();
+        self.light_samples.clear();
+        self.wi.clear();
+        for i in 0..n {
+            let ray = ctx.ray_id()[i] as usize;
+            let s = &mut samplers[ray];
+            let sel = s.next_1d();
+            let u = s.next_2d();
+            let ls = self.scene.lights.sample(&self.scene.geometry, ctx.p()[i], sel, u);
+            self.wi.push(ls.map_or(Vec3::Z, |l| l.wi));
+            self.light_samples.push(ls);
+        }
+        self.value.resize(n, Rgb::BLACK);
+        self.pdf.resize(n, 0.0);
+        bxdf.evaluate_samples(ctx, &self.wi, &mut self.value, &mut self.pdf);
+        for i in 0..n {
+            let Some(ls) = self.light_samples[i] else { continue };
+            let ray = ctx.ray_id()[i] as usize;
+            let mis = if ls.delta {
+                1.0
+            } else {
+                power_heuristic(ls.pdf, self.pdf[i])
+            };
+            let c = rays.throughput[ray] * weight[i] * self.value[i] * ls.radiance * (mis / ls.pdf);
+            if c.is_black() {
+                continue;
+            }
+            self.shadow.push(ShadowRayRow {
+                origin: ctx.p()[i],
+                direction: ls.wi,
+                tmax: ls.distance * (1.0 - 1e-4),
+                contribution: c,
+                path: rays.path[ray],
+                volume_stack: rays.volume_stack[ray].clone(),
+            });
+        }
+    }
+}
+
+impl PathTracer {
+    /// Renders the samples `samples` of every pixel of `tile`, in batches of about
+    /// `batch_size` paths, splatting into `tile`.
+    #[allow(clippy::too_many_arguments, reason = "the scheduler's inputs, named")]
+    pub fn render_tile(
+        &self,
+        scene: &CompiledScene,
+        tile: &mut TileFilm,
+        samples: std::ops::Range<u32>,
+        batch_size: usize,
+        tables: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &mut Bump,
+        progress: &dyn Fn(u64),
+    ) {
+        let w = tile.film.width;
+        let h = tile.film.height;
+        let pixels = (w * h) as usize;
+        let per_batch = (batch_size / pixels.max(1)).max(1) as u32;
+        let mut s0 = samples.start;
+        while s0 < samples.end {
+            let s1 = (s0 + per_batch).min(samples.end);
+            let t = &mut *tables;
+            t.paths.clear();
+            for y in 0..h {
+                for x in 0..w {
+                    let pixel = (tile.y0 + y) * scene.camera.width + tile.x0 + x;
+                    for s in s0..s1 {
+                        t.paths.push(PathRow {
+                            pixel,
+                            sample: s,
+                            radiance: Rgb::BLACK,
+                            albedo: Rgb::BLACK,
+                            normal: Vec3::ZERO,
+                            depth: f32::INFINITY,
+                        });
+                    }
+                }
+            }
+            self.run_batch(scene, t, stats, arena);
+            // Splat: the film gets one sample per path.
+            let n = t.paths.len();
+            t.pixel_tmp.clear();
+            for i in 0..n {
+                t.pixel_tmp.push(tile.local(t.paths.pixel[i], scene.camera.width));
+            }
+            let dropped = stats.time(System::Splat, n, || {
+                splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
+            });
+            stats.nan_dropped += dropped;
+            for i in 0..n {
+                let p = t.pixel_tmp[i] as usize;
+                tile.albedo[p] += t.paths.albedo[i];
+                tile.normal[p] += t.paths.normal[i];
+                let d = t.paths.depth[i];
+                tile.depth[p] += if d.is_finite() { d } else { 0.0 };
+            }
+            stats.samples += n as u64;
+            arena.reset();
+            progress(n as u64);
+            s0 = s1;
+        }
+    }
+
+    /// Runs every path of `t.paths` to completion, leaving their radiance in the table.
+    pub fn run_batch(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        let n = t.paths.len();
+        t.seeds.clear();
+        t.sample_tmp.clear();
+        for i in 0..n {
+            t.seeds.push(pixel_seed(scene.settings.seed, t.paths.pixel[i]));
+            t.sample_tmp.push(t.paths.sample[i]);
+        }
+        // Camera rays.
+        t.rays.clear();
+        let mut origin = vec![Vec3::ZERO; n];
+        let mut direction = vec![Vec3::Z; n];
+        stats.time(System::Camera, n, || {
+            generate_camera_rays(
+                &scene.camera,
+                &t.paths.pixel,
+                &t.sample_tmp,
+                &t.seeds,
+                &mut origin,
+                &mut direction,
+            )
+        });
+        for i in 0..n {
+            t.rays.push(RayRow {
+                origin: origin[i],
+                direction: direction[i],
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+                path: i as u32,
+                throughput: Rgb::WHITE,
+                lobe: LobeSampled::NONE,
+                depth: 0,
+                passes: 0,
+                pdf: 0.0,
+                eta_scale: 1.0,
+                dimension: FIRST_PATH_DIMENSION,
+                shading_ctx_index: u32::MAX,
+                prev_p: origin[i],
+                volume_stack: scene.camera_stack.clone(),
+            });
+        }
+        stats.rays += n as u64;
+        while !t.rays.is_empty() {
+            self.trace(scene, t, stats, arena);
+            self.shade(scene, t, stats, arena);
+            self.transmission(scene, t, stats, arena);
+            std::mem::swap(&mut t.rays, &mut t.next);
+            t.next.clear();
+            stats.rays += t.rays.len() as u64;
+        }
+    }
+
+    fn sampler(&self, t: &BatchTables, rays: &Rays, i: usize) -> PathSampler {
+        let path = rays.path[i] as usize;
+        PathSampler {
+            seed: t.seeds[path],
+            sample: t.paths.sample[path],
+            dimension: rays.dimension[i],
+        }
+    }
+
+    /// Trace stage: finds the next shading points of `t.rays` (through volume integrators
+    /// where rays travel in a volume), following pass-throughs, and handles escaped rays.
+    /// Leaves `t.incoming` (the rays, with throughput including transmission) and
+    /// `t.groups` (points whose `ray_id` indexes `t.incoming`).
+    fn trace(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+        let features = scene.features;
+        t.incoming.clear();
+        t.groups.clear();
+        std::mem::swap(&mut t.pending, &mut t.rays);
+        t.rays.clear();
+        while !t.pending.is_empty() {
+            if features.volumes {
+                self.trace_partitioned(scene, t, stats, arena);
+            } else {
+                t.tmp.clear();
+                let mut ictx = IntegratorContext::new(scene, stats);
+                ictx.nearest_hits(&t.pending, &mut t.tmp);
+                append_groups(&mut t.groups, &mut t.incoming, &t.tmp, &t.pending);
+            }
+            t.pending.clear();
+            self.escaped_and_passes(scene, t, stats);
+        }
+    }
+
+    /// Partitions `t.pending` into bundles by the volumes the rays travel in and the transmit
+    /// bit, and runs each bundle through its innermost volume's integrator (or plain nearest
+    /// hits when in no volume).
+    fn trace_partitioned(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        let n = t.pending.len();
+        // Distinct stacks of this round (few: rays in one scene share a handful of states).
+        let mut stacks: Vec<VolumeStack> = Vec::new();
+        t.keys.clear();
+        stats.time(System::Partition, n, || {
+            for i in 0..n {
+                let s = &t.pending.volume_stack[i];
+                let id = match stacks.iter().position(|x| x == s) {
+                    Some(id) => id,
+                    None => {
+                        stacks.push(s.clone());
+                        stacks.len() - 1
+                    }
+                };
+                let transmit = t.pending.lobe[i].is_transmit() as u32;
+                t.keys.push(id as u32 * 2 + transmit);
+            }
+            partition_by_key(&t.keys, stacks.len() * 2, &mut t.order, &mut t.runs);
+        });
+        let runs = std::mem::take(&mut t.runs);
+        for (key, range) in &runs {
+            let stack = &stacks[(*key / 2) as usize];
+            t.bundle.clear();
+            for &i in &t.order[range.clone()] {
+                t.bundle.push_from(&t.pending, i as usize);
+            }
+            for (k, s) in t.bundle.shading_ctx_index.iter_mut().enumerate() {
+                *s = k as u32;
+            }
+            t.tmp.clear();
+            let inner = stack.innermost().filter(|e| {
+                scene.material_info[e.material as usize]
+                    .hints
+                    .contains(InstanceHints::COMPUTES_INTERIOR)
+            });
+            match inner {
+                None => {
+                    let mut ictx = IntegratorContext::new(scene, stats);
+                    ictx.nearest_hits(&t.bundle, &mut t.tmp);
+                }
+                Some(entry) => {
+                    let m = t.bundle.len();
+                    let points = volume_points(&t.bundle, entry.material);
+                    let others: Vec<VolumeEntry> = stack
+                        .overlapping()
+                        .filter(|e| {
+                            scene.material_info[e.material as usize]
+                                .hints
+                                .contains(InstanceHints::COMPUTES_INTERIOR)
+                        })
+                        .collect();
+                    let points = arena.alloc(points);
+                    let ctx_plain = arena.alloc(ShadingContext::new(
+                        points,
+                        0..m,
+                        ShadingMode::Interior,
+                        entry.material,
+                        &[],
+                    ));
+                    let overlapping: &[OverlappingVolume] =
+                        arena.alloc_slice_fill_iter(others.iter().map(|e| {
+                            let factory = scene.materials[e.material as usize].factory.as_ref();
+                            OverlappingVolume {
+                                entry: *e,
+                                factory,
+                                integrator: factory
+                                    .begin_interior(ctx_plain, ShadingMode::Interior, arena)
+                                    .map(|v| &*v),
+                            }
+                        }));
+                    let ctx = arena.alloc(ShadingContext::new(
+                        points,
+                        0..m,
+                        ShadingMode::Interior,
+                        entry.material,
+                        overlapping,
+                    ));
+                    let factory = scene.materials[entry.material as usize].factory.as_ref();
+                    let integrator = factory
+                        .begin_interior(ctx, ShadingMode::Interior, arena)
+                        .expect("hint COMPUTES_INTERIOR promised an interior");
+                    t.samplers.clear();
+                    for i in 0..m {
+                        let s = self.sampler(t, &t.bundle, i);
+                        t.samplers.push(s);
+                    }
+                    let mut delegate = DirectLighting {
+                        scene,
+                        shadow: &mut t.shadow,
+                        light_samples: Vec::new(),
+                        wi: Vec::new(),
+                        value: Vec::new(),
+                        pdf: Vec::new(),
+                    };
+                    let lighting: Option<&mut dyn LightingDelegate> =
+                        if self.technique == LightingTechnique::BxdfOnly {
+                            None
+                        } else {
+                            Some(&mut delegate)
+                        };
+                    let mut ictx = IntegratorContext::new(scene, stats);
+                    let start = std::time::Instant::now();
+                    integrator.nearest_hits(
+                        &t.bundle,
+                        &mut t.samplers,
+                        LobeSampled(0xff),
+                        &mut ictx,
+                        lighting,
+                        &mut t.tmp,
+                    );
+                    let elapsed = start.elapsed().as_secs_f64();
+                    stats.record(System::Volume, m, elapsed);
+                    for (i, s) in t.samplers.iter().enumerate() {
+                        t.bundle.dimension[i] = s.dimension;
+                    }
+                    // Rays the integrator returned nothing for were absorbed in the volume.
+                    let mut answered = vec![false; m];
+                    for &r in t.tmp.points.ray_id.iter().chain(&t.tmp.misses) {
+                        answered[r as usize] = true;
+                    }
+                    let absorbed = answered.iter().filter(|a| !**a).count();
+                    stats.terminate(Termination::Absorbed, absorbed as u64);
+                }
+            }
+            append_groups(&mut t.groups, &mut t.incoming, &t.tmp, &t.bundle);
+        }
+        t.runs = runs;
+    }
+
+    /// Handles the rays that escaped (environment emission) and the points on pass-through
+    /// boundaries (index-matched or false): those continue as new pending rays and are removed
+    /// from the groups.
+    fn escaped_and_passes(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats) {
+        // Escaped rays: only misses appended this round are new; process and clear.
+        let misses = std::mem::take(&mut t.groups.misses);
+        let miss_tr = std::mem::take(&mut t.groups.miss_transmission);
+        for (k, &r) in misses.iter().enumerate() {
+            let r = r as usize;
+            let path = t.incoming.path[r] as usize;
+            let d = t.incoming.direction[r];
+            let le = scene.lights.environment_radiance(d);
+            if !le.is_black() && self.emission_counts(scene, &t.incoming, r) {
+                let w = self.emitter_mis(&t.incoming, r, || scene.lights.environment_pdf(d));
+                t.paths.radiance[path] += t.incoming.throughput[r] * miss_tr[k] * le * w;
+            }
+            if t.incoming.depth[r] == 0 && t.paths.depth[path].is_infinite() {
+                t.paths.albedo[path] = le;
+            }
+        }
+        stats.terminate(Termination::Escaped, misses.len() as u64);
+        t.groups.misses = misses;
+        t.groups.misses.clear();
+        t.groups.miss_transmission = miss_tr;
+        t.groups.miss_transmission.clear();
+
+        if !scene.features.transmissive {
+            return;
+        }
+        // Pass-throughs: index-matched surfaces and false boundaries never get shaded.
+        let mut keep = ShadeGroups::default();
+        let groups = std::mem::take(&mut t.groups.groups);
+        for g in groups {
+            if g.mode != ShadingMode::Scatter {
+                let start = keep.points.len();
+                for i in g.range.clone() {
+                    keep.points.push_from(&t.groups.points, i);
+                }
+                keep.groups.push(ShadeGroup {
+                    range: start..keep.points.len(),
+                    ..g
+                });
+                continue;
+            }
+            let info = &scene.material_info[g.material as usize];
+            let start = keep.points.len();
+            for i in g.range.clone() {
+                let r = t.groups.points.ray_id[i] as usize;
+                let shape = t.groups.points.shape[i];
+                let pass = info.hints.contains(InstanceHints::INDEX_MATCHED)
+                    || t.incoming.volume_stack[r].is_false_boundary(shape, info.priority);
+                if !pass {
+                    keep.points.push_from(&t.groups.points, i);
+                    continue;
+                }
+                let p = t.groups.points.p[i];
+                let front = t.groups.points.front_face[i];
+                let tr = t.groups.points.transmission[i];
+                // Emission on a pass-through surface still reaches the path.
+                self.surface_emission(scene, t, r, i, tr);
+                let mut row = t.incoming.row(r);
+                if row.passes as u32 >= scene.settings.max_passes {
+                    stats.terminate(Termination::PassLimit, 1);
+                    continue;
+                }
+                row.passes += 1;
+                row.throughput *= tr;
+                if row.throughput.is_black() {
+                    stats.terminate(Termination::Absorbed, 1);
+                    continue;
+                }
+                let d = row.direction;
+                let ng = t.groups.points.ng[i];
+                let side = if d.dot(ng) >= 0.0 { ng } else { -ng };
+                row.origin = p + side * ray_offset(p);
+                row.tmin = 0.0;
+                row.tmax = f32::INFINITY;
+                if scene.tracks_interior(shape) {
+                    row.volume_stack.cross(scene.volume_entry(shape), front);
+                }
+                t.pending.push(row);
+            }
+            if keep.points.len() > start {
+                keep.groups.push(ShadeGroup {
+                    range: start..keep.points.len(),
+                    ..g
+                });
+            }
+        }
+        // Points kept from earlier rounds were already compacted; rebuild the table.
+        t.groups.points = keep.points;
+        t.groups.groups = keep.groups;
+    }
+
+    /// Whether an emitter seen along ray `r` is inside the path-length budget.
+    fn emission_counts(&self, scene: &CompiledScene, rays: &Rays, r: usize) -> bool {
+        // The ray is segment depth+1 of its path.
+        (rays.depth[r] as u32 + 1) <= scene.settings.max_depth
+    }
+
+    /// MIS weight of an emitter hit by ray `r` (Bxdf-sampled) against light sampling.
+    fn emitter_mis(&self, rays: &Rays, r: usize, light_pdf: impl FnOnce() -> f32) -> f32 {
+        if rays.depth[r] == 0 || rays.lobe[r].is_specular() || rays.pdf[r] <= 0.0 {
+            return 1.0;
+        }
+        match self.technique {
+            LightingTechnique::BxdfOnly => 1.0,
+            LightingTechnique::NeeOnly => 0.0,
+            LightingTechnique::Mis => power_heuristic(rays.pdf[r], light_pdf()),
+        }
+    }
+
+    /// Adds the emission of the surface at point `i` (hit by incoming ray `r`), if any.
+    fn surface_emission(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        r: usize,
+        i: usize,
+        transmission: Rgb,
+    ) {
+        let pts = &t.groups.points;
+        let shape = pts.shape[i];
+        if shape == u32::MAX || !pts.front_face[i] {
+            return;
+        }
+        let Some(le) = scene.shapes[shape as usize].emission else {
+            return;
+        };
+        if !self.emission_counts(scene, &t.incoming, r) {
+            return;
+        }
+        let p = pts.p[i];
+        let ng = pts.ng[i];
+        let prev = t.incoming.prev_p[r];
+        let w = self.emitter_mis(&t.incoming, r, || {
+            light_pdf_at(scene, shape, prev, p, ng, &t.incoming, r)
+        });
+        let path = t.incoming.path[r] as usize;
+        t.paths.radiance[path] += t.incoming.throughput[r] * transmission * le * w;
+    }
+
+    /// Shade stage: emission, Bxdf sampling, direct lighting, Russian roulette, next rays.
+    fn shade(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+        let settings = scene.settings;
+        let groups = std::mem::take(&mut t.groups.groups);
+        let total: usize = groups.iter().map(|g| g.range.len()).sum();
+        let shade_start = std::time::Instant::now();
+        for g in &groups {
+            let range = g.range.clone();
+            // Transmission of the incident segment multiplies the throughput first.
+            for i in range.clone() {
+                let r = t.groups.points.ray_id[i] as usize;
+                t.incoming.throughput[r] *= t.groups.points.transmission[i];
+            }
+            for i in range.clone() {
+                let r = t.groups.points.ray_id[i] as usize;
+                // Throughput already includes the transmission.
+                self.surface_emission(scene, t, r, i, Rgb::WHITE);
+            }
+            let ctx = ShadingContext::new(&t.groups.points, range.clone(), g.mode, g.material, &[]);
+            let factory = scene.materials[g.material as usize].factory.as_ref();
+            let bxdf_start = std::time::Instant::now();
+            let bxdf = factory.begin_scatter(&ctx, g.mode, arena);
+            let lobes = bxdf.lobes();
+            let m = range.len();
+
+            // AOVs at the first vertex.
+            t.albedo_tmp.resize(m, Rgb::BLACK);
+            bxdf.albedo(&ctx, &mut t.albedo_tmp);
+            for (k, i) in range.clone().enumerate() {
+                let r = t.groups.points.ray_id[i] as usize;
+                if t.incoming.depth[r] == 0 && t.incoming.passes[r] == 0 {
+                    let path = t.incoming.path[r] as usize;
+                    t.paths.albedo[path] = t.albedo_tmp[k];
+                    t.paths.normal[path] = t.groups.points.nn[i];
+                    t.paths.depth[path] = t.groups.points.vlen[i];
+                }
+            }
+
+            // Per-point samplers at this vertex's dimensions.
+            t.samplers.clear();
+            for i in range.clone() {
+                let r = t.groups.points.ray_id[i] as usize;
+                let s = self.sampler(t, &t.incoming, r);
+                t.samplers.push(s);
+            }
+            // Which points may continue: the next segment must fit in max_depth.
+            let can_continue: Vec<bool> = range
+                .clone()
+                .map(|i| {
+                    let r = t.groups.points.ray_id[i] as usize;
+                    (t.incoming.depth[r] as u32 + 2) <= settings.max_depth
+                })
+                .collect();
+
+            // Direct lighting (not for purely specular closures).
+            if lobes.contains(LobeSampled::DIFFUSE)
+                && self.technique != LightingTechnique::BxdfOnly
+                && !scene.lights.is_empty()
+            {
+                let lstart = std::time::Instant::now();
+                t.light_samples.clear();
+                t.wi_tmp.clear();
+                for (k, i) in range.clone().enumerate() {
+                    let ls = if can_continue[k] {
+                        let mut s = t.samplers[k];
+                        let sel = s.next_1d();
+                        let u = s.next_2d();
+                        scene.lights.sample(&scene.geometry, t.groups.points.p[i], sel, u)
+                    } else {
+                        None
+                    };
+                    t.wi_tmp.push(ls.map_or(Vec3::Z, |l| l.wi));
+                    t.light_samples.push(ls);
+                }
+                stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
+                t.eval_value.resize(m, Rgb::BLACK);
+                t.eval_pdf.resize(m, 0.0);
+                bxdf.evaluate_samples(&ctx, &t.wi_tmp, &mut t.eval_value, &mut t.eval_pdf);
+                for (k, i) in range.clone().enumerate() {
+                    let Some(ls) = t.light_samples[k] else { continue };
+                    let f = t.eval_value[k];
+                    if f.is_black() {
+                        continue;
+                    }
+                    let r = t.groups.points.ray_id[i] as usize;
+                    let w = if ls.delta || self.technique == LightingTechnique::NeeOnly {
+                        1.0
+                    } else {
+                        power_heuristic(ls.pdf, t.eval_pdf[k])
+                    };
+                    let c = t.incoming.throughput[r] * f * ls.radiance * (w / ls.pdf);
+                    if c.is_black() {
+                        continue;
+                    }
+                    let p = t.groups.points.p[i];
+                    let ng = t.groups.points.ng[i];
+                    let origin = if g.mode == ShadingMode::Scatter {
+                        let side = if ls.wi.dot(ng) >= 0.0 { ng } else { -ng };
+                        p + side * ray_offset(p)
+                    } else {
+                        p
+                    };
+                    let mut stack = t.incoming.volume_stack[r].clone();
+                    // A shadow ray leaving through the surface it starts on enters (or leaves)
+                    // that shape's interior.
+                    let shape = t.groups.points.shape[i];
+                    if g.mode == ShadingMode::Scatter
+                        && (ls.wi.dot(ng) >= 0.0) != (t.groups.points.vn[i].dot(ng) >= 0.0)
+                        && scene.tracks_interior(shape)
+                    {
+                        stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i]);
+                    }
+                    t.shadow.push(ShadowRayRow {
+                        origin,
+                        direction: ls.wi,
+                        tmax: if ls.distance.is_finite() {
+                            ls.distance * (1.0 - 1e-4) - ray_offset(p)
+                        } else {
+                            f32::INFINITY
+                        },
+                        contribution: c,
+                        path: t.incoming.path[r],
+                        volume_stack: stack,
+                    });
+                }
+            }
+
+            // Bxdf sampling for the next bounce.
+            for s in t.samplers.iter_mut() {
+                s.dimension += 4;
+            }
+            t.samples.reset(m);
+            bxdf.generate_samples(&ctx, &mut t.samplers, &mut t.samples);
+            stats.record(System::Bxdf, m, bxdf_start.elapsed().as_secs_f64());
+
+            for (k, i) in range.clone().enumerate() {
+                let r = t.groups.points.ray_id[i] as usize;
+                if !can_continue[k] {
+                    stats.terminate(Termination::MaxDepth, 1);
+                    continue;
+                }
+                let pdf = t.samples.pdf[k];
+                let weight = t.samples.weight[k];
+                if pdf <= 0.0 || weight.is_black() || !weight.is_finite() {
+                    stats.terminate(Termination::Absorbed, 1);
+                    continue;
+                }
+                let mut throughput = t.incoming.throughput[r] * weight;
+                let lobe = t.samples.lobe[k];
+                let eta = t.samples.eta[k];
+                let eta_scale = t.incoming.eta_scale[r]
+                    * if lobe.is_transmit() { eta * eta } else { 1.0 };
+                let depth = t.incoming.depth[r] + 1;
+                // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
+                if depth as u32 > settings.rr_depth {
+                    let q = (throughput.max_channel() * eta_scale).min(0.95);
+                    let mut s = t.incoming_sampler(r, t.incoming.dimension[r] + 3);
+                    if !(s.next_1d() < q) {
+                        stats.terminate(Termination::RussianRoulette, 1);
+                        continue;
+                    }
+                    throughput *= 1.0 / q;
+                }
+                let p = t.groups.points.p[i];
+                let ng = t.groups.points.ng[i];
+                let wi = t.samples.wi[k];
+                let mut stack = t.incoming.volume_stack[r].clone();
+                let origin = if g.mode == ShadingMode::Scatter {
+                    let shape = t.groups.points.shape[i];
+                    if lobe.is_transmit() && scene.tracks_interior(shape) {
+                        stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i]);
+                    }
+                    let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+                    p + side * ray_offset(p)
+                } else {
+                    p
+                };
+                t.next.push(RayRow {
+                    origin,
+                    direction: wi,
+                    tmin: 0.0,
+                    tmax: f32::INFINITY,
+                    path: t.incoming.path[r],
+                    throughput,
+                    lobe,
+                    depth,
+                    passes: t.incoming.passes[r],
+                    pdf: if lobe.is_specular() { 0.0 } else { pdf },
+                    eta_scale,
+                    dimension: t.incoming.dimension[r] + DIMS_PER_VERTEX,
+                    shading_ctx_index: k as u32,
+                    prev_p: p,
+                    volume_stack: stack,
+                });
+            }
+        }
+        stats.record(System::Shade, total, shade_start.elapsed().as_secs_f64());
+        t.groups.groups = groups;
+    }
+
+    /// Transmission stage: walks every shadow ray through the surfaces that let shadows pass
+    /// and the volumes it crosses, then adds the surviving contributions to their paths.
+    fn transmission(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+        let n = t.shadow.len();
+        if n == 0 {
+            return;
+        }
+        let start = std::time::Instant::now();
+        let mut contribution = t.shadow.contribution.clone();
+        crate::transmission::trace_shadow_rays(scene, &t.shadow, &t.paths, &t.seeds, &mut contribution, stats, arena);
+        for i in 0..n {
+            let path = t.shadow.path[i] as usize;
+            t.paths.radiance[path] += contribution[i];
+        }
+        stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
+        t.shadow.clear();
+    }
+}
+
+impl BatchTables {
+    fn incoming_sampler(&self, r: usize, dimension: u32) -> PathSampler {
+        let path = self.incoming.path[r] as usize;
+        PathSampler {
+            seed: self.seeds[path],
+            sample: self.paths.sample[path],
+            dimension,
+        }
+    }
+}
+
+/// Light-sampling pdf (solid angle at `from`, including selection) of the point `p` on the
+/// emissive shape `shape` hit by ray `r`.
+fn light_pdf_at(scene: &CompiledScene, shape: u32, from: Vec3, p: Vec3, ng: Vec3, rays: &Rays, r: usize) -> f32 {
+    // The hit primitive is not stored on the point; find it by re-intersecting the ray (cheap
+    // and rare: only for emitter hits after a non-specular bounce).
+    let mut t = [0.0f32];
+    let mut prim = [NO_HIT];
+    let (mut b1, mut b2) = ([0.0f32], [0.0f32]);
+    risotto_systems::intersect::intersect_closest(
+        &scene.geometry,
+        &[rays.origin[r]],
+        &[rays.direction[r]],
+        &[rays.tmin[r]],
+        &[rays.tmax[r]],
+        &mut t,
+        &mut prim,
+        &mut b1,
+        &mut b2,
+    );
+    if prim[0] == NO_HIT || scene.prim_shape[prim[0] as usize] != shape {
+        return 0.0;
+    }
+    scene.lights.area_pdf(&scene.geometry, prim[0], from, p, ng)
+}
+
+/// Shading points at the rays' origins, for binding a volume integrator to the bundle.
+fn volume_points(rays: &Rays, material: u32) -> ShadingPoints {
+    let mut pts = ShadingPoints::with_capacity(rays.len());
+    for i in 0..rays.len() {
+        let d = rays.direction[i];
+        pts.push(ShadingPointRow {
+            p: rays.origin[i],
+            ng: -d,
+            nn: -d,
+            vn: -d,
+            vlen: 0.0,
+            u: 0.0,
+            v: 0.0,
+            w: 0.0,
+            transmission: Rgb::WHITE,
+            ray_id: i as u32,
+            material,
+            shape: u32::MAX,
+            front_face: true,
+            ior_outside: 1.0,
+        });
+    }
+    pts
+}
+
+/// Appends `src`'s groups and misses to `dst`, re-indexing ray ids into `incoming`, to which
+/// `rays` (the table `src` answers) is appended.
+fn append_groups(dst: &mut ShadeGroups, incoming: &mut Rays, src: &ShadeGroups, rays: &Rays) {
+    let offset = incoming.len() as u32;
+    for i in 0..rays.len() {
+        incoming.push_from(rays, i);
+    }
+    for g in &src.groups {
+        let start = dst.points.len();
+        for i in g.range.clone() {
+            dst.points.push_from(&src.points, i);
+            let last = dst.points.len() - 1;
+            dst.points.ray_id[last] += offset;
+        }
+        dst.groups.push(ShadeGroup {
+            material: g.material,
+            mode: g.mode,
+            range: start..dst.points.len(),
+        });
+    }
+    for (k, &r) in src.misses.iter().enumerate() {
+        dst.push_miss(r + offset, src.miss_transmission[k]);
+    }
+}

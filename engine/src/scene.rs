@@ -1,0 +1,529 @@
+//! The scene world (hecs) and its compilation into the flat data the systems read.
+//!
+//! A scene is an [`hecs::World`] of entities: shapes ([`ShapeGeometry`] + [`MaterialRef`],
+//! optionally [`Emission`]) and lights ([`LightComponent`]), each with a [`Name`]. Materials
+//! are factories registered in the [`Scene`] by name. [`Scene::compile`] flattens the world:
+//! one BVH over every primitive, a light set, a per-material table of hints, and the
+//! [`Features`] that decide which stages the scheduler runs.
+
+use crate::plugin::{BxdfFactory, InstanceHints};
+use glam::Vec3;
+use risotto_components::{Rgb, VolumeStack};
+use risotto_systems::camera::Camera;
+use risotto_systems::distribution::EnvironmentMap;
+use risotto_systems::geometry::{SceneGeometry, Sphere};
+use risotto_systems::lights::{Light, LightSet};
+use std::sync::Arc;
+
+/// Name of an entity (shape or light), used in messages and stats.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Name(pub String);
+
+/// Geometry of a shape entity, in world space.
+#[derive(Clone, Debug)]
+pub enum ShapeGeometry {
+    /// An analytic sphere.
+    Sphere(Sphere),
+    /// Triangles (for quads, boxes and meshes), wound so `(v1-v0)x(v2-v0)` is the outward
+    /// (front) normal.
+    Triangles(Vec<[Vec3; 3]>),
+}
+
+/// The material (index into [`Scene::materials`]) of a shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaterialRef(pub u32);
+
+/// Emitted radiance of a shape (an area light, front side only).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission(pub Rgb);
+
+/// A light that is not a shape.
+#[derive(Clone, Debug)]
+pub enum LightComponent {
+    /// Distant light.
+    Distant {
+        /// Direction the light travels (unit).
+        direction: Vec3,
+        /// Irradiance.
+        irradiance: Rgb,
+    },
+    /// Point light.
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Intensity.
+        intensity: Rgb,
+    },
+    /// Environment.
+    Environment {
+        /// Constant radiance (scales the map).
+        radiance: Rgb,
+        /// Optional equirectangular map.
+        map: Option<Arc<EnvironmentMap>>,
+    },
+}
+
+/// A registered material.
+pub struct Material {
+    /// Name used by shapes and messages.
+    pub name: String,
+    /// Priority for nested dielectrics (higher wins); defaults to 0.
+    pub priority: i32,
+    /// The factory.
+    pub factory: Box<dyn BxdfFactory>,
+}
+
+/// Render settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum number of path segments (Mitsuba's `max_depth`: 1 = directly visible emitters
+    /// only, 2 = direct lighting); `u32::MAX` = unbounded.
+    pub max_depth: u32,
+    /// Scattering vertices after which Russian roulette starts.
+    pub rr_depth: u32,
+    /// Seed of the sampler.
+    pub seed: u64,
+    /// Pass-throughs (index-matched or false boundaries) one path may make before it is
+    /// stopped; a generous guard against infinite loops. Defaults to 1024.
+    pub max_passes: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            spp: 64,
+            max_depth: 8,
+            rr_depth: 5,
+            seed: 0,
+            max_passes: 1024,
+        }
+    }
+}
+
+/// What a scene contains, as far as the scheduler cares.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Features {
+    /// Some material computes an interior (volume stages run).
+    pub volumes: bool,
+    /// Some material lets rays cross its surface (partitioning by transmit bit runs).
+    pub transmissive: bool,
+    /// Some interior scatters.
+    pub scattering_media: bool,
+    /// Some interior is heterogeneous.
+    pub heterogeneous: bool,
+    /// Some interior is subsurface.
+    pub subsurface: bool,
+    /// Some interior emits.
+    pub emissive_media: bool,
+    /// Some surface passes shadow rays (transmission system must walk through surfaces).
+    pub transmission_shadows: bool,
+    /// Emissive shapes.
+    pub area_lights: bool,
+    /// Distant lights.
+    pub distant_lights: bool,
+    /// Point lights.
+    pub point_lights: bool,
+    /// An environment.
+    pub environment: bool,
+}
+
+impl Features {
+    /// Feature names for the stats' `features` list.
+    pub fn names(&self) -> Vec<String> {
+        let all = [
+            (self.volumes, "volumes"),
+            (self.transmissive, "transmissive_surfaces"),
+            (self.scattering_media, "scattering_media"),
+            (self.heterogeneous, "heterogeneous_media"),
+            (self.subsurface, "subsurface"),
+            (self.emissive_media, "emissive_media"),
+            (self.transmission_shadows, "transmission_shadows"),
+            (self.area_lights, "area_lights"),
+            (self.distant_lights, "distant_lights"),
+            (self.point_lights, "point_lights"),
+            (self.environment, "environment"),
+        ];
+        all.iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, n)| n.to_string())
+            .collect()
+    }
+}
+
+/// A scene being assembled: the world, the materials, the camera and the settings.
+pub struct Scene {
+    /// The entities.
+    pub world: hecs::World,
+    /// Materials by index.
+    pub materials: Vec<Material>,
+    /// The camera.
+    pub camera: Camera,
+    /// Render settings.
+    pub settings: RenderSettings,
+    /// Volume stack at the camera, by shape name (outermost first); `None` = found by probing.
+    pub camera_volume: Option<Vec<String>>,
+}
+
+/// Per-shape data of a compiled scene.
+#[derive(Clone, Debug)]
+pub struct ShapeInfo {
+    /// Name.
+    pub name: String,
+    /// Material index.
+    pub material: u32,
+    /// Emitted radiance, if an area light.
+    pub emission: Option<Rgb>,
+}
+
+/// Per-material data of a compiled scene.
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialInfo {
+    /// Instance hints of the factory.
+    pub hints: InstanceHints,
+    /// Priority.
+    pub priority: i32,
+    /// IOR of the interior.
+    pub ior: f32,
+    /// Shadow-ray transmittance of the surface.
+    pub shadow_transmittance: Rgb,
+}
+
+/// The flat, read-only data the renderer works from.
+pub struct CompiledScene {
+    /// All primitives and the BVH.
+    pub geometry: SceneGeometry,
+    /// Shape index of every primitive.
+    pub prim_shape: Vec<u32>,
+    /// Shapes.
+    pub shapes: Vec<ShapeInfo>,
+    /// Materials (factories).
+    pub materials: Vec<Material>,
+    /// Material data the hot loops read.
+    pub material_info: Vec<MaterialInfo>,
+    /// Lights.
+    pub lights: LightSet,
+    /// Camera.
+    pub camera: Camera,
+    /// Settings.
+    pub settings: RenderSettings,
+    /// Features.
+    pub features: Features,
+    /// Volume stack rays start with at the camera.
+    pub camera_stack: VolumeStack,
+    /// Radius of the scene's bounding sphere.
+    pub radius: f32,
+    /// Centre of the scene's bounding sphere.
+    pub center: Vec3,
+}
+
+/// Errors found while compiling a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum CompileError {
+    /// A shape names a material index that does not exist.
+    #[error("shape \"{shape}\": material index {index} does not exist")]
+    MissingMaterial {
+        /// Shape name.
+        shape: String,
+        /// Index.
+        index: u32,
+    },
+    /// The camera volume names an unknown shape or a shape without interior.
+    #[error("camera_volume: shape \"{0}\" does not exist or has no interior")]
+    CameraVolume(String),
+    /// A value is invalid.
+    #[error("{entity}: {message}")]
+    Invalid {
+        /// Entity name.
+        entity: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl Scene {
+    /// An empty scene with the given camera and settings.
+    pub fn new(camera: Camera, settings: RenderSettings) -> Self {
+        Scene {
+            world: hecs::World::new(),
+            materials: Vec::new(),
+            camera,
+            settings,
+            camera_volume: None,
+        }
+    }
+
+    /// Registers a material and returns its index.
+    pub fn add_material(&mut self, name: &str, priority: i32, factory: Box<dyn BxdfFactory>) -> u32 {
+        self.materials.push(Material {
+            name: name.to_string(),
+            priority,
+            factory,
+        });
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Adds a shape entity.
+    pub fn add_shape(
+        &mut self,
+        name: &str,
+        geometry: ShapeGeometry,
+        material: u32,
+        emission: Option<Rgb>,
+    ) -> hecs::Entity {
+        let e = self
+            .world
+            .spawn((Name(name.to_string()), geometry, MaterialRef(material)));
+        if let Some(l) = emission {
+            self.world.insert_one(e, Emission(l)).expect("entity was just spawned");
+        }
+        e
+    }
+
+    /// Adds a light entity.
+    pub fn add_light(&mut self, name: &str, light: LightComponent) -> hecs::Entity {
+        self.world.spawn((Name(name.to_string()), light))
+    }
+
+    /// Flattens the world into a [`CompiledScene`].
+    pub fn compile(self) -> Result<CompiledScene, CompileError> {
+        let Scene {
+            world,
+            materials,
+            camera,
+            settings,
+            camera_volume,
+        } = self;
+        // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
+        // primitive numbering is stable).
+        let mut shape_entities: Vec<(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)> =
+            Vec::new();
+        for (e, (name, geom, mat)) in world.query::<(&Name, &ShapeGeometry, &MaterialRef)>().iter() {
+            let emission = world.get::<&Emission>(e).ok().map(|em| em.0);
+            shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
+        }
+        shape_entities.sort_by_key(|s| s.0.id());
+
+        let mut triangles = Vec::new();
+        let mut tri_shape = Vec::new();
+        let mut spheres = Vec::new();
+        let mut sphere_shape = Vec::new();
+        let mut shapes = Vec::new();
+        for (i, (_, name, geom, mat, emission)) in shape_entities.into_iter().enumerate() {
+            if mat as usize >= materials.len() {
+                return Err(CompileError::MissingMaterial {
+                    shape: name,
+                    index: mat,
+                });
+            }
+            match geom {
+                ShapeGeometry::Sphere(s) => {
+                    spheres.push(s);
+                    sphere_shape.push(i as u32);
+                }
+                ShapeGeometry::Triangles(t) => {
+                    tri_shape.extend(std::iter::repeat_n(i as u32, t.len()));
+                    triangles.extend(t);
+                }
+            }
+            shapes.push(ShapeInfo {
+                name,
+                material: mat,
+                emission,
+            });
+        }
+        let num_tris = triangles.len();
+        let geometry = SceneGeometry::build(triangles, spheres);
+        let mut prim_shape = tri_shape;
+        prim_shape.extend(sphere_shape);
+
+        let (lo, hi) = geometry.bounds();
+        let (center, radius) = if lo.cmple(hi).all() {
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
+        } else {
+            (Vec3::ZERO, 1.0)
+        };
+
+        let mut lights = Vec::new();
+        let mut features = Features::default();
+        for (prim, &s) in prim_shape.iter().enumerate() {
+            if let Some(radiance) = shapes[s as usize].emission {
+                if !radiance.is_black() {
+                    lights.push(Light::Area {
+                        prim: prim as u32,
+                        radiance,
+                    });
+                    features.area_lights = true;
+                }
+            }
+        }
+        let _ = num_tris;
+        let mut light_entities: Vec<(hecs::Entity, LightComponent)> = world
+            .query::<&LightComponent>()
+            .iter()
+            .map(|(e, l)| (e, l.clone()))
+            .collect();
+        light_entities.sort_by_key(|l| l.0.id());
+        for (_, l) in light_entities {
+            lights.push(match l {
+                LightComponent::Distant {
+                    direction,
+                    irradiance,
+                } => {
+                    features.distant_lights = true;
+                    Light::Distant {
+                        direction,
+                        irradiance,
+                    }
+                }
+                LightComponent::Point {
+                    position,
+                    intensity,
+                } => {
+                    features.point_lights = true;
+                    Light::Point {
+                        position,
+                        intensity,
+                    }
+                }
+                LightComponent::Environment { radiance, map } => {
+                    features.environment = true;
+                    Light::Environment {
+                        radiance,
+                        map: map.map(|m| Box::new((*m).clone())),
+                    }
+                }
+            });
+        }
+        let lights = LightSet::new(lights, &geometry, radius);
+
+        let material_info: Vec<MaterialInfo> = materials
+            .iter()
+            .map(|m| MaterialInfo {
+                hints: m.factory.instance_hints(),
+                priority: m.priority,
+                ior: m.factory.ior(),
+                shadow_transmittance: m.factory.shadow_transmittance(),
+            })
+            .collect();
+        // Only materials some shape uses decide the features.
+        let mut used = vec![false; materials.len()];
+        for s in &shapes {
+            used[s.material as usize] = true;
+        }
+        for (info, _) in material_info.iter().zip(&used).filter(|(_, &u)| u) {
+            let h = info.hints;
+            features.volumes |= h.contains(InstanceHints::COMPUTES_INTERIOR);
+            features.transmissive |= h.contains(InstanceHints::TRANSMITS)
+                || h.contains(InstanceHints::INDEX_MATCHED);
+            features.scattering_media |= h.contains(InstanceHints::INTERIOR_SCATTERS);
+            features.heterogeneous |= h.contains(InstanceHints::INTERIOR_HETEROGENEOUS);
+            features.subsurface |= h.contains(InstanceHints::INTERIOR_SUBSURFACE);
+            features.emissive_media |= h.contains(InstanceHints::INTERIOR_EMITS);
+            features.transmission_shadows |= h.contains(InstanceHints::TRANSMISSION_SHADOWS);
+        }
+
+        let mut compiled = CompiledScene {
+            geometry,
+            prim_shape,
+            shapes,
+            materials,
+            material_info,
+            lights,
+            camera,
+            settings,
+            features,
+            camera_stack: VolumeStack::new(),
+            radius,
+            center,
+        };
+        compiled.camera_stack = match camera_volume {
+            Some(names) => compiled.explicit_stack(&names)?,
+            None => compiled.probe_stack(camera.from),
+        };
+        Ok(compiled)
+    }
+}
+
+impl CompiledScene {
+    /// The volume entry for crossing into `shape`'s interior, if its material has one.
+    pub fn volume_entry(&self, shape: u32) -> risotto_components::VolumeEntry {
+        let material = self.shapes[shape as usize].material;
+        risotto_components::VolumeEntry {
+            material,
+            shape,
+            priority: self.material_info[material as usize].priority,
+        }
+    }
+
+    /// True when rays crossing `shape` enter a volume the renderer must track (its material
+    /// computes an interior or takes part in priorities / IOR nesting).
+    pub fn tracks_interior(&self, shape: u32) -> bool {
+        let info = &self.material_info[self.shapes[shape as usize].material as usize];
+        info.hints.contains(InstanceHints::COMPUTES_INTERIOR)
+            || info.hints.contains(InstanceHints::TRANSMITS)
+    }
+
+    fn explicit_stack(&self, names: &[String]) -> Result<VolumeStack, CompileError> {
+        let mut stack = VolumeStack::new();
+        for n in names {
+            let s = self
+                .shapes
+                .iter()
+                .position(|s| &s.name == n)
+                .filter(|&s| self.tracks_interior(s as u32))
+                .ok_or_else(|| CompileError::CameraVolume(n.clone()))?;
+            stack.enter(self.volume_entry(s as u32));
+        }
+        Ok(stack)
+    }
+
+    /// Finds the volumes containing `point` by walking a ray from outside the scene to it and
+    /// applying every crossing of a tracked shape (front face: enter, back face: leave).
+    pub fn probe_stack(&self, point: Vec3) -> VolumeStack {
+        let mut stack = VolumeStack::new();
+        if !self.features.volumes && !self.features.transmissive {
+            return stack;
+        }
+        // Start outside the bounding sphere, on a direction unlikely to graze edges.
+        let dir = Vec3::new(0.5773, 0.5774, 0.5773).normalize();
+        let start = point + dir * (self.radius * 4.0 + (point - self.center).length() + 1.0);
+        let d = -dir;
+        let total = (point - start).length();
+        let mut t0 = 0.0f32;
+        for _ in 0..10_000 {
+            let mut t = [0.0f32];
+            let mut prim = [0u32];
+            let (mut b1, mut b2) = ([0.0f32], [0.0f32]);
+            risotto_systems::intersect::intersect_closest(
+                &self.geometry,
+                &[start],
+                &[d],
+                &[t0],
+                &[total],
+                &mut t,
+                &mut prim,
+                &mut b1,
+                &mut b2,
+            );
+            if prim[0] == risotto_components::NO_HIT {
+                break;
+            }
+            let shape = self.prim_shape[prim[0] as usize];
+            if self.tracks_interior(shape) {
+                let s = self.geometry.surface_at(prim[0], start, d, t[0], b1[0], b2[0]);
+                let front = d.dot(s.ng) < 0.0;
+                stack.cross(self.volume_entry(shape), front);
+            }
+            t0 = t[0] * (1.0 + 1e-5) + 1e-5;
+        }
+        stack
+    }
+}

@@ -1,0 +1,229 @@
+//! The transmission system: shadow rays never bend (the seed's "non-refractive, non-bending"
+//! transmission rays). Each one walks from its origin to its light sample; surfaces whose
+//! material lets shadows pass ([`InstanceHints::TRANSMISSION_SHADOWS`], e.g. index-matched
+//! boundaries or glass with cheap shadows) attenuate it by their shadow transmittance, false
+//! boundaries (priorities) pass it unchanged, every other surface blocks it, and each interval
+//! inside a volume is attenuated by that volume's `transmission`.
+//!
+//! Work is batch-shaped: all live shadow rays advance to their next surface in one intersect
+//! call per round, and the intervals of one round are grouped by volume so that each volume
+//! integrator answers once per round.
+
+use crate::integrator::ray_offset;
+use crate::plugin::*;
+use crate::scene::CompiledScene;
+use crate::stats::{System, SystemStats};
+use bumpalo::Bump;
+use glam::Vec3;
+use risotto_components::{Paths, Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
+use risotto_systems::intersect::{intersect_closest, intersect_occluded};
+use risotto_systems::sampler::PathSampler;
+
+/// Attenuates `contribution[i]` of every shadow ray by the transmittance to its light sample
+/// (0 when blocked).
+pub fn trace_shadow_rays(
+    scene: &CompiledScene,
+    shadow: &ShadowRays,
+    paths: &Paths,
+    seeds: &[u32],
+    contribution: &mut [Rgb],
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    let n = shadow.len();
+    let f = scene.features;
+    if !f.volumes && !f.transmission_shadows && !f.transmissive {
+        // Fast path: opaque surfaces only, a single any-hit query per ray.
+        let mut occluded = vec![false; n];
+        let tmin = vec![0.0f32; n];
+        stats.time(System::Intersect, n, || {
+            intersect_occluded(
+                &scene.geometry,
+                &shadow.origin,
+                &shadow.direction,
+                &tmin,
+                &shadow.tmax,
+                &mut occluded,
+            )
+        });
+        for i in 0..n {
+            if occluded[i] {
+                contribution[i] = Rgb::BLACK;
+            }
+        }
+        return;
+    }
+
+    let mut active: Vec<u32> = (0..n as u32).collect();
+    let mut t0 = vec![0.0f32; n];
+    let mut stacks: Vec<VolumeStack> = shadow.volume_stack.clone();
+    let mut origin = Vec::new();
+    let mut direction = Vec::new();
+    let mut tmin = Vec::new();
+    let mut tmax = Vec::new();
+    let (mut t, mut prim, mut b1, mut b2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut rounds = 0;
+    while !active.is_empty() && rounds < scene.settings.max_passes {
+        rounds += 1;
+        let m = active.len();
+        origin.clear();
+        direction.clear();
+        tmin.clear();
+        tmax.clear();
+        for &i in &active {
+            let i = i as usize;
+            origin.push(shadow.origin[i]);
+            direction.push(shadow.direction[i]);
+            tmin.push(t0[i]);
+            tmax.push(shadow.tmax[i]);
+        }
+        t.resize(m, 0.0);
+        prim.resize(m, NO_HIT);
+        b1.resize(m, 0.0);
+        b2.resize(m, 0.0);
+        stats.time(System::Intersect, m, || {
+            intersect_closest(
+                &scene.geometry,
+                &origin,
+                &direction,
+                &tmin,
+                &tmax,
+                &mut t,
+                &mut prim,
+                &mut b1,
+                &mut b2,
+            )
+        });
+        // Intervals inside volumes for this round: (ray, start, length).
+        if f.volumes {
+            let mut segs: Vec<(usize, f32, f32)> = Vec::new();
+            for (k, &i) in active.iter().enumerate() {
+                let i = i as usize;
+                let end = if prim[k] == NO_HIT { shadow.tmax[i] } else { t[k] };
+                if stacks[i].innermost().is_some() && end > t0[i] {
+                    segs.push((i, t0[i], end - t0[i]));
+                }
+            }
+            attenuate_in_volumes(scene, shadow, paths, seeds, &stacks, &segs, contribution, stats, arena);
+        }
+        let mut next = Vec::with_capacity(m);
+        for (k, &i) in active.iter().enumerate() {
+            let iu = i as usize;
+            if prim[k] == NO_HIT || contribution[iu].is_black() {
+                continue;
+            }
+            let shape = scene.prim_shape[prim[k] as usize];
+            let material = scene.shapes[shape as usize].material;
+            let info = &scene.material_info[material as usize];
+            let false_boundary = stacks[iu].is_false_boundary(shape, info.priority);
+            if !false_boundary {
+                if !info.hints.contains(InstanceHints::TRANSMISSION_SHADOWS) {
+                    contribution[iu] = Rgb::BLACK;
+                    continue;
+                }
+                contribution[iu] *= info.shadow_transmittance;
+            }
+            if scene.tracks_interior(shape) {
+                let s = scene
+                    .geometry
+                    .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
+                let front = direction[k].dot(s.ng) < 0.0;
+                stacks[iu].cross(scene.volume_entry(shape), front);
+            }
+            let p = origin[k] + direction[k] * t[k];
+            t0[iu] = t[k] + ray_offset(p);
+            if t0[iu] < shadow.tmax[iu] {
+                next.push(i);
+            }
+        }
+        active = next;
+    }
+    // Rays still walking after the pass budget are treated as blocked (never silently lit).
+    for &i in &active {
+        contribution[i as usize] = Rgb::BLACK;
+    }
+}
+
+/// Runs each volume's `transmission` on the intervals of one round that lie in it.
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+fn attenuate_in_volumes(
+    scene: &CompiledScene,
+    shadow: &ShadowRays,
+    paths: &Paths,
+    seeds: &[u32],
+    stacks: &[VolumeStack],
+    segs: &[(usize, f32, f32)],
+    contribution: &mut [Rgb],
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    if segs.is_empty() {
+        return;
+    }
+    let start = std::time::Instant::now();
+    // Group by innermost volume entry (material, shape): few distinct ones per round.
+    let mut keys: Vec<risotto_components::VolumeEntry> = Vec::new();
+    for &(i, _, _) in segs {
+        let e = stacks[i].innermost().expect("filtered above");
+        if !keys.contains(&e) {
+            keys.push(e);
+        }
+    }
+    for entry in keys {
+        let info = &scene.material_info[entry.material as usize];
+        if !info.hints.contains(InstanceHints::COMPUTES_INTERIOR) {
+            continue;
+        }
+        let members: Vec<&(usize, f32, f32)> = segs
+            .iter()
+            .filter(|(i, _, _)| stacks[*i].innermost() == Some(entry))
+            .collect();
+        let mut segments = Segments::default();
+        let mut pts = ShadingPoints::with_capacity(members.len());
+        let mut samplers = Vec::with_capacity(members.len());
+        for (k, &&(i, s0, len)) in members.iter().enumerate() {
+            let o: Vec3 = shadow.origin[i] + shadow.direction[i] * s0;
+            segments.push(o, shadow.direction[i], len);
+            let d = shadow.direction[i];
+            pts.push(ShadingPointRow {
+                p: o,
+                ng: -d,
+                nn: -d,
+                vn: -d,
+                vlen: 0.0,
+                u: 0.0,
+                v: 0.0,
+                w: 0.0,
+                transmission: Rgb::WHITE,
+                ray_id: k as u32,
+                material: entry.material,
+                shape: u32::MAX,
+                front_face: true,
+                ior_outside: 1.0,
+            });
+            let path = shadow.path[i] as usize;
+            // Shadow rays get their own decorrelated dimension block (high dimensions).
+            samplers.push(PathSampler {
+                seed: seeds[path] ^ 0x5bd1_e995,
+                sample: paths.sample[path],
+                dimension: 1024,
+            });
+        }
+        let m = members.len();
+        let pts = arena.alloc(pts);
+        let ctx = arena.alloc(ShadingContext::new(pts, 0..m, ShadingMode::Interior, entry.material, &[]));
+        let factory = scene.materials[entry.material as usize].factory.as_ref();
+        let Some(integrator) = factory.begin_interior(ctx, ShadingMode::Interior, arena) else {
+            continue;
+        };
+        let mut trans = vec![Rgb::WHITE; m];
+        let mut emission = vec![Rgb::BLACK; m];
+        let mut scratch_stats = SystemStats::default();
+        let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats);
+        integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
+        for (k, &&(i, _, _)) in members.iter().enumerate() {
+            contribution[i] *= trans[k];
+        }
+    }
+    stats.record(System::Volume, segs.len(), start.elapsed().as_secs_f64());
+}
