@@ -30,7 +30,11 @@ impl Rgb {
     }
     /// A colour from an array `[r, g, b]`.
     pub const fn from_array(a: [f32; 3]) -> Self {
-        Rgb { r: a[0], g: a[1], b: a[2] }
+        Rgb {
+            r: a[0],
+            g: a[1],
+            b: a[2],
+        }
     }
     /// The channels as an array `[r, g, b]`.
     pub const fn to_array(self) -> [f32; 3] {

@@ -1,1 +1,2 @@
 //! risotto systems.
+pub mod bxdf;
