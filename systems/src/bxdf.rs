@@ -1,0 +1,1010 @@
+//! Scattering math for surfaces and phase functions, one sample at a time.
+//!
+//! The engine wraps these in batch-shaped Bxdf closures; here live the per-sample formulas.
+//!
+//! # Conventions
+//! - Surface functions work in a **local shading frame** whose shading normal is `+z`
+//!   ([`Frame`] maps world directions in and out). `+z` is the *outside* of a dielectric.
+//! - `wo` points from the shading point back towards where the ray came from (`wo = -d`,
+//!   the same as a shading point's `vn`); `wi` is the sampled direction the path continues
+//!   along. Both are unit vectors.
+//! - A [`BxdfSample::weight`] is `f * |cos theta_i| / pdf`, per channel, dimensionless.
+//! - Dirac (specular) lobes report as `pdf` the *discrete probability* of choosing that lobe,
+//!   and their weight already includes the lobe's `f * |cos| / pdf`. Evaluating a Dirac lobe
+//!   at an arbitrary direction gives zero, so there are no eval functions for them.
+//! - Degenerate inputs (grazing `wo` exactly in the surface plane, samples that land on the
+//!   horizon) produce `None`, never NaN.
+
+use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+
+/// `1 / (4 pi)`: the density of the uniform distribution on the unit sphere.
+pub const INV_4PI: f32 = 0.25 * FRAC_1_PI;
+
+/// Largest `|g|` the Henyey-Greenstein functions use. At `|g| = 1` the lobe is a Dirac delta
+/// and the density formula is `0/0`; clamping keeps every result finite (the clamped lobe
+/// has an angular width of about `1e-5` rad, far below anything a renderer resolves).
+pub const HG_G_MAX: f32 = 0.99999;
+
+/// An orthonormal, right-handed basis (`s x t = n`) around a unit normal `n`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// First tangent.
+    pub s: Vec3,
+    /// Second tangent (`n x s`).
+    pub t: Vec3,
+    /// The normal; maps to local `+z`.
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// Builds a frame from a **unit** normal with the branchless construction of Duff et al.
+    /// 2017, "Building an Orthonormal Basis, Revisited" (JCGT 6(1)), listing 3. It is
+    /// continuous everywhere except across `n.z = 0` with `n.z` changing sign, and -- unlike
+    /// Frisvad's original -- stays accurate as `n` approaches `-z`.
+    pub fn from_normal(n: Vec3) -> Self {
+        // copysign rather than signum so that n.z = -0.0 takes the "-z" branch consistently
+        // and never divides by zero: sign + n.z has |.| >= 1.
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Frame { s, t, n }
+    }
+
+    /// World direction to local coordinates (`n` becomes `+z`).
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    /// Local coordinates to a world direction.
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+/// One sampled scattering direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BxdfSample {
+    /// Sampled direction, local frame, unit length.
+    pub wi: Vec3,
+    /// `f * |cos theta_i| / pdf` per channel.
+    pub weight: Rgb,
+    /// Solid-angle density of `wi`; for a Dirac lobe the discrete probability of having
+    /// chosen that lobe.
+    pub pdf: f32,
+    /// `REFLECT` or `TRANSMIT`, plus `DIFFUSE` or `SPECULAR`.
+    pub lobe: LobeSampled,
+    /// Relative index of refraction crossed, `eta_transmitted / eta_incident`; 1 when the
+    /// sample did not cross an interface.
+    pub eta: f32,
+}
+
+// ---------------------------------------------------------------------------------------
+// Warps from the unit square
+// ---------------------------------------------------------------------------------------
+
+/// Maps `u` in `[0,1)^2` to the unit disk with Shirley and Chiu's concentric mapping
+/// ("A Low Distortion Map Between Disk and Square", 1997): area preserving and continuous,
+/// so stratification of `u` survives.
+pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
+    let p = 2.0 * u - Vec2::ONE;
+    if p.x == 0.0 && p.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    // Each wedge |x| > |y| maps radius |x| and angle in [-pi/4, pi/4] (mirrored for the
+    // other wedge); the ratio of the smaller to the larger coordinate is in [-1, 1].
+    let (r, theta) = if p.x.abs() > p.y.abs() {
+        (p.x, FRAC_PI_4 * (p.y / p.x))
+    } else {
+        (p.y, FRAC_PI_2 - FRAC_PI_4 * (p.x / p.y))
+    };
+    let (sin, cos) = theta.sin_cos();
+    Vec2::new(r * cos, r * sin)
+}
+
+/// Cosine-weighted direction on the `+z` hemisphere (Malley's method: project a uniform
+/// disk sample up onto the hemisphere). Density `cos theta / pi`. The result can have
+/// `z = 0` when `u` is on the square's boundary.
+pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = sample_concentric_disk(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+/// Uniform direction on the unit sphere; density [`INV_4PI`]. `z = 1 - 2 u.x` is uniform by
+/// Archimedes' hat-box theorem.
+pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    // (1 - z)(1 + z) instead of 1 - z^2 keeps precision near the poles.
+    let r = ((1.0 - z) * (1.0 + z)).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3::new(r * cos, r * sin, z)
+}
+
+/// Uniform direction in the cone of half-angle `acos(cos_max)` around `+z`; density
+/// [`uniform_cone_pdf`]. `cos theta` is uniform on `[cos_max, 1]` (hat-box again).
+pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
+    let cos_max = cos_max.clamp(-1.0, 1.0);
+    // 1 - cos theta = u (1 - cos_max), computed directly so narrow cones keep their
+    // resolution (cos theta itself would round to 1).
+    let one_minus_cos = u.x * (1.0 - cos_max);
+    let z = 1.0 - one_minus_cos;
+    let r = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3::new(r * cos, r * sin, z)
+}
+
+/// Density of [`sample_uniform_cone`]: `1 / (2 pi (1 - cos_max))` (infinite for a
+/// degenerate cone, where the distribution is a Dirac delta).
+pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * (1.0 - cos_max.clamp(-1.0, 1.0)))
+}
+
+/// Uniformly distributed barycentrics `(b0, b1)` on a triangle (`b2 = 1 - b0 - b1`), with the
+/// low-distortion warp of Heitz 2019 ("A Low-Distortion Map Between Triangle and Square"):
+/// an offset along the diagonal instead of the classic `sqrt(u)` fold, which keeps
+/// neighbouring `u` neighbours on the triangle.
+pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
+    let (b0, b1) = if u.x < u.y {
+        let b0 = 0.5 * u.x;
+        (b0, u.y - b0)
+    } else {
+        let b1 = 0.5 * u.y;
+        (u.x - b1, b1)
+    };
+    Vec2::new(b0, b1)
+}
+
+// ---------------------------------------------------------------------------------------
+// Lambertian
+// ---------------------------------------------------------------------------------------
+
+const DIFFUSE_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSampled::DIFFUSE.0);
+const SPECULAR_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSampled::SPECULAR.0);
+const SPECULAR_TRANSMIT: LobeSampled =
+    LobeSampled(LobeSampled::TRANSMIT.0 | LobeSampled::SPECULAR.0);
+
+/// Strictly above the surface (`cos > 0`); false for NaN, so NaN input yields no sample.
+#[inline]
+fn above(cos: f32) -> bool {
+    cos > 0.0
+}
+
+/// A usable relative index of refraction: positive and finite (false for NaN).
+#[inline]
+fn valid_eta(eta: f32) -> bool {
+    eta > 0.0 && eta.is_finite()
+}
+
+/// Samples the one-sided Lambertian lobe `f = reflectance / pi` by cosine-weighted
+/// hemisphere sampling, so `weight = reflectance` exactly. `None` when `wo` is at or below
+/// the surface (the lobe is zero there) or the sample lands on the horizon.
+pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample> {
+    if !above(wo.z) {
+        return None;
+    }
+    let wi = sample_cosine_hemisphere(u);
+    if !above(wi.z) {
+        return None;
+    }
+    Some(BxdfSample {
+        wi,
+        weight: reflectance,
+        pdf: wi.z * FRAC_1_PI,
+        lobe: DIFFUSE_REFLECT,
+        eta: 1.0,
+    })
+}
+
+/// Evaluates the one-sided Lambertian lobe: `(f * |cos theta_i|, pdf)` with
+/// `f = reflectance / pi` and the cosine-hemisphere pdf; zero when either direction is at
+/// or below the surface.
+pub fn diffuse_eval(reflectance: Rgb, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+    if !(above(wo.z) && above(wi.z)) {
+        return (Rgb::BLACK, 0.0);
+    }
+    let pdf = wi.z * FRAC_1_PI;
+    (reflectance * pdf, pdf)
+}
+
+// ---------------------------------------------------------------------------------------
+// Fresnel and the smooth dielectric
+// ---------------------------------------------------------------------------------------
+
+/// Result of solving Snell's law plus the Fresnel equations at one interface.
+struct FresnelTerms {
+    /// `R_s` (perpendicular) reflectance.
+    rs: f32,
+    /// `R_p` (parallel) reflectance.
+    rp: f32,
+    /// `cos theta_t >= 0` (0 under total internal reflection).
+    cos_t: f32,
+    /// `eta_t / eta_i` for the side the light arrives from.
+    eta_rel: f32,
+    /// Total internal reflection: no transmitted direction exists.
+    tir: bool,
+}
+
+/// Fresnel equations for a dielectric interface (Born & Wolf, "Principles of Optics",
+/// sec. 1.5.2). `cos_i < 0` means arriving from the inside: the ratio flips to `1/eta`.
+fn fresnel_terms(cos_i: f32, eta: f32) -> FresnelTerms {
+    let cos_i = cos_i.clamp(-1.0, 1.0);
+    let (cos_i, eta) = if cos_i < 0.0 {
+        (-cos_i, 1.0 / eta)
+    } else {
+        (cos_i, eta)
+    };
+    if eta == 1.0 {
+        // Index matched: no interface at all (and the general formulas are 0/0 at grazing).
+        return FresnelTerms {
+            rs: 0.0,
+            rp: 0.0,
+            cos_t: cos_i,
+            eta_rel: 1.0,
+            tir: false,
+        };
+    }
+    // Snell: sin_t = sin_i / eta. (1 - c)(1 + c) keeps precision at normal incidence.
+    let sin2_t = (1.0 - cos_i) * (1.0 + cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return FresnelTerms {
+            rs: 1.0,
+            rp: 1.0,
+            cos_t: 0.0,
+            eta_rel: eta,
+            tir: true,
+        };
+    }
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    // Amplitude coefficients with eta = n_t / n_i (divide the textbook forms by n_i):
+    // r_s = (n_i cos_i - n_t cos_t) / (n_i cos_i + n_t cos_t),
+    // r_p = (n_t cos_i - n_i cos_t) / (n_t cos_i + n_i cos_t).
+    // A denominator is zero only when cos_i = cos_t = 0, i.e. eta = 1 at exactly grazing
+    // incidence; an index-matched interface does not reflect, so report 0 there.
+    let ds = cos_i + eta * cos_t;
+    let dp = eta * cos_i + cos_t;
+    let rs_amp = if ds > 0.0 {
+        (cos_i - eta * cos_t) / ds
+    } else {
+        0.0
+    };
+    let rp_amp = if dp > 0.0 {
+        (eta * cos_i - cos_t) / dp
+    } else {
+        0.0
+    };
+    FresnelTerms {
+        rs: (rs_amp * rs_amp).min(1.0),
+        rp: (rp_amp * rp_amp).min(1.0),
+        cos_t,
+        eta_rel: eta,
+        tir: false,
+    }
+}
+
+/// Unpolarized Fresnel reflectance `(R_s + R_p) / 2` of a smooth dielectric interface.
+///
+/// `cos_theta_i` is the cosine between the incident direction (pointing away from the
+/// surface) and the normal; `eta = n_inside / n_outside`. A negative cosine means the light
+/// arrives from the inside and the ratio becomes `1 / eta`. Returns 1 under total internal
+/// reflection. The transmittance is `1 - R` (energy conservation of the interface).
+pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> f32 {
+    let f = fresnel_terms(cos_theta_i, eta);
+    0.5 * (f.rs + f.rp)
+}
+
+/// The two polarized Fresnel reflectances `(R_s, R_p)` (perpendicular, parallel) with the
+/// same conventions as [`fresnel_dielectric`]. `R_p` vanishes at Brewster's angle.
+pub fn fresnel_dielectric_polarized(cos_theta_i: f32, eta: f32) -> (f32, f32) {
+    let f = fresnel_terms(cos_theta_i, eta);
+    (f.rs, f.rp)
+}
+
+/// Mirror reflection of a local direction about `+z`.
+#[inline]
+pub fn reflect_local(wo: Vec3) -> Vec3 {
+    Vec3::new(-wo.x, -wo.y, wo.z)
+}
+
+/// Refraction of a local direction through the `z = 0` interface with
+/// `eta = n_inside / n_outside` (`+z` is outside). `wo` may be on either side; the result
+/// is on the other side. Returns `(wi, eta_rel)` with `eta_rel = n_t / n_i` for this
+/// crossing, or `None` under total internal reflection or for `wo` in the plane.
+pub fn refract_local(wo: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+    if wo.z == 0.0 || !valid_eta(eta) {
+        return None;
+    }
+    let f = fresnel_terms(wo.z, eta);
+    if f.tir {
+        return None;
+    }
+    Some((refract_with(wo, f.cos_t, f.eta_rel), f.eta_rel))
+}
+
+/// Snell's law in vector form (pbrt-v4 sec. 9.3.2): the tangential part scales by
+/// `1/eta_rel`, the normal part is `cos_t` on the far side of the interface.
+#[inline]
+fn refract_with(wo: Vec3, cos_t: f32, eta_rel: f32) -> Vec3 {
+    let z = if wo.z > 0.0 { -cos_t } else { cos_t };
+    Vec3::new(-wo.x / eta_rel, -wo.y / eta_rel, z)
+}
+
+/// Samples a smooth dielectric interface (`eta = n_inside / n_outside`, `+z` outside).
+///
+/// Chooses reflection with probability `R` (exact unpolarized Fresnel, `u.x < R`) and
+/// refraction otherwise, so each Dirac lobe's weight is `f |cos| / pdf`:
+/// - reflection: `pdf = R`, weight 1;
+/// - refraction: `pdf = T = 1 - R`, weight `tint / eta_rel^2`. The `1/eta_rel^2` is the
+///   radiance (not importance) transport factor: radiance is compressed by `(n_t/n_i)^2`
+///   crossing into a denser medium (pbrt-v4 sec. 9.5.2, Veach thesis sec. 5.2).
+///
+/// So `E[weight] = R + T * tint / eta_rel^2`. `wo` may be on either side; under total
+/// internal reflection `R = 1`. `None` for `wo` in the surface plane or an invalid `eta`.
+pub fn dielectric_sample(eta: f32, tint: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample> {
+    if wo.z == 0.0 || !wo.z.is_finite() || !valid_eta(eta) {
+        return None;
+    }
+    let f = fresnel_terms(wo.z, eta);
+    let r = 0.5 * (f.rs + f.rp);
+    // `f.tir` also covers u.x = 1 (outside [0, 1)) under total internal reflection.
+    if u.x < r || f.tir {
+        Some(BxdfSample {
+            wi: reflect_local(wo),
+            weight: Rgb::WHITE,
+            pdf: r,
+            lobe: SPECULAR_REFLECT,
+            eta: 1.0,
+        })
+    } else {
+        let inv_eta = 1.0 / f.eta_rel;
+        Some(BxdfSample {
+            wi: refract_with(wo, f.cos_t, f.eta_rel),
+            weight: tint * (inv_eta * inv_eta),
+            pdf: 1.0 - r,
+            lobe: SPECULAR_TRANSMIT,
+            eta: f.eta_rel,
+        })
+    }
+}
+
+/// Perfect specular reflection weighted by `reflectance` (a mirror or a smooth conductor
+/// whose colour the caller already computed). One-sided like [`diffuse_sample`]: `None`
+/// when `wo` is at or below the surface.
+pub fn mirror_sample(reflectance: Rgb, wo: Vec3) -> Option<BxdfSample> {
+    if !above(wo.z) {
+        return None;
+    }
+    Some(BxdfSample {
+        wi: reflect_local(wo),
+        weight: reflectance,
+        pdf: 1.0,
+        lobe: SPECULAR_REFLECT,
+        eta: 1.0,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Henyey-Greenstein
+// ---------------------------------------------------------------------------------------
+
+/// HG density from `1 - cos theta` and `1 + cos theta`, both passed separately because each
+/// is computed without cancellation.
+///
+/// The denominator `1 + g^2 - 2 g cos theta` is rewritten as a sum of non-negative terms:
+/// `(1 - g)^2 + 2 g (1 - cos)` for `g >= 0` and `(1 + g)^2 - 2 g (1 + cos)` for `g < 0`.
+/// The naive form cancels catastrophically near the peak when `|g| -> 1` (it can even go
+/// negative in f32); this one is bounded below by `(1 - |g|)^2 > 0`.
+#[inline]
+fn hg_density(g: f32, one_minus_cos: f32, one_plus_cos: f32) -> f32 {
+    let g = g.clamp(-HG_G_MAX, HG_G_MAX);
+    let denom = if g >= 0.0 {
+        (1.0 - g) * (1.0 - g) + 2.0 * g * one_minus_cos
+    } else {
+        (1.0 + g) * (1.0 + g) - 2.0 * g * one_plus_cos
+    };
+    (1.0 - g) * (1.0 + g) * INV_4PI / (denom * denom.sqrt())
+}
+
+/// Henyey-Greenstein phase function (1941),
+/// `p = (1 - g^2) / (4 pi (1 + g^2 - 2 g cos theta)^1.5)`, in 1/sr, integrating to 1.
+///
+/// Direction convention: `wo` points back towards where the light came from
+/// (`wo = -ray direction`), so `theta` is the angle between the propagation direction `-wo`
+/// and `wi`; `g > 0` scatters forward (`wi` close to `-wo`). Frame independent: pass world
+/// or local directions. `g` is clamped to `[-HG_G_MAX, HG_G_MAX]`.
+pub fn hg_eval(g: f32, wo: Vec3, wi: Vec3) -> f32 {
+    // For unit vectors a, b: 1 - a.b = |a - b|^2 / 2 and 1 + a.b = |a + b|^2 / 2. Unlike
+    // 1 - dot(a, b) these keep full relative precision for nearly (anti)parallel vectors,
+    // which is exactly where a strongly peaked lobe lives.
+    let d = -wo;
+    let one_minus_cos = (0.5 * (d - wi).length_squared()).min(2.0);
+    let one_plus_cos = (0.5 * (d + wi).length_squared()).min(2.0);
+    hg_density(g, one_minus_cos, one_plus_cos)
+}
+
+/// Samples [`hg_eval`] exactly by inverting its CDF; returns `(wi, pdf)` with
+/// `pdf == hg_eval(g, wo, wi)` (up to rounding). Same convention as [`hg_eval`]; `wo` must be
+/// a unit vector. `u.x` picks the polar angle, `u.y` the azimuth.
+///
+/// Derivation: with `mu = cos theta` the marginal is `(1 - g^2) / (2 (1 + g^2 - 2 g mu)^1.5)`
+/// and its CDF from `mu = -1` is
+/// `F(mu) = (1 - g^2) / (2g) * ((1 + g^2 - 2 g mu)^-1/2 - 1 / (1 + g))`.
+/// Solving `F(mu) = xi` gives `1 + g^2 - 2 g mu = ((1 - g^2) / D)^2` with
+/// `D = 1 - g + 2 g xi`, and after factoring differences of squares
+/// - `1 - mu = 2 (1 - g)^2 (1 - xi) (1 + g xi) / D^2`,
+/// - `1 + mu = 2 (1 + g)^2 xi (1 - g + g xi) / D^2`,
+/// - `p = D^3 / (4 pi (1 - g^2)^2)`.
+///
+/// No `1/g` survives (so `g = 0` is exactly uniform, with no special case) and no
+/// difference of nearly equal numbers remains (so `|g| -> 1` is accurate). `D` lies between
+/// `1 - |g|` and `1 + |g|`, hence is positive: the result is never NaN.
+pub fn hg_sample(g: f32, wo: Vec3, u: Vec2) -> (Vec3, f32) {
+    let g = g.clamp(-HG_G_MAX, HG_G_MAX);
+    let xi = u.x.clamp(0.0, 1.0);
+    let d = 1.0 - g + 2.0 * g * xi;
+    let inv_d2 = 1.0 / (d * d);
+    let one_minus_mu =
+        (2.0 * (1.0 - g) * (1.0 - g) * (1.0 - xi) * (1.0 + g * xi) * inv_d2).clamp(0.0, 2.0);
+    let one_plus_mu =
+        (2.0 * (1.0 + g) * (1.0 + g) * xi * (1.0 - g + g * xi) * inv_d2).clamp(0.0, 2.0);
+    // Take mu from whichever side is closer to its pole, where that side is the accurate one.
+    let mu = if one_minus_mu < one_plus_mu {
+        1.0 - one_minus_mu
+    } else {
+        one_plus_mu - 1.0
+    };
+    let sin_theta = (one_minus_mu * one_plus_mu).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+    let local = Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, mu);
+    let wi = Frame::from_normal(-wo).to_world(local);
+    let one_minus_g2 = (1.0 - g) * (1.0 + g);
+    let pdf = d * d * d * INV_4PI / (one_minus_g2 * one_minus_g2);
+    (wi, pdf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64: a tiny deterministic generator for reproducible tests.
+    struct Rng(u64);
+    impl Rng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        }
+        fn f32(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        }
+        fn vec2(&mut self) -> Vec2 {
+            Vec2::new(self.f32(), self.f32())
+        }
+    }
+
+    fn dir(theta: f32, phi: f32) -> Vec3 {
+        Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
+    }
+
+    /// Fresnel reflectance from the angle forms (Born & Wolf eq. 1.5.(21)):
+    /// `R_s = sin^2(ti - tt) / sin^2(ti + tt)`, `R_p = tan^2(ti - tt) / tan^2(ti + tt)`,
+    /// in f64 -- a different formula than the one under test.
+    fn fresnel_angles(theta_i: f64, eta: f64) -> (f64, f64) {
+        if theta_i == 0.0 {
+            let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+            return (r0, r0);
+        }
+        let sin_t = theta_i.sin() / eta;
+        if sin_t >= 1.0 {
+            return (1.0, 1.0);
+        }
+        let theta_t = sin_t.asin();
+        let rs = ((theta_i - theta_t).sin() / (theta_i + theta_t).sin()).powi(2);
+        let rp = ((theta_i - theta_t).tan() / (theta_i + theta_t).tan()).powi(2);
+        (rs, rp)
+    }
+
+    #[test]
+    fn frame_is_orthonormal_right_handed_and_inverts() {
+        let mut rng = Rng(1);
+        let mut normals: Vec<Vec3> = (0..2000)
+            .map(|_| sample_uniform_sphere(rng.vec2()))
+            .collect();
+        normals.extend([
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.0, -0.0, -1.0),
+            Vec3::new(1e-4, 0.0, -1.0).normalize(),
+            Vec3::new(0.0, 1e-7, -1.0).normalize(),
+            Vec3::new(1.0, 0.0, -0.0),
+            Vec3::new(1.0, 0.0, 1e-7).normalize(),
+        ]);
+        for n in normals {
+            let f = Frame::from_normal(n);
+            for (a, b) in [(f.s, f.t), (f.t, f.n), (f.s, f.n)] {
+                assert!(a.dot(b).abs() < 1e-5, "not orthogonal for n = {n}");
+            }
+            for v in [f.s, f.t, f.n] {
+                assert!((v.length() - 1.0).abs() < 1e-5, "not unit for n = {n}");
+            }
+            assert!(
+                (f.s.cross(f.t) - f.n).length() < 1e-5,
+                "not right-handed for {n}"
+            );
+            assert!((f.to_local(n) - Vec3::Z).length() < 1e-5);
+            let v = Vec3::new(0.3, -0.5, 0.81).normalize();
+            assert!((f.to_local(f.to_world(v)) - v).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn concentric_disk_stays_in_disk_and_covers_it() {
+        let mut rng = Rng(2);
+        let mut quadrants = [0usize; 4];
+        for _ in 0..10_000 {
+            let d = sample_concentric_disk(rng.vec2());
+            assert!(d.length() <= 1.0 + 1e-6);
+            quadrants[(d.x >= 0.0) as usize * 2 + (d.y >= 0.0) as usize] += 1;
+        }
+        for q in quadrants {
+            assert!((q as f64 - 2500.0).abs() < 5.0 * 43.3, "{quadrants:?}");
+        }
+        // Corners of the square go to the circle's diagonals.
+        let c = sample_concentric_disk(Vec2::new(1.0, 1.0));
+        assert!((c - Vec2::splat(std::f32::consts::FRAC_1_SQRT_2)).length() < 1e-6);
+    }
+
+    #[test]
+    fn triangle_samples_are_uniform_barycentrics() {
+        // Inside the triangle, and the mean of uniform barycentrics is the centroid
+        // (1/3, 1/3) with per-coordinate variance 1/18.
+        let mut rng = Rng(3);
+        let n = 200_000;
+        let mut sum = [0.0f64; 2];
+        let mut below_half = 0usize;
+        for _ in 0..n {
+            let b = sample_uniform_triangle(rng.vec2());
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+            sum[0] += b.x as f64;
+            sum[1] += b.y as f64;
+            // Area of {b0 + b1 < 1/2} is a quarter of the triangle's.
+            below_half += (b.x + b.y < 0.5) as usize;
+        }
+        let tol = 5.0 * (1.0f64 / 18.0 / n as f64).sqrt();
+        for s in sum {
+            assert!((s / n as f64 - 1.0 / 3.0).abs() < tol, "{sum:?}");
+        }
+        let p = below_half as f64 / n as f64;
+        assert!(
+            (p - 0.25).abs() < 5.0 * (0.25 * 0.75 / n as f64).sqrt(),
+            "{p}"
+        );
+    }
+
+    #[test]
+    fn fresnel_known_values() {
+        for eta in [1.0f32, 1.33, 1.5, 2.4, 0.5] {
+            let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+            assert!(
+                (fresnel_dielectric(1.0, eta) - r0).abs() < 1e-6,
+                "eta {eta}"
+            );
+            // Normal incidence from inside sees the same reflectance.
+            assert!(
+                (fresnel_dielectric(-1.0, eta) - r0).abs() < 1e-6,
+                "eta {eta}"
+            );
+        }
+        // Glass: 4% at normal incidence, 1 at grazing.
+        assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert_eq!(fresnel_dielectric(0.0, 1.5), 1.0);
+        // Index matched: no reflection at all, even at grazing incidence.
+        for c in [1.0, 0.5, 1e-7, 0.0, -0.3] {
+            assert_eq!(fresnel_dielectric(c, 1.0), 0.0);
+        }
+        // Against the angle form of the Fresnel equations over the whole range.
+        for eta in [1.33f64, 1.5, 2.4, 1.0 / 1.5] {
+            for k in 1..90 {
+                let theta = (k as f64).to_radians();
+                let (rs, rp) = fresnel_angles(theta, eta);
+                let (s, p) = fresnel_dielectric_polarized(theta.cos() as f32, eta as f32);
+                assert!(
+                    (s as f64 - rs).abs() < 2e-5,
+                    "Rs eta {eta} theta {k}: {s} {rs}"
+                );
+                assert!(
+                    (p as f64 - rp).abs() < 2e-5,
+                    "Rp eta {eta} theta {k}: {p} {rp}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fresnel_total_internal_reflection_above_critical_angle() {
+        let eta = 1.5f32;
+        let critical = (1.0 / eta).asin();
+        for k in 1..50 {
+            let theta = critical + (FRAC_PI_2 - critical) * k as f32 / 50.0;
+            // From inside (cos < 0): TIR.
+            assert_eq!(fresnel_dielectric(-theta.cos(), eta), 1.0, "theta {theta}");
+            // The same angle from outside never totally reflects.
+            assert!(fresnel_dielectric(theta.cos(), eta) < 1.0);
+        }
+        // Just below the critical angle light still gets through.
+        let below = critical - 1e-3;
+        assert!(fresnel_dielectric(-below.cos(), eta) < 1.0);
+        assert!(refract_local(-dir(critical + 1e-3, 0.3), eta).is_none());
+    }
+
+    #[test]
+    fn fresnel_brewster_angle_zeroes_parallel_reflectance() {
+        for eta in [1.33f32, 1.5, 2.4, 1.0 / 1.5] {
+            // tan(theta_B) = n_t / n_i.
+            let theta_b = eta.atan();
+            let (rs, rp) = fresnel_dielectric_polarized(theta_b.cos(), eta);
+            assert!(rp < 1e-6, "eta {eta}: Rp = {rp}");
+            assert!(rs > 1e-3, "eta {eta}: Rs = {rs}");
+            // And R_p is not small away from it.
+            let (_, rp_off) = fresnel_dielectric_polarized((theta_b + 0.2).cos(), eta);
+            assert!(rp_off > 1e-3);
+        }
+    }
+
+    #[test]
+    fn fresnel_reciprocity_and_energy_conservation() {
+        for eta in [1.33f32, 1.5, 2.4] {
+            for k in 1..=100 {
+                let cos_i = k as f32 / 100.0;
+                let r = fresnel_dielectric(cos_i, eta);
+                // Stokes relations: reflectance is the same for the reversed path
+                // (from inside at the refracted angle, relative index 1/eta).
+                let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+                let cos_t = (1.0 - sin2_t).sqrt();
+                // Going back from inside near the critical angle is ill-conditioned
+                // (cos_i = sqrt(1 - eta^2 sin_t^2) cancels), so the f32 tolerance grows as
+                // 1 / cos_i towards grazing incidence.
+                let tol = 2e-6 / cos_i.max(0.01);
+                let back = fresnel_dielectric(cos_t, 1.0 / eta);
+                assert!(
+                    (back - r).abs() < tol,
+                    "eta {eta} cos {cos_i}: {r} vs {back}"
+                );
+                assert!((fresnel_dielectric(-cos_t, eta) - r).abs() < tol);
+                // A negative cosine is the same as flipping eta.
+                assert_eq!(
+                    fresnel_dielectric(-cos_i, eta),
+                    fresnel_dielectric(cos_i, 1.0 / eta)
+                );
+                // Energy: T from the *transmission* amplitude coefficients
+                // t_s = 2 cos_i / (cos_i + eta cos_t), t_p = 2 cos_i / (eta cos_i + cos_t),
+                // with the beam cross-section/impedance factor eta cos_t / cos_i,
+                // must complement R.
+                let (ci, ct, e) = (cos_i as f64, cos_t as f64, eta as f64);
+                let ts = 2.0 * ci / (ci + e * ct);
+                let tp = 2.0 * ci / (e * ci + ct);
+                let t = e * ct / ci * 0.5 * (ts * ts + tp * tp);
+                assert!((r as f64 + t - 1.0).abs() < 1e-5, "eta {eta} cos {cos_i}");
+            }
+        }
+    }
+
+    #[test]
+    fn refraction_obeys_snell_and_is_reciprocal() {
+        let mut rng = Rng(4);
+        for eta in [1.33f32, 1.5, 2.4, 0.7] {
+            for _ in 0..2000 {
+                let mut wo = sample_uniform_sphere(rng.vec2());
+                if wo.z.abs() < 1e-3 {
+                    wo.z = 0.5;
+                    wo = wo.normalize();
+                }
+                let Some((wi, eta_rel)) = refract_local(wo, eta) else {
+                    // Only total internal reflection may refuse to refract.
+                    let n_ratio = if wo.z > 0.0 { eta } else { 1.0 / eta };
+                    let sin_o = (1.0 - wo.z * wo.z).sqrt();
+                    assert!(sin_o > n_ratio * (1.0 - 1e-5), "refused at sin {sin_o}");
+                    continue;
+                };
+                let (n_i, n_t) = if wo.z > 0.0 { (1.0, eta) } else { (eta, 1.0) };
+                assert!((eta_rel - n_t / n_i).abs() < 1e-6);
+                assert!((wi.length() - 1.0).abs() < 1e-5);
+                assert!(wi.z * wo.z < 0.0, "must cross the interface");
+                // Snell: n_i sin_i = n_t sin_t.
+                let sin_i = wo.truncate().length();
+                let sin_t = wi.truncate().length();
+                assert!((n_i * sin_i - n_t * sin_t).abs() < 1e-5);
+                // Plane of incidence: the tangential parts are antiparallel.
+                assert!(wo.truncate().perp_dot(wi.truncate()).abs() < 1e-5);
+                assert!(wo.truncate().dot(wi.truncate()) <= 1e-6);
+                // Reciprocity: reversing the light path refracts back to wo, with 1/eta.
+                let (back, eta_back) = refract_local(wi, eta).expect("reverse path exists");
+                assert!((back - wo).length() < 1e-4, "{back} vs {wo}");
+                assert!((eta_back * eta_rel - 1.0).abs() < 1e-5);
+                // The sampler's transmitted lobe is exactly this direction.
+                let s = dielectric_sample(eta, Rgb::WHITE, wo, Vec2::new(1.0 - 1e-7, 0.5))
+                    .expect("valid wo");
+                assert!(s.lobe.is_transmit() && s.lobe.is_specular());
+                assert_eq!(s.wi, wi);
+                assert_eq!(s.eta, eta_rel);
+            }
+        }
+    }
+
+    #[test]
+    fn mirror_reflection_is_exact() {
+        let mut rng = Rng(5);
+        for _ in 0..1000 {
+            let n = sample_uniform_sphere(rng.vec2());
+            let frame = Frame::from_normal(n);
+            let mut w = sample_uniform_sphere(rng.vec2());
+            if w.dot(n) < 0.0 {
+                w = -w;
+            }
+            let wo = frame.to_local(w);
+            let Some(s) = mirror_sample(Rgb::new(0.9, 0.5, 0.1), wo) else {
+                assert!(wo.z <= 0.0);
+                continue;
+            };
+            // r = 2 (n.w) n - w in world space.
+            let expected = 2.0 * n.dot(w) * n - w;
+            assert!((frame.to_world(s.wi) - expected).length() < 1e-5);
+            assert_eq!(s.wi, reflect_local(wo));
+            assert_eq!(s.weight, Rgb::new(0.9, 0.5, 0.1));
+            assert_eq!(s.lobe, SPECULAR_REFLECT);
+            // The dielectric's reflected lobe is the same direction.
+            let d = dielectric_sample(1.5, Rgb::WHITE, wo, Vec2::ZERO).expect("reflects");
+            assert_eq!(d.wi, s.wi);
+        }
+        assert!(mirror_sample(Rgb::WHITE, Vec3::new(0.0, 0.6, -0.8)).is_none());
+    }
+
+    #[test]
+    fn dielectric_reflection_probability_and_mean_weight() {
+        // Monte Carlo over u.x must reproduce P(reflect) = R and E[weight] =
+        // R + T tint / eta_rel^2, at several angles and from both sides.
+        let tint = Rgb::new(1.0, 0.8, 0.3);
+        let n = 200_000;
+        for eta in [1.5f32, 1.33] {
+            for theta_deg in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
+                for side in [1.0f32, -1.0] {
+                    let mut wo = dir(theta_deg.to_radians(), 1.1);
+                    wo.z *= side;
+                    let mut rng = Rng(6 + theta_deg as u64);
+                    let mut reflected = 0usize;
+                    let mut sum = [0.0f64; 3];
+                    for _ in 0..n {
+                        let s = dielectric_sample(eta, tint, wo, rng.vec2()).expect("valid");
+                        reflected += s.lobe.contains(LobeSampled::REFLECT) as usize;
+                        for (acc, w) in sum.iter_mut().zip(s.weight.to_array()) {
+                            *acc += w as f64;
+                        }
+                    }
+                    // Reference from the independent angle-form Fresnel, in f64.
+                    let eta_rel = if side > 0.0 {
+                        eta as f64
+                    } else {
+                        1.0 / eta as f64
+                    };
+                    let (rs, rp) = fresnel_angles(theta_deg.to_radians() as f64, eta_rel);
+                    let r = 0.5 * (rs + rp);
+                    let t = 1.0 - r;
+                    let p = reflected as f64 / n as f64;
+                    let sigma = (r * t / n as f64).sqrt().max(1e-9);
+                    assert!((p - r).abs() < 5.0 * sigma + 1e-5, "P(R) {p} vs {r}");
+                    for (c, acc) in tint.to_array().iter().zip(sum) {
+                        let expect = r + t * *c as f64 / (eta_rel * eta_rel);
+                        let mean = acc / n as f64;
+                        // Two-valued weight: std = |1 - c/eta^2| sqrt(R T).
+                        let spread = (1.0 - *c as f64 / (eta_rel * eta_rel)).abs();
+                        assert!(
+                            (mean - expect).abs() < 5.0 * spread * sigma + 1e-5,
+                            "E[w] {mean} vs {expect}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn diffuse_weight_is_albedo_and_eval_matches_sample() {
+        let albedo = Rgb::new(0.8, 0.5, 0.2);
+        let mut rng = Rng(7);
+        let wo = dir(0.7, 2.0);
+        let n = 100_000;
+        let mut sum = [0.0f64; 3];
+        for _ in 0..n {
+            let s = diffuse_sample(albedo, wo, rng.vec2()).expect("wo is above");
+            let (f_cos, pdf) = diffuse_eval(albedo, wo, s.wi);
+            assert!((pdf - s.pdf).abs() <= 1e-6 * pdf);
+            // weight = f |cos| / pdf, consistently with eval.
+            let w = f_cos / pdf;
+            assert!((w.r - s.weight.r).abs() < 1e-5 && (w.b - s.weight.b).abs() < 1e-5);
+            for (acc, w) in sum.iter_mut().zip(s.weight.to_array()) {
+                *acc += w as f64;
+            }
+        }
+        for (acc, a) in sum.iter().zip(albedo.to_array()) {
+            assert!((acc / n as f64 - a as f64).abs() < 1e-6);
+        }
+        // Independently: the albedo is the hemispherical integral of eval's f |cos|,
+        // estimated with uniform sphere sampling (density 1/(4 pi)).
+        let mut est = 0.0f64;
+        for _ in 0..n {
+            let wi = sample_uniform_sphere(rng.vec2());
+            est += diffuse_eval(albedo, wo, wi).0.g as f64 / INV_4PI as f64;
+        }
+        let est = est / n as f64;
+        // The estimator is X = 4 a cos on the upper hemisphere, 0 below:
+        // E[X^2] = 8 a^2 / 3, so Var X = 5 a^2 / 3.
+        let a = albedo.g as f64;
+        assert!(
+            (est - a).abs() < 5.0 * a * (5.0 / 3.0 / n as f64).sqrt(),
+            "{est}"
+        );
+        // One-sided: nothing from below.
+        assert!(diffuse_sample(albedo, Vec3::new(0.0, 0.6, -0.8), Vec2::splat(0.3)).is_none());
+        assert_eq!(diffuse_eval(albedo, wo, -Vec3::Z), (Rgb::BLACK, 0.0));
+    }
+
+    #[test]
+    fn hg_sample_pdf_matches_eval_and_isotropic_at_zero() {
+        let mut rng = Rng(8);
+        for g in [-0.99f32, -0.5, 0.0, 0.3, 0.9, 0.99] {
+            for _ in 0..2000 {
+                let wo = sample_uniform_sphere(rng.vec2());
+                let (wi, pdf) = hg_sample(g, wo, rng.vec2());
+                assert!((wi.length() - 1.0).abs() < 1e-5);
+                let e = hg_eval(g, wo, wi);
+                assert!(
+                    (e - pdf).abs() <= 2e-3 * pdf,
+                    "g {g}: eval {e} vs sample {pdf}"
+                );
+            }
+        }
+        for _ in 0..100 {
+            let wo = sample_uniform_sphere(rng.vec2());
+            let (_, pdf) = hg_sample(0.0, wo, rng.vec2());
+            assert_eq!(pdf, INV_4PI);
+            assert_eq!(hg_eval(0.0, wo, sample_uniform_sphere(rng.vec2())), INV_4PI);
+        }
+        // Convention: g > 0 favours continuing along the propagation direction -wo.
+        let wo = Vec3::Z;
+        assert!(hg_eval(0.7, wo, -Vec3::Z) > hg_eval(0.7, wo, Vec3::Z));
+        assert!(hg_eval(-0.7, wo, -Vec3::Z) < hg_eval(-0.7, wo, Vec3::Z));
+        // Closed forms at the poles: (1 + g) / (4 pi (1 - g)^2) forward.
+        let g = 0.5f32;
+        let forward = (1.0 + g) / (1.0 - g).powi(2) * INV_4PI;
+        assert!((hg_eval(g, wo, -wo) - forward).abs() < 1e-6 * forward);
+        let backward = (1.0 - g) / (1.0 + g).powi(2) * INV_4PI;
+        assert!((hg_eval(g, wo, wo) - backward).abs() < 1e-6 * backward);
+    }
+
+    #[test]
+    fn hg_mean_cosine_is_g() {
+        // The defining property of HG: E[cos theta] = g.
+        for g in [-0.9f32, -0.3, 0.0, 0.5, 0.95] {
+            let mut rng = Rng(9);
+            let wo = Vec3::new(0.36, -0.48, 0.8);
+            let n = 200_000;
+            let mut sum = 0.0f64;
+            let mut sum2 = 0.0f64;
+            for _ in 0..n {
+                let (wi, _) = hg_sample(g, wo, rng.vec2());
+                let c = (-wo).dot(wi) as f64;
+                sum += c;
+                sum2 += c * c;
+            }
+            let mean = sum / n as f64;
+            let var = sum2 / n as f64 - mean * mean;
+            assert!(
+                (mean - g as f64).abs() < 5.0 * (var / n as f64).sqrt() + 1e-5,
+                "g {g}"
+            );
+        }
+    }
+
+    #[test]
+    fn no_nan_at_grazing_angles_extreme_g_and_u_edges() {
+        let one_minus = 1.0 - f32::EPSILON / 2.0;
+        let us = [0.0f32, 1e-7, 0.5, one_minus];
+        let mut uvs = Vec::new();
+        for &a in &us {
+            for &b in &us {
+                uvs.push(Vec2::new(a, b));
+            }
+        }
+        let mut wos = Vec::new();
+        for z in [1e-7f32, 0.0, -0.0, -1e-7, 1.0, -1.0] {
+            let r = (1.0 - z * z).sqrt();
+            wos.push(Vec3::new(r, 0.0, z));
+            wos.push(Vec3::new(0.6 * r, -0.8 * r, z));
+        }
+        let finite = |s: &BxdfSample| {
+            s.wi.is_finite() && s.weight.is_finite() && s.pdf.is_finite() && s.eta.is_finite()
+        };
+        for &wo in &wos {
+            for &u in &uvs {
+                if let Some(s) = diffuse_sample(Rgb::WHITE, wo, u) {
+                    assert!(finite(&s) && s.pdf > 0.0 && s.wi.z > 0.0, "{wo} {u} {s:?}");
+                    let (f, p) = diffuse_eval(Rgb::WHITE, wo, s.wi);
+                    assert!(f.is_finite() && p.is_finite());
+                }
+                for eta in [1.5f32, 1.0 / 1.5, 1.0, 1.0001] {
+                    if let Some(s) = dielectric_sample(eta, Rgb::WHITE, wo, u) {
+                        assert!(finite(&s) && s.pdf > 0.0, "eta {eta} wo {wo} u {u}: {s:?}");
+                        assert!((s.wi.length() - 1.0).abs() < 1e-4);
+                    } else {
+                        assert_eq!(wo.z, 0.0);
+                    }
+                }
+                if let Some(s) = mirror_sample(Rgb::WHITE, wo) {
+                    assert!(finite(&s));
+                }
+                for g in [-0.9999f32, -0.999, 0.0, 0.999, 0.9999, 1.0, -1.0, 2.0] {
+                    let (wi, pdf) = hg_sample(g, wo, u);
+                    assert!(wi.is_finite() && pdf.is_finite() && pdf > 0.0, "g {g}");
+                    assert!(
+                        (wi.length() - 1.0).abs() < 1e-4,
+                        "g {g} |wi| {}",
+                        wi.length()
+                    );
+                    let e = hg_eval(g, wo, wi);
+                    assert!(e.is_finite() && e > 0.0);
+                    let e = hg_eval(g, wo, wo);
+                    assert!(e.is_finite() && e > 0.0);
+                    let e = hg_eval(g, wo, -wo);
+                    assert!(e.is_finite() && e > 0.0);
+                }
+            }
+            for c in [wo.z, 1.0, -1.0, 0.0, -0.0, 1.0000001, -1.0000001] {
+                for eta in [1.5f32, 1.0 / 1.5, 1.0] {
+                    let r = fresnel_dielectric(c, eta);
+                    assert!((0.0..=1.0).contains(&r), "c {c} eta {eta}: {r}");
+                }
+            }
+        }
+        // Samplers at the square's edges stay on their domain.
+        for &u in &uvs {
+            assert!(sample_uniform_sphere(u).is_finite());
+            assert!((sample_uniform_sphere(u).length() - 1.0).abs() < 1e-5);
+            assert!(sample_cosine_hemisphere(u).z >= 0.0);
+            let c = sample_uniform_cone(u, 0.9999);
+            assert!(c.is_finite() && c.z >= 0.9999 - 1e-6);
+        }
+    }
+
+    #[test]
+    fn hg_peaked_lobe_keeps_angular_resolution() {
+        // For g = 0.9999 the lobe's angular scale is ~ (1 - g) = 1e-4 rad, below what a
+        // naive f32 cos theta can represent (its spacing near 1 is ~6e-8, i.e. ~3e-4 rad).
+        // Compare the sampled polar angle with the exact inverse CDF in f64.
+        let (g32, wo) = (0.9999f32, Vec3::Z);
+        let g = g32 as f64;
+        for xi32 in [0.1f32, 0.5, 0.9, 0.999] {
+            let xi = xi32 as f64;
+            let (wi, _) = hg_sample(g32, wo, Vec2::new(xi32, 0.25));
+            let theta = ((-wo).cross(wi).length() as f64).atan2((-wo).dot(wi) as f64);
+            // Exact: 1 - mu = 2 (1-g)^2 (1-xi)(1+g xi) / (1 - g + 2 g xi)^2 in f64.
+            let d = 1.0 - g + 2.0 * g * xi;
+            let omm = 2.0 * (1.0 - g).powi(2) * (1.0 - xi) * (1.0 + g * xi) / (d * d);
+            let exact = (1.0 - omm).acos();
+            assert!(
+                (theta - exact).abs() < 1e-2 * exact + 1e-7,
+                "xi {xi}: theta {theta} vs {exact}"
+            );
+        }
+    }
+}
