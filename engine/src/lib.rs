@@ -1,1 +1,5 @@
 //! risotto engine.
+
+pub mod compare;
+pub mod output;
+pub mod stats;
