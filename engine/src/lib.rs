@@ -2,8 +2,11 @@
 //! (Bxdf factories, Bxdfs, volume integrators), the scheduler and global integrators, output.
 
 pub mod builtin;
+pub mod compare;
 pub mod context;
 pub mod integrator;
+pub mod output;
 pub mod plugin;
 pub mod scene;
+pub mod stats;
 pub mod transmission;

@@ -1,0 +1,556 @@
+//! Render statistics: per-system call/item/time counters, ray and sample counts, path
+//! termination reasons.
+//!
+//! Workers each own a [`SystemStats`] (plain arrays indexed by enum discriminants: no locks,
+//! no hashing on the hot path) and the scheduler [`merge`](SystemStats::merge)s them into a
+//! [`RenderStats`] at the end. [`RenderStats`] serialises to this JSON:
+//!
+//! ```json
+//! {"systems": {"intersect": {"calls": 12, "items": 4096, "seconds": 0.01}},
+//!  "rays": 4096, "samples": 1024, "terminated": {"escaped": 900, "max_depth": 124},
+//!  "nan_dropped": 0, "wall_seconds": 1.5, "features": ["volumes"]}
+//! ```
+//!
+//! Systems that never ran (zero calls) and termination reasons with a zero count are left
+//! out; a `"warnings": [...]` array is appended only when there are warnings.
+
+use std::fmt;
+use std::path::Path;
+use std::time::Instant;
+
+use serde::ser::{Serialize, SerializeMap, Serializer};
+
+/// A system whose work is timed. The discriminant indexes [`SystemStats::systems`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum System {
+    /// Camera ray generation.
+    Camera,
+    /// Ray-scene intersection.
+    Intersect,
+    /// Building shading points from hits.
+    Shade,
+    /// Surface and phase-function sampling/evaluation.
+    Bxdf,
+    /// Light sampling and MIS.
+    Lights,
+    /// Shadow-ray transmission (visibility and transmittance).
+    Transmission,
+    /// Partitioning/grouping rays (transmit/reflect, by volume).
+    Partition,
+    /// Volume tracking and volume integrators.
+    Volume,
+    /// Splatting samples into the film.
+    Splat,
+}
+
+impl System {
+    /// Number of systems.
+    pub const COUNT: usize = 9;
+    /// Every system, in discriminant order.
+    pub const ALL: [System; System::COUNT] = [
+        System::Camera,
+        System::Intersect,
+        System::Shade,
+        System::Bxdf,
+        System::Lights,
+        System::Transmission,
+        System::Partition,
+        System::Volume,
+        System::Splat,
+    ];
+
+    /// The lower-case name used in JSON and in the summary table.
+    pub const fn name(self) -> &'static str {
+        match self {
+            System::Camera => "camera",
+            System::Intersect => "intersect",
+            System::Shade => "shade",
+            System::Bxdf => "bxdf",
+            System::Lights => "lights",
+            System::Transmission => "transmission",
+            System::Partition => "partition",
+            System::Volume => "volume",
+            System::Splat => "splat",
+        }
+    }
+}
+
+/// Why a path stopped. The discriminant indexes [`SystemStats::terminated`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Termination {
+    /// Left the scene (missed all geometry; environment light, if any, was added).
+    Escaped,
+    /// Throughput became exactly zero (black surface, zero-weight sample, opaque medium).
+    Absorbed,
+    /// Killed by Russian roulette.
+    RussianRoulette,
+    /// Reached the maximum path depth.
+    MaxDepth,
+    /// Ran out of the per-pass continuation budget.
+    PassLimit,
+    /// Throughput became NaN or infinite; the path was dropped.
+    NonFinite,
+}
+
+impl Termination {
+    /// Number of reasons.
+    pub const COUNT: usize = 6;
+    /// Every reason, in discriminant order.
+    pub const ALL: [Termination; Termination::COUNT] = [
+        Termination::Escaped,
+        Termination::Absorbed,
+        Termination::RussianRoulette,
+        Termination::MaxDepth,
+        Termination::PassLimit,
+        Termination::NonFinite,
+    ];
+
+    /// The snake_case name used in JSON and in the summary table.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Termination::Escaped => "escaped",
+            Termination::Absorbed => "absorbed",
+            Termination::RussianRoulette => "russian_roulette",
+            Termination::MaxDepth => "max_depth",
+            Termination::PassLimit => "pass_limit",
+            Termination::NonFinite => "non_finite",
+        }
+    }
+}
+
+/// Counters of one system.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SystemCounter {
+    /// Number of (batched) invocations.
+    pub calls: u64,
+    /// Items processed over all calls (rays, shading points, samples...).
+    pub items: u64,
+    /// Wall time spent inside the system, summed over workers.
+    pub seconds: f64,
+}
+
+impl SystemCounter {
+    fn add(&mut self, o: &SystemCounter) {
+        self.calls += o.calls;
+        self.items += o.items;
+        self.seconds += o.seconds;
+    }
+}
+
+/// Per-worker accumulator. Cheap to update: every counter is a fixed array slot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SystemStats {
+    /// Counters indexed by `System as usize`.
+    pub systems: [SystemCounter; System::COUNT],
+    /// Rays traced (camera, continuation and shadow rays).
+    pub rays: u64,
+    /// Camera samples completed.
+    pub samples: u64,
+    /// Path terminations indexed by `Termination as usize`.
+    pub terminated: [u64; Termination::COUNT],
+    /// Samples dropped at the film because they were NaN or infinite.
+    pub nan_dropped: u64,
+}
+
+impl SystemStats {
+    /// Empty counters.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Runs `f`, recording one call of `sys` over `items` items and the elapsed wall time.
+    #[inline]
+    pub fn time<R>(&mut self, sys: System, items: usize, f: impl FnOnce() -> R) -> R {
+        let start = Instant::now();
+        let r = f();
+        self.record(sys, items, start.elapsed().as_secs_f64());
+        r
+    }
+
+    /// Records one call of `sys` over `items` items that took `seconds`.
+    #[inline]
+    pub fn record(&mut self, sys: System, items: usize, seconds: f64) {
+        let c = &mut self.systems[sys as usize];
+        c.calls += 1;
+        c.items += items as u64;
+        c.seconds += seconds;
+    }
+
+    /// Counts `n` traced rays.
+    #[inline]
+    pub fn add_rays(&mut self, n: usize) {
+        self.rays += n as u64;
+    }
+
+    /// Counts `n` completed camera samples.
+    #[inline]
+    pub fn add_samples(&mut self, n: usize) {
+        self.samples += n as u64;
+    }
+
+    /// Counts `n` paths that stopped for `reason`.
+    #[inline]
+    pub fn terminate(&mut self, reason: Termination, n: usize) {
+        self.terminated[reason as usize] += n as u64;
+    }
+
+    /// Counts `n` non-finite samples dropped at the film.
+    #[inline]
+    pub fn drop_nan(&mut self, n: usize) {
+        self.nan_dropped += n as u64;
+    }
+
+    /// Counters of one system.
+    pub fn system(&self, sys: System) -> &SystemCounter {
+        &self.systems[sys as usize]
+    }
+
+    /// Adds another worker's counters into these.
+    pub fn merge(&mut self, other: &Self) {
+        for (a, b) in self.systems.iter_mut().zip(&other.systems) {
+            a.add(b);
+        }
+        self.rays += other.rays;
+        self.samples += other.samples;
+        for (a, b) in self.terminated.iter_mut().zip(&other.terminated) {
+            *a += b;
+        }
+        self.nan_dropped += other.nan_dropped;
+    }
+}
+
+/// Statistics of a whole render: merged worker counters plus run-level facts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Merged counters of all workers.
+    pub counters: SystemStats,
+    /// Wall-clock duration of the render.
+    pub wall_seconds: f64,
+    /// Features the compiled scene used (e.g. "volumes", "environment").
+    pub features: Vec<String>,
+    /// Problems worth telling the user about (serialised only when non-empty).
+    pub warnings: Vec<String>,
+}
+
+impl RenderStats {
+    /// Stats from merged counters and the wall time.
+    pub fn new(counters: SystemStats, wall_seconds: f64) -> Self {
+        RenderStats {
+            counters,
+            wall_seconds,
+            ..Default::default()
+        }
+    }
+
+    /// Pretty-printed JSON (schema in the module docs).
+    pub fn to_json(&self) -> String {
+        // Serialising plain numbers, strings and maps with string keys cannot fail.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Writes [`to_json`](Self::to_json) (plus a trailing newline) to `path`.
+    pub fn write_json(&self, path: &Path) -> std::io::Result<()> {
+        let mut s = self.to_json();
+        s.push('\n');
+        std::fs::write(path, s)
+    }
+}
+
+/// `{"calls": n, "items": n, "seconds": s}`.
+impl Serialize for SystemCounter {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(3))?;
+        m.serialize_entry("calls", &self.calls)?;
+        m.serialize_entry("items", &self.items)?;
+        m.serialize_entry("seconds", &self.seconds)?;
+        m.end()
+    }
+}
+
+/// Map keyed by system name, in [`System::ALL`] order, systems with zero calls omitted.
+struct SystemsJson<'a>(&'a [SystemCounter; System::COUNT]);
+impl Serialize for SystemsJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        for sys in System::ALL {
+            let c = &self.0[sys as usize];
+            if c.calls > 0 {
+                m.serialize_entry(sys.name(), c)?;
+            }
+        }
+        m.end()
+    }
+}
+
+/// Map keyed by termination name, zero counts omitted.
+struct TerminatedJson<'a>(&'a [u64; Termination::COUNT]);
+impl Serialize for TerminatedJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        for t in Termination::ALL {
+            let n = self.0[t as usize];
+            if n > 0 {
+                m.serialize_entry(t.name(), &n)?;
+            }
+        }
+        m.end()
+    }
+}
+
+impl Serialize for RenderStats {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let c = &self.counters;
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry("systems", &SystemsJson(&c.systems))?;
+        m.serialize_entry("rays", &c.rays)?;
+        m.serialize_entry("samples", &c.samples)?;
+        m.serialize_entry("terminated", &TerminatedJson(&c.terminated))?;
+        m.serialize_entry("nan_dropped", &c.nan_dropped)?;
+        m.serialize_entry("wall_seconds", &self.wall_seconds)?;
+        m.serialize_entry("features", &self.features)?;
+        if !self.warnings.is_empty() {
+            m.serialize_entry("warnings", &self.warnings)?;
+        }
+        m.end()
+    }
+}
+
+/// `x / t` as a rate, 0 when no time elapsed.
+fn rate(x: f64, t: f64) -> f64 {
+    if t > 0.0 {
+        x / t
+    } else {
+        0.0
+    }
+}
+
+/// The human summary the driver prints.
+impl fmt::Display for RenderStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let c = &self.counters;
+        writeln!(
+            f,
+            "{:<14}{:>12}{:>14}{:>11}{:>11}",
+            "system", "calls", "items", "seconds", "Mitems/s"
+        )?;
+        let mut total = 0.0;
+        for sys in System::ALL {
+            let s = &c.systems[sys as usize];
+            if s.calls == 0 {
+                continue;
+            }
+            total += s.seconds;
+            writeln!(
+                f,
+                "{:<14}{:>12}{:>14}{:>11.3}{:>11.2}",
+                sys.name(),
+                s.calls,
+                s.items,
+                s.seconds,
+                rate(s.items as f64, s.seconds) * 1e-6
+            )?;
+        }
+        writeln!(f, "{:<14}{:>37.3}  (summed over workers)", "total", total)?;
+        writeln!(
+            f,
+            "rays: {} ({:.2} Mrays/s), samples: {} ({:.3} Msamples/s), wall: {:.3} s",
+            c.rays,
+            rate(c.rays as f64, self.wall_seconds) * 1e-6,
+            c.samples,
+            rate(c.samples as f64, self.wall_seconds) * 1e-6,
+            self.wall_seconds
+        )?;
+        let ended: u64 = c.terminated.iter().sum();
+        write!(f, "terminated:")?;
+        if ended == 0 {
+            write!(f, " none")?;
+        }
+        for t in Termination::ALL {
+            let n = c.terminated[t as usize];
+            if n > 0 {
+                write!(
+                    f,
+                    " {} {} ({:.1}%)",
+                    t.name(),
+                    n,
+                    100.0 * n as f64 / ended as f64
+                )?;
+            }
+        }
+        writeln!(f)?;
+        write!(f, "nan dropped: {}", c.nan_dropped)?;
+        if !self.features.is_empty() {
+            write!(f, "\nfeatures: {}", self.features.join(", "))?;
+        }
+        for w in &self.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::Value;
+
+    fn sample_worker(scale: u64) -> SystemStats {
+        let mut s = SystemStats::new();
+        s.record(System::Camera, 100 * scale as usize, 0.5);
+        s.record(System::Intersect, 200 * scale as usize, 1.0);
+        s.record(System::Intersect, 50, 0.25);
+        s.add_rays(250 * scale as usize);
+        s.add_samples(100 * scale as usize);
+        s.terminate(Termination::Escaped, 60);
+        s.terminate(Termination::MaxDepth, 40 * scale as usize);
+        s.drop_nan(scale as usize);
+        s
+    }
+
+    #[test]
+    fn names_follow_the_schema() {
+        let names: Vec<_> = System::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "camera",
+                "intersect",
+                "shade",
+                "bxdf",
+                "lights",
+                "transmission",
+                "partition",
+                "volume",
+                "splat"
+            ]
+        );
+        for (i, s) in System::ALL.iter().enumerate() {
+            assert_eq!(*s as usize, i);
+        }
+        for (i, t) in Termination::ALL.iter().enumerate() {
+            assert_eq!(*t as usize, i);
+            let n = t.name();
+            assert!(n.chars().all(|c| c.is_ascii_lowercase() || c == '_'), "{n}");
+        }
+        assert_eq!(Termination::RussianRoulette.name(), "russian_roulette");
+    }
+
+    #[test]
+    fn time_records_calls_items_and_elapsed_time() {
+        let mut s = SystemStats::new();
+        let out = s.time(System::Bxdf, 7, || {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            42
+        });
+        assert_eq!(out, 42);
+        s.time(System::Bxdf, 3, || ());
+        let c = s.system(System::Bxdf);
+        assert_eq!((c.calls, c.items), (2, 10));
+        assert!(c.seconds >= 0.02 && c.seconds < 5.0, "{}", c.seconds);
+        assert_eq!(s.system(System::Splat).calls, 0);
+    }
+
+    #[test]
+    fn merge_adds_everything() {
+        let mut a = sample_worker(1);
+        let b = sample_worker(2);
+        a.merge(&b);
+        let i = a.system(System::Intersect);
+        assert_eq!((i.calls, i.items), (4, 200 + 50 + 400 + 50));
+        assert!((i.seconds - 2.5).abs() < 1e-12);
+        assert_eq!(a.system(System::Camera).items, 300);
+        assert_eq!(a.rays, 750);
+        assert_eq!(a.samples, 300);
+        assert_eq!(a.terminated[Termination::Escaped as usize], 120);
+        assert_eq!(a.terminated[Termination::MaxDepth as usize], 120);
+        assert_eq!(a.terminated[Termination::Absorbed as usize], 0);
+        assert_eq!(a.nan_dropped, 3);
+        // Merging an empty accumulator changes nothing.
+        let before = a.clone();
+        a.merge(&SystemStats::new());
+        assert_eq!(a, before);
+    }
+
+    #[test]
+    fn json_schema() {
+        let mut stats = RenderStats::new(sample_worker(1), 2.0);
+        stats.features = vec!["volumes".into(), "environment".into()];
+        let v: Value = serde_json::from_str(&stats.to_json()).unwrap();
+        let obj = v.as_object().unwrap();
+        let keys: Vec<&str> = obj.keys().map(String::as_str).collect();
+        let mut want = [
+            "systems",
+            "rays",
+            "samples",
+            "terminated",
+            "nan_dropped",
+            "wall_seconds",
+            "features",
+        ];
+        want.sort_unstable();
+        let mut got = keys.clone();
+        got.sort_unstable();
+        assert_eq!(got, want, "no warnings key without warnings");
+
+        let systems = v["systems"].as_object().unwrap();
+        // never-run systems are absent
+        let mut sys_keys: Vec<&str> = systems.keys().map(String::as_str).collect();
+        sys_keys.sort_unstable();
+        assert_eq!(sys_keys, ["camera", "intersect"]);
+        for (_, c) in systems {
+            let c = c.as_object().unwrap();
+            assert_eq!(c.len(), 3);
+            assert!(c["calls"].is_u64() && c["items"].is_u64() && c["seconds"].is_f64());
+        }
+        assert_eq!(v["systems"]["intersect"]["calls"], 2);
+        assert_eq!(v["systems"]["intersect"]["items"], 250);
+        assert_eq!(v["systems"]["intersect"]["seconds"].as_f64(), Some(1.25));
+        assert_eq!(v["rays"], 250);
+        assert_eq!(v["samples"], 100);
+        assert!(v["rays"].is_u64() && v["samples"].is_u64() && v["nan_dropped"].is_u64());
+        assert_eq!(v["nan_dropped"], 1);
+        assert_eq!(v["wall_seconds"].as_f64(), Some(2.0));
+        let term = v["terminated"].as_object().unwrap();
+        assert_eq!(term.len(), 2);
+        assert_eq!(term["escaped"], 60);
+        assert_eq!(term["max_depth"], 40);
+        assert_eq!(
+            v["features"],
+            serde_json::json!(["volumes", "environment"])
+        );
+
+        stats.warnings.push("light has zero power".into());
+        let v: Value = serde_json::from_str(&stats.to_json()).unwrap();
+        assert_eq!(v["warnings"], serde_json::json!(["light has zero power"]));
+    }
+
+    #[test]
+    fn empty_stats_serialise_to_empty_maps() {
+        let v: Value = serde_json::from_str(&RenderStats::default().to_json()).unwrap();
+        assert_eq!(v["systems"], serde_json::json!({}));
+        assert_eq!(v["terminated"], serde_json::json!({}));
+        assert_eq!(v["features"], serde_json::json!([]));
+        assert_eq!(v["rays"], 0);
+    }
+
+    #[test]
+    fn write_json_and_display() {
+        let stats = RenderStats::new(sample_worker(1), 2.0);
+        let path =
+            std::env::temp_dir().join(format!("risotto-stats-{}.json", std::process::id()));
+        stats.write_json(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let v: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["rays"], 250);
+
+        let shown = stats.to_string();
+        assert!(shown.contains("intersect"), "{shown}");
+        assert!(!shown.contains("splat"), "{shown}");
+        // camera: 100 items in 0.5 s = 0.0002 Mitems/s; samples: 100 / 2 s
+        assert!(shown.contains("0.00"), "{shown}");
+        assert!(shown.contains("escaped 60 (60.0%)"), "{shown}");
+        assert!(shown.contains("max_depth 40 (40.0%)"), "{shown}");
+        assert!(shown.contains("nan dropped: 1"), "{shown}");
+    }
+}
