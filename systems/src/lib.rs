@@ -1,1 +1,4 @@
 //! risotto systems.
+
+pub mod geometry;
+pub mod intersect;
