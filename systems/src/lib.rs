@@ -4,7 +4,10 @@
 
 pub mod bxdf;
 pub mod camera;
+pub mod distribution;
 pub mod film;
+pub mod geometry;
+pub mod intersect;
 pub mod lights;
 pub mod partition;
 pub mod sampler;

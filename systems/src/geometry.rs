@@ -1,0 +1,390 @@
+//! Compiled scene geometry: triangles and analytic spheres behind one compressed wide BVH.
+//!
+//! Primitive index convention (used in [`risotto_components::Hits::prim`] and everywhere
+//! else): `0..num_triangles` are the triangles in the order given to [`SceneGeometry::build`],
+//! `num_triangles..num_prims` are the spheres in the order given. The BVH reorders its leaves;
+//! that order never leaks out of this module and [`crate::intersect`].
+
+use std::f32::consts::PI;
+
+use glam::{DVec3, Vec2, Vec3, Vec3A};
+use obvhs::{
+    aabb::Aabb,
+    bvh2::reinsertion::ReinsertionOptimizer,
+    cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh},
+    ploc::PlocBuilder,
+    splits::split_aabbs_preset,
+    triangle::Triangle,
+    BvhBuildParams,
+};
+
+/// An analytic sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre in world space.
+    pub center: Vec3,
+    /// Radius (> 0).
+    pub radius: f32,
+}
+
+/// Geometry of a surface point found by a ray hit or by sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceSample {
+    /// World-space position.
+    pub p: Vec3,
+    /// Unit geometric normal. Triangles: `normalize((v1 - v0) x (v2 - v0))`; spheres: outward.
+    pub ng: Vec3,
+    /// Surface parameters. Triangles: barycentrics `(b1, b2)` of `v1` and `v2`; spheres:
+    /// `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi` the
+    /// azimuth from `+x` towards `+y`, in `[0, 2pi)`.
+    pub uv: Vec2,
+}
+
+/// One BVH leaf entry, in BVH order. Triangles store their three vertices; spheres store
+/// their centre in `v0` and radius in `v1[0]`. `prim` is the scene primitive index, so
+/// `prim < num_triangles` tells the kind without another memory access.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct LeafPrim {
+    pub(crate) v0: [f32; 3],
+    pub(crate) prim: u32,
+    pub(crate) v1: [f32; 3],
+    _pad1: u32,
+    pub(crate) v2: [f32; 3],
+    _pad2: u32,
+}
+
+impl LeafPrim {
+    fn triangle(v: &[Vec3; 3], prim: u32) -> Self {
+        Self {
+            v0: v[0].to_array(),
+            prim,
+            v1: v[1].to_array(),
+            _pad1: 0,
+            v2: v[2].to_array(),
+            _pad2: 0,
+        }
+    }
+
+    fn sphere(s: &Sphere, prim: u32) -> Self {
+        Self {
+            v0: s.center.to_array(),
+            prim,
+            v1: [s.radius, 0.0, 0.0],
+            _pad1: 0,
+            v2: [0.0; 3],
+            _pad2: 0,
+        }
+    }
+}
+
+/// Use obvhs' spatial pre-splits of large triangles. Measured on the 100k-triangle bench
+/// mesh (benches/README.md): see `SceneGeometry::build` for the decision.
+const PRE_SPLIT: bool = false;
+
+/// All primitives of a compiled scene and the BVH over them.
+///
+/// One CWBVH (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through
+/// Compressed Wide BVHs") holds the triangles and the spheres' bounding boxes together, so a
+/// ray visits every primitive kind in a single front-to-back traversal.
+#[derive(Clone, Debug)]
+pub struct SceneGeometry {
+    triangles: Vec<[Vec3; 3]>,
+    spheres: Vec<Sphere>,
+    /// `None` for an empty scene (obvhs cannot build an empty tree).
+    bvh: Option<CwBvh>,
+    /// Leaf entries in BVH order: `leaves[i]` is the primitive at `bvh.primitive_indices[i]`.
+    leaves: Vec<LeafPrim>,
+    bounds: (Vec3, Vec3),
+}
+
+/// Relative padding of sphere boxes: `center +- radius` is rounded, and the box must
+/// contain the sphere exactly for traversal to be conservative.
+const BOX_PAD: f32 = 4.0 * f32::EPSILON;
+
+fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
+    let pad_lo = lo.abs() * BOX_PAD + Vec3::splat(f32::MIN_POSITIVE);
+    let pad_hi = hi.abs() * BOX_PAD + Vec3::splat(f32::MIN_POSITIVE);
+    Aabb::new(Vec3A::from(lo - pad_lo), Vec3A::from(hi + pad_hi))
+}
+
+impl SceneGeometry {
+    /// Builds the geometry and its BVH. Triangles may be degenerate (they are never hit).
+    ///
+    /// # Panics
+    /// If a vertex, centre or radius is not finite, a radius is not positive, or there are
+    /// more than `u32::MAX - 1` primitives.
+    pub fn build(triangles: Vec<[Vec3; 3]>, spheres: Vec<Sphere>) -> Self {
+        let num_prims = triangles.len() + spheres.len();
+        assert!(
+            num_prims < u32::MAX as usize,
+            "too many primitives: {num_prims}"
+        );
+        for tri in &triangles {
+            assert!(
+                tri.iter().all(|v| v.is_finite()),
+                "non-finite vertex in {tri:?}"
+            );
+        }
+        for s in &spheres {
+            assert!(
+                s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0,
+                "invalid sphere {s:?}"
+            );
+        }
+
+        // Triangle boxes are exact (min/max of the vertices); sphere boxes are padded.
+        let mut aabbs: Vec<Aabb> = triangles
+            .iter()
+            .map(|t| {
+                Aabb::new(
+                    Vec3A::from(t[0].min(t[1]).min(t[2])),
+                    Vec3A::from(t[0].max(t[1]).max(t[2])),
+                )
+            })
+            .collect();
+        let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
+
+        let params = BvhBuildParams::medium_build();
+        if PRE_SPLIT && !triangles.is_empty() {
+            let tris: Vec<Triangle> = triangles
+                .iter()
+                .map(|t| Triangle {
+                    v0: t[0].into(),
+                    v1: t[1].into(),
+                    v2: t[2].into(),
+                })
+                .collect();
+            let (mut largest, mut total) = (0.0f32, 0.0f32);
+            for b in &aabbs {
+                largest = largest.max(b.half_area());
+                total += b.half_area();
+            }
+            let avg = total / aabbs.len() as f32;
+            split_aabbs_preset(&mut aabbs, &mut indices, &tris, avg, largest);
+            // Split boxes come from clipping the triangle in floating point and may miss it
+            // by an ulp; pad them so node culling stays conservative.
+            for b in &mut aabbs {
+                *b = padded_box(b.min.into(), b.max.into());
+            }
+        }
+
+        let tri_count = triangles.len() as u32;
+        for (i, s) in spheres.iter().enumerate() {
+            aabbs.push(padded_box(
+                s.center - Vec3::splat(s.radius),
+                s.center + Vec3::splat(s.radius),
+            ));
+            indices.push(tri_count + i as u32);
+        }
+
+        let mut bounds = (Vec3::ZERO, Vec3::ZERO);
+        let (bvh, leaves) = if aabbs.is_empty() {
+            (None, Vec::new())
+        } else {
+            let mut lo = Vec3::splat(f32::INFINITY);
+            let mut hi = Vec3::splat(f32::NEG_INFINITY);
+            for t in &triangles {
+                for v in t {
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+            }
+            for s in &spheres {
+                lo = lo.min(s.center - Vec3::splat(s.radius));
+                hi = hi.max(s.center + Vec3::splat(s.radius));
+            }
+            bounds = (lo, hi);
+
+            // Same pipeline as obvhs' `build_cwbvh_from_tris` (PLOC, reinsertion, collapse
+            // to 8-wide nodes with up to 3 primitives per leaf), but over our own boxes so
+            // spheres can share the tree.
+            let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+                params.ploc_search_distance,
+                &aabbs,
+                indices,
+                params.sort_precision,
+                params.search_depth_threshold,
+            );
+            bvh2.uses_spatial_splits = PRE_SPLIT;
+            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+            let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+            let leaves = bvh
+                .primitive_indices
+                .iter()
+                .map(|&p| {
+                    if p < tri_count {
+                        LeafPrim::triangle(&triangles[p as usize], p)
+                    } else {
+                        LeafPrim::sphere(&spheres[(p - tri_count) as usize], p)
+                    }
+                })
+                .collect();
+            (Some(bvh), leaves)
+        };
+
+        Self {
+            triangles,
+            spheres,
+            bvh,
+            leaves,
+            bounds,
+        }
+    }
+
+    /// Number of triangles (they are primitives `0..num_triangles()`).
+    pub fn num_triangles(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Number of spheres (primitives `num_triangles()..num_prims()`).
+    pub fn num_spheres(&self) -> usize {
+        self.spheres.len()
+    }
+
+    /// Number of primitives.
+    pub fn num_prims(&self) -> usize {
+        self.triangles.len() + self.spheres.len()
+    }
+
+    /// World AABB `(min, max)` of every primitive; `(0, 0)` for an empty scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// Vertices of triangle `i` (a primitive index below `num_triangles()`).
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i]
+    }
+
+    /// Sphere number `i` (primitive `num_triangles() + i`).
+    pub fn sphere(&self, i: usize) -> Sphere {
+        self.spheres[i]
+    }
+
+    /// The BVH (`None` for an empty scene). Its `primitive_indices` map leaf slots to
+    /// primitive indices. Exposed for benchmarks and diagnostics.
+    pub fn bvh(&self) -> Option<&CwBvh> {
+        self.bvh.as_ref()
+    }
+
+    pub(crate) fn leaves(&self) -> &[LeafPrim] {
+        &self.leaves
+    }
+
+    /// Geometry at a hit of the ray `origin + t * direction` on primitive `prim`, with the
+    /// hit's `b1`, `b2` as written by [`crate::intersect::intersect_closest`].
+    ///
+    /// Triangles: `p` is interpolated from the vertices with the barycentrics (more accurate
+    /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `(b1, b2)` are the surface
+    /// parameters `(phi / 2pi, theta / pi)` computed in double precision at intersection
+    /// time, so the normal stays accurate even where `t` has lost precision (tiny spheres far
+    /// away); `p` is the corresponding point on the sphere. `origin`, `direction` and `t` are
+    /// only used for spheres when `(b1, b2)` are not finite.
+    pub fn surface_at(
+        &self,
+        prim: u32,
+        origin: Vec3,
+        direction: Vec3,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> SurfaceSample {
+        let prim = prim as usize;
+        if prim < self.triangles.len() {
+            let [v0, v1, v2] = self.triangles[prim];
+            let b0 = 1.0 - b1 - b2;
+            SurfaceSample {
+                p: v0 * b0 + v1 * b1 + v2 * b2,
+                ng: triangle_normal(v0, v1, v2),
+                uv: Vec2::new(b1, b2),
+            }
+        } else {
+            let s = self.spheres[prim - self.triangles.len()];
+            let uv = if b1.is_finite() && b2.is_finite() {
+                Vec2::new(b1, b2)
+            } else {
+                let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
+                sphere_uv(h)
+            };
+            let n = sphere_dir_from_uv(uv);
+            SurfaceSample {
+                p: s.center + n * s.radius,
+                ng: n,
+                uv,
+            }
+        }
+    }
+
+    /// Surface area of primitive `prim`.
+    pub fn prim_area(&self, prim: u32) -> f32 {
+        let prim = prim as usize;
+        if prim < self.triangles.len() {
+            let [v0, v1, v2] = self.triangles[prim];
+            0.5 * (v1 - v0).cross(v2 - v0).length()
+        } else {
+            let r = self.spheres[prim - self.triangles.len()].radius;
+            4.0 * PI * r * r
+        }
+    }
+
+    /// Samples a point uniformly by area on primitive `prim` (for area lights) from
+    /// `u` in `[0, 1)^2`. Returns the point and the unit geometric normal (as in
+    /// [`Self::surface_at`]); the area-measure pdf is `1 / prim_area(prim)`. Degenerate
+    /// triangles (zero area) return a zero normal.
+    pub fn sample_prim(&self, prim: u32, u: Vec2) -> (Vec3, Vec3) {
+        let prim = prim as usize;
+        if prim < self.triangles.len() {
+            let [v0, v1, v2] = self.triangles[prim];
+            // Heitz 2019, "A Low-Distortion Map Between Triangle and Square": folds the
+            // square onto the triangle so that the map is area preserving (uniform).
+            let (b0, b1) = if u.x < u.y {
+                let b0 = u.x * 0.5;
+                (b0, u.y - b0)
+            } else {
+                let b1 = u.y * 0.5;
+                (u.x - b1, b1)
+            };
+            let b2 = 1.0 - b0 - b1;
+            (v0 * b0 + v1 * b1 + v2 * b2, triangle_normal(v0, v1, v2))
+        } else {
+            let s = self.spheres[prim - self.triangles.len()];
+            // Archimedes: z = cos(theta) is uniform on [-1, 1] for area-uniform points.
+            let z = 1.0 - 2.0 * u.x;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * PI * u.y;
+            let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            (s.center + n * s.radius, n)
+        }
+    }
+}
+
+/// `normalize((v1 - v0) x (v2 - v0))`, zero for degenerate triangles.
+fn triangle_normal(v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
+    (v1 - v0).cross(v2 - v0).normalize_or_zero()
+}
+
+/// Surface parameters `(phi / 2pi, theta / pi)` of the direction `h` (centre to point).
+pub(crate) fn sphere_uv(h: DVec3) -> Vec2 {
+    use std::f64::consts::PI as PI64;
+    // atan2 of (sin, cos) keeps full precision near the poles, unlike acos(z / r).
+    let theta = h.x.hypot(h.y).atan2(h.z);
+    let mut phi = h.y.atan2(h.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI64;
+    }
+    // u must stay below 1 after rounding so it is a valid [0, 1) parameter.
+    let u = ((phi / (2.0 * PI64)) as f32).min(1.0 - f32::EPSILON / 2.0);
+    Vec2::new(u, (theta / PI64) as f32)
+}
+
+/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]).
+fn sphere_dir_from_uv(uv: Vec2) -> Vec3 {
+    use std::f64::consts::PI as PI64;
+    // In double precision so the only error left is the f32 rounding of uv (~1e-7 rad).
+    let phi = uv.x as f64 * 2.0 * PI64;
+    let theta = uv.y as f64 * PI64;
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    DVec3::new(st * cp, st * sp, ct).as_vec3()
+}
