@@ -1,1 +1,3 @@
 //! risotto engine.
+
+pub mod scene_file;
