@@ -1,0 +1,215 @@
+//! [`SceneError`]: a scene-file error located by file, line and column, with a source
+//! excerpt, and the scene text it points into ([`Source`]).
+
+use std::fmt::Write as _;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// What went wrong, for callers that react to the category (the message says it all).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SceneErrorKind {
+    /// The scene file itself could not be read.
+    Io,
+    /// The text is not valid TOML.
+    Syntax,
+    /// A key the entity does not accept (usually a typo).
+    UnknownField,
+    /// A required key is absent.
+    MissingField,
+    /// A value of the wrong TOML type (e.g. a string where a number is expected).
+    WrongType,
+    /// A value of the right type outside its valid range (negative radiance, fov 190, ...).
+    InvalidValue,
+    /// A name that refers to nothing (a shape's material, a camera volume shape).
+    UnknownReference,
+    /// Two entities with the same name.
+    Duplicate,
+    /// A referenced file (OBJ mesh, environment map) is missing or cannot be parsed.
+    ExternalFile,
+}
+
+/// An error in a scene file. Its `Display` is a complete message: the file, line and
+/// column, the entity (`shapes[3] "tall_box"`, `materials.glass`, `camera`), the field, what
+/// is wrong with the offending value, then the offending source line with a caret marker.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{}", .0.rendered)]
+pub struct SceneError(Box<ErrorData>);
+
+/// The parts of a [`SceneError`] (boxed: errors are rare, `Result`s are everywhere).
+#[derive(Debug, Clone)]
+struct ErrorData {
+    kind: SceneErrorKind,
+    file: PathBuf,
+    line_col: Option<(usize, usize)>,
+    entity: Option<String>,
+    field: Option<String>,
+    message: String,
+    rendered: String,
+}
+
+impl SceneError {
+    /// The category.
+    pub fn kind(&self) -> SceneErrorKind {
+        self.0.kind
+    }
+    /// The scene file the error is in.
+    pub fn file(&self) -> &Path {
+        &self.0.file
+    }
+    /// 1-based line of the offending text (`None` only when the file could not be read).
+    pub fn line(&self) -> Option<usize> {
+        self.0.line_col.map(|(l, _)| l)
+    }
+    /// 1-based column (in characters) of the offending text.
+    pub fn column(&self) -> Option<usize> {
+        self.0.line_col.map(|(_, c)| c)
+    }
+    /// The entity, e.g. `shapes[3] "tall_box"` or `materials.glass`.
+    pub fn entity(&self) -> Option<&str> {
+        self.0.entity.as_deref()
+    }
+    /// The field (key) within the entity, e.g. `radius`.
+    pub fn field(&self) -> Option<&str> {
+        self.0.field.as_deref()
+    }
+    /// The bare description without location, entity and excerpt.
+    pub fn message(&self) -> &str {
+        &self.0.message
+    }
+
+    /// An error reading the scene file itself.
+    pub(crate) fn io(file: &Path, err: &std::io::Error) -> SceneError {
+        let message = format!("cannot read scene file: {err}");
+        SceneError(Box::new(ErrorData {
+            kind: SceneErrorKind::Io,
+            file: file.to_path_buf(),
+            line_col: None,
+            entity: None,
+            field: None,
+            rendered: format!("{}: {message}", file.display()),
+            message,
+        }))
+    }
+}
+
+/// The scene text being read, for turning byte spans into line:column and excerpts.
+#[derive(Debug)]
+pub(crate) struct Source {
+    /// The scene file's path as given (used in messages).
+    pub(crate) path: PathBuf,
+    /// The directory relative paths in the scene are resolved against.
+    pub(crate) dir: PathBuf,
+    pub(crate) text: String,
+}
+
+/// Longest excerpt of a value quoted in a message.
+const MAX_QUOTE: usize = 60;
+
+impl Source {
+    pub(crate) fn new(path: &Path, text: &str) -> Source {
+        let dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        Source {
+            path: path.to_path_buf(),
+            dir,
+            text: text.to_owned(),
+        }
+    }
+
+    /// Clamps a byte offset into the text, onto a char boundary.
+    fn clamp(&self, mut offset: usize) -> usize {
+        offset = offset.min(self.text.len());
+        while !self.text.is_char_boundary(offset) {
+            offset -= 1;
+        }
+        offset
+    }
+
+    /// 1-based line and column (in chars) of a byte offset.
+    pub(crate) fn line_col(&self, offset: usize) -> (usize, usize) {
+        let offset = self.clamp(offset);
+        let before = &self.text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let col = self.text[line_start..offset].chars().count() + 1;
+        (line, col)
+    }
+
+    /// The source text of a span, shortened for quoting in a message.
+    pub(crate) fn quote(&self, span: &Range<usize>) -> String {
+        let (s, e) = (self.clamp(span.start), self.clamp(span.end));
+        let text = self.text[s..e.max(s)].trim();
+        // A table's span covers whole lines; quote only its first line.
+        let first = text.lines().next().unwrap_or("");
+        let shortened: String = first.chars().take(MAX_QUOTE).collect();
+        if shortened.len() < text.len() {
+            format!("{shortened} ...")
+        } else {
+            shortened
+        }
+    }
+
+    /// The line containing `span.start` and a caret line under the span (clipped to that
+    /// line), indented like rustc's excerpts.
+    fn excerpt(&self, span: &Range<usize>) -> String {
+        let start = self.clamp(span.start);
+        let end = self.clamp(span.end).max(start);
+        let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = self.text[start..]
+            .find('\n')
+            .map_or(self.text.len(), |i| start + i);
+        let line_text = self.text[line_start..line_end].trim_end_matches('\r');
+        let (line, col) = self.line_col(start);
+        let width = self.text[start..end.min(line_end)].chars().count().max(1);
+        let gutter = line.to_string().len();
+        let mut out = String::new();
+        let _ = writeln!(out, "{:gutter$} |", "");
+        let _ = writeln!(out, "{line} | {line_text}");
+        let _ = write!(
+            out,
+            "{:gutter$} | {}{}",
+            "",
+            " ".repeat(col - 1),
+            "^".repeat(width)
+        );
+        out
+    }
+
+    /// Builds a located error.
+    pub(crate) fn error(
+        &self,
+        kind: SceneErrorKind,
+        span: &Range<usize>,
+        entity: Option<&str>,
+        field: Option<&str>,
+        message: impl Into<String>,
+    ) -> SceneError {
+        let message = message.into();
+        let (line, col) = self.line_col(span.start);
+        let mut head = format!("{}:{line}:{col}: ", self.path.display());
+        match (entity, field) {
+            (Some(e), Some(f)) => {
+                let _ = write!(head, "{e}, field `{f}`: ");
+            }
+            (Some(e), None) => {
+                let _ = write!(head, "{e}: ");
+            }
+            (None, Some(f)) => {
+                let _ = write!(head, "field `{f}`: ");
+            }
+            (None, None) => {}
+        }
+        let rendered = format!("{head}{message}\n{}", self.excerpt(span));
+        SceneError(Box::new(ErrorData {
+            kind,
+            file: self.path.clone(),
+            line_col: Some((line, col)),
+            entity: entity.map(str::to_owned),
+            field: field.map(str::to_owned),
+            message,
+            rendered,
+        }))
+    }
+}
