@@ -226,7 +226,7 @@ impl PathTracer {
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
             });
-            stats.nan_dropped += dropped;
+            stats.drop_nan(dropped as usize);
             for i in 0..n {
                 let p = t.pixel_tmp[i] as usize;
                 tile.albedo[p] += t.paths.albedo[i];
@@ -234,7 +234,7 @@ impl PathTracer {
                 let d = t.paths.depth[i];
                 tile.depth[p] += if d.is_finite() { d } else { 0.0 };
             }
-            stats.samples += n as u64;
+            stats.add_samples(n);
             arena.reset();
             progress(n as u64);
             s0 = s1;
@@ -289,14 +289,14 @@ impl PathTracer {
                 volume_stack: scene.camera_stack.clone(),
             });
         }
-        stats.rays += n as u64;
+        stats.add_rays(n);
         while !t.rays.is_empty() {
             self.trace(scene, t, stats, arena);
             self.shade(scene, t, stats, arena);
             self.transmission(scene, t, stats, arena);
             std::mem::swap(&mut t.rays, &mut t.next);
             t.next.clear();
-            stats.rays += t.rays.len() as u64;
+            stats.add_rays(t.rays.len());
         }
     }
 
@@ -464,7 +464,7 @@ impl PathTracer {
                         answered[r as usize] = true;
                     }
                     let absorbed = answered.iter().filter(|a| !**a).count();
-                    stats.terminate(Termination::Absorbed, absorbed as u64);
+                    stats.terminate(Termination::Absorbed, absorbed);
                 }
             }
             append_groups(&mut t.groups, &mut t.incoming, &t.tmp, &t.bundle);
@@ -492,7 +492,7 @@ impl PathTracer {
                 t.paths.albedo[path] = le;
             }
         }
-        stats.terminate(Termination::Escaped, misses.len() as u64);
+        stats.terminate(Termination::Escaped, misses.len());
         t.groups.misses = misses;
         t.groups.misses.clear();
         t.groups.miss_transmission = miss_tr;

@@ -90,8 +90,9 @@ impl LightSet {
                 Light::Point { intensity, .. } => 4.0 * PI * intensity.average(),
                 Light::Environment { radiance, map } => {
                     environment = Some(i as u32);
-                    let avg = map.as_ref().map_or(1.0, |m| m.average().average());
-                    radiance.average() * avg * 4.0 * PI * PI * r2
+                    // Integral of the map's radiance over the sphere (4 pi for a constant 1).
+                    let sphere = map.as_ref().map_or(4.0 * PI, |m| m.integral().average());
+                    radiance.average() * sphere * PI * r2
                 }
             })
             .map(|p| if p.is_finite() { p.max(0.0) } else { 0.0 })
@@ -127,7 +128,7 @@ impl LightSet {
     pub fn selection_pmf(&self, index: u32) -> f32 {
         self.selection
             .as_ref()
-            .map_or(0.0, |d| d.discrete_pmf(index as usize))
+            .map_or(0.0, |d| d.pmf(index as usize))
     }
 
     /// Radiance of the environment towards direction `dir` (seen along a ray going `dir`).

@@ -1,0 +1,308 @@
+//! From scene files to scenes: the material registry (type name -> factory constructor) and
+//! the conversion of a [`SceneDesc`] into a [`Scene`] world.
+//!
+//! Users register their own material types so that a scene file can say
+//! `type = "my_glass"`:
+//!
+//! ```
+//! use risotto_engine::load::MaterialRegistry;
+//! use risotto_engine::builtin::{BuiltinMaterial, Interior, Surface};
+//! use risotto_components::Rgb;
+//!
+//! let mut registry = MaterialRegistry::with_builtins();
+//! registry.register("grey", |params| {
+//!     let level = params.f32_in("level", Some(0.5), 0.0, 1.0)?;
+//!     Ok(Box::new(BuiltinMaterial {
+//!         surface: Surface::Diffuse { reflectance: Rgb::splat(level) },
+//!         interior: Interior::None,
+//!     }))
+//! });
+//! assert!(registry.contains("grey") && registry.contains("diffuse"));
+//! ```
+
+use crate::builtin::{BuiltinMaterial, Interior, Surface};
+use crate::output::{read_exr_rgb, OutputError};
+use crate::plugin::BxdfFactory;
+use crate::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
+use crate::scene_file::{
+    load_scene, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc, SceneError,
+    ShapeGeometry as DescGeometry,
+};
+use risotto_components::Rgb;
+use risotto_systems::camera::{Camera, Projection};
+use risotto_systems::distribution::EnvironmentMap;
+use risotto_systems::geometry::Sphere;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Builds a factory from a material's parameters.
+pub type MaterialConstructor =
+    Box<dyn Fn(&MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError> + Send + Sync>;
+
+/// Material types by name.
+pub struct MaterialRegistry {
+    constructors: BTreeMap<String, MaterialConstructor>,
+}
+
+/// Errors turning a scene file into a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file itself (syntax, values, missing meshes, material parameters).
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// An environment map could not be read.
+    #[error("{scene}: light \"{light}\": cannot read environment map: {source}")]
+    EnvironmentMap {
+        /// Scene file.
+        scene: PathBuf,
+        /// Light name.
+        light: String,
+        /// Cause.
+        source: OutputError,
+    },
+    /// A material type nobody registered.
+    #[error("{scene}: materials.{material}: unknown type \"{type_name}\" (known: {known})")]
+    UnknownType {
+        /// Scene file.
+        scene: PathBuf,
+        /// Material name.
+        material: String,
+        /// The type.
+        type_name: String,
+        /// Registered types.
+        known: String,
+    },
+    /// The camera is degenerate.
+    #[error("{scene}: camera: `from` and `to` coincide or `up` is parallel to the view direction")]
+    Camera {
+        /// Scene file.
+        scene: PathBuf,
+    },
+    /// Compilation failed.
+    #[error("{scene}: {source}")]
+    Compile {
+        /// Scene file.
+        scene: PathBuf,
+        /// Cause.
+        source: CompileError,
+    },
+}
+
+impl MaterialRegistry {
+    /// An empty registry.
+    pub fn new() -> Self {
+        MaterialRegistry {
+            constructors: BTreeMap::new(),
+        }
+    }
+
+    /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
+    /// `interface`.
+    pub fn with_builtins() -> Self {
+        let mut r = Self::new();
+        r.register("diffuse", |p| {
+            let reflectance = p.rgb_where(
+                "reflectance",
+                Some(Rgb::splat(0.5)),
+                "every channel in [0, 1]",
+                |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
+            )?;
+            builtin(p, Surface::Diffuse { reflectance }, &["reflectance"])
+        });
+        r.register("dielectric", |p| {
+            let ior = p.f32_where("ior", Some(1.5), "> 0", |v| v > 0.0)?;
+            let tint = p.rgb_where("tint", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
+                c.min_channel() >= 0.0 && c.max_channel() <= 1.0
+            })?;
+            let cheap_shadows = p.bool("cheap_shadows", Some(false))?;
+            builtin(
+                p,
+                Surface::Dielectric {
+                    ior,
+                    tint,
+                    cheap_shadows,
+                },
+                &["ior", "tint", "cheap_shadows"],
+            )
+        });
+        for name in ["conductor", "mirror"] {
+            r.register(name, |p| {
+                let reflectance = p.rgb_where(
+                    "reflectance",
+                    Some(Rgb::splat(0.9)),
+                    "every channel in [0, 1]",
+                    |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
+                )?;
+                builtin(p, Surface::Mirror { reflectance }, &["reflectance"])
+            });
+        }
+        r.register("interface", |p| builtin(p, Surface::Interface, &[]));
+        r
+    }
+
+    /// Registers (or replaces) a material type.
+    pub fn register(
+        &mut self,
+        type_name: &str,
+        constructor: impl Fn(&MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError>
+            + Send
+            + Sync
+            + 'static,
+    ) {
+        self.constructors
+            .insert(type_name.to_string(), Box::new(constructor));
+    }
+
+    /// True when `type_name` is registered.
+    pub fn contains(&self, type_name: &str) -> bool {
+        self.constructors.contains_key(type_name)
+    }
+
+    /// Registered type names.
+    pub fn types(&self) -> impl Iterator<Item = &str> {
+        self.constructors.keys().map(String::as_str)
+    }
+}
+
+impl Default for MaterialRegistry {
+    fn default() -> Self {
+        Self::with_builtins()
+    }
+}
+
+/// Reads the optional `interior` table of a built-in material.
+fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
+    let Some(t) = p.table("interior")? else {
+        return Ok(Interior::None);
+    };
+    let kind = t.string("type", None)?;
+    match kind.as_str() {
+        "null" => {
+            t.deny_unknown(&["type"])?;
+            Ok(Interior::Null)
+        }
+        "beer" => {
+            t.deny_unknown(&["type", "sigma_a"])?;
+            let sigma_a = t.rgb_where("sigma_a", None, "every channel >= 0 and finite", |c| {
+                c.min_channel() >= 0.0 && c.is_finite()
+            })?;
+            Ok(Interior::Beer { sigma_a })
+        }
+        other => Err(t.error(
+            Some("type"),
+            format!("unknown interior type \"{other}\" (known: null, beer)"),
+        )),
+    }
+}
+
+fn builtin(
+    p: &MaterialParams,
+    surface: Surface,
+    keys: &[&str],
+) -> Result<Box<dyn BxdfFactory>, SceneError> {
+    let mut known = keys.to_vec();
+    known.push("interior");
+    p.deny_unknown(&known)?;
+    Ok(Box::new(BuiltinMaterial {
+        surface,
+        interior: interior(p)?,
+    }))
+}
+
+/// Loads a scene file and builds its world with the materials of `registry`.
+pub fn load_scene_file(path: &Path, registry: &MaterialRegistry) -> Result<Scene, LoadError> {
+    let desc = load_scene(path)?;
+    scene_from_desc(desc, registry)
+}
+
+/// Builds a scene world from a parsed description.
+pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<Scene, LoadError> {
+    let r = desc.render;
+    let settings = RenderSettings {
+        width: r.width,
+        height: r.height,
+        spp: r.spp,
+        max_depth: r.max_depth,
+        rr_depth: r.rr_depth,
+        seed: r.seed,
+        ..RenderSettings::default()
+    };
+    let c = desc.camera;
+    let projection = match c.projection {
+        DescProjection::Perspective { fov_deg } => Projection::Perspective { fov_deg },
+        DescProjection::Orthographic { width } => Projection::Orthographic { width },
+    };
+    let camera = Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height).ok_or_else(
+        || LoadError::Camera {
+            scene: desc.path.clone(),
+        },
+    )?;
+    let mut scene = Scene::new(camera, settings);
+    scene.camera_volume = desc.camera_volume.clone();
+    for m in &desc.materials {
+        let ctor = registry
+            .constructors
+            .get(&m.type_name)
+            .ok_or_else(|| LoadError::UnknownType {
+                scene: desc.path.clone(),
+                material: m.name.clone(),
+                type_name: m.type_name.clone(),
+                known: registry.types().collect::<Vec<_>>().join(", "),
+            })?;
+        let factory = ctor(&m.params)?;
+        scene.add_material(&m.name, m.priority, factory);
+    }
+    for s in desc.shapes {
+        let geometry = match s.geometry {
+            DescGeometry::Sphere { center, radius } => ShapeGeometry::Sphere(Sphere { center, radius }),
+            DescGeometry::Triangles { triangles, .. } => ShapeGeometry::Triangles(triangles),
+        };
+        scene.add_shape(&s.name, geometry, s.material as u32, s.emission);
+    }
+    for l in desc.lights {
+        let name = l.name().to_string();
+        let light = match l {
+            LightDesc::Distant {
+                direction,
+                irradiance,
+                ..
+            } => LightComponent::Distant {
+                direction,
+                irradiance,
+            },
+            LightDesc::Point {
+                position,
+                intensity,
+                ..
+            } => LightComponent::Point {
+                position,
+                intensity,
+            },
+            LightDesc::Environment { radiance, map, .. } => {
+                let map = match map {
+                    Some(p) => {
+                        let img = read_exr_rgb(&p).map_err(|e| LoadError::EnvironmentMap {
+                            scene: desc.path.clone(),
+                            light: name.clone(),
+                            source: e,
+                        })?;
+                        Some(Arc::new(EnvironmentMap::new(img.pixels, img.width, img.height)))
+                    }
+                    None => None,
+                };
+                LightComponent::Environment { radiance, map }
+            }
+        };
+        scene.add_light(&name, light);
+    }
+    Ok(scene)
+}
+
+/// Compiles a scene, attributing errors to its file.
+pub fn compile_scene(scene: Scene, path: &Path) -> Result<crate::scene::CompiledScene, LoadError> {
+    scene.compile().map_err(|source| LoadError::Compile {
+        scene: path.to_path_buf(),
+        source,
+    })
+}

@@ -1,0 +1,173 @@
+//! Rendering a compiled scene: the image is cut into tiles (work items); each rayon worker
+//! renders whole tiles, batch by batch, with its own tables and arena. A tile's samples are
+//! splatted in a fixed order, so the image does not depend on the number of threads.
+
+use crate::integrator::{BatchTables, LightingTechnique, PathTracer, TileFilm};
+use crate::output::Image;
+use crate::scene::CompiledScene;
+use crate::stats::{RenderStats, SystemStats};
+use bumpalo::Bump;
+use glam::Vec3;
+use rayon::prelude::*;
+use risotto_components::Rgb;
+use risotto_systems::film::Film;
+
+/// Options of one render that are not part of the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    /// Worker threads. Defaults to `None`: all cores.
+    pub threads: Option<usize>,
+    /// Paths per batch. Defaults to 4096.
+    pub batch_size: usize,
+    /// Tile edge in pixels. Defaults to 16.
+    pub tile_size: u32,
+    /// Direct-lighting technique. Defaults to MIS.
+    pub technique: LightingTechnique,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            threads: None,
+            batch_size: 4096,
+            tile_size: 16,
+            technique: LightingTechnique::Mis,
+        }
+    }
+}
+
+/// What a render produces.
+pub struct RenderOutput {
+    /// Mean radiance per pixel.
+    pub beauty: Image,
+    /// Variance of the mean per pixel and channel.
+    pub variance: Image,
+    /// Samples per pixel.
+    pub sample_count: Vec<f32>,
+    /// Mean first-hit albedo.
+    pub albedo: Image,
+    /// Mean first-hit shading normal.
+    pub normal: Image,
+    /// Mean first-hit distance (0 where the camera saw nothing).
+    pub depth: Vec<f32>,
+    /// Statistics.
+    pub stats: RenderStats,
+}
+
+/// Errors of [`render`].
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The thread pool could not be built.
+    #[error("cannot start {threads} render threads: {message}")]
+    ThreadPool {
+        /// Requested threads.
+        threads: usize,
+        /// Cause.
+        message: String,
+    },
+}
+
+/// Renders `scene`. `progress` is called with the number of samples finished, from worker
+/// threads.
+pub fn render(
+    scene: &CompiledScene,
+    options: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RenderOutput, RenderError> {
+    let start = std::time::Instant::now();
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let ts = options.tile_size.max(1);
+    let mut tiles = Vec::new();
+    for y0 in (0..h).step_by(ts as usize) {
+        for x0 in (0..w).step_by(ts as usize) {
+            tiles.push((x0, y0, ts.min(w - x0), ts.min(h - y0)));
+        }
+    }
+    let tracer = PathTracer {
+        technique: options.technique,
+    };
+    let spp = scene.settings.spp;
+    let work = || -> Vec<(TileFilm, SystemStats)> {
+        tiles
+            .par_iter()
+            .map_init(
+                || (BatchTables::default(), Bump::new()),
+                |(tables, arena), &(x0, y0, tw, th)| {
+                    let mut tile = TileFilm::new(x0, y0, tw, th);
+                    let mut stats = SystemStats::default();
+                    tracer.render_tile(
+                        scene,
+                        &mut tile,
+                        0..spp,
+                        options.batch_size,
+                        tables,
+                        &mut stats,
+                        arena,
+                        progress,
+                    );
+                    (tile, stats)
+                },
+            )
+            .collect()
+    };
+    let results = match options.threads {
+        Some(threads) => rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| RenderError::ThreadPool {
+                threads,
+                message: e.to_string(),
+            })?
+            .install(work),
+        None => work(),
+    };
+
+    let mut film = Film::new(w, h);
+    let n = (w * h) as usize;
+    let mut albedo = vec![Rgb::BLACK; n];
+    let mut normal = vec![Vec3::ZERO; n];
+    let mut depth = vec![0.0f32; n];
+    let mut counters = SystemStats::default();
+    for (tile, stats) in &results {
+        film.add_tile(&tile.film, tile.x0, tile.y0);
+        for ty in 0..tile.film.height {
+            for tx in 0..tile.film.width {
+                let src = (ty * tile.film.width + tx) as usize;
+                let dst = ((tile.y0 + ty) * w + tile.x0 + tx) as usize;
+                albedo[dst] = tile.albedo[src];
+                normal[dst] = tile.normal[src];
+                depth[dst] = tile.depth[src];
+            }
+        }
+        counters.merge(stats);
+    }
+    let mean = |v: Rgb, i: usize| {
+        let c = film.count[i].max(1) as f32;
+        v / c
+    };
+    let image = |f: &dyn Fn(usize) -> Rgb| Image {
+        width: w as usize,
+        height: h as usize,
+        pixels: (0..n).map(f).collect(),
+    };
+    let beauty = image(&|i| film.mean(i));
+    let variance = image(&|i| film.variance_of_mean(i));
+    let albedo_img = image(&|i| mean(albedo[i], i));
+    let normal_img = image(&|i| {
+        let v = normal[i] / film.count[i].max(1) as f32;
+        Rgb::new(v.x, v.y, v.z)
+    });
+    let depth = (0..n).map(|i| depth[i] / film.count[i].max(1) as f32).collect();
+    let sample_count = film.count.iter().map(|&c| c as f32).collect();
+    let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
+    stats.features = scene.features.names();
+    Ok(RenderOutput {
+        beauty,
+        variance,
+        sample_count,
+        albedo: albedo_img,
+        normal: normal_img,
+        depth,
+        stats,
+    })
+}

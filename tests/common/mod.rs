@@ -1,0 +1,75 @@
+//! Helpers shared by the integration tests: small scenes built in code.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
+use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene};
+use risotto::systems::camera::{Camera, Projection};
+use risotto_components::Rgb;
+use glam::Vec3;
+
+/// A camera looking down -z from `z = dist` with a horizontal fov.
+pub fn camera(fov: f32, dist: f32, w: u32, h: u32) -> Camera {
+    Camera::look_at(
+        Projection::Perspective { fov_deg: fov },
+        Vec3::new(0.0, 0.0, dist),
+        Vec3::ZERO,
+        Vec3::Y,
+        w,
+        h,
+    )
+    .unwrap()
+}
+
+/// Settings with the given resolution and spp.
+pub fn settings(w: u32, h: u32, spp: u32, max_depth: u32) -> RenderSettings {
+    RenderSettings {
+        width: w,
+        height: h,
+        spp,
+        max_depth,
+        ..Default::default()
+    }
+}
+
+/// A built-in material.
+pub fn mat(surface: Surface) -> Box<BuiltinMaterial> {
+    Box::new(BuiltinMaterial {
+        surface,
+        interior: Interior::None,
+    })
+}
+
+/// A built-in material with an interior.
+pub fn mat_in(surface: Surface, interior: Interior) -> Box<BuiltinMaterial> {
+    Box::new(BuiltinMaterial { surface, interior })
+}
+
+/// A constant environment.
+pub fn environment(scene: &mut Scene, radiance: Rgb) {
+    scene.add_light(
+        "env",
+        LightComponent::Environment {
+            radiance,
+            map: None,
+        },
+    );
+}
+
+/// Renders with default options.
+pub fn render_default(scene: &CompiledScene) -> RenderOutput {
+    render(scene, &RenderOptions::default(), &|_| {}).unwrap()
+}
+
+/// Mean and standard error of the image mean (per channel), from the film's per-pixel
+/// variances.
+pub fn image_mean(out: &RenderOutput) -> (Rgb, Rgb) {
+    let n = out.beauty.pixels.len() as f32;
+    let mut mean = Rgb::BLACK;
+    let mut var = Rgb::BLACK;
+    for (p, v) in out.beauty.pixels.iter().zip(&out.variance.pixels) {
+        mean += *p;
+        var += *v;
+    }
+    (mean / n, (var / (n * n)).map(f32::sqrt))
+}
