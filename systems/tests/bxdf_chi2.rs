@@ -28,6 +28,9 @@ const NUM_TESTS: u32 = 1 + 4 + 7;
 const ALPHA: f64 = 0.01;
 /// Samples per test: ~1e6 keeps a release run well under a second per test.
 const N_SAMPLES: usize = 1_000_000;
+/// Samples for the must-reject tests: their statistics exceed the threshold by orders of
+/// magnitude at 1e6, so a quarter of that still rejects with a wide margin.
+const N_SAMPLES_REJECT: usize = 250_000;
 /// Minimum expected count of a cell before pooling (the usual rule of thumb).
 const MIN_EXPECTED: f64 = 5.0;
 
@@ -257,17 +260,18 @@ struct Chi2 {
     p_value: f64,
 }
 
-/// Histograms `N_SAMPLES` draws of `sample` (a `None` is a lost sample and counts against
+/// Histograms `n_samples` draws of `sample` (a `None` is a lost sample and counts against
 /// the sampler) and compares them with `pdf` integrated over the cells of `domain`.
 fn chi2_test(
     domain: &Domain,
     seed: u64,
+    n_samples: usize,
     mut sample: impl FnMut(Vec2) -> Option<Vec3>,
     pdf: &dyn Fn(Vec3) -> f64,
 ) -> Chi2 {
     let mut observed = vec![0u64; domain.n_theta * domain.n_phi];
     let mut rng = Rng(seed);
-    for _ in 0..N_SAMPLES {
+    for _ in 0..n_samples {
         if let Some(w) = sample(rng.vec2()) {
             assert!(w.is_finite(), "sampler produced {w}");
             observed[domain.cell_of(w)] += 1;
@@ -276,7 +280,7 @@ fn chi2_test(
     let expected: Vec<f64> = domain
         .integrate(pdf)
         .into_iter()
-        .map(|p| p * N_SAMPLES as f64)
+        .map(|p| p * n_samples as f64)
         .collect();
     pearson(&observed, &expected)
 }
@@ -424,6 +428,7 @@ fn chi2_uniform_sphere() {
     let r = chi2_test(
         &Domain::new(Vec3::new(0.48, 0.6, 0.64), 1.0),
         11,
+        N_SAMPLES,
         |u| Some(sample_uniform_sphere(u)),
         &|_| INV_4PI as f64,
     );
@@ -441,6 +446,7 @@ fn chi2_diffuse() {
         let r = chi2_test(
             &domain,
             20 + k as u64,
+            N_SAMPLES,
             |u| diffuse_sample(albedo, wo, u).map(|s| s.wi),
             &|wi| diffuse_eval(albedo, wo, wi).1 as f64,
         );
@@ -458,6 +464,7 @@ fn chi2_henyey_greenstein() {
         let r = chi2_test(
             &hg_domain(g, wo),
             30 + k as u64,
+            N_SAMPLES,
             |u| Some(hg_sample(g, wo, u).0),
             &|wi| hg_eval(g, wo, wi) as f64,
         );
@@ -481,6 +488,7 @@ fn chi2_rejects_wrong_densities() {
         let r = chi2_test(
             &hg_domain(g, wo),
             40,
+            N_SAMPLES_REJECT,
             |u| Some(hg_sample(g, wo, u).0),
             &|wi| hg_eval(wrong, wo, wi) as f64,
         );
@@ -494,6 +502,7 @@ fn chi2_rejects_wrong_densities() {
     let r = chi2_test(
         &Domain::new(Vec3::Z, 1.0),
         41,
+        N_SAMPLES_REJECT,
         |u| diffuse_sample(Rgb::WHITE, Vec3::Z, u).map(|s| s.wi),
         &|wi| if wi.z > 0.0 { 0.5 / PI } else { 0.0 },
     );
@@ -502,6 +511,7 @@ fn chi2_rejects_wrong_densities() {
     let r = chi2_test(
         &Domain::new(Vec3::Z, 1.0),
         42,
+        N_SAMPLES_REJECT,
         |u| Some(sample_uniform_sphere(Vec2::new(u.x, 0.98 * u.y))),
         &|_| INV_4PI as f64,
     );
@@ -511,6 +521,7 @@ fn chi2_rejects_wrong_densities() {
     let r = chi2_test(
         &Domain::new(Vec3::Z, 1.0),
         43,
+        N_SAMPLES_REJECT,
         |u| Some(sample_uniform_sphere(u)),
         &|wi| if wi.z > 0.0 { 0.5 / PI } else { 0.0 },
     );
