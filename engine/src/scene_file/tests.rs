@@ -1451,3 +1451,29 @@ fn furnace_and_glass_scenes_have_their_lights() {
     assert!(matches!(m.lights[0], LightDesc::Point { .. }));
     assert!(m.shapes.iter().any(|s| s.emission.is_some()));
 }
+
+#[test]
+fn documented_complete_example_parses() {
+    let doc = include_str!("../../../docs/scene-format.md");
+    let section = &doc[doc.find("## Complete example").expect("section")..];
+    let start = section.find("```toml\n").expect("toml block") + "```toml\n".len();
+    let end = start + section[start..].find("```").expect("closing fence");
+    // Parsed as if it lived in scenes/, so its mesh path resolves to the shipped OBJ.
+    let path = scenes_dir().join("doc-example.toml");
+    let s = parse_scene(&section[start..end], &path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.render.max_depth, RenderSettings::UNBOUNDED_DEPTH);
+    assert_eq!(s.shapes.len(), 6);
+    assert_eq!(s.lights.len(), 2);
+    let glass = s.materials.iter().find(|m| m.name == "glass").unwrap();
+    let interior = glass.params.table("interior").unwrap().unwrap();
+    assert_eq!(interior.string("type", None).unwrap(), "beer");
+    assert_eq!(
+        interior.rgb("sigma_a", None).unwrap(),
+        Rgb::new(0.1, 0.8, 1.5)
+    );
+    // The lamp: side 4 centred at (-3, 6, 3) facing the origin.
+    let lamp = triangles(shape(&s, "lamp"));
+    let centre = distinct_vertices(lamp).iter().copied().sum::<Vec3>() / 4.0;
+    assert!(centre.distance(Vec3::new(-3.0, 6.0, 3.0)) < 1e-5);
+    assert!(normal(&lamp[0]).dot(-centre.normalize()) > 0.9999);
+}
