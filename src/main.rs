@@ -3,15 +3,19 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::output::{write_exr, write_png, FilmOutput};
 use risotto::engine::render::{render, RenderOptions};
-use risotto::engine::integrator::LightingTechnique;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "risotto", version, about = "A physically based CPU renderer with first-class volumes")]
+#[command(
+    name = "risotto",
+    version,
+    about = "A physically based CPU renderer with first-class volumes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -101,7 +105,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(0) = args.threads {
         anyhow::bail!("--threads 0: need at least one thread");
     }
-    anyhow::ensure!(args.batch_size > 0, "--batch-size 0: need at least one path per batch");
+    anyhow::ensure!(
+        args.batch_size > 0,
+        "--batch-size 0: need at least one path per batch"
+    );
     let technique = match args.lighting.as_str() {
         "mis" => LightingTechnique::Mis,
         "nee" => LightingTechnique::NeeOnly,
@@ -109,10 +116,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
         other => anyhow::bail!("--lighting {other}: expected mis, nee or bxdf"),
     };
     let compiled = compile_scene(scene, &args.scene)?;
-    let out = args.out.clone().unwrap_or_else(|| default_output(&args.scene));
-    let total = compiled.settings.spp as u64
-        * compiled.camera.width as u64
-        * compiled.camera.height as u64;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene));
+    let total =
+        compiled.settings.spp as u64 * compiled.camera.width as u64 * compiled.camera.height as u64;
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
@@ -159,6 +168,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
 }
 
 fn default_output(scene: &Path) -> PathBuf {
-    let stem = scene.file_stem().map_or_else(|| "render".into(), |s| s.to_os_string());
+    let stem = scene
+        .file_stem()
+        .map_or_else(|| "render".into(), |s| s.to_os_string());
     PathBuf::from(stem).with_extension("exr")
 }

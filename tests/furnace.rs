@@ -2,11 +2,11 @@
 
 mod common;
 use common::*;
+use glam::Vec3;
 use risotto::engine::builtin::Surface;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::systems::geometry::Sphere;
 use risotto_components::Rgb;
-use glam::Vec3;
 
 fn furnace(surface: Surface) -> (Rgb, Rgb) {
     let mut scene = Scene::new(camera(40.0, 4.0, 32, 32), settings(32, 32, 64, 64));
@@ -47,4 +47,3 @@ fn glass_sphere_conserves_energy_in_a_furnace() {
         assert!((m - 1.0).abs() <= 3.0 * s + 1e-3, "mean {m} se {s}");
     }
 }
-

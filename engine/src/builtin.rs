@@ -140,7 +140,11 @@ impl Bxdf for MirrorBxdf {
         let (nn, vn) = (ctx.nn(), ctx.vn());
         for i in 0..ctx.num_points() {
             // Two-sided mirror: reflect about the normal facing the viewer.
-            let n = if nn[i].dot(vn[i]) >= 0.0 { nn[i] } else { -nn[i] };
+            let n = if nn[i].dot(vn[i]) >= 0.0 {
+                nn[i]
+            } else {
+                -nn[i]
+            };
             let f = frame(n);
             if let Some(s) = bxdf::mirror_sample(self.reflectance, f.to_local(vn[i])) {
                 out.wi[i] = f.to_world(s.wi);

@@ -146,7 +146,10 @@ impl LightingDelegate for DirectLighting<'_> {
             let s = &mut samplers[ray];
             let sel = s.next_1d();
             let u = s.next_2d();
-            let ls = self.scene.lights.sample(&self.scene.geometry, ctx.p()[i], sel, u);
+            let ls = self
+                .scene
+                .lights
+                .sample(&self.scene.geometry, ctx.p()[i], sel, u);
             self.wi.push(ls.map_or(Vec3::Z, |l| l.wi));
             self.light_samples.push(ls);
         }
@@ -154,7 +157,9 @@ impl LightingDelegate for DirectLighting<'_> {
         self.pdf.resize(n, 0.0);
         bxdf.evaluate_samples(ctx, &self.wi, &mut self.value, &mut self.pdf);
         for i in 0..n {
-            let Some(ls) = self.light_samples[i] else { continue };
+            let Some(ls) = self.light_samples[i] else {
+                continue;
+            };
             let ray = ctx.ray_id()[i] as usize;
             let mis = if ls.delta {
                 1.0
@@ -221,7 +226,8 @@ impl PathTracer {
             let n = t.paths.len();
             t.pixel_tmp.clear();
             for i in 0..n {
-                t.pixel_tmp.push(tile.local(t.paths.pixel[i], scene.camera.width));
+                t.pixel_tmp
+                    .push(tile.local(t.paths.pixel[i], scene.camera.width));
             }
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
@@ -253,7 +259,8 @@ impl PathTracer {
         t.seeds.clear();
         t.sample_tmp.clear();
         for i in 0..n {
-            t.seeds.push(pixel_seed(scene.settings.seed, t.paths.pixel[i]));
+            t.seeds
+                .push(pixel_seed(scene.settings.seed, t.paths.pixel[i]));
             t.sample_tmp.push(t.paths.sample[i]);
         }
         // Camera rays.
@@ -313,7 +320,13 @@ impl PathTracer {
     /// where rays travel in a volume), following pass-throughs, and handles escaped rays.
     /// Leaves `t.incoming` (the rays, with throughput including transmission) and
     /// `t.groups` (points whose `ray_id` indexes `t.incoming`).
-    fn trace(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+    fn trace(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
         let features = scene.features;
         t.incoming.clear();
         t.groups.clear();
@@ -475,7 +488,12 @@ impl PathTracer {
     /// Handles the rays that escaped (environment emission) and the points on pass-through
     /// boundaries (index-matched or false): those continue as new pending rays and are removed
     /// from the groups.
-    fn escaped_and_passes(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats) {
+    fn escaped_and_passes(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+    ) {
         // Escaped rays: only misses appended this round are new; process and clear.
         let misses = std::mem::take(&mut t.groups.misses);
         let miss_tr = std::mem::take(&mut t.groups.miss_transmission);
@@ -615,7 +633,13 @@ impl PathTracer {
     }
 
     /// Shade stage: emission, Bxdf sampling, direct lighting, Russian roulette, next rays.
-    fn shade(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+    fn shade(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
         let settings = scene.settings;
         let groups = std::mem::take(&mut t.groups.groups);
         let total: usize = groups.iter().map(|g| g.range.len()).sum();
@@ -681,7 +705,9 @@ impl PathTracer {
                         let mut s = t.samplers[k];
                         let sel = s.next_1d();
                         let u = s.next_2d();
-                        scene.lights.sample(&scene.geometry, t.groups.points.p[i], sel, u)
+                        scene
+                            .lights
+                            .sample(&scene.geometry, t.groups.points.p[i], sel, u)
                     } else {
                         None
                     };
@@ -693,7 +719,9 @@ impl PathTracer {
                 t.eval_pdf.resize(m, 0.0);
                 bxdf.evaluate_samples(&ctx, &t.wi_tmp, &mut t.eval_value, &mut t.eval_pdf);
                 for (k, i) in range.clone().enumerate() {
-                    let Some(ls) = t.light_samples[k] else { continue };
+                    let Some(ls) = t.light_samples[k] else {
+                        continue;
+                    };
                     let f = t.eval_value[k];
                     if f.is_black() {
                         continue;
@@ -764,8 +792,8 @@ impl PathTracer {
                 let mut throughput = t.incoming.throughput[r] * weight;
                 let lobe = t.samples.lobe[k];
                 let eta = t.samples.eta[k];
-                let eta_scale = t.incoming.eta_scale[r]
-                    * if lobe.is_transmit() { eta * eta } else { 1.0 };
+                let eta_scale =
+                    t.incoming.eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
                 let depth = t.incoming.depth[r] + 1;
                 // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
                 if depth as u32 > settings.rr_depth {
@@ -816,14 +844,28 @@ impl PathTracer {
 
     /// Transmission stage: walks every shadow ray through the surfaces that let shadows pass
     /// and the volumes it crosses, then adds the surviving contributions to their paths.
-    fn transmission(&self, scene: &CompiledScene, t: &mut BatchTables, stats: &mut SystemStats, arena: &Bump) {
+    fn transmission(
+        &self,
+        scene: &CompiledScene,
+        t: &mut BatchTables,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
         let n = t.shadow.len();
         if n == 0 {
             return;
         }
         let start = std::time::Instant::now();
         let mut contribution = t.shadow.contribution.clone();
-        crate::transmission::trace_shadow_rays(scene, &t.shadow, &t.paths, &t.seeds, &mut contribution, stats, arena);
+        crate::transmission::trace_shadow_rays(
+            scene,
+            &t.shadow,
+            &t.paths,
+            &t.seeds,
+            &mut contribution,
+            stats,
+            arena,
+        );
         for i in 0..n {
             let path = t.shadow.path[i] as usize;
             t.paths.radiance[path] += contribution[i];
@@ -846,7 +888,15 @@ impl BatchTables {
 
 /// Light-sampling pdf (solid angle at `from`, including selection) of the point `p` on the
 /// emissive shape `shape` hit by ray `r`.
-fn light_pdf_at(scene: &CompiledScene, shape: u32, from: Vec3, p: Vec3, ng: Vec3, rays: &Rays, r: usize) -> f32 {
+fn light_pdf_at(
+    scene: &CompiledScene,
+    shape: u32,
+    from: Vec3,
+    p: Vec3,
+    ng: Vec3,
+    rays: &Rays,
+    r: usize,
+) -> f32 {
     // The hit primitive is not stored on the point; find it by re-intersecting the ray (cheap
     // and rare: only for emitter hits after a non-specular bounce).
     let mut t = [0.0f32];

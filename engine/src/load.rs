@@ -233,29 +233,33 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         DescProjection::Perspective { fov_deg } => Projection::Perspective { fov_deg },
         DescProjection::Orthographic { width } => Projection::Orthographic { width },
     };
-    let camera = Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height).ok_or_else(
-        || LoadError::Camera {
-            scene: desc.path.clone(),
-        },
-    )?;
+    let camera =
+        Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height).ok_or_else(|| {
+            LoadError::Camera {
+                scene: desc.path.clone(),
+            }
+        })?;
     let mut scene = Scene::new(camera, settings);
     scene.camera_volume = desc.camera_volume.clone();
     for m in &desc.materials {
-        let ctor = registry
-            .constructors
-            .get(&m.type_name)
-            .ok_or_else(|| LoadError::UnknownType {
-                scene: desc.path.clone(),
-                material: m.name.clone(),
-                type_name: m.type_name.clone(),
-                known: registry.types().collect::<Vec<_>>().join(", "),
-            })?;
+        let ctor =
+            registry
+                .constructors
+                .get(&m.type_name)
+                .ok_or_else(|| LoadError::UnknownType {
+                    scene: desc.path.clone(),
+                    material: m.name.clone(),
+                    type_name: m.type_name.clone(),
+                    known: registry.types().collect::<Vec<_>>().join(", "),
+                })?;
         let factory = ctor(&m.params)?;
         scene.add_material(&m.name, m.priority, factory);
     }
     for s in desc.shapes {
         let geometry = match s.geometry {
-            DescGeometry::Sphere { center, radius } => ShapeGeometry::Sphere(Sphere { center, radius }),
+            DescGeometry::Sphere { center, radius } => {
+                ShapeGeometry::Sphere(Sphere { center, radius })
+            }
             DescGeometry::Triangles { triangles, .. } => ShapeGeometry::Triangles(triangles),
         };
         scene.add_shape(&s.name, geometry, s.material as u32, s.emission);
@@ -287,7 +291,9 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                             light: name.clone(),
                             source: e,
                         })?;
-                        Some(Arc::new(EnvironmentMap::new(img.pixels, img.width, img.height)))
+                        Some(Arc::new(EnvironmentMap::new(
+                            img.pixels, img.width, img.height,
+                        )))
                     }
                     None => None,
                 };

@@ -412,7 +412,10 @@ pub trait VolumeIntegrator {
     /// `lighting`, or return different points altogether (points inside the volume as a
     /// [`ShadingMode::VolumeScatter`] group; rays it returns nothing for are absorbed).
     /// `samplers[i]` is ray `i`'s sample source.
-    #[allow(clippy::too_many_arguments, reason = "mirrors the RIS GetNearestHits contract")]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "mirrors the RIS GetNearestHits contract"
+    )]
     fn nearest_hits(
         &mut self,
         rays: &Rays,

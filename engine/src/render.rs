@@ -157,7 +157,9 @@ pub fn render(
         let v = normal[i] / film.count[i].max(1) as f32;
         Rgb::new(v.x, v.y, v.z)
     });
-    let depth = (0..n).map(|i| depth[i] / film.count[i].max(1) as f32).collect();
+    let depth = (0..n)
+        .map(|i| depth[i] / film.count[i].max(1) as f32)
+        .collect();
     let sample_count = film.count.iter().map(|&c| c as f32).collect();
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();

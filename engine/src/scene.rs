@@ -261,7 +261,12 @@ impl Scene {
     }
 
     /// Registers a material and returns its index.
-    pub fn add_material(&mut self, name: &str, priority: i32, factory: Box<dyn BxdfFactory>) -> u32 {
+    pub fn add_material(
+        &mut self,
+        name: &str,
+        priority: i32,
+        factory: Box<dyn BxdfFactory>,
+    ) -> u32 {
         self.materials.push(Material {
             name: name.to_string(),
             priority,
@@ -282,7 +287,9 @@ impl Scene {
             .world
             .spawn((Name(name.to_string()), geometry, MaterialRef(material)));
         if let Some(l) = emission {
-            self.world.insert_one(e, Emission(l)).expect("entity was just spawned");
+            self.world
+                .insert_one(e, Emission(l))
+                .expect("entity was just spawned");
         }
         e
     }
@@ -305,7 +312,10 @@ impl Scene {
         // primitive numbering is stable).
         let mut shape_entities: Vec<(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)> =
             Vec::new();
-        for (e, (name, geom, mat)) in world.query::<(&Name, &ShapeGeometry, &MaterialRef)>().iter() {
+        for (e, (name, geom, mat)) in world
+            .query::<(&Name, &ShapeGeometry, &MaterialRef)>()
+            .iter()
+        {
             let emission = world.get::<&Emission>(e).ok().map(|em| em.0);
             shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
         }
@@ -421,8 +431,8 @@ impl Scene {
         for (info, _) in material_info.iter().zip(&used).filter(|(_, &u)| u) {
             let h = info.hints;
             features.volumes |= h.contains(InstanceHints::COMPUTES_INTERIOR);
-            features.transmissive |= h.contains(InstanceHints::TRANSMITS)
-                || h.contains(InstanceHints::INDEX_MATCHED);
+            features.transmissive |=
+                h.contains(InstanceHints::TRANSMITS) || h.contains(InstanceHints::INDEX_MATCHED);
             features.scattering_media |= h.contains(InstanceHints::INTERIOR_SCATTERS);
             features.heterogeneous |= h.contains(InstanceHints::INTERIOR_HETEROGENEOUS);
             features.subsurface |= h.contains(InstanceHints::INTERIOR_SUBSURFACE);
@@ -518,7 +528,9 @@ impl CompiledScene {
             }
             let shape = self.prim_shape[prim[0] as usize];
             if self.tracks_interior(shape) {
-                let s = self.geometry.surface_at(prim[0], start, d, t[0], b1[0], b2[0]);
+                let s = self
+                    .geometry
+                    .surface_at(prim[0], start, d, t[0], b1[0], b2[0]);
                 let front = d.dot(s.ng) < 0.0;
                 stack.cross(self.volume_entry(shape), front);
             }

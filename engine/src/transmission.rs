@@ -15,7 +15,9 @@ use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{Paths, Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
+use risotto_components::{
+    Paths, Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT,
+};
 use risotto_systems::intersect::{intersect_closest, intersect_occluded};
 use risotto_systems::sampler::PathSampler;
 
@@ -99,12 +101,26 @@ pub fn trace_shadow_rays(
             let mut segs: Vec<(usize, f32, f32)> = Vec::new();
             for (k, &i) in active.iter().enumerate() {
                 let i = i as usize;
-                let end = if prim[k] == NO_HIT { shadow.tmax[i] } else { t[k] };
+                let end = if prim[k] == NO_HIT {
+                    shadow.tmax[i]
+                } else {
+                    t[k]
+                };
                 if stacks[i].innermost().is_some() && end > t0[i] {
                     segs.push((i, t0[i], end - t0[i]));
                 }
             }
-            attenuate_in_volumes(scene, shadow, paths, seeds, &stacks, &segs, contribution, stats, arena);
+            attenuate_in_volumes(
+                scene,
+                shadow,
+                paths,
+                seeds,
+                &stacks,
+                &segs,
+                contribution,
+                stats,
+                arena,
+            );
         }
         let mut next = Vec::with_capacity(m);
         for (k, &i) in active.iter().enumerate() {
@@ -124,9 +140,10 @@ pub fn trace_shadow_rays(
                 contribution[iu] *= info.shadow_transmittance;
             }
             if scene.tracks_interior(shape) {
-                let s = scene
-                    .geometry
-                    .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
+                let s =
+                    scene
+                        .geometry
+                        .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
                 let front = direction[k].dot(s.ng) < 0.0;
                 stacks[iu].cross(scene.volume_entry(shape), front);
             }
@@ -211,7 +228,13 @@ fn attenuate_in_volumes(
         }
         let m = members.len();
         let pts = arena.alloc(pts);
-        let ctx = arena.alloc(ShadingContext::new(pts, 0..m, ShadingMode::Interior, entry.material, &[]));
+        let ctx = arena.alloc(ShadingContext::new(
+            pts,
+            0..m,
+            ShadingMode::Interior,
+            entry.material,
+            &[],
+        ));
         let factory = scene.materials[entry.material as usize].factory.as_ref();
         let Some(integrator) = factory.begin_interior(ctx, ShadingMode::Interior, arena) else {
             continue;

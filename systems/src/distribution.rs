@@ -196,8 +196,10 @@ impl Distribution2D {
             "Distribution2D::new: {} values for {width}x{height}",
             values.len()
         );
-        let conditional: Vec<Distribution1D> =
-            values.chunks_exact(width).map(Distribution1D::new).collect();
+        let conditional: Vec<Distribution1D> = values
+            .chunks_exact(width)
+            .map(Distribution1D::new)
+            .collect();
         // Rows weighted by their true integral: an all-zero row gets weight 0 (its uniform
         // fallback conditional is then never used by sampling).
         let row_int: Vec<f32> = conditional.iter().map(Distribution1D::integral).collect();
@@ -295,12 +297,14 @@ impl EnvironmentMap {
             pixels.len()
         );
         let mut weights = Vec::with_capacity(pixels.len());
-        for (j, row) in pixels.chunks_exact(width).enumerate() {
+        for row in pixels.chunks_exact(width) {
             let sin_theta = 1.0;
             // Average, not luminance: every channel > 0 must give a density > 0, or radiance
             // in that channel would never be sampled (bias).
             weights.extend(row.iter().map(|p| {
-                let a = p.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 }).average();
+                let a = p
+                    .map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })
+                    .average();
                 a * sin_theta
             }));
         }
@@ -443,7 +447,10 @@ mod tests {
             assert_eq!(i, (x * 10.0) as usize);
             // analytic density: f(x) / ∫f
             let want = f64::from(FUNC[i]) / (sum / 10.0);
-            assert!((f64::from(pdf) - want).abs() < 1e-5 * want, "{pdf} vs {want}");
+            assert!(
+                (f64::from(pdf) - want).abs() < 1e-5 * want,
+                "{pdf} vs {want}"
+            );
             assert_eq!(pdf, d.pdf(x));
             counts[(x * (10 * sub) as f32) as usize] += 1;
         }
@@ -477,7 +484,10 @@ mod tests {
         // Extreme random numbers never land on zero bins and stay inside [0, 1).
         for u in [0.0, 1e-30, ONE_MINUS_EPSILON, 1.0, 2.0, -1.0, f32::NAN] {
             let (x, pdf, i) = d.sample_continuous(u);
-            assert!((0.0..1.0).contains(&x) && pdf > 0.0 && FUNC[i] > 0.0, "u={u}");
+            assert!(
+                (0.0..1.0).contains(&x) && pdf > 0.0 && FUNC[i] > 0.0,
+                "u={u}"
+            );
             let (j, pmf) = d.sample_discrete(u);
             assert!(pmf > 0.0 && FUNC[j] > 0.0, "u={u}");
         }
@@ -537,7 +547,13 @@ mod tests {
     fn grid_values(w: usize, h: usize) -> Vec<f32> {
         let mut rng = Rng(99);
         (0..w * h)
-            .map(|i| if i % 7 == 3 { 0.0 } else { rng.f32() * rng.f32() * 10.0 })
+            .map(|i| {
+                if i % 7 == 3 {
+                    0.0
+                } else {
+                    rng.f32() * rng.f32() * 10.0
+                }
+            })
             .collect()
     }
 
@@ -559,7 +575,10 @@ mod tests {
             let (i, j) = ((uv.x * w as f32) as usize, (uv.y * h as f32) as usize);
             // density = f / mean(f)
             let want = f64::from(vals[j * w + i]) * (w * h) as f64 / sum;
-            assert!((f64::from(pdf) - want).abs() < 1e-4 * want, "{pdf} vs {want}");
+            assert!(
+                (f64::from(pdf) - want).abs() < 1e-4 * want,
+                "{pdf} vs {want}"
+            );
             assert_eq!(pdf, d.pdf(uv));
             counts[j * w + i] += 1;
         }
@@ -608,8 +627,14 @@ mod tests {
         px[3] = Rgb::new(1.0, 2.0, 3.0);
         px[4] = Rgb::new(4.0, 0.0, 0.0); // (0, 1): u in [0, 0.25), lower half: +z, down
         let map = EnvironmentMap::new(px, 4, 2);
-        assert_eq!(map.eval(Vec3::new(1.0, 0.3, 0.1).normalize()), Rgb::new(1.0, 2.0, 3.0));
-        assert_eq!(map.eval(Vec3::new(-0.1, -0.3, 1.0).normalize()), Rgb::new(4.0, 0.0, 0.0));
+        assert_eq!(
+            map.eval(Vec3::new(1.0, 0.3, 0.1).normalize()),
+            Rgb::new(1.0, 2.0, 3.0)
+        );
+        assert_eq!(
+            map.eval(Vec3::new(-0.1, -0.3, 1.0).normalize()),
+            Rgb::new(4.0, 0.0, 0.0)
+        );
         assert_eq!(map.eval(Vec3::new(0.0, 0.3, -1.0).normalize()), Rgb::BLACK);
     }
 
@@ -662,8 +687,7 @@ mod tests {
     fn env_importance_sampling_matches_quadrature() {
         let (w, h) = (32, 16);
         let map = EnvironmentMap::new(test_map(w, h), w, h);
-        let exact =
-            quadrature(&map, |d| map.eval(d).to_array().map(f64::from));
+        let exact = quadrature(&map, |d| map.eval(d).to_array().map(f64::from));
         let closed = map.integral();
         for c in 0..3 {
             let rel = (f64::from(closed.to_array()[c]) - exact[c]).abs() / exact[c];
@@ -707,7 +731,9 @@ mod tests {
         let map = EnvironmentMap::new(px, w, h);
         let mut rng = Rng(77);
         let n = 100_000;
-        let hits = (0..n).filter(|_| map.sample(rng.vec2()).1 == bright).count();
+        let hits = (0..n)
+            .filter(|_| map.sample(rng.vec2()).1 == bright)
+            .count();
         // Expected share: 5667 sin θ_20 / (5667 sin θ_20 + 1e-3 Σ sin θ) ≈ 0.9998.
         assert!(hits as f64 > 0.999 * n as f64, "{hits} of {n}");
     }

@@ -159,7 +159,14 @@ impl LightSet {
 
     /// Solid-angle pdf (including selection) that light sampling from `from` picks the point
     /// `p` (normal `n`) on the area light of `prim`.
-    pub fn area_pdf(&self, geometry: &SceneGeometry, prim: u32, from: Vec3, p: Vec3, n: Vec3) -> f32 {
+    pub fn area_pdf(
+        &self,
+        geometry: &SceneGeometry,
+        prim: u32,
+        from: Vec3,
+        p: Vec3,
+        n: Vec3,
+    ) -> f32 {
         let Some(l) = self.area_light(prim) else {
             return 0.0;
         };
@@ -173,7 +180,13 @@ impl LightSet {
     }
 
     /// Samples a light from `p`. `u_select` chooses the light, `u` the point on it.
-    pub fn sample(&self, geometry: &SceneGeometry, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        geometry: &SceneGeometry,
+        p: Vec3,
+        u_select: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
         let (index, pmf) = self.selection.as_ref()?.sample_discrete(u_select);
         if pmf <= 0.0 {
             return None;
@@ -236,7 +249,11 @@ impl LightSet {
                         let (dir, value, pdf) = m.sample(u);
                         (dir, *radiance * value, pdf)
                     }
-                    None => (crate::bxdf::sample_uniform_sphere(u), *radiance, 1.0 / (4.0 * PI)),
+                    None => (
+                        crate::bxdf::sample_uniform_sphere(u),
+                        *radiance,
+                        1.0 / (4.0 * PI),
+                    ),
                 };
                 let pdf = pdf * pmf;
                 (pdf > 0.0 && pdf.is_finite()).then_some(LightSample {

@@ -1,12 +1,12 @@
 //! Helpers shared by the integration tests: small scenes built in code.
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
+use glam::Vec3;
 use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene};
 use risotto::systems::camera::{Camera, Projection};
 use risotto_components::Rgb;
-use glam::Vec3;
 
 /// A camera looking down -z from `z = dist` with a horizontal fov.
 pub fn camera(fov: f32, dist: f32, w: u32, h: u32) -> Camera {
