@@ -799,7 +799,7 @@ impl PathTracer {
                 if depth as u32 > settings.rr_depth {
                     let q = (throughput.max_channel() * eta_scale).min(0.95);
                     let mut s = t.incoming_sampler(r, t.incoming.dimension[r] + 3);
-                    if !(s.next_1d() < q) {
+                    if s.next_1d() >= q {
                         stats.terminate(Termination::RussianRoulette, 1);
                         continue;
                     }
