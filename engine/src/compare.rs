@@ -195,7 +195,12 @@ impl Metrics {
         let per: serde_json::Map<String, serde_json::Value> = ["R", "G", "B"]
             .iter()
             .zip(&self.per_channel)
-            .map(|(name, m)| (name.to_string(), serde_json::to_value(m).unwrap_or_default()))
+            .map(|(name, m)| {
+                (
+                    name.to_string(),
+                    serde_json::to_value(m).unwrap_or_default(),
+                )
+            })
             .collect();
         serde_json::json!({
             "shape": [self.size.1, self.size.0, 3],
@@ -259,33 +264,25 @@ mod tests {
 
     #[test]
     fn identical_images_have_zero_error() {
-        let img = Image::from_pixels(
-            2,
-            1,
-            vec![Rgb::new(0.1, 0.2, 0.3), Rgb::new(1.0, 2.0, 4.0)],
-        );
+        let img = Image::from_pixels(2, 1, vec![Rgb::new(0.1, 0.2, 0.3), Rgb::new(1.0, 2.0, 4.0)]);
         let m = compare(&img, &img).unwrap();
         assert_eq!(m.all.rmse, 0.0);
         assert_eq!(m.all.relmse, 0.0);
         assert_eq!(m.all.maxabs, 0.0);
         assert!(m.per_channel.iter().all(|c| c.mean_reldiff == 0.0));
-        assert!(close(m.per_channel[2].mean_ref, (f64::from(0.3f32) + 4.0) / 2.0));
+        assert!(close(
+            m.per_channel[2].mean_ref,
+            (f64::from(0.3f32) + 4.0) / 2.0
+        ));
     }
 
     /// Hand-computed values for a 2x1 image.
     #[test]
     fn synthetic_known_answers() {
         // test - ref per pixel: R: (+1, -3), G: (0, 0), B: (+2, +2)
-        let reference = Image::from_pixels(
-            2,
-            1,
-            vec![Rgb::new(1.0, 0.5, 0.0), Rgb::new(4.0, 0.5, 1.0)],
-        );
-        let test = Image::from_pixels(
-            2,
-            1,
-            vec![Rgb::new(2.0, 0.5, 2.0), Rgb::new(1.0, 0.5, 3.0)],
-        );
+        let reference =
+            Image::from_pixels(2, 1, vec![Rgb::new(1.0, 0.5, 0.0), Rgb::new(4.0, 0.5, 1.0)]);
+        let test = Image::from_pixels(2, 1, vec![Rgb::new(2.0, 0.5, 2.0), Rgb::new(1.0, 0.5, 3.0)]);
         let m = compare(&test, &reference).unwrap();
         let [r, g, b] = m.per_channel;
         // R: squares 1, 9 -> mse 5
@@ -311,7 +308,10 @@ mod tests {
         ));
         // a different eps changes only relmse
         let m2 = compare_with_eps(&test, &reference, 1.0).unwrap();
-        assert!(close(m2.per_channel[2].relmse, (4.0 / 1.0 + 4.0 / 2.0) / 2.0));
+        assert!(close(
+            m2.per_channel[2].relmse,
+            (4.0 / 1.0 + 4.0 / 2.0) / 2.0
+        ));
         assert_eq!(m2.all.rmse, m.all.rmse);
     }
 
@@ -320,12 +320,20 @@ mod tests {
         let reference = Image::from_pixels(
             3,
             1,
-            vec![Rgb::splat(1.0), Rgb::new(1.0, f32::INFINITY, 1.0), Rgb::splat(1.0)],
+            vec![
+                Rgb::splat(1.0),
+                Rgb::new(1.0, f32::INFINITY, 1.0),
+                Rgb::splat(1.0),
+            ],
         );
         let test = Image::from_pixels(
             3,
             1,
-            vec![Rgb::new(f32::NAN, 2.0, 2.0), Rgb::splat(3.0), Rgb::splat(1.0)],
+            vec![
+                Rgb::new(f32::NAN, 2.0, 2.0),
+                Rgb::splat(3.0),
+                Rgb::splat(1.0),
+            ],
         );
         let m = compare(&test, &reference).unwrap();
         assert_eq!((m.test_nan, m.test_inf, m.ref_nan, m.ref_inf), (1, 0, 0, 1));

@@ -166,7 +166,10 @@ fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
 pub fn write_exr(path: &Path, out: &FilmOutput) -> Result<(), OutputError> {
     let (w, h) = (out.beauty.width, out.beauty.height);
     if w == 0 || h == 0 {
-        return Err(invalid(path, format!("cannot write an empty {w}x{h} image")));
+        return Err(invalid(
+            path,
+            format!("cannot write an empty {w}x{h} image"),
+        ));
     }
     let n = w * h;
     let check_image = |name: &str, img: &Image| {
@@ -277,17 +280,12 @@ pub fn read_exr_rgb(path: &Path) -> Result<Image, OutputError> {
 
     type Layer = x::Layer<x::AnyChannels<x::FlatSamples>>;
     let find = |layer: &Layer, name: &str| -> Option<usize> {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .position(|c| c.name.eq(name))
+        layer.channel_data.list.iter().position(|c| c.name.eq(name))
     };
     // Un-prefixed RGB in any layer first, then any `prefix.R/G/B`, then `Y`.
     let mut chosen: Option<(&Layer, [usize; 3])> = None;
     for layer in &image.layer_data {
-        if let (Some(r), Some(g), Some(b)) =
-            (find(layer, "R"), find(layer, "G"), find(layer, "B"))
+        if let (Some(r), Some(g), Some(b)) = (find(layer, "R"), find(layer, "G"), find(layer, "B"))
         {
             chosen = Some((layer, [r, g, b]));
             break;
@@ -325,13 +323,15 @@ pub fn read_exr_rgb(path: &Path) -> Result<Image, OutputError> {
     let (w, h) = (layer.size.width(), layer.size.height());
     let planes: Vec<Vec<f32>> = idx
         .iter()
-        .map(|&i| layer.channel_data.list[i].sample_data.values_as_f32().collect())
+        .map(|&i| {
+            layer.channel_data.list[i]
+                .sample_data
+                .values_as_f32()
+                .collect()
+        })
         .collect();
     if planes.iter().any(|p| p.len() != w * h) {
-        return Err(invalid(
-            path,
-            "sub-sampled RGB channels are not supported",
-        ));
+        return Err(invalid(path, "sub-sampled RGB channels are not supported"));
     }
     let pixels = (0..w * h)
         .map(|i| Rgb::new(planes[0][i], planes[1][i], planes[2][i]))
@@ -379,7 +379,10 @@ pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), Ou
         return Err(invalid(path, "image too large for PNG"));
     };
     if w == 0 || h == 0 {
-        return Err(invalid(path, format!("cannot write an empty {w}x{h} image")));
+        return Err(invalid(
+            path,
+            format!("cannot write an empty {w}x{h} image"),
+        ));
     }
     let scale = exposure_stops.exp2();
     let mut bytes = Vec::with_capacity(img.pixels.len() * 3);
@@ -432,7 +435,9 @@ mod tests {
                 1.0
             }
         };
-        let pixels = (0..w * h).map(|_| Rgb::new(next(), next(), next())).collect();
+        let pixels = (0..w * h)
+            .map(|_| Rgb::new(next(), next(), next()))
+            .collect();
         Image::from_pixels(w, h, pixels)
     }
 
@@ -461,7 +466,10 @@ mod tests {
         let back = read_exr_rgb(&path).unwrap();
         assert_eq!((back.width, back.height), (w, h));
         for (a, b) in beauty.pixels.iter().zip(&back.pixels) {
-            assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits));
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits)
+            );
         }
         // The auxiliary channels exist under the documented names, as float32, exactly.
         let img = x::read()
@@ -495,7 +503,10 @@ mod tests {
             "normal.Z",
             "depth.Z",
         ] {
-            assert!(names.iter().any(|n| n == want), "missing {want} in {names:?}");
+            assert!(
+                names.iter().any(|n| n == want),
+                "missing {want} in {names:?}"
+            );
         }
         assert_eq!(names.len(), 14);
         assert_eq!(layer.encoding.compression, x::Compression::ZIP16);
@@ -511,7 +522,10 @@ mod tests {
         let x::FlatSamples::F32(v) = get("variance.G") else {
             panic!("variance.G is not float32");
         };
-        assert!(v.iter().zip(&variance.pixels).all(|(a, p)| a.to_bits() == p.g.to_bits()));
+        assert!(v
+            .iter()
+            .zip(&variance.pixels)
+            .all(|(a, p)| a.to_bits() == p.g.to_bits()));
         let x::FlatSamples::F32(d) = get("depth.Z") else {
             panic!("depth.Z is not float32");
         };
@@ -519,7 +533,10 @@ mod tests {
         let x::FlatSamples::F32(nz) = get("normal.Z") else {
             panic!("normal.Z is not float32");
         };
-        assert!(nz.iter().zip(&normal.pixels).all(|(a, p)| a.to_bits() == p.b.to_bits()));
+        assert!(nz
+            .iter()
+            .zip(&normal.pixels)
+            .all(|(a, p)| a.to_bits() == p.b.to_bits()));
         let x::FlatSamples::F32(sc) = get("sampleCount") else {
             panic!("sampleCount is not float32");
         };
@@ -607,13 +624,22 @@ mod tests {
     #[test]
     fn reads_mitsuba_reference_piz() {
         let path = Path::new("/work/shared/refs/mitsuba/ref/cornell.exr");
-        assert!(path.exists(), "reference image {} is missing", path.display());
+        assert!(
+            path.exists(),
+            "reference image {} is missing",
+            path.display()
+        );
         let img = read_exr_rgb(path).unwrap();
         assert_eq!((img.width, img.height), (256, 256));
         let m = img.mean();
         let want = [0.264184832572937, 0.17212238907814026, 0.04938432574272156];
         for c in 0..3 {
-            assert!((m[c] - want[c]).abs() < 1e-6, "channel {c}: {} vs {}", m[c], want[c]);
+            assert!(
+                (m[c] - want[c]).abs() < 1e-6,
+                "channel {c}: {} vs {}",
+                m[c],
+                want[c]
+            );
         }
     }
 

@@ -514,10 +514,7 @@ mod tests {
         assert_eq!(term.len(), 2);
         assert_eq!(term["escaped"], 60);
         assert_eq!(term["max_depth"], 40);
-        assert_eq!(
-            v["features"],
-            serde_json::json!(["volumes", "environment"])
-        );
+        assert_eq!(v["features"], serde_json::json!(["volumes", "environment"]));
 
         stats.warnings.push("light has zero power".into());
         let v: Value = serde_json::from_str(&stats.to_json()).unwrap();
@@ -536,8 +533,7 @@ mod tests {
     #[test]
     fn write_json_and_display() {
         let stats = RenderStats::new(sample_worker(1), 2.0);
-        let path =
-            std::env::temp_dir().join(format!("risotto-stats-{}.json", std::process::id()));
+        let path = std::env::temp_dir().join(format!("risotto-stats-{}.json", std::process::id()));
         stats.write_json(&path).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
         let _ = std::fs::remove_file(&path);

@@ -1,1 +1,3 @@
 //! risotto systems.
+
+pub mod distribution;
