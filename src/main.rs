@@ -3,9 +3,10 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use risotto::engine::compare::compare;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
-use risotto::engine::output::{write_exr, write_png, FilmOutput};
+use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
 use risotto::engine::render::{render, RenderOptions};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -25,6 +26,14 @@ struct Cli {
 enum Command {
     /// Render a scene file to an EXR (beauty, variance, sampleCount) and a PNG preview.
     Render(RenderArgs),
+    /// Compare an image with a reference (RMSE, relMSE, MAE, per-channel means), as the
+    /// Mitsuba harness's rmse.py does.
+    Compare {
+        /// The image to test (EXR).
+        test: PathBuf,
+        /// The reference (EXR).
+        reference: PathBuf,
+    },
 }
 
 #[derive(clap::Args)]
@@ -71,6 +80,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render_command(args),
+        Command::Compare { test, reference } => compare_command(&test, &reference),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -164,6 +174,14 @@ fn render_command(args: RenderArgs) -> Result<()> {
         eprintln!("{}", result.stats);
         eprintln!("wrote {} and {}", out.display(), png.display());
     }
+    Ok(())
+}
+
+fn compare_command(test: &Path, reference: &Path) -> Result<()> {
+    let t = read_exr_rgb(test)?;
+    let r = read_exr_rgb(reference)?;
+    let m = compare(&t, &r)?;
+    println!("{m}");
     Ok(())
 }
 

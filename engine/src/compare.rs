@@ -389,7 +389,8 @@ mod tests {
     /// from Mitsuba's manifest.
     #[test]
     fn reference_round_trip_compares_equal() {
-        let path = std::path::Path::new("/work/shared/refs/mitsuba/ref/cornell.exr");
+        let path = &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../shared/refs/mitsuba/ref/cornell.exr");
         let img = crate::output::read_exr_rgb(path).unwrap();
         let tmp = std::env::temp_dir().join(format!("risotto-compare-{}.exr", std::process::id()));
         let var = Image::filled(img.width, img.height, Rgb::BLACK);
@@ -421,5 +422,64 @@ mod tests {
         for c in &m.per_channel {
             assert!((c.mean_reldiff - 0.5).abs() < 1e-6, "{}", c.mean_reldiff);
         }
+    }
+    /// Two Mitsuba references compared by `rmse.py` itself (numbers recorded from
+    /// `rmse.py ref/smoke_homog.exr ref/cornell.exr --json`): same metrics to ~1e-9.
+    #[test]
+    fn matches_rmse_py_on_reference_images() {
+        let dir =
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/refs/mitsuba/ref");
+        let test = crate::output::read_exr_rgb(&dir.join("smoke_homog.exr")).unwrap();
+        let reference = crate::output::read_exr_rgb(&dir.join("cornell.exr")).unwrap();
+        let m = compare(&test, &reference).unwrap();
+        let near = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+        // [rmse, relmse, mae, maxabs, mean_test, mean_ref, mean_reldiff] per channel
+        let want = [
+            [
+                0.061625783713797476,
+                0.15075641829437467,
+                0.036871902067654005,
+                0.45032835006713867,
+                0.2725495777645488,
+                0.2641849240943941,
+                0.03166211584112193,
+            ],
+            [
+                0.0406508706303952,
+                0.08782579631519667,
+                0.02356320972104342,
+                0.31789350509643555,
+                0.17425183075294104,
+                0.17212306702486924,
+                0.012367684151039606,
+            ],
+            [
+                0.012408043828056742,
+                0.012658115321636229,
+                0.006754627787936784,
+                0.10595822334289551,
+                0.0503757192161276,
+                0.049384843767114606,
+                0.020064363343654436,
+            ],
+        ];
+        for (c, w) in m.per_channel.iter().zip(&want) {
+            let got = [
+                c.rmse,
+                c.relmse,
+                c.mae,
+                c.maxabs,
+                c.mean_test,
+                c.mean_ref,
+                c.mean_reldiff,
+            ];
+            for (g, w) in got.iter().zip(w) {
+                assert!(near(*g, *w), "{g} vs rmse.py {w}");
+            }
+        }
+        assert!(near(m.all.rmse, 0.04322109844735497));
+        assert!(near(m.all.relmse, 0.08374677664373585));
+        assert!(near(m.all.mae, 0.02239657985887807));
+        assert!(near(m.all.maxabs, 0.45032835006713867));
     }
 }

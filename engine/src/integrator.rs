@@ -567,8 +567,11 @@ impl PathTracer {
                 row.origin = p + side * ray_offset(p);
                 row.tmin = 0.0;
                 row.tmax = f32::INFINITY;
-                if scene.tracks_interior(shape) {
-                    row.volume_stack.cross(scene.volume_entry(shape), front);
+                if scene.tracks_interior(shape)
+                    && row.volume_stack.cross(scene.volume_entry(shape), front)
+                        == StackEvent::UnmatchedExit
+                {
+                    stats.unmatched_exit(shape);
                 }
                 t.pending.push(row);
             }
@@ -799,7 +802,7 @@ impl PathTracer {
                 if depth as u32 > settings.rr_depth {
                     let q = (throughput.max_channel() * eta_scale).min(0.95);
                     let mut s = t.incoming_sampler(r, t.incoming.dimension[r] + 3);
-                    if !(s.next_1d() < q) {
+                    if s.next_1d() >= q {
                         stats.terminate(Termination::RussianRoulette, 1);
                         continue;
                     }
@@ -811,8 +814,12 @@ impl PathTracer {
                 let mut stack = t.incoming.volume_stack[r].clone();
                 let origin = if g.mode == ShadingMode::Scatter {
                     let shape = t.groups.points.shape[i];
-                    if lobe.is_transmit() && scene.tracks_interior(shape) {
-                        stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i]);
+                    if lobe.is_transmit()
+                        && scene.tracks_interior(shape)
+                        && stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i])
+                            == StackEvent::UnmatchedExit
+                    {
+                        stats.unmatched_exit(shape);
                     }
                     let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
                     p + side * ray_offset(p)

@@ -111,7 +111,7 @@ impl MaterialRegistry {
             builtin(p, Surface::Diffuse { reflectance }, &["reflectance"])
         });
         r.register("dielectric", |p| {
-            let ior = p.f32_where("ior", Some(1.5), "> 0", |v| v > 0.0)?;
+            let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
             let tint = p.rgb_where("tint", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
                 c.min_channel() >= 0.0 && c.max_channel() <= 1.0
             })?;

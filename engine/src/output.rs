@@ -2,25 +2,25 @@
 //! the RGB of reference EXRs.
 //!
 //! # EXR layout written by [`write_exr`]
-//! One single-part, scan-line OpenEXR file, every channel `FLOAT` (32-bit), ZIP compression
-//! (lossless, 16 scan lines per block). Channels (OpenEXR stores them sorted by name):
+//! One two-part, scan-line OpenEXR 2 file; every channel `FLOAT` (32-bit), ZIP compression
+//! (lossless, 16 scan lines per block).
 //!
-//! | channels | content |
-//! |---|---|
-//! | `R`, `G`, `B` | the beauty image (linear Rec.709 radiance) |
-//! | `variance.R`, `variance.G`, `variance.B` | per-pixel variance of the mean estimate |
-//! | `sampleCount` | samples that contributed to the pixel |
-//! | `albedo.R`, `albedo.G`, `albedo.B` | optional first-hit albedo |
-//! | `normal.X`, `normal.Y`, `normal.Z` | optional first-hit shading normal (world space) |
-//! | `depth.Z` | optional first-hit distance |
+//! | part (`name`) | channels | content |
+//! |---|---|---|
+//! | 0 `beauty` | `R`, `G`, `B` | the rendered image (linear Rec.709 radiance) |
+//! | 1 `aovs` | `variance.R`, `variance.G`, `variance.B` | per-pixel variance of the mean estimate |
+//! | | `sampleCount` | samples that contributed to the pixel |
+//! | | `albedo.R`, `albedo.G`, `albedo.B` | optional first-hit albedo |
+//! | | `normal.X`, `normal.Y`, `normal.Z` | optional first-hit shading normal (world space) |
+//! | | `depth.Z` | optional first-hit distance |
 //!
-//! The beauty channels carry no layer prefix, so every reader that looks for the "main"
-//! image finds it: OpenEXR's RGBA interface reads `R`, `G`, `B`, and Mitsuba's `Bitmap` loads
-//! the file as a multi-channel bitmap whose `convert(RGB)` picks the fields named `R`, `G`,
-//! `B`. The other channels use the `layer.channel` naming convention of the OpenEXR
-//! "Technical Introduction" (section "Layers"), which tools such as `exrheader`, Nuke and
-//! Blender show as separate layers. A single part (not a multi-part file) keeps the file
-//! readable by OpenEXR 1.x-era readers, which only see the first part of multi-part files.
+//! Why two parts: single-part readers (OpenEXR's `InputFile`/RGBA interface, and therefore
+//! Mitsuba's `Bitmap`) open part 0 only, and there they find exactly `R`, `G`, `B`, so the
+//! file loads as a plain RGB image (`rmse.py`'s `convert(RGB)` works; with the auxiliary
+//! channels in the same part Mitsuba would load a 14-channel bitmap that `convert(RGB)`
+//! rejects). Multi-part-aware tools (`exrheader`, OpenImageIO, Nuke, Blender, the exr crate)
+//! see both parts. Auxiliary channel names carry a `layer.` prefix (OpenEXR "Technical
+//! Introduction", "Layers") so they stay unique even for tools that flatten parts.
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -30,6 +30,11 @@ use exr::prelude as x;
 use exr::prelude::{ReadChannels as _, ReadLayers as _, WritableImage as _};
 use risotto_components::Rgb;
 use smallvec::SmallVec;
+
+/// Name of the EXR part holding the beauty `R`, `G`, `B` (part 0).
+pub const BEAUTY_PART: &str = "beauty";
+/// Name of the EXR part holding the auxiliary channels (part 1).
+pub const AOV_PART: &str = "aovs";
 
 /// A linear RGB image, row-major, pixel `(0, 0)` at the top left.
 #[derive(Clone, Debug, PartialEq)]
@@ -161,7 +166,7 @@ fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
     }
 }
 
-/// Writes a render as one float32, ZIP-compressed, single-part EXR (layout in the module
+/// Writes a render as one float32, ZIP-compressed, two-part EXR (layout in the module
 /// docs). Every plane must match the beauty's size.
 pub fn write_exr(path: &Path, out: &FilmOutput) -> Result<(), OutputError> {
     let (w, h) = (out.beauty.width, out.beauty.height);
@@ -201,51 +206,61 @@ pub fn write_exr(path: &Path, out: &FilmOutput) -> Result<(), OutputError> {
     check_image("variance", out.variance)?;
     check_plane("sampleCount", out.sample_count)?;
 
-    let mut channels: SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = SmallVec::new();
-    let mut push_rgb = |prefix: &str, names: [&str; 3], img: &Image| {
-        for (c, suffix) in names.iter().enumerate() {
-            let values: Vec<f32> = img.pixels.iter().map(|p| p.to_array()[c]).collect();
-            channels.push(x::AnyChannel::new(
-                format!("{prefix}{suffix}").as_str(),
-                x::FlatSamples::F32(values),
-            ));
-        }
-    };
-    push_rgb("", ["R", "G", "B"], out.beauty);
-    push_rgb("variance.", ["R", "G", "B"], out.variance);
+    let mut aovs: SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = SmallVec::new();
+    push_rgb(&mut aovs, "variance.", ["R", "G", "B"], out.variance);
     if let Some(albedo) = out.albedo {
         check_image("albedo", albedo)?;
-        push_rgb("albedo.", ["R", "G", "B"], albedo);
+        push_rgb(&mut aovs, "albedo.", ["R", "G", "B"], albedo);
     }
     if let Some(normal) = out.normal {
         check_image("normal", normal)?;
-        push_rgb("normal.", ["X", "Y", "Z"], normal);
+        push_rgb(&mut aovs, "normal.", ["X", "Y", "Z"], normal);
     }
-    channels.push(x::AnyChannel::new(
+    aovs.push(x::AnyChannel::new(
         "sampleCount",
         x::FlatSamples::F32(out.sample_count.to_vec()),
     ));
     if let Some(depth) = out.depth {
         check_plane("depth", depth)?;
-        channels.push(x::AnyChannel::new(
+        aovs.push(x::AnyChannel::new(
             "depth.Z",
             x::FlatSamples::F32(depth.to_vec()),
         ));
     }
+    let mut beauty = SmallVec::new();
+    push_rgb(&mut beauty, "", ["R", "G", "B"], out.beauty);
 
-    // No layer name: a named layer would make the exr crate write a `name` attribute, which
-    // some readers take as a multi-part hint. ZIP16 scan lines: lossless for float32 and the
-    // most widely supported compression after "none".
-    let layer = x::Layer::new(
-        (w, h),
-        x::LayerAttributes::default(),
-        x::Encoding::SMALL_LOSSLESS,
-        x::AnyChannels::sort(channels),
-    );
-    x::Image::from_layer(layer)
+    // ZIP16 scan lines: lossless for float32 and supported by every OpenEXR reader.
+    let part = |name: &str, channels| {
+        x::Layer::new(
+            (w, h),
+            x::LayerAttributes::named(name),
+            x::Encoding::SMALL_LOSSLESS,
+            x::AnyChannels::sort(channels),
+        )
+    };
+    let layers = vec![part(BEAUTY_PART, beauty), part(AOV_PART, aovs)];
+    let attributes = x::ImageAttributes::new(x::IntegerBounds::from_dimensions((w, h)));
+    x::Image::from_layers(attributes, layers)
         .write()
         .to_file(path)
         .map_err(|source| exr_error(path, source))
+}
+
+/// Appends three float32 channels `prefix + names[c]` holding channel `c` of `img`.
+fn push_rgb(
+    channels: &mut SmallVec<[x::AnyChannel<x::FlatSamples>; 4]>,
+    prefix: &str,
+    names: [&str; 3],
+    img: &Image,
+) {
+    for (c, suffix) in names.iter().enumerate() {
+        let values: Vec<f32> = img.pixels.iter().map(|p| p.to_array()[c]).collect();
+        channels.push(x::AnyChannel::new(
+            format!("{prefix}{suffix}").as_str(),
+            x::FlatSamples::F32(values),
+        ));
+    }
 }
 
 /// Maps the exr crate's error, keeping OS errors as [`OutputError::Io`].
@@ -471,26 +486,35 @@ mod tests {
                 b.to_array().map(f32::to_bits)
             );
         }
-        // The auxiliary channels exist under the documented names, as float32, exactly.
+        // Two parts: `beauty` with exactly R, G, B; `aovs` with the documented names, all
+        // float32, ZIP.
         let img = x::read()
             .no_deep_data()
             .largest_resolution_level()
             .all_channels()
-            .first_valid_layer()
+            .all_layers()
             .all_attributes()
             .from_file(&path)
             .unwrap();
-        let layer = &img.layer_data;
-        let names: Vec<String> = layer
-            .channel_data
-            .list
-            .iter()
-            .map(|c| c.name.to_string())
-            .collect();
-        for want in [
-            "R",
-            "G",
-            "B",
+        assert_eq!(img.layer_data.len(), 2);
+        let names = |l: &x::Layer<x::AnyChannels<x::FlatSamples>>| -> Vec<String> {
+            l.channel_data
+                .list
+                .iter()
+                .map(|c| c.name.to_string())
+                .collect()
+        };
+        let part0 = &img.layer_data[0];
+        assert_eq!(
+            part0.attributes.layer_name,
+            Some(x::Text::from(BEAUTY_PART))
+        );
+        assert_eq!(names(part0), ["B", "G", "R"]);
+        let layer = &img.layer_data[1];
+        assert_eq!(layer.attributes.layer_name, Some(x::Text::from(AOV_PART)));
+        let mut got = names(layer);
+        got.sort();
+        let mut want = [
             "variance.R",
             "variance.G",
             "variance.B",
@@ -502,14 +526,17 @@ mod tests {
             "normal.Y",
             "normal.Z",
             "depth.Z",
-        ] {
-            assert!(
-                names.iter().any(|n| n == want),
-                "missing {want} in {names:?}"
-            );
+        ];
+        want.sort_unstable();
+        assert_eq!(got, want);
+        for l in &img.layer_data {
+            assert_eq!(l.encoding.compression, x::Compression::ZIP16);
+            assert!(l
+                .channel_data
+                .list
+                .iter()
+                .all(|c| matches!(c.sample_data, x::FlatSamples::F32(_))));
         }
-        assert_eq!(names.len(), 14);
-        assert_eq!(layer.encoding.compression, x::Compression::ZIP16);
         let get = |name: &str| -> &x::FlatSamples {
             &layer
                 .channel_data
@@ -623,7 +650,8 @@ mod tests {
     /// records (`/work/shared/refs/mitsuba/ref/manifest.json`: mean_rgb of cornell).
     #[test]
     fn reads_mitsuba_reference_piz() {
-        let path = Path::new("/work/shared/refs/mitsuba/ref/cornell.exr");
+        let path = &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../shared/refs/mitsuba/ref/cornell.exr");
         assert!(
             path.exists(),
             "reference image {} is missing",

@@ -163,6 +163,16 @@ pub fn render(
     let sample_count = film.count.iter().map(|&c| c as f32).collect();
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();
+    // The validator: one warning per shape whose boundary rays left without entering.
+    for (shape, &n) in stats.counters.unmatched_exits.iter().enumerate() {
+        if n > 0 {
+            stats.warnings.push(format!(
+                "shape \"{}\": {n} rays crossed its back face without having entered it; \
+                 its boundary may not be closed (or its normals point inwards)",
+                scene.shapes[shape].name
+            ));
+        }
+    }
     Ok(RenderOutput {
         beauty,
         variance,

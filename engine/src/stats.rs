@@ -150,12 +150,24 @@ pub struct SystemStats {
     pub terminated: [u64; Termination::COUNT],
     /// Samples dropped at the film because they were NaN or infinite.
     pub nan_dropped: u64,
+    /// Per shape index: rays that crossed a back face of the shape without having entered it
+    /// (a hint that its boundary is not closed). Grown on demand.
+    pub unmatched_exits: Vec<u64>,
 }
 
 impl SystemStats {
     /// Empty counters.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Records a crossing of `shape`'s back face by a ray that was not inside it.
+    pub fn unmatched_exit(&mut self, shape: u32) {
+        let s = shape as usize;
+        if self.unmatched_exits.len() <= s {
+            self.unmatched_exits.resize(s + 1, 0);
+        }
+        self.unmatched_exits[s] += 1;
     }
 
     /// Runs `f`, recording one call of `sys` over `items` items and the elapsed wall time.
@@ -216,6 +228,12 @@ impl SystemStats {
             *a += b;
         }
         self.nan_dropped += other.nan_dropped;
+        if self.unmatched_exits.len() < other.unmatched_exits.len() {
+            self.unmatched_exits.resize(other.unmatched_exits.len(), 0);
+        }
+        for (a, b) in self.unmatched_exits.iter_mut().zip(&other.unmatched_exits) {
+            *a += b;
+        }
     }
 }
 

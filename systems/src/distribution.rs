@@ -297,8 +297,8 @@ impl EnvironmentMap {
             pixels.len()
         );
         let mut weights = Vec::with_capacity(pixels.len());
-        for row in pixels.chunks_exact(width) {
-            let sin_theta = 1.0;
+        for (j, row) in pixels.chunks_exact(width).enumerate() {
+            let sin_theta = (PI * (j as f32 + 0.5) / height as f32).sin();
             // Average, not luminance: every channel > 0 must give a density > 0, or radiance
             // in that channel would never be sampled (bias).
             weights.extend(row.iter().map(|p| {
@@ -346,13 +346,21 @@ impl EnvironmentMap {
     pub fn sample(&self, u: Vec2) -> (Vec3, Rgb, f32) {
         let (uv, _) = self.dist.sample(u);
         let dir = uv_to_dir(uv);
-        (dir, self.eval(dir), self.pdf(dir))
+        // Re-derive (u, v) from the direction (once) so radiance and pdf are those of the
+        // texel `eval(dir)` / `pdf(dir)` would pick, even where rounding crosses a texel edge.
+        let uv = dir_to_uv(dir);
+        (dir, self.lookup_uv(uv), self.pdf_uv_dir(uv, dir))
     }
 
     /// Solid-angle density of [`sample`](Self::sample) in direction `dir`:
     /// `p(ω) = p(u, v) / (2π² sin θ)` (the Jacobian of `(u, v) -> ω` is `2π · π · sin θ`).
     pub fn pdf(&self, dir: Vec3) -> f32 {
-        let uv = dir_to_uv(dir);
+        self.pdf_uv_dir(dir_to_uv(dir), dir)
+    }
+
+    /// [`pdf`](Self::pdf) with `uv = dir_to_uv(dir)` already computed.
+    #[inline]
+    fn pdf_uv_dir(&self, uv: Vec2, dir: Vec3) -> f32 {
         let sin_theta = (1.0 - dir.y * dir.y).max(0.0).sqrt();
         if sin_theta.is_nan() || sin_theta <= 0.0 {
             return 0.0;
@@ -689,8 +697,8 @@ mod tests {
         let map = EnvironmentMap::new(test_map(w, h), w, h);
         let exact = quadrature(&map, |d| map.eval(d).to_array().map(f64::from));
         let closed = map.integral();
-        for c in 0..3 {
-            let rel = (f64::from(closed.to_array()[c]) - exact[c]).abs() / exact[c];
+        for (cl, ex) in closed.to_array().into_iter().zip(exact) {
+            let rel = (f64::from(cl) - ex).abs() / ex;
             assert!(rel < 1e-4, "closed form vs quadrature: {rel}");
         }
         let mut rng = Rng(2024);

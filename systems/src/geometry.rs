@@ -13,8 +13,6 @@ use obvhs::{
     bvh2::reinsertion::ReinsertionOptimizer,
     cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh},
     ploc::PlocBuilder,
-    splits::split_aabbs_preset,
-    triangle::Triangle,
     BvhBuildParams,
 };
 
@@ -77,10 +75,6 @@ impl LeafPrim {
         }
     }
 }
-
-/// Use obvhs' spatial pre-splits of large triangles. Measured on the 100k-triangle bench
-/// mesh (benches/README.md): see `SceneGeometry::build` for the decision.
-const PRE_SPLIT: bool = false;
 
 /// All primitives of a compiled scene and the BVH over them.
 ///
@@ -145,30 +139,10 @@ impl SceneGeometry {
             .collect();
         let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
 
+        // Without obvhs' spatial pre-splits: on the bench mesh and on a room with large
+        // walls and long slivers they did not speed up traversal (benches/README.md) while
+        // doubling build time, and their clipped boxes would need padding.
         let params = BvhBuildParams::medium_build();
-        if PRE_SPLIT && !triangles.is_empty() {
-            let tris: Vec<Triangle> = triangles
-                .iter()
-                .map(|t| Triangle {
-                    v0: t[0].into(),
-                    v1: t[1].into(),
-                    v2: t[2].into(),
-                })
-                .collect();
-            let (mut largest, mut total) = (0.0f32, 0.0f32);
-            for b in &aabbs {
-                largest = largest.max(b.half_area());
-                total += b.half_area();
-            }
-            let avg = total / aabbs.len() as f32;
-            split_aabbs_preset(&mut aabbs, &mut indices, &tris, avg, largest);
-            // Split boxes come from clipping the triangle in floating point and may miss it
-            // by an ulp; pad them so node culling stays conservative.
-            for b in &mut aabbs {
-                *b = padded_box(b.min.into(), b.max.into());
-            }
-        }
-
         let tri_count = triangles.len() as u32;
         for (i, s) in spheres.iter().enumerate() {
             aabbs.push(padded_box(
@@ -206,7 +180,6 @@ impl SceneGeometry {
                 params.sort_precision,
                 params.search_depth_threshold,
             );
-            bvh2.uses_spatial_splits = PRE_SPLIT;
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
             let leaves = bvh

@@ -3,8 +3,9 @@
 
 use glam::Vec3;
 use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
+use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
-use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene};
+use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto::systems::camera::{Camera, Projection};
 use risotto_components::Rgb;
 
@@ -74,26 +75,91 @@ pub fn image_mean(out: &RenderOutput) -> (Rgb, Rgb) {
     (mean / n, (var / (n * n)).map(f32::sqrt))
 }
 
-/// A parallelogram `corner, corner + e1, corner + e1 + e2, corner + e2` as two triangles
-/// whose geometric normal is `normalize(e1 x e2)`.
-pub fn quad(corner: Vec3, e1: Vec3, e2: Vec3) -> Vec<[Vec3; 3]> {
-    vec![
-        [corner, corner + e1, corner + e1 + e2],
-        [corner, corner + e1 + e2, corner + e2],
-    ]
+/// The parallelogram `corner`, `corner + e1`, `corner + e1 + e2`, `corner + e2` as two
+/// triangles whose geometric normal is along `e1 x e2` (the engine's winding convention).
+pub fn quad(corner: Vec3, e1: Vec3, e2: Vec3) -> ShapeGeometry {
+    let (a, b, c, d) = (corner, corner + e1, corner + e1 + e2, corner + e2);
+    ShapeGeometry::Triangles(vec![[a, b, c], [a, c, d]])
+}
+
+/// An orthographic camera at `from` looking at `to`, showing `view_width` world units across.
+pub fn ortho_camera(from: Vec3, to: Vec3, up: Vec3, view_width: f32, w: u32, h: u32) -> Camera {
+    Camera::look_at(
+        Projection::Orthographic { width: view_width },
+        from,
+        to,
+        up,
+        w,
+        h,
+    )
+    .unwrap()
+}
+
+/// A perspective camera at `from` looking at `to` (up = +y) with a full horizontal fov.
+pub fn perspective(from: Vec3, to: Vec3, fov: f32, w: u32, h: u32) -> Camera {
+    Camera::look_at(
+        Projection::Perspective { fov_deg: fov },
+        from,
+        to,
+        Vec3::Y,
+        w,
+        h,
+    )
+    .unwrap()
+}
+
+/// Renders with the given lighting technique and thread count (other options default).
+pub fn render_with(
+    scene: &CompiledScene,
+    technique: LightingTechnique,
+    threads: Option<usize>,
+) -> RenderOutput {
+    let options = RenderOptions {
+        technique,
+        threads,
+        ..RenderOptions::default()
+    };
+    render(scene, &options, &|_| {}).unwrap()
+}
+
+/// Mean and standard error (per channel) of the mean over the pixels `(x, y)` with
+/// `x in xs`, `y in ys`, from the film's per-pixel variances of the mean (pixels are
+/// independent estimates, so the variances of their average add with weight 1/n^2).
+pub fn crop_mean(
+    out: &RenderOutput,
+    xs: std::ops::Range<usize>,
+    ys: std::ops::Range<usize>,
+) -> (Rgb, Rgb) {
+    let mut mean = Rgb::BLACK;
+    let mut var = Rgb::BLACK;
+    let mut n = 0.0f32;
+    for y in ys {
+        for x in xs.clone() {
+            mean += out.beauty.get(x, y);
+            var += out.variance.get(x, y);
+            n += 1.0;
+        }
+    }
+    (mean / n, (var / (n * n)).map(f32::sqrt))
 }
 
 /// The axis-aligned box `[lo, hi]` as 12 triangles with outward normals.
-pub fn box_tris(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+pub fn box_geometry(lo: Vec3, hi: Vec3) -> ShapeGeometry {
     let s = hi - lo;
     let (x, y, z) = (Vec3::X * s.x, Vec3::Y * s.y, Vec3::Z * s.z);
+    // Each face: a corner and two edges ordered so that e1 x e2 points out of the box.
+    let faces = [
+        (lo, z, y),     // x = lo.x, normal -x (z x y = -x)
+        (lo + x, y, z), // x = hi.x, normal +x
+        (lo, x, z),     // y = lo.y, normal -y (x x z = -y)
+        (lo + y, z, x), // y = hi.y, normal +y
+        (lo, y, x),     // z = lo.z, normal -z (y x x = -z)
+        (lo + z, x, y), // z = hi.z, normal +z
+    ];
     let mut t = Vec::with_capacity(12);
-    // Each face: corner and two edges ordered so that e1 x e2 points out of the box.
-    t.extend(quad(lo, z, y)); // x = lo.x, normal -x (z x y = -x)
-    t.extend(quad(lo + x, y, z)); // x = hi.x, normal +x
-    t.extend(quad(lo, x, z)); // y = lo.y, normal -y (x x z = -y)
-    t.extend(quad(lo + y, z, x)); // y = hi.y, normal +y
-    t.extend(quad(lo, y, x)); // z = lo.z, normal -z (y x x = -z)
-    t.extend(quad(lo + z, x, y)); // z = hi.z, normal +z
-    t
+    for (c, e1, e2) in faces {
+        t.push([c, c + e1, c + e1 + e2]);
+        t.push([c, c + e1 + e2, c + e2]);
+    }
+    ShapeGeometry::Triangles(t)
 }

@@ -1193,7 +1193,18 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                     p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)
                         .unwrap();
                 }
+                // Index-matched boundary: no surface parameters.
+                "interface" => {}
                 other => panic!("{what}: unexpected material type {other}"),
+            }
+            if let Some(interior) = p.table("interior").unwrap() {
+                match interior.string("type", None).unwrap().as_str() {
+                    "null" => {}
+                    "beer" => {
+                        interior.rgb("sigma_a", None).unwrap();
+                    }
+                    other => panic!("{what}: unexpected interior type {other}"),
+                }
             }
         }
     }

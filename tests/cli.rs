@@ -1,0 +1,294 @@
+//! The `risotto` driver end to end: a valid scene renders and writes its outputs; every kind
+//! of bad input exits non-zero with a message that names the file and the problem (and never
+//! a panic); the stats show that stages a scene does not need did not run.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_risotto");
+
+/// A small valid scene: floor, downward-facing square lamp, sky.
+const SCENE: &str = r#"[render]
+width = 16
+height = 12
+spp = 4
+max_depth = 4
+
+[camera]
+fov = 40
+from = [0, 1, 4]
+to = [0, 0.5, 0]
+
+[materials.floor]
+type = "diffuse"
+reflectance = 0.5
+
+[materials.emitter]
+type = "diffuse"
+reflectance = 0
+
+[[shapes]]
+name = "floor"
+type = "quad"
+material = "floor"
+corner = [-5, 0, -5]
+edge1 = [0, 0, 10]
+edge2 = [10, 0, 0]
+
+[[shapes]]
+name = "lamp"
+type = "quad"
+material = "emitter"
+emission = 5
+corner = [-0.5, 2, -0.5]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, 1]
+
+[[lights]]
+name = "sky"
+type = "environment"
+radiance = 0.1
+"#;
+
+/// A fresh directory for one test.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{test}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `SCENE` with each `(from, to)` replacement applied once (each `from` must occur).
+fn scene_with(edits: &[(&str, &str)]) -> String {
+    let mut s = SCENE.to_string();
+    for (from, to) in edits {
+        assert!(s.contains(from), "test bug: {from:?} not in the scene");
+        s = s.replacen(from, to, 1);
+    }
+    s
+}
+
+fn risotto(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn render(dir: &Path, name: &str, text: &str, extra: &[&str]) -> (Output, PathBuf) {
+    let scene = dir.join(name);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join(Path::new(name).with_extension("exr"));
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    (risotto(&args), out)
+}
+
+/// Asserts a clean failure: non-zero exit, no panic, and every `needle` in stderr.
+fn assert_fails(what: &str, out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{what}: exit 0; stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "{what}: stderr lacks {n:?}: {stderr}");
+    }
+}
+
+fn stats_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Calls of a system in the stats (systems that never ran are left out of the JSON).
+fn calls(stats: &serde_json::Value, system: &str) -> u64 {
+    stats["systems"]
+        .get(system)
+        .map_or(0, |s| s["calls"].as_u64().unwrap())
+}
+
+#[test]
+fn valid_scene_renders_exr_png_and_stats() {
+    let dir = temp_dir("valid");
+    let stats = dir.join("stats.json");
+    let (out, exr) = render(
+        &dir,
+        "ok.toml",
+        SCENE,
+        &["--stats", stats.to_str().unwrap(), "--threads", "2"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = risotto::engine::output::read_exr_rgb(&exr).unwrap();
+    assert_eq!((img.width, img.height), (16, 12));
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    assert!(img.mean()[0] > 0.0, "black render");
+    let png = std::fs::read(exr.with_extension("png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+
+    let s = stats_json(&stats);
+    for key in [
+        "systems",
+        "rays",
+        "samples",
+        "terminated",
+        "nan_dropped",
+        "wall_seconds",
+        "features",
+    ] {
+        assert!(s.get(key).is_some(), "stats lack {key}: {s}");
+    }
+    assert_eq!(s["samples"].as_u64(), Some(16 * 12 * 4));
+    assert!(s["rays"].as_u64().unwrap() >= 16 * 12 * 4);
+    assert!(calls(&s, "intersect") > 0 && calls(&s, "shade") > 0);
+    let features: Vec<&str> = s["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert!(features.contains(&"area_lights") && features.contains(&"environment"));
+    // Only needed stages ran: no transmissive surface, no volume.
+    assert_eq!(calls(&s, "partition"), 0, "{s}");
+    assert_eq!(calls(&s, "volume"), 0, "{s}");
+    assert!(!features.contains(&"volumes"));
+}
+
+#[test]
+fn volume_stages_run_only_when_a_scene_has_a_volume() {
+    let dir = temp_dir("volume");
+    let stats = dir.join("stats.json");
+    // An index-matched box of absorbing fog in front of the camera.
+    let text = format!(
+        "{SCENE}\n[materials.fog]\ntype = \"interface\"\n\
+         interior = {{ type = \"beer\", sigma_a = [1, 1, 1] }}\n\n\
+         [[shapes]]\nname = \"fog\"\ntype = \"box\"\nmaterial = \"fog\"\n\
+         min = [-1, 0, -1]\nmax = [1, 1, 1]\n"
+    );
+    let (out, _) = render(
+        &dir,
+        "fog.toml",
+        &text,
+        &["--stats", stats.to_str().unwrap()],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = stats_json(&stats);
+    assert!(calls(&s, "partition") > 0, "{s}");
+    assert!(calls(&s, "volume") > 0, "{s}");
+    let features = s["features"].to_string();
+    assert!(features.contains("volumes") && features.contains("transmissive_surfaces"));
+}
+
+#[test]
+fn malformed_toml_reports_line_and_column() {
+    let dir = temp_dir("malformed");
+    // Line 4, column 7 is the second `=`.
+    let (out, _) = render(
+        &dir,
+        "broken.toml",
+        &scene_with(&[("spp = 4", "spp = = 4")]),
+        &[],
+    );
+    assert_fails("malformed TOML", &out, &["broken.toml:4:7"]);
+}
+
+#[test]
+fn missing_obj_names_the_path_tried() {
+    let dir = temp_dir("missing_obj");
+    let text = scene_with(&[(
+        "type = \"quad\"\nmaterial = \"floor\"\ncorner = [-5, 0, -5]\nedge1 = [0, 0, 10]\nedge2 = [10, 0, 0]",
+        "type = \"mesh\"\nmaterial = \"floor\"\npath = \"meshes/nowhere.obj\"",
+    )]);
+    let (out, _) = render(&dir, "mesh.toml", &text, &[]);
+    let tried = dir.join("meshes/nowhere.obj");
+    assert_fails(
+        "missing OBJ",
+        &out,
+        &["mesh.toml", "\"floor\"", "path", tried.to_str().unwrap()],
+    );
+}
+
+#[test]
+fn invalid_values_are_reported_with_file_entity_and_field() {
+    let dir = temp_dir("invalid");
+    // (file name, edits of SCENE, what stderr must say)
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a [&'a str]);
+    let cases: [Case; 5] = [
+        (
+            "negative_emission.toml",
+            vec![("emission = 5", "emission = [1, -2, 1]")],
+            &["\"lamp\"", "emission", ">= 0", "-2"],
+        ),
+        (
+            "zero_ior.toml",
+            vec![(
+                "[materials.emitter]",
+                "[materials.glass]\ntype = \"dielectric\"\nior = 0\n\n[materials.emitter]",
+            )],
+            &["materials.glass", "ior", "> 0"],
+        ),
+        (
+            "zero_direction.toml",
+            vec![(
+                "[[lights]]",
+                "[[lights]]\nname = \"sun\"\ntype = \"distant\"\ndirection = [0, 0, 0]\n\
+                 irradiance = 1\n\n[[lights]]",
+            )],
+            &["\"sun\"", "direction", "non-zero"],
+        ),
+        (
+            "fov180.toml",
+            vec![("fov = 40", "fov = 180")],
+            &["camera", "fov", "180"],
+        ),
+        (
+            "unknown_type.toml",
+            vec![("type = \"diffuse\"\nreflectance = 0.5", "type = \"velvet\"")],
+            &["materials.floor", "unknown type", "velvet"],
+        ),
+    ];
+    for (name, edits, needles) in cases {
+        let (out, _) = render(&dir, name, &scene_with(&edits), &[]);
+        let mut all = vec![name];
+        all.extend_from_slice(needles);
+        assert_fails(name, &out, &all);
+    }
+    // Value errors point at the offending line: `fov = 180` is on line 8, column 7.
+    let (out, _) = render(
+        &dir,
+        "fov.toml",
+        &scene_with(&[("fov = 40", "fov = 180")]),
+        &[],
+    );
+    assert_fails("fov 180", &out, &["fov.toml:8:7"]);
+}
+
+#[test]
+fn nonexistent_scene_is_reported() {
+    let dir = temp_dir("nonexistent");
+    let missing = dir.join("no_such_scene.toml");
+    let out = risotto(&["render", missing.to_str().unwrap(), "--quiet"]);
+    assert_fails(
+        "missing scene",
+        &out,
+        &["no_such_scene.toml", "cannot read"],
+    );
+}
+
+#[test]
+fn bad_options_are_rejected_before_rendering() {
+    let dir = temp_dir("options");
+    for (flag, value) in [("--spp", "0"), ("--threads", "0")] {
+        let (out, exr) = render(&dir, "ok.toml", SCENE, &[flag, value]);
+        assert_fails(flag, &out, &[&format!("{flag} {value}")]);
+        assert!(!exr.exists(), "{flag} {value}: an image was written");
+    }
+}

@@ -1,0 +1,84 @@
+//! Comparisons with the Mitsuba 3 reference renders of `../shared/refs/mitsuba` (8192 spp,
+//! 256x256), box-downsampled 4x to 64x64 and committed in `tests/data/`. With a box pixel
+//! filter a 64x64 render is exactly the 4x4 block average of the 256x256 one, so the
+//! downsampled reference is the expected image at 64x64.
+
+use risotto::engine::compare::compare;
+use risotto::engine::load::{scene_from_desc, MaterialRegistry};
+use risotto::engine::output::read_exr_rgb;
+use risotto::engine::render::{render, RenderOptions};
+use risotto::engine::scene_file::load_scene;
+use std::path::Path;
+
+/// Renders `scene` at 64x64 and checks it against `reference`: per-channel means within
+/// `mean_tol` (relative) and an RMSE consistent with the render's own noise.
+fn check(scene: &str, reference: &str, spp: u32, mean_tol: f64, max_rmse: f64) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut desc = load_scene(&root.join(scene)).unwrap();
+    desc.render.width = 64;
+    desc.render.height = 64;
+    desc.render.spp = spp;
+    let compiled = scene_from_desc(desc, &MaterialRegistry::with_builtins())
+        .unwrap()
+        .compile()
+        .unwrap();
+    let out = render(&compiled, &RenderOptions::default(), &|_| {}).unwrap();
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+    let reference = read_exr_rgb(&root.join(reference)).unwrap();
+    let m = compare(&out.beauty, &reference).unwrap();
+    // Expected squared error: our variance of the mean, averaged over pixels and channels.
+    let var: f64 = out
+        .variance
+        .pixels
+        .iter()
+        .map(|v| (v.r + v.g + v.b) as f64 / 3.0)
+        .sum::<f64>()
+        / out.variance.pixels.len() as f64;
+    let expected_rmse = var.sqrt();
+    eprintln!("{scene}: {m}\nexpected rmse from own variance {expected_rmse:.3e}");
+    for c in &m.per_channel {
+        assert!(
+            c.mean_reldiff.abs() < mean_tol,
+            "{scene}: mean {} vs reference {} ({:+.3}%)",
+            c.mean_test,
+            c.mean_ref,
+            100.0 * c.mean_reldiff
+        );
+    }
+    // The per-pixel variance assumes independent samples; Owen-scrambled Sobol converges
+    // faster, so the measured RMSE is well below it. The bound is about twice the RMSE
+    // measured when the test was written (and never above the iid prediction): a shifted,
+    // mirrored or biased image is far above it.
+    assert!(
+        m.all.rmse < max_rmse.min(expected_rmse),
+        "{scene}: rmse {} (bound {max_rmse}, iid prediction {expected_rmse})",
+        m.all.rmse
+    );
+}
+
+#[test]
+fn cornell_matches_mitsuba() {
+    check(
+        "scenes/mitsuba-suite/cornell.toml",
+        "tests/data/cornell-mitsuba-64.exr",
+        64,
+        0.005,
+        0.02,
+    );
+}
+
+#[test]
+fn glass_beer_matches_mitsuba() {
+    // Smooth dielectric sphere with a Beer (absorbing) interior: refraction with the IOR
+    // outside taken from the volume stack, Beer transmittance on the segments inside, and
+    // shadow rays blocked by the glass. Measured when written: means within 0.1 %, rmse
+    // 0.027 (caustics through the sphere are found by Bxdf sampling only, so noisier than
+    // the cornell box).
+    check(
+        "scenes/mitsuba-suite/glass_beer.toml",
+        "tests/data/glass_beer-mitsuba-64.exr",
+        64,
+        0.005,
+        0.05,
+    );
+}
