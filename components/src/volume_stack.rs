@@ -206,4 +206,88 @@ mod tests {
         s.cross(e(2, 2, 0), false);
         assert!(s.is_empty());
     }
+    #[test]
+    fn coincident_surfaces_left_in_reverse_order() {
+        // Same shared boundary, left in the opposite order (last in, first out): the innermost
+        // is always the remaining most recent entry.
+        let mut s = VolumeStack::new();
+        s.cross(e(1, 1, 0), true);
+        s.cross(e(2, 2, 0), true);
+        assert_eq!(s.innermost(), Some(e(2, 2, 0)));
+        assert_eq!(s.cross(e(2, 2, 0), false), StackEvent::Exited);
+        assert_eq!(s.innermost(), Some(e(1, 1, 0)));
+        assert_eq!(s.cross(e(1, 1, 0), false), StackEvent::Exited);
+        assert!(s.is_empty());
+    }
+
+    #[test]
+    fn coincident_surfaces_left_in_entry_order_keep_the_other_innermost() {
+        // Entered 1 then 2, left 1 first: 2 stays and is innermost; the overlap list is empty.
+        let mut s = VolumeStack::new();
+        s.cross(e(1, 1, 0), true);
+        s.cross(e(2, 2, 0), true);
+        assert_eq!(s.overlapping().count(), 1);
+        s.cross(e(1, 1, 0), false);
+        assert_eq!(s.innermost(), Some(e(2, 2, 0)));
+        assert_eq!(s.overlapping().count(), 0);
+    }
+
+    #[test]
+    fn rays_starting_on_a_boundary_take_the_side_they_leave_to() {
+        // A ray spawned on the surface of shape 4 (a refraction or a shadow ray towards the
+        // inside) gets the stack *after* the crossing: the shape is then its innermost volume
+        // and the boundary it starts on is a real boundary for it (leaving again is matched).
+        let glass = e(3, 4, 1);
+        let outside = VolumeStack::new();
+        let mut inward = outside.clone();
+        assert_eq!(inward.cross(glass, true), StackEvent::Entered);
+        assert_eq!(inward.innermost(), Some(glass));
+        assert!(!inward.is_false_boundary(4, 1));
+        assert!(inward.contains_shape(4));
+        // The reflected ray (no transmit bit) keeps the outside stack.
+        assert!(outside.is_empty());
+        // From inside, a ray leaving through the boundary it starts on returns to vacuum,
+        // while the stack of the reflected ray still holds the glass.
+        let mut outward = inward.clone();
+        assert_eq!(outward.cross(glass, false), StackEvent::Exited);
+        assert!(outward.is_empty());
+        assert_eq!(inward.innermost(), Some(glass));
+        // A second, spurious back-face crossing of the same boundary (a self-intersection the
+        // ray offset should have avoided) cannot corrupt the stack: it is an unmatched exit.
+        assert_eq!(outward.cross(glass, false), StackEvent::UnmatchedExit);
+        assert!(outward.is_empty());
+    }
+
+    #[test]
+    fn liquid_in_glass_walk() {
+        // A glass (priority 2) with a liquid (priority 1) whose surface lies slightly inside
+        // the glass wall (the liquid overlaps the wall). A ray from the air, straight through.
+        let glass = e(1, 10, 2);
+        let liquid = e(2, 20, 1);
+        let mut s = VolumeStack::new();
+        // Outer glass wall: a real boundary (nothing of higher priority around).
+        assert!(!s.is_false_boundary(10, 2));
+        s.cross(glass, true);
+        // The liquid's surface, inside the wall: a false boundary, still recorded.
+        assert!(s.is_false_boundary(20, 1));
+        s.cross(liquid, true);
+        assert_eq!(s.innermost(), Some(glass), "the glass wins inside the wall");
+        assert_eq!(s.overlapping().collect::<Vec<_>>(), vec![liquid]);
+        // Inner glass wall: real (the glass's own boundary), leaving the glass into the liquid.
+        assert!(!s.is_false_boundary(10, 2));
+        s.cross(glass, false);
+        assert_eq!(s.innermost(), Some(liquid));
+        // Across the liquid, into the glass wall on the far side: real for the glass.
+        assert!(!s.is_false_boundary(10, 2));
+        s.cross(glass, true);
+        assert_eq!(s.innermost(), Some(glass));
+        // The liquid's far surface inside the wall: false, leaves the liquid.
+        assert!(s.is_false_boundary(20, 1));
+        assert_eq!(s.cross(liquid, false), StackEvent::Exited);
+        assert_eq!(s.entries(), &[glass]);
+        // Out of the glass into the air.
+        assert!(!s.is_false_boundary(10, 2));
+        s.cross(glass, false);
+        assert!(s.is_empty());
+    }
 }

@@ -178,22 +178,29 @@ fn attenuate_in_volumes(
         return;
     }
     let start = std::time::Instant::now();
-    // Group by innermost volume entry (material, shape): few distinct ones per round.
-    let mut keys: Vec<risotto_components::VolumeEntry> = Vec::new();
+    // Group by volume stack (few distinct ones per round): the innermost volume's integrator
+    // answers, and it sees the other volumes of the same stack as overlapping ones (the seed:
+    // "that single integrator is allowed to query properties of all other overlapping
+    // volumes", for GetTransmission as for GetNearestHits).
+    let mut keys: Vec<&VolumeStack> = Vec::new();
     for &(i, _, _) in segs {
-        let e = stacks[i].innermost().expect("filtered above");
-        if !keys.contains(&e) {
-            keys.push(e);
+        if !keys.contains(&&stacks[i]) {
+            keys.push(&stacks[i]);
         }
     }
-    for entry in keys {
-        let info = &scene.material_info[entry.material as usize];
-        if !info.hints.contains(InstanceHints::COMPUTES_INTERIOR) {
+    let computes_interior = |e: &risotto_components::VolumeEntry| {
+        scene.material_info[e.material as usize]
+            .hints
+            .contains(InstanceHints::COMPUTES_INTERIOR)
+    };
+    for stack in keys {
+        let entry = stack.innermost().expect("filtered above");
+        if !computes_interior(&entry) {
             continue;
         }
         let members: Vec<&(usize, f32, f32)> = segs
             .iter()
-            .filter(|(i, _, _)| stacks[*i].innermost() == Some(entry))
+            .filter(|(i, _, _)| &stacks[*i] == stack)
             .collect();
         let mut segments = Segments::default();
         let mut pts = ShadingPoints::with_capacity(members.len());
@@ -228,12 +235,36 @@ fn attenuate_in_volumes(
         }
         let m = members.len();
         let pts = arena.alloc(pts);
-        let ctx = arena.alloc(ShadingContext::new(
+        // The other volumes' integrators are bound to a context without overlaps, as in the
+        // trace stage.
+        let ctx_plain = arena.alloc(ShadingContext::new(
             pts,
             0..m,
             ShadingMode::Interior,
             entry.material,
             &[],
+        ));
+        let others: Vec<risotto_components::VolumeEntry> = stack
+            .overlapping()
+            .filter(|e| computes_interior(e))
+            .collect();
+        let overlapping: &[OverlappingVolume] =
+            arena.alloc_slice_fill_iter(others.into_iter().map(|e| {
+                let factory = scene.materials[e.material as usize].factory.as_ref();
+                OverlappingVolume {
+                    entry: e,
+                    factory,
+                    integrator: factory
+                        .begin_interior(ctx_plain, ShadingMode::Interior, arena)
+                        .map(|v| &*v),
+                }
+            }));
+        let ctx = arena.alloc(ShadingContext::new(
+            pts,
+            0..m,
+            ShadingMode::Interior,
+            entry.material,
+            overlapping,
         ));
         let factory = scene.materials[entry.material as usize].factory.as_ref();
         let Some(integrator) = factory.begin_interior(ctx, ShadingMode::Interior, arena) else {

@@ -13,7 +13,10 @@
 //!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7), evaluated in double precision so
 //!   tiny spheres far away and huge spheres seen from close by stay accurate.
 //!
-//! Hits are accepted for `tmin < t < tmax`.
+//! Hits are accepted for `tmin < t < tmax`; a triangle hit must also be farther beyond
+//! `tmin` than the rounding-error bound of its computed `t` (pbrt-v4's conservative t), so
+//! that rays spawned on a large triangle, or walks that restart just past a hit, do not find
+//! the same surface again.
 
 use glam::{DVec3, Mat3A, UVec2, Vec3, Vec3A, Vec4};
 use obvhs::{
@@ -88,7 +91,8 @@ impl WatertightRay {
     }
 
     /// Two-sided watertight intersection with triangle `(v0, v1, v2)`, accepting
-    /// `tmin < t < tmax`. Degenerate triangles and rays in the triangle's plane miss.
+    /// `tmin < t < tmax` where `t - tmin` also exceeds the error bound of the computed `t`.
+    /// Degenerate triangles and rays in the triangle's plane miss.
     #[inline(always)]
     pub fn intersect_triangle(
         &self,
@@ -119,16 +123,48 @@ impl WatertightRay {
         let scaled_t = u * a.z + v * b.z + w * c.z;
         let inv_det = 1.0 / det;
         let t = scaled_t * inv_det;
-        if t > tmin && t < tmax {
-            Some(TriangleHit {
-                t,
-                b1: v * inv_det,
-                b2: w * inv_det,
-            })
-        } else {
-            None
+        if !(t > tmin && t < tmax) {
+            return None;
         }
+        // The computed `t` is only known to within `delta_t`; a hit that close to `tmin`
+        // may lie on the wrong side of it (a ray spawned on this very triangle, or a walk
+        // re-finding the triangle it just crossed, would hit it again). Reject it, as
+        // pbrt-v4 does for `tmin = 0` ("Physically Based Rendering", 4th ed., sec. 6.8.7,
+        // conservative ray-triangle t: bounds on the rounding of the transformed vertices,
+        // the edge functions and the scaled t).
+        if t - tmin <= t_error_bound(a, b, c, u, v, w, inv_det) {
+            return None;
+        }
+        Some(TriangleHit {
+            t,
+            b1: v * inv_det,
+            b2: w * inv_det,
+        })
     }
+}
+
+/// `gamma(n) = n eps / (1 - n eps)` with `eps = 2^-24` (unit roundoff): the relative error
+/// bound of `n` chained f32 operations (Higham; pbrt-v4 sec. 6.8.1).
+#[inline(always)]
+fn gamma(n: f32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    n * e / (1.0 - n * e)
+}
+
+/// Absolute error bound of the `t` computed by [`WatertightRay::intersect_triangle`] from
+/// the transformed vertices `a, b, c` and the edge functions `u, v, w` (pbrt-v4 sec. 6.8.7:
+/// delta_t = 3 (gamma(3) max|e| max|z| + delta_e max|z| + delta_z max|e|) / |det|).
+#[inline(always)]
+fn t_error_bound(a: Vec3A, b: Vec3A, c: Vec3A, u: f32, v: f32, w: f32, inv_det: f32) -> f32 {
+    let max_x = a.x.abs().max(b.x.abs()).max(c.x.abs());
+    let max_y = a.y.abs().max(b.y.abs()).max(c.y.abs());
+    let max_z = a.z.abs().max(b.z.abs()).max(c.z.abs());
+    let delta_z = gamma(3.0) * max_z;
+    let delta_x = gamma(5.0) * (max_x + max_z);
+    let delta_y = gamma(5.0) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
 
 /// The paper's fallback (sec. 3, "if any edge function is exactly zero"): recompute in

@@ -1088,3 +1088,90 @@ fn sphere_uv_and_surface_at_agree_with_sample_prim() {
         assert!((0.0..1.0).contains(&s.uv.x) && (0.0..=1.0).contains(&s.uv.y));
     }
 }
+
+/// The engine's spawn offset (`risotto_engine::integrator::ray_offset`): a few dozen ulps of
+/// the point's largest coordinate -- far less than the rounding of `t` for a triangle whose
+/// vertices are much farther from the ray origin than the point itself.
+fn spawn_offset(p: Vec3) -> f32 {
+    p.abs().max_element() * 4e-6 + 1e-9
+}
+
+#[test]
+fn rays_spawned_on_large_triangles_near_the_origin_do_not_re_hit_them() {
+    // A 40 x 40 quad (two triangles sharing a diagonal), tilted, through the origin; points
+    // near the origin are spawned from with the engine's tiny offset. The rounding of the
+    // computed t is set by the vertices (|v| ~ 20), so without the conservative t bound of
+    // the triangle test many of these rays hit their own quad at t ~ 1e-6.
+    let mut rng = Rng(11);
+    let mut self_hits = 0;
+    let mut walk_rehits = 0;
+    let mut checked = 0;
+    for _ in 0..40 {
+        let n = rng.unit();
+        let e1 = n.any_orthonormal_vector() * 20.0;
+        let e2 = n.cross(e1);
+        let c = rng.vec_in(-0.05, 0.05);
+        let (a, b, cc, d) = (c - e1 - e2, c + e1 - e2, c + e1 + e2, c - e1 + e2);
+        let tris = vec![[a, b, cc], [a, cc, d]];
+        let ng = (b - a).cross(cc - a).normalize();
+        let geom = SceneGeometry::build(tris, vec![]);
+        let mut batch = Batch::default();
+        for _ in 0..200 {
+            // A point on the quad near its centre (the middle of the shared diagonal), from
+            // barycentrics as the engine computes hit points.
+            let (small, half) = (rng.range(0.0, 0.01), 0.5 + rng.range(-0.01, 0.01));
+            let prim = rng.usize(2) as u32;
+            let (b1, b2) = if prim == 0 {
+                (small, half)
+            } else {
+                (half, small)
+            };
+            let pos = geom.surface_at(prim, Vec3::ZERO, Vec3::Z, 0.0, b1, b2).p;
+            let dir = rng.unit();
+            if dir.dot(ng).abs() < 0.05 {
+                continue;
+            }
+            let side = if dir.dot(ng) >= 0.0 { ng } else { -ng };
+            batch.push(pos + side * spawn_offset(pos), dir, 0.0, f32::INFINITY);
+        }
+        let r = batch.run(&geom);
+        for i in 0..batch.o.len() {
+            checked += 1;
+            if r.prim[i] != NO_HIT || r.occluded[i] {
+                self_hits += 1;
+            }
+        }
+        // Walks with a fixed origin (the engine's shadow-ray transmission walk): after a hit,
+        // tmin moves just past it; the quad must not be found again.
+        let mut walk = Batch::default();
+        for _ in 0..200 {
+            let target = c + (e1 * rng.range(-0.5, 0.5) + e2 * rng.range(-0.5, 0.5)) * 0.02;
+            let dir = rng.unit();
+            if dir.dot(ng).abs() < 0.05 {
+                continue;
+            }
+            walk.push(target - dir * 30.0, dir, 0.0, f32::INFINITY);
+        }
+        let first = walk.run(&geom);
+        let mut again = Batch::default();
+        for i in 0..walk.o.len() {
+            assert_ne!(first.prim[i], NO_HIT, "walk ray {i} missed the quad");
+            let p = walk.o[i] + walk.d[i] * first.t[i];
+            again.push(
+                walk.o[i],
+                walk.d[i],
+                first.t[i] + spawn_offset(p),
+                f32::INFINITY,
+            );
+        }
+        let second = again.run(&geom);
+        for i in 0..again.o.len() {
+            checked += 1;
+            if second.prim[i] != NO_HIT || second.occluded[i] {
+                walk_rehits += 1;
+            }
+        }
+    }
+    assert!(checked > 10_000, "{checked}");
+    assert_eq!((self_hits, walk_rehits), (0, 0), "of {checked} rays");
+}
