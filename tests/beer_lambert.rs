@@ -21,8 +21,8 @@ use risotto::engine::builtin::{beer, Interior, NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::Image;
 use risotto::engine::plugin::*;
-use risotto::engine::scene::{LightComponent, RenderSettings, Scene};
-use risotto::systems::camera::Camera;
+use risotto::engine::scene::{LightComponent, RenderSettings, Scene, ShapeGeometry};
+use risotto::systems::camera::{Camera, Projection};
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{LobeSampled, Rays, Rgb};
 
@@ -34,7 +34,15 @@ const RES: u32 = 16;
 
 /// An orthographic camera at `from` looking at `to`, `view` world units wide, RES x RES.
 fn ortho(from: Vec3, to: Vec3, up: Vec3, view: f32) -> Camera {
-    ortho_camera(from, to, up, view, RES, RES)
+    Camera::look_at(
+        Projection::Orthographic { width: view },
+        from,
+        to,
+        up,
+        RES,
+        RES,
+    )
+    .unwrap()
 }
 
 fn settings_depth(max_depth: u32) -> RenderSettings {
@@ -61,7 +69,11 @@ fn emitter_at(scene: &mut Scene, z: f32) {
     );
     scene.add_shape(
         "emitter",
-        quad(Vec3::new(-5.0, -5.0, z), Vec3::X * 10.0, Vec3::Y * 10.0),
+        ShapeGeometry::Triangles(quad_tris(
+            Vec3::new(-5.0, -5.0, z),
+            Vec3::X * 10.0,
+            Vec3::Y * 10.0,
+        )),
         black,
         Some(L),
     );
@@ -109,10 +121,10 @@ fn camera_rays_through_an_index_matched_absorber() {
     let m = beer_boundary(&mut scene, "absorber", sigma);
     scene.add_shape(
         "slab",
-        box_geometry(
+        ShapeGeometry::Triangles(box_tris(
             Vec3::new(-3.0, -3.0, -0.5 * d),
             Vec3::new(3.0, 3.0, 0.5 * d),
-        ),
+        )),
         m,
         None,
     );
@@ -138,14 +150,21 @@ fn shadow_scene(sigma: Rgb, d: f32, theta: f32, camera_y: f32) -> (Scene, Rgb, f
     );
     scene.add_shape(
         "floor",
-        quad(Vec3::new(-20.0, 0.0, -20.0), Vec3::Z * 40.0, Vec3::X * 40.0),
+        ShapeGeometry::Triangles(quad_tris(
+            Vec3::new(-20.0, 0.0, -20.0),
+            Vec3::Z * 40.0,
+            Vec3::X * 40.0,
+        )),
         floor,
         None,
     );
     let m = beer_boundary(&mut scene, "absorber", sigma);
     scene.add_shape(
         "slab",
-        box_geometry(Vec3::new(-20.0, 0.5, -20.0), Vec3::new(20.0, 0.5 + d, 20.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-20.0, 0.5, -20.0),
+            Vec3::new(20.0, 0.5 + d, 20.0),
+        )),
         m,
         None,
     );
@@ -194,13 +213,19 @@ fn nested_volumes_run_the_innermost_integrator() {
     // covers pixels 4..12 exactly.
     scene.add_shape(
         "outer",
-        box_geometry(Vec3::new(-1.5, -1.5, -1.0), Vec3::new(1.5, 1.5, 1.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-1.5, -1.5, -1.0),
+            Vec3::new(1.5, 1.5, 1.0),
+        )),
         outer,
         None,
     );
     scene.add_shape(
         "inner",
-        box_geometry(Vec3::new(-0.5, -0.5, -0.4), Vec3::new(0.5, 0.5, 0.4)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-0.5, -0.5, -0.4),
+            Vec3::new(0.5, 0.5, 0.4),
+        )),
         inner,
         None,
     );
@@ -336,13 +361,19 @@ fn overlapping_volumes_are_visible_to_the_innermost_integrator() {
     // Box b only covers x > 0 (pixel columns 8..16).
     scene.add_shape(
         "a",
-        box_geometry(Vec3::new(-1.5, -1.5, -1.0), Vec3::new(1.5, 1.5, 0.4)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-1.5, -1.5, -1.0),
+            Vec3::new(1.5, 1.5, 0.4),
+        )),
         m1,
         None,
     );
     scene.add_shape(
         "b",
-        box_geometry(Vec3::new(0.0, -1.6, -0.2), Vec3::new(1.6, 1.6, 1.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(0.0, -1.6, -0.2),
+            Vec3::new(1.6, 1.6, 1.0),
+        )),
         m2,
         None,
     );
@@ -381,13 +412,19 @@ fn overlapping_volumes_are_visible_to_shadow_rays() {
     let m2 = scene.add_material("b", 0, Box::new(SummingAbsorber { sigma_a: s2 }));
     scene.add_shape(
         "a",
-        box_geometry(Vec3::new(-20.0, 0.5, -20.0), Vec3::new(20.0, 1.5, 20.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-20.0, 0.5, -20.0),
+            Vec3::new(20.0, 1.5, 20.0),
+        )),
         m1,
         None,
     );
     scene.add_shape(
         "b",
-        box_geometry(Vec3::new(-21.0, 1.0, -21.0), Vec3::new(21.0, 2.2, 21.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-21.0, 1.0, -21.0),
+            Vec3::new(21.0, 2.2, 21.0),
+        )),
         m2,
         None,
     );
@@ -409,7 +446,10 @@ fn camera_inside(with_mist: bool, camera_volume: Option<Vec<String>>) -> Scene {
     let fog = beer_boundary(&mut scene, "fog", Rgb::new(0.4, 0.8, 1.6));
     scene.add_shape(
         "fog",
-        box_geometry(Vec3::new(-3.0, -3.0, -1.0), Vec3::new(3.0, 3.0, 1.0)),
+        ShapeGeometry::Triangles(box_tris(
+            Vec3::new(-3.0, -3.0, -1.0),
+            Vec3::new(3.0, 3.0, 1.0),
+        )),
         fog,
         None,
     );
@@ -417,7 +457,10 @@ fn camera_inside(with_mist: bool, camera_volume: Option<Vec<String>>) -> Scene {
         let mist = beer_boundary(&mut scene, "mist", Rgb::new(2.0, 1.0, 0.1));
         scene.add_shape(
             "mist",
-            box_geometry(Vec3::new(-2.0, -2.0, -0.6), Vec3::new(2.0, 2.0, 0.5)),
+            ShapeGeometry::Triangles(box_tris(
+                Vec3::new(-2.0, -2.0, -0.6),
+                Vec3::new(2.0, 2.0, 0.5),
+            )),
             mist,
             None,
         );

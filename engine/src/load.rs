@@ -130,7 +130,7 @@ impl MaterialRegistry {
             r.register(name, |p| {
                 let reflectance = p.rgb_where(
                     "reflectance",
-                    Some(Rgb::splat(0.9)),
+                    Some(Rgb::splat(1.0)),
                     "every channel in [0, 1]",
                     |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
                 )?;

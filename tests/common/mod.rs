@@ -143,23 +143,26 @@ pub fn crop_mean(
     (mean / n, (var / (n * n)).map(f32::sqrt))
 }
 
+/// A parallelogram `corner, corner + e1, corner + e1 + e2, corner + e2` as two triangles
+/// whose geometric normal is `normalize(e1 x e2)`.
+pub fn quad_tris(corner: Vec3, e1: Vec3, e2: Vec3) -> Vec<[Vec3; 3]> {
+    vec![
+        [corner, corner + e1, corner + e1 + e2],
+        [corner, corner + e1 + e2, corner + e2],
+    ]
+}
+
 /// The axis-aligned box `[lo, hi]` as 12 triangles with outward normals.
-pub fn box_geometry(lo: Vec3, hi: Vec3) -> ShapeGeometry {
+pub fn box_tris(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
     let s = hi - lo;
     let (x, y, z) = (Vec3::X * s.x, Vec3::Y * s.y, Vec3::Z * s.z);
-    // Each face: a corner and two edges ordered so that e1 x e2 points out of the box.
-    let faces = [
-        (lo, z, y),     // x = lo.x, normal -x (z x y = -x)
-        (lo + x, y, z), // x = hi.x, normal +x
-        (lo, x, z),     // y = lo.y, normal -y (x x z = -y)
-        (lo + y, z, x), // y = hi.y, normal +y
-        (lo, y, x),     // z = lo.z, normal -z (y x x = -z)
-        (lo + z, x, y), // z = hi.z, normal +z
-    ];
     let mut t = Vec::with_capacity(12);
-    for (c, e1, e2) in faces {
-        t.push([c, c + e1, c + e1 + e2]);
-        t.push([c, c + e1 + e2, c + e2]);
-    }
-    ShapeGeometry::Triangles(t)
+    // Each face: corner and two edges ordered so that e1 x e2 points out of the box.
+    t.extend(quad_tris(lo, z, y)); // x = lo.x, normal -x (z x y = -x)
+    t.extend(quad_tris(lo + x, y, z)); // x = hi.x, normal +x
+    t.extend(quad_tris(lo, x, z)); // y = lo.y, normal -y (x x z = -y)
+    t.extend(quad_tris(lo + y, z, x)); // y = hi.y, normal +y
+    t.extend(quad_tris(lo, y, x)); // z = lo.z, normal -z (y x x = -z)
+    t.extend(quad_tris(lo + z, x, y)); // z = hi.z, normal +z
+    t
 }

@@ -1193,7 +1193,7 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                     p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)
                         .unwrap();
                 }
-                // Index-matched boundary: no surface parameters.
+                // Index-matched boundaries take no surface parameters.
                 "interface" => {}
                 other => panic!("{what}: unexpected material type {other}"),
             }
