@@ -930,25 +930,41 @@ fn light_pdf_at(
 fn volume_points(rays: &Rays, material: u32) -> ShadingPoints {
     let mut pts = ShadingPoints::with_capacity(rays.len());
     for i in 0..rays.len() {
-        let d = rays.direction[i];
-        pts.push(ShadingPointRow {
-            p: rays.origin[i],
-            ng: -d,
-            nn: -d,
-            vn: -d,
-            vlen: 0.0,
-            u: 0.0,
-            v: 0.0,
-            w: 0.0,
-            transmission: Rgb::WHITE,
-            ray_id: i as u32,
+        pts.push(volume_point(
+            rays.origin[i],
+            rays.direction[i],
+            i as u32,
             material,
-            shape: u32::MAX,
-            front_face: true,
-            ior_outside: 1.0,
-        });
+        ));
     }
     pts
+}
+
+/// A shading point at the start of a segment inside a volume (no surface: normals face the
+/// viewer, transmission 1). Binds volume integrators to the rays or shadow segments they
+/// answer.
+pub(crate) fn volume_point(
+    p: Vec3,
+    direction: Vec3,
+    ray_id: u32,
+    material: u32,
+) -> ShadingPointRow {
+    ShadingPointRow {
+        p,
+        ng: -direction,
+        nn: -direction,
+        vn: -direction,
+        vlen: 0.0,
+        u: 0.0,
+        v: 0.0,
+        w: 0.0,
+        transmission: Rgb::WHITE,
+        ray_id,
+        material,
+        shape: u32::MAX,
+        front_face: true,
+        ior_outside: 1.0,
+    }
 }
 
 /// Appends `src`'s groups and misses to `dst`, re-indexing ray ids into `incoming`, to which

@@ -9,15 +9,13 @@
 //! call per round, and the intervals of one round are grouped by volume so that each volume
 //! integrator answers once per round.
 
-use crate::integrator::ray_offset;
+use crate::integrator::{ray_offset, volume_point};
 use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{
-    Paths, Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT,
-};
+use risotto_components::{Paths, Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
 use risotto_systems::intersect::{intersect_closest, intersect_occluded};
 use risotto_systems::sampler::PathSampler;
 
@@ -208,23 +206,12 @@ fn attenuate_in_volumes(
         for (k, &&(i, s0, len)) in members.iter().enumerate() {
             let o: Vec3 = shadow.origin[i] + shadow.direction[i] * s0;
             segments.push(o, shadow.direction[i], len);
-            let d = shadow.direction[i];
-            pts.push(ShadingPointRow {
-                p: o,
-                ng: -d,
-                nn: -d,
-                vn: -d,
-                vlen: 0.0,
-                u: 0.0,
-                v: 0.0,
-                w: 0.0,
-                transmission: Rgb::WHITE,
-                ray_id: k as u32,
-                material: entry.material,
-                shape: u32::MAX,
-                front_face: true,
-                ior_outside: 1.0,
-            });
+            pts.push(volume_point(
+                o,
+                shadow.direction[i],
+                k as u32,
+                entry.material,
+            ));
             let path = shadow.path[i] as usize;
             // Shadow rays get their own decorrelated dimension block (high dimensions).
             samplers.push(PathSampler {
