@@ -29,30 +29,37 @@ macro_rules! soa_table {
 
         impl $name {
             /// An empty table with room for `n` rows in every column.
+            #[inline]
             pub fn with_capacity(n: usize) -> Self {
                 Self { $( $field: Vec::with_capacity(n), )* }
             }
             /// Number of rows.
+            #[inline]
             pub fn len(&self) -> usize {
                 self.first_len()
             }
             /// True when the table has no rows.
+            #[inline]
             pub fn is_empty(&self) -> bool {
                 self.len() == 0
             }
             /// Removes every row, keeping the columns' allocations.
+            #[inline]
             pub fn clear(&mut self) {
                 $( self.$field.clear(); )*
             }
             /// Appends one row.
+            #[inline]
             pub fn push(&mut self, row: $row) {
                 $( self.$field.push(row.$field); )*
             }
             /// Copies row `i` out.
+            #[inline]
             pub fn row(&self, i: usize) -> $row {
                 $row { $( $field: self.$field[i].clone(), )* }
             }
             /// Appends a copy of row `i` of `other`.
+            #[inline]
             pub fn push_from(&mut self, other: &Self, i: usize) {
                 $( self.$field.push(other.$field[i].clone()); )*
             }

@@ -40,9 +40,25 @@ pub enum StackEvent {
 
 /// The volumes a ray is inside, in the order they were entered. Stored inline for up to four
 /// nested volumes (no heap allocation on the common path).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Debug, Default, PartialEq, Eq)]
 pub struct VolumeStack {
     entries: SmallVec<[VolumeEntry; 4]>,
+}
+
+impl Clone for VolumeStack {
+    /// Every ray row carries a stack and every bounce copies it, so this is on the hot path:
+    /// `SmallVec`'s derived clone goes through a generic `extend`; entries are `Copy`, so
+    /// copy them as one slice (and an empty stack, the common case, as nothing).
+    #[inline]
+    fn clone(&self) -> Self {
+        if self.entries.is_empty() {
+            Self::default()
+        } else {
+            Self {
+                entries: SmallVec::from_slice(&self.entries),
+            }
+        }
+    }
 }
 
 impl VolumeStack {

@@ -1,11 +1,23 @@
 //! The integrator context (RIS `RixIntegratorContext`): the renderer's ray-tracing services
 //! for global and volume integrators.
 
-use crate::plugin::{ShadeGroups, ShadingMode};
+use crate::plugin::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use risotto_components::{Hits, Rays, Rgb, ShadingPointRow, VolumeStack, NO_HIT};
 use risotto_systems::intersect::intersect_closest;
+
+/// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
+/// the per-bounce path does not allocate.
+#[derive(Debug, Default)]
+pub struct HitScratch {
+    hits: Hits,
+    /// Material of each ray's hit (`u32::MAX` for a miss).
+    material: Vec<u32>,
+    counts: Vec<u32>,
+    cursor: Vec<u32>,
+    sorted: Vec<u32>,
+}
 
 /// Ray-tracing services bound to one compiled scene and one worker.
 pub struct IntegratorContext<'s> {
@@ -13,33 +25,37 @@ pub struct IntegratorContext<'s> {
     pub scene: &'s CompiledScene,
     /// The worker's statistics.
     pub stats: &'s mut SystemStats,
-    hits: Hits,
-    order: Vec<u32>,
-    rows: Vec<ShadingPointRow>,
+    scratch: HitScratch,
 }
 
 impl<'s> IntegratorContext<'s> {
     /// A context for `scene`, recording into `stats`.
     pub fn new(scene: &'s CompiledScene, stats: &'s mut SystemStats) -> Self {
+        Self::with_scratch(scene, stats, HitScratch::default())
+    }
+
+    /// A context reusing the buffers of an earlier one ([`Self::into_scratch`]).
+    pub fn with_scratch(
+        scene: &'s CompiledScene,
+        stats: &'s mut SystemStats,
+        scratch: HitScratch,
+    ) -> Self {
         IntegratorContext {
             scene,
             stats,
-            hits: Hits::default(),
-            order: Vec::new(),
-            rows: Vec::new(),
+            scratch,
         }
+    }
+
+    /// Gives the buffers back for the next context.
+    pub fn into_scratch(self) -> HitScratch {
+        self.scratch
     }
 
     /// IOR outside `shape` for a ray travelling with `stack`: the IOR of the innermost volume
     /// that is not `shape`'s own interior (1 in vacuum).
     pub fn ior_outside(&self, stack: &VolumeStack, shape: u32) -> f32 {
-        let mut best: Option<risotto_components::VolumeEntry> = None;
-        for e in stack.entries() {
-            if e.shape != shape && best.is_none_or(|b| e.priority >= b.priority) {
-                best = Some(*e);
-            }
-        }
-        best.map_or(1.0, |e| self.scene.material_info[e.material as usize].ior)
+        ior_outside(self.scene, stack, shape)
     }
 
     /// Traces `rays` to their nearest surface hits and appends the hits to `out`, grouped by
@@ -51,12 +67,14 @@ impl<'s> IntegratorContext<'s> {
         if n == 0 {
             return;
         }
-        let hits = &mut self.hits;
+        let scene = self.scene;
+        let geometry = &scene.geometry;
+        let s = &mut self.scratch;
+        let hits = &mut s.hits;
         hits.t.resize(n, 0.0);
         hits.prim.resize(n, NO_HIT);
         hits.b1.resize(n, 0.0);
         hits.b2.resize(n, 0.0);
-        let geometry = &self.scene.geometry;
         self.stats.time(System::Intersect, n, || {
             intersect_closest(
                 geometry,
@@ -72,68 +90,86 @@ impl<'s> IntegratorContext<'s> {
         });
         // Counting sort of hit rays by material: groups come out contiguous and in material
         // order, so each factory runs once per call.
-        let scene = self.scene;
         let num_materials = scene.materials.len();
-        let mut counts = vec![0u32; num_materials + 1];
-        self.order.clear();
+        s.counts.clear();
+        s.counts.resize(num_materials + 1, 0);
+        s.material.clear();
         for i in 0..n {
-            let prim = self.hits.prim[i];
+            let prim = hits.prim[i];
             if prim == NO_HIT {
                 out.push_miss(i as u32, Rgb::WHITE);
+                s.material.push(u32::MAX);
             } else {
                 let shape = scene.prim_shape[prim as usize];
-                counts[scene.shapes[shape as usize].material as usize + 1] += 1;
-                self.order.push(i as u32);
+                let m = scene.shapes[shape as usize].material;
+                s.counts[m as usize + 1] += 1;
+                s.material.push(m);
             }
         }
         for m in 0..num_materials {
-            counts[m + 1] += counts[m];
+            s.counts[m + 1] += s.counts[m];
         }
-        let mut cursor = counts.clone();
-        let mut sorted = vec![0u32; self.order.len()];
-        for &i in &self.order {
-            let shape = scene.prim_shape[self.hits.prim[i as usize] as usize];
-            let m = scene.shapes[shape as usize].material as usize;
-            sorted[cursor[m] as usize] = i;
-            cursor[m] += 1;
+        s.cursor.clear();
+        s.cursor.extend_from_slice(&s.counts);
+        s.sorted.resize(s.counts[num_materials] as usize, 0);
+        for i in 0..n {
+            let m = s.material[i];
+            if m != u32::MAX {
+                s.sorted[s.cursor[m as usize] as usize] = i as u32;
+                s.cursor[m as usize] += 1;
+            }
         }
         for m in 0..num_materials {
-            let range = counts[m] as usize..counts[m + 1] as usize;
+            let range = s.counts[m] as usize..s.counts[m + 1] as usize;
             if range.is_empty() {
                 continue;
             }
-            self.rows.clear();
-            for &i in &sorted[range] {
+            let start = out.points.len();
+            for &i in &s.sorted[range] {
                 let i = i as usize;
-                let prim = self.hits.prim[i];
+                let prim = hits.prim[i];
                 let shape = scene.prim_shape[prim as usize];
                 let d = rays.direction[i];
-                let s = geometry.surface_at(
-                    prim,
-                    rays.origin[i],
-                    d,
-                    self.hits.t[i],
-                    self.hits.b1[i],
-                    self.hits.b2[i],
-                );
-                self.rows.push(ShadingPointRow {
-                    p: s.p,
-                    ng: s.ng,
-                    nn: s.ng,
+                let sp =
+                    geometry.surface_at(prim, rays.origin[i], d, hits.t[i], hits.b1[i], hits.b2[i]);
+                let stack = &rays.volume_stack[i];
+                out.points.push(ShadingPointRow {
+                    p: sp.p,
+                    ng: sp.ng,
+                    nn: sp.ng,
                     vn: -d,
-                    vlen: self.hits.t[i],
-                    u: s.uv.x,
-                    v: s.uv.y,
+                    vlen: hits.t[i],
+                    u: sp.uv.x,
+                    v: sp.uv.y,
                     w: 0.0,
                     transmission: Rgb::WHITE,
                     ray_id: i as u32,
                     material: m as u32,
                     shape,
-                    front_face: d.dot(s.ng) < 0.0,
-                    ior_outside: self.ior_outside(&rays.volume_stack[i], shape),
+                    front_face: d.dot(sp.ng) < 0.0,
+                    ior_outside: if stack.is_empty() {
+                        1.0
+                    } else {
+                        ior_outside(scene, stack, shape)
+                    },
                 });
             }
-            out.push_group(m as u32, ShadingMode::Scatter, self.rows.drain(..));
+            out.groups.push(ShadeGroup {
+                material: m as u32,
+                mode: ShadingMode::Scatter,
+                range: start..out.points.len(),
+            });
         }
     }
+}
+
+/// IOR of the innermost volume of `stack` that is not `shape`'s own interior (1 in vacuum).
+fn ior_outside(scene: &CompiledScene, stack: &VolumeStack, shape: u32) -> f32 {
+    let mut best: Option<risotto_components::VolumeEntry> = None;
+    for e in stack.entries() {
+        if e.shape != shape && best.is_none_or(|b| e.priority >= b.priority) {
+            best = Some(*e);
+        }
+    }
+    best.map_or(1.0, |e| scene.material_info[e.material as usize].ior)
 }

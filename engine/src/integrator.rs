@@ -11,7 +11,7 @@
 //! Depth convention (Mitsuba's `max_depth`): a path of `k` segments has `k - 1` scattering
 //! vertices; emitters seen along segment `k` count only if `k <= max_depth`.
 
-use crate::context::IntegratorContext;
+use crate::context::{HitScratch, IntegratorContext};
 use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats, Termination};
@@ -22,7 +22,7 @@ use risotto_systems::camera::{generate_camera_rays, FIRST_PATH_DIMENSION};
 use risotto_systems::film::{splat, Film};
 use risotto_systems::lights::{power_heuristic, LightSample};
 use risotto_systems::partition::partition_by_key;
-use risotto_systems::sampler::{pixel_seed, PathSampler};
+use risotto_systems::sampler::{pixel_seed, sample_1d, PathSampler};
 
 /// How direct lighting is estimated; a named technique so its cost and error can be compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -38,7 +38,8 @@ pub enum LightingTechnique {
 }
 
 /// Sampler dimensions each scattering vertex reserves: light selection (0), light position
-/// (1, 2), Russian roulette (3), Bxdf (4..8).
+/// (1, 2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4
+/// (`FIRST_PATH_DIMENSION`), so each group of four is one aligned SIMD Sobol evaluation.
 const DIMS_PER_VERTEX: u32 = 8;
 
 /// Offset for spawning rays off a surface, relative to the coordinates' magnitude so that tiny
@@ -73,6 +74,10 @@ pub struct BatchTables {
     order: Vec<u32>,
     runs: Vec<(u32, std::ops::Range<usize>)>,
     albedo_tmp: Vec<Rgb>,
+    hit_scratch: HitScratch,
+    can_continue: Vec<bool>,
+    /// Russian-roulette sample of each point of the group being shaded.
+    rr_u: Vec<f32>,
 }
 
 /// Film plus optional AOV accumulators for one tile.
@@ -335,10 +340,20 @@ impl PathTracer {
         while !t.pending.is_empty() {
             if features.volumes {
                 self.trace_partitioned(scene, t, stats, arena);
+            } else if t.incoming.is_empty() && t.groups.points.is_empty() {
+                // First round (the only one unless there are pass-throughs): answer straight
+                // into the groups and move the rays over instead of copying them.
+                let scratch = std::mem::take(&mut t.hit_scratch);
+                let mut ictx = IntegratorContext::with_scratch(scene, stats, scratch);
+                ictx.nearest_hits(&t.pending, &mut t.groups);
+                t.hit_scratch = ictx.into_scratch();
+                std::mem::swap(&mut t.incoming, &mut t.pending);
             } else {
                 t.tmp.clear();
-                let mut ictx = IntegratorContext::new(scene, stats);
+                let scratch = std::mem::take(&mut t.hit_scratch);
+                let mut ictx = IntegratorContext::with_scratch(scene, stats, scratch);
                 ictx.nearest_hits(&t.pending, &mut t.tmp);
+                t.hit_scratch = ictx.into_scratch();
                 append_groups(&mut t.groups, &mut t.incoming, &t.tmp, &t.pending);
             }
             t.pending.clear();
@@ -393,8 +408,10 @@ impl PathTracer {
             });
             match inner {
                 None => {
-                    let mut ictx = IntegratorContext::new(scene, stats);
+                    let scratch = std::mem::take(&mut t.hit_scratch);
+                    let mut ictx = IntegratorContext::with_scratch(scene, stats, scratch);
                     ictx.nearest_hits(&t.bundle, &mut t.tmp);
+                    t.hit_scratch = ictx.into_scratch();
                 }
                 Some(entry) => {
                     let m = t.bundle.len();
@@ -456,7 +473,8 @@ impl PathTracer {
                         } else {
                             Some(&mut delegate)
                         };
-                    let mut ictx = IntegratorContext::new(scene, stats);
+                    let scratch = std::mem::take(&mut t.hit_scratch);
+                    let mut ictx = IntegratorContext::with_scratch(scene, stats, scratch);
                     let start = std::time::Instant::now();
                     integrator.nearest_hits(
                         &t.bundle,
@@ -467,6 +485,7 @@ impl PathTracer {
                         &mut t.tmp,
                     );
                     let elapsed = start.elapsed().as_secs_f64();
+                    t.hit_scratch = ictx.into_scratch();
                     stats.record(System::Volume, m, elapsed);
                     for (i, s) in t.samplers.iter().enumerate() {
                         t.bundle.dimension[i] = s.dimension;
@@ -647,17 +666,23 @@ impl PathTracer {
         let groups = std::mem::take(&mut t.groups.groups);
         let total: usize = groups.iter().map(|g| g.range.len()).sum();
         let shade_start = std::time::Instant::now();
+        let has_emitters = scene.features.area_lights;
         for g in &groups {
             let range = g.range.clone();
-            // Transmission of the incident segment multiplies the throughput first.
-            for i in range.clone() {
-                let r = t.groups.points.ray_id[i] as usize;
-                t.incoming.throughput[r] *= t.groups.points.transmission[i];
+            // Transmission of the incident segment multiplies the throughput first (only
+            // volume integrators return points with transmission other than 1).
+            if scene.features.volumes {
+                for i in range.clone() {
+                    let r = t.groups.points.ray_id[i] as usize;
+                    t.incoming.throughput[r] *= t.groups.points.transmission[i];
+                }
             }
-            for i in range.clone() {
-                let r = t.groups.points.ray_id[i] as usize;
-                // Throughput already includes the transmission.
-                self.surface_emission(scene, t, r, i, Rgb::WHITE);
+            if has_emitters {
+                for i in range.clone() {
+                    let r = t.groups.points.ray_id[i] as usize;
+                    // Throughput already includes the transmission.
+                    self.surface_emission(scene, t, r, i, Rgb::WHITE);
+                }
             }
             let ctx = ShadingContext::new(&t.groups.points, range.clone(), g.mode, g.material, &[]);
             let factory = scene.materials[g.material as usize].factory.as_ref();
@@ -665,52 +690,55 @@ impl PathTracer {
             let bxdf = factory.begin_scatter(&ctx, g.mode, arena);
             let lobes = bxdf.lobes();
             let m = range.len();
+            let ray_id = &t.groups.points.ray_id[range.clone()];
 
             // AOVs at the first vertex.
-            t.albedo_tmp.resize(m, Rgb::BLACK);
-            bxdf.albedo(&ctx, &mut t.albedo_tmp);
-            for (k, i) in range.clone().enumerate() {
-                let r = t.groups.points.ray_id[i] as usize;
-                if t.incoming.depth[r] == 0 && t.incoming.passes[r] == 0 {
-                    let path = t.incoming.path[r] as usize;
-                    t.paths.albedo[path] = t.albedo_tmp[k];
-                    t.paths.normal[path] = t.groups.points.nn[i];
-                    t.paths.depth[path] = t.groups.points.vlen[i];
+            let first_vertex = |r: usize| t.incoming.depth[r] == 0 && t.incoming.passes[r] == 0;
+            if ray_id.iter().any(|&r| first_vertex(r as usize)) {
+                t.albedo_tmp.resize(m, Rgb::BLACK);
+                bxdf.albedo(&ctx, &mut t.albedo_tmp);
+                for (k, i) in range.clone().enumerate() {
+                    let r = ray_id[k] as usize;
+                    if first_vertex(r) {
+                        let path = t.incoming.path[r] as usize;
+                        t.paths.albedo[path] = t.albedo_tmp[k];
+                        t.paths.normal[path] = t.groups.points.nn[i];
+                        t.paths.depth[path] = t.groups.points.vlen[i];
+                    }
                 }
             }
 
-            // Per-point samplers at this vertex's dimensions.
+            // Per-point samplers at this vertex's dimensions, and which points may continue:
+            // the next segment must fit in max_depth.
             t.samplers.clear();
-            for i in range.clone() {
-                let r = t.groups.points.ray_id[i] as usize;
-                let s = self.sampler(t, &t.incoming, r);
-                t.samplers.push(s);
+            t.can_continue.clear();
+            for &r in ray_id {
+                let r = r as usize;
+                t.samplers.push(self.sampler(t, &t.incoming, r));
+                t.can_continue
+                    .push((t.incoming.depth[r] as u32 + 2) <= settings.max_depth);
             }
-            // Which points may continue: the next segment must fit in max_depth.
-            let can_continue: Vec<bool> = range
-                .clone()
-                .map(|i| {
-                    let r = t.groups.points.ray_id[i] as usize;
-                    (t.incoming.depth[r] as u32 + 2) <= settings.max_depth
-                })
-                .collect();
 
-            // Direct lighting (not for purely specular closures).
-            if lobes.contains(LobeSampled::DIFFUSE)
+            // The vertex's first four dimensions: light selection, light position, Russian
+            // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
+            t.rr_u.clear();
+            let light_sampling = lobes.contains(LobeSampled::DIFFUSE)
                 && self.technique != LightingTechnique::BxdfOnly
-                && !scene.lights.is_empty()
-            {
+                && !scene.lights.is_empty();
+            if light_sampling {
                 let lstart = std::time::Instant::now();
                 t.light_samples.clear();
                 t.wi_tmp.clear();
                 for (k, i) in range.clone().enumerate() {
-                    let ls = if can_continue[k] {
-                        let mut s = t.samplers[k];
-                        let sel = s.next_1d();
-                        let u = s.next_2d();
-                        scene
-                            .lights
-                            .sample(&scene.geometry, t.groups.points.p[i], sel, u)
+                    let [sel, u0, u1, rr] = t.samplers[k].next_4d();
+                    t.rr_u.push(rr);
+                    let ls = if t.can_continue[k] {
+                        scene.lights.sample(
+                            &scene.geometry,
+                            t.groups.points.p[i],
+                            sel,
+                            glam::Vec2::new(u0, u1),
+                        )
                     } else {
                         None
                     };
@@ -729,7 +757,7 @@ impl PathTracer {
                     if f.is_black() {
                         continue;
                     }
-                    let r = t.groups.points.ray_id[i] as usize;
+                    let r = ray_id[k] as usize;
                     let w = if ls.delta || self.technique == LightingTechnique::NeeOnly {
                         1.0
                     } else {
@@ -770,26 +798,35 @@ impl PathTracer {
                         volume_stack: stack,
                     });
                 }
+            } else {
+                for sampler in &t.samplers {
+                    t.rr_u.push(sample_1d(
+                        sampler.seed,
+                        sampler.sample,
+                        sampler.dimension + 3,
+                    ));
+                }
             }
 
-            // Bxdf sampling for the next bounce.
-            for s in t.samplers.iter_mut() {
-                s.dimension += 4;
+            // Bxdf sampling for the next bounce, from the vertex's dimension 4 on.
+            for (k, &r) in ray_id.iter().enumerate() {
+                t.samplers[k].dimension = t.incoming.dimension[r as usize] + 4;
             }
             t.samples.reset(m);
             bxdf.generate_samples(&ctx, &mut t.samplers, &mut t.samples);
             stats.record(System::Bxdf, m, bxdf_start.elapsed().as_secs_f64());
 
+            let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
             for (k, i) in range.clone().enumerate() {
-                let r = t.groups.points.ray_id[i] as usize;
-                if !can_continue[k] {
-                    stats.terminate(Termination::MaxDepth, 1);
+                let r = ray_id[k] as usize;
+                if !t.can_continue[k] {
+                    max_depth += 1;
                     continue;
                 }
                 let pdf = t.samples.pdf[k];
                 let weight = t.samples.weight[k];
                 if pdf <= 0.0 || weight.is_black() || !weight.is_finite() {
-                    stats.terminate(Termination::Absorbed, 1);
+                    absorbed += 1;
                     continue;
                 }
                 let mut throughput = t.incoming.throughput[r] * weight;
@@ -801,9 +838,8 @@ impl PathTracer {
                 // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
                 if depth as u32 > settings.rr_depth {
                     let q = (throughput.max_channel() * eta_scale).min(0.95);
-                    let mut s = t.incoming_sampler(r, t.incoming.dimension[r] + 3);
-                    if s.next_1d() >= q {
-                        stats.terminate(Termination::RussianRoulette, 1);
+                    if t.rr_u[k] >= q {
+                        roulette += 1;
                         continue;
                     }
                     throughput *= 1.0 / q;
@@ -844,6 +880,9 @@ impl PathTracer {
                     volume_stack: stack,
                 });
             }
+            stats.terminate(Termination::MaxDepth, max_depth);
+            stats.terminate(Termination::Absorbed, absorbed);
+            stats.terminate(Termination::RussianRoulette, roulette);
         }
         stats.record(System::Shade, total, shade_start.elapsed().as_secs_f64());
         t.groups.groups = groups;
@@ -879,17 +918,6 @@ impl PathTracer {
         }
         stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
         t.shadow.clear();
-    }
-}
-
-impl BatchTables {
-    fn incoming_sampler(&self, r: usize, dimension: u32) -> PathSampler {
-        let path = self.incoming.path[r] as usize;
-        PathSampler {
-            seed: self.seeds[path],
-            sample: self.paths.sample[path],
-            dimension,
-        }
     }
 }
 

@@ -114,8 +114,10 @@ pub fn generate_camera_rays(
     }
 }
 
-/// The sampler dimension the first bounce starts at (after the pixel jitter).
-pub const FIRST_PATH_DIMENSION: u32 = 2;
+/// The sampler dimension the first bounce starts at: the pixel jitter uses 0 and 1, 2 and 3
+/// are kept for lens sampling, so every vertex's dimensions start on a multiple of 4 (one
+/// SIMD evaluation of four Sobol dimensions, [`crate::sampler::sample_4d`]).
+pub const FIRST_PATH_DIMENSION: u32 = 4;
 
 /// Convenience for tests and plug-ins: a [`PathSampler`] positioned after the camera jitter.
 pub fn path_sampler(seed: u32, sample: u32) -> PathSampler {

@@ -84,6 +84,9 @@ impl LeafPrim {
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
     triangles: Vec<[Vec3; 3]>,
+    /// Per-triangle unit geometric normal and area, precomputed: every hit and every light
+    /// sample needs them, and recomputing costs a cross product and a square root each time.
+    triangle_normal_area: Vec<(Vec3, f32)>,
     spheres: Vec<Sphere>,
     /// `None` for an empty scene (obvhs cannot build an empty tree).
     bvh: Option<CwBvh>,
@@ -196,8 +199,16 @@ impl SceneGeometry {
             (Some(bvh), leaves)
         };
 
+        let triangle_normal_area = triangles
+            .iter()
+            .map(|&[v0, v1, v2]| {
+                let c = (v1 - v0).cross(v2 - v0);
+                (c.normalize_or_zero(), 0.5 * c.length())
+            })
+            .collect();
         Self {
             triangles,
+            triangle_normal_area,
             spheres,
             bvh,
             leaves,
@@ -269,7 +280,7 @@ impl SceneGeometry {
             let b0 = 1.0 - b1 - b2;
             SurfaceSample {
                 p: v0 * b0 + v1 * b1 + v2 * b2,
-                ng: triangle_normal(v0, v1, v2),
+                ng: self.triangle_normal_area[prim].0,
                 uv: Vec2::new(b1, b2),
             }
         } else {
@@ -293,8 +304,7 @@ impl SceneGeometry {
     pub fn prim_area(&self, prim: u32) -> f32 {
         let prim = prim as usize;
         if prim < self.triangles.len() {
-            let [v0, v1, v2] = self.triangles[prim];
-            0.5 * (v1 - v0).cross(v2 - v0).length()
+            self.triangle_normal_area[prim].1
         } else {
             let r = self.spheres[prim - self.triangles.len()].radius;
             4.0 * PI * r * r
@@ -319,7 +329,10 @@ impl SceneGeometry {
                 (u.x - b1, b1)
             };
             let b2 = 1.0 - b0 - b1;
-            (v0 * b0 + v1 * b1 + v2 * b2, triangle_normal(v0, v1, v2))
+            (
+                v0 * b0 + v1 * b1 + v2 * b2,
+                self.triangle_normal_area[prim].0,
+            )
         } else {
             let s = self.spheres[prim - self.triangles.len()];
             // Archimedes: z = cos(theta) is uniform on [-1, 1] for area-uniform points.
@@ -330,11 +343,6 @@ impl SceneGeometry {
             (s.center + n * s.radius, n)
         }
     }
-}
-
-/// `normalize((v1 - v0) x (v2 - v0))`, zero for degenerate triangles.
-fn triangle_normal(v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
-    (v1 - v0).cross(v2 - v0).normalize_or_zero()
 }
 
 /// Surface parameters `(phi / 2pi, theta / pi)` of the direction `h` (centre to point).

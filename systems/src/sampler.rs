@@ -23,26 +23,52 @@ pub fn pixel_seed(render_seed: u64, pixel: u32) -> u32 {
     (z ^ (z >> 31)) as u32
 }
 
+/// The scrambling seed of the 256-dimension block `block` of a pixel's sequence.
+#[inline(always)]
+fn block_seed(seed: u32, block: u32) -> u32 {
+    if block == 0 {
+        seed
+    } else {
+        pixel_seed(seed as u64, block)
+    }
+}
+
 /// One sample dimension in [0, 1).
 #[inline]
 pub fn sample_1d(seed: u32, sample: u32, dimension: u32) -> f32 {
-    let set = dimension / sobol_burley::NUM_DIMENSIONS;
+    let block = dimension / sobol_burley::NUM_DIMENSIONS;
     let dim = dimension % sobol_burley::NUM_DIMENSIONS;
-    let seed = if set == 0 {
-        seed
-    } else {
-        pixel_seed(seed as u64, set)
-    };
-    sobol_burley::sample(sample % MAX_SPP, dim, seed)
+    sobol_burley::sample(sample % MAX_SPP, dim, block_seed(seed, block))
+}
+
+/// The four dimensions `4 * set .. 4 * set + 4` at once: the same values as four
+/// [`sample_1d`] calls, computed with one index scramble and SIMD Owen scrambling
+/// (`sobol_burley::sample_4d`), about a quarter of the cost.
+#[inline]
+pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
+    let sets_per_block = sobol_burley::NUM_DIMENSION_SETS_4D;
+    let block = set / sets_per_block;
+    sobol_burley::sample_4d(
+        sample % MAX_SPP,
+        set % sets_per_block,
+        block_seed(seed, block),
+    )
 }
 
 /// Two consecutive sample dimensions (`dimension`, `dimension + 1`) in [0, 1)^2.
 #[inline]
 pub fn sample_2d(seed: u32, sample: u32, dimension: u32) -> Vec2 {
-    Vec2::new(
-        sample_1d(seed, sample, dimension),
-        sample_1d(seed, sample, dimension + 1),
-    )
+    if dimension % 4 <= 2 {
+        // Both dimensions lie in one aligned set of four.
+        let v = sample_4d(seed, sample, dimension / 4);
+        let k = (dimension % 4) as usize;
+        Vec2::new(v[k], v[k + 1])
+    } else {
+        Vec2::new(
+            sample_1d(seed, sample, dimension),
+            sample_1d(seed, sample, dimension + 1),
+        )
+    }
 }
 
 /// Per-ray sample source handed to plug-ins: each call consumes the next dimensions of the
@@ -72,6 +98,18 @@ impl PathSampler {
         self.dimension += 2;
         v
     }
+    /// The next four sample dimensions (one SIMD evaluation when `dimension` is a multiple
+    /// of 4).
+    #[inline]
+    pub fn next_4d(&mut self) -> [f32; 4] {
+        let d = self.dimension;
+        self.dimension += 4;
+        if d.is_multiple_of(4) {
+            sample_4d(self.seed, self.sample, d / 4)
+        } else {
+            std::array::from_fn(|k| sample_1d(self.seed, self.sample, d + k as u32))
+        }
+    }
 }
 
 #[cfg(test)]
@@ -91,6 +129,37 @@ mod tests {
                 strata[(v * 64.0) as usize] = true;
             }
             assert!(strata.iter().all(|&s| s), "dimension {dim} not stratified");
+        }
+    }
+
+    #[test]
+    fn four_and_two_dimensional_samples_equal_one_dimensional_ones() {
+        // sample_4d / sample_2d / next_4d are only faster paths: they must return exactly
+        // the per-dimension values, including past the first 256-dimension block and at
+        // unaligned starts.
+        let seed = pixel_seed(11, 4321);
+        for sample in [0u32, 1, 7, 1000] {
+            for set in [0u32, 1, 63, 64, 65, 200] {
+                let v = sample_4d(seed, sample, set);
+                for k in 0..4 {
+                    assert_eq!(v[k], sample_1d(seed, sample, 4 * set + k as u32));
+                }
+            }
+            for dim in [0u32, 1, 2, 3, 254, 255, 256, 301] {
+                let v = sample_2d(seed, sample, dim);
+                assert_eq!(v.x, sample_1d(seed, sample, dim));
+                assert_eq!(v.y, sample_1d(seed, sample, dim + 1));
+                let mut s = PathSampler {
+                    seed,
+                    sample,
+                    dimension: dim,
+                };
+                let w = s.next_4d();
+                assert_eq!(s.dimension, dim + 4);
+                for k in 0..4 {
+                    assert_eq!(w[k], sample_1d(seed, sample, dim + k as u32));
+                }
+            }
         }
     }
 
