@@ -59,8 +59,8 @@ impl Bxdf for DiffuseBxdf {
     ) {
         let (nn, vn) = (ctx.nn(), ctx.vn());
         for i in 0..ctx.num_points() {
-            let f = frame(nn[i]);
-            let (v, p) = bxdf::diffuse_eval(self.reflectance, f.to_local(vn[i]), f.to_local(wi[i]));
+            let (v, p) =
+                bxdf::diffuse_eval_cos(self.reflectance, nn[i].dot(vn[i]), nn[i].dot(wi[i]));
             value[i] = v;
             pdf[i] = p;
         }

@@ -951,7 +951,7 @@ fn light_pdf_at(
     if prim[0] == NO_HIT || scene.prim_shape[prim[0] as usize] != shape {
         return 0.0;
     }
-    scene.lights.area_pdf(&scene.geometry, prim[0], from, p, ng)
+    scene.lights.area_pdf(prim[0], from, p, ng)
 }
 
 /// Shading points at the rays' origins, for binding a volume integrator to the bundle.

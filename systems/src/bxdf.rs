@@ -204,10 +204,18 @@ pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample>
 /// `f = reflectance / pi` and the cosine-hemisphere pdf; zero when either direction is at
 /// or below the surface.
 pub fn diffuse_eval(reflectance: Rgb, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
-    if !(above(wo.z) && above(wi.z)) {
+    diffuse_eval_cos(reflectance, wo.z, wi.z)
+}
+
+/// [`diffuse_eval`] from the cosines alone (`cos_o = n . wo`, `cos_i = n . wi`): the
+/// Lambertian lobe needs no tangent frame, so callers with world-space directions can skip
+/// building one.
+#[inline]
+pub fn diffuse_eval_cos(reflectance: Rgb, cos_o: f32, cos_i: f32) -> (Rgb, f32) {
+    if !(above(cos_o) && above(cos_i)) {
         return (Rgb::BLACK, 0.0);
     }
-    let pdf = wi.z * FRAC_1_PI;
+    let pdf = cos_i * FRAC_1_PI;
     (reflectance * pdf, pdf)
 }
 

@@ -54,6 +54,10 @@ pub struct LightSet {
     /// For every primitive, the index of its area light or `u32::MAX`.
     light_of_prim: Vec<u32>,
     environment: Option<u32>,
+    /// Per light: selection probability, and for area lights selection probability / area
+    /// (the area-measure pdf of a sample), precomputed so sampling does not divide by them.
+    pmf: Vec<f32>,
+    pmf_over_area: Vec<f32>,
 }
 
 /// One light sample, as seen from a shading point.
@@ -98,11 +102,24 @@ impl LightSet {
             .map(|p| if p.is_finite() { p.max(0.0) } else { 0.0 })
             .collect();
         let selection = (!lights.is_empty()).then(|| Distribution1D::new(&power));
+        let pmf: Vec<f32> = (0..lights.len())
+            .map(|i| selection.as_ref().map_or(0.0, |d| d.pmf(i)))
+            .collect();
+        let pmf_over_area = lights
+            .iter()
+            .zip(&pmf)
+            .map(|(l, &pmf)| match l {
+                Light::Area { prim, .. } => pmf / geometry.prim_area(*prim),
+                _ => 0.0,
+            })
+            .collect();
         LightSet {
             lights,
             selection,
             light_of_prim,
             environment,
+            pmf,
+            pmf_over_area,
         }
     }
 
@@ -126,9 +143,7 @@ impl LightSet {
 
     /// Probability of selecting light `index`.
     pub fn selection_pmf(&self, index: u32) -> f32 {
-        self.selection
-            .as_ref()
-            .map_or(0.0, |d| d.pmf(index as usize))
+        self.pmf.get(index as usize).copied().unwrap_or(0.0)
     }
 
     /// Radiance of the environment towards direction `dir` (seen along a ray going `dir`).
@@ -159,14 +174,7 @@ impl LightSet {
 
     /// Solid-angle pdf (including selection) that light sampling from `from` picks the point
     /// `p` (normal `n`) on the area light of `prim`.
-    pub fn area_pdf(
-        &self,
-        geometry: &SceneGeometry,
-        prim: u32,
-        from: Vec3,
-        p: Vec3,
-        n: Vec3,
-    ) -> f32 {
+    pub fn area_pdf(&self, prim: u32, from: Vec3, p: Vec3, n: Vec3) -> f32 {
         let Some(l) = self.area_light(prim) else {
             return 0.0;
         };
@@ -176,7 +184,7 @@ impl LightSet {
         if cos <= 0.0 || dist2 <= 0.0 {
             return 0.0;
         }
-        self.selection_pmf(l) * dist2 / (cos * geometry.prim_area(prim))
+        self.pmf_over_area[l as usize] * dist2 / cos
     }
 
     /// Samples a light from `p`. `u_select` chooses the light, `u` the point on it.
@@ -187,7 +195,8 @@ impl LightSet {
         u_select: f32,
         u: Vec2,
     ) -> Option<LightSample> {
-        let (index, pmf) = self.selection.as_ref()?.sample_discrete(u_select);
+        let (index, _) = self.selection.as_ref()?.sample_discrete(u_select);
+        let pmf = self.pmf[index];
         if pmf <= 0.0 {
             return None;
         }
@@ -200,13 +209,15 @@ impl LightSet {
                     return None;
                 }
                 let dist = dist2.sqrt();
-                let wi = d / dist;
+                // One division for the direction (glam's Vec3 / f32 divides per component).
+                let wi = d * (1.0 / dist);
                 // One-sided emitter: it shines towards where its normal points.
                 let cos_light = -n.dot(wi);
                 if cos_light <= 0.0 {
                     return None;
                 }
-                let pdf = pmf * dist2 / (cos_light * geometry.prim_area(*prim));
+                // Area pdf (pmf / area) to solid angle: * dist^2 / cos (PBR 4th ed. eq. 4.9).
+                let pdf = self.pmf_over_area[index] * dist2 / cos_light;
                 (pdf.is_finite() && pdf > 0.0).then_some(LightSample {
                     wi,
                     distance: dist,
