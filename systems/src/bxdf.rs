@@ -675,7 +675,7 @@ mod tests {
         let eta = 1.5f32;
         let critical = (1.0 / eta).asin();
         for k in 1..50 {
-            let theta = critical + (FRAC_PI_2 - critical) * k as f32 / 50.0;
+            let theta = critical + (std::f32::consts::FRAC_PI_2 - critical) * k as f32 / 50.0;
             // From inside (cos < 0): TIR.
             assert_eq!(fresnel_dielectric(-theta.cos(), eta), 1.0, "theta {theta}");
             // The same angle from outside never totally reflects.
