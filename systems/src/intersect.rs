@@ -749,3 +749,182 @@ pub fn intersect_occluded(
         occluded[i] = hit;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Sphere;
+    use obvhs::cwbvh::node::extract_byte64;
+
+    /// SplitMix64.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn f32(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
+            Vec3::new(self.f32(), self.f32(), self.f32()) * (hi - lo) + Vec3::splat(lo)
+        }
+    }
+
+    /// The hit mask the straightforward way (obvhs' `intersect_ray_basic` layout): one child
+    /// at a time, near/far planes chosen by the direction's sign, the traversal bits of hit
+    /// children ORed in with a branch (`get_child_and_index_bits`, `extract_byte64`).
+    fn child_mask_reference(node: &CwBvhNode, oct_inv4: u32, hit: [bool; 8]) -> u32 {
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+        let mut mask = 0;
+        for (c, &h) in hit.iter().enumerate() {
+            if h {
+                mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
+            }
+        }
+        mask
+    }
+
+    /// The slab test of one child in scalar code, with the roundings of the node test
+    /// (`q * (e / d) + ((p - o) / d -+ slack)`).
+    fn child_hit_reference(
+        node: &CwBvhNode,
+        c: usize,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> bool {
+        let e = node.compute_extent();
+        let inv = |x: f32| {
+            if x.abs() < MIN_DIR {
+                (1.0 / MIN_DIR).copysign(x)
+            } else {
+                1.0 / x
+            }
+        };
+        let inv_dir = [inv(d.x), inv(d.y), inv(d.z)];
+        let p = node.p.to_array();
+        let o = o.to_array();
+        let planes = [
+            (node.child_min_x[c], node.child_max_x[c]),
+            (node.child_min_y[c], node.child_max_y[c]),
+            (node.child_min_z[c], node.child_max_z[c]),
+        ];
+        let (mut tnear, mut tfar) = ([0.0f32; 3], [0.0f32; 3]);
+        for a in 0..3 {
+            let diff = p[a] - o[a];
+            let adj_dir = e[a] * inv_dir[a];
+            let adj_orig = diff * inv_dir[a];
+            let slack = (e[a] * 255.0 + diff.abs()) * (inv_dir[a].abs() * NODE_SLACK);
+            let (lo, hi) = planes[a];
+            let (n, f) = if inv_dir[a] < 0.0 { (hi, lo) } else { (lo, hi) };
+            tnear[a] = n as f32 * adj_dir + (adj_orig - slack);
+            tfar[a] = f as f32 * adj_dir + (adj_orig + slack);
+        }
+        tnear[0].max(tnear[1]).max(tnear[2].max(tmin))
+            <= tfar[0].min(tfar[1]).min(tfar[2].min(tmax))
+    }
+
+    #[test]
+    fn node_test_matches_per_child_reference() {
+        let mut rng = Rng(3);
+        let tris: Vec<[Vec3; 3]> = (0..3000)
+            .map(|_| {
+                let c = rng.vec(-10.0, 10.0);
+                [
+                    c + rng.vec(-0.5, 0.5),
+                    c + rng.vec(-0.5, 0.5),
+                    c + rng.vec(-0.5, 0.5),
+                ]
+            })
+            .collect();
+        let spheres = vec![Sphere {
+            center: Vec3::ONE,
+            radius: 0.3,
+        }];
+        let geom = SceneGeometry::build(tris, spheres);
+        let nodes = &geom.bvh().unwrap().nodes;
+        let (mut hits, mut misses) = (0, 0);
+        for k in 0..400 {
+            let o = rng.vec(-12.0, 12.0);
+            // Aimed at a triangle, so that deep nodes get hits too.
+            let target = geom.triangle((rng.next() % 3000) as usize)[0];
+            let mut d = target - o + rng.vec(-0.1, 0.1);
+            // Axis-parallel directions, including negative zeros.
+            match k % 5 {
+                0 => d.x = 0.0,
+                1 => d.y = -0.0,
+                2 => d = Vec3::new(0.0, -0.0, d.z),
+                _ => {}
+            }
+            let (tmin, tmax) = if k % 2 == 0 {
+                (0.0, f32::INFINITY)
+            } else {
+                (rng.f32(), 5.0 * rng.f32())
+            };
+            let ray = NodeRay::new(o, d, tmin);
+            for node in nodes {
+                let hit: [bool; 8] =
+                    std::array::from_fn(|c| child_hit_reference(node, c, o, d, tmin, tmax));
+                let want = child_mask_reference(node, ray.oct_inv4, hit);
+                assert_eq!(
+                    intersect_node(node, &ray, tmax),
+                    want,
+                    "ray {k}: o={o:?} d={d:?} node {node:?}"
+                );
+                let n = hit.iter().filter(|&&h| h).count();
+                hits += n;
+                misses += 8 - n;
+            }
+        }
+        assert!(
+            hits > 4_000 && misses > 4_000,
+            "{hits} child hits, {misses} misses"
+        );
+    }
+
+    #[test]
+    fn child_hit_mask_matches_per_child_reference() {
+        let mut rng = Rng(11);
+        for k in 0..20_000 {
+            // A node's children: empty, inner (meta 24 + c) or leaves owning 1..3 primitives
+            // from a running offset, up to obvhs' 24 per node.
+            let mut node = CwBvhNode::default();
+            let mut offset = 0u8;
+            for c in 0..8 {
+                match rng.next() % 4 {
+                    0 => {}
+                    1 => {
+                        node.imask |= 1 << c;
+                        node.child_meta[c] = (24 + c as u8) | 0b0010_0000;
+                    }
+                    _ => {
+                        let count = (1 + rng.next() % 3) as u8;
+                        if offset + count <= 24 {
+                            node.child_meta[c] =
+                                offset | [0, 0b0010_0000, 0b0110_0000, 0b1110_0000][count as usize];
+                            offset += count;
+                        }
+                    }
+                }
+            }
+            let hit: [bool; 8] = std::array::from_fn(|_| !rng.next().is_multiple_of(3));
+            let oct_inv4 = (k % 8) * 0x0101_0101;
+            let b: &[u8; 80] = bytemuck::bytes_of(&node).try_into().unwrap();
+            let lanes = [
+                BVec4A::new(hit[0], hit[1], hit[2], hit[3]),
+                BVec4A::new(hit[4], hit[5], hit[6], hit[7]),
+            ];
+            assert_eq!(
+                child_hit_mask(b, node.imask, oct_inv4, lanes),
+                child_mask_reference(&node, oct_inv4, hit),
+                "node {node:?} hits {hit:?} octant code {oct_inv4:#x}"
+            );
+        }
+    }
+}
