@@ -470,7 +470,10 @@ fn child_hit_mask(b: &[u8; 80], imask: u8, oct: u32, hit: [BVec4A; 2]) -> u32 {
         )
     };
     let sum = leaf(&b[NODE_META..][..4], hit[0]) + leaf(&b[NODE_META + 4..][..4], hit[1]);
-    inner | sum.element_sum() as u32
+    // The sum is an integer below 2^24: adding 2^52 in f64 leaves it in the low mantissa
+    // bits (exact, and cheaper than a saturating float-to-int conversion).
+    let leaf_bits = (sum.element_sum() as f64 + 4_503_599_627_370_496.0).to_bits() as u32;
+    inner | leaf_bits
 }
 
 /// Slab test of the ray against the 8 children of a CWBVH node, four at a time. Returns
@@ -482,7 +485,9 @@ fn intersect_node(node: &CwBvhNode, ray: &NodeRay, tmax: f32) -> u32 {
         .expect("CwBvhNode is 80 bytes");
     // obvhs' `compute_extent`: the exponent bytes moved into the f32 exponent field (the
     // fourth byte, imask, is masked out).
-    let e = (widen4_u32(&b[NODE_E..][..4]) & UVec4::new(!0, !0, !0, 0)) << 23u32;
+    let e =
+        u32::from_le_bytes([b[NODE_E], b[NODE_E + 1], b[NODE_E + 2], b[NODE_E + 3]]) & 0xff_ffff;
+    let e = widen4_u32(&e.to_le_bytes()) << 23u32;
     let e = Vec3A::new(
         f32::from_bits(e.x),
         f32::from_bits(e.y),
