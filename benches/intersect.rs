@@ -15,11 +15,13 @@ use std::f32::consts::PI;
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 use obvhs::ray::{Ray, RayHit};
 use risotto::components::NO_HIT;
 use risotto::systems::geometry::SceneGeometry;
-use risotto::systems::intersect::{intersect_closest, intersect_occluded, WatertightRay};
+use risotto::systems::intersect::{
+    intersect_closest, intersect_occluded, PackedTriangle, WatertightRay,
+};
 
 const BATCH: usize = 4096;
 
@@ -195,8 +197,13 @@ fn ours_occluded(geom: &SceneGeometry, rays: &Rays, out: &mut [bool]) {
 }
 
 /// The reference loop: obvhs' own traversal (`ray_traverse`, its SIMD node test) calling
-/// the same watertight triangle test on triangles stored in BVH order.
-fn bare_closest(bvh: &obvhs::cwbvh::CwBvh, tris: &[[Vec3A; 3]], rays: &Rays, out: &mut [RayHit]) {
+/// the same watertight triangle test on triangles stored in BVH order, packed as ours are.
+fn bare_closest(
+    bvh: &obvhs::cwbvh::CwBvh,
+    tris: &[PackedTriangle],
+    rays: &Rays,
+    out: &mut [RayHit],
+) {
     let rays = black_box(rays);
     for i in 0..rays.o.len() {
         let ray = Ray::new(
@@ -208,8 +215,7 @@ fn bare_closest(bvh: &obvhs::cwbvh::CwBvh, tris: &[[Vec3A; 3]], rays: &Rays, out
         let w = WatertightRay::new(rays.o[i], rays.d[i]);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let [v0, v1, v2] = tris[id];
-            w.intersect_triangle(v0, v1, v2, r.tmin, r.tmax)
+            w.intersect_packed(&tris[id], r.tmin, r.tmax)
                 .map_or(f32::INFINITY, |h| h.t)
         });
         out[i] = hit;
@@ -217,7 +223,12 @@ fn bare_closest(bvh: &obvhs::cwbvh::CwBvh, tris: &[[Vec3A; 3]], rays: &Rays, out
     black_box(&out);
 }
 
-fn bare_occluded(bvh: &obvhs::cwbvh::CwBvh, tris: &[[Vec3A; 3]], rays: &Rays, out: &mut [bool]) {
+fn bare_occluded(
+    bvh: &obvhs::cwbvh::CwBvh,
+    tris: &[PackedTriangle],
+    rays: &Rays,
+    out: &mut [bool],
+) {
     let rays = black_box(rays);
     for i in 0..rays.o.len() {
         let ray = Ray::new(
@@ -228,8 +239,7 @@ fn bare_occluded(bvh: &obvhs::cwbvh::CwBvh, tris: &[[Vec3A; 3]], rays: &Rays, ou
         );
         let w = WatertightRay::new(rays.o[i], rays.d[i]);
         out[i] = !bvh.ray_traverse_miss(ray, |r, id| {
-            let [v0, v1, v2] = tris[id];
-            w.intersect_triangle(v0, v1, v2, r.tmin, r.tmax)
+            w.intersect_packed(&tris[id], r.tmin, r.tmax)
                 .map_or(f32::INFINITY, |h| h.t)
         });
     }
@@ -253,10 +263,13 @@ fn bench_intersect(c: &mut Criterion) {
         t0.elapsed().as_secs_f64() * 1e3
     );
     let bvh = geom.bvh().expect("non-empty scene");
-    let tris: Vec<[Vec3A; 3]> = bvh
+    let tris: Vec<PackedTriangle> = bvh
         .primitive_indices
         .iter()
-        .map(|&p| geom.triangle(p as usize).map(Vec3A::from))
+        .map(|&p| {
+            let [v0, v1, v2] = geom.triangle(p as usize);
+            PackedTriangle::new(v0, v1, v2)
+        })
         .collect();
 
     let mut rng = Rng(7);

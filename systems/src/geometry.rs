@@ -7,7 +7,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{DVec3, Vec2, Vec3, Vec3A};
+use glam::{DVec3, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::{
     aabb::Aabb,
     bvh2::reinsertion::ReinsertionOptimizer,
@@ -15,6 +15,8 @@ use obvhs::{
     ploc::PlocBuilder,
     BvhBuildParams,
 };
+
+use crate::intersect::PackedTriangle;
 
 /// An analytic sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,41 +40,38 @@ pub struct SurfaceSample {
     pub uv: Vec2,
 }
 
-/// One BVH leaf entry, in BVH order. Triangles store their three vertices; spheres store
-/// their centre in `v0` and radius in `v1[0]`. `prim` is the scene primitive index, so
-/// `prim < num_triangles` tells the kind without another memory access.
+/// One BVH leaf entry, in BVH order, in the layout of [`crate::intersect::PackedTriangle`]:
+/// `rows[a]` holds coordinate `a` of the three vertices in lanes 0..3, lane 3 zero. A sphere
+/// stores `(center, radius)` in `rows[0]` and sets `rows[2].w = 1` (a triangle's is 0), so
+/// the kind is known without another memory access. The scene primitive index of
+/// `leaves[i]` is `bvh.primitive_indices[i]`.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
 pub(crate) struct LeafPrim {
-    pub(crate) v0: [f32; 3],
-    pub(crate) prim: u32,
-    pub(crate) v1: [f32; 3],
-    _pad1: u32,
-    pub(crate) v2: [f32; 3],
-    _pad2: u32,
+    pub(crate) rows: [Vec4; 3],
 }
 
 impl LeafPrim {
-    fn triangle(v: &[Vec3; 3], prim: u32) -> Self {
+    fn triangle(v: &[Vec3; 3]) -> Self {
         Self {
-            v0: v[0].to_array(),
-            prim,
-            v1: v[1].to_array(),
-            _pad1: 0,
-            v2: v[2].to_array(),
-            _pad2: 0,
+            rows: PackedTriangle::new(v[0], v[1], v[2]).rows,
         }
     }
 
-    fn sphere(s: &Sphere, prim: u32) -> Self {
+    fn sphere(s: &Sphere) -> Self {
         Self {
-            v0: s.center.to_array(),
-            prim,
-            v1: [s.radius, 0.0, 0.0],
-            _pad1: 0,
-            v2: [0.0; 3],
-            _pad2: 0,
+            rows: [s.center.extend(s.radius), Vec4::ZERO, Vec4::W],
         }
+    }
+
+    #[inline(always)]
+    pub(crate) fn is_sphere(&self) -> bool {
+        self.rows[2].w != 0.0
+    }
+
+    /// Centre and radius of a sphere leaf.
+    #[inline(always)]
+    pub(crate) fn sphere_center_radius(&self) -> (Vec3, f32) {
+        (self.rows[0].truncate(), self.rows[0].w)
     }
 }
 
@@ -190,9 +189,9 @@ impl SceneGeometry {
                 .iter()
                 .map(|&p| {
                     if p < tri_count {
-                        LeafPrim::triangle(&triangles[p as usize], p)
+                        LeafPrim::triangle(&triangles[p as usize])
                     } else {
-                        LeafPrim::sphere(&spheres[(p - tri_count) as usize], p)
+                        LeafPrim::sphere(&spheres[(p - tri_count) as usize])
                     }
                 })
                 .collect();

@@ -1,14 +1,19 @@
 //! Ray/scene intersection systems: closest hit and occlusion over columns of rays.
 //!
-//! Traversal uses obvhs' CWBVH stack machine (`traverse!`) with our own node test, which
-//! (unlike obvhs' `CwBvhNode::intersect_ray`) honours the ray's `tmin` instead of a fixed
-//! `1e-4` and widens every slab by a bound on its floating-point error, so a box is never
-//! culled when the primitive test would report a hit inside it (obvhs' test loses rays
-//! grazing box faces, e.g. along the edges of an axis-aligned mesh). The widening costs ~5%
-//! of closest-hit throughput (benches/README.md). Primitive tests:
+//! Traversal is the CWBVH stack machine of Ylitie et al. 2017 (the same visiting order as
+//! obvhs' `traverse!`, written out here so the per-node work stays branch-free) with our own
+//! node test, which (unlike obvhs' `CwBvhNode::intersect_ray`) honours the ray's `tmin`
+//! instead of a fixed `1e-4` and widens every slab by a bound on its floating-point error,
+//! so a box is never culled when the primitive test would report a hit inside it (obvhs'
+//! test loses rays grazing box faces, e.g. along the edges of an axis-aligned mesh). The
+//! node test picks each axis' near planes by address, widens the quantized planes to f32
+//! in SIMD registers and builds the traversal hit mask without a branch per child.
+//! Primitive tests:
 //! - triangles: watertight test of Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle
-//!   Intersection", JCGT 2(1)), two-sided; rays through shared edges and vertices of a
-//!   closed mesh cannot slip through;
+//!   Intersection", JCGT 2(1)), two-sided, on triangles stored coordinate by coordinate
+//!   ([`PackedTriangle`]) so the three vertices are sheared and the three edge functions
+//!   evaluated together; rays through shared edges and vertices of a closed mesh cannot
+//!   slip through;
 //! - spheres: the quadratic in the form of Haines et al. 2019 ("Precision Improvements for
 //!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7), evaluated in double precision so
 //!   tiny spheres far away and huge spheres seen from close by stay accurate.
@@ -18,11 +23,10 @@
 //! that rays spawned on a large triangle, or walks that restart just past a hit, do not find
 //! the same surface again.
 
-use glam::{DVec3, Mat3A, UVec2, Vec3, Vec3A, Vec4};
-use obvhs::{
-    cwbvh::node::{extract_byte64, CwBvhNode},
-    traverse,
-};
+use std::mem::offset_of;
+
+use glam::{BVec4A, DVec3, UVec4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
+use obvhs::cwbvh::node::CwBvhNode;
 use risotto_components::NO_HIT;
 
 use crate::geometry::{sphere_uv, LeafPrim, SceneGeometry};
@@ -38,6 +42,39 @@ pub struct TriangleHit {
     pub b2: f32,
 }
 
+/// A triangle stored coordinate by coordinate, the layout the triangle test reads:
+/// `rows[a]` holds coordinate `a` (x, y, z) of `v0, v1, v2` in lanes 0, 1, 2 (lane 3 is
+/// zero). The BVH leaves use the same layout, so one triangle costs three aligned loads and
+/// the three vertices are transformed together.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackedTriangle {
+    pub(crate) rows: [Vec4; 3],
+}
+
+impl PackedTriangle {
+    /// Packs the triangle `(v0, v1, v2)`.
+    #[inline]
+    pub fn new(v0: Vec3, v1: Vec3, v2: Vec3) -> Self {
+        Self {
+            rows: [
+                Vec4::new(v0.x, v1.x, v2.x, 0.0),
+                Vec4::new(v0.y, v1.y, v2.y, 0.0),
+                Vec4::new(v0.z, v1.z, v2.z, 0.0),
+            ],
+        }
+    }
+}
+
+/// A coordinate axis; as an index its range `0..3` is known to the compiler, so indexing a
+/// three-element array with it needs no bounds check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+enum Axis {
+    X = 0,
+    Y = 1,
+    Z = 2,
+}
+
 /// Per-ray precomputation of the watertight ray/triangle test (Woop et al. 2013, sec. 3):
 /// the affine map that moves the origin to zero, makes the dominant direction axis `z` and
 /// shears the ray onto the `+z` axis, so the 2D edge functions of the transformed vertices
@@ -45,9 +82,20 @@ pub struct TriangleHit {
 /// edge functions of a shared edge are exact negatives, which is what makes it watertight.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
-    origin: Vec3A,
-    /// Rows: `e_kx - Sx e_kz`, `e_ky - Sy e_kz`, `Sz e_kz` (paper's permutation + shear).
-    shear: Mat3A,
+    /// Origin coordinate along `kx`, `ky`, `kz`, in every lane.
+    ox: Vec4,
+    oy: Vec4,
+    oz: Vec4,
+    /// The shear constants `Sx = d[kx] / d[kz]`, `Sy = d[ky] / d[kz]`, `Sz = 1 / d[kz]`
+    /// (paper eq. (2)), in every lane.
+    sx: Vec4,
+    sy: Vec4,
+    sz: Vec4,
+    /// The paper's axis permutation: `kz` is the dominant direction axis,
+    /// `kx = (kz + 1) % 3`, `ky = (kx + 1) % 3`.
+    kx: Axis,
+    ky: Axis,
+    kz: Axis,
 }
 
 impl WatertightRay {
@@ -56,44 +104,37 @@ impl WatertightRay {
     #[inline]
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
         let a = direction.abs();
-        let kz = if a.x > a.y {
+        // Origin and direction permuted to (kx, ky, kz).
+        let (kx, ky, kz, o, d) = if a.x > a.y {
             if a.x > a.z {
-                0
+                (Axis::Y, Axis::Z, Axis::X, origin.yzx(), direction.yzx())
             } else {
-                2
+                (Axis::X, Axis::Y, Axis::Z, origin, direction)
             }
         } else if a.y > a.z {
-            1
+            (Axis::Z, Axis::X, Axis::Y, origin.zxy(), direction.zxy())
         } else {
-            2
+            (Axis::X, Axis::Y, Axis::Z, origin, direction)
         };
-        let kx = (kz + 1) % 3;
-        let ky = (kx + 1) % 3;
-        let d = direction.to_array();
-        let sx = d[kx] / d[kz];
-        let sy = d[ky] / d[kz];
-        let sz = 1.0 / d[kz];
-        let mut rx = [0.0f32; 3];
-        let mut ry = [0.0f32; 3];
-        let mut rz = [0.0f32; 3];
-        rx[kx] = 1.0;
-        rx[kz] = -sx;
-        ry[ky] = 1.0;
-        ry[kz] = -sy;
-        rz[kz] = sz;
-        // Each output coordinate is v[kx] + (-Sx * v[kz]) plus exact zeros, i.e. the
-        // paper's `A[kx] - Sx * A[kz]` with the same single rounding per operation.
-        let shear = Mat3A::from_cols(rx.into(), ry.into(), rz.into()).transpose();
+        // (Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]), each one division.
+        let s = Vec3A::new(d.x, d.y, 1.0) / d.z;
         Self {
-            origin: origin.into(),
-            shear,
+            ox: Vec4::splat(o.x),
+            oy: Vec4::splat(o.y),
+            oz: Vec4::splat(o.z),
+            sx: Vec4::splat(s.x),
+            sy: Vec4::splat(s.y),
+            sz: Vec4::splat(s.z),
+            kx,
+            ky,
+            kz,
         }
     }
 
     /// Two-sided watertight intersection with triangle `(v0, v1, v2)`, accepting
     /// `tmin < t < tmax` where `t - tmin` also exceeds the error bound of the computed `t`.
     /// Degenerate triangles and rays in the triangle's plane miss.
-    #[inline(always)]
+    #[inline]
     pub fn intersect_triangle(
         &self,
         v0: Vec3A,
@@ -102,25 +143,54 @@ impl WatertightRay {
         tmin: f32,
         tmax: f32,
     ) -> Option<TriangleHit> {
-        let a = self.shear * (v0 - self.origin);
-        let b = self.shear * (v1 - self.origin);
-        let c = self.shear * (v2 - self.origin);
-        // Scaled barycentrics (2D edge functions), paper eq. (4)-(6).
-        let mut u = c.x * b.y - c.y * b.x;
-        let mut v = a.x * c.y - a.y * c.x;
-        let mut w = b.x * a.y - b.y * a.x;
-        if u == 0.0 || v == 0.0 || w == 0.0 {
-            (u, v, w) = edge_functions_f64(a, b, c);
-        }
-        // Two-sided: all edge functions must share a sign (zeros are on the edge: a hit).
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-            return None;
-        }
+        self.intersect_packed(
+            &PackedTriangle::new(v0.into(), v1.into(), v2.into()),
+            tmin,
+            tmax,
+        )
+    }
+
+    /// [`Self::intersect_triangle`] on a packed triangle (same result, bit for bit).
+    #[inline(always)]
+    pub fn intersect_packed(
+        &self,
+        tri: &PackedTriangle,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<TriangleHit> {
+        self.intersect_rows(&tri.rows, tmin, tmax)
+    }
+
+    #[inline(always)]
+    fn intersect_rows(&self, rows: &[Vec4; 3], tmin: f32, tmax: f32) -> Option<TriangleHit> {
+        // Lane i holds vertex i. Paper sec. 3: after translating and permuting,
+        // A'x = A[kx] - Sx A[kz], A'y = A[ky] - Sy A[kz]; the products and differences are
+        // rounded once each, the same for every triangle sharing the vertex.
+        let z = rows[self.kz as usize] - self.oz;
+        let x = (rows[self.kx as usize] - self.ox) - self.sx * z;
+        let y = (rows[self.ky as usize] - self.oy) - self.sy * z;
+        // Scaled barycentrics (2D edge functions), paper eq. (4)-(6), all three at once:
+        // lanes (U, V, W) = (Cx By - Cy Bx, Ax Cy - Ay Cx, Bx Ay - By Ax).
+        let uvw = x.zxyw() * y.yzxw() - y.zxyw() * x.yzxw();
+        let uvw = if uvw.cmpeq(Vec4::ZERO).bitmask() & 0b111 != 0 {
+            edge_functions_f64(x, y)?
+        } else {
+            // No edge function is zero: two-sided hit iff all three share a sign. (A NaN
+            // lane may pass here; it makes `t` NaN, which the range test rejects.)
+            let neg = uvw.is_negative_bitmask() & 0b111;
+            if neg != 0 && neg != 0b111 {
+                return None;
+            }
+            uvw
+        };
+        let (u, v, w) = (uvw.x, uvw.y, uvw.z);
         let det = u + v + w;
         if det == 0.0 {
             return None;
         }
-        let scaled_t = u * a.z + v * b.z + w * c.z;
+        // A'z = Sz A[kz] is only needed from here on.
+        let z = z * self.sz;
+        let scaled_t = u * z.x + v * z.y + w * z.z;
         let inv_det = 1.0 / det;
         let t = scaled_t * inv_det;
         if !(t > tmin && t < tmax) {
@@ -132,7 +202,7 @@ impl WatertightRay {
         // pbrt-v4 does for `tmin = 0` ("Physically Based Rendering", 4th ed., sec. 6.8.7,
         // conservative ray-triangle t: bounds on the rounding of the transformed vertices,
         // the edge functions and the scaled t).
-        if t - tmin <= t_error_bound(a, b, c, u, v, w, inv_det) {
+        if t - tmin <= t_error_bound(x, y, z, u, v, w, inv_det) {
             return None;
         }
         Some(TriangleHit {
@@ -151,14 +221,22 @@ fn gamma(n: f32) -> f32 {
     n * e / (1.0 - n * e)
 }
 
+/// Largest magnitude among lanes 0..3 (the three vertices).
+#[inline(always)]
+fn max_abs3(v: Vec4) -> f32 {
+    let a = v.abs();
+    a.x.max(a.y).max(a.z)
+}
+
 /// Absolute error bound of the `t` computed by [`WatertightRay::intersect_triangle`] from
-/// the transformed vertices `a, b, c` and the edge functions `u, v, w` (pbrt-v4 sec. 6.8.7:
+/// the transformed vertices (coordinates `x, y, z`, one vertex per lane) and the edge
+/// functions `u, v, w` (pbrt-v4 sec. 6.8.7:
 /// delta_t = 3 (gamma(3) max|e| max|z| + delta_e max|z| + delta_z max|e|) / |det|).
 #[inline(always)]
-fn t_error_bound(a: Vec3A, b: Vec3A, c: Vec3A, u: f32, v: f32, w: f32, inv_det: f32) -> f32 {
-    let max_x = a.x.abs().max(b.x.abs()).max(c.x.abs());
-    let max_y = a.y.abs().max(b.y.abs()).max(c.y.abs());
-    let max_z = a.z.abs().max(b.z.abs()).max(c.z.abs());
+fn t_error_bound(x: Vec4, y: Vec4, z: Vec4, u: f32, v: f32, w: f32, inv_det: f32) -> f32 {
+    let max_x = max_abs3(x);
+    let max_y = max_abs3(y);
+    let max_z = max_abs3(z);
     let delta_z = gamma(3.0) * max_z;
     let delta_x = gamma(5.0) * (max_x + max_z);
     let delta_y = gamma(5.0) * (max_y + max_z);
@@ -170,17 +248,21 @@ fn t_error_bound(a: Vec3A, b: Vec3A, c: Vec3A, u: f32, v: f32, w: f32, inv_det: 
 /// The paper's fallback (sec. 3, "if any edge function is exactly zero"): recompute in
 /// double precision, where the products of f32 values are exact, so the sign of an edge
 /// function that rounded to zero is resolved consistently for both triangles of an edge.
+/// Returns the edge functions, or `None` if they have mixed signs (zeros lie on an edge
+/// and count as either sign).
 #[cold]
 #[inline(never)]
-fn edge_functions_f64(a: Vec3A, b: Vec3A, c: Vec3A) -> (f32, f32, f32) {
-    let (ax, ay) = (a.x as f64, a.y as f64);
-    let (bx, by) = (b.x as f64, b.y as f64);
-    let (cx, cy) = (c.x as f64, c.y as f64);
-    (
-        (cx * by - cy * bx) as f32,
-        (ax * cy - ay * cx) as f32,
-        (bx * ay - by * ax) as f32,
-    )
+fn edge_functions_f64(x: Vec4, y: Vec4) -> Option<Vec4> {
+    let (ax, ay) = (x.x as f64, y.x as f64);
+    let (bx, by) = (x.y as f64, y.y as f64);
+    let (cx, cy) = (x.z as f64, y.z as f64);
+    let u = (cx * by - cy * bx) as f32;
+    let v = (ax * cy - ay * cx) as f32;
+    let w = (bx * ay - by * ax) as f32;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    Some(Vec4::new(u, v, w, 0.0))
 }
 
 /// The nearest root of the ray/sphere quadratic with `tmin < t < tmax` (compared after
@@ -253,47 +335,164 @@ struct NodeRay {
     inv_dir: Vec3A,
     /// `NODE_SLACK * |1/d|`: turns a distance bound into a `t` bound per axis.
     slack_scale: Vec3A,
-    neg: [bool; 3],
+    /// Per axis: 8 where the direction is negative, else 0: the byte offset of the near
+    /// plane array (max instead of min) from the axis' min plane array.
+    near: [usize; 3],
     tmin: f32,
+    /// obvhs' octant code of the direction (`7 - octant` in every byte), which orders the
+    /// hit children front to back (see `CwBvhNode::get_child_and_index_bits`).
+    oct_inv4: u32,
 }
 
 impl NodeRay {
     #[inline(always)]
     fn new(origin: Vec3, direction: Vec3, tmin: f32) -> Self {
-        let safe = |x: f32| {
-            if x.abs() < MIN_DIR {
-                (1.0 / MIN_DIR).copysign(x)
-            } else {
-                1.0 / x
-            }
-        };
-        let inv_dir = Vec3A::new(safe(direction.x), safe(direction.y), safe(direction.z));
+        let d = Vec3A::from(direction);
+        let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
+        let inv_dir = Vec3A::select(
+            tiny,
+            Vec3A::splat(1.0 / MIN_DIR).copysign(d),
+            Vec3A::ONE / d,
+        );
+        // From inv_dir, so -0.0 components pick planes consistently with their inverse.
+        let neg = inv_dir.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let oct_inv4 = (if direction.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if direction.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if direction.z < 0.0 { 0 } else { 0x0101_0101 });
         Self {
             origin: origin.into(),
             inv_dir,
             slack_scale: inv_dir.abs() * NODE_SLACK,
-            // From inv_dir, so -0.0 components pick planes consistently with their inverse.
-            neg: [inv_dir.x < 0.0, inv_dir.y < 0.0, inv_dir.z < 0.0],
+            near: [(neg & 1) << 3, (neg & 2) << 2, (neg & 4) << 1],
             tmin,
+            oct_inv4,
         }
     }
 }
 
+/// Byte offsets into obvhs' `repr(C)` `CwBvhNode`, which the node test reads as bytes so
+/// that the ray picks each child's near plane by address instead of by a branch or a
+/// select per node.
+const NODE_E: usize = offset_of!(CwBvhNode, e);
+const NODE_META: usize = offset_of!(CwBvhNode, child_meta);
+const NODE_PLANES: usize = offset_of!(CwBvhNode, child_min_x);
+const _: () = {
+    // Plane arrays: min x, max x, min y, max y, min z, max z, 8 bytes each, contiguous.
+    assert!(offset_of!(CwBvhNode, child_max_x) == NODE_PLANES + 8);
+    assert!(offset_of!(CwBvhNode, child_min_y) == NODE_PLANES + 16);
+    assert!(offset_of!(CwBvhNode, child_max_y) == NODE_PLANES + 24);
+    assert!(offset_of!(CwBvhNode, child_min_z) == NODE_PLANES + 32);
+    assert!(offset_of!(CwBvhNode, child_max_z) == NODE_PLANES + 40);
+    assert!(size_of::<CwBvhNode>() == NODE_PLANES + 48);
+};
+
+/// Four bytes as floats (the compiler widens u8 -> u16 -> u32 -> f32 in SIMD registers).
 #[inline(always)]
-fn quantized4(q: &[u8; 8], i: usize) -> Vec4 {
+fn widen4(q: &[u8]) -> Vec4 {
+    Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32)
+}
+
+/// Four bytes as `u32` lanes.
+#[inline(always)]
+fn widen4_u32(q: &[u8]) -> UVec4 {
+    UVec4::new(q[0] as u32, q[1] as u32, q[2] as u32, q[3] as u32)
+}
+
+/// `2^k` for integer lanes `k` in `0..128`, built in the f32 exponent field.
+#[inline(always)]
+fn exp2i(k: UVec4) -> Vec4 {
+    let e = (k + UVec4::splat(127)) << 23u32;
     Vec4::new(
-        q[4 * i] as f32,
-        q[4 * i + 1] as f32,
-        q[4 * i + 2] as f32,
-        q[4 * i + 3] as f32,
+        f32::from_bits(e.x),
+        f32::from_bits(e.y),
+        f32::from_bits(e.z),
+        f32::from_bits(e.w),
     )
+}
+
+/// Eight bytes as floats, children 0..4 and 4..8.
+#[inline(always)]
+fn widen8(q: &[u8]) -> (Vec4, Vec4) {
+    (widen4(&q[..4]), widen4(&q[4..8]))
+}
+
+/// The quantized near and far planes of the 8 children along axis `a`, as floats:
+/// `((near 0..4, near 4..8), (far 0..4, far 4..8))`.
+#[inline(always)]
+fn near_far_planes(b: &[u8; 80], ray: &NodeRay, a: usize) -> ((Vec4, Vec4), (Vec4, Vec4)) {
+    // `& 8` lets the compiler see the offsets stay inside the node.
+    let near = NODE_PLANES + 16 * a + (ray.near[a] & 8);
+    let far = NODE_PLANES + 16 * a + (ray.near[a] & 8 ^ 8);
+    (widen8(&b[near..][..8]), widen8(&b[far..][..8]))
+}
+
+/// `XOR_PERM[o][m]`: the byte `m` with bit `c` moved to bit `c ^ o`.
+const XOR_PERM: [[u8; 256]; 8] = {
+    let mut t = [[0u8; 256]; 8];
+    let mut o = 0;
+    while o < 8 {
+        let mut m = 0;
+        while m < 256 {
+            let mut c = 0;
+            while c < 8 {
+                if m & (1 << c) != 0 {
+                    t[o][m] |= 1 << (c ^ o);
+                }
+                c += 1;
+            }
+            m += 1;
+        }
+        o += 1;
+    }
+    t
+};
+
+/// The obvhs traversal hit mask (see `CwBvhNode::intersect_ray`) from the per-child slab
+/// hits (`hit[0]` children 0..4, `hit[1]` children 4..8), without a branch per child:
+/// - bits 24..32, hit inner children: child `c` (an inner child's meta byte is `24 + c`,
+///   see obvhs' `bvh2_to_cwbvh`) goes to bit `24 + (c ^ octant code)`, a table lookup;
+/// - bits 0..24, primitives of hit leaf children: child `c` owns `count` primitives from
+///   `offset` on (meta byte: unary count in bits 5..8, offset in bits 0..5), i.e. adds
+///   `unary_count * 2^offset`, computed in f32: exact integers below 2^24 whose sum over
+///   the (disjoint) children is the bitwise OR. Inner children give `2^(24..32)` and are
+///   dropped by the `< 2^24` test.
+#[inline(always)]
+fn child_hit_mask(b: &[u8; 80], imask: u8, oct: u32, hit: [BVec4A; 2]) -> u32 {
+    let m = (hit[0].bitmask() | hit[1].bitmask() << 4) as u8;
+    let inner = (XOR_PERM[(oct & 7) as usize][(m & imask) as usize] as u32) << 24;
+    let leaf = |q: &[u8], hit: BVec4A| {
+        let meta = widen4_u32(q);
+        let owned = (meta >> 5u32).as_vec4() * exp2i(meta & UVec4::splat(31));
+        Vec4::select(
+            hit & owned.cmplt(Vec4::splat(16_777_216.0)),
+            owned,
+            Vec4::ZERO,
+        )
+    };
+    let sum = leaf(&b[NODE_META..][..4], hit[0]) + leaf(&b[NODE_META + 4..][..4], hit[1]);
+    // The sum is an integer below 2^24: adding 2^52 in f64 leaves it in the low mantissa
+    // bits (exact, and cheaper than a saturating float-to-int conversion).
+    let leaf_bits = (sum.element_sum() as f64 + 4_503_599_627_370_496.0).to_bits() as u32;
+    inner | leaf_bits
 }
 
 /// Slab test of the ray against the 8 children of a CWBVH node, four at a time. Returns
 /// the obvhs hit mask (child bits in traversal order; see `CwBvhNode::intersect_ray`).
 #[inline(always)]
-fn intersect_node(node: &CwBvhNode, ray: &NodeRay, oct_inv4: u32, tmax: f32) -> u32 {
-    let e = node.compute_extent();
+fn intersect_node(node: &CwBvhNode, ray: &NodeRay, tmax: f32) -> u32 {
+    let b: &[u8; 80] = bytemuck::bytes_of(node)
+        .try_into()
+        .expect("CwBvhNode is 80 bytes");
+    // obvhs' `compute_extent`: the exponent bytes moved into the f32 exponent field (the
+    // fourth byte, imask, is masked out).
+    let e =
+        u32::from_le_bytes([b[NODE_E], b[NODE_E + 1], b[NODE_E + 2], b[NODE_E + 3]]) & 0xff_ffff;
+    let e = widen4_u32(&e.to_le_bytes()) << 23u32;
+    let e = Vec3A::new(
+        f32::from_bits(e.x),
+        f32::from_bits(e.y),
+        f32::from_bits(e.z),
+    );
     let diff = Vec3A::from(node.p) - ray.origin;
     let adj_dir = e * ray.inv_dir;
     let adj_orig = diff * ray.inv_dir;
@@ -302,38 +501,107 @@ fn intersect_node(node: &CwBvhNode, ray: &NodeRay, oct_inv4: u32, tmax: f32) -> 
     let far_orig = adj_orig + slack;
     let tmin4 = Vec4::splat(ray.tmin);
     let tmax4 = Vec4::splat(tmax);
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut hit_mask = 0u32;
-    for i in 0..2 {
-        let lo = quantized4(&node.child_min_x, i);
-        let hi = quantized4(&node.child_max_x, i);
-        let (n, f) = if ray.neg[0] { (hi, lo) } else { (lo, hi) };
-        let tnear_x = n * adj_dir.x + near_orig.x;
-        let tfar_x = f * adj_dir.x + far_orig.x;
-
-        let lo = quantized4(&node.child_min_y, i);
-        let hi = quantized4(&node.child_max_y, i);
-        let (n, f) = if ray.neg[1] { (hi, lo) } else { (lo, hi) };
-        let tnear_y = n * adj_dir.y + near_orig.y;
-        let tfar_y = f * adj_dir.y + far_orig.y;
-
-        let lo = quantized4(&node.child_min_z, i);
-        let hi = quantized4(&node.child_max_z, i);
-        let (n, f) = if ray.neg[2] { (hi, lo) } else { (lo, hi) };
-        let tnear_z = n * adj_dir.z + near_orig.z;
-        let tfar_z = f * adj_dir.z + far_orig.z;
-
+    let ((nx0, nx1), (fx0, fx1)) = near_far_planes(b, ray, 0);
+    let ((ny0, ny1), (fy0, fy1)) = near_far_planes(b, ray, 1);
+    let ((nz0, nz1), (fz0, fz1)) = near_far_planes(b, ray, 2);
+    let slab = |nx: Vec4, fx: Vec4, ny: Vec4, fy: Vec4, nz: Vec4, fz: Vec4| {
+        let tnear_x = nx * adj_dir.x + near_orig.x;
+        let tfar_x = fx * adj_dir.x + far_orig.x;
+        let tnear_y = ny * adj_dir.y + near_orig.y;
+        let tfar_y = fy * adj_dir.y + far_orig.y;
+        let tnear_z = nz * adj_dir.z + near_orig.z;
+        let tfar_z = fz * adj_dir.z + far_orig.z;
         let tnear = tnear_x.max(tnear_y).max(tnear_z.max(tmin4));
         let tfar = tfar_x.min(tfar_y).min(tfar_z.min(tmax4));
-        let mask = tnear.cmple(tfar).bitmask();
-        for j in 0..4 {
-            if mask & (1 << j) != 0 {
-                let child = i * 4 + j;
-                hit_mask |= extract_byte64(child_bits8, child) << extract_byte64(bit_index8, child);
+        tnear.cmple(tfar)
+    };
+    let hit = [
+        slab(nx0, fx0, ny0, fy0, nz0, fz0),
+        slab(nx1, fx1, ny1, fy1, nz1, fz1),
+    ];
+    child_hit_mask(b, node.imask, ray.oct_inv4, hit)
+}
+
+/// Bits 24..32 of a traversal group: the hit inner children still to visit.
+const INNER_HITS: u32 = 0xff00_0000;
+
+/// Population count of a byte (x86-64 without `popcnt` would spend a dozen instructions).
+const POPCOUNT8: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = (i as u32).count_ones() as u8;
+        i += 1;
+    }
+    t
+};
+
+/// Front-to-back CWBVH traversal (Ylitie, Karras and Laine 2017, "Efficient Incoherent Ray
+/// Traversal on GPUs Through Compressed Wide BVHs", sec. 3 and Algorithm 1; the same stack
+/// machine and visiting order as obvhs' `traverse!`). `leaf(slot, tmax)` tests the
+/// primitive in leaf slot `slot`, may shrink `tmax` (closest hit) and returns true to stop.
+#[inline(always)]
+fn traverse(
+    nodes: &[CwBvhNode],
+    ray: &NodeRay,
+    stack: &mut Vec<(u32, u32)>,
+    tmax: &mut f32,
+    mut leaf: impl FnMut(u32, &mut f32) -> bool,
+) {
+    stack.clear();
+    let oct = ray.oct_inv4 & 0b111;
+    // A node group: the first child index of a node, and in its bits the hit inner children
+    // not yet visited (bits 24..32, by traversal priority) and the node's imask (bits 0..8).
+    // The root is the single hit child (bit 31) of a node with an empty imask.
+    let (mut base, mut group) = (0u32, 1u32 << 31);
+    // The hit leaf primitives of the last node: first slot and hits (bits 0..24).
+    let (mut prim_base, mut prims) = (0u32, 0u32);
+    loop {
+        while prims != 0 {
+            let i = 31 - prims.leading_zeros();
+            prims &= !(1 << i);
+            if leaf(prim_base + i, tmax) {
+                return;
             }
         }
+        if group & INNER_HITS == 0 {
+            match stack.pop() {
+                Some(g) => (base, group) = g,
+                None => return,
+            }
+        }
+        let bit = 31 - group.leading_zeros();
+        let rest = group & !(1 << bit);
+        if rest & INNER_HITS != 0 {
+            stack.push((base, rest));
+        }
+        // Undo the octant ordering to get the child slot; inner children are stored in slot
+        // order, so the node index is the base plus the inner children before the slot.
+        let slot = (bit - 24) ^ oct;
+        let node =
+            &nodes[(base + POPCOUNT8[(group & ((1 << slot) - 1) & 0xff) as usize] as u32) as usize];
+        let hits = intersect_node(node, ray, *tmax);
+        (base, group) = (node.child_base_idx, (hits & INNER_HITS) | node.imask as u32);
+        (prim_base, prims) = (node.primitive_base_idx, hits & !INNER_HITS);
     }
-    hit_mask
+}
+
+/// [`intersect_sphere`] on a sphere leaf; out of line, so that the traversal loops of
+/// triangle-only scenes carry no sphere set-up.
+#[inline(never)]
+fn sphere_leaf_t(leaf: &LeafPrim, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f32 {
+    let (c, r) = leaf.sphere_center_radius();
+    intersect_sphere(o, d, c, r, tmin, tmax)
+}
+
+/// Surface parameters of the closest hit on a sphere leaf, from the double-precision root.
+#[inline(never)]
+fn sphere_leaf_uv(leaf: &LeafPrim, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> (f32, f32) {
+    let (c, r) = leaf.sphere_center_radius();
+    let uv = sphere_t64(o, d, c, r, tmin, tmax)
+        .map(|t64| sphere_uv((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64))
+        .unwrap_or_else(|| sphere_uv(DVec3::Z));
+    (uv.x, uv.y)
 }
 
 #[inline(always)]
@@ -387,64 +655,50 @@ pub fn intersect_closest(
         return;
     };
     let leaves: &[LeafPrim] = geom.leaves();
-    let num_tri = geom.num_triangles() as u32;
-    let mut state = bvh.new_traversal(Vec3A::Z);
+    let mut stack = Vec::with_capacity(64);
     for i in 0..n {
         let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
         let node_ray = NodeRay::new(o, d, ray_tmin);
         let tri_ray = WatertightRay::new(o, d);
         let mut best_t = tmax[i];
-        let mut best_leaf = u32::MAX;
+        let mut best_slot = u32::MAX;
         let (mut hit_b1, mut hit_b2) = (0.0f32, 0.0f32);
-        state.reinit(d.into());
-        let mut node;
-        traverse!(
-            bvh,
-            node,
-            state,
-            intersect_node(node, &node_ray, state.oct_inv4, best_t),
-            {
-                let leaf = &leaves[state.primitive_id as usize];
-                if leaf.prim < num_tri {
-                    if let Some(h) = tri_ray.intersect_triangle(
-                        leaf.v0.into(),
-                        leaf.v1.into(),
-                        leaf.v2.into(),
-                        ray_tmin,
-                        best_t,
-                    ) {
-                        best_t = h.t;
-                        best_leaf = state.primitive_id;
+        traverse(
+            &bvh.nodes,
+            &node_ray,
+            &mut stack,
+            &mut best_t,
+            |slot, best_t| {
+                let leaf = &leaves[slot as usize];
+                if !leaf.is_sphere() {
+                    if let Some(h) = tri_ray.intersect_rows(&leaf.rows, ray_tmin, *best_t) {
+                        *best_t = h.t;
+                        best_slot = slot;
                         hit_b1 = h.b1;
                         hit_b2 = h.b2;
                     }
                 } else {
-                    let ts = intersect_sphere(o, d, leaf.v0.into(), leaf.v1[0], ray_tmin, best_t);
-                    if ts < best_t {
-                        best_t = ts;
-                        best_leaf = state.primitive_id;
+                    let ts = sphere_leaf_t(leaf, o, d, ray_tmin, *best_t);
+                    if ts < *best_t {
+                        *best_t = ts;
+                        best_slot = slot;
                     }
                 }
-            }
+                false
+            },
         );
-        if best_leaf == u32::MAX {
+        if best_slot == u32::MAX {
             t[i] = f32::INFINITY;
             prim[i] = NO_HIT;
             b1[i] = 0.0;
             b2[i] = 0.0;
         } else {
-            let leaf = &leaves[best_leaf as usize];
-            if leaf.prim >= num_tri {
-                // Surface parameters from the double-precision root (rare: spheres only).
-                let c = Vec3::from(leaf.v0);
-                let uv = sphere_t64(o, d, c, leaf.v1[0], ray_tmin, tmax[i])
-                    .map(|t64| sphere_uv((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64))
-                    .unwrap_or_else(|| sphere_uv(DVec3::Z));
-                hit_b1 = uv.x;
-                hit_b2 = uv.y;
+            let leaf = &leaves[best_slot as usize];
+            if leaf.is_sphere() {
+                (hit_b1, hit_b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
             }
             t[i] = best_t;
-            prim[i] = leaf.prim;
+            prim[i] = bvh.primitive_indices[best_slot as usize];
             b1[i] = hit_b1;
             b2[i] = hit_b2;
         }
@@ -474,42 +728,208 @@ pub fn intersect_occluded(
         return;
     };
     let leaves: &[LeafPrim] = geom.leaves();
-    let num_tri = geom.num_triangles() as u32;
-    let mut state = bvh.new_traversal(Vec3A::Z);
+    let mut stack = Vec::with_capacity(64);
     for i in 0..n {
-        let (o, d, ray_tmin, ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
+        let (o, d, ray_tmin, mut ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
         let node_ray = NodeRay::new(o, d, ray_tmin);
         let tri_ray = WatertightRay::new(o, d);
         let mut hit = false;
-        state.reinit(d.into());
-        let mut node;
-        'traversal: {
-            traverse!(
-                bvh,
-                node,
-                state,
-                intersect_node(node, &node_ray, state.oct_inv4, ray_tmax),
-                {
-                    let leaf = &leaves[state.primitive_id as usize];
-                    hit = if leaf.prim < num_tri {
-                        tri_ray
-                            .intersect_triangle(
-                                leaf.v0.into(),
-                                leaf.v1.into(),
-                                leaf.v2.into(),
-                                ray_tmin,
-                                ray_tmax,
-                            )
-                            .is_some()
-                    } else {
-                        sphere_t64(o, d, leaf.v0.into(), leaf.v1[0], ray_tmin, ray_tmax).is_some()
-                    };
-                    if hit {
-                        break 'traversal;
+        traverse(
+            &bvh.nodes,
+            &node_ray,
+            &mut stack,
+            &mut ray_tmax,
+            |slot, ray_tmax| {
+                let leaf = &leaves[slot as usize];
+                hit = if !leaf.is_sphere() {
+                    tri_ray
+                        .intersect_rows(&leaf.rows, ray_tmin, *ray_tmax)
+                        .is_some()
+                } else {
+                    sphere_leaf_t(leaf, o, d, ray_tmin, *ray_tmax) < f32::INFINITY
+                };
+                hit
+            },
+        );
+        occluded[i] = hit;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Sphere;
+    use obvhs::cwbvh::node::extract_byte64;
+
+    /// SplitMix64.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn f32(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
+            Vec3::new(self.f32(), self.f32(), self.f32()) * (hi - lo) + Vec3::splat(lo)
+        }
+    }
+
+    /// The hit mask the straightforward way (obvhs' `intersect_ray_basic` layout): one child
+    /// at a time, near/far planes chosen by the direction's sign, the traversal bits of hit
+    /// children ORed in with a branch (`get_child_and_index_bits`, `extract_byte64`).
+    fn child_mask_reference(node: &CwBvhNode, oct_inv4: u32, hit: [bool; 8]) -> u32 {
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+        let mut mask = 0;
+        for (c, &h) in hit.iter().enumerate() {
+            if h {
+                mask |= extract_byte64(child_bits8, c) << extract_byte64(bit_index8, c);
+            }
+        }
+        mask
+    }
+
+    /// The slab test of one child in scalar code, with the roundings of the node test
+    /// (`q * (e / d) + ((p - o) / d -+ slack)`).
+    fn child_hit_reference(
+        node: &CwBvhNode,
+        c: usize,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> bool {
+        let e = node.compute_extent();
+        let inv = |x: f32| {
+            if x.abs() < MIN_DIR {
+                (1.0 / MIN_DIR).copysign(x)
+            } else {
+                1.0 / x
+            }
+        };
+        let inv_dir = [inv(d.x), inv(d.y), inv(d.z)];
+        let p = node.p.to_array();
+        let o = o.to_array();
+        let planes = [
+            (node.child_min_x[c], node.child_max_x[c]),
+            (node.child_min_y[c], node.child_max_y[c]),
+            (node.child_min_z[c], node.child_max_z[c]),
+        ];
+        let (mut tnear, mut tfar) = ([0.0f32; 3], [0.0f32; 3]);
+        for a in 0..3 {
+            let diff = p[a] - o[a];
+            let adj_dir = e[a] * inv_dir[a];
+            let adj_orig = diff * inv_dir[a];
+            let slack = (e[a] * 255.0 + diff.abs()) * (inv_dir[a].abs() * NODE_SLACK);
+            let (lo, hi) = planes[a];
+            let (n, f) = if inv_dir[a] < 0.0 { (hi, lo) } else { (lo, hi) };
+            tnear[a] = n as f32 * adj_dir + (adj_orig - slack);
+            tfar[a] = f as f32 * adj_dir + (adj_orig + slack);
+        }
+        tnear[0].max(tnear[1]).max(tnear[2].max(tmin))
+            <= tfar[0].min(tfar[1]).min(tfar[2].min(tmax))
+    }
+
+    #[test]
+    fn node_test_matches_per_child_reference() {
+        let mut rng = Rng(3);
+        let tris: Vec<[Vec3; 3]> = (0..3000)
+            .map(|_| {
+                let c = rng.vec(-10.0, 10.0);
+                [
+                    c + rng.vec(-0.5, 0.5),
+                    c + rng.vec(-0.5, 0.5),
+                    c + rng.vec(-0.5, 0.5),
+                ]
+            })
+            .collect();
+        let spheres = vec![Sphere {
+            center: Vec3::ONE,
+            radius: 0.3,
+        }];
+        let geom = SceneGeometry::build(tris, spheres);
+        let nodes = &geom.bvh().unwrap().nodes;
+        let (mut hits, mut misses) = (0, 0);
+        for k in 0..400 {
+            let o = rng.vec(-12.0, 12.0);
+            // Aimed at a triangle, so that deep nodes get hits too.
+            let target = geom.triangle((rng.next() % 3000) as usize)[0];
+            let mut d = target - o + rng.vec(-0.1, 0.1);
+            // Axis-parallel directions, including negative zeros.
+            match k % 5 {
+                0 => d.x = 0.0,
+                1 => d.y = -0.0,
+                2 => d = Vec3::new(0.0, -0.0, d.z),
+                _ => {}
+            }
+            let (tmin, tmax) = if k % 2 == 0 {
+                (0.0, f32::INFINITY)
+            } else {
+                (rng.f32(), 5.0 * rng.f32())
+            };
+            let ray = NodeRay::new(o, d, tmin);
+            for node in nodes {
+                let hit: [bool; 8] =
+                    std::array::from_fn(|c| child_hit_reference(node, c, o, d, tmin, tmax));
+                let want = child_mask_reference(node, ray.oct_inv4, hit);
+                assert_eq!(
+                    intersect_node(node, &ray, tmax),
+                    want,
+                    "ray {k}: o={o:?} d={d:?} node {node:?}"
+                );
+                let n = hit.iter().filter(|&&h| h).count();
+                hits += n;
+                misses += 8 - n;
+            }
+        }
+        assert!(
+            hits > 4_000 && misses > 4_000,
+            "{hits} child hits, {misses} misses"
+        );
+    }
+
+    #[test]
+    fn child_hit_mask_matches_per_child_reference() {
+        let mut rng = Rng(11);
+        for k in 0..20_000 {
+            // A node's children: empty, inner (meta 24 + c) or leaves owning 1..3 primitives
+            // from a running offset, up to obvhs' 24 per node.
+            let mut node = CwBvhNode::default();
+            let mut offset = 0u8;
+            for c in 0..8 {
+                match rng.next() % 4 {
+                    0 => {}
+                    1 => {
+                        node.imask |= 1 << c;
+                        node.child_meta[c] = (24 + c as u8) | 0b0010_0000;
+                    }
+                    _ => {
+                        let count = (1 + rng.next() % 3) as u8;
+                        if offset + count <= 24 {
+                            node.child_meta[c] =
+                                offset | [0, 0b0010_0000, 0b0110_0000, 0b1110_0000][count as usize];
+                            offset += count;
+                        }
                     }
                 }
+            }
+            let hit: [bool; 8] = std::array::from_fn(|_| !rng.next().is_multiple_of(3));
+            let oct_inv4 = (k % 8) * 0x0101_0101;
+            let b: &[u8; 80] = bytemuck::bytes_of(&node).try_into().unwrap();
+            let lanes = [
+                BVec4A::new(hit[0], hit[1], hit[2], hit[3]),
+                BVec4A::new(hit[4], hit[5], hit[6], hit[7]),
+            ];
+            assert_eq!(
+                child_hit_mask(b, node.imask, oct_inv4, lanes),
+                child_mask_reference(&node, oct_inv4, hit),
+                "node {node:?} hits {hit:?} octant code {oct_inv4:#x}"
             );
         }
-        occluded[i] = hit;
     }
 }

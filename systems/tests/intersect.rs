@@ -6,11 +6,11 @@
 
 use std::f64::consts::PI as PI64;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Mat3A, Vec2, Vec3, Vec3A};
 use risotto_components::NO_HIT;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::intersect::{
-    intersect_closest, intersect_occluded, intersect_sphere, WatertightRay,
+    intersect_closest, intersect_occluded, intersect_sphere, PackedTriangle, WatertightRay,
 };
 
 /// SplitMix64: small deterministic generator for test inputs.
@@ -1174,4 +1174,132 @@ fn rays_spawned_on_large_triangles_near_the_origin_do_not_re_hit_them() {
     }
     assert!(checked > 10_000, "{checked}");
     assert_eq!((self_hits, walk_rehits), (0, 0), "of {checked} rays");
+}
+
+/// The watertight test as first written here: the permutation and shear as a 3x3 matrix
+/// applied to each vertex (Woop et al. 2013 sec. 3), scalar edge functions with the same f64
+/// fallback, pbrt-v4's conservative-t rejection. Every operation that reaches the result
+/// is rounded as in [`WatertightRay`] (the matrix's extra terms are exact zeros), so the two
+/// must agree bit for bit while sharing no code.
+fn watertight_matrix_form(
+    o: Vec3,
+    d: Vec3,
+    [v0, v1, v2]: [Vec3; 3],
+    tmin: f32,
+    tmax: f32,
+    zero_edges: &mut usize,
+) -> Option<(f32, f32, f32)> {
+    let a = d.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z {
+            0
+        } else {
+            2
+        }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    let d = d.to_array();
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let (mut rx, mut ry, mut rz) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
+    rx[kx] = 1.0;
+    rx[kz] = -sx;
+    ry[ky] = 1.0;
+    ry[kz] = -sy;
+    rz[kz] = sz;
+    let m = Mat3A::from_cols(rx.into(), ry.into(), rz.into()).transpose();
+    let o = Vec3A::from(o);
+    let [a, b, c] = [v0, v1, v2].map(|v| m * (Vec3A::from(v) - o));
+    let mut u = c.x * b.y - c.y * b.x;
+    let mut v = a.x * c.y - a.y * c.x;
+    let mut w = b.x * a.y - b.y * a.x;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        *zero_edges += 1;
+        let f = |p: Vec3A| (p.x as f64, p.y as f64);
+        let ((ax, ay), (bx, by), (cx, cy)) = (f(a), f(b), f(c));
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = (u * a.z + v * b.z + w * c.z) * inv_det;
+    if !(t > tmin && t < tmax) {
+        return None;
+    }
+    let gamma = |n: f32| n * (f32::EPSILON * 0.5) / (1.0 - n * (f32::EPSILON * 0.5));
+    let max_x = a.x.abs().max(b.x.abs()).max(c.x.abs());
+    let max_y = a.y.abs().max(b.y.abs()).max(c.y.abs());
+    let max_z = a.z.abs().max(b.z.abs()).max(c.z.abs());
+    let delta_z = gamma(3.0) * max_z;
+    let delta_x = gamma(5.0) * (max_x + max_z);
+    let delta_y = gamma(5.0) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let delta_t =
+        3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
+    if t - tmin <= delta_t {
+        return None;
+    }
+    Some((t, v * inv_det, w * inv_det))
+}
+
+#[test]
+fn packed_triangle_test_matches_matrix_form_bit_for_bit() {
+    let mut rng = Rng(23);
+    let soup = random_soup(&mut rng, 200, true);
+    // Integer grid triangles hit by axis-aligned and diagonal rays through grid points: edge
+    // functions that are exactly zero, i.e. the double-precision fallback.
+    let grid: Vec<[Vec3; 3]> = grid_cube(4);
+    let (mut hits, mut zero_edges) = (0, 0);
+    for k in 0..40000 {
+        let (tri, o, d) = if k % 2 == 0 {
+            let tri = soup[rng.usize(soup.len())];
+            let o = rng.vec_in(-3.0, 3.0);
+            let target = tri[0] + (tri[1] - tri[0]) * rng.f32() + (tri[2] - tri[0]) * rng.f32();
+            let d = if k % 4 == 0 { target - o } else { rng.unit() };
+            (tri, o, d)
+        } else {
+            let tri = grid[rng.usize(grid.len())];
+            // Origins and targets on the quarter grid, so rays pass exactly through
+            // vertices and along edges.
+            let q = |rng: &mut Rng| (rng.usize(17) as f32 - 8.0) * 0.25;
+            let o = Vec3::new(q(&mut rng), q(&mut rng), q(&mut rng)) * 2.0;
+            let target = Vec3::new(q(&mut rng), q(&mut rng), q(&mut rng));
+            let d = target - o;
+            if d == Vec3::ZERO {
+                continue;
+            }
+            (tri, o, d)
+        };
+        let (tmin, tmax) = match k % 3 {
+            0 => (0.0, f32::INFINITY),
+            1 => (rng.range(0.0, 1.0), rng.range(1.0, 4.0)),
+            _ => (-1.0, 2.0),
+        };
+        let [v0, v1, v2] = tri;
+        let got = WatertightRay::new(o, d)
+            .intersect_triangle(v0.into(), v1.into(), v2.into(), tmin, tmax)
+            .map(|h| (h.t, h.b1, h.b2));
+        let packed = WatertightRay::new(o, d)
+            .intersect_packed(&PackedTriangle::new(v0, v1, v2), tmin, tmax)
+            .map(|h| (h.t, h.b1, h.b2));
+        let reference = watertight_matrix_form(o, d, tri, tmin, tmax, &mut zero_edges);
+        assert_eq!(got, reference, "case {k}: o={o:?} d={d:?} tri={tri:?}");
+        assert_eq!(packed, got, "case {k}");
+        hits += got.is_some() as usize;
+    }
+    assert!(
+        hits > 4000 && zero_edges > 500,
+        "{hits} hits, {zero_edges} zero edge functions"
+    );
 }
