@@ -33,10 +33,11 @@ pub fn trace_shadow_rays(
     let n = shadow.len();
     let f = scene.features;
     if !f.volumes && !f.transmission_shadows && !f.transmissive {
-        // Fast path: opaque surfaces only, a single any-hit query per ray.
+        // Fast path: opaque surfaces only, a single any-hit query per ray (counted as
+        // `occlusion`, so the stats show which path shadow rays took).
         let mut occluded = vec![false; n];
         let tmin = vec![0.0f32; n];
-        stats.time(System::Intersect, n, || {
+        stats.time(System::Occlusion, n, || {
             intersect_occluded(
                 &scene.geometry,
                 &shadow.origin,
