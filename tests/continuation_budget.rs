@@ -3,6 +3,10 @@
 //! separate, generous limit (`RenderSettings::max_passes`) stops runaway paths and counts them
 //! as `pass_limit` in the stats; thin interfaces leave no dark shells.
 //!
+//! Thin layers are also checked with absorbing interiors: each interval inside a volume must be
+//! measured from the boundary it starts on (Beer-Lambert to float precision), for camera rays
+//! and for shadow rays, near the origin and 1e4 away from it.
+//!
 //! Every check is deterministic: orthographic cameras (parallel rays), index-matched or false
 //! boundaries (no random choice anywhere), emitters seen on the first segment (`max_depth` 1,
 //! Mitsuba's convention: a path of one segment sees emitters and nothing else) or a Dirac
@@ -117,13 +121,13 @@ fn inverted_box_tris(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
 /// Number of thin boxes in the layer stacks (24 boundaries).
 const LAYERS: usize = 12;
 
-/// `LAYERS` closed boxes with index-matched surfaces and null interiors, each `gap` thick and
-/// `gap` apart, so their 24 faces (normal to z) lie `gap` apart from `z = origin.z + 1` down.
+/// `LAYERS` closed boxes with index-matched surfaces and the given interior, each `gap` thick
+/// and `gap` apart, so their 24 faces (normal to z) lie `gap` apart from `z = origin.z + 1` down.
 /// They span `x in [origin.x - 3, origin.x + x_max]`, `y in origin.y +- 3`; the emitter is at
 /// `origin.z - 3`. Camera rays covered by the layers cross exactly `2 * LAYERS` boundaries.
-fn layer_scene(origin: Vec3, gap: f32, x_max: f32, max_passes: u32) -> Scene {
+fn layer_scene(origin: Vec3, gap: f32, x_max: f32, max_passes: u32, interior: Interior) -> Scene {
     let mut scene = ortho_scene(origin, 2.0, RES, max_passes);
-    let m = scene.add_material("layer", 0, mat_in(Surface::Interface, Interior::Null));
+    let m = scene.add_material("layer", 0, mat_in(Surface::Interface, interior));
     for k in 0..LAYERS {
         let top = 1.0 - 2.0 * k as f32 * gap;
         scene.add_shape(
@@ -146,7 +150,11 @@ fn layer_scene(origin: Vec3, gap: f32, x_max: f32, max_passes: u32) -> Scene {
 /// stats must also show every boundary crossed exactly once (no surface skipped by the spawn
 /// offset, none hit twice by self-intersection).
 fn check_layers(origin: Vec3, gap: f32, exact_crossings: bool) {
-    let out = render_and_check(layer_scene(origin, gap, 3.0, 1024), 1e-6, |_, _| Some(L));
+    let out = render_and_check(
+        layer_scene(origin, gap, 3.0, 1024, Interior::Null),
+        1e-6,
+        |_, _| Some(L),
+    );
     let paths = (RES * RES * SPP) as u64;
     let c = &out.stats.counters;
     assert_eq!(terminated(&out, Termination::PassLimit), 0);
@@ -200,7 +208,7 @@ fn pass_limit_stops_paths_and_counts_them() {
 
     // One pass short: every path through the layers is stopped (black) and counted.
     let out = render_and_check(
-        layer_scene(Vec3::ZERO, 1e-4, 0.0, 2 * LAYERS as u32 - 1),
+        layer_scene(Vec3::ZERO, 1e-4, 0.0, 2 * LAYERS as u32 - 1, Interior::Null),
         1e-6,
         |x, _| Some(if left(x) { Rgb::BLACK } else { L }),
     );
@@ -212,7 +220,7 @@ fn pass_limit_stops_paths_and_counts_them() {
 
     // Exactly enough passes: everything reaches the emitter.
     let out = render_and_check(
-        layer_scene(Vec3::ZERO, 1e-4, 0.0, 2 * LAYERS as u32),
+        layer_scene(Vec3::ZERO, 1e-4, 0.0, 2 * LAYERS as u32, Interior::Null),
         1e-6,
         |_, _| Some(L),
     );
@@ -255,6 +263,138 @@ fn thin_spherical_shell_leaves_no_dark_ring() {
         out.stats.counters.system(System::Intersect)
     );
     assert!(out.stats.warnings.is_empty(), "{:?}", out.stats.warnings);
+}
+
+// ---------------------------------------------------------------------------------------
+// Thin absorbing layers: Beer-Lambert through many close boundaries.
+
+/// Tolerance on an absorbing length measured through `LAYERS` boxes whose coordinates are at
+/// most `extent` in magnitude: every one of the `2 * LAYERS` boundary positions is known to
+/// an ulp (`<= extent * EPSILON`), so allow two ulps per boundary.
+fn length_tolerance(extent: f32) -> f32 {
+    2.0 * (2 * LAYERS) as f32 * extent * f32::EPSILON
+}
+
+/// Checks the absorbing length `-ln(T) / sigma` seen in every pixel of `out`, where
+/// `T = value / unlit` per channel, against `expected` to within `tol`.
+fn check_absorbing_length(out: &RenderOutput, unlit: Rgb, sigma: f32, expected: f32, tol: f32) {
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+    for y in 0..out.beauty.height {
+        for x in 0..out.beauty.width {
+            let v = out.beauty.get(x, y).to_array();
+            for (c, (v, l)) in v.iter().zip(unlit.to_array()).enumerate() {
+                let length = -(v / l).ln() / sigma;
+                assert!(
+                    (length - expected).abs() <= tol,
+                    "pixel ({x}, {y}) channel {c}: absorbing length {length}, expected \
+                     {expected} +- {tol} (transmittance {} instead of {})",
+                    v / l,
+                    (-sigma * expected).exp()
+                );
+            }
+        }
+    }
+}
+
+/// Camera rays through `LAYERS` index-matched Beer boxes `gap` thick: the image is
+/// `L exp(-sigma LAYERS gap)`, sigma chosen so that the transmittance is about 0.55.
+fn check_absorbing_layers(origin: Vec3, gap: f32) {
+    let length = LAYERS as f32 * gap;
+    let sigma = 0.6 / length;
+    let scene = layer_scene(
+        origin,
+        gap,
+        3.0,
+        1024,
+        Interior::Beer {
+            sigma_a: Rgb::splat(sigma),
+        },
+    );
+    let out = render_default(&scene.compile().unwrap());
+    let extent = origin.abs().max_element() + 1.0;
+    check_absorbing_length(&out, L, sigma, length, length_tolerance(extent));
+}
+
+#[test]
+fn thin_absorbing_layers_follow_beer_lambert() {
+    // The layers of the depth tests, now absorbing: each of the 12 intervals inside a volume
+    // must be measured from the boundary it starts on, not from wherever the continuation
+    // ray was re-spawned.
+    check_absorbing_layers(Vec3::ZERO, 1e-4);
+    check_absorbing_layers(Vec3::splat(1e4), 0.1);
+}
+
+#[test]
+fn shadow_rays_through_thin_absorbing_layers_follow_beer_lambert() {
+    // A diffuse floor lit by a distant light at 30 degrees through LAYERS Beer boxes, 0.1
+    // thick and 0.1 apart, 1e4 from the origin; the camera, below the layers, sees the floor.
+    // Only shadow rays cross the layers, on chords gap / cos(theta).
+    let origin = Vec3::splat(1e4);
+    let (gap, theta) = (0.1f32, 30f32.to_radians());
+    let length = LAYERS as f32 * gap / theta.cos();
+    let sigma = 0.6 / length;
+    let mut scene = Scene::new(
+        ortho_camera(origin + Vec3::Y * 0.3, origin, Vec3::Z, 1.0, RES, RES),
+        settings(RES, RES, SPP, 2),
+    );
+    let albedo = Rgb::new(0.8, 0.6, 0.4);
+    let floor = scene.add_material(
+        "floor",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: albedo,
+        }),
+    );
+    scene.add_shape(
+        "floor",
+        ShapeGeometry::Triangles(quad_tris(
+            origin + Vec3::new(-20.0, 0.0, -20.0),
+            Vec3::Z * 40.0,
+            Vec3::X * 40.0,
+        )),
+        floor,
+        None,
+    );
+    let m = scene.add_material(
+        "layer",
+        0,
+        mat_in(
+            Surface::Interface,
+            Interior::Beer {
+                sigma_a: Rgb::splat(sigma),
+            },
+        ),
+    );
+    for k in 0..LAYERS {
+        let bottom = 0.5 + 2.0 * k as f32 * gap;
+        scene.add_shape(
+            &format!("layer{k}"),
+            ShapeGeometry::Triangles(box_tris(
+                origin + Vec3::new(-20.0, bottom, -20.0),
+                origin + Vec3::new(20.0, bottom + gap, 20.0),
+            )),
+            m,
+            None,
+        );
+    }
+    let e = Rgb::new(3.0, 2.0, 1.5);
+    scene.add_light(
+        "sun",
+        LightComponent::Distant {
+            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
+            irradiance: e,
+        },
+    );
+    let out = render_default(&scene.compile().unwrap());
+    let unlit = albedo * e * (theta.cos() / std::f32::consts::PI);
+    let extent = origin.abs().max_element() + 20.0;
+    check_absorbing_length(
+        &out,
+        unlit,
+        sigma,
+        length,
+        length_tolerance(extent) / theta.cos(),
+    );
 }
 
 // ---------------------------------------------------------------------------------------
