@@ -580,11 +580,13 @@ impl PathTracer {
                     stats.terminate(Termination::Absorbed, 1);
                     continue;
                 }
-                let d = row.direction;
-                let ng = t.groups.points.ng[i];
-                let side = if d.dot(ng) >= 0.0 { ng } else { -ng };
-                row.origin = p + side * ray_offset(p);
-                row.tmin = 0.0;
+                // The ray goes on along the same line. It restarts on the boundary itself, so
+                // that the next segment's length (what volume integrators attenuate by) is the
+                // true distance, and skips the boundary with `tmin`: the spawn offset, measured
+                // along the ray (clamped for grazing rays).
+                let cos = row.direction.dot(t.groups.points.ng[i]).abs().max(1e-3);
+                row.origin = p;
+                row.tmin = ray_offset(p) / cos;
                 row.tmax = f32::INFINITY;
                 if scene.tracks_interior(shape)
                     && row.volume_stack.cross(scene.volume_entry(shape), front)

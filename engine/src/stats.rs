@@ -13,6 +13,14 @@
 //!
 //! Systems that never ran (zero calls) and termination reasons with a zero count are left
 //! out; a `"warnings": [...]` array is appended only when there are warnings.
+//!
+//! Which systems appear shows which stages a scene needed: without volumes there is no
+//! `partition` or `volume`; shadow rays of scenes whose surfaces are all opaque (no volumes,
+//! no transmissive surface, no surface that lets shadows pass) are answered by one any-hit
+//! query each and counted under `occlusion`, while shadow rays that must walk through
+//! surfaces use closest-hit queries counted under `intersect`. Times of nested systems
+//! (`intersect`/`occlusion`/`volume` inside `transmission`, `bxdf`/`lights` inside `shade`)
+//! are counted in both.
 
 use std::fmt;
 use std::path::Path;
@@ -25,7 +33,8 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 pub enum System {
     /// Camera ray generation.
     Camera,
-    /// Ray-scene intersection.
+    /// Closest-hit ray-scene intersection (camera and continuation rays, shadow rays that
+    /// walk through surfaces).
     Intersect,
     /// Building shading points from hits.
     Shade,
@@ -35,6 +44,9 @@ pub enum System {
     Lights,
     /// Shadow-ray transmission (visibility and transmittance).
     Transmission,
+    /// Any-hit shadow-ray queries of the transmission system's fast path (scenes whose
+    /// surfaces are all opaque and that have no volumes); never runs otherwise.
+    Occlusion,
     /// Partitioning/grouping rays (transmit/reflect, by volume).
     Partition,
     /// Volume tracking and volume integrators.
@@ -45,7 +57,7 @@ pub enum System {
 
 impl System {
     /// Number of systems.
-    pub const COUNT: usize = 9;
+    pub const COUNT: usize = 10;
     /// Every system, in discriminant order.
     pub const ALL: [System; System::COUNT] = [
         System::Camera,
@@ -54,6 +66,7 @@ impl System {
         System::Bxdf,
         System::Lights,
         System::Transmission,
+        System::Occlusion,
         System::Partition,
         System::Volume,
         System::Splat,
@@ -68,6 +81,7 @@ impl System {
             System::Bxdf => "bxdf",
             System::Lights => "lights",
             System::Transmission => "transmission",
+            System::Occlusion => "occlusion",
             System::Partition => "partition",
             System::Volume => "volume",
             System::Splat => "splat",
@@ -437,6 +451,7 @@ mod tests {
                 "bxdf",
                 "lights",
                 "transmission",
+                "occlusion",
                 "partition",
                 "volume",
                 "splat"

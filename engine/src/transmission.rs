@@ -33,10 +33,11 @@ pub fn trace_shadow_rays(
     let n = shadow.len();
     let f = scene.features;
     if !f.volumes && !f.transmission_shadows && !f.transmissive {
-        // Fast path: opaque surfaces only, a single any-hit query per ray.
+        // Fast path: opaque surfaces only, a single any-hit query per ray (counted as
+        // `occlusion`, so the stats show which path shadow rays took).
         let mut occluded = vec![false; n];
         let tmin = vec![0.0f32; n];
-        stats.time(System::Intersect, n, || {
+        stats.time(System::Occlusion, n, || {
             intersect_occluded(
                 &scene.geometry,
                 &shadow.origin,
@@ -55,7 +56,12 @@ pub fn trace_shadow_rays(
     }
 
     let mut active: Vec<u32> = (0..n as u32).collect();
+    // `t0`: where the next intersect query starts (past the last boundary by the spawn
+    // offset); `entered`: where the ray crossed that boundary, the true start of the interval
+    // inside the volume it entered (measuring from `t0` would lose the offset on every
+    // interval, 33 ulps of the coordinates each).
     let mut t0 = vec![0.0f32; n];
+    let mut entered = vec![0.0f32; n];
     let mut stacks: Vec<VolumeStack> = shadow.volume_stack.clone();
     let mut origin = Vec::new();
     let mut direction = Vec::new();
@@ -104,8 +110,8 @@ pub fn trace_shadow_rays(
                 } else {
                     t[k]
                 };
-                if stacks[i].innermost().is_some() && end > t0[i] {
-                    segs.push((i, t0[i], end - t0[i]));
+                if stacks[i].innermost().is_some() && end > entered[i] {
+                    segs.push((i, entered[i], end - entered[i]));
                 }
             }
             attenuate_in_volumes(
@@ -146,6 +152,7 @@ pub fn trace_shadow_rays(
                 stacks[iu].cross(scene.volume_entry(shape), front);
             }
             let p = origin[k] + direction[k] * t[k];
+            entered[iu] = t[k];
             t0[iu] = t[k] + ray_offset(p);
             if t0[iu] < shadow.tmax[iu] {
                 next.push(i);
