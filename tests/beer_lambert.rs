@@ -141,23 +141,7 @@ fn shadow_scene(sigma: Rgb, d: f32, theta: f32, camera_y: f32) -> (Scene, Rgb, f
         settings_depth(2),
     );
     let albedo = Rgb::new(0.8, 0.6, 0.4);
-    let floor = scene.add_material(
-        "floor",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: albedo,
-        }),
-    );
-    scene.add_shape(
-        "floor",
-        ShapeGeometry::Triangles(quad_tris(
-            Vec3::new(-20.0, 0.0, -20.0),
-            Vec3::Z * 40.0,
-            Vec3::X * 40.0,
-        )),
-        floor,
-        None,
-    );
+    add_floor(&mut scene, Vec3::ZERO, albedo);
     let m = beer_boundary(&mut scene, "absorber", sigma);
     scene.add_shape(
         "slab",

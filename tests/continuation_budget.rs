@@ -338,23 +338,7 @@ fn shadow_rays_through_thin_absorbing_layers_follow_beer_lambert() {
         settings(RES, RES, SPP, 2),
     );
     let albedo = Rgb::new(0.8, 0.6, 0.4);
-    let floor = scene.add_material(
-        "floor",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: albedo,
-        }),
-    );
-    scene.add_shape(
-        "floor",
-        ShapeGeometry::Triangles(quad_tris(
-            origin + Vec3::new(-20.0, 0.0, -20.0),
-            Vec3::Z * 40.0,
-            Vec3::X * 40.0,
-        )),
-        floor,
-        None,
-    );
+    add_floor(&mut scene, origin, albedo);
     let m = scene.add_material(
         "layer",
         0,
@@ -512,23 +496,7 @@ fn shadow_rays_pass_false_boundaries_unchanged() {
         settings(RES, RES, SPP, 2),
     );
     let albedo = Rgb::new(0.8, 0.6, 0.4);
-    let floor = scene.add_material(
-        "floor",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: albedo,
-        }),
-    );
-    scene.add_shape(
-        "floor",
-        ShapeGeometry::Triangles(quad_tris(
-            Vec3::new(-20.0, 0.0, -20.0),
-            Vec3::Z * 40.0,
-            Vec3::X * 40.0,
-        )),
-        floor,
-        None,
-    );
+    add_floor(&mut scene, Vec3::ZERO, albedo);
     let (glass, liquid) = glass_and_liquid(&mut scene);
     scene.add_shape(
         "glass",

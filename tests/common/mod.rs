@@ -166,3 +166,25 @@ pub fn box_tris(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
     t.extend(quad_tris(lo + z, x, y)); // z = hi.z, normal +z
     t
 }
+
+/// A diffuse floor: the 40 x 40 square of the plane `y = center.y` around `center`, facing
+/// up, with its own material `floor` of the given albedo.
+pub fn add_floor(scene: &mut Scene, center: Vec3, albedo: Rgb) {
+    let floor = scene.add_material(
+        "floor",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: albedo,
+        }),
+    );
+    scene.add_shape(
+        "floor",
+        ShapeGeometry::Triangles(quad_tris(
+            center + Vec3::new(-20.0, 0.0, -20.0),
+            Vec3::Z * 40.0,
+            Vec3::X * 40.0,
+        )),
+        floor,
+        None,
+    );
+}
