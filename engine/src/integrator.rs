@@ -37,9 +37,11 @@ pub enum LightingTechnique {
     BxdfOnly,
 }
 
-/// Sampler dimensions each scattering vertex reserves: light selection (0), light position
-/// (1, 2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4
-/// (`FIRST_PATH_DIMENSION`), so each group of four is one aligned SIMD Sobol evaluation.
+/// Sampler dimensions each scattering vertex reserves: light position (0, 1), light selection
+/// (2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4
+/// (`FIRST_PATH_DIMENSION`), so each group of four is one aligned set of the sampler (one
+/// SIMD Sobol evaluation), and the 2D samples (light position, the Bxdf's first two) take
+/// the set's first two dimensions, Sobol's best-stratified pair.
 const DIMS_PER_VERTEX: u32 = 8;
 
 /// Offset for spawning rays off a surface, relative to the coordinates' magnitude so that tiny
@@ -721,7 +723,7 @@ impl PathTracer {
                     .push((t.incoming.depth[r] as u32 + 2) <= settings.max_depth);
             }
 
-            // The vertex's first four dimensions: light selection, light position, Russian
+            // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
             t.rr_u.clear();
             let light_sampling = lobes.contains(LobeSampled::DIFFUSE)
@@ -732,7 +734,7 @@ impl PathTracer {
                 t.light_samples.clear();
                 t.wi_tmp.clear();
                 for (k, i) in range.clone().enumerate() {
-                    let [sel, u0, u1, rr] = t.samplers[k].next_4d();
+                    let [u0, u1, sel, rr] = t.samplers[k].next_4d();
                     t.rr_u.push(rr);
                     let ls = if t.can_continue[k] {
                         scene.lights.sample(
