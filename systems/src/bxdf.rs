@@ -90,6 +90,7 @@ pub struct BxdfSample {
 /// Maps `u` in `[0,1)^2` to the unit disk with Shirley and Chiu's concentric mapping
 /// ("A Low Distortion Map Between Disk and Square", 1997): area preserving and continuous,
 /// so stratification of `u` survives.
+#[inline]
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let p = 2.0 * u - Vec2::ONE;
     if p.x == 0.0 && p.y == 0.0 {
@@ -124,6 +125,7 @@ pub fn sin_cos_quarter_pi(x: f32) -> (f32, f32) {
 /// Cosine-weighted direction on the `+z` hemisphere (Malley's method: project a uniform
 /// disk sample up onto the hemisphere). Density `cos theta / pi`. The result can have
 /// `z = 0` when `u` is on the square's boundary.
+#[inline]
 pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = sample_concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
@@ -198,6 +200,7 @@ fn valid_eta(eta: f32) -> bool {
 /// Samples the one-sided Lambertian lobe `f = reflectance / pi` by cosine-weighted
 /// hemisphere sampling, so `weight = reflectance` exactly. `None` when `wo` is at or below
 /// the surface (the lobe is zero there) or the sample lands on the horizon.
+#[inline]
 pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample> {
     if !above(wo.z) {
         return None;

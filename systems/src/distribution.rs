@@ -157,6 +157,7 @@ impl Distribution1D {
     }
 
     /// Samples a bin with probability proportional to its value: `(index, pmf)`.
+    #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
         let o = self.find_bin(clamp_unit(u));
         (o, self.func[o] / self.func_sum)

@@ -264,6 +264,7 @@ impl SceneGeometry {
     /// time, so the normal stays accurate even where `t` has lost precision (tiny spheres far
     /// away); `p` is the corresponding point on the sphere. `origin`, `direction` and `t` are
     /// only used for spheres when `(b1, b2)` are not finite.
+    #[inline]
     pub fn surface_at(
         &self,
         prim: u32,
@@ -314,6 +315,7 @@ impl SceneGeometry {
     /// `u` in `[0, 1)^2`. Returns the point and the unit geometric normal (as in
     /// [`Self::surface_at`]); the area-measure pdf is `1 / prim_area(prim)`. Degenerate
     /// triangles (zero area) return a zero normal.
+    #[inline]
     pub fn sample_prim(&self, prim: u32, u: Vec2) -> (Vec3, Vec3) {
         let prim = prim as usize;
         if prim < self.triangles.len() {
