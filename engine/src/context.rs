@@ -4,7 +4,8 @@
 use crate::plugin::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
-use risotto_components::{Hits, Rays, Rgb, ShadingPointRow, VolumeStack, NO_HIT};
+use risotto_components::{Hits, Rays, Rgb, VolumeStack, NO_HIT};
+use risotto_systems::geometry::SurfaceSample;
 use risotto_systems::intersect::intersect_closest;
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
@@ -17,6 +18,8 @@ pub struct HitScratch {
     counts: Vec<u32>,
     cursor: Vec<u32>,
     sorted: Vec<u32>,
+    /// Geometry of each hit, in sorted order.
+    surface: Vec<SurfaceSample>,
 }
 
 /// Ray-tracing services bound to one compiled scene and one worker.
@@ -119,46 +122,65 @@ impl<'s> IntegratorContext<'s> {
                 s.cursor[m as usize] += 1;
             }
         }
+        // The shading points of all hits, in sorted order, written column by column: each
+        // column is one tight loop (one capacity check, no row structs), which measured
+        // faster than pushing 14-column rows.
+        let count = s.sorted.len();
+        let base = out.points.len();
+        s.surface.clear();
+        s.surface.extend(s.sorted.iter().map(|&i| {
+            let i = i as usize;
+            geometry.surface_at(
+                hits.prim[i],
+                rays.origin[i],
+                rays.direction[i],
+                hits.t[i],
+                hits.b1[i],
+                hits.b2[i],
+            )
+        }));
+        let (sorted, surface) = (&s.sorted, &s.surface);
+        let shape_of = |i: u32| scene.prim_shape[hits.prim[i as usize] as usize];
+        let pts = &mut out.points;
+        pts.p.extend(surface.iter().map(|x| x.p));
+        pts.ng.extend(surface.iter().map(|x| x.ng));
+        pts.nn.extend(surface.iter().map(|x| x.ng));
+        pts.vn
+            .extend(sorted.iter().map(|&i| -rays.direction[i as usize]));
+        pts.vlen.extend(sorted.iter().map(|&i| hits.t[i as usize]));
+        pts.u.extend(surface.iter().map(|x| x.uv.x));
+        pts.v.extend(surface.iter().map(|x| x.uv.y));
+        pts.w.extend(std::iter::repeat_n(0.0, count));
+        pts.transmission
+            .extend(std::iter::repeat_n(Rgb::WHITE, count));
+        pts.ray_id.extend_from_slice(sorted);
+        pts.material
+            .extend(sorted.iter().map(|&i| s.material[i as usize]));
+        pts.shape.extend(sorted.iter().map(|&i| shape_of(i)));
+        pts.front_face.extend(
+            sorted
+                .iter()
+                .zip(surface)
+                .map(|(&i, x)| rays.direction[i as usize].dot(x.ng) < 0.0),
+        );
+        pts.ior_outside.extend(sorted.iter().map(|&i| {
+            let stack = &rays.volume_stack[i as usize];
+            if stack.is_empty() {
+                1.0
+            } else {
+                ior_outside(scene, stack, shape_of(i))
+            }
+        }));
+        debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
         for m in 0..num_materials {
             let range = s.counts[m] as usize..s.counts[m + 1] as usize;
-            if range.is_empty() {
-                continue;
-            }
-            let start = out.points.len();
-            for &i in &s.sorted[range] {
-                let i = i as usize;
-                let prim = hits.prim[i];
-                let shape = scene.prim_shape[prim as usize];
-                let d = rays.direction[i];
-                let sp =
-                    geometry.surface_at(prim, rays.origin[i], d, hits.t[i], hits.b1[i], hits.b2[i]);
-                let stack = &rays.volume_stack[i];
-                out.points.push(ShadingPointRow {
-                    p: sp.p,
-                    ng: sp.ng,
-                    nn: sp.ng,
-                    vn: -d,
-                    vlen: hits.t[i],
-                    u: sp.uv.x,
-                    v: sp.uv.y,
-                    w: 0.0,
-                    transmission: Rgb::WHITE,
-                    ray_id: i as u32,
+            if !range.is_empty() {
+                out.groups.push(ShadeGroup {
                     material: m as u32,
-                    shape,
-                    front_face: d.dot(sp.ng) < 0.0,
-                    ior_outside: if stack.is_empty() {
-                        1.0
-                    } else {
-                        ior_outside(scene, stack, shape)
-                    },
+                    mode: ShadingMode::Scatter,
+                    range: base + range.start..base + range.end,
                 });
             }
-            out.groups.push(ShadeGroup {
-                material: m as u32,
-                mode: ShadingMode::Scatter,
-                range: start..out.points.len(),
-            });
         }
     }
 }
