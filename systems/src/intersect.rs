@@ -456,20 +456,39 @@ const XOR_PERM: [[u8; 256]; 8] = {
 ///   `unary_count * 2^offset`, computed in f32: exact integers below 2^24 whose sum over
 ///   the (disjoint) children is the bitwise OR. Inner children give `2^(24..32)` and are
 ///   dropped by the `< 2^24` test.
-#[inline(always)]
+#[cfg(test)]
 fn child_hit_mask(b: &[u8; 80], imask: u8, oct: u32, hit: [BVec4A; 2]) -> u32 {
-    let m = (hit[0].bitmask() | hit[1].bitmask() << 4) as u8;
-    let inner = (XOR_PERM[(oct & 7) as usize][(m & imask) as usize] as u32) << 24;
-    let leaf = |q: &[u8], hit: BVec4A| {
+    child_hit_mask_owned(&leaf_owned_bytes(b), imask, oct, hit)
+}
+
+/// The leaf-primitive bits each child of a node owns (children 0..4, 4..8): `unary_count *
+/// 2^offset` from its meta byte as an exact f32 integer below `2^24`, zero for inner and
+/// empty children. Precomputed per node by [`SceneGeometry`] so the traversal loads it.
+pub(crate) fn leaf_owned(node: &CwBvhNode) -> [Vec4; 2] {
+    leaf_owned_bytes(
+        bytemuck::bytes_of(node)
+            .try_into()
+            .expect("CwBvhNode is 80 bytes"),
+    )
+}
+
+#[inline(always)]
+fn leaf_owned_bytes(b: &[u8; 80]) -> [Vec4; 2] {
+    let owned = |q: &[u8]| {
         let meta = widen4_u32(q);
         let owned = (meta >> 5u32).as_vec4() * exp2i(meta & UVec4::splat(31));
-        Vec4::select(
-            hit & owned.cmplt(Vec4::splat(16_777_216.0)),
-            owned,
-            Vec4::ZERO,
-        )
+        Vec4::select(owned.cmplt(Vec4::splat(16_777_216.0)), owned, Vec4::ZERO)
     };
-    let sum = leaf(&b[NODE_META..][..4], hit[0]) + leaf(&b[NODE_META + 4..][..4], hit[1]);
+    [owned(&b[NODE_META..][..4]), owned(&b[NODE_META + 4..][..4])]
+}
+
+/// [`child_hit_mask`] with the leaf bits of [`leaf_owned`].
+#[inline(always)]
+fn child_hit_mask_owned(owned: &[Vec4; 2], imask: u8, oct: u32, hit: [BVec4A; 2]) -> u32 {
+    let m = (hit[0].bitmask() | hit[1].bitmask() << 4) as u8;
+    let inner = (XOR_PERM[(oct & 7) as usize][(m & imask) as usize] as u32) << 24;
+    let sum =
+        Vec4::select(hit[0], owned[0], Vec4::ZERO) + Vec4::select(hit[1], owned[1], Vec4::ZERO);
     // The sum is an integer below 2^24: adding 2^52 in f64 leaves it in the low mantissa
     // bits (exact, and cheaper than a saturating float-to-int conversion).
     let leaf_bits = (sum.element_sum() as f64 + 4_503_599_627_370_496.0).to_bits() as u32;
@@ -478,8 +497,14 @@ fn child_hit_mask(b: &[u8; 80], imask: u8, oct: u32, hit: [BVec4A; 2]) -> u32 {
 
 /// Slab test of the ray against the 8 children of a CWBVH node, four at a time. Returns
 /// the obvhs hit mask (child bits in traversal order; see `CwBvhNode::intersect_ray`).
-#[inline(always)]
+#[cfg(test)]
 fn intersect_node(node: &CwBvhNode, ray: &NodeRay, tmax: f32) -> u32 {
+    intersect_node_owned(node, &leaf_owned(node), ray, tmax)
+}
+
+/// [`intersect_node`] with the node's [`leaf_owned`] bits given.
+#[inline(always)]
+fn intersect_node_owned(node: &CwBvhNode, owned: &[Vec4; 2], ray: &NodeRay, tmax: f32) -> u32 {
     let b: &[u8; 80] = bytemuck::bytes_of(node)
         .try_into()
         .expect("CwBvhNode is 80 bytes");
@@ -519,7 +544,7 @@ fn intersect_node(node: &CwBvhNode, ray: &NodeRay, tmax: f32) -> u32 {
         slab(nx0, fx0, ny0, fy0, nz0, fz0),
         slab(nx1, fx1, ny1, fy1, nz1, fz1),
     ];
-    child_hit_mask(b, node.imask, ray.oct_inv4, hit)
+    child_hit_mask_owned(owned, node.imask, ray.oct_inv4, hit)
 }
 
 /// Bits 24..32 of a traversal group: the hit inner children still to visit.
@@ -543,6 +568,7 @@ const POPCOUNT8: [u8; 256] = {
 #[inline(always)]
 fn traverse(
     nodes: &[CwBvhNode],
+    owned: &[[Vec4; 2]],
     ray: &NodeRay,
     stack: &mut Vec<(u32, u32)>,
     tmax: &mut f32,
@@ -578,9 +604,9 @@ fn traverse(
         // Undo the octant ordering to get the child slot; inner children are stored in slot
         // order, so the node index is the base plus the inner children before the slot.
         let slot = (bit - 24) ^ oct;
-        let node =
-            &nodes[(base + POPCOUNT8[(group & ((1 << slot) - 1) & 0xff) as usize] as u32) as usize];
-        let hits = intersect_node(node, ray, *tmax);
+        let index = (base + POPCOUNT8[(group & ((1 << slot) - 1) & 0xff) as usize] as u32) as usize;
+        let node = &nodes[index];
+        let hits = intersect_node_owned(node, &owned[index], ray, *tmax);
         (base, group) = (node.child_base_idx, (hits & INNER_HITS) | node.imask as u32);
         (prim_base, prims) = (node.primitive_base_idx, hits & !INNER_HITS);
     }
@@ -665,6 +691,7 @@ pub fn intersect_closest(
         let (mut hit_b1, mut hit_b2) = (0.0f32, 0.0f32);
         traverse(
             &bvh.nodes,
+            geom.node_owned(),
             &node_ray,
             &mut stack,
             &mut best_t,
@@ -736,6 +763,7 @@ pub fn intersect_occluded(
         let mut hit = false;
         traverse(
             &bvh.nodes,
+            geom.node_owned(),
             &node_ray,
             &mut stack,
             &mut ray_tmax,
@@ -891,6 +919,28 @@ mod tests {
             hits > 4_000 && misses > 4_000,
             "{hits} child hits, {misses} misses"
         );
+    }
+
+    #[test]
+    fn precomputed_leaf_bits_match_per_child_reference() {
+        let mut rng = Rng(5);
+        let tris: Vec<[Vec3; 3]> = (0..2000)
+            .map(|_| {
+                let c = rng.vec(-10.0, 10.0);
+                [c, c + rng.vec(-0.5, 0.5), c + rng.vec(-0.5, 0.5)]
+            })
+            .collect();
+        let geom = SceneGeometry::build(tris, Vec::new());
+        let nodes = &geom.bvh().unwrap().nodes;
+        assert_eq!(geom.node_owned().len(), nodes.len());
+        for (node, owned) in nodes.iter().zip(geom.node_owned()) {
+            // Each child alone: its leaf bits (bits 0..24 of obvhs' mask) as an integer.
+            for c in 0..8 {
+                let hit: [bool; 8] = std::array::from_fn(|k| k == c);
+                let want = child_mask_reference(node, 0, hit) & 0x00ff_ffff;
+                assert_eq!(owned[c / 4][c % 4], want as f32, "node {node:?} child {c}");
+            }
+        }
     }
 
     #[test]
