@@ -189,6 +189,15 @@ fn thin_layers_near_the_origin_cost_no_depth() {
 }
 
 #[test]
+fn layers_a_few_ulps_apart_are_each_crossed_once() {
+    // 2e-6 apart near z = 1 is ~17 ulps of the coordinates: above the spawn offset (about
+    // 4 ulps of the largest coordinate), so every boundary must still be crossed exactly
+    // once and every interval inside the absorbers measured.
+    check_layers(Vec3::ZERO, 2e-6, true);
+    check_absorbing_layers(Vec3::ZERO, 2e-6);
+}
+
+#[test]
 fn thin_layers_far_from_the_origin_cost_no_depth() {
     // At 1e4 the float spacing is ~1e-3, so an absolute spawn epsilon would put the next
     // origin back on the surface just left. 0.1 apart (~100 ulps there) is resolvable: every
