@@ -16,6 +16,7 @@ use obvhs::{
     BvhBuildParams,
 };
 
+use crate::bvh4::Bvh4;
 use crate::intersect::PackedTriangle;
 
 /// An analytic sphere.
@@ -95,6 +96,10 @@ pub struct SceneGeometry {
     /// [`crate::intersect`]): decoding them from the node's meta bytes on every visit cost
     /// about a sixth of the node test.
     node_owned: Vec<[glam::Vec4; 2]>,
+    /// The same binary BVH collapsed to an uncompressed 4-wide BVH (what the intersection
+    /// systems traverse; see [`crate::intersect`]), and its leaf entries in its own order.
+    bvh4: Option<Bvh4>,
+    leaves4: Vec<LeafPrim>,
     bounds: (Vec3, Vec3),
 }
 
@@ -159,8 +164,8 @@ impl SceneGeometry {
         }
 
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
-        let (bvh, leaves) = if aabbs.is_empty() {
-            (None, Vec::new())
+        let (bvh, leaves, bvh4, leaves4) = if aabbs.is_empty() {
+            (None, Vec::new(), None, Vec::new())
         } else {
             let mut lo = Vec3::splat(f32::INFINITY);
             let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -188,18 +193,22 @@ impl SceneGeometry {
             );
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
-            let leaves = bvh
-                .primitive_indices
-                .iter()
-                .map(|&p| {
-                    if p < tri_count {
-                        LeafPrim::triangle(&triangles[p as usize])
-                    } else {
-                        LeafPrim::sphere(&spheres[(p - tri_count) as usize])
-                    }
-                })
-                .collect();
-            (Some(bvh), leaves)
+            let leaf_prims = |indices: &[u32]| -> Vec<LeafPrim> {
+                indices
+                    .iter()
+                    .map(|&p| {
+                        if p < tri_count {
+                            LeafPrim::triangle(&triangles[p as usize])
+                        } else {
+                            LeafPrim::sphere(&spheres[(p - tri_count) as usize])
+                        }
+                    })
+                    .collect()
+            };
+            let leaves = leaf_prims(&bvh.primitive_indices);
+            let bvh4 = Bvh4::from_bvh2(&bvh2);
+            let leaves4 = leaf_prims(&bvh4.prim_indices);
+            (Some(bvh), leaves, Some(bvh4), leaves4)
         };
 
         let triangle_normal_area = triangles
@@ -218,6 +227,8 @@ impl SceneGeometry {
             }),
             bvh,
             leaves,
+            bvh4,
+            leaves4,
             bounds,
         }
     }
@@ -260,6 +271,11 @@ impl SceneGeometry {
 
     pub(crate) fn leaves(&self) -> &[LeafPrim] {
         &self.leaves
+    }
+
+    /// The 4-wide BVH (`None` for an empty scene) and its leaf entries in its leaf order.
+    pub(crate) fn bvh4(&self) -> Option<(&Bvh4, &[LeafPrim])> {
+        self.bvh4.as_ref().map(|b| (b, self.leaves4.as_slice()))
     }
 
     /// [`crate::intersect::leaf_owned`] of every BVH node, in node order.

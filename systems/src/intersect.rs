@@ -29,6 +29,7 @@ use glam::{BVec4A, DVec3, UVec4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 use obvhs::cwbvh::node::CwBvhNode;
 use risotto_components::NO_HIT;
 
+use crate::bvh4::{Bvh4, Bvh4Node};
 use crate::geometry::{sphere_uv, LeafPrim, SceneGeometry};
 
 /// A ray/triangle hit: distance and the barycentrics of `v1` and `v2`.
@@ -612,6 +613,189 @@ fn traverse(
     }
 }
 
+/// Relative slab widening of the 4-wide node test. A slab distance is computed as
+/// `b * inv + near_orig` with `inv = fl(1/d)` and `near_orig = fl(fl(-o * inv) -+ s)`: with
+/// unit roundoff `u = 2^-24` its error against `(b - o) / d` is below
+/// `u (3 |b| + 4 |o|) / |d| + 2 u s` (standard model, Higham 2002 ch. 3: two roundings in
+/// `b * inv`, two in `-o * inv`, one in the widening and one in the sum), and `|b|` is at
+/// most the largest box coordinate magnitude `B` on that axis. Widening by
+/// `s = 8 u (B + |o|) |inv|` therefore covers it on every axis, for every node of the tree,
+/// so the widening is a per-ray constant folded into `near_orig`/`far_orig`.
+const NODE4_SLACK: f32 = 4.0 * f32::EPSILON;
+
+/// Per-ray constants of the 4-wide node test, each splat across the four child lanes.
+struct Ray4 {
+    /// `1 / d` per axis (clamped like [`NodeRay`]).
+    inv: [Vec4; 3],
+    /// `-o / d - s` and `-o / d + s` per axis: slab distance offsets with the widening.
+    near_orig: [Vec4; 3],
+    far_orig: [Vec4; 3],
+    /// Per axis 1 where the direction is negative (the near plane is the box maximum).
+    neg: [usize; 3],
+    tmin: Vec4,
+}
+
+impl Ray4 {
+    #[inline(always)]
+    fn new(origin: Vec3, direction: Vec3, tmin: f32, max_abs: Vec3A) -> Self {
+        let d = Vec3A::from(direction);
+        let o = Vec3A::from(origin);
+        let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
+        let inv_dir = Vec3A::select(
+            tiny,
+            Vec3A::splat(1.0 / MIN_DIR).copysign(d),
+            Vec3A::ONE / d,
+        );
+        let c = -(o * inv_dir);
+        let slack = (max_abs + o.abs()) * (inv_dir.abs() * NODE4_SLACK);
+        let near_orig = c - slack;
+        let far_orig = c + slack;
+        // From inv_dir, so -0.0 components pick planes consistently with their inverse.
+        let neg = inv_dir.cmplt(Vec3A::ZERO).bitmask() as usize;
+        Self {
+            inv: [
+                Vec4::splat(inv_dir.x),
+                Vec4::splat(inv_dir.y),
+                Vec4::splat(inv_dir.z),
+            ],
+            near_orig: [
+                Vec4::splat(near_orig.x),
+                Vec4::splat(near_orig.y),
+                Vec4::splat(near_orig.z),
+            ],
+            far_orig: [
+                Vec4::splat(far_orig.x),
+                Vec4::splat(far_orig.y),
+                Vec4::splat(far_orig.z),
+            ],
+            neg: [neg & 1, (neg >> 1) & 1, (neg >> 2) & 1],
+            tmin: Vec4::splat(tmin),
+        }
+    }
+}
+
+/// Slab test of the ray against the four children of a 4-wide node: the hit mask (bit `c`
+/// for child `c`) and the entry distances.
+#[inline(always)]
+fn intersect_node4(node: &Bvh4Node, ray: &Ray4, tmax: f32) -> (u32, Vec4) {
+    let b = &node.bounds;
+    let slab = |a: usize| {
+        // `& 1` keeps the row indices provably inside the array.
+        let near = b[2 * a + (ray.neg[a] & 1)];
+        let far = b[2 * a + ((ray.neg[a] & 1) ^ 1)];
+        (
+            near * ray.inv[a] + ray.near_orig[a],
+            far * ray.inv[a] + ray.far_orig[a],
+        )
+    };
+    let (nx, fx) = slab(0);
+    let (ny, fy) = slab(1);
+    let (nz, fz) = slab(2);
+    let tnear = nx.max(ny).max(nz.max(ray.tmin));
+    let tfar = fx.min(fy).min(fz.min(Vec4::splat(tmax)));
+    (tnear.cmple(tfar).bitmask(), tnear)
+}
+
+/// Traversal of the 4-wide BVH. `leaf(slot, tmax)` tests the primitive in leaf slot `slot`,
+/// may shrink `tmax` (closest hit) and returns true to stop. With `ORDERED`, hit inner
+/// children are visited nearest entry distance first and stacked nodes that start beyond
+/// the shrunk `tmax` are skipped (closest hit); without, in any order (occlusion).
+#[inline(always)]
+fn traverse4<const ORDERED: bool>(
+    bvh: &Bvh4,
+    ray: &Ray4,
+    stack: &mut Vec<(u32, f32)>,
+    tmax: &mut f32,
+    mut leaf: impl FnMut(u32, &mut f32) -> bool,
+) {
+    stack.clear();
+    let nodes = &bvh.nodes;
+    let mut index = 0usize;
+    loop {
+        let node = &nodes[index];
+        let (mut mask, tnear) = intersect_node4(node, ray, *tmax);
+        let mut leaves = mask & node.leaf_mask;
+        if leaves != 0 {
+            mask &= !node.leaf_mask;
+            while leaves != 0 {
+                let c = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                if ORDERED && tnear.to_array()[c & 3] > *tmax {
+                    continue;
+                }
+                let first = node.child[c & 3];
+                for slot in first..first + node.count[c & 3] as u32 {
+                    if leaf(slot, tmax) {
+                        return;
+                    }
+                }
+            }
+            if ORDERED {
+                // The leaves may have shrunk tmax: drop children that start beyond it.
+                mask &= tnear.cmple(Vec4::splat(*tmax)).bitmask();
+            }
+        }
+        if mask != 0 {
+            let c0 = mask.trailing_zeros() as usize & 3;
+            let rest = mask & (mask - 1);
+            if rest == 0 {
+                index = node.child[c0] as usize;
+                continue;
+            }
+            let t = tnear.to_array();
+            if !ORDERED {
+                let mut m = rest;
+                while m != 0 {
+                    let c = m.trailing_zeros() as usize & 3;
+                    m &= m - 1;
+                    stack.push((node.child[c], t[c]));
+                }
+                index = node.child[c0] as usize;
+                continue;
+            }
+            let c1 = rest.trailing_zeros() as usize & 3;
+            let rest = rest & (rest - 1);
+            if rest == 0 {
+                // Two children: push the farther, visit the nearer.
+                let (near, far) = if t[c1] < t[c0] { (c1, c0) } else { (c0, c1) };
+                stack.push((node.child[far], t[far]));
+                index = node.child[near] as usize;
+                continue;
+            }
+            // Three or four: push all, sort them far to near on the stack (insertion sort
+            // of at most four), visit the nearest.
+            let base = stack.len();
+            stack.push((node.child[c0], t[c0]));
+            stack.push((node.child[c1], t[c1]));
+            let mut m = rest;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize & 3;
+                m &= m - 1;
+                stack.push((node.child[c], t[c]));
+            }
+            let s = &mut stack[base..];
+            for i in 1..s.len() {
+                let mut j = i;
+                while j > 0 && s[j - 1].1 < s[j].1 {
+                    s.swap(j - 1, j);
+                    j -= 1;
+                }
+            }
+        }
+        loop {
+            match stack.pop() {
+                Some((n, t)) => {
+                    if !ORDERED || t <= *tmax {
+                        index = n as usize;
+                        break;
+                    }
+                }
+                None => return,
+            }
+        }
+    }
+}
+
 /// [`intersect_sphere`] on a sphere leaf; out of line, so that the traversal loops of
 /// triangle-only scenes carry no sphere set-up.
 #[inline(never)]
@@ -673,47 +857,39 @@ pub fn intersect_closest(
             b2.len(),
         ],
     );
-    let Some(bvh) = geom.bvh() else {
+    let Some((bvh, leaves)) = geom.bvh4() else {
         t.fill(f32::INFINITY);
         prim.fill(NO_HIT);
         b1.fill(0.0);
         b2.fill(0.0);
         return;
     };
-    let leaves: &[LeafPrim] = geom.leaves();
     let mut stack = Vec::with_capacity(64);
     for i in 0..n {
         let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
-        let node_ray = NodeRay::new(o, d, ray_tmin);
+        let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
         let tri_ray = WatertightRay::new(o, d);
         let mut best_t = tmax[i];
         let mut best_slot = u32::MAX;
         let (mut hit_b1, mut hit_b2) = (0.0f32, 0.0f32);
-        traverse(
-            &bvh.nodes,
-            geom.node_owned(),
-            &node_ray,
-            &mut stack,
-            &mut best_t,
-            |slot, best_t| {
-                let leaf = &leaves[slot as usize];
-                if !leaf.is_sphere() {
-                    if let Some(h) = tri_ray.intersect_rows(&leaf.rows, ray_tmin, *best_t) {
-                        *best_t = h.t;
-                        best_slot = slot;
-                        hit_b1 = h.b1;
-                        hit_b2 = h.b2;
-                    }
-                } else {
-                    let ts = sphere_leaf_t(leaf, o, d, ray_tmin, *best_t);
-                    if ts < *best_t {
-                        *best_t = ts;
-                        best_slot = slot;
-                    }
+        traverse4::<true>(bvh, &node_ray, &mut stack, &mut best_t, |slot, best_t| {
+            let leaf = &leaves[slot as usize];
+            if !leaf.is_sphere() {
+                if let Some(h) = tri_ray.intersect_rows(&leaf.rows, ray_tmin, *best_t) {
+                    *best_t = h.t;
+                    best_slot = slot;
+                    hit_b1 = h.b1;
+                    hit_b2 = h.b2;
                 }
-                false
-            },
-        );
+            } else {
+                let ts = sphere_leaf_t(leaf, o, d, ray_tmin, *best_t);
+                if ts < *best_t {
+                    *best_t = ts;
+                    best_slot = slot;
+                }
+            }
+            false
+        });
         if best_slot == u32::MAX {
             t[i] = f32::INFINITY;
             prim[i] = NO_HIT;
@@ -725,7 +901,7 @@ pub fn intersect_closest(
                 (hit_b1, hit_b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
             }
             t[i] = best_t;
-            prim[i] = bvh.primitive_indices[best_slot as usize];
+            prim[i] = bvh.prim_indices[best_slot as usize];
             b1[i] = hit_b1;
             b2[i] = hit_b2;
         }
@@ -750,35 +926,27 @@ pub fn intersect_occluded(
         n,
         &[direction.len(), tmin.len(), tmax.len(), occluded.len()],
     );
-    let Some(bvh) = geom.bvh() else {
+    let Some((bvh, leaves)) = geom.bvh4() else {
         occluded.fill(false);
         return;
     };
-    let leaves: &[LeafPrim] = geom.leaves();
     let mut stack = Vec::with_capacity(64);
     for i in 0..n {
         let (o, d, ray_tmin, mut ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
-        let node_ray = NodeRay::new(o, d, ray_tmin);
+        let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
         let tri_ray = WatertightRay::new(o, d);
         let mut hit = false;
-        traverse(
-            &bvh.nodes,
-            geom.node_owned(),
-            &node_ray,
-            &mut stack,
-            &mut ray_tmax,
-            |slot, ray_tmax| {
-                let leaf = &leaves[slot as usize];
-                hit = if !leaf.is_sphere() {
-                    tri_ray
-                        .intersect_rows(&leaf.rows, ray_tmin, *ray_tmax)
-                        .is_some()
-                } else {
-                    sphere_leaf_t(leaf, o, d, ray_tmin, *ray_tmax) < f32::INFINITY
-                };
-                hit
-            },
-        );
+        traverse4::<false>(bvh, &node_ray, &mut stack, &mut ray_tmax, |slot, ray_tmax| {
+            let leaf = &leaves[slot as usize];
+            hit = if !leaf.is_sphere() {
+                tri_ray
+                    .intersect_rows(&leaf.rows, ray_tmin, *ray_tmax)
+                    .is_some()
+            } else {
+                sphere_leaf_t(leaf, o, d, ray_tmin, *ray_tmax) < f32::INFINITY
+            };
+            hit
+        });
         occluded[i] = hit;
     }
 }

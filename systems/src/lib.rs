@@ -3,6 +3,7 @@
 //! integrator, and can be benchmarked alone.
 
 pub mod bxdf;
+mod bvh4;
 pub mod camera;
 pub mod distribution;
 pub mod film;
