@@ -696,97 +696,95 @@ fn intersect_node4(node: &Bvh4Node, ray: &Ray4, tmax: f32) -> (u32, Vec4) {
     (tnear.cmple(tfar).bitmask(), tnear)
 }
 
-/// Traversal of the 4-wide BVH. `leaf(slot, tmax)` tests the primitive in leaf slot `slot`,
-/// may shrink `tmax` (closest hit) and returns true to stop. With `ORDERED`, hit inner
-/// children are visited nearest entry distance first and stacked nodes that start beyond
-/// the shrunk `tmax` are skipped (closest hit); without, in any order (occlusion).
+/// A stacked child of the 4-wide traversal: an inner node (`count == 0`, `index` the node)
+/// or a leaf (`index` its first leaf slot), with its entry distance.
+#[derive(Clone, Copy)]
+struct Entry4 {
+    index: u32,
+    count: u32,
+    t: f32,
+}
+
+/// Traversal of the 4-wide BVH: hit children, leaves and inner nodes alike, are visited
+/// nearest entry distance first, and stacked children that start beyond the shrunk `tmax`
+/// are skipped, so leaves behind the closest hit are never tested (and shadow rays, which
+/// stop at the first hit, find blockers near the origin first). `leaf(slot, tmax)` tests
+/// the primitive in leaf slot `slot`, may shrink `tmax` and returns true to stop.
 #[inline(always)]
-fn traverse4<const ORDERED: bool>(
+fn traverse4(
     bvh: &Bvh4,
     ray: &Ray4,
-    stack: &mut Vec<(u32, f32)>,
+    stack: &mut Vec<Entry4>,
     tmax: &mut f32,
     mut leaf: impl FnMut(u32, &mut f32) -> bool,
 ) {
     stack.clear();
     let nodes = &bvh.nodes;
-    let mut index = 0usize;
+    let mut cur = Entry4 {
+        index: 0,
+        count: 0,
+        t: 0.0,
+    };
     loop {
-        let node = &nodes[index];
-        let (mut mask, tnear) = intersect_node4(node, ray, *tmax);
-        let mut leaves = mask & node.leaf_mask;
-        if leaves != 0 {
-            mask &= !node.leaf_mask;
-            while leaves != 0 {
-                let c = leaves.trailing_zeros() as usize;
-                leaves &= leaves - 1;
-                if ORDERED && tnear.to_array()[c & 3] > *tmax {
+        if cur.count == 0 {
+            let node = &nodes[cur.index as usize];
+            let (mask, tnear) = intersect_node4(node, ray, *tmax);
+            if mask != 0 {
+                let t = tnear.to_array();
+                let entry = |c: usize| Entry4 {
+                    index: node.child[c],
+                    count: node.count[c] as u32,
+                    t: t[c],
+                };
+                let c0 = mask.trailing_zeros() as usize & 3;
+                let rest = mask & (mask - 1);
+                if rest == 0 {
+                    cur = entry(c0);
                     continue;
                 }
-                let first = node.child[c & 3];
-                for slot in first..first + node.count[c & 3] as u32 {
-                    if leaf(slot, tmax) {
-                        return;
-                    }
+                let c1 = rest.trailing_zeros() as usize & 3;
+                let rest = rest & (rest - 1);
+                if rest == 0 {
+                    // Two children: stack the farther, visit the nearer.
+                    let (near, far) = if t[c1] < t[c0] { (c1, c0) } else { (c0, c1) };
+                    stack.push(entry(far));
+                    cur = entry(near);
+                    continue;
                 }
-            }
-            if ORDERED {
-                // The leaves may have shrunk tmax: drop children that start beyond it.
-                mask &= tnear.cmple(Vec4::splat(*tmax)).bitmask();
-            }
-        }
-        if mask != 0 {
-            let c0 = mask.trailing_zeros() as usize & 3;
-            let rest = mask & (mask - 1);
-            if rest == 0 {
-                index = node.child[c0] as usize;
-                continue;
-            }
-            let t = tnear.to_array();
-            if !ORDERED {
+                // Three or four: stack all, sorted far to near (insertion sort of at most
+                // four), and visit the nearest.
+                let base = stack.len();
+                stack.push(entry(c0));
+                stack.push(entry(c1));
                 let mut m = rest;
                 while m != 0 {
                     let c = m.trailing_zeros() as usize & 3;
                     m &= m - 1;
-                    stack.push((node.child[c], t[c]));
+                    stack.push(entry(c));
                 }
-                index = node.child[c0] as usize;
-                continue;
+                let s = &mut stack[base..];
+                for i in 1..s.len() {
+                    let e = s[i];
+                    let mut j = i;
+                    while j > 0 && s[j - 1].t < e.t {
+                        s[j] = s[j - 1];
+                        j -= 1;
+                    }
+                    s[j] = e;
+                }
             }
-            let c1 = rest.trailing_zeros() as usize & 3;
-            let rest = rest & (rest - 1);
-            if rest == 0 {
-                // Two children: push the farther, visit the nearer.
-                let (near, far) = if t[c1] < t[c0] { (c1, c0) } else { (c0, c1) };
-                stack.push((node.child[far], t[far]));
-                index = node.child[near] as usize;
-                continue;
-            }
-            // Three or four: push all, sort them far to near on the stack (insertion sort
-            // of at most four), visit the nearest.
-            let base = stack.len();
-            stack.push((node.child[c0], t[c0]));
-            stack.push((node.child[c1], t[c1]));
-            let mut m = rest;
-            while m != 0 {
-                let c = m.trailing_zeros() as usize & 3;
-                m &= m - 1;
-                stack.push((node.child[c], t[c]));
-            }
-            let s = &mut stack[base..];
-            for i in 1..s.len() {
-                let mut j = i;
-                while j > 0 && s[j - 1].1 < s[j].1 {
-                    s.swap(j - 1, j);
-                    j -= 1;
+        } else {
+            for slot in cur.index..cur.index + cur.count {
+                if leaf(slot, tmax) {
+                    return;
                 }
             }
         }
         loop {
             match stack.pop() {
-                Some((n, t)) => {
-                    if !ORDERED || t <= *tmax {
-                        index = n as usize;
+                Some(e) => {
+                    if e.t <= *tmax {
+                        cur = e;
                         break;
                     }
                 }
@@ -872,7 +870,7 @@ pub fn intersect_closest(
         let mut best_t = tmax[i];
         let mut best_slot = u32::MAX;
         let (mut hit_b1, mut hit_b2) = (0.0f32, 0.0f32);
-        traverse4::<true>(bvh, &node_ray, &mut stack, &mut best_t, |slot, best_t| {
+        traverse4(bvh, &node_ray, &mut stack, &mut best_t, |slot, best_t| {
             let leaf = &leaves[slot as usize];
             if !leaf.is_sphere() {
                 if let Some(h) = tri_ray.intersect_rows(&leaf.rows, ray_tmin, *best_t) {
@@ -936,7 +934,7 @@ pub fn intersect_occluded(
         let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
         let tri_ray = WatertightRay::new(o, d);
         let mut hit = false;
-        traverse4::<false>(bvh, &node_ray, &mut stack, &mut ray_tmax, |slot, ray_tmax| {
+        traverse4(bvh, &node_ray, &mut stack, &mut ray_tmax, |slot, ray_tmax| {
             let leaf = &leaves[slot as usize];
             hit = if !leaf.is_sphere() {
                 tri_ray
