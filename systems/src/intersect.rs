@@ -794,6 +794,60 @@ fn traverse4(
     }
 }
 
+/// Any-hit traversal of the 4-wide BVH for shadow rays: the hit leaf children of a node are
+/// tested as soon as the node is visited (a blocker found early ends the ray, and testing
+/// them costs less than stacking them), then the nearest hit inner child is visited and the
+/// others are stacked unsorted. `leaf(slot)` returns true to stop.
+#[inline(always)]
+fn traverse4_any(
+    bvh: &Bvh4,
+    ray: &Ray4,
+    stack: &mut Vec<u32>,
+    tmax: f32,
+    mut leaf: impl FnMut(u32) -> bool,
+) {
+    stack.clear();
+    let nodes = &bvh.nodes;
+    let mut index = 0usize;
+    loop {
+        let node = &nodes[index];
+        let (mask, tnear) = intersect_node4(node, ray, tmax);
+        let mut leaves = mask & node.leaf_mask;
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize & 3;
+            leaves &= leaves - 1;
+            let first = node.child[c];
+            for slot in first..first + node.count[c] as u32 {
+                if leaf(slot) {
+                    return;
+                }
+            }
+        }
+        let mut inner = mask & !node.leaf_mask;
+        if inner != 0 {
+            let t = tnear.to_array();
+            let mut near = inner.trailing_zeros() as usize & 3;
+            inner &= inner - 1;
+            while inner != 0 {
+                let c = inner.trailing_zeros() as usize & 3;
+                inner &= inner - 1;
+                let far = if t[c] < t[near] {
+                    std::mem::replace(&mut near, c)
+                } else {
+                    c
+                };
+                stack.push(node.child[far]);
+            }
+            index = node.child[near] as usize;
+            continue;
+        }
+        match stack.pop() {
+            Some(n) => index = n as usize,
+            None => return,
+        }
+    }
+}
+
 /// [`intersect_sphere`] on a sphere leaf; out of line, so that the traversal loops of
 /// triangle-only scenes carry no sphere set-up.
 #[inline(never)]
@@ -930,18 +984,18 @@ pub fn intersect_occluded(
     };
     let mut stack = Vec::with_capacity(64);
     for i in 0..n {
-        let (o, d, ray_tmin, mut ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
+        let (o, d, ray_tmin, ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
         let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
         let tri_ray = WatertightRay::new(o, d);
         let mut hit = false;
-        traverse4(bvh, &node_ray, &mut stack, &mut ray_tmax, |slot, ray_tmax| {
+        traverse4_any(bvh, &node_ray, &mut stack, ray_tmax, |slot| {
             let leaf = &leaves[slot as usize];
             hit = if !leaf.is_sphere() {
                 tri_ray
-                    .intersect_rows(&leaf.rows, ray_tmin, *ray_tmax)
+                    .intersect_rows(&leaf.rows, ray_tmin, ray_tmax)
                     .is_some()
             } else {
-                sphere_leaf_t(leaf, o, d, ray_tmin, *ray_tmax) < f32::INFINITY
+                sphere_leaf_t(leaf, o, d, ray_tmin, ray_tmax) < f32::INFINITY
             };
             hit
         });
