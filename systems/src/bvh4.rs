@@ -229,8 +229,9 @@ impl Bvh4 {
             self.gather_prims(bvh2, node.first_index + 1);
         } else {
             let first = node.first_index as usize;
-            self.prim_indices
-                .extend_from_slice(&bvh2.primitive_indices[first..first + node.prim_count as usize]);
+            self.prim_indices.extend_from_slice(
+                &bvh2.primitive_indices[first..first + node.prim_count as usize],
+            );
         }
     }
 }

@@ -2,8 +2,8 @@
 //! the slices it writes, knows nothing of the scene world, the scheduler or the global
 //! integrator, and can be benchmarked alone.
 
-pub mod bxdf;
 mod bvh4;
+pub mod bxdf;
 pub mod camera;
 pub mod distribution;
 pub mod film;
