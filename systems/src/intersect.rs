@@ -757,12 +757,13 @@ mod tests {
         let geom = SceneGeometry::build(tris, spheres);
         let (bvh, _) = geom.bvh4().unwrap();
         let (mut hits, mut misses, mut touching) = (0, 0, 0);
-        for k in 0..300 {
+        for k in 0..3000 {
             let o = rng.vec(-12.0, 12.0);
-            // Aimed at a box corner (the ray touches that box) or near a triangle.
+            // Mostly aimed at a box corner, so the ray grazes that box (without the widening
+            // rounding culls some of these boxes; checked), else near a triangle.
             let node = &bvh.nodes[(rng.next() % bvh.nodes.len() as u64) as usize];
             let c = (rng.next() % 4) as usize;
-            let target = if k % 3 == 0 && node.bounds[0][c].is_finite() {
+            let target = if k % 3 != 2 && node.bounds[0][c].is_finite() {
                 Vec3::new(node.bounds[0][c], node.bounds[3][c], node.bounds[4][c])
             } else {
                 geom.triangle((rng.next() % 3000) as usize)[0] + rng.vec(-0.1, 0.1)
