@@ -503,8 +503,8 @@ fn traverse4(
 
 /// Any-hit traversal of the 4-wide BVH for shadow rays: the hit leaf children of a node are
 /// tested as soon as the node is visited (a blocker found early ends the ray, and testing
-/// them costs less than stacking them), then the nearest hit inner child is visited and the
-/// others are stacked unsorted. `leaf(slot)` returns true to stop.
+/// them costs less than stacking them), then the hit inner children are visited nearest
+/// first. `leaf(slot)` returns true to stop.
 #[inline(always)]
 fn traverse4_any(
     bvh: &Bvh4,
@@ -533,19 +533,25 @@ fn traverse4_any(
         let mut inner = mask & !node.leaf_mask;
         if inner != 0 {
             let t = tnear.to_array();
-            let mut near = inner.trailing_zeros() as usize & 3;
-            inner &= inner - 1;
+            // The hit inner children sorted far to near (insertion sort of at most four):
+            // all but the nearest are stacked, so they are popped nearest first.
+            let mut order = [0usize; 4];
+            let mut k = 0;
             while inner != 0 {
                 let c = inner.trailing_zeros() as usize & 3;
                 inner &= inner - 1;
-                let far = if t[c] < t[near] {
-                    std::mem::replace(&mut near, c)
-                } else {
-                    c
-                };
-                stack.push(node.child[far]);
+                let mut j = k;
+                while j > 0 && t[order[j - 1]] < t[c] {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = c;
+                k += 1;
             }
-            index = node.child[near] as usize;
+            for &c in &order[..k - 1] {
+                stack.push(node.child[c]);
+            }
+            index = node.child[order[k - 1]] as usize;
             continue;
         }
         match stack.pop() {
