@@ -1,4 +1,4 @@
-//! Compiled scene geometry: triangles and analytic spheres behind one compressed wide BVH.
+//! Compiled scene geometry: triangles and analytic spheres behind one BVH.
 //!
 //! Primitive index convention (used in [`risotto_components::Hits::prim`] and everywhere
 //! else): `0..num_triangles` are the triangles in the order given to [`SceneGeometry::build`],
@@ -16,6 +16,7 @@ use obvhs::{
     BvhBuildParams,
 };
 
+use crate::bvh4::Bvh4;
 use crate::intersect::PackedTriangle;
 
 /// An analytic sphere.
@@ -43,8 +44,8 @@ pub struct SurfaceSample {
 /// One BVH leaf entry, in BVH order, in the layout of [`crate::intersect::PackedTriangle`]:
 /// `rows[a]` holds coordinate `a` of the three vertices in lanes 0..3, lane 3 zero. A sphere
 /// stores `(center, radius)` in `rows[0]` and sets `rows[2].w = 1` (a triangle's is 0), so
-/// the kind is known without another memory access. The scene primitive index of
-/// `leaves[i]` is `bvh.primitive_indices[i]`.
+/// the kind is known without another memory access. The scene primitive index of leaf slot
+/// `i` of the 4-wide BVH is `bvh4.prim_indices[i]`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LeafPrim {
     pub(crate) rows: [Vec4; 3],
@@ -77,9 +78,11 @@ impl LeafPrim {
 
 /// All primitives of a compiled scene and the BVH over them.
 ///
-/// One CWBVH (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through
-/// Compressed Wide BVHs") holds the triangles and the spheres' bounding boxes together, so a
-/// ray visits every primitive kind in a single front-to-back traversal.
+/// One binary BVH (obvhs' PLOC builder and reinsertion optimizer) over the triangles and the
+/// spheres' bounding boxes, so a ray visits every primitive kind in a single traversal. The
+/// intersection systems traverse it collapsed to uncompressed 4-wide nodes; the obvhs
+/// CWBVH collapse (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through
+/// Compressed Wide BVHs") is kept alongside for [`Self::bvh`].
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
     triangles: Vec<[Vec3; 3]>,
@@ -89,12 +92,11 @@ pub struct SceneGeometry {
     spheres: Vec<Sphere>,
     /// `None` for an empty scene (obvhs cannot build an empty tree).
     bvh: Option<CwBvh>,
-    /// Leaf entries in BVH order: `leaves[i]` is the primitive at `bvh.primitive_indices[i]`.
-    leaves: Vec<LeafPrim>,
-    /// Per BVH node, the leaf-primitive bits each child owns, as exact f32 integers (see
-    /// [`crate::intersect`]): decoding them from the node's meta bytes on every visit cost
-    /// about a sixth of the node test.
-    node_owned: Vec<[glam::Vec4; 2]>,
+    /// The same binary BVH collapsed to an uncompressed 4-wide BVH (what the intersection
+    /// systems traverse; see [`crate::intersect`]; 4-wide nodes of f32 boxes beat the
+    /// quantized 8-wide ones there, benches/README.md), and its leaf entries in leaf order.
+    bvh4: Option<Bvh4>,
+    leaves4: Vec<LeafPrim>,
     bounds: (Vec3, Vec3),
 }
 
@@ -159,8 +161,8 @@ impl SceneGeometry {
         }
 
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
-        let (bvh, leaves) = if aabbs.is_empty() {
-            (None, Vec::new())
+        let (bvh, bvh4, leaves4) = if aabbs.is_empty() {
+            (None, None, Vec::new())
         } else {
             let mut lo = Vec3::splat(f32::INFINITY);
             let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -188,8 +190,9 @@ impl SceneGeometry {
             );
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
-            let leaves = bvh
-                .primitive_indices
+            let bvh4 = Bvh4::from_bvh2(&bvh2);
+            let leaves4 = bvh4
+                .prim_indices
                 .iter()
                 .map(|&p| {
                     if p < tri_count {
@@ -199,7 +202,7 @@ impl SceneGeometry {
                     }
                 })
                 .collect();
-            (Some(bvh), leaves)
+            (Some(bvh), Some(bvh4), leaves4)
         };
 
         let triangle_normal_area = triangles
@@ -213,11 +216,9 @@ impl SceneGeometry {
             triangles,
             triangle_normal_area,
             spheres,
-            node_owned: bvh.as_ref().map_or_else(Vec::new, |b| {
-                b.nodes.iter().map(crate::intersect::leaf_owned).collect()
-            }),
             bvh,
-            leaves,
+            bvh4,
+            leaves4,
             bounds,
         }
     }
@@ -252,19 +253,17 @@ impl SceneGeometry {
         self.spheres[i]
     }
 
-    /// The BVH (`None` for an empty scene). Its `primitive_indices` map leaf slots to
-    /// primitive indices. Exposed for benchmarks and diagnostics.
+    /// The scene's BVH collapsed to obvhs' compressed 8-wide CWBVH (`None` for an empty
+    /// scene). Its `primitive_indices` map leaf slots to primitive indices. Exposed for
+    /// benchmarks and diagnostics; the intersection systems traverse an uncompressed 4-wide
+    /// collapse of the same binary BVH instead.
     pub fn bvh(&self) -> Option<&CwBvh> {
         self.bvh.as_ref()
     }
 
-    pub(crate) fn leaves(&self) -> &[LeafPrim] {
-        &self.leaves
-    }
-
-    /// [`crate::intersect::leaf_owned`] of every BVH node, in node order.
-    pub(crate) fn node_owned(&self) -> &[[glam::Vec4; 2]] {
-        &self.node_owned
+    /// The 4-wide BVH (`None` for an empty scene) and its leaf entries in its leaf order.
+    pub(crate) fn bvh4(&self) -> Option<(&Bvh4, &[LeafPrim])> {
+        self.bvh4.as_ref().map(|b| (b, self.leaves4.as_slice()))
     }
 
     /// Geometry at a hit of the ray `origin + t * direction` on primitive `prim`, with the

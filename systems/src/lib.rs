@@ -2,6 +2,7 @@
 //! the slices it writes, knows nothing of the scene world, the scheduler or the global
 //! integrator, and can be benchmarked alone.
 
+mod bvh4;
 pub mod bxdf;
 pub mod camera;
 pub mod distribution;
