@@ -25,17 +25,14 @@ use risotto::systems::intersect::{
 
 const BATCH: usize = 4096;
 
-/// SplitMix64 for reproducible ray sets.
-struct Rng(u64);
+use risotto::systems::sampler::SplitMix64 as Rng;
 
-impl Rng {
-    fn f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
+/// Test-input helpers on top of the shared generator.
+trait RngExt {
+    fn unit(&mut self) -> Vec3;
+}
+
+impl RngExt for Rng {
     fn unit(&mut self) -> Vec3 {
         let z = 1.0 - 2.0 * self.f32();
         let r = (1.0 - z * z).max(0.0).sqrt();

@@ -182,14 +182,9 @@ impl VolumeIntegrator for SmokyInterior {
     ) {
         // Nothing scatters inside: the next hits are the ordinary nearest hits ...
         ictx.nearest_hits(rays, out);
-        // ... attenuated by Beer's law over each point's incident segment (RIS `k_VLen`).
-        for i in 0..out.points.len() {
-            out.points.transmission[i] *= self.transmittance(out.points.vlen[i]);
-        }
-        // A ray escaping from inside (an open mesh) travelled an unbounded distance.
-        for (k, &ray) in out.misses.iter().enumerate() {
-            out.miss_transmission[k] *= self.transmittance(rays.tmax[ray as usize]);
-        }
+        // ... attenuated by Beer's law over each point's incident segment (RIS `k_VLen`); a
+        // ray escaping from inside (an open mesh) travelled its whole, unbounded, tmax.
+        out.attenuate_segments(rays, |length| self.transmittance(length));
     }
 
     fn transmission(

@@ -303,15 +303,7 @@ impl VolumeIntegrator for SummingInterior {
         out: &mut ShadeGroups,
     ) {
         ictx.nearest_hits(rays, out);
-        for g in 0..out.groups.len() {
-            let r = out.groups[g].range.clone();
-            for i in r {
-                out.points.transmission[i] *= beer(self.total, out.points.vlen[i]);
-            }
-        }
-        for (k, &ray) in out.misses.iter().enumerate() {
-            out.miss_transmission[k] *= beer(self.total, rays.tmax[ray as usize]);
-        }
+        out.attenuate_segments(rays, |length| beer(self.total, length));
     }
     fn transmission(
         &self,

@@ -42,11 +42,7 @@ impl Bxdf for DiffuseBxdf {
             let u = samplers[i].next_2d();
             let f = frame(nn[i]);
             if let Some(s) = bxdf::diffuse_sample(self.reflectance, f.to_local(vn[i]), u) {
-                out.wi[i] = f.to_world(s.wi);
-                out.weight[i] = s.weight;
-                out.pdf[i] = s.pdf;
-                out.lobe[i] = s.lobe;
-                out.eta[i] = 1.0;
+                out.set_local(i, &f, s);
             }
         }
     }
@@ -97,11 +93,7 @@ impl Bxdf for DielectricBxdf {
             let f = frame(ng[i]);
             let eta = self.ior / ior_out[i].max(1e-6);
             if let Some(s) = bxdf::dielectric_sample(eta, self.tint, f.to_local(vn[i]), u) {
-                out.wi[i] = f.to_world(s.wi);
-                out.weight[i] = s.weight;
-                out.pdf[i] = s.pdf;
-                out.lobe[i] = s.lobe;
-                out.eta[i] = s.eta;
+                out.set_local(i, &f, s);
             }
         }
     }
@@ -147,11 +139,7 @@ impl Bxdf for MirrorBxdf {
             };
             let f = frame(n);
             if let Some(s) = bxdf::mirror_sample(self.reflectance, f.to_local(vn[i])) {
-                out.wi[i] = f.to_world(s.wi);
-                out.weight[i] = s.weight;
-                out.pdf[i] = s.pdf;
-                out.lobe[i] = s.lobe;
-                out.eta[i] = 1.0;
+                out.set_local(i, &f, s);
             }
         }
     }
@@ -314,15 +302,7 @@ impl VolumeIntegrator for BeerInterior {
         out: &mut ShadeGroups,
     ) {
         ictx.nearest_hits(rays, out);
-        for g in 0..out.groups.len() {
-            let r = out.groups[g].range.clone();
-            for i in r {
-                out.points.transmission[i] *= self.transmittance(out.points.vlen[i]);
-            }
-        }
-        for (k, &ray) in out.misses.iter().enumerate() {
-            out.miss_transmission[k] *= self.transmittance(rays.tmax[ray as usize]);
-        }
+        out.attenuate_segments(rays, |length| self.transmittance(length));
     }
     fn transmission(
         &self,

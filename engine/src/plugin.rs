@@ -39,6 +39,7 @@ use crate::context::IntegratorContext;
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints, VolumeEntry};
+use risotto_systems::bxdf::{BxdfSample, Frame};
 use risotto_systems::sampler::PathSampler;
 use std::any::Any;
 use std::ops::Range;
@@ -226,6 +227,17 @@ pub struct BxdfSamples {
 }
 
 impl BxdfSamples {
+    /// Writes the sample `s` drawn in the local frame `frame` as row `i` (direction turned to
+    /// world space).
+    #[inline]
+    pub fn set_local(&mut self, i: usize, frame: &Frame, s: BxdfSample) {
+        self.wi[i] = frame.to_world(s.wi);
+        self.weight[i] = s.weight;
+        self.pdf[i] = s.pdf;
+        self.lobe[i] = s.lobe;
+        self.eta[i] = s.eta;
+    }
+
     /// Resizes every column to `n` rows of "no sample".
     pub fn reset(&mut self, n: usize) {
         self.wi.clear();
@@ -327,6 +339,18 @@ impl ShadeGroups {
                 mode,
                 range: start..end,
             });
+        }
+    }
+    /// Multiplies the transmission of every point by `transmittance(VLen)` and of every
+    /// escaped ray by `transmittance(tmax)` of its ray in `rays` (the table this was answered
+    /// for): what a homogeneous, non-scattering interior does to the hits `nearest_hits`
+    /// returns.
+    pub fn attenuate_segments(&mut self, rays: &Rays, transmittance: impl Fn(f32) -> Rgb) {
+        for (tr, &vlen) in self.points.transmission.iter_mut().zip(&self.points.vlen) {
+            *tr *= transmittance(vlen);
+        }
+        for (tr, &ray) in self.miss_transmission.iter_mut().zip(&self.misses) {
+            *tr *= transmittance(rays.tmax[ray as usize]);
         }
     }
     /// Records an escaped ray.

@@ -496,24 +496,7 @@ pub fn hg_sample(g: f32, wo: Vec3, u: Vec2) -> (Vec3, f32) {
 mod tests {
     use super::*;
 
-    /// SplitMix64: a tiny deterministic generator for reproducible tests.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-        }
-        fn vec2(&mut self) -> Vec2 {
-            Vec2::new(self.f32(), self.f32())
-        }
-    }
-
+    use crate::sampler::SplitMix64 as Rng;
     fn dir(theta: f32, phi: f32) -> Vec3 {
         Vec3::new(
             theta.sin() * phi.cos(),

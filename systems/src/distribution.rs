@@ -398,24 +398,7 @@ impl EnvironmentMap {
 mod tests {
     use super::*;
 
-    /// splitmix64: a tiny, good-enough generator so tests need no dependency.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-        }
-        fn vec2(&mut self) -> Vec2 {
-            Vec2::new(self.f32(), self.f32())
-        }
-    }
-
+    use crate::sampler::SplitMix64 as Rng;
     /// Pearson's chi-square statistic of observed counts against expected probabilities.
     /// Bins with zero probability must be empty. Returns (statistic, degrees of freedom).
     fn chi_square(counts: &[u64], probs: &[f64], n: u64) -> (f64, usize) {

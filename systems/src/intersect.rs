@@ -721,20 +721,14 @@ mod tests {
     use super::*;
     use crate::geometry::Sphere;
 
-    /// SplitMix64.
-    struct Rng(u64);
+    use crate::sampler::SplitMix64 as Rng;
 
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        fn f32(&mut self) -> f32 {
-            (self.next() >> 40) as f32 / (1u64 << 24) as f32
-        }
+    /// Test-input helpers on top of the shared generator.
+    trait RngExt {
+        fn vec(&mut self, lo: f32, hi: f32) -> Vec3;
+    }
+
+    impl RngExt for Rng {
         fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
             Vec3::new(self.f32(), self.f32(), self.f32()) * (hi - lo) + Vec3::splat(lo)
         }
@@ -767,12 +761,12 @@ mod tests {
             let o = rng.vec(-12.0, 12.0);
             // Mostly aimed at a box corner, so the ray grazes that box (without the widening
             // rounding culls some of these boxes; checked), else near a triangle.
-            let node = &bvh.nodes[(rng.next() % bvh.nodes.len() as u64) as usize];
-            let c = (rng.next() % 4) as usize;
+            let node = &bvh.nodes[(rng.next_u64() % bvh.nodes.len() as u64) as usize];
+            let c = (rng.next_u64() % 4) as usize;
             let target = if k % 3 != 2 && node.bounds[0][c].is_finite() {
                 Vec3::new(node.bounds[0][c], node.bounds[3][c], node.bounds[4][c])
             } else {
-                geom.triangle((rng.next() % 3000) as usize)[0] + rng.vec(-0.1, 0.1)
+                geom.triangle((rng.next_u64() % 3000) as usize)[0] + rng.vec(-0.1, 0.1)
             };
             let mut d = target - o;
             // Axis-parallel directions, including negative zeros.

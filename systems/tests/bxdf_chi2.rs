@@ -43,26 +43,7 @@ fn sidak_alpha() -> f64 {
 // Random numbers
 // ---------------------------------------------------------------------------------------
 
-/// SplitMix64 (Steele et al. 2014): deterministic, so a failure is reproducible.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)` with 24 random bits (every f32 in the range is reachable).
-    fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    fn vec2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-}
-
+use risotto_systems::sampler::SplitMix64 as Rng;
 // ---------------------------------------------------------------------------------------
 // Chi-square survival function
 // ---------------------------------------------------------------------------------------

@@ -13,21 +13,17 @@ use risotto_systems::intersect::{
     intersect_closest, intersect_occluded, intersect_sphere, PackedTriangle, WatertightRay,
 };
 
-/// SplitMix64: small deterministic generator for test inputs.
-struct Rng(u64);
+use risotto_systems::sampler::SplitMix64 as Rng;
 
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
+/// Test-input helpers on top of the shared generator.
+trait RngExt {
+    fn range(&mut self, lo: f32, hi: f32) -> f32;
+    fn vec_in(&mut self, lo: f32, hi: f32) -> Vec3;
+    fn unit(&mut self) -> Vec3;
+    fn usize(&mut self, n: usize) -> usize;
+}
+
+impl RngExt for Rng {
     fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.f32()
     }
