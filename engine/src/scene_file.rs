@@ -83,14 +83,16 @@ impl RenderSettings {
 }
 
 impl Default for RenderSettings {
+    /// The engine's defaults ([`crate::scene::RenderSettings::default`]), stated once.
     fn default() -> Self {
+        let d = crate::scene::RenderSettings::default();
         RenderSettings {
-            width: 512,
-            height: 512,
-            spp: 64,
-            max_depth: 8,
-            seed: 0,
-            rr_depth: 5,
+            width: d.width,
+            height: d.height,
+            spp: d.spp,
+            max_depth: d.max_depth,
+            seed: d.seed,
+            rr_depth: d.rr_depth,
         }
     }
 }
