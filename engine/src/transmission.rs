@@ -35,16 +35,17 @@ pub fn trace_shadow_rays(
     if !f.volumes && !f.transmission_shadows && !f.transmissive {
         // Fast path: opaque surfaces only, a single any-hit query per ray (counted as
         // `occlusion`, so the stats show which path shadow rays took).
-        let mut occluded = vec![false; n];
-        let tmin = vec![0.0f32; n];
+        // Scratch from the batch arena (reset after each batch): no heap traffic per bounce.
+        let occluded = arena.alloc_slice_fill_copy(n, false);
+        let tmin = arena.alloc_slice_fill_copy(n, 0.0f32);
         stats.time(System::Occlusion, n, || {
             intersect_occluded(
                 &scene.geometry,
                 &shadow.origin,
                 &shadow.direction,
-                &tmin,
+                tmin,
                 &shadow.tmax,
-                &mut occluded,
+                occluded,
             )
         });
         for i in 0..n {
