@@ -8,10 +8,14 @@
 use crate::context::IntegratorContext;
 use crate::plugin::*;
 use bumpalo::Bump;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb};
 use risotto_systems::bxdf;
-use risotto_systems::sampler::PathSampler;
+use risotto_systems::sampler::{next_2d_column, PathSampler};
+
+/// Points per block in the column-wise Bxdf kernels: the block's sample columns live on the
+/// stack (no allocation per call) and stay in L1 between the passes.
+const CHUNK: usize = 64;
 
 /// Lambertian reflection (one-sided: black seen from behind).
 #[derive(Clone, Copy, Debug)]
@@ -38,11 +42,17 @@ impl Bxdf for DiffuseBxdf {
         out: &mut BxdfSamples,
     ) {
         let (nn, vn) = (ctx.nn(), ctx.vn());
-        for i in 0..ctx.num_points() {
-            let u = samplers[i].next_2d();
-            let f = frame(nn[i]);
-            if let Some(s) = bxdf::diffuse_sample(self.reflectance, f.to_local(vn[i]), u) {
-                out.set_local(i, &f, s);
+        let mut u = [Vec2::ZERO; CHUNK];
+        for start in (0..ctx.num_points()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(ctx.num_points());
+            let u = &mut u[..end - start];
+            next_2d_column(&mut samplers[start..end], u);
+            for (k, &u) in u.iter().enumerate() {
+                let i = start + k;
+                let f = frame(nn[i]);
+                if let Some(s) = bxdf::diffuse_sample(self.reflectance, f.to_local(vn[i]), u) {
+                    out.set_local(i, &f, s);
+                }
             }
         }
     }

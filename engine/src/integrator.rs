@@ -22,7 +22,7 @@ use risotto_systems::camera::{generate_camera_rays, FIRST_PATH_DIMENSION};
 use risotto_systems::film::{splat, Film};
 use risotto_systems::lights::{power_heuristic, LightSample};
 use risotto_systems::partition::partition_by_key;
-use risotto_systems::sampler::{pixel_seed, sample_1d, PathSampler};
+use risotto_systems::sampler::{next_4d_column, pixel_seed, sample_1d, PathSampler};
 
 /// How direct lighting is estimated; a named technique so its cost and error can be compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -738,8 +738,10 @@ impl PathTracer {
                 let lstart = std::time::Instant::now();
                 t.light_samples.clear();
                 t.wi_tmp.clear();
+                let u4 = arena.alloc_slice_fill_copy(m, [0.0f32; 4]);
+                next_4d_column(&mut t.samplers, u4);
                 for (k, i) in range.clone().enumerate() {
-                    let [u0, u1, sel, rr] = t.samplers[k].next_4d();
+                    let [u0, u1, sel, rr] = u4[k];
                     t.rr_u.push(rr);
                     let ls = if t.can_continue[k] {
                         scene.lights.sample(

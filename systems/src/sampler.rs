@@ -107,13 +107,16 @@ pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
         .to_f32_norm()
 }
 
+/// The type of [`sobol_byte_table`].
+type SobolTable = [[[u32; 4]; 256]; 2];
+
 /// Per-byte Sobol products of dimensions 0..4: `table[b][v]` is the bit-reversed Sobol value
 /// of the reversed index whose byte `b` (0 = bits 31..24, 1 = bits 23..16) is `v` and whose
 /// other bits are zero.
-fn sobol_byte_table() -> &'static [[[u32; 4]; 256]; 2] {
-    static TABLE: std::sync::OnceLock<Box<[[[u32; 4]; 256]; 2]>> = std::sync::OnceLock::new();
+fn sobol_byte_table() -> &'static SobolTable {
+    static TABLE: std::sync::OnceLock<Box<SobolTable>> = std::sync::OnceLock::new();
     TABLE.get_or_init(|| {
-        let mut t = Box::new([[[0u32; 4]; 256]; 2]);
+        let mut t: Box<SobolTable> = Box::new([[[0u32; 4]; 256]; 2]);
         for (b, bytes) in t.iter_mut().enumerate() {
             for (v, entry) in bytes.iter_mut().enumerate() {
                 *entry = sobol_burley::parts::sobol_int4_rev((v as u32) << (24 - 8 * b), 0).into();
@@ -136,6 +139,169 @@ pub fn sample_2d(seed: u32, sample: u32, dimension: u32) -> Vec2 {
             sample_1d(seed, sample, dimension),
             sample_1d(seed, sample, dimension + 1),
         )
+    }
+}
+
+/// Points evaluated together by the column functions ([`next_4d_column`],
+/// [`next_2d_column`]): one SSE vector of `u32` lanes.
+const LANES: usize = 4;
+
+/// Salts of the four dimensions' Owen scrambles (as in `sobol_burley::sample_4d`).
+const DIM_SALT: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
+
+/// The per-point part of [`sample_4d`] for `LANES` points whose next dimension starts an
+/// aligned set: each point's shuffled (reversed) sample index split into the two table
+/// bytes, and its set seed times the scramble multiplier. Only the set seed's 64-bit
+/// SplitMix stays scalar (SSE has no 64-bit multiply); the rest is four-wide where
+/// [`sample_4d`] is scalar. `None` when some point is not at the start of a set.
+#[inline(always)]
+fn lanes_prefix(
+    lanes: &[PathSampler; LANES],
+) -> Option<([u32; LANES], [u32; LANES], [u32; LANES])> {
+    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
+    if lanes.iter().any(|s| s.dimension % 4 != 0) {
+        return None;
+    }
+    let mut seed = [0u32; LANES];
+    let mut sample = [0u32; LANES];
+    for l in 0..LANES {
+        seed[l] = set_seed(lanes[l].seed, lanes[l].dimension / 4);
+        sample[l] = lanes[l].sample;
+    }
+    let s = Int4::from(seed);
+    let index = Int4::from(sample) & Int4::from([MAX_SPP - 1; LANES]);
+    let index_rev = owen_scramble_int4_rev(
+        index.reverse_bits(),
+        hash_int4(s ^ Int4::from([0x79c6_8e4a; LANES])),
+    );
+    let high: [u32; LANES] = (index_rev >> 24).into();
+    let low: [u32; LANES] = ((index_rev >> 16) & Int4::from([0xff; LANES])).into();
+    let seed_mul: [u32; LANES] = (s * Int4::from([0x9c8f_2d3b; LANES])).into();
+    Some((high, low, seed_mul))
+}
+
+/// The Owen scramble and float conversion of [`sample_4d`] on four lanes, each lane one
+/// (point, dimension) pair: `sobol` the unscrambled reversed Sobol values, `seed_mul` the
+/// point's set seed times the scramble multiplier, `salt` the dimension's salt.
+#[inline(always)]
+fn scramble_lanes(sobol: [u32; 4], seed_mul: [u32; 4], salt: [u32; 4]) -> [f32; 4] {
+    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
+    let scramble = hash_int4(Int4::from(seed_mul) ^ Int4::from(salt));
+    owen_scramble_int4_rev(Int4::from(sobol), scramble)
+        .reverse_bits()
+        .to_f32_norm()
+}
+
+/// Four dimensions of `LANES` points into `out` (lanes: one point per vector, its four
+/// dimensions); false (and `out` untouched) unless every point starts a set.
+#[inline(always)]
+fn kernel_4d(
+    table: &SobolTable,
+    lanes: &[PathSampler; LANES],
+    out: &mut [[f32; 4]; LANES],
+) -> bool {
+    let Some((high, low, seed_mul)) = lanes_prefix(lanes) else {
+        return false;
+    };
+    for l in 0..LANES {
+        let (h, w) = (&table[0][high[l] as usize], &table[1][low[l] as usize]);
+        let sobol = [h[0] ^ w[0], h[1] ^ w[1], h[2] ^ w[2], h[3] ^ w[3]];
+        out[l] = scramble_lanes(sobol, [seed_mul[l]; 4], DIM_SALT);
+    }
+    true
+}
+
+/// Two dimensions of `LANES` points into `out` (lanes: two points per vector, only the two
+/// dimensions they use); false (and `out` untouched) unless every point starts a set.
+#[inline(always)]
+fn kernel_2d(table: &SobolTable, lanes: &[PathSampler; LANES], out: &mut [Vec2; LANES]) -> bool {
+    let Some((high, low, seed_mul)) = lanes_prefix(lanes) else {
+        return false;
+    };
+    let sobol = |l: usize, d: usize| table[0][high[l] as usize][d] ^ table[1][low[l] as usize][d];
+    let salt = [DIM_SALT[0], DIM_SALT[1], DIM_SALT[0], DIM_SALT[1]];
+    for a in [0, 2] {
+        let b = a + 1;
+        let r = scramble_lanes(
+            [sobol(a, 0), sobol(a, 1), sobol(b, 0), sobol(b, 1)],
+            [seed_mul[a], seed_mul[a], seed_mul[b], seed_mul[b]],
+            salt,
+        );
+        out[a] = Vec2::new(r[0], r[1]);
+        out[b] = Vec2::new(r[2], r[3]);
+    }
+    true
+}
+
+/// Runs `chunk` on every group of `LANES` samplers (the last group padded with copies of
+/// its first sampler, whose results are dropped) together with the matching rows of `out`; `chunk` returns false when it could not handle the group, which then goes
+/// through `single` one sampler at a time. Neither advances the samplers.
+#[inline(always)]
+fn for_lane_groups<T: Copy>(
+    samplers: &[PathSampler],
+    out: &mut [T],
+    table: &SobolTable,
+    chunk: impl Fn(&SobolTable, &[PathSampler; LANES], &mut [T; LANES]) -> bool,
+    single: impl Fn(&PathSampler) -> T,
+) {
+    let (lanes, rest) = samplers.as_chunks::<LANES>();
+    let (rows, rest_out) = out.as_chunks_mut::<LANES>();
+    for (s, o) in lanes.iter().zip(rows) {
+        if !chunk(table, s, o) {
+            o.iter_mut().zip(s).for_each(|(o, s)| *o = single(s));
+        }
+    }
+    if let Some(&first) = rest.first() {
+        let mut s = [first; LANES];
+        s[..rest.len()].copy_from_slice(rest);
+        let mut o = [rest_out[0]; LANES];
+        if chunk(table, &s, &mut o) {
+            rest_out.copy_from_slice(&o[..rest_out.len()]);
+        } else {
+            rest_out
+                .iter_mut()
+                .zip(rest)
+                .for_each(|(o, s)| *o = single(s));
+        }
+    }
+}
+
+/// [`PathSampler::next_4d`] for a column of samplers: `out[i]` gets sampler `i`'s next four
+/// dimensions and every sampler advances by four. Exactly the per-sampler values; groups
+/// of four points whose dimensions are aligned sets (the renderer's vertices always are)
+/// are evaluated together by a vectorised kernel.
+///
+/// # Panics
+/// When `out` and `samplers` differ in length.
+pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
+    assert_eq!(samplers.len(), out.len(), "next_4d_column: column lengths");
+    let table = sobol_byte_table();
+    for_lane_groups(samplers, out, table, kernel_4d, |&s| {
+        let mut s = s;
+        s.next_4d()
+    });
+    // The kernel leaves the samplers alone (the remainder's padding is a copy).
+    for s in samplers.iter_mut() {
+        s.dimension += 4;
+    }
+}
+
+/// [`PathSampler::next_2d`] for a column of samplers: `out[i]` gets sampler `i`'s next two
+/// dimensions and every sampler advances by two. Exactly the per-sampler values; groups of
+/// four points that all start a set (as Bxdf sampling does at every vertex) are evaluated
+/// together, computing only the two dimensions they use.
+///
+/// # Panics
+/// When `out` and `samplers` differ in length.
+pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
+    assert_eq!(samplers.len(), out.len(), "next_2d_column: column lengths");
+    let table = sobol_byte_table();
+    for_lane_groups(samplers, out, table, kernel_2d, |&s| {
+        let mut s = s;
+        s.next_2d()
+    });
+    for s in samplers.iter_mut() {
+        s.dimension += 2;
     }
 }
 
@@ -226,6 +392,45 @@ mod tests {
                 assert_eq!(s.dimension, dim + 4);
                 for k in 0..4 {
                     assert_eq!(w[k], sample_1d(seed, sample, dim + k as u32));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn column_draws_equal_per_sampler_draws() {
+        // The column kernels are only faster paths: every length (full groups of four and
+        // a remainder), aligned and unaligned dimensions (which fall back per sampler),
+        // set 0 and large sets must give exactly next_4d / next_2d and advance the same.
+        let mut rng = SplitMix64(99);
+        for n in [0usize, 1, 3, 4, 5, 8, 13, 64] {
+            for unaligned_every in [0usize, 1, 3, 7] {
+                let samplers: Vec<PathSampler> = (0..n)
+                    .map(|i| {
+                        let set = [0u32, 1, 2, 63, 64, 1000][i % 6];
+                        let shift = if unaligned_every > 0 && i % unaligned_every == 0 {
+                            1 + i as u32 % 3
+                        } else {
+                            0
+                        };
+                        PathSampler {
+                            seed: rng.next_u64() as u32,
+                            sample: (rng.next_u64() % (2 * MAX_SPP as u64)) as u32,
+                            dimension: 4 * set + shift,
+                        }
+                    })
+                    .collect();
+                let mut col = samplers.clone();
+                let mut out4 = vec![[0.0f32; 4]; n];
+                next_4d_column(&mut col, &mut out4);
+                let mut out2 = vec![Vec2::ZERO; n];
+                next_2d_column(&mut col, &mut out2);
+                for (i, s) in samplers.iter().enumerate() {
+                    let mut one = *s;
+                    assert_eq!(out4[i], one.next_4d(), "4d: n {n}, point {i}");
+                    assert_eq!(out2[i], one.next_2d(), "2d: n {n}, point {i}");
+                    assert_eq!(col[i].dimension, one.dimension);
+                    assert_eq!((col[i].seed, col[i].sample), (s.seed, s.sample));
                 }
             }
         }
