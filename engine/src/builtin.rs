@@ -17,6 +17,9 @@ use risotto_systems::sampler::{next_2d_column, PathSampler};
 /// stack (no allocation per call) and stay in L1 between the passes.
 const CHUNK: usize = 64;
 
+/// Lobe bits of a Lambertian sample.
+const DIFFUSE_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSampled::DIFFUSE.0);
+
 /// Lambertian reflection (one-sided: black seen from behind).
 #[derive(Clone, Copy, Debug)]
 pub struct DiffuseBxdf {
@@ -42,17 +45,26 @@ impl Bxdf for DiffuseBxdf {
         out: &mut BxdfSamples,
     ) {
         let (nn, vn) = (ctx.nn(), ctx.vn());
+        let m = ctx.num_points();
         let mut u = [Vec2::ZERO; CHUNK];
-        for start in (0..ctx.num_points()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(ctx.num_points());
+        for start in (0..m).step_by(CHUNK) {
+            let end = (start + CHUNK).min(m);
             let u = &mut u[..end - start];
             next_2d_column(&mut samplers[start..end], u);
-            for (k, &u) in u.iter().enumerate() {
-                let i = start + k;
-                let f = frame(nn[i]);
-                if let Some(s) = bxdf::diffuse_sample(self.reflectance, f.to_local(vn[i]), u) {
-                    out.set_local(i, &f, s);
-                }
+            bxdf::diffuse_sample_world(
+                &nn[start..end],
+                &vn[start..end],
+                u,
+                &mut out.wi[start..end],
+                &mut out.pdf[start..end],
+            );
+        }
+        // Cosine-weighted sampling of f = reflectance / pi: the weight is the reflectance.
+        // (`out.reset` left black weights and no lobe where there is no sample.)
+        for ((weight, lobe), &pdf) in out.weight.iter_mut().zip(&mut out.lobe).zip(&out.pdf) {
+            if pdf > 0.0 {
+                *weight = self.reflectance;
+                *lobe = DIFFUSE_REFLECT;
             }
         }
     }

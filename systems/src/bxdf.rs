@@ -15,6 +15,7 @@
 //! - Degenerate inputs (grazing `wo` exactly in the surface plane, samples that land on the
 //!   horizon) produce `None`, never NaN.
 
+use glam::Vec4;
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
@@ -216,6 +217,123 @@ pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample>
         lobe: DIFFUSE_REFLECT,
         eta: 1.0,
     })
+}
+
+/// [`diffuse_sample`] for a column of points, with the directions turned to world space:
+/// for point `i` with unit shading normal `n[i]`, unit direction towards the viewer
+/// `vn[i]` and sample `u[i]`, writes `wi[i]` and `pdf[i]` (0 where `diffuse_sample` returns
+/// `None`; `wi[i]` is then `+z`). The weight of every sample is the reflectance.
+///
+/// Bit for bit `Frame::from_normal(n).to_world(diffuse_sample(_, frame.to_local(vn), u).wi)`
+/// and its pdf (tested): the same float operations in the same order, evaluated for four
+/// points at once in SSE lanes, with the concentric map's two wedges as selects (so both
+/// share one division and one polynomial) and no branch per point.
+///
+/// # Panics
+/// When the columns differ in length.
+pub fn diffuse_sample_world(n: &[Vec3], vn: &[Vec3], u: &[Vec2], wi: &mut [Vec3], pdf: &mut [f32]) {
+    let len = n.len();
+    assert!(
+        vn.len() == len && u.len() == len && wi.len() == len && pdf.len() == len,
+        "diffuse_sample_world: column lengths"
+    );
+    let (n4, n_rest) = n.as_chunks::<4>();
+    let (vn4, vn_rest) = vn.as_chunks::<4>();
+    let (u4, u_rest) = u.as_chunks::<4>();
+    let (wi4, wi_rest) = wi.as_chunks_mut::<4>();
+    let (pdf4, pdf_rest) = pdf.as_chunks_mut::<4>();
+    for ((((n, vn), u), wi), pdf) in n4.iter().zip(vn4).zip(u4).zip(wi4).zip(pdf4) {
+        diffuse_sample_four(n, vn, u, wi, pdf);
+    }
+    if !n_rest.is_empty() {
+        // The last partial group, padded with a point that has no sample (seen from below).
+        let r = n_rest.len();
+        let (mut n, mut vn, mut u) = ([Vec3::Z; 4], [Vec3::NEG_Z; 4], [Vec2::ZERO; 4]);
+        n[..r].copy_from_slice(n_rest);
+        vn[..r].copy_from_slice(vn_rest);
+        u[..r].copy_from_slice(u_rest);
+        let (mut wi, mut pdf) = ([Vec3::Z; 4], [0.0; 4]);
+        diffuse_sample_four(&n, &vn, &u, &mut wi, &mut pdf);
+        wi_rest.copy_from_slice(&wi[..r]);
+        pdf_rest.copy_from_slice(&pdf[..r]);
+    }
+}
+
+/// Four points of [`diffuse_sample_world`], moved into and out of SSE lanes.
+#[inline(always)]
+fn diffuse_sample_four(
+    n: &[Vec3; 4],
+    vn: &[Vec3; 4],
+    u: &[Vec2; 4],
+    wi: &mut [Vec3; 4],
+    pdf: &mut [f32; 4],
+) {
+    let lanes = |f: &dyn Fn(usize) -> f32| Vec4::new(f(0), f(1), f(2), f(3));
+    let (x, y, z, p) = diffuse_sample_lanes(
+        lanes(&|j| n[j].x),
+        lanes(&|j| n[j].y),
+        lanes(&|j| n[j].z),
+        // Frame::to_local(vn).z, the only local coordinate of wo the lobe needs.
+        lanes(&|j| vn[j].dot(n[j])),
+        lanes(&|j| u[j].x),
+        lanes(&|j| u[j].y),
+    );
+    let (x, y, z) = (x.to_array(), y.to_array(), z.to_array());
+    for j in 0..4 {
+        wi[j] = Vec3::new(x[j], y[j], z[j]);
+    }
+    *pdf = p.to_array();
+}
+
+/// Four lanes of [`diffuse_sample_world`]: world direction and pdf from the normal, the
+/// cosine of `wo` and the sample.
+#[inline(always)]
+fn diffuse_sample_lanes(
+    nx: Vec4,
+    ny: Vec4,
+    nz: Vec4,
+    cos_o: Vec4,
+    ux: Vec4,
+    uy: Vec4,
+) -> (Vec4, Vec4, Vec4, Vec4) {
+    let (zero, one) = (Vec4::ZERO, Vec4::ONE);
+    // sample_concentric_disk, the wedge test as a select.
+    let px = 2.0 * ux - one;
+    let py = 2.0 * uy - one;
+    let wedge_x = px.abs().cmpgt(py.abs());
+    let big = Vec4::select(wedge_x, px, py);
+    let small = Vec4::select(wedge_x, py, px);
+    let (sin, cos) = sin_cos_quarter_pi_lanes(FRAC_PI_4 * (small / big));
+    let centre = px.cmpeq(zero) & py.cmpeq(zero);
+    let dx = Vec4::select(centre, zero, big * Vec4::select(wedge_x, cos, sin));
+    let dy = Vec4::select(centre, zero, big * Vec4::select(wedge_x, sin, cos));
+    // sample_cosine_hemisphere: 1 - |d|^2 is never -0 or NaN here, so a compare-select is
+    // the same value as f32::max(0).
+    let r2 = one - (dx * dx + dy * dy);
+    let lz = Vec4::select(r2.cmpgt(zero), r2, zero).sqrt();
+    // Frame::from_normal and Frame::to_world, term for term.
+    let sign = one.copysign(nz);
+    let a = -one / (sign + nz);
+    let b = nx * ny * a;
+    let (sx, sy, sz) = (one + sign * nx * nx * a, sign * b, -sign * nx);
+    let (tx, ty, tz) = (b, sign + ny * ny * a, -ny);
+    let ok = cos_o.cmpgt(zero) & lz.cmpgt(zero);
+    (
+        Vec4::select(ok, sx * dx + tx * dy + nx * lz, zero),
+        Vec4::select(ok, sy * dx + ty * dy + ny * lz, zero),
+        Vec4::select(ok, sz * dx + tz * dy + nz * lz, one),
+        Vec4::select(ok, lz * FRAC_1_PI, zero),
+    )
+}
+
+/// [`sin_cos_quarter_pi`] on four lanes (the same polynomial, operation for operation).
+#[inline(always)]
+fn sin_cos_quarter_pi_lanes(x: Vec4) -> (Vec4, Vec4) {
+    let z = x * x;
+    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
+    let cos = (((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z)
+        + Vec4::ONE;
+    (sin, cos)
 }
 
 /// Evaluates the one-sided Lambertian lobe: `(f * |cos theta_i|, pdf)` with
@@ -839,6 +957,67 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn diffuse_column_equals_per_point_sampling_bit_for_bit() {
+        // diffuse_sample_world is a rearrangement of Frame + diffuse_sample + to_world; it
+        // must produce the same bits, including at the concentric map's centre and wedge
+        // diagonals, the square's edges, normals at +-z (and -0 z), grazing and below-surface
+        // viewers, and for every length (full groups of four and a remainder).
+        let mut rng = Rng(21);
+        let edge_u = [0.0, 0.25, 0.5, 0.75, 1.0 - f32::EPSILON / 2.0];
+        let special_n = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(1.0, 0.0, -0.0),
+            Vec3::Y,
+            Vec3::new(0.6, 0.0, -0.8),
+        ];
+        for len in [0usize, 1, 2, 3, 4, 5, 7, 64, 203] {
+            let mut n = Vec::new();
+            let mut vn = Vec::new();
+            let mut u = Vec::new();
+            for i in 0..len {
+                let ni = if i % 3 == 0 {
+                    special_n[i % special_n.len()]
+                } else {
+                    sample_uniform_sphere(rng.vec2())
+                };
+                let ui = if i % 4 == 1 {
+                    Vec2::new(edge_u[i % 5], edge_u[(i / 5) % 5])
+                } else {
+                    rng.vec2()
+                };
+                let vi = match i % 5 {
+                    0 => -ni,
+                    1 => Frame::from_normal(ni).to_world(Vec3::X),
+                    _ => sample_uniform_sphere(rng.vec2()),
+                };
+                n.push(ni);
+                vn.push(vi);
+                u.push(ui);
+            }
+            let mut wi = vec![Vec3::splat(7.0); len];
+            let mut pdf = vec![7.0; len];
+            diffuse_sample_world(&n, &vn, &u, &mut wi, &mut pdf);
+            for i in 0..len {
+                let f = Frame::from_normal(n[i]);
+                let (want_wi, want_pdf) = match diffuse_sample(Rgb::WHITE, f.to_local(vn[i]), u[i])
+                {
+                    Some(s) => (f.to_world(s.wi), s.pdf),
+                    None => (Vec3::Z, 0.0),
+                };
+                assert_eq!(
+                    (wi[i].to_array().map(f32::to_bits), pdf[i].to_bits()),
+                    (want_wi.to_array().map(f32::to_bits), want_pdf.to_bits()),
+                    "len {len}, point {i}: n {:?} vn {:?} u {:?}",
+                    n[i],
+                    vn[i],
+                    u[i]
+                );
             }
         }
     }
