@@ -740,21 +740,17 @@ impl PathTracer {
                 t.wi_tmp.clear();
                 let u4 = arena.alloc_slice_fill_copy(m, [0.0f32; 4]);
                 next_4d_column(&mut t.samplers, u4);
-                for (k, i) in range.clone().enumerate() {
-                    let [u0, u1, sel, rr] = u4[k];
-                    t.rr_u.push(rr);
-                    let ls = if t.can_continue[k] {
-                        scene.lights.sample(
-                            &scene.geometry,
-                            t.groups.points.p[i],
-                            sel,
-                            glam::Vec2::new(u0, u1),
-                        )
-                    } else {
-                        None
-                    };
+                t.light_samples.resize(m, None);
+                scene.lights.sample_column(
+                    &scene.geometry,
+                    &t.groups.points.p[range.clone()],
+                    u4,
+                    &t.can_continue,
+                    &mut t.light_samples,
+                );
+                for (u, ls) in u4.iter().zip(&t.light_samples) {
+                    t.rr_u.push(u[3]);
                     t.wi_tmp.push(ls.map_or(Vec3::Z, |l| l.wi));
-                    t.light_samples.push(ls);
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
                 t.eval_value.resize(m, Rgb::BLACK);

@@ -123,6 +123,13 @@ impl Distribution1D {
         self.input_int
     }
 
+    /// The CDF, `len() + 1` entries: entry `i` is the probability of the bins below `i`
+    /// (the first is 0, the last 1). [`Self::sample_discrete`] returns the number of entries
+    /// `1..len()` that are `<= u` after clamping `u` into `[0, 1)`.
+    pub fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
     /// Largest bin index `o` with `cdf[o] <= u`. Zero-probability bins have
     /// `cdf[o] == cdf[o + 1]`, so taking the *largest* such index skips them.
     #[inline]
