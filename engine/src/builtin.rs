@@ -17,6 +17,21 @@ use risotto_systems::sampler::{next_2d_column, PathSampler};
 /// stack (no allocation per call) and stay in L1 between the passes.
 const CHUNK: usize = 64;
 
+/// Draws every sampler's next two dimensions, a stack block at a time through the column
+/// sampler, and hands each to `f(point index, sample)` in order.
+#[inline]
+fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2)) {
+    let mut u = [Vec2::ZERO; CHUNK];
+    for start in (0..samplers.len()).step_by(CHUNK) {
+        let end = (start + CHUNK).min(samplers.len());
+        let u = &mut u[..end - start];
+        next_2d_column(&mut samplers[start..end], u);
+        for (k, &u) in u.iter().enumerate() {
+            f(start + k, u);
+        }
+    }
+}
+
 /// Lobe bits of a Lambertian sample.
 const DIFFUSE_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSampled::DIFFUSE.0);
 
@@ -108,8 +123,7 @@ impl Bxdf for DielectricBxdf {
         out: &mut BxdfSamples,
     ) {
         let (ng, vn, ior_out) = (ctx.ng(), ctx.vn(), ctx.ior_outside());
-        for i in 0..ctx.num_points() {
-            let u = samplers[i].next_2d();
+        for_sample_chunks(samplers, |i, u| {
             // The frame follows the outward geometric normal so `eta` keeps its meaning
             // (inside / outside) whichever side the ray arrives from.
             let f = frame(ng[i]);
@@ -117,7 +131,7 @@ impl Bxdf for DielectricBxdf {
             if let Some(s) = bxdf::dielectric_sample(eta, self.tint, f.to_local(vn[i]), u) {
                 out.set_local(i, &f, s);
             }
-        }
+        });
     }
     fn evaluate_samples(
         &mut self,
@@ -201,8 +215,7 @@ impl Bxdf for HenyeyGreensteinPhase {
         out: &mut BxdfSamples,
     ) {
         let vn = ctx.vn();
-        for i in 0..ctx.num_points() {
-            let u = samplers[i].next_2d();
+        for_sample_chunks(samplers, |i, u| {
             let (wi, pdf) = bxdf::hg_sample(self.g, vn[i], u);
             if pdf > 0.0 {
                 out.wi[i] = wi;
@@ -212,7 +225,7 @@ impl Bxdf for HenyeyGreensteinPhase {
                 out.lobe[i] = LobeSampled::SCATTER | LobeSampled::DIFFUSE;
                 out.eta[i] = 1.0;
             }
-        }
+        });
     }
     fn evaluate_samples(
         &mut self,
