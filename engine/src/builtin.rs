@@ -12,24 +12,33 @@ use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb};
 use risotto_systems::bxdf;
 use risotto_systems::sampler::{next_2d_column, PathSampler};
+use std::ops::Range;
 
 /// Points per block in the column-wise Bxdf kernels: the block's sample columns live on the
 /// stack (no allocation per call) and stay in L1 between the passes.
 const CHUNK: usize = 64;
 
-/// Draws every sampler's next two dimensions, a stack block at a time through the column
-/// sampler, and hands each to `f(point index, sample)` in order.
+/// Draws every sampler's next two dimensions, a stack block of [`CHUNK`] points at a time
+/// through the column sampler, and hands each block to `f(point range, samples)`.
 #[inline]
-fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2)) {
+fn for_sample_blocks(samplers: &mut [PathSampler], mut f: impl FnMut(Range<usize>, &[Vec2])) {
     let mut u = [Vec2::ZERO; CHUNK];
     for start in (0..samplers.len()).step_by(CHUNK) {
         let end = (start + CHUNK).min(samplers.len());
         let u = &mut u[..end - start];
         next_2d_column(&mut samplers[start..end], u);
-        for (k, &u) in u.iter().enumerate() {
-            f(start + k, u);
-        }
+        f(start..end, u);
     }
+}
+
+/// [`for_sample_blocks`] one point at a time: `f(point index, sample)`, in order.
+#[inline]
+fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2)) {
+    for_sample_blocks(samplers, |range, u| {
+        for (i, &u) in range.zip(u) {
+            f(i, u);
+        }
+    });
 }
 
 /// Lobe bits of a Lambertian sample.
@@ -60,20 +69,15 @@ impl Bxdf for DiffuseBxdf {
         out: &mut BxdfSamples,
     ) {
         let (nn, vn) = (ctx.nn(), ctx.vn());
-        let m = ctx.num_points();
-        let mut u = [Vec2::ZERO; CHUNK];
-        for start in (0..m).step_by(CHUNK) {
-            let end = (start + CHUNK).min(m);
-            let u = &mut u[..end - start];
-            next_2d_column(&mut samplers[start..end], u);
+        for_sample_blocks(samplers, |r, u| {
             bxdf::diffuse_sample_world(
-                &nn[start..end],
-                &vn[start..end],
+                &nn[r.clone()],
+                &vn[r.clone()],
                 u,
-                &mut out.wi[start..end],
-                &mut out.pdf[start..end],
+                &mut out.wi[r.clone()],
+                &mut out.pdf[r],
             );
-        }
+        });
         // Cosine-weighted sampling of f = reflectance / pi: the weight is the reflectance.
         // (`out.reset` left black weights and no lobe where there is no sample.)
         for ((weight, lobe), &pdf) in out.weight.iter_mut().zip(&mut out.lobe).zip(&out.pdf) {
