@@ -72,7 +72,6 @@ pub struct BatchTables {
     samplers: Vec<PathSampler>,
     seeds: Vec<u32>,
     pixel_tmp: Vec<u32>,
-    sample_tmp: Vec<u32>,
     light_samples: Vec<Option<LightSample>>,
     eval_value: Vec<Rgb>,
     eval_pdf: Vec<f32>,
@@ -82,7 +81,6 @@ pub struct BatchTables {
     runs: Vec<(u32, std::ops::Range<usize>)>,
     albedo_tmp: Vec<Rgb>,
     hit_scratch: HitScratch,
-    can_continue: Vec<bool>,
     /// Russian-roulette sample of each point of the group being shaded.
     rr_u: Vec<f32>,
 }
@@ -269,53 +267,47 @@ impl PathTracer {
     ) {
         let n = t.paths.len();
         t.seeds.clear();
-        t.sample_tmp.clear();
-        for i in 0..n {
-            t.seeds
-                .push(pixel_seed(scene.settings.seed, t.paths.pixel[i]));
-            t.sample_tmp.push(t.paths.sample[i]);
-        }
-        // Camera rays.
+        let seed = scene.settings.seed;
+        t.seeds
+            .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
+        // Camera rays, generated straight into the new rows' columns.
         t.rays.clear();
-        let mut origin = vec![Vec3::ZERO; n];
-        let mut direction = vec![Vec3::Z; n];
+        let rays = t.rays.append_default(n);
         stats.time(System::Camera, n, || {
             generate_camera_rays(
                 &scene.camera,
                 &t.paths.pixel,
-                &t.sample_tmp,
+                &t.paths.sample,
                 &t.seeds,
-                &mut origin,
-                &mut direction,
+                rays.origin,
+                rays.direction,
             )
         });
-        for i in 0..n {
-            t.rays.push(RayRow {
-                origin: origin[i],
-                direction: direction[i],
-                tmin: 0.0,
-                tmax: f32::INFINITY,
-                path: i as u32,
-                throughput: Rgb::WHITE,
-                lobe: LobeSampled::NONE,
-                depth: 0,
-                passes: 0,
-                pdf: 0.0,
-                eta_scale: 1.0,
-                dimension: FIRST_PATH_DIMENSION,
-                shading_ctx_index: u32::MAX,
-                prev_p: origin[i],
-                volume_stack: scene.camera_stack.clone(),
-            });
+        // tmin 0, lobe NONE, depth 0, passes 0, pdf 0: the defaults.
+        rays.tmax.fill(f32::INFINITY);
+        for (i, path) in rays.path.iter_mut().enumerate() {
+            *path = i as u32;
+        }
+        rays.throughput.fill(Rgb::WHITE);
+        rays.eta_scale.fill(1.0);
+        rays.dimension.fill(FIRST_PATH_DIMENSION);
+        rays.shading_ctx_index.fill(u32::MAX);
+        rays.prev_p.copy_from_slice(rays.origin);
+        if !scene.camera_stack.is_empty() {
+            for stack in rays.volume_stack.iter_mut() {
+                stack.clone_from(&scene.camera_stack);
+            }
         }
         stats.add_rays(n);
+        let mut first_bounce = true;
         while !t.rays.is_empty() {
             self.trace(scene, t, stats, arena);
-            self.shade(scene, t, stats, arena);
+            self.shade(scene, t, stats, arena, first_bounce);
             self.transmission(scene, t, stats, arena);
             std::mem::swap(&mut t.rays, &mut t.next);
             t.next.clear();
             stats.add_rays(t.rays.len());
+            first_bounce = false;
         }
     }
 
@@ -650,251 +642,265 @@ impl PathTracer {
         let Some(le) = scene.shapes[shape as usize].emission else {
             return;
         };
-        if !self.emission_counts(scene, &t.incoming, r) {
+        self.add_emission(
+            scene,
+            pts,
+            &t.incoming,
+            &mut t.paths,
+            r,
+            i,
+            le,
+            transmission,
+        );
+    }
+
+    /// Adds the emission `le` of the front face of emissive shape at point `i` (hit by
+    /// incoming ray `r`) to the ray's path, if inside the depth budget, MIS-weighted. Kept
+    /// out of line: the shade loop tests the (rare) emissive front faces itself.
+    #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+    #[inline(never)]
+    fn add_emission(
+        &self,
+        scene: &CompiledScene,
+        pts: &ShadingPoints,
+        incoming: &Rays,
+        paths: &mut Paths,
+        r: usize,
+        i: usize,
+        le: Rgb,
+        transmission: Rgb,
+    ) {
+        if !self.emission_counts(scene, incoming, r) {
             return;
         }
+        let shape = pts.shape[i];
         let p = pts.p[i];
         let ng = pts.ng[i];
-        let prev = t.incoming.prev_p[r];
-        let w = self.emitter_mis(&t.incoming, r, || {
-            light_pdf_at(scene, shape, prev, p, ng, &t.incoming, r)
+        let prev = incoming.prev_p[r];
+        let w = self.emitter_mis(incoming, r, || {
+            light_pdf_at(scene, shape, prev, p, ng, incoming, r)
         });
-        let path = t.incoming.path[r] as usize;
-        t.paths.radiance[path] += t.incoming.throughput[r] * transmission * le * w;
+        let path = incoming.path[r] as usize;
+        paths.radiance[path] += incoming.throughput[r] * transmission * le * w;
     }
 
     /// Shade stage: emission, Bxdf sampling, direct lighting, Russian roulette, next rays.
+    /// `first_bounce` is true when `t.incoming` may hold camera rays (the first iteration of
+    /// the batch; later rays have scattered at least once), the only ones that record AOVs.
+    ///
+    /// The loops write the next rays and the shadow rays into rows appended up front for all
+    /// groups ([`Rays::append_default`]) and truncate the unused ones at the end, instead of
+    /// pushing row by row: a push checks capacity and stores the length of each of the 15
+    /// columns.
     fn shade(
         &self,
         scene: &CompiledScene,
         t: &mut BatchTables,
         stats: &mut SystemStats,
         arena: &Bump,
+        first_bounce: bool,
     ) {
         let settings = scene.settings;
-        let groups = std::mem::take(&mut t.groups.groups);
+        let features = scene.features;
+        let BatchTables {
+            paths,
+            incoming,
+            next,
+            groups: shade_groups,
+            shadow,
+            samples,
+            samplers,
+            seeds,
+            light_samples,
+            eval_value,
+            eval_pdf,
+            wi_tmp,
+            albedo_tmp,
+            rr_u,
+            ..
+        } = t;
+        let groups = std::mem::take(&mut shade_groups.groups);
+        let pts = &shade_groups.points;
         let total: usize = groups.iter().map(|g| g.range.len()).sum();
         let shade_start = std::time::Instant::now();
-        let has_emitters = scene.features.area_lights;
+        // Without materials that compute interiors or let rays cross their surface, no stack
+        // ever gets an entry (only shapes of such materials are tracked, see
+        // `CompiledScene::tracks_interior`): every stack is the empty default and the stack
+        // columns need no per-row copies.
+        let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
+        let light_sampling_possible =
+            self.technique != LightingTechnique::BxdfOnly && !scene.lights.is_empty();
+        // Every point spawns at most one shadow ray and one next ray: room for all of them
+        // at once, truncated to the rows written after the last group.
+        let (shadow_base, next_base) = (shadow.len(), next.len());
+        let mut shadow_out = shadow.append_default(total);
+        let mut next_out = next.append_default(total);
+        let (mut shadow_len, mut next_len) = (0, 0);
         for g in &groups {
             let range = g.range.clone();
+            let m = range.len();
+            let ray_id = &pts.ray_id[range.clone()];
             // Transmission of the incident segment multiplies the throughput first (only
             // volume integrators return points with transmission other than 1).
-            if scene.features.volumes {
-                for i in range.clone() {
-                    let r = t.groups.points.ray_id[i] as usize;
-                    t.incoming.throughput[r] *= t.groups.points.transmission[i];
+            if features.volumes {
+                for (&r, &tr) in ray_id.iter().zip(&pts.transmission[range.clone()]) {
+                    incoming.throughput[r as usize] *= tr;
                 }
             }
-            if has_emitters {
-                for i in range.clone() {
-                    let r = t.groups.points.ray_id[i] as usize;
-                    // Throughput already includes the transmission.
-                    self.surface_emission(scene, t, r, i, Rgb::WHITE);
+            if features.area_lights {
+                let shape = &pts.shape[range.clone()];
+                let front = &pts.front_face[range.clone()];
+                for (k, ((&r, &shape), &front)) in ray_id.iter().zip(shape).zip(front).enumerate() {
+                    // The cheap tests of `surface_emission` first: most points are not on
+                    // emitters.
+                    if shape == u32::MAX || !front {
+                        continue;
+                    }
+                    if let Some(le) = scene.shapes[shape as usize].emission {
+                        // Throughput already includes the transmission.
+                        let i = range.start + k;
+                        self.add_emission(
+                            scene,
+                            pts,
+                            incoming,
+                            paths,
+                            r as usize,
+                            i,
+                            le,
+                            Rgb::WHITE,
+                        );
+                    }
                 }
             }
-            let ctx = ShadingContext::new(&t.groups.points, range.clone(), g.mode, g.material, &[]);
+            let ctx = ShadingContext::new(pts, range.clone(), g.mode, g.material, &[]);
             let factory = scene.materials[g.material as usize].factory.as_ref();
             let bxdf_start = std::time::Instant::now();
             let bxdf = factory.begin_scatter(&ctx, g.mode, arena);
             let lobes = bxdf.lobes();
-            let m = range.len();
-            let ray_id = &t.groups.points.ray_id[range.clone()];
 
             // AOVs at the first vertex.
-            let first_vertex = |r: usize| t.incoming.depth[r] == 0 && t.incoming.passes[r] == 0;
-            if ray_id.iter().any(|&r| first_vertex(r as usize)) {
-                t.albedo_tmp.resize(m, Rgb::BLACK);
-                bxdf.albedo(&ctx, &mut t.albedo_tmp);
+            let first_vertex = |r: usize| incoming.depth[r] == 0 && incoming.passes[r] == 0;
+            if first_bounce && ray_id.iter().any(|&r| first_vertex(r as usize)) {
+                albedo_tmp.resize(m, Rgb::BLACK);
+                bxdf.albedo(&ctx, albedo_tmp);
                 for (k, i) in range.clone().enumerate() {
                     let r = ray_id[k] as usize;
                     if first_vertex(r) {
-                        let path = t.incoming.path[r] as usize;
-                        t.paths.albedo[path] = t.albedo_tmp[k];
-                        t.paths.normal[path] = t.groups.points.nn[i];
-                        t.paths.depth[path] = t.groups.points.vlen[i];
+                        let path = incoming.path[r] as usize;
+                        paths.albedo[path] = albedo_tmp[k];
+                        paths.normal[path] = pts.nn[i];
+                        paths.depth[path] = pts.vlen[i];
                     }
                 }
             }
 
-            // Per-point samplers at this vertex's dimensions, and which points may continue:
-            // the next segment must fit in max_depth.
-            t.samplers.clear();
-            t.can_continue.clear();
-            for &r in ray_id {
+            // Per-point samplers at this vertex's dimensions.
+            samplers.clear();
+            samplers.extend(ray_id.iter().map(|&r| {
                 let r = r as usize;
-                t.samplers.push(self.sampler(t, &t.incoming, r));
-                t.can_continue
-                    .push((t.incoming.depth[r] as u32 + 2) <= settings.max_depth);
-            }
+                let path = incoming.path[r] as usize;
+                PathSampler {
+                    seed: seeds[path],
+                    sample: paths.sample[path],
+                    dimension: incoming.dimension[r],
+                }
+            }));
+            // Which points may continue: the next segment must fit in max_depth.
+            let can_continue = |r: usize| (incoming.depth[r] as u32 + 2) <= settings.max_depth;
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
-            t.rr_u.clear();
-            let light_sampling = lobes.contains(LobeSampled::DIFFUSE)
-                && self.technique != LightingTechnique::BxdfOnly
-                && !scene.lights.is_empty();
-            if light_sampling {
+            rr_u.clear();
+            rr_u.resize(m, 0.0);
+            if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
                 let lstart = std::time::Instant::now();
-                t.light_samples.clear();
-                t.wi_tmp.clear();
-                for (k, i) in range.clone().enumerate() {
-                    let [u0, u1, sel, rr] = t.samplers[k].next_4d();
-                    t.rr_u.push(rr);
-                    let ls = if t.can_continue[k] {
-                        scene.lights.sample(
-                            &scene.geometry,
-                            t.groups.points.p[i],
-                            sel,
-                            glam::Vec2::new(u0, u1),
-                        )
-                    } else {
-                        None
-                    };
-                    t.wi_tmp.push(ls.map_or(Vec3::Z, |l| l.wi));
-                    t.light_samples.push(ls);
+                light_samples.clear();
+                light_samples.resize(m, None);
+                wi_tmp.clear();
+                wi_tmp.resize(m, Vec3::Z);
+                let p = &pts.p[range.clone()];
+                for (((((s, &r), &p), rr), wi), ls_out) in samplers
+                    .iter_mut()
+                    .zip(ray_id)
+                    .zip(p)
+                    .zip(rr_u.iter_mut())
+                    .zip(wi_tmp.iter_mut())
+                    .zip(light_samples.iter_mut())
+                {
+                    // Leaves the sampler at the vertex's dimension 4, where the Bxdf starts.
+                    let [u0, u1, sel, u_rr] = s.next_4d();
+                    *rr = u_rr;
+                    if can_continue(r as usize) {
+                        let ls =
+                            scene
+                                .lights
+                                .sample(&scene.geometry, p, sel, glam::Vec2::new(u0, u1));
+                        if let Some(l) = ls {
+                            *wi = l.wi;
+                        }
+                        *ls_out = ls;
+                    }
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
-                t.eval_value.resize(m, Rgb::BLACK);
-                t.eval_pdf.resize(m, 0.0);
-                bxdf.evaluate_samples(&ctx, &t.wi_tmp, &mut t.eval_value, &mut t.eval_pdf);
-                for (k, i) in range.clone().enumerate() {
-                    let Some(ls) = t.light_samples[k] else {
-                        continue;
-                    };
-                    let f = t.eval_value[k];
-                    if f.is_black() {
-                        continue;
-                    }
-                    let r = ray_id[k] as usize;
-                    let w = if ls.delta || self.technique == LightingTechnique::NeeOnly {
-                        1.0
-                    } else {
-                        power_heuristic(ls.pdf, t.eval_pdf[k])
-                    };
-                    let c = t.incoming.throughput[r] * f * ls.radiance * (w / ls.pdf);
-                    if c.is_black() {
-                        continue;
-                    }
-                    let p = t.groups.points.p[i];
-                    let ng = t.groups.points.ng[i];
-                    let origin = if g.mode == ShadingMode::Scatter {
-                        let side = if ls.wi.dot(ng) >= 0.0 { ng } else { -ng };
-                        p + side * ray_offset(p)
-                    } else {
-                        p
-                    };
-                    let mut stack = t.incoming.volume_stack[r].clone();
-                    // A shadow ray leaving through the surface it starts on enters (or leaves)
-                    // that shape's interior.
-                    let shape = t.groups.points.shape[i];
-                    if g.mode == ShadingMode::Scatter
-                        && (ls.wi.dot(ng) >= 0.0) != (t.groups.points.vn[i].dot(ng) >= 0.0)
-                        && scene.tracks_interior(shape)
-                    {
-                        stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i]);
-                    }
-                    t.shadow.push(ShadowRayRow {
-                        origin,
-                        direction: ls.wi,
-                        tmax: if ls.distance.is_finite() {
-                            ls.distance * (1.0 - 1e-4) - ray_offset(p)
-                        } else {
-                            f32::INFINITY
-                        },
-                        contribution: c,
-                        path: t.incoming.path[r],
-                        volume_stack: stack,
-                    });
-                }
+                eval_value.resize(m, Rgb::BLACK);
+                eval_pdf.resize(m, 0.0);
+                bxdf.evaluate_samples(&ctx, wi_tmp, eval_value, eval_pdf);
+                let (light_samples, eval_value, eval_pdf) =
+                    (&light_samples[..m], &eval_value[..m], &eval_pdf[..m]);
+                let (no_mis, mode) = (self.technique == LightingTechnique::NeeOnly, g.mode);
+                let (shadow_scene, incoming) = (stacks.then_some(scene), &*incoming);
+                let light = LightColumns {
+                    samples: &light_samples[..m],
+                    value: &eval_value[..m],
+                    pdf: &eval_pdf[..m],
+                };
+                shadow_len += spawn_shadow_rays(
+                    shadow_scene,
+                    mode,
+                    pts,
+                    range.clone(),
+                    incoming,
+                    light,
+                    no_mis,
+                    &mut shadow_out,
+                    shadow_len,
+                );
             } else {
-                for sampler in &t.samplers {
-                    t.rr_u.push(sample_1d(
-                        sampler.seed,
-                        sampler.sample,
-                        sampler.dimension + 3,
-                    ));
+                for (s, rr) in samplers.iter_mut().zip(rr_u.iter_mut()) {
+                    *rr = sample_1d(s.seed, s.sample, s.dimension + 3);
+                    // The Bxdf starts at the vertex's dimension 4.
+                    s.dimension += 4;
                 }
             }
 
-            // Bxdf sampling for the next bounce, from the vertex's dimension 4 on.
-            for (k, &r) in ray_id.iter().enumerate() {
-                t.samplers[k].dimension = t.incoming.dimension[r as usize] + 4;
-            }
-            t.samples.reset(m);
-            bxdf.generate_samples(&ctx, &mut t.samplers, &mut t.samples);
+            // Bxdf sampling for the next bounce.
+            samples.reset(m);
+            bxdf.generate_samples(&ctx, samplers, samples);
             stats.record(System::Bxdf, m, bxdf_start.elapsed().as_secs_f64());
 
-            let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
-            for (k, i) in range.clone().enumerate() {
-                let r = ray_id[k] as usize;
-                if !t.can_continue[k] {
-                    max_depth += 1;
-                    continue;
-                }
-                let pdf = t.samples.pdf[k];
-                let weight = t.samples.weight[k];
-                if pdf <= 0.0 || weight.is_black() || !weight.is_finite() {
-                    absorbed += 1;
-                    continue;
-                }
-                let mut throughput = t.incoming.throughput[r] * weight;
-                let lobe = t.samples.lobe[k];
-                let eta = t.samples.eta[k];
-                let eta_scale =
-                    t.incoming.eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
-                let depth = t.incoming.depth[r] + 1;
-                // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
-                if depth as u32 > settings.rr_depth {
-                    let q = (throughput.max_channel() * eta_scale).min(0.95);
-                    if t.rr_u[k] >= q {
-                        roulette += 1;
-                        continue;
-                    }
-                    throughput *= 1.0 / q;
-                }
-                let p = t.groups.points.p[i];
-                let ng = t.groups.points.ng[i];
-                let wi = t.samples.wi[k];
-                let mut stack = t.incoming.volume_stack[r].clone();
-                let origin = if g.mode == ShadingMode::Scatter {
-                    let shape = t.groups.points.shape[i];
-                    if lobe.is_transmit()
-                        && scene.tracks_interior(shape)
-                        && stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i])
-                            == StackEvent::UnmatchedExit
-                    {
-                        stats.unmatched_exit(shape);
-                    }
-                    let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
-                    p + side * ray_offset(p)
-                } else {
-                    p
-                };
-                t.next.push(RayRow {
-                    origin,
-                    direction: wi,
-                    tmin: 0.0,
-                    tmax: f32::INFINITY,
-                    path: t.incoming.path[r],
-                    throughput,
-                    lobe,
-                    depth,
-                    passes: t.incoming.passes[r],
-                    pdf: if lobe.is_specular() { 0.0 } else { pdf },
-                    eta_scale,
-                    dimension: t.incoming.dimension[r] + DIMS_PER_VERTEX,
-                    shading_ctx_index: k as u32,
-                    prev_p: p,
-                    volume_stack: stack,
-                });
-            }
+            let stack_scene = stacks.then_some(scene);
+            let (written, max_depth, absorbed, roulette) = continue_paths(
+                stack_scene,
+                settings,
+                g.mode,
+                pts,
+                range.clone(),
+                incoming,
+                samples,
+                &rr_u[..m],
+                &mut next_out,
+                next_len,
+                stats,
+            );
+            next_len += written;
             stats.terminate(Termination::MaxDepth, max_depth);
             stats.terminate(Termination::Absorbed, absorbed);
             stats.terminate(Termination::RussianRoulette, roulette);
         }
+        shadow.truncate(shadow_base + shadow_len);
+        next.truncate(next_base + next_len);
         stats.record(System::Shade, total, shade_start.elapsed().as_secs_f64());
-        t.groups.groups = groups;
+        shade_groups.groups = groups;
     }
 
     /// Transmission stage: walks every shadow ray through the surfaces that let shadows pass
@@ -928,6 +934,262 @@ impl PathTracer {
         stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
         t.shadow.clear();
     }
+}
+
+/// Light samples of a group's points and the Bxdf's response to them.
+struct LightColumns<'a> {
+    /// Light sample per point (`None`: no shadow ray).
+    samples: &'a [Option<LightSample>],
+    /// Bxdf value `f * |cos|` for the sample's direction.
+    value: &'a [Rgb],
+    /// Bxdf pdf of the sample's direction (for MIS).
+    pdf: &'a [f32],
+}
+
+/// Direct-lighting system: writes to `out` from row `start` on one shadow ray per point of
+/// `range` whose
+/// light sample has a non-black contribution `throughput * f * Le * w / pdf` (power heuristic
+/// weight `w` unless the sample is a Dirac light or `no_mis`). `stacks` (the scene, when
+/// volume stacks can be non-empty) copies the rays' stacks and records crossings of the
+/// surface the shadow ray starts on; otherwise the rows keep the empty default stack.
+///
+/// A plain function over columns, written for few instructions per row: the columns are
+/// re-sliced to one length each (`m` for the group's points, the table's length for the
+/// incoming rays) so that each row needs at most one bounds check per length, and the new
+/// rows are written into space appended up front (no per-column capacity checks).
+#[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+#[inline(never)]
+fn spawn_shadow_rays(
+    stacks: Option<&CompiledScene>,
+    mode: ShadingMode,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    incoming: &Rays,
+    light: LightColumns<'_>,
+    no_mis: bool,
+    out: &mut ShadowRayColumns<'_>,
+    start: usize,
+) -> usize {
+    let m = range.len();
+    let n = incoming.len();
+    let (in_throughput, in_path, in_stack) = (
+        &incoming.throughput[..n],
+        &incoming.path[..n],
+        &incoming.volume_stack[..n],
+    );
+    let (ray_id, p, ng, vn) = (
+        &pts.ray_id[range.clone()],
+        &pts.p[range.clone()],
+        &pts.ng[range.clone()],
+        &pts.vn[range.clone()],
+    );
+    let (samples, value, pdf) = (&light.samples[..m], &light.value[..m], &light.pdf[..m]);
+    let rows = start..start + m;
+    let (o_origin, o_direction, o_tmax, o_contribution, o_path, o_stack) = (
+        &mut out.origin[rows.clone()],
+        &mut out.direction[rows.clone()],
+        &mut out.tmax[rows.clone()],
+        &mut out.contribution[rows.clone()],
+        &mut out.path[rows.clone()],
+        &mut out.volume_stack[rows],
+    );
+    let mut j = 0;
+    for k in 0..m {
+        let Some(ls) = samples[k] else {
+            continue;
+        };
+        let f = value[k];
+        if f.is_black() {
+            continue;
+        }
+        let r = ray_id[k] as usize;
+        let w = if ls.delta || no_mis {
+            1.0
+        } else {
+            power_heuristic(ls.pdf, pdf[k])
+        };
+        let c = in_throughput[r] * f * ls.radiance * (w / ls.pdf);
+        if c.is_black() {
+            continue;
+        }
+        let (p, ng) = (p[k], ng[k]);
+        o_origin[j] = if mode == ShadingMode::Scatter {
+            let side = if ls.wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * ray_offset(p)
+        } else {
+            p
+        };
+        o_direction[j] = ls.wi;
+        o_tmax[j] = if ls.distance.is_finite() {
+            ls.distance * (1.0 - 1e-4) - ray_offset(p)
+        } else {
+            f32::INFINITY
+        };
+        o_contribution[j] = c;
+        o_path[j] = in_path[r];
+        if let Some(scene) = stacks {
+            let mut stack = in_stack[r].clone();
+            // A shadow ray leaving through the surface it starts on enters (or leaves) that
+            // shape's interior.
+            let i = range.start + k;
+            let shape = pts.shape[i];
+            if mode == ShadingMode::Scatter
+                && (ls.wi.dot(ng) >= 0.0) != (vn[k].dot(ng) >= 0.0)
+                && scene.tracks_interior(shape)
+            {
+                stack.cross(scene.volume_entry(shape), pts.front_face[i]);
+            }
+            o_stack[j] = stack;
+        }
+        j += 1;
+    }
+    j
+}
+
+/// Path-continuation system: writes to `out` from row `start` on the ray each point of
+/// `range` continues its path with (direction, weight, pdf and lobe from `samples`, Russian roulette with `rr_u`),
+/// unless the path reached `max_depth`, the sample was absorbed or the roulette ended it.
+/// Returns the number of rows written and those three counts. `stacks` as in [`spawn_shadow_rays`]; a transmitted ray
+/// crosses the surface's interior boundary.
+///
+/// Written like [`spawn_shadow_rays`]: columns re-sliced to a common length each, rows
+/// written into space appended up front.
+#[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+#[inline(never)]
+fn continue_paths(
+    stacks: Option<&CompiledScene>,
+    settings: crate::scene::RenderSettings,
+    mode: ShadingMode,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    incoming: &Rays,
+    samples: &BxdfSamples,
+    rr_u: &[f32],
+    out: &mut RayColumns<'_>,
+    start: usize,
+    stats: &mut SystemStats,
+) -> (usize, usize, usize, usize) {
+    let m = range.len();
+    let n = incoming.len();
+    let (in_throughput, in_eta_scale, in_depth, in_passes, in_path, in_dimension, in_stack) = (
+        &incoming.throughput[..n],
+        &incoming.eta_scale[..n],
+        &incoming.depth[..n],
+        &incoming.passes[..n],
+        &incoming.path[..n],
+        &incoming.dimension[..n],
+        &incoming.volume_stack[..n],
+    );
+    let (ray_id, p, ng) = (
+        &pts.ray_id[range.clone()],
+        &pts.p[range.clone()],
+        &pts.ng[range.clone()],
+    );
+    let (s_pdf, s_weight, s_lobe, s_eta, s_wi, rr_u) = (
+        &samples.pdf[..m],
+        &samples.weight[..m],
+        &samples.lobe[..m],
+        &samples.eta[..m],
+        &samples.wi[..m],
+        &rr_u[..m],
+    );
+    let rows = start..start + m;
+    let (o_origin, o_direction, o_tmax, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
+        &mut out.origin[rows.clone()],
+        &mut out.direction[rows.clone()],
+        &mut out.tmax[rows.clone()],
+        &mut out.path[rows.clone()],
+        &mut out.throughput[rows.clone()],
+        &mut out.lobe[rows.clone()],
+        &mut out.depth[rows.clone()],
+        &mut out.passes[rows.clone()],
+    );
+    let (o_pdf, o_eta_scale, o_dimension, o_ctx, o_prev_p, o_stack) = (
+        &mut out.pdf[rows.clone()],
+        &mut out.eta_scale[rows.clone()],
+        &mut out.dimension[rows.clone()],
+        &mut out.shading_ctx_index[rows.clone()],
+        &mut out.prev_p[rows.clone()],
+        &mut out.volume_stack[rows],
+    );
+    let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
+    let mut j = 0;
+    for k in 0..m {
+        let r = ray_id[k] as usize;
+        // The next segment must fit in max_depth.
+        if in_depth[r] as u32 + 2 > settings.max_depth {
+            max_depth += 1;
+            continue;
+        }
+        let pdf = s_pdf[k];
+        let weight = s_weight[k];
+        if pdf <= 0.0 || is_black_or_not_finite(weight) {
+            absorbed += 1;
+            continue;
+        }
+        let mut throughput = in_throughput[r] * weight;
+        let lobe = s_lobe[k];
+        let eta = s_eta[k];
+        let eta_scale = in_eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
+        let depth = in_depth[r] + 1;
+        // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
+        if depth as u32 > settings.rr_depth {
+            let q = (throughput.max_channel() * eta_scale).min(0.95);
+            if rr_u[k] >= q {
+                roulette += 1;
+                continue;
+            }
+            throughput *= 1.0 / q;
+        }
+        let (p, ng) = (p[k], ng[k]);
+        let wi = s_wi[k];
+        if let Some(scene) = stacks {
+            let mut stack = in_stack[r].clone();
+            let i = range.start + k;
+            let shape = pts.shape[i];
+            if mode == ShadingMode::Scatter
+                && lobe.is_transmit()
+                && scene.tracks_interior(shape)
+                && stack.cross(scene.volume_entry(shape), pts.front_face[i])
+                    == StackEvent::UnmatchedExit
+            {
+                stats.unmatched_exit(shape);
+            }
+            o_stack[j] = stack;
+        }
+        o_origin[j] = if mode == ShadingMode::Scatter {
+            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * ray_offset(p)
+        } else {
+            p
+        };
+        o_direction[j] = wi;
+        // tmin: the default 0.
+        o_tmax[j] = f32::INFINITY;
+        o_path[j] = in_path[r];
+        o_throughput[j] = throughput;
+        o_lobe[j] = lobe;
+        o_depth[j] = depth;
+        o_passes[j] = in_passes[r];
+        o_pdf[j] = if lobe.is_specular() { 0.0 } else { pdf };
+        o_eta_scale[j] = eta_scale;
+        o_dimension[j] = in_dimension[r] + DIMS_PER_VERTEX;
+        o_ctx[j] = k as u32;
+        o_prev_p[j] = p;
+        j += 1;
+    }
+    (j, max_depth, absorbed, roulette)
+}
+
+/// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
+/// (signed) zero for finite `x` and NaN for infinities and NaN, so the sum of the three
+/// products is zero exactly when every channel is finite; then the sum of the absolute
+/// values is zero exactly when every channel is (a sum of non-negative numbers is at least
+/// its largest term; overflow gives infinity, not zero).
+#[inline]
+fn is_black_or_not_finite(w: Rgb) -> bool {
+    let finite = w.r * 0.0 + w.g * 0.0 + w.b * 0.0 == 0.0;
+    !finite || w.r.abs() + w.g.abs() + w.b.abs() == 0.0
 }
 
 /// Light-sampling pdf (solid angle at `from`, including selection) of the point `p` on the
