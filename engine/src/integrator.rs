@@ -735,6 +735,8 @@ impl PathTracer {
         let (shadow_base, next_base) = (shadow.len(), next.len());
         let mut shadow_out = shadow.append_default(total);
         let mut next_out = next.append_default(total);
+        // tmin: the default 0.
+        next_out.tmax.fill(f32::INFINITY);
         let (mut shadow_len, mut next_len) = (0, 0);
         for g in &groups {
             let range = g.range.clone();
@@ -947,16 +949,18 @@ struct LightColumns<'a> {
 }
 
 /// Direct-lighting system: writes to `out` from row `start` on one shadow ray per point of
-/// `range` whose
-/// light sample has a non-black contribution `throughput * f * Le * w / pdf` (power heuristic
-/// weight `w` unless the sample is a Dirac light or `no_mis`). `stacks` (the scene, when
-/// volume stacks can be non-empty) copies the rays' stacks and records crossings of the
-/// surface the shadow ray starts on; otherwise the rows keep the empty default stack.
+/// `range` whose light sample has a non-black contribution `throughput * f * Le * w / pdf`
+/// (power heuristic weight `w` unless the sample is a Dirac light or `no_mis`), and returns
+/// the number of rows written. `stacks` (the scene, when volume stacks can be non-empty)
+/// copies the rays' stacks and records crossings of the surface the shadow ray starts on;
+/// otherwise the rows keep the empty default stack.
 ///
-/// A plain function over columns, written for few instructions per row: the columns are
-/// re-sliced to one length each (`m` for the group's points, the table's length for the
-/// incoming rays) so that each row needs at most one bounds check per length, and the new
-/// rows are written into space appended up front (no per-column capacity checks).
+/// Written for few instructions per row: the output rows were appended up front (no
+/// per-column capacity checks), columns are re-sliced to one length each so that a row
+/// needs at most one bounds check per length, and the work is split into passes over
+/// columns that each keep few values live (one fused loop spilled most of them to the
+/// stack). The first pass decides which points get a ray; the later ones fill the other
+/// columns of those rows.
 #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
 #[inline(never)]
 fn spawn_shadow_rays(
@@ -972,18 +976,7 @@ fn spawn_shadow_rays(
 ) -> usize {
     let m = range.len();
     let n = incoming.len();
-    let (in_throughput, in_path, in_stack) = (
-        &incoming.throughput[..n],
-        &incoming.path[..n],
-        &incoming.volume_stack[..n],
-    );
-    let (ray_id, p, ng, vn) = (
-        &pts.ray_id[range.clone()],
-        &pts.p[range.clone()],
-        &pts.ng[range.clone()],
-        &pts.vn[range.clone()],
-    );
-    let (samples, value, pdf) = (&light.samples[..m], &light.value[..m], &light.pdf[..m]);
+    let ray_id = &pts.ray_id[range.clone()];
     let rows = start..start + m;
     let (o_origin, o_direction, o_tmax, o_contribution, o_path, o_stack) = (
         &mut out.origin[rows.clone()],
@@ -993,7 +986,11 @@ fn spawn_shadow_rays(
         &mut out.path[rows.clone()],
         &mut out.volume_stack[rows],
     );
-    let mut j = 0;
+    // Pass 1: contributions. `o_path` holds the point index `k` of each row until pass 3
+    // replaces it by the path; `o_tmax` the light sample's distance until pass 2.
+    let in_throughput = &incoming.throughput[..n];
+    let (samples, value, pdf) = (&light.samples[..m], &light.value[..m], &light.pdf[..m]);
+    let mut count = 0;
     for k in 0..m {
         let Some(ls) = samples[k] else {
             continue;
@@ -1002,58 +999,83 @@ fn spawn_shadow_rays(
         if f.is_black() {
             continue;
         }
-        let r = ray_id[k] as usize;
         let w = if ls.delta || no_mis {
             1.0
         } else {
             power_heuristic(ls.pdf, pdf[k])
         };
-        let c = in_throughput[r] * f * ls.radiance * (w / ls.pdf);
+        let c = in_throughput[ray_id[k] as usize] * f * ls.radiance * (w / ls.pdf);
         if c.is_black() {
             continue;
         }
-        let (p, ng) = (p[k], ng[k]);
-        o_origin[j] = if mode == ShadingMode::Scatter {
-            let side = if ls.wi.dot(ng) >= 0.0 { ng } else { -ng };
-            p + side * ray_offset(p)
+        o_contribution[count] = c;
+        o_direction[count] = ls.wi;
+        o_tmax[count] = ls.distance;
+        o_path[count] = k as u32;
+        count += 1;
+    }
+    // Pass 2: origins (offset to the side of the surface the ray leaves to) and lengths.
+    let (p, ng) = (&pts.p[range.clone()], &pts.ng[range.clone()]);
+    for (((origin, tmax), &wi), &k) in o_origin[..count]
+        .iter_mut()
+        .zip(&mut o_tmax[..count])
+        .zip(&o_direction[..count])
+        .zip(&o_path[..count])
+    {
+        let (p, ng) = (p[k as usize], ng[k as usize]);
+        let offset = ray_offset(p);
+        *origin = if mode == ShadingMode::Scatter {
+            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * offset
         } else {
             p
         };
-        o_direction[j] = ls.wi;
-        o_tmax[j] = if ls.distance.is_finite() {
-            ls.distance * (1.0 - 1e-4) - ray_offset(p)
+        let distance = *tmax;
+        *tmax = if distance.is_finite() {
+            distance * (1.0 - 1e-4) - offset
         } else {
             f32::INFINITY
         };
-        o_contribution[j] = c;
-        o_path[j] = in_path[r];
-        if let Some(scene) = stacks {
-            let mut stack = in_stack[r].clone();
+    }
+    // Pass 3: volume stacks (while `o_path` still names the points), then paths.
+    if let Some(scene) = stacks {
+        let (in_stack, vn) = (&incoming.volume_stack[..n], &pts.vn[range.clone()]);
+        for ((stack, &wi), &k) in o_stack[..count]
+            .iter_mut()
+            .zip(&o_direction[..count])
+            .zip(&o_path[..count])
+        {
+            let k = k as usize;
+            *stack = in_stack[ray_id[k] as usize].clone();
             // A shadow ray leaving through the surface it starts on enters (or leaves) that
             // shape's interior.
-            let i = range.start + k;
+            let (i, ng) = (range.start + k, pts.ng[range.start + k]);
             let shape = pts.shape[i];
             if mode == ShadingMode::Scatter
-                && (ls.wi.dot(ng) >= 0.0) != (vn[k].dot(ng) >= 0.0)
+                && (wi.dot(ng) >= 0.0) != (vn[k].dot(ng) >= 0.0)
                 && scene.tracks_interior(shape)
             {
                 stack.cross(scene.volume_entry(shape), pts.front_face[i]);
             }
-            o_stack[j] = stack;
         }
-        j += 1;
     }
-    j
+    let in_path = &incoming.path[..n];
+    for path in &mut o_path[..count] {
+        *path = in_path[ray_id[*path as usize] as usize];
+    }
+    count
 }
 
 /// Path-continuation system: writes to `out` from row `start` on the ray each point of
-/// `range` continues its path with (direction, weight, pdf and lobe from `samples`, Russian roulette with `rr_u`),
-/// unless the path reached `max_depth`, the sample was absorbed or the roulette ended it.
-/// Returns the number of rows written and those three counts. `stacks` as in [`spawn_shadow_rays`]; a transmitted ray
-/// crosses the surface's interior boundary.
+/// `range` continues its path with (direction, weight, pdf and lobe from `samples`, Russian
+/// roulette with `rr_u`), unless the path reached `max_depth`, the sample was absorbed or
+/// the roulette ended it. Returns the number of rows written and those three counts.
+/// `stacks` as in [`spawn_shadow_rays`]; a transmitted ray crosses the surface's interior
+/// boundary. Rows keep the default `tmin` 0; the caller sets `tmax`.
 ///
-/// Written like [`spawn_shadow_rays`]: columns re-sliced to a common length each, rows
-/// written into space appended up front.
+/// Written like [`spawn_shadow_rays`]: a first pass decides which points continue and
+/// writes the columns it computes, the `shading_ctx_index` column (the point index `k`)
+/// then drives passes over the other columns.
 #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
 #[inline(never)]
 fn continue_paths(
@@ -1071,33 +1093,11 @@ fn continue_paths(
 ) -> (usize, usize, usize, usize) {
     let m = range.len();
     let n = incoming.len();
-    let (in_throughput, in_eta_scale, in_depth, in_passes, in_path, in_dimension, in_stack) = (
-        &incoming.throughput[..n],
-        &incoming.eta_scale[..n],
-        &incoming.depth[..n],
-        &incoming.passes[..n],
-        &incoming.path[..n],
-        &incoming.dimension[..n],
-        &incoming.volume_stack[..n],
-    );
-    let (ray_id, p, ng) = (
-        &pts.ray_id[range.clone()],
-        &pts.p[range.clone()],
-        &pts.ng[range.clone()],
-    );
-    let (s_pdf, s_weight, s_lobe, s_eta, s_wi, rr_u) = (
-        &samples.pdf[..m],
-        &samples.weight[..m],
-        &samples.lobe[..m],
-        &samples.eta[..m],
-        &samples.wi[..m],
-        &rr_u[..m],
-    );
+    let ray_id = &pts.ray_id[range.clone()];
     let rows = start..start + m;
-    let (o_origin, o_direction, o_tmax, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
+    let (o_origin, o_direction, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
         &mut out.origin[rows.clone()],
         &mut out.direction[rows.clone()],
-        &mut out.tmax[rows.clone()],
         &mut out.path[rows.clone()],
         &mut out.throughput[rows.clone()],
         &mut out.lobe[rows.clone()],
@@ -1112,8 +1112,21 @@ fn continue_paths(
         &mut out.prev_p[rows.clone()],
         &mut out.volume_stack[rows],
     );
+    // Pass 1: which points continue, with which throughput.
+    let (in_throughput, in_eta_scale, in_depth) = (
+        &incoming.throughput[..n],
+        &incoming.eta_scale[..n],
+        &incoming.depth[..n],
+    );
+    let (s_pdf, s_weight, s_lobe, s_eta, rr_u) = (
+        &samples.pdf[..m],
+        &samples.weight[..m],
+        &samples.lobe[..m],
+        &samples.eta[..m],
+        &rr_u[..m],
+    );
     let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
-    let mut j = 0;
+    let mut count = 0;
     for k in 0..m {
         let r = ray_id[k] as usize;
         // The next segment must fit in max_depth.
@@ -1141,10 +1154,61 @@ fn continue_paths(
             }
             throughput *= 1.0 / q;
         }
-        let (p, ng) = (p[k], ng[k]);
-        let wi = s_wi[k];
-        if let Some(scene) = stacks {
-            let mut stack = in_stack[r].clone();
+        o_throughput[count] = throughput;
+        o_eta_scale[count] = eta_scale;
+        o_depth[count] = depth;
+        o_lobe[count] = lobe;
+        o_pdf[count] = if lobe.is_specular() { 0.0 } else { pdf };
+        o_ctx[count] = k as u32;
+        count += 1;
+    }
+    let ctx = &o_ctx[..count];
+    // Pass 2: geometry. Rays leave from the side of the surface they go to.
+    let (p, ng, s_wi) = (
+        &pts.p[range.clone()],
+        &pts.ng[range.clone()],
+        &samples.wi[..m],
+    );
+    for (((origin, direction), prev_p), &k) in o_origin[..count]
+        .iter_mut()
+        .zip(&mut o_direction[..count])
+        .zip(&mut o_prev_p[..count])
+        .zip(ctx)
+    {
+        let k = k as usize;
+        let (p, ng, wi) = (p[k], ng[k], s_wi[k]);
+        *origin = if mode == ShadingMode::Scatter {
+            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * ray_offset(p)
+        } else {
+            p
+        };
+        *direction = wi;
+        *prev_p = p;
+    }
+    // Pass 3: what the path carries over from the incoming ray.
+    let (in_path, in_passes, in_dimension) = (
+        &incoming.path[..n],
+        &incoming.passes[..n],
+        &incoming.dimension[..n],
+    );
+    for (((path, passes), dimension), &k) in o_path[..count]
+        .iter_mut()
+        .zip(&mut o_passes[..count])
+        .zip(&mut o_dimension[..count])
+        .zip(ctx)
+    {
+        let r = ray_id[k as usize] as usize;
+        *path = in_path[r];
+        *passes = in_passes[r];
+        *dimension = in_dimension[r] + DIMS_PER_VERTEX;
+    }
+    // Pass 4: volume stacks; a transmitted ray crosses the surface's interior boundary.
+    if let Some(scene) = stacks {
+        let in_stack = &incoming.volume_stack[..n];
+        for ((stack, &lobe), &k) in o_stack[..count].iter_mut().zip(&o_lobe[..count]).zip(ctx) {
+            let k = k as usize;
+            *stack = in_stack[ray_id[k] as usize].clone();
             let i = range.start + k;
             let shape = pts.shape[i];
             if mode == ShadingMode::Scatter
@@ -1155,30 +1219,9 @@ fn continue_paths(
             {
                 stats.unmatched_exit(shape);
             }
-            o_stack[j] = stack;
         }
-        o_origin[j] = if mode == ShadingMode::Scatter {
-            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
-            p + side * ray_offset(p)
-        } else {
-            p
-        };
-        o_direction[j] = wi;
-        // tmin: the default 0.
-        o_tmax[j] = f32::INFINITY;
-        o_path[j] = in_path[r];
-        o_throughput[j] = throughput;
-        o_lobe[j] = lobe;
-        o_depth[j] = depth;
-        o_passes[j] = in_passes[r];
-        o_pdf[j] = if lobe.is_specular() { 0.0 } else { pdf };
-        o_eta_scale[j] = eta_scale;
-        o_dimension[j] = in_dimension[r] + DIMS_PER_VERTEX;
-        o_ctx[j] = k as u32;
-        o_prev_p[j] = p;
-        j += 1;
     }
-    (j, max_depth, absorbed, roulette)
+    (count, max_depth, absorbed, roulette)
 }
 
 /// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
