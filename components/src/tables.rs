@@ -75,6 +75,16 @@ macro_rules! soa_table {
                 $( self.$field.resize(start + n, Default::default()); )*
                 $cols { $( $field: &mut self.$field[start..start + n], )* }
             }
+            /// Sets the table to `n` rows and returns every column, for a caller that
+            /// overwrites every column of every row it keeps: rows that existed keep their old
+            /// values, only rows beyond the old length are defaults. A table whose rows are
+            /// dead can so be refilled without first writing defaults into every column as
+            /// [`append_default`](Self::append_default) does.
+            #[inline]
+            pub fn reuse_rows(&mut self, n: usize) -> $cols<'_> {
+                $( self.$field.resize(n, Default::default()); )*
+                $cols { $( $field: &mut self.$field[..n], )* }
+            }
             /// Keeps the first `n` rows (no effect when the table is not longer).
             #[inline]
             pub fn truncate(&mut self, n: usize) {
@@ -89,6 +99,11 @@ macro_rules! soa_table {
             #[inline]
             pub fn push_from(&mut self, other: &Self, i: usize) {
                 $( self.$field.push(other.$field[i].clone()); )*
+            }
+            /// Appends a copy of every row of `other`.
+            #[inline]
+            pub fn extend_from(&mut self, other: &Self) {
+                $( self.$field.extend_from_slice(&other.$field); )*
             }
             /// Debug check that every column has the same length.
             pub fn is_consistent(&self) -> bool {

@@ -68,6 +68,9 @@ pub struct BatchTables {
     groups: ShadeGroups,
     tmp: ShadeGroups,
     shadow: ShadowRays,
+    /// Storage for the shade stage's shadow rays: the dead rows of the last transmission
+    /// stage, overwritten (`ShadowRays::reuse_rows`) and then moved to `shadow`.
+    shadow_spare: ShadowRays,
     samples: BxdfSamples,
     samplers: Vec<PathSampler>,
     seeds: Vec<u32>,
@@ -83,6 +86,11 @@ pub struct BatchTables {
     hit_scratch: HitScratch,
     /// Russian-roulette sample of each point of the group being shaded.
     rr_u: Vec<f32>,
+    /// Whether some emissive shape has the material (per material index): the shade stage
+    /// looks for emitters only in the groups of those materials.
+    emissive_material: Vec<bool>,
+    /// Contributions of the shadow rays, attenuated by the transmission stage.
+    contribution: Vec<Rgb>,
 }
 
 /// Film plus optional AOV accumulators for one tile.
@@ -215,39 +223,47 @@ impl PathTracer {
         while s0 < samples.end {
             let s1 = (s0 + per_batch).min(samples.end);
             let t = &mut *tables;
+            // One path per pixel and sample, pixel-major; radiance, albedo and normal start
+            // black (the defaults), depth at infinity (no hit yet).
             t.paths.clear();
+            let count = pixels * (s1 - s0) as usize;
+            let paths = t.paths.append_default(count);
+            let spp = (s1 - s0) as usize;
+            let mut rows = paths
+                .pixel
+                .chunks_exact_mut(spp)
+                .zip(paths.sample.chunks_exact_mut(spp));
             for y in 0..h {
                 for x in 0..w {
-                    let pixel = (tile.y0 + y) * scene.camera.width + tile.x0 + x;
-                    for s in s0..s1 {
-                        t.paths.push(PathRow {
-                            pixel,
-                            sample: s,
-                            radiance: Rgb::BLACK,
-                            albedo: Rgb::BLACK,
-                            normal: Vec3::ZERO,
-                            depth: f32::INFINITY,
-                        });
+                    let (pixel, sample) = rows.next().expect("one run of rows per pixel");
+                    pixel.fill((tile.y0 + y) * scene.camera.width + tile.x0 + x);
+                    for (v, s) in sample.iter_mut().zip(s0..s1) {
+                        *v = s;
                     }
                 }
             }
+            paths.depth.fill(f32::INFINITY);
             self.run_batch(scene, t, stats, arena);
             // Splat: the film gets one sample per path.
             let n = t.paths.len();
             t.pixel_tmp.clear();
-            for i in 0..n {
-                t.pixel_tmp
-                    .push(tile.local(t.paths.pixel[i], scene.camera.width));
-            }
+            let image_width = scene.camera.width;
+            t.pixel_tmp
+                .extend(t.paths.pixel.iter().map(|&p| tile.local(p, image_width)));
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
             });
             stats.drop_nan(dropped as usize);
-            for i in 0..n {
-                let p = t.pixel_tmp[i] as usize;
-                tile.albedo[p] += t.paths.albedo[i];
-                tile.normal[p] += t.paths.normal[i];
-                let d = t.paths.depth[i];
+            let aovs = t
+                .paths
+                .albedo
+                .iter()
+                .zip(&t.paths.normal)
+                .zip(&t.paths.depth);
+            for (&p, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
+                let p = p as usize;
+                tile.albedo[p] += albedo;
+                tile.normal[p] += normal;
                 tile.depth[p] += if d.is_finite() { d } else { 0.0 };
             }
             stats.add_samples(n);
@@ -270,35 +286,43 @@ impl PathTracer {
         let seed = scene.settings.seed;
         t.seeds
             .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
-        // Camera rays, generated straight into the new rows' columns.
-        t.rays.clear();
-        let rays = t.rays.append_default(n);
+        // Camera rays, generated straight into the table's columns; every other column is
+        // written once with its start value.
+        let rays = &mut t.rays;
+        rays.clear();
+        rays.origin.resize(n, Vec3::ZERO);
+        rays.direction.resize(n, Vec3::Z);
         stats.time(System::Camera, n, || {
             generate_camera_rays(
                 &scene.camera,
                 &t.paths.pixel,
                 &t.paths.sample,
                 &t.seeds,
-                rays.origin,
-                rays.direction,
+                &mut rays.origin,
+                &mut rays.direction,
             )
         });
-        // tmin 0, lobe NONE, depth 0, passes 0, pdf 0: the defaults.
-        rays.tmax.fill(f32::INFINITY);
-        for (i, path) in rays.path.iter_mut().enumerate() {
-            *path = i as u32;
-        }
-        rays.throughput.fill(Rgb::WHITE);
-        rays.eta_scale.fill(1.0);
-        rays.dimension.fill(FIRST_PATH_DIMENSION);
-        rays.shading_ctx_index.fill(u32::MAX);
-        rays.prev_p.copy_from_slice(rays.origin);
-        if !scene.camera_stack.is_empty() {
-            for stack in rays.volume_stack.iter_mut() {
-                stack.clone_from(&scene.camera_stack);
-            }
-        }
+        rays.tmin.resize(n, 0.0);
+        rays.tmax.resize(n, f32::INFINITY);
+        rays.path.extend(0..n as u32);
+        rays.throughput.resize(n, Rgb::WHITE);
+        rays.lobe.resize(n, LobeSampled::NONE);
+        rays.depth.resize(n, 0);
+        rays.passes.resize(n, 0);
+        rays.pdf.resize(n, 0.0);
+        rays.eta_scale.resize(n, 1.0);
+        rays.dimension.resize(n, FIRST_PATH_DIMENSION);
+        rays.shading_ctx_index.resize(n, u32::MAX);
+        rays.prev_p.extend_from_slice(&rays.origin);
+        rays.volume_stack.resize(n, scene.camera_stack.clone());
+        rays.debug_check();
         stats.add_rays(n);
+        // A point's material is its shape's (`IntegratorContext::nearest_hits`).
+        t.emissive_material.clear();
+        t.emissive_material.resize(scene.materials.len(), false);
+        for shape in scene.shapes.iter().filter(|s| s.emission.is_some()) {
+            t.emissive_material[shape.material as usize] = true;
+        }
         let mut first_bounce = true;
         while !t.rays.is_empty() {
             self.trace(scene, t, stats, arena);
@@ -332,6 +356,10 @@ impl PathTracer {
         arena: &Bump,
     ) {
         let features = scene.features;
+        // The last bounce's rays are dead: their rows become the storage the shade stage
+        // overwrites with the next rays (`Rays::reuse_rows`), which spares it writing
+        // defaults into every column of fresh rows first.
+        std::mem::swap(&mut t.incoming, &mut t.next);
         t.incoming.clear();
         t.groups.clear();
         std::mem::swap(&mut t.pending, &mut t.rays);
@@ -708,6 +736,7 @@ impl PathTracer {
             next,
             groups: shade_groups,
             shadow,
+            shadow_spare,
             samples,
             samplers,
             seeds,
@@ -717,6 +746,7 @@ impl PathTracer {
             wi_tmp,
             albedo_tmp,
             rr_u,
+            emissive_material,
             ..
         } = t;
         let groups = std::mem::take(&mut shade_groups.groups);
@@ -732,11 +762,15 @@ impl PathTracer {
             self.technique != LightingTechnique::BxdfOnly && !scene.lights.is_empty();
         // Every point spawns at most one shadow ray and one next ray: room for all of them
         // at once, truncated to the rows written after the last group.
-        let (shadow_base, next_base) = (shadow.len(), next.len());
-        let mut shadow_out = shadow.append_default(total);
-        let mut next_out = next.append_default(total);
-        // tmin: the default 0.
+        // `next` holds no live rows here, only the dead rows of an earlier bounce (see
+        // `trace`), which `continue_paths` overwrites column by column.
+        let mut shadow_out = shadow_spare.reuse_rows(total);
+        let mut next_out = next.reuse_rows(total);
+        next_out.tmin.fill(0.0);
         next_out.tmax.fill(f32::INFINITY);
+        // Without stacks (see above) every stack, dead rows' included, is the empty default.
+        debug_assert!(stacks || next_out.volume_stack.iter().all(VolumeStack::is_empty));
+        debug_assert!(stacks || shadow_out.volume_stack.iter().all(VolumeStack::is_empty));
         let (mut shadow_len, mut next_len) = (0, 0);
         for g in &groups {
             let range = g.range.clone();
@@ -749,7 +783,7 @@ impl PathTracer {
                     incoming.throughput[r as usize] *= tr;
                 }
             }
-            if features.area_lights {
+            if features.area_lights && emissive_material[g.material as usize] {
                 let shape = &pts.shape[range.clone()];
                 let front = &pts.front_face[range.clone()];
                 for (k, ((&r, &shape), &front)) in ray_id.iter().zip(shape).zip(front).enumerate() {
@@ -812,49 +846,45 @@ impl PathTracer {
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
-            rr_u.clear();
-            rr_u.resize(m, 0.0);
+            let rr_u = scratch(rr_u, m, 0.0);
             if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
                 let lstart = std::time::Instant::now();
-                light_samples.clear();
-                light_samples.resize(m, None);
-                wi_tmp.clear();
-                wi_tmp.resize(m, Vec3::Z);
+                let light_samples = scratch(light_samples, m, None);
+                let wi = scratch(wi_tmp, m, Vec3::Z);
                 let p = &pts.p[range.clone()];
                 for (((((s, &r), &p), rr), wi), ls_out) in samplers
                     .iter_mut()
                     .zip(ray_id)
                     .zip(p)
                     .zip(rr_u.iter_mut())
-                    .zip(wi_tmp.iter_mut())
+                    .zip(wi.iter_mut())
                     .zip(light_samples.iter_mut())
                 {
                     // Leaves the sampler at the vertex's dimension 4, where the Bxdf starts.
                     let [u0, u1, sel, u_rr] = s.next_4d();
                     *rr = u_rr;
-                    if can_continue(r as usize) {
-                        let ls =
-                            scene
-                                .lights
-                                .sample(&scene.geometry, p, sel, glam::Vec2::new(u0, u1));
-                        if let Some(l) = ls {
-                            *wi = l.wi;
-                        }
-                        *ls_out = ls;
-                    }
+                    let ls = if can_continue(r as usize) {
+                        scene
+                            .lights
+                            .sample(&scene.geometry, p, sel, glam::Vec2::new(u0, u1))
+                    } else {
+                        None
+                    };
+                    *wi = ls.map_or(Vec3::Z, |l| l.wi);
+                    *ls_out = ls;
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
-                eval_value.resize(m, Rgb::BLACK);
-                eval_pdf.resize(m, 0.0);
-                bxdf.evaluate_samples(&ctx, wi_tmp, eval_value, eval_pdf);
-                let (light_samples, eval_value, eval_pdf) =
-                    (&light_samples[..m], &eval_value[..m], &eval_pdf[..m]);
+                let (value, pdf) = (
+                    scratch(eval_value, m, Rgb::BLACK),
+                    scratch(eval_pdf, m, 0.0),
+                );
+                bxdf.evaluate_samples(&ctx, wi, value, pdf);
                 let (no_mis, mode) = (self.technique == LightingTechnique::NeeOnly, g.mode);
                 let (shadow_scene, incoming) = (stacks.then_some(scene), &*incoming);
                 let light = LightColumns {
-                    samples: &light_samples[..m],
-                    value: &eval_value[..m],
-                    pdf: &eval_pdf[..m],
+                    samples: light_samples,
+                    value,
+                    pdf,
                 };
                 shadow_len += spawn_shadow_rays(
                     shadow_scene,
@@ -889,7 +919,7 @@ impl PathTracer {
                 range.clone(),
                 incoming,
                 samples,
-                &rr_u[..m],
+                rr_u,
                 &mut next_out,
                 next_len,
                 stats,
@@ -899,8 +929,14 @@ impl PathTracer {
             stats.terminate(Termination::Absorbed, absorbed);
             stats.terminate(Termination::RussianRoulette, roulette);
         }
-        shadow.truncate(shadow_base + shadow_len);
-        next.truncate(next_base + next_len);
+        next.truncate(next_len);
+        // The shadow rays go after those volume integrators queued during the trace stage.
+        shadow_spare.truncate(shadow_len);
+        if shadow.is_empty() {
+            std::mem::swap(shadow, shadow_spare);
+        } else {
+            shadow.extend_from(shadow_spare);
+        }
         stats.record(System::Shade, total, shade_start.elapsed().as_secs_f64());
         shade_groups.groups = groups;
     }
@@ -919,21 +955,23 @@ impl PathTracer {
             return;
         }
         let start = std::time::Instant::now();
-        let mut contribution = t.shadow.contribution.clone();
+        t.contribution.clear();
+        t.contribution.extend_from_slice(&t.shadow.contribution);
         crate::transmission::trace_shadow_rays(
             scene,
             &t.shadow,
             &t.paths,
             &t.seeds,
-            &mut contribution,
+            &mut t.contribution,
             stats,
             arena,
         );
-        for i in 0..n {
-            let path = t.shadow.path[i] as usize;
-            t.paths.radiance[path] += contribution[i];
+        for (&path, &c) in t.shadow.path.iter().zip(&t.contribution) {
+            t.paths.radiance[path as usize] += c;
         }
         stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
+        // Keep the dead rows as storage for the next shade stage's shadow rays.
+        std::mem::swap(&mut t.shadow, &mut t.shadow_spare);
         t.shadow.clear();
     }
 }
@@ -953,10 +991,11 @@ struct LightColumns<'a> {
 /// (power heuristic weight `w` unless the sample is a Dirac light or `no_mis`), and returns
 /// the number of rows written. `stacks` (the scene, when volume stacks can be non-empty)
 /// copies the rays' stacks and records crossings of the surface the shadow ray starts on;
-/// otherwise the rows keep the empty default stack.
+/// `None` means every stack is empty, and the rows' stacks are left as they are. Every
+/// other column of the rows written is overwritten.
 ///
-/// Written for few instructions per row: the output rows were appended up front (no
-/// per-column capacity checks), columns are re-sliced to one length each so that a row
+/// Written for few instructions per row: the output rows exist up front (no per-column
+/// capacity checks), columns are re-sliced to one length each so that a row
 /// needs at most one bounds check per length, and the work is split into passes over
 /// columns that each keep few values live (one fused loop spilled most of them to the
 /// stack). The first pass decides which points get a ray; the later ones fill the other
@@ -1071,7 +1110,8 @@ fn spawn_shadow_rays(
 /// roulette with `rr_u`), unless the path reached `max_depth`, the sample was absorbed or
 /// the roulette ended it. Returns the number of rows written and those three counts.
 /// `stacks` as in [`spawn_shadow_rays`]; a transmitted ray crosses the surface's interior
-/// boundary. Rows keep the default `tmin` 0; the caller sets `tmax`.
+/// boundary. The caller sets `tmin` and `tmax`; `stacks` being `None` means every stack is
+/// empty, and the rows' stacks are left as they are.
 ///
 /// Written like [`spawn_shadow_rays`]: a first pass decides which points continue and
 /// writes the columns it computes, the `shading_ctx_index` column (the point index `k`)
@@ -1222,6 +1262,17 @@ fn continue_paths(
         }
     }
     (count, max_depth, absorbed, roulette)
+}
+
+/// The first `n` elements of a per-group scratch buffer, grown with `fill` when shorter.
+/// The callers overwrite what they read, so the buffer is filled once per size reached
+/// rather than cleared and refilled for every group.
+#[inline]
+fn scratch<T: Clone>(v: &mut Vec<T>, n: usize, fill: T) -> &mut [T] {
+    if v.len() < n {
+        v.resize(n, fill);
+    }
+    &mut v[..n]
 }
 
 /// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
