@@ -293,4 +293,68 @@ mod tests {
         h.clear();
         assert!(h.is_empty());
     }
+
+    fn hit(t: f32, prim: u32) -> HitRow {
+        HitRow {
+            t,
+            prim,
+            b1: t * 0.5,
+            b2: t * 0.25,
+        }
+    }
+
+    fn prims(h: &Hits) -> Vec<u32> {
+        h.prim.clone()
+    }
+
+    #[test]
+    fn append_default_returns_exactly_the_new_rows() {
+        let mut h = Hits::default();
+        h.push(hit(1.0, 10));
+        h.push(hit(2.0, 20));
+        let cols = h.append_default(3);
+        assert_eq!((cols.t.len(), cols.prim.len(), cols.b1.len()), (3, 3, 3));
+        assert!(cols.prim.iter().all(|&p| p == 0) && cols.t.iter().all(|&t| t == 0.0));
+        cols.prim[0] = 30;
+        cols.t[2] = 5.0;
+        assert_eq!(h.len(), 5);
+        assert!(h.is_consistent());
+        assert_eq!(prims(&h), vec![10, 20, 30, 0, 0]);
+        assert_eq!(h.t[4], 5.0);
+        assert_eq!(h.row(1).b1, 1.0, "existing rows untouched");
+        h.truncate(3);
+        assert_eq!(prims(&h), vec![10, 20, 30]);
+        h.truncate(7);
+        assert_eq!(h.len(), 3, "truncate never grows");
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn reuse_rows_keeps_existing_rows_and_defaults_new_ones() {
+        let mut h = Hits::default();
+        for i in 0..3 {
+            h.push(hit(i as f32 + 1.0, i));
+        }
+        let cols = h.reuse_rows(2);
+        assert_eq!(cols.prim, &[0, 1], "old values, not defaults");
+        assert_eq!(h.len(), 2);
+        let cols = h.reuse_rows(4);
+        assert_eq!(cols.prim.len(), 4);
+        assert_eq!(cols.prim, &[0, 1, 0, 0]);
+        assert_eq!(cols.t, &[1.0, 2.0, 0.0, 0.0]);
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn extend_from_appends_every_row_in_order() {
+        let mut a = Hits::default();
+        a.push(hit(1.0, 1));
+        let mut b = Hits::default();
+        b.push(hit(2.0, 2));
+        b.push(hit(3.0, 3));
+        a.extend_from(&b);
+        assert_eq!(prims(&a), vec![1, 2, 3]);
+        assert_eq!(a.row(2).b2, 0.75);
+        assert!(a.is_consistent());
+    }
 }

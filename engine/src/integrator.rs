@@ -814,35 +814,47 @@ impl PathTracer {
             let bxdf = factory.begin_scatter(&ctx, g.mode, arena);
             let lobes = bxdf.lobes();
 
+            // Incoming-ray columns re-sliced to one length (one bounds check per gather).
+            let n = incoming.len();
+            let (in_depth, in_passes, in_path, in_dimension) = (
+                &incoming.depth[..n],
+                &incoming.passes[..n],
+                &incoming.path[..n],
+                &incoming.dimension[..n],
+            );
+
             // AOVs at the first vertex.
-            let first_vertex = |r: usize| incoming.depth[r] == 0 && incoming.passes[r] == 0;
+            let first_vertex = |r: usize| in_depth[r] == 0 && in_passes[r] == 0;
             if first_bounce && ray_id.iter().any(|&r| first_vertex(r as usize)) {
-                albedo_tmp.resize(m, Rgb::BLACK);
-                bxdf.albedo(&ctx, albedo_tmp);
-                for (k, i) in range.clone().enumerate() {
+                let albedo = scratch(albedo_tmp, m, Rgb::BLACK);
+                bxdf.albedo(&ctx, albedo);
+                let (nn, vlen) = (&pts.nn[range.clone()], &pts.vlen[range.clone()]);
+                for k in 0..m {
                     let r = ray_id[k] as usize;
                     if first_vertex(r) {
-                        let path = incoming.path[r] as usize;
-                        paths.albedo[path] = albedo_tmp[k];
-                        paths.normal[path] = pts.nn[i];
-                        paths.depth[path] = pts.vlen[i];
+                        let path = in_path[r] as usize;
+                        paths.albedo[path] = albedo[k];
+                        paths.normal[path] = nn[k];
+                        paths.depth[path] = vlen[k];
                     }
                 }
             }
 
             // Per-point samplers at this vertex's dimensions.
+            let num_paths = paths.len();
+            let (seed, sample) = (&seeds[..num_paths], &paths.sample[..num_paths]);
             samplers.clear();
             samplers.extend(ray_id.iter().map(|&r| {
                 let r = r as usize;
-                let path = incoming.path[r] as usize;
+                let path = in_path[r] as usize;
                 PathSampler {
-                    seed: seeds[path],
-                    sample: paths.sample[path],
-                    dimension: incoming.dimension[r],
+                    seed: seed[path],
+                    sample: sample[path],
+                    dimension: in_dimension[r],
                 }
             }));
             // Which points may continue: the next segment must fit in max_depth.
-            let can_continue = |r: usize| (incoming.depth[r] as u32 + 2) <= settings.max_depth;
+            let can_continue = |r: usize| (in_depth[r] as u32 + 2) <= settings.max_depth;
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
@@ -851,27 +863,20 @@ impl PathTracer {
                 let lstart = std::time::Instant::now();
                 let light_samples = scratch(light_samples, m, None);
                 let wi = scratch(wi_tmp, m, Vec3::Z);
-                let p = &pts.p[range.clone()];
-                for (((((s, &r), &p), rr), wi), ls_out) in samplers
-                    .iter_mut()
-                    .zip(ray_id)
-                    .zip(p)
-                    .zip(rr_u.iter_mut())
-                    .zip(wi.iter_mut())
-                    .zip(light_samples.iter_mut())
-                {
+                let (p, samplers) = (&pts.p[range.clone()], &mut samplers[..m]);
+                for k in 0..m {
                     // Leaves the sampler at the vertex's dimension 4, where the Bxdf starts.
-                    let [u0, u1, sel, u_rr] = s.next_4d();
-                    *rr = u_rr;
-                    let ls = if can_continue(r as usize) {
+                    let [u0, u1, sel, u_rr] = samplers[k].next_4d();
+                    rr_u[k] = u_rr;
+                    let ls = if can_continue(ray_id[k] as usize) {
                         scene
                             .lights
-                            .sample(&scene.geometry, p, sel, glam::Vec2::new(u0, u1))
+                            .sample(&scene.geometry, p[k], sel, glam::Vec2::new(u0, u1))
                     } else {
                         None
                     };
-                    *wi = ls.map_or(Vec3::Z, |l| l.wi);
-                    *ls_out = ls;
+                    wi[k] = ls.map_or(Vec3::Z, |l| l.wi);
+                    light_samples[k] = ls;
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
                 let (value, pdf) = (
