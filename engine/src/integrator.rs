@@ -774,8 +774,10 @@ impl PathTracer {
         let (mut shadow_len, mut next_len) = (0, 0);
         for g in &groups {
             let range = g.range.clone();
-            let m = range.len();
             let ray_id = &pts.ray_id[range.clone()];
+            // The group's length as the slices' length, so that every column re-sliced to
+            // it shares one bounds check.
+            let m = ray_id.len();
             // Transmission of the incident segment multiplies the throughput first (only
             // volume integrators return points with transmission other than 1).
             if features.volumes {
@@ -828,7 +830,7 @@ impl PathTracer {
             if first_bounce && ray_id.iter().any(|&r| first_vertex(r as usize)) {
                 let albedo = scratch(albedo_tmp, m, Rgb::BLACK);
                 bxdf.albedo(&ctx, albedo);
-                let (nn, vlen) = (&pts.nn[range.clone()], &pts.vlen[range.clone()]);
+                let (nn, vlen) = (&pts.nn[range.clone()][..m], &pts.vlen[range.clone()][..m]);
                 for k in 0..m {
                     let r = ray_id[k] as usize;
                     if first_vertex(r) {
@@ -863,7 +865,7 @@ impl PathTracer {
                 let lstart = std::time::Instant::now();
                 let light_samples = scratch(light_samples, m, None);
                 let wi = scratch(wi_tmp, m, Vec3::Z);
-                let (p, samplers) = (&pts.p[range.clone()], &mut samplers[..m]);
+                let (p, samplers) = (&pts.p[range.clone()][..m], &mut samplers[..m]);
                 for k in 0..m {
                     // Leaves the sampler at the vertex's dimension 4, where the Bxdf starts.
                     let [u0, u1, sel, u_rr] = samplers[k].next_4d();
@@ -1018,9 +1020,8 @@ fn spawn_shadow_rays(
     out: &mut ShadowRayColumns<'_>,
     start: usize,
 ) -> usize {
-    let m = range.len();
-    let n = incoming.len();
     let ray_id = &pts.ray_id[range.clone()];
+    let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
     let (o_origin, o_direction, o_tmax, o_contribution, o_path, o_stack) = (
         &mut out.origin[rows.clone()],
@@ -1059,7 +1060,7 @@ fn spawn_shadow_rays(
         count += 1;
     }
     // Pass 2: origins (offset to the side of the surface the ray leaves to) and lengths.
-    let (p, ng) = (&pts.p[range.clone()], &pts.ng[range.clone()]);
+    let (p, ng) = (&pts.p[range.clone()][..m], &pts.ng[range.clone()][..m]);
     for (((origin, tmax), &wi), &k) in o_origin[..count]
         .iter_mut()
         .zip(&mut o_tmax[..count])
@@ -1083,7 +1084,7 @@ fn spawn_shadow_rays(
     }
     // Pass 3: volume stacks (while `o_path` still names the points), then paths.
     if let Some(scene) = stacks {
-        let (in_stack, vn) = (&incoming.volume_stack[..n], &pts.vn[range.clone()]);
+        let (in_stack, vn) = (&incoming.volume_stack[..n], &pts.vn[range.clone()][..m]);
         for ((stack, &wi), &k) in o_stack[..count]
             .iter_mut()
             .zip(&o_direction[..count])
@@ -1136,9 +1137,8 @@ fn continue_paths(
     start: usize,
     stats: &mut SystemStats,
 ) -> (usize, usize, usize, usize) {
-    let m = range.len();
-    let n = incoming.len();
     let ray_id = &pts.ray_id[range.clone()];
+    let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
     let (o_origin, o_direction, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
         &mut out.origin[rows.clone()],
@@ -1210,8 +1210,8 @@ fn continue_paths(
     let ctx = &o_ctx[..count];
     // Pass 2: geometry. Rays leave from the side of the surface they go to.
     let (p, ng, s_wi) = (
-        &pts.p[range.clone()],
-        &pts.ng[range.clone()],
+        &pts.p[range.clone()][..m],
+        &pts.ng[range.clone()][..m],
         &samples.wi[..m],
     );
     for (((origin, direction), prev_p), &k) in o_origin[..count]
