@@ -100,6 +100,18 @@ macro_rules! soa_table {
             pub fn push_from(&mut self, other: &Self, i: usize) {
                 $( self.$field.push(other.$field[i].clone()); )*
             }
+            /// Keeps the rows `i` with `keep[i]` (in order) and removes the others, in place.
+            ///
+            /// # Panics
+            /// When `keep` is not as long as the table.
+            pub fn retain_rows(&mut self, keep: &[bool]) {
+                assert_eq!(keep.len(), self.len(), "one flag per row");
+                // `Vec::retain` visits the elements in order, exactly once each.
+                $( {
+                    let mut flags = keep.iter();
+                    self.$field.retain(|_| *flags.next().unwrap_or(&false));
+                } )*
+            }
             /// Appends a copy of every row of `other`.
             #[inline]
             pub fn extend_from(&mut self, other: &Self) {
@@ -343,6 +355,27 @@ mod tests {
         assert_eq!(cols.prim, &[0, 1, 0, 0]);
         assert_eq!(cols.t, &[1.0, 2.0, 0.0, 0.0]);
         assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn retain_rows_keeps_flagged_rows_in_order() {
+        let mut h = Hits::default();
+        for i in 0..5 {
+            h.push(hit(i as f32, i));
+        }
+        h.retain_rows(&[true, false, false, true, true]);
+        assert_eq!(prims(&h), vec![0, 3, 4]);
+        assert_eq!(h.t, vec![0.0, 3.0, 4.0]);
+        assert_eq!(h.row(1).b1, 1.5, "rows move whole");
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    #[should_panic(expected = "one flag per row")]
+    fn retain_rows_wants_one_flag_per_row() {
+        let mut h = Hits::default();
+        h.push(hit(1.0, 1));
+        h.retain_rows(&[]);
     }
 
     #[test]

@@ -91,6 +91,10 @@ pub struct BatchTables {
     emissive_material: Vec<bool>,
     /// Contributions of the shadow rays, attenuated by the transmission stage.
     contribution: Vec<Rgb>,
+    /// Which shading points stay in the groups (pass-through points leave).
+    keep: Vec<bool>,
+    /// Number of kept points before each point (prefix sums of `keep`).
+    kept_before: Vec<u32>,
 }
 
 /// Film plus optional AOV accumulators for one tile.
@@ -565,32 +569,41 @@ impl PathTracer {
         if !scene.features.transmissive {
             return;
         }
-        // Pass-throughs: index-matched surfaces and false boundaries never get shaded.
-        let mut keep = ShadeGroups::default();
+        // Pass-throughs: index-matched surfaces and false boundaries never get shaded. Most
+        // rounds have none; the points table is compacted (in place) only when some point
+        // leaves it. `keep[i]`: point `i` stays (points outside every group do not).
         let groups = std::mem::take(&mut t.groups.groups);
-        for g in groups {
+        let n = t.groups.points.len();
+        t.keep.clear();
+        t.keep.resize(n, false);
+        let mut passes = false;
+        for g in &groups {
             if g.mode != ShadingMode::Scatter {
-                let start = keep.points.len();
-                for i in g.range.clone() {
-                    keep.points.push_from(&t.groups.points, i);
-                }
-                keep.groups.push(ShadeGroup {
-                    range: start..keep.points.len(),
-                    ..g
-                });
+                t.keep[g.range.clone()].fill(true);
                 continue;
             }
             let info = &scene.material_info[g.material as usize];
-            let start = keep.points.len();
+            let index_matched = info.hints.contains(InstanceHints::INDEX_MATCHED);
+            let pts = &t.groups.points;
             for i in g.range.clone() {
-                let r = t.groups.points.ray_id[i] as usize;
-                let shape = t.groups.points.shape[i];
-                let pass = info.hints.contains(InstanceHints::INDEX_MATCHED)
-                    || t.incoming.volume_stack[r].is_false_boundary(shape, info.priority);
-                if !pass {
-                    keep.points.push_from(&t.groups.points, i);
+                let r = pts.ray_id[i] as usize;
+                let pass = index_matched
+                    || t.incoming.volume_stack[r].is_false_boundary(pts.shape[i], info.priority);
+                t.keep[i] = !pass;
+                passes |= pass;
+            }
+        }
+        if !passes && t.keep.iter().all(|&k| k) {
+            t.groups.groups = groups;
+            return;
+        }
+        for g in groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
+            for i in g.range.clone() {
+                if t.keep[i] {
                     continue;
                 }
+                let r = t.groups.points.ray_id[i] as usize;
+                let shape = t.groups.points.shape[i];
                 let p = t.groups.points.p[i];
                 let front = t.groups.points.front_face[i];
                 let tr = t.groups.points.transmission[i];
@@ -623,16 +636,26 @@ impl PathTracer {
                 }
                 t.pending.push(row);
             }
-            if keep.points.len() > start {
-                keep.groups.push(ShadeGroup {
-                    range: start..keep.points.len(),
-                    ..g
-                });
-            }
         }
-        // Points kept from earlier rounds were already compacted; rebuild the table.
-        t.groups.points = keep.points;
-        t.groups.groups = keep.groups;
+        // Compact: a group's range moves to the number of kept points before it.
+        t.kept_before.clear();
+        t.kept_before.push(0);
+        let mut kept = 0;
+        for &k in &t.keep {
+            kept += k as u32;
+            t.kept_before.push(kept);
+        }
+        t.groups.points.retain_rows(&t.keep);
+        let kept_before = &t.kept_before;
+        t.groups.groups = groups
+            .into_iter()
+            .filter_map(|g| {
+                let range = kept_before[g.range.start] as usize..kept_before[g.range.end] as usize;
+                // Surface groups left empty are dropped; volume groups stay as they were.
+                (g.mode != ShadingMode::Scatter || !range.is_empty())
+                    .then_some(ShadeGroup { range, ..g })
+            })
+            .collect();
     }
 
     /// Whether an emitter seen along ray `r` is inside the path-length budget.
