@@ -135,7 +135,8 @@ soa_table! {
     Rays,
     /// One ray of a [`Rays`] table.
     RayRow,
-    /// Mutable column slices of some rows of a [`Rays`] table (from `append_default` or `reuse_rows`).
+    /// Mutable column slices of some rows of a [`Rays`] table (from `append_default`
+    /// or `reuse_rows`).
     RayColumns {
         /// World-space origin.
         origin: Vec3,
@@ -180,7 +181,8 @@ soa_table! {
     Paths,
     /// One path of a [`Paths`] table.
     PathRow,
-    /// Mutable column slices of some rows of a [`Paths`] table (from `append_default` or `reuse_rows`).
+    /// Mutable column slices of some rows of a [`Paths`] table (from `append_default`
+    /// or `reuse_rows`).
     PathColumns {
         /// Pixel index `y * width + x` in the film.
         pixel: u32,
@@ -202,7 +204,8 @@ soa_table! {
     Hits,
     /// One row of a [`Hits`] table.
     HitRow,
-    /// Mutable column slices of some rows of a [`Hits`] table (from `append_default` or `reuse_rows`).
+    /// Mutable column slices of some rows of a [`Hits`] table (from `append_default`
+    /// or `reuse_rows`).
     HitColumns {
         /// Hit distance along the ray.
         t: f32,
@@ -221,7 +224,8 @@ soa_table! {
     ShadingPoints,
     /// One row of a [`ShadingPoints`] table.
     ShadingPointRow,
-    /// Mutable column slices of some rows of a [`ShadingPoints`] table (from `append_default` or `reuse_rows`).
+    /// Mutable column slices of some rows of a [`ShadingPoints`] table (from `append_default`
+    /// or `reuse_rows`).
     ShadingPointColumns {
         /// Position `P`.
         p: Vec3,
@@ -262,7 +266,8 @@ soa_table! {
     ShadowRays,
     /// One row of a [`ShadowRays`] table.
     ShadowRayRow,
-    /// Mutable column slices of some rows of a [`ShadowRays`] table (from `append_default` or `reuse_rows`).
+    /// Mutable column slices of some rows of a [`ShadowRays`] table (from `append_default`
+    /// or `reuse_rows`).
     ShadowRayColumns {
         /// Origin (already offset from the surface).
         origin: Vec3,
