@@ -19,7 +19,8 @@ mod volume_stack;
 pub use color::Rgb;
 pub use lobe::LobeSampled;
 pub use tables::{
-    HitRow, Hits, PathRow, Paths, RayRow, Rays, ShadingPointRow, ShadingPoints, ShadowRayRow,
+    HitColumns, HitRow, Hits, PathColumns, PathRow, Paths, RayColumns, RayRow, Rays,
+    ShadingPointColumns, ShadingPointRow, ShadingPoints, ShadowRayColumns, ShadowRayRow,
     ShadowRays, NO_HIT,
 };
 pub use volume_stack::{StackEvent, VolumeEntry, VolumeStack};

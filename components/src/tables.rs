@@ -8,10 +8,12 @@ use glam::Vec3;
 /// Marks a miss in [`Hits::prim`].
 pub const NO_HIT: u32 = u32::MAX;
 
-/// Declares an SoA table `$name` with its columns and a row type `$row` holding one item.
+/// Declares an SoA table `$name` with its columns, a row type `$row` holding one item and a
+/// view `$cols` of some rows' columns as mutable slices.
 macro_rules! soa_table {
     (
-        $(#[$meta:meta])* $name:ident, $(#[$rmeta:meta])* $row:ident {
+        $(#[$meta:meta])* $name:ident, $(#[$rmeta:meta])* $row:ident,
+        $(#[$cmeta:meta])* $cols:ident {
             $( $(#[$fmeta:meta])* $field:ident : $ty:ty ),* $(,)?
         }
     ) => {
@@ -25,6 +27,12 @@ macro_rules! soa_table {
         #[derive(Clone, Debug, Default)]
         pub struct $row {
             $( $(#[$fmeta])* pub $field: $ty, )*
+        }
+
+        $(#[$cmeta])*
+        #[derive(Debug)]
+        pub struct $cols<'a> {
+            $( $(#[$fmeta])* pub $field: &'a mut [$ty], )*
         }
 
         impl $name {
@@ -48,10 +56,39 @@ macro_rules! soa_table {
             pub fn clear(&mut self) {
                 $( self.$field.clear(); )*
             }
-            /// Appends one row.
+            /// Appends one row. Every column checks its capacity and stores its length; to
+            /// write many rows, [`append_default`](Self::append_default) or
+            /// [`reuse_rows`](Self::reuse_rows) and writing the returned slices avoids that.
             #[inline]
             pub fn push(&mut self, row: $row) {
                 $( self.$field.push(row.$field); )*
+            }
+            /// Appends `n` rows of default values and returns the new rows' columns, each
+            /// exactly `n` long. A loop that writes row `j < n` of every slice needs no
+            /// capacity checks and (since all slices have the same, known length) at most one
+            /// bounds check per row, where per-row [`push`](Self::push) pays a capacity check
+            /// and a length update per column. Rows not written keep their defaults; drop
+            /// unused ones with [`truncate`](Self::truncate).
+            #[inline]
+            pub fn append_default(&mut self, n: usize) -> $cols<'_> {
+                let start = self.len();
+                $( self.$field.resize(start + n, Default::default()); )*
+                $cols { $( $field: &mut self.$field[start..start + n], )* }
+            }
+            /// Sets the table to `n` rows and returns every column, for a caller that
+            /// overwrites every column of every row it keeps: rows that existed keep their old
+            /// values, only rows beyond the old length are defaults. A table whose rows are
+            /// dead can so be refilled without first writing defaults into every column as
+            /// [`append_default`](Self::append_default) does.
+            #[inline]
+            pub fn reuse_rows(&mut self, n: usize) -> $cols<'_> {
+                $( self.$field.resize(n, Default::default()); )*
+                $cols { $( $field: &mut self.$field[..n], )* }
+            }
+            /// Keeps the first `n` rows (no effect when the table is not longer).
+            #[inline]
+            pub fn truncate(&mut self, n: usize) {
+                $( self.$field.truncate(n); )*
             }
             /// Copies row `i` out.
             #[inline]
@@ -62,6 +99,23 @@ macro_rules! soa_table {
             #[inline]
             pub fn push_from(&mut self, other: &Self, i: usize) {
                 $( self.$field.push(other.$field[i].clone()); )*
+            }
+            /// Keeps the rows `i` with `keep[i]` (in order) and removes the others, in place.
+            ///
+            /// # Panics
+            /// When `keep` is not as long as the table.
+            pub fn retain_rows(&mut self, keep: &[bool]) {
+                assert_eq!(keep.len(), self.len(), "one flag per row");
+                // `Vec::retain` visits the elements in order, exactly once each.
+                $( {
+                    let mut flags = keep.iter();
+                    self.$field.retain(|_| *flags.next().unwrap_or(&false));
+                } )*
+            }
+            /// Appends a copy of every row of `other`.
+            #[inline]
+            pub fn extend_from(&mut self, other: &Self) {
+                $( self.$field.extend_from_slice(&other.$field); )*
             }
             /// Debug check that every column has the same length.
             pub fn is_consistent(&self) -> bool {
@@ -80,7 +134,10 @@ soa_table! {
     /// A batch of rays in flight (camera rays or the next bounce of paths).
     Rays,
     /// One ray of a [`Rays`] table.
-    RayRow {
+    RayRow,
+    /// Mutable column slices of some rows of a [`Rays`] table (from `append_default`
+    /// or `reuse_rows`).
+    RayColumns {
         /// World-space origin.
         origin: Vec3,
         /// Unit direction.
@@ -123,7 +180,10 @@ soa_table! {
     /// The state of every camera sample (path) of a batch.
     Paths,
     /// One path of a [`Paths`] table.
-    PathRow {
+    PathRow,
+    /// Mutable column slices of some rows of a [`Paths`] table (from `append_default`
+    /// or `reuse_rows`).
+    PathColumns {
         /// Pixel index `y * width + x` in the film.
         pixel: u32,
         /// Sample index within the pixel (the Sobol index).
@@ -143,7 +203,10 @@ soa_table! {
     /// Nearest-hit results, one row per ray of the [`Rays`] table they answer.
     Hits,
     /// One row of a [`Hits`] table.
-    HitRow {
+    HitRow,
+    /// Mutable column slices of some rows of a [`Hits`] table (from `append_default`
+    /// or `reuse_rows`).
+    HitColumns {
         /// Hit distance along the ray.
         t: f32,
         /// Primitive index in the compiled scene, or [`NO_HIT`].
@@ -160,7 +223,10 @@ soa_table! {
     /// context are contiguous.
     ShadingPoints,
     /// One row of a [`ShadingPoints`] table.
-    ShadingPointRow {
+    ShadingPointRow,
+    /// Mutable column slices of some rows of a [`ShadingPoints`] table (from `append_default`
+    /// or `reuse_rows`).
+    ShadingPointColumns {
         /// Position `P`.
         p: Vec3,
         /// Geometric normal `Ng` (outward for closed shapes).
@@ -199,7 +265,10 @@ soa_table! {
     /// Shadow (transmission) rays: straight, never bending segments towards light samples.
     ShadowRays,
     /// One row of a [`ShadowRays`] table.
-    ShadowRayRow {
+    ShadowRayRow,
+    /// Mutable column slices of some rows of a [`ShadowRays`] table (from `append_default`
+    /// or `reuse_rows`).
+    ShadowRayColumns {
         /// Origin (already offset from the surface).
         origin: Vec3,
         /// Unit direction.
@@ -240,5 +309,90 @@ mod tests {
         assert_eq!(h.row(0).prim, 3);
         h.clear();
         assert!(h.is_empty());
+    }
+
+    fn hit(t: f32, prim: u32) -> HitRow {
+        HitRow {
+            t,
+            prim,
+            b1: t * 0.5,
+            b2: t * 0.25,
+        }
+    }
+
+    fn prims(h: &Hits) -> Vec<u32> {
+        h.prim.clone()
+    }
+
+    #[test]
+    fn append_default_returns_exactly_the_new_rows() {
+        let mut h = Hits::default();
+        h.push(hit(1.0, 10));
+        h.push(hit(2.0, 20));
+        let cols = h.append_default(3);
+        assert_eq!((cols.t.len(), cols.prim.len(), cols.b1.len()), (3, 3, 3));
+        assert!(cols.prim.iter().all(|&p| p == 0) && cols.t.iter().all(|&t| t == 0.0));
+        cols.prim[0] = 30;
+        cols.t[2] = 5.0;
+        assert_eq!(h.len(), 5);
+        assert!(h.is_consistent());
+        assert_eq!(prims(&h), vec![10, 20, 30, 0, 0]);
+        assert_eq!(h.t[4], 5.0);
+        assert_eq!(h.row(1).b1, 1.0, "existing rows untouched");
+        h.truncate(3);
+        assert_eq!(prims(&h), vec![10, 20, 30]);
+        h.truncate(7);
+        assert_eq!(h.len(), 3, "truncate never grows");
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn reuse_rows_keeps_existing_rows_and_defaults_new_ones() {
+        let mut h = Hits::default();
+        for i in 0..3 {
+            h.push(hit(i as f32 + 1.0, i));
+        }
+        let cols = h.reuse_rows(2);
+        assert_eq!(cols.prim, &[0, 1], "old values, not defaults");
+        assert_eq!(h.len(), 2);
+        let cols = h.reuse_rows(4);
+        assert_eq!(cols.prim.len(), 4);
+        assert_eq!(cols.prim, &[0, 1, 0, 0]);
+        assert_eq!(cols.t, &[1.0, 2.0, 0.0, 0.0]);
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn retain_rows_keeps_flagged_rows_in_order() {
+        let mut h = Hits::default();
+        for i in 0..5 {
+            h.push(hit(i as f32, i));
+        }
+        h.retain_rows(&[true, false, false, true, true]);
+        assert_eq!(prims(&h), vec![0, 3, 4]);
+        assert_eq!(h.t, vec![0.0, 3.0, 4.0]);
+        assert_eq!(h.row(1).b1, 1.5, "rows move whole");
+        assert!(h.is_consistent());
+    }
+
+    #[test]
+    #[should_panic(expected = "one flag per row")]
+    fn retain_rows_wants_one_flag_per_row() {
+        let mut h = Hits::default();
+        h.push(hit(1.0, 1));
+        h.retain_rows(&[]);
+    }
+
+    #[test]
+    fn extend_from_appends_every_row_in_order() {
+        let mut a = Hits::default();
+        a.push(hit(1.0, 1));
+        let mut b = Hits::default();
+        b.push(hit(2.0, 2));
+        b.push(hit(3.0, 3));
+        a.extend_from(&b);
+        assert_eq!(prims(&a), vec![1, 2, 3]);
+        assert_eq!(a.row(2).b2, 0.75);
+        assert!(a.is_consistent());
     }
 }

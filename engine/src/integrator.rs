@@ -68,11 +68,13 @@ pub struct BatchTables {
     groups: ShadeGroups,
     tmp: ShadeGroups,
     shadow: ShadowRays,
+    /// Storage for the shade stage's shadow rays: the dead rows of the last transmission
+    /// stage, overwritten (`ShadowRays::reuse_rows`) and then moved to `shadow`.
+    shadow_spare: ShadowRays,
     samples: BxdfSamples,
     samplers: Vec<PathSampler>,
     seeds: Vec<u32>,
     pixel_tmp: Vec<u32>,
-    sample_tmp: Vec<u32>,
     light_samples: Vec<Option<LightSample>>,
     eval_value: Vec<Rgb>,
     eval_pdf: Vec<f32>,
@@ -82,9 +84,17 @@ pub struct BatchTables {
     runs: Vec<(u32, std::ops::Range<usize>)>,
     albedo_tmp: Vec<Rgb>,
     hit_scratch: HitScratch,
-    can_continue: Vec<bool>,
     /// Russian-roulette sample of each point of the group being shaded.
     rr_u: Vec<f32>,
+    /// Whether some emissive shape has the material (per material index): the shade stage
+    /// looks for emitters only in the groups of those materials.
+    emissive_material: Vec<bool>,
+    /// Contributions of the shadow rays, attenuated by the transmission stage.
+    contribution: Vec<Rgb>,
+    /// Which shading points stay in the groups (pass-through points leave).
+    keep: Vec<bool>,
+    /// Number of kept points before each point (prefix sums of `keep`).
+    kept_before: Vec<u32>,
 }
 
 /// Film plus optional AOV accumulators for one tile.
@@ -217,39 +227,47 @@ impl PathTracer {
         while s0 < samples.end {
             let s1 = (s0 + per_batch).min(samples.end);
             let t = &mut *tables;
+            // One path per pixel and sample, pixel-major; radiance, albedo and normal start
+            // black (the defaults), depth at infinity (no hit yet).
             t.paths.clear();
+            let count = pixels * (s1 - s0) as usize;
+            let paths = t.paths.append_default(count);
+            let spp = (s1 - s0) as usize;
+            let mut rows = paths
+                .pixel
+                .chunks_exact_mut(spp)
+                .zip(paths.sample.chunks_exact_mut(spp));
             for y in 0..h {
                 for x in 0..w {
-                    let pixel = (tile.y0 + y) * scene.camera.width + tile.x0 + x;
-                    for s in s0..s1 {
-                        t.paths.push(PathRow {
-                            pixel,
-                            sample: s,
-                            radiance: Rgb::BLACK,
-                            albedo: Rgb::BLACK,
-                            normal: Vec3::ZERO,
-                            depth: f32::INFINITY,
-                        });
+                    let (pixel, sample) = rows.next().expect("one run of rows per pixel");
+                    pixel.fill((tile.y0 + y) * scene.camera.width + tile.x0 + x);
+                    for (v, s) in sample.iter_mut().zip(s0..s1) {
+                        *v = s;
                     }
                 }
             }
+            paths.depth.fill(f32::INFINITY);
             self.run_batch(scene, t, stats, arena);
             // Splat: the film gets one sample per path.
             let n = t.paths.len();
             t.pixel_tmp.clear();
-            for i in 0..n {
-                t.pixel_tmp
-                    .push(tile.local(t.paths.pixel[i], scene.camera.width));
-            }
+            let image_width = scene.camera.width;
+            t.pixel_tmp
+                .extend(t.paths.pixel.iter().map(|&p| tile.local(p, image_width)));
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
             });
             stats.drop_nan(dropped as usize);
-            for i in 0..n {
-                let p = t.pixel_tmp[i] as usize;
-                tile.albedo[p] += t.paths.albedo[i];
-                tile.normal[p] += t.paths.normal[i];
-                let d = t.paths.depth[i];
+            let aovs = t
+                .paths
+                .albedo
+                .iter()
+                .zip(&t.paths.normal)
+                .zip(&t.paths.depth);
+            for (&p, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
+                let p = p as usize;
+                tile.albedo[p] += albedo;
+                tile.normal[p] += normal;
                 tile.depth[p] += if d.is_finite() { d } else { 0.0 };
             }
             stats.add_samples(n);
@@ -269,53 +287,55 @@ impl PathTracer {
     ) {
         let n = t.paths.len();
         t.seeds.clear();
-        t.sample_tmp.clear();
-        for i in 0..n {
-            t.seeds
-                .push(pixel_seed(scene.settings.seed, t.paths.pixel[i]));
-            t.sample_tmp.push(t.paths.sample[i]);
-        }
-        // Camera rays.
-        t.rays.clear();
-        let mut origin = vec![Vec3::ZERO; n];
-        let mut direction = vec![Vec3::Z; n];
+        let seed = scene.settings.seed;
+        t.seeds
+            .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
+        // Camera rays, generated straight into the table's columns; every other column is
+        // written once with its start value.
+        let rays = &mut t.rays;
+        rays.clear();
+        rays.origin.resize(n, Vec3::ZERO);
+        rays.direction.resize(n, Vec3::Z);
         stats.time(System::Camera, n, || {
             generate_camera_rays(
                 &scene.camera,
                 &t.paths.pixel,
-                &t.sample_tmp,
+                &t.paths.sample,
                 &t.seeds,
-                &mut origin,
-                &mut direction,
+                &mut rays.origin,
+                &mut rays.direction,
             )
         });
-        for i in 0..n {
-            t.rays.push(RayRow {
-                origin: origin[i],
-                direction: direction[i],
-                tmin: 0.0,
-                tmax: f32::INFINITY,
-                path: i as u32,
-                throughput: Rgb::WHITE,
-                lobe: LobeSampled::NONE,
-                depth: 0,
-                passes: 0,
-                pdf: 0.0,
-                eta_scale: 1.0,
-                dimension: FIRST_PATH_DIMENSION,
-                shading_ctx_index: u32::MAX,
-                prev_p: origin[i],
-                volume_stack: scene.camera_stack.clone(),
-            });
-        }
+        rays.tmin.resize(n, 0.0);
+        rays.tmax.resize(n, f32::INFINITY);
+        rays.path.extend(0..n as u32);
+        rays.throughput.resize(n, Rgb::WHITE);
+        rays.lobe.resize(n, LobeSampled::NONE);
+        rays.depth.resize(n, 0);
+        rays.passes.resize(n, 0);
+        rays.pdf.resize(n, 0.0);
+        rays.eta_scale.resize(n, 1.0);
+        rays.dimension.resize(n, FIRST_PATH_DIMENSION);
+        rays.shading_ctx_index.resize(n, u32::MAX);
+        rays.prev_p.extend_from_slice(&rays.origin);
+        rays.volume_stack.resize(n, scene.camera_stack.clone());
+        rays.debug_check();
         stats.add_rays(n);
+        // A point's material is its shape's (`IntegratorContext::nearest_hits`).
+        t.emissive_material.clear();
+        t.emissive_material.resize(scene.materials.len(), false);
+        for shape in scene.shapes.iter().filter(|s| s.emission.is_some()) {
+            t.emissive_material[shape.material as usize] = true;
+        }
+        let mut first_bounce = true;
         while !t.rays.is_empty() {
             self.trace(scene, t, stats, arena);
-            self.shade(scene, t, stats, arena);
+            self.shade(scene, t, stats, arena, first_bounce);
             self.transmission(scene, t, stats, arena);
             std::mem::swap(&mut t.rays, &mut t.next);
             t.next.clear();
             stats.add_rays(t.rays.len());
+            first_bounce = false;
         }
     }
 
@@ -340,6 +360,10 @@ impl PathTracer {
         arena: &Bump,
     ) {
         let features = scene.features;
+        // The last bounce's rays are dead: their rows become the storage the shade stage
+        // overwrites with the next rays (`Rays::reuse_rows`), which spares it writing
+        // defaults into every column of fresh rows first.
+        std::mem::swap(&mut t.incoming, &mut t.next);
         t.incoming.clear();
         t.groups.clear();
         std::mem::swap(&mut t.pending, &mut t.rays);
@@ -545,32 +569,41 @@ impl PathTracer {
         if !scene.features.transmissive {
             return;
         }
-        // Pass-throughs: index-matched surfaces and false boundaries never get shaded.
-        let mut keep = ShadeGroups::default();
+        // Pass-throughs: index-matched surfaces and false boundaries never get shaded. Most
+        // rounds have none; the points table is compacted (in place) only when some point
+        // leaves it. `keep[i]`: point `i` stays (points outside every group do not).
         let groups = std::mem::take(&mut t.groups.groups);
-        for g in groups {
+        let n = t.groups.points.len();
+        t.keep.clear();
+        t.keep.resize(n, false);
+        let mut passes = false;
+        for g in &groups {
             if g.mode != ShadingMode::Scatter {
-                let start = keep.points.len();
-                for i in g.range.clone() {
-                    keep.points.push_from(&t.groups.points, i);
-                }
-                keep.groups.push(ShadeGroup {
-                    range: start..keep.points.len(),
-                    ..g
-                });
+                t.keep[g.range.clone()].fill(true);
                 continue;
             }
             let info = &scene.material_info[g.material as usize];
-            let start = keep.points.len();
+            let index_matched = info.hints.contains(InstanceHints::INDEX_MATCHED);
+            let pts = &t.groups.points;
             for i in g.range.clone() {
-                let r = t.groups.points.ray_id[i] as usize;
-                let shape = t.groups.points.shape[i];
-                let pass = info.hints.contains(InstanceHints::INDEX_MATCHED)
-                    || t.incoming.volume_stack[r].is_false_boundary(shape, info.priority);
-                if !pass {
-                    keep.points.push_from(&t.groups.points, i);
+                let r = pts.ray_id[i] as usize;
+                let pass = index_matched
+                    || t.incoming.volume_stack[r].is_false_boundary(pts.shape[i], info.priority);
+                t.keep[i] = !pass;
+                passes |= pass;
+            }
+        }
+        if !passes && t.keep.iter().all(|&k| k) {
+            t.groups.groups = groups;
+            return;
+        }
+        for g in groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
+            for i in g.range.clone() {
+                if t.keep[i] {
                     continue;
                 }
+                let r = t.groups.points.ray_id[i] as usize;
+                let shape = t.groups.points.shape[i];
                 let p = t.groups.points.p[i];
                 let front = t.groups.points.front_face[i];
                 let tr = t.groups.points.transmission[i];
@@ -603,16 +636,26 @@ impl PathTracer {
                 }
                 t.pending.push(row);
             }
-            if keep.points.len() > start {
-                keep.groups.push(ShadeGroup {
-                    range: start..keep.points.len(),
-                    ..g
-                });
-            }
         }
-        // Points kept from earlier rounds were already compacted; rebuild the table.
-        t.groups.points = keep.points;
-        t.groups.groups = keep.groups;
+        // Compact: a group's range moves to the number of kept points before it.
+        t.kept_before.clear();
+        t.kept_before.push(0);
+        let mut kept = 0;
+        for &k in &t.keep {
+            kept += k as u32;
+            t.kept_before.push(kept);
+        }
+        t.groups.points.retain_rows(&t.keep);
+        let kept_before = &t.kept_before;
+        t.groups.groups = groups
+            .into_iter()
+            .filter_map(|g| {
+                let range = kept_before[g.range.start] as usize..kept_before[g.range.end] as usize;
+                // Surface groups left empty are dropped; volume groups stay as they were.
+                (g.mode != ShadingMode::Scatter || !range.is_empty())
+                    .then_some(ShadeGroup { range, ..g })
+            })
+            .collect();
     }
 
     /// Whether an emitter seen along ray `r` is inside the path-length budget.
@@ -650,249 +693,284 @@ impl PathTracer {
         let Some(le) = scene.shapes[shape as usize].emission else {
             return;
         };
-        if !self.emission_counts(scene, &t.incoming, r) {
+        self.add_emission(
+            scene,
+            pts,
+            &t.incoming,
+            &mut t.paths,
+            r,
+            i,
+            le,
+            transmission,
+        );
+    }
+
+    /// Adds the emission `le` of the front face of emissive shape at point `i` (hit by
+    /// incoming ray `r`) to the ray's path, if inside the depth budget, MIS-weighted. Kept
+    /// out of line: the shade loop tests the (rare) emissive front faces itself.
+    #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+    #[inline(never)]
+    fn add_emission(
+        &self,
+        scene: &CompiledScene,
+        pts: &ShadingPoints,
+        incoming: &Rays,
+        paths: &mut Paths,
+        r: usize,
+        i: usize,
+        le: Rgb,
+        transmission: Rgb,
+    ) {
+        if !self.emission_counts(scene, incoming, r) {
             return;
         }
+        let shape = pts.shape[i];
         let p = pts.p[i];
         let ng = pts.ng[i];
-        let prev = t.incoming.prev_p[r];
-        let w = self.emitter_mis(&t.incoming, r, || {
-            light_pdf_at(scene, shape, prev, p, ng, &t.incoming, r)
+        let prev = incoming.prev_p[r];
+        let w = self.emitter_mis(incoming, r, || {
+            light_pdf_at(scene, shape, prev, p, ng, incoming, r)
         });
-        let path = t.incoming.path[r] as usize;
-        t.paths.radiance[path] += t.incoming.throughput[r] * transmission * le * w;
+        let path = incoming.path[r] as usize;
+        paths.radiance[path] += incoming.throughput[r] * transmission * le * w;
     }
 
     /// Shade stage: emission, Bxdf sampling, direct lighting, Russian roulette, next rays.
+    /// `first_bounce` is true when `t.incoming` may hold camera rays (the first iteration of
+    /// the batch; later rays have scattered at least once), the only ones that record AOVs.
+    ///
+    /// The loops write the next rays and the shadow rays into rows appended up front for all
+    /// groups ([`Rays::append_default`]) and truncate the unused ones at the end, instead of
+    /// pushing row by row: a push checks capacity and stores the length of each of the 15
+    /// columns.
     fn shade(
         &self,
         scene: &CompiledScene,
         t: &mut BatchTables,
         stats: &mut SystemStats,
         arena: &Bump,
+        first_bounce: bool,
     ) {
         let settings = scene.settings;
-        let groups = std::mem::take(&mut t.groups.groups);
+        let features = scene.features;
+        let BatchTables {
+            paths,
+            incoming,
+            next,
+            groups: shade_groups,
+            shadow,
+            shadow_spare,
+            samples,
+            samplers,
+            seeds,
+            light_samples,
+            eval_value,
+            eval_pdf,
+            wi_tmp,
+            albedo_tmp,
+            rr_u,
+            emissive_material,
+            ..
+        } = t;
+        let groups = std::mem::take(&mut shade_groups.groups);
+        let pts = &shade_groups.points;
         let total: usize = groups.iter().map(|g| g.range.len()).sum();
         let shade_start = std::time::Instant::now();
-        let has_emitters = scene.features.area_lights;
+        // Without materials that compute interiors or let rays cross their surface, no stack
+        // ever gets an entry (only shapes of such materials are tracked, see
+        // `CompiledScene::tracks_interior`): every stack is the empty default and the stack
+        // columns need no per-row copies.
+        let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
+        let light_sampling_possible =
+            self.technique != LightingTechnique::BxdfOnly && !scene.lights.is_empty();
+        // Every point spawns at most one shadow ray and one next ray: room for all of them
+        // at once, truncated to the rows written after the last group.
+        // `next` holds no live rows here, only the dead rows of an earlier bounce (see
+        // `trace`), which `continue_paths` overwrites column by column.
+        let mut shadow_out = shadow_spare.reuse_rows(total);
+        let mut next_out = next.reuse_rows(total);
+        next_out.tmin.fill(0.0);
+        next_out.tmax.fill(f32::INFINITY);
+        // Without stacks (see above) every stack, dead rows' included, is the empty default.
+        debug_assert!(stacks || next_out.volume_stack.iter().all(VolumeStack::is_empty));
+        debug_assert!(stacks || shadow_out.volume_stack.iter().all(VolumeStack::is_empty));
+        let (mut shadow_len, mut next_len) = (0, 0);
         for g in &groups {
             let range = g.range.clone();
+            let ray_id = &pts.ray_id[range.clone()];
+            // The group's length as the slices' length, so that every column re-sliced to
+            // it shares one bounds check.
+            let m = ray_id.len();
             // Transmission of the incident segment multiplies the throughput first (only
             // volume integrators return points with transmission other than 1).
-            if scene.features.volumes {
-                for i in range.clone() {
-                    let r = t.groups.points.ray_id[i] as usize;
-                    t.incoming.throughput[r] *= t.groups.points.transmission[i];
+            if features.volumes {
+                for (&r, &tr) in ray_id.iter().zip(&pts.transmission[range.clone()]) {
+                    incoming.throughput[r as usize] *= tr;
                 }
             }
-            if has_emitters {
-                for i in range.clone() {
-                    let r = t.groups.points.ray_id[i] as usize;
-                    // Throughput already includes the transmission.
-                    self.surface_emission(scene, t, r, i, Rgb::WHITE);
+            if features.area_lights && emissive_material[g.material as usize] {
+                let shape = &pts.shape[range.clone()];
+                let front = &pts.front_face[range.clone()];
+                for (k, ((&r, &shape), &front)) in ray_id.iter().zip(shape).zip(front).enumerate() {
+                    // The cheap tests of `surface_emission` first: most points are not on
+                    // emitters.
+                    if shape == u32::MAX || !front {
+                        continue;
+                    }
+                    if let Some(le) = scene.shapes[shape as usize].emission {
+                        // Throughput already includes the transmission.
+                        let i = range.start + k;
+                        self.add_emission(
+                            scene,
+                            pts,
+                            incoming,
+                            paths,
+                            r as usize,
+                            i,
+                            le,
+                            Rgb::WHITE,
+                        );
+                    }
                 }
             }
-            let ctx = ShadingContext::new(&t.groups.points, range.clone(), g.mode, g.material, &[]);
+            let ctx = ShadingContext::new(pts, range.clone(), g.mode, g.material, &[]);
             let factory = scene.materials[g.material as usize].factory.as_ref();
             let bxdf_start = std::time::Instant::now();
             let bxdf = factory.begin_scatter(&ctx, g.mode, arena);
             let lobes = bxdf.lobes();
-            let m = range.len();
-            let ray_id = &t.groups.points.ray_id[range.clone()];
+
+            // Incoming-ray columns re-sliced to one length (one bounds check per gather).
+            let n = incoming.len();
+            let (in_depth, in_passes, in_path, in_dimension) = (
+                &incoming.depth[..n],
+                &incoming.passes[..n],
+                &incoming.path[..n],
+                &incoming.dimension[..n],
+            );
 
             // AOVs at the first vertex.
-            let first_vertex = |r: usize| t.incoming.depth[r] == 0 && t.incoming.passes[r] == 0;
-            if ray_id.iter().any(|&r| first_vertex(r as usize)) {
-                t.albedo_tmp.resize(m, Rgb::BLACK);
-                bxdf.albedo(&ctx, &mut t.albedo_tmp);
-                for (k, i) in range.clone().enumerate() {
+            let first_vertex = |r: usize| in_depth[r] == 0 && in_passes[r] == 0;
+            if first_bounce && ray_id.iter().any(|&r| first_vertex(r as usize)) {
+                let albedo = scratch(albedo_tmp, m, Rgb::BLACK);
+                bxdf.albedo(&ctx, albedo);
+                let (nn, vlen) = (&pts.nn[range.clone()][..m], &pts.vlen[range.clone()][..m]);
+                for k in 0..m {
                     let r = ray_id[k] as usize;
                     if first_vertex(r) {
-                        let path = t.incoming.path[r] as usize;
-                        t.paths.albedo[path] = t.albedo_tmp[k];
-                        t.paths.normal[path] = t.groups.points.nn[i];
-                        t.paths.depth[path] = t.groups.points.vlen[i];
+                        let path = in_path[r] as usize;
+                        paths.albedo[path] = albedo[k];
+                        paths.normal[path] = nn[k];
+                        paths.depth[path] = vlen[k];
                     }
                 }
             }
 
-            // Per-point samplers at this vertex's dimensions, and which points may continue:
-            // the next segment must fit in max_depth.
-            t.samplers.clear();
-            t.can_continue.clear();
-            for &r in ray_id {
+            // Per-point samplers at this vertex's dimensions.
+            let num_paths = paths.len();
+            let (seed, sample) = (&seeds[..num_paths], &paths.sample[..num_paths]);
+            samplers.clear();
+            samplers.extend(ray_id.iter().map(|&r| {
                 let r = r as usize;
-                t.samplers.push(self.sampler(t, &t.incoming, r));
-                t.can_continue
-                    .push((t.incoming.depth[r] as u32 + 2) <= settings.max_depth);
-            }
+                let path = in_path[r] as usize;
+                PathSampler {
+                    seed: seed[path],
+                    sample: sample[path],
+                    dimension: in_dimension[r],
+                }
+            }));
+            // Which points may continue: the next segment must fit in max_depth.
+            let can_continue = |r: usize| (in_depth[r] as u32 + 2) <= settings.max_depth;
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
-            t.rr_u.clear();
-            let light_sampling = lobes.contains(LobeSampled::DIFFUSE)
-                && self.technique != LightingTechnique::BxdfOnly
-                && !scene.lights.is_empty();
-            if light_sampling {
+            let rr_u = scratch(rr_u, m, 0.0);
+            if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
                 let lstart = std::time::Instant::now();
-                t.light_samples.clear();
-                t.wi_tmp.clear();
+                let light_samples = scratch(light_samples, m, None);
+                let wi = scratch(wi_tmp, m, Vec3::Z);
+                // One column draw for the group; leaves the samplers at the vertex's
+                // dimension 4, where the Bxdf starts.
                 let u4 = arena.alloc_slice_fill_copy(m, [0.0f32; 4]);
-                next_4d_column(&mut t.samplers, u4);
-                t.light_samples.resize(m, None);
+                next_4d_column(&mut samplers[..m], u4);
+                let active =
+                    arena.alloc_slice_fill_iter(ray_id.iter().map(|&r| can_continue(r as usize)));
                 scene.lights.sample_column(
                     &scene.geometry,
-                    &t.groups.points.p[range.clone()],
+                    &pts.p[range.clone()][..m],
                     u4,
-                    &t.can_continue,
-                    &mut t.light_samples,
+                    active,
+                    light_samples,
                 );
-                for (u, ls) in u4.iter().zip(&t.light_samples) {
-                    t.rr_u.push(u[3]);
-                    t.wi_tmp.push(ls.map_or(Vec3::Z, |l| l.wi));
+                for k in 0..m {
+                    rr_u[k] = u4[k][3];
+                    wi[k] = light_samples[k].map_or(Vec3::Z, |l| l.wi);
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
-                t.eval_value.resize(m, Rgb::BLACK);
-                t.eval_pdf.resize(m, 0.0);
-                bxdf.evaluate_samples(&ctx, &t.wi_tmp, &mut t.eval_value, &mut t.eval_pdf);
-                for (k, i) in range.clone().enumerate() {
-                    let Some(ls) = t.light_samples[k] else {
-                        continue;
-                    };
-                    let f = t.eval_value[k];
-                    if f.is_black() {
-                        continue;
-                    }
-                    let r = ray_id[k] as usize;
-                    let w = if ls.delta || self.technique == LightingTechnique::NeeOnly {
-                        1.0
-                    } else {
-                        power_heuristic(ls.pdf, t.eval_pdf[k])
-                    };
-                    let c = t.incoming.throughput[r] * f * ls.radiance * (w / ls.pdf);
-                    if c.is_black() {
-                        continue;
-                    }
-                    let p = t.groups.points.p[i];
-                    let ng = t.groups.points.ng[i];
-                    let origin = if g.mode == ShadingMode::Scatter {
-                        let side = if ls.wi.dot(ng) >= 0.0 { ng } else { -ng };
-                        p + side * ray_offset(p)
-                    } else {
-                        p
-                    };
-                    let mut stack = t.incoming.volume_stack[r].clone();
-                    // A shadow ray leaving through the surface it starts on enters (or leaves)
-                    // that shape's interior.
-                    let shape = t.groups.points.shape[i];
-                    if g.mode == ShadingMode::Scatter
-                        && (ls.wi.dot(ng) >= 0.0) != (t.groups.points.vn[i].dot(ng) >= 0.0)
-                        && scene.tracks_interior(shape)
-                    {
-                        stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i]);
-                    }
-                    t.shadow.push(ShadowRayRow {
-                        origin,
-                        direction: ls.wi,
-                        tmax: if ls.distance.is_finite() {
-                            ls.distance * (1.0 - 1e-4) - ray_offset(p)
-                        } else {
-                            f32::INFINITY
-                        },
-                        contribution: c,
-                        path: t.incoming.path[r],
-                        volume_stack: stack,
-                    });
-                }
+                let (value, pdf) = (
+                    scratch(eval_value, m, Rgb::BLACK),
+                    scratch(eval_pdf, m, 0.0),
+                );
+                bxdf.evaluate_samples(&ctx, wi, value, pdf);
+                let (no_mis, mode) = (self.technique == LightingTechnique::NeeOnly, g.mode);
+                let (shadow_scene, incoming) = (stacks.then_some(scene), &*incoming);
+                let light = LightColumns {
+                    samples: light_samples,
+                    value,
+                    pdf,
+                };
+                shadow_len += spawn_shadow_rays(
+                    shadow_scene,
+                    mode,
+                    pts,
+                    range.clone(),
+                    incoming,
+                    light,
+                    no_mis,
+                    &mut shadow_out,
+                    shadow_len,
+                );
             } else {
-                for sampler in &t.samplers {
-                    t.rr_u.push(sample_1d(
-                        sampler.seed,
-                        sampler.sample,
-                        sampler.dimension + 3,
-                    ));
+                for (s, rr) in samplers.iter_mut().zip(rr_u.iter_mut()) {
+                    *rr = sample_1d(s.seed, s.sample, s.dimension + 3);
+                    // The Bxdf starts at the vertex's dimension 4.
+                    s.dimension += 4;
                 }
             }
 
-            // Bxdf sampling for the next bounce, from the vertex's dimension 4 on.
-            for (k, &r) in ray_id.iter().enumerate() {
-                t.samplers[k].dimension = t.incoming.dimension[r as usize] + 4;
-            }
-            t.samples.reset(m);
-            bxdf.generate_samples(&ctx, &mut t.samplers, &mut t.samples);
+            // Bxdf sampling for the next bounce.
+            samples.reset(m);
+            bxdf.generate_samples(&ctx, samplers, samples);
             stats.record(System::Bxdf, m, bxdf_start.elapsed().as_secs_f64());
 
-            let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
-            for (k, i) in range.clone().enumerate() {
-                let r = ray_id[k] as usize;
-                if !t.can_continue[k] {
-                    max_depth += 1;
-                    continue;
-                }
-                let pdf = t.samples.pdf[k];
-                let weight = t.samples.weight[k];
-                if pdf <= 0.0 || weight.is_black() || !weight.is_finite() {
-                    absorbed += 1;
-                    continue;
-                }
-                let mut throughput = t.incoming.throughput[r] * weight;
-                let lobe = t.samples.lobe[k];
-                let eta = t.samples.eta[k];
-                let eta_scale =
-                    t.incoming.eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
-                let depth = t.incoming.depth[r] + 1;
-                // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
-                if depth as u32 > settings.rr_depth {
-                    let q = (throughput.max_channel() * eta_scale).min(0.95);
-                    if t.rr_u[k] >= q {
-                        roulette += 1;
-                        continue;
-                    }
-                    throughput *= 1.0 / q;
-                }
-                let p = t.groups.points.p[i];
-                let ng = t.groups.points.ng[i];
-                let wi = t.samples.wi[k];
-                let mut stack = t.incoming.volume_stack[r].clone();
-                let origin = if g.mode == ShadingMode::Scatter {
-                    let shape = t.groups.points.shape[i];
-                    if lobe.is_transmit()
-                        && scene.tracks_interior(shape)
-                        && stack.cross(scene.volume_entry(shape), t.groups.points.front_face[i])
-                            == StackEvent::UnmatchedExit
-                    {
-                        stats.unmatched_exit(shape);
-                    }
-                    let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
-                    p + side * ray_offset(p)
-                } else {
-                    p
-                };
-                t.next.push(RayRow {
-                    origin,
-                    direction: wi,
-                    tmin: 0.0,
-                    tmax: f32::INFINITY,
-                    path: t.incoming.path[r],
-                    throughput,
-                    lobe,
-                    depth,
-                    passes: t.incoming.passes[r],
-                    pdf: if lobe.is_specular() { 0.0 } else { pdf },
-                    eta_scale,
-                    dimension: t.incoming.dimension[r] + DIMS_PER_VERTEX,
-                    shading_ctx_index: k as u32,
-                    prev_p: p,
-                    volume_stack: stack,
-                });
-            }
+            let stack_scene = stacks.then_some(scene);
+            let (written, max_depth, absorbed, roulette) = continue_paths(
+                stack_scene,
+                settings,
+                g.mode,
+                pts,
+                range.clone(),
+                incoming,
+                samples,
+                rr_u,
+                &mut next_out,
+                next_len,
+                stats,
+            );
+            next_len += written;
             stats.terminate(Termination::MaxDepth, max_depth);
             stats.terminate(Termination::Absorbed, absorbed);
             stats.terminate(Termination::RussianRoulette, roulette);
         }
+        next.truncate(next_len);
+        // The shadow rays go after those volume integrators queued during the trace stage.
+        shadow_spare.truncate(shadow_len);
+        if shadow.is_empty() {
+            std::mem::swap(shadow, shadow_spare);
+        } else {
+            shadow.extend_from(shadow_spare);
+        }
         stats.record(System::Shade, total, shade_start.elapsed().as_secs_f64());
-        t.groups.groups = groups;
+        shade_groups.groups = groups;
     }
 
     /// Transmission stage: walks every shadow ray through the surfaces that let shadows pass
@@ -909,23 +987,333 @@ impl PathTracer {
             return;
         }
         let start = std::time::Instant::now();
-        let mut contribution = t.shadow.contribution.clone();
+        t.contribution.clear();
+        t.contribution.extend_from_slice(&t.shadow.contribution);
         crate::transmission::trace_shadow_rays(
             scene,
             &t.shadow,
             &t.paths,
             &t.seeds,
-            &mut contribution,
+            &mut t.contribution,
             stats,
             arena,
         );
-        for i in 0..n {
-            let path = t.shadow.path[i] as usize;
-            t.paths.radiance[path] += contribution[i];
+        for (&path, &c) in t.shadow.path.iter().zip(&t.contribution) {
+            t.paths.radiance[path as usize] += c;
         }
         stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
+        // Keep the dead rows as storage for the next shade stage's shadow rays.
+        std::mem::swap(&mut t.shadow, &mut t.shadow_spare);
         t.shadow.clear();
     }
+}
+
+/// Light samples of a group's points and the Bxdf's response to them.
+struct LightColumns<'a> {
+    /// Light sample per point (`None`: no shadow ray).
+    samples: &'a [Option<LightSample>],
+    /// Bxdf value `f * |cos|` for the sample's direction.
+    value: &'a [Rgb],
+    /// Bxdf pdf of the sample's direction (for MIS).
+    pdf: &'a [f32],
+}
+
+/// Direct-lighting system: writes to `out` from row `start` on one shadow ray per point of
+/// `range` whose light sample has a non-black contribution `throughput * f * Le * w / pdf`
+/// (power heuristic weight `w` unless the sample is a Dirac light or `no_mis`), and returns
+/// the number of rows written. `stacks` (the scene, when volume stacks can be non-empty)
+/// copies the rays' stacks and records crossings of the surface the shadow ray starts on;
+/// `None` means every stack is empty, and the rows' stacks are left as they are. Every
+/// other column of the rows written is overwritten.
+///
+/// Written for few instructions per row: the output rows exist up front (no per-column
+/// capacity checks), columns are re-sliced to one length each so that a row
+/// needs at most one bounds check per length, and the work is split into passes over
+/// columns that each keep few values live (one fused loop spilled most of them to the
+/// stack). The first pass decides which points get a ray; the later ones fill the other
+/// columns of those rows.
+#[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+#[inline(never)]
+fn spawn_shadow_rays(
+    stacks: Option<&CompiledScene>,
+    mode: ShadingMode,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    incoming: &Rays,
+    light: LightColumns<'_>,
+    no_mis: bool,
+    out: &mut ShadowRayColumns<'_>,
+    start: usize,
+) -> usize {
+    let ray_id = &pts.ray_id[range.clone()];
+    let (m, n) = (ray_id.len(), incoming.len());
+    let rows = start..start + m;
+    let (o_origin, o_direction, o_tmax, o_contribution, o_path, o_stack) = (
+        &mut out.origin[rows.clone()],
+        &mut out.direction[rows.clone()],
+        &mut out.tmax[rows.clone()],
+        &mut out.contribution[rows.clone()],
+        &mut out.path[rows.clone()],
+        &mut out.volume_stack[rows],
+    );
+    // Pass 1: contributions. `o_path` holds the point index `k` of each row until pass 3
+    // replaces it by the path; `o_tmax` the light sample's distance until pass 2.
+    let in_throughput = &incoming.throughput[..n];
+    let (samples, value, pdf) = (&light.samples[..m], &light.value[..m], &light.pdf[..m]);
+    let mut count = 0;
+    for k in 0..m {
+        let Some(ls) = samples[k] else {
+            continue;
+        };
+        let f = value[k];
+        if f.is_black() {
+            continue;
+        }
+        let w = if ls.delta || no_mis {
+            1.0
+        } else {
+            power_heuristic(ls.pdf, pdf[k])
+        };
+        let c = in_throughput[ray_id[k] as usize] * f * ls.radiance * (w / ls.pdf);
+        if c.is_black() {
+            continue;
+        }
+        o_contribution[count] = c;
+        o_direction[count] = ls.wi;
+        o_tmax[count] = ls.distance;
+        o_path[count] = k as u32;
+        count += 1;
+    }
+    // Pass 2: origins (offset to the side of the surface the ray leaves to) and lengths.
+    let (p, ng) = (&pts.p[range.clone()][..m], &pts.ng[range.clone()][..m]);
+    for (((origin, tmax), &wi), &k) in o_origin[..count]
+        .iter_mut()
+        .zip(&mut o_tmax[..count])
+        .zip(&o_direction[..count])
+        .zip(&o_path[..count])
+    {
+        let (p, ng) = (p[k as usize], ng[k as usize]);
+        let offset = ray_offset(p);
+        *origin = if mode == ShadingMode::Scatter {
+            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * offset
+        } else {
+            p
+        };
+        let distance = *tmax;
+        *tmax = if distance.is_finite() {
+            distance * (1.0 - 1e-4) - offset
+        } else {
+            f32::INFINITY
+        };
+    }
+    // Pass 3: volume stacks (while `o_path` still names the points), then paths.
+    if let Some(scene) = stacks {
+        let (in_stack, vn) = (&incoming.volume_stack[..n], &pts.vn[range.clone()][..m]);
+        for ((stack, &wi), &k) in o_stack[..count]
+            .iter_mut()
+            .zip(&o_direction[..count])
+            .zip(&o_path[..count])
+        {
+            let k = k as usize;
+            *stack = in_stack[ray_id[k] as usize].clone();
+            // A shadow ray leaving through the surface it starts on enters (or leaves) that
+            // shape's interior.
+            let (i, ng) = (range.start + k, pts.ng[range.start + k]);
+            let shape = pts.shape[i];
+            if mode == ShadingMode::Scatter
+                && (wi.dot(ng) >= 0.0) != (vn[k].dot(ng) >= 0.0)
+                && scene.tracks_interior(shape)
+            {
+                stack.cross(scene.volume_entry(shape), pts.front_face[i]);
+            }
+        }
+    }
+    let in_path = &incoming.path[..n];
+    for path in &mut o_path[..count] {
+        *path = in_path[ray_id[*path as usize] as usize];
+    }
+    count
+}
+
+/// Path-continuation system: writes to `out` from row `start` on the ray each point of
+/// `range` continues its path with (direction, weight, pdf and lobe from `samples`, Russian
+/// roulette with `rr_u`), unless the path reached `max_depth`, the sample was absorbed or
+/// the roulette ended it. Returns the number of rows written and those three counts.
+/// `stacks` as in [`spawn_shadow_rays`]; a transmitted ray crosses the surface's interior
+/// boundary. The caller sets `tmin` and `tmax`; `stacks` being `None` means every stack is
+/// empty, and the rows' stacks are left as they are.
+///
+/// Written like [`spawn_shadow_rays`]: a first pass decides which points continue and
+/// writes the columns it computes, the `shading_ctx_index` column (the point index `k`)
+/// then drives passes over the other columns.
+#[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
+#[inline(never)]
+fn continue_paths(
+    stacks: Option<&CompiledScene>,
+    settings: crate::scene::RenderSettings,
+    mode: ShadingMode,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    incoming: &Rays,
+    samples: &BxdfSamples,
+    rr_u: &[f32],
+    out: &mut RayColumns<'_>,
+    start: usize,
+    stats: &mut SystemStats,
+) -> (usize, usize, usize, usize) {
+    let ray_id = &pts.ray_id[range.clone()];
+    let (m, n) = (ray_id.len(), incoming.len());
+    let rows = start..start + m;
+    let (o_origin, o_direction, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
+        &mut out.origin[rows.clone()],
+        &mut out.direction[rows.clone()],
+        &mut out.path[rows.clone()],
+        &mut out.throughput[rows.clone()],
+        &mut out.lobe[rows.clone()],
+        &mut out.depth[rows.clone()],
+        &mut out.passes[rows.clone()],
+    );
+    let (o_pdf, o_eta_scale, o_dimension, o_ctx, o_prev_p, o_stack) = (
+        &mut out.pdf[rows.clone()],
+        &mut out.eta_scale[rows.clone()],
+        &mut out.dimension[rows.clone()],
+        &mut out.shading_ctx_index[rows.clone()],
+        &mut out.prev_p[rows.clone()],
+        &mut out.volume_stack[rows],
+    );
+    // Pass 1: which points continue, with which throughput.
+    let (in_throughput, in_eta_scale, in_depth) = (
+        &incoming.throughput[..n],
+        &incoming.eta_scale[..n],
+        &incoming.depth[..n],
+    );
+    let (s_pdf, s_weight, s_lobe, s_eta, rr_u) = (
+        &samples.pdf[..m],
+        &samples.weight[..m],
+        &samples.lobe[..m],
+        &samples.eta[..m],
+        &rr_u[..m],
+    );
+    let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
+    let mut count = 0;
+    for k in 0..m {
+        let r = ray_id[k] as usize;
+        // The next segment must fit in max_depth.
+        if in_depth[r] as u32 + 2 > settings.max_depth {
+            max_depth += 1;
+            continue;
+        }
+        let pdf = s_pdf[k];
+        let weight = s_weight[k];
+        if pdf <= 0.0 || is_black_or_not_finite(weight) {
+            absorbed += 1;
+            continue;
+        }
+        let mut throughput = in_throughput[r] * weight;
+        let lobe = s_lobe[k];
+        let eta = s_eta[k];
+        let eta_scale = in_eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
+        let depth = in_depth[r] + 1;
+        // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
+        if depth as u32 > settings.rr_depth {
+            let q = (throughput.max_channel() * eta_scale).min(0.95);
+            if rr_u[k] >= q {
+                roulette += 1;
+                continue;
+            }
+            throughput *= 1.0 / q;
+        }
+        o_throughput[count] = throughput;
+        o_eta_scale[count] = eta_scale;
+        o_depth[count] = depth;
+        o_lobe[count] = lobe;
+        o_pdf[count] = if lobe.is_specular() { 0.0 } else { pdf };
+        o_ctx[count] = k as u32;
+        count += 1;
+    }
+    let ctx = &o_ctx[..count];
+    // Pass 2: geometry. Rays leave from the side of the surface they go to.
+    let (p, ng, s_wi) = (
+        &pts.p[range.clone()][..m],
+        &pts.ng[range.clone()][..m],
+        &samples.wi[..m],
+    );
+    for (((origin, direction), prev_p), &k) in o_origin[..count]
+        .iter_mut()
+        .zip(&mut o_direction[..count])
+        .zip(&mut o_prev_p[..count])
+        .zip(ctx)
+    {
+        let k = k as usize;
+        let (p, ng, wi) = (p[k], ng[k], s_wi[k]);
+        *origin = if mode == ShadingMode::Scatter {
+            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
+            p + side * ray_offset(p)
+        } else {
+            p
+        };
+        *direction = wi;
+        *prev_p = p;
+    }
+    // Pass 3: what the path carries over from the incoming ray.
+    let (in_path, in_passes, in_dimension) = (
+        &incoming.path[..n],
+        &incoming.passes[..n],
+        &incoming.dimension[..n],
+    );
+    for (((path, passes), dimension), &k) in o_path[..count]
+        .iter_mut()
+        .zip(&mut o_passes[..count])
+        .zip(&mut o_dimension[..count])
+        .zip(ctx)
+    {
+        let r = ray_id[k as usize] as usize;
+        *path = in_path[r];
+        *passes = in_passes[r];
+        *dimension = in_dimension[r] + DIMS_PER_VERTEX;
+    }
+    // Pass 4: volume stacks; a transmitted ray crosses the surface's interior boundary.
+    if let Some(scene) = stacks {
+        let in_stack = &incoming.volume_stack[..n];
+        for ((stack, &lobe), &k) in o_stack[..count].iter_mut().zip(&o_lobe[..count]).zip(ctx) {
+            let k = k as usize;
+            *stack = in_stack[ray_id[k] as usize].clone();
+            let i = range.start + k;
+            let shape = pts.shape[i];
+            if mode == ShadingMode::Scatter
+                && lobe.is_transmit()
+                && scene.tracks_interior(shape)
+                && stack.cross(scene.volume_entry(shape), pts.front_face[i])
+                    == StackEvent::UnmatchedExit
+            {
+                stats.unmatched_exit(shape);
+            }
+        }
+    }
+    (count, max_depth, absorbed, roulette)
+}
+
+/// The first `n` elements of a per-group scratch buffer, grown with `fill` when shorter.
+/// The callers overwrite what they read, so the buffer is filled once per size reached
+/// rather than cleared and refilled for every group.
+#[inline]
+fn scratch<T: Clone>(v: &mut Vec<T>, n: usize, fill: T) -> &mut [T] {
+    if v.len() < n {
+        v.resize(n, fill);
+    }
+    &mut v[..n]
+}
+
+/// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
+/// (signed) zero for finite `x` and NaN for infinities and NaN, so the sum of the three
+/// products is zero exactly when every channel is finite; then the sum of the absolute
+/// values is zero exactly when every channel is (a sum of non-negative numbers is at least
+/// its largest term; overflow gives infinity, not zero).
+#[inline]
+fn is_black_or_not_finite(w: Rgb) -> bool {
+    let finite = w.r * 0.0 + w.g * 0.0 + w.b * 0.0 == 0.0;
+    !finite || w.r.abs() + w.g.abs() + w.b.abs() == 0.0
 }
 
 /// Light-sampling pdf (solid angle at `from`, including selection) of the point `p` on the
