@@ -68,6 +68,7 @@ impl VolumeStack {
     }
 
     /// True when the ray is in no volume.
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }

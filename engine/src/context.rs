@@ -4,6 +4,7 @@
 use crate::plugin::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
+use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, VolumeStack, NO_HIT};
 use risotto_systems::geometry::SurfaceSample;
 use risotto_systems::intersect::intersect_closest;
@@ -18,8 +19,6 @@ pub struct HitScratch {
     counts: Vec<u32>,
     cursor: Vec<u32>,
     sorted: Vec<u32>,
-    /// Geometry of each hit, in sorted order.
-    surface: Vec<SurfaceSample>,
 }
 
 /// Ray-tracing services bound to one compiled scene and one worker.
@@ -97,84 +96,123 @@ impl<'s> IntegratorContext<'s> {
         s.counts.clear();
         s.counts.resize(num_materials + 1, 0);
         s.material.clear();
+        s.material.resize(n, 0);
+        let (prims, material) = (&hits.prim[..n], &mut s.material[..n]);
         for i in 0..n {
-            let prim = hits.prim[i];
-            if prim == NO_HIT {
+            let prim = prims[i];
+            material[i] = if prim == NO_HIT {
                 out.push_miss(i as u32, Rgb::WHITE);
-                s.material.push(u32::MAX);
+                u32::MAX
             } else {
                 let shape = scene.prim_shape[prim as usize];
                 let m = scene.shapes[shape as usize].material;
                 s.counts[m as usize + 1] += 1;
-                s.material.push(m);
-            }
+                m
+            };
         }
         for m in 0..num_materials {
             s.counts[m + 1] += s.counts[m];
         }
+        let count = s.counts[num_materials] as usize;
         s.cursor.clear();
-        s.cursor.extend_from_slice(&s.counts);
-        s.sorted.resize(s.counts[num_materials] as usize, 0);
-        for i in 0..n {
-            let m = s.material[i];
+        s.cursor.extend_from_slice(&s.counts[..num_materials]);
+        s.sorted.resize(count, 0);
+        for (i, &m) in material.iter().enumerate() {
             if m != u32::MAX {
-                s.sorted[s.cursor[m as usize] as usize] = i as u32;
-                s.cursor[m as usize] += 1;
+                let slot = &mut s.cursor[m as usize];
+                s.sorted[*slot as usize] = i as u32;
+                *slot += 1;
             }
         }
-        // The shading points of all hits, in sorted order, written column by column: each
-        // column is one tight loop (one capacity check, no row structs), which measured
-        // faster than pushing 14-column rows.
-        let count = s.sorted.len();
+        // The shading points of all hits, in sorted order. The columns that vary per point are
+        // sized first and then written in one pass over the sorted rays (every slice is cut to
+        // its exact length, so the compiler drops the bounds checks); the columns that are
+        // constant per group or copies of another column are filled in bulk afterwards.
         let base = out.points.len();
-        s.surface.clear();
-        s.surface.extend(s.sorted.iter().map(|&i| {
-            let i = i as usize;
-            geometry.surface_at(
-                hits.prim[i],
-                rays.origin[i],
-                rays.direction[i],
-                hits.t[i],
-                hits.b1[i],
-                hits.b2[i],
-            )
-        }));
-        let (sorted, surface) = (&s.sorted, &s.surface);
-        let shape_of = |i: u32| scene.prim_shape[hits.prim[i as usize] as usize];
         let pts = &mut out.points;
-        pts.p.extend(surface.iter().map(|x| x.p));
-        pts.ng.extend(surface.iter().map(|x| x.ng));
-        pts.nn.extend(surface.iter().map(|x| x.ng));
-        pts.vn
-            .extend(sorted.iter().map(|&i| -rays.direction[i as usize]));
-        pts.vlen.extend(sorted.iter().map(|&i| hits.t[i as usize]));
-        pts.u.extend(surface.iter().map(|x| x.uv.x));
-        pts.v.extend(surface.iter().map(|x| x.uv.y));
-        pts.w.extend(std::iter::repeat_n(0.0, count));
-        pts.transmission
-            .extend(std::iter::repeat_n(Rgb::WHITE, count));
-        pts.ray_id.extend_from_slice(sorted);
-        pts.material
-            .extend(sorted.iter().map(|&i| s.material[i as usize]));
-        pts.shape.extend(sorted.iter().map(|&i| shape_of(i)));
-        pts.front_face.extend(
-            sorted
-                .iter()
-                .zip(surface)
-                .map(|(&i, x)| rays.direction[i as usize].dot(x.ng) < 0.0),
-        );
-        pts.ior_outside.extend(sorted.iter().map(|&i| {
-            let stack = &rays.volume_stack[i as usize];
-            if stack.is_empty() {
-                1.0
-            } else {
-                ior_outside(scene, stack, shape_of(i))
+        let end = base + count;
+        pts.p.resize(end, Vec3::ZERO);
+        pts.ng.resize(end, Vec3::ZERO);
+        pts.vn.resize(end, Vec3::ZERO);
+        pts.vlen.resize(end, 0.0);
+        pts.u.resize(end, 0.0);
+        pts.v.resize(end, 0.0);
+        pts.shape.resize(end, 0);
+        pts.front_face.resize(end, false);
+        pts.ior_outside.resize(end, 0.0);
+        {
+            let sorted = &s.sorted[..count];
+            let (p, ng, vn, vlen) = (
+                &mut pts.p[base..end],
+                &mut pts.ng[base..end],
+                &mut pts.vn[base..end],
+                &mut pts.vlen[base..end],
+            );
+            let (u, v) = (&mut pts.u[base..end], &mut pts.v[base..end]);
+            let (shape_out, front_face, ior_out) = (
+                &mut pts.shape[base..end],
+                &mut pts.front_face[base..end],
+                &mut pts.ior_outside[base..end],
+            );
+            let (t, b1, b2) = (&hits.t[..n], &hits.b1[..n], &hits.b2[..n]);
+            let (origin, direction, stacks) = (
+                &rays.origin[..n],
+                &rays.direction[..n],
+                &rays.volume_stack[..n],
+            );
+            // Two passes over the sorted rays rather than one: each needs few enough pointers
+            // to stay in registers. First the surface geometry...
+            for k in 0..count {
+                let i = sorted[k] as usize;
+                let prim = prims[i];
+                // Written from each branch, so the triangle case stays in registers.
+                macro_rules! emit {
+                    ($surf:expr) => {{
+                        let surf: SurfaceSample = $surf;
+                        p[k] = surf.p;
+                        ng[k] = surf.ng;
+                        u[k] = surf.uv.x;
+                        v[k] = surf.uv.y;
+                    }};
+                }
+                match geometry.triangle_surface_at(prim, b1[i], b2[i]) {
+                    Some(surf) => emit!(surf),
+                    None => emit!(geometry.surface_at(
+                        prim,
+                        origin[i],
+                        direction[i],
+                        t[i],
+                        b1[i],
+                        b2[i]
+                    )),
+                }
             }
-        }));
-        debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
+            // ...then what comes from the ray.
+            let ng = &*ng;
+            for k in 0..count {
+                let i = sorted[k] as usize;
+                let d = direction[i];
+                let shape = scene.prim_shape[prims[i] as usize];
+                vn[k] = -d;
+                vlen[k] = t[i];
+                front_face[k] = d.dot(ng[k]) < 0.0;
+                shape_out[k] = shape;
+                let stack = &stacks[i];
+                ior_out[k] = if stack.is_empty() {
+                    1.0
+                } else {
+                    ior_outside(scene, stack, shape)
+                };
+            }
+        }
+        pts.nn.extend_from_slice(&pts.ng[base..end]);
+        pts.w.resize(end, 0.0);
+        pts.transmission.resize(end, Rgb::WHITE);
+        pts.ray_id.extend_from_slice(&s.sorted[..count]);
         for m in 0..num_materials {
             let range = s.counts[m] as usize..s.counts[m + 1] as usize;
             if !range.is_empty() {
+                pts.material.resize(base + range.end, m as u32);
                 out.groups.push(ShadeGroup {
                     material: m as u32,
                     mode: ShadingMode::Scatter,
@@ -182,6 +220,7 @@ impl<'s> IntegratorContext<'s> {
                 });
             }
         }
+        debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
     }
 }
 

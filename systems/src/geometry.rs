@@ -275,7 +275,7 @@ impl SceneGeometry {
     /// time, so the normal stays accurate even where `t` has lost precision (tiny spheres far
     /// away); `p` is the corresponding point on the sphere. `origin`, `direction` and `t` are
     /// only used for spheres when `(b1, b2)` are not finite.
-    #[inline]
+    #[inline(always)]
     pub fn surface_at(
         &self,
         prim: u32,
@@ -285,29 +285,54 @@ impl SceneGeometry {
         b1: f32,
         b2: f32,
     ) -> SurfaceSample {
+        match self.triangle_surface_at(prim, b1, b2) {
+            Some(s) => s,
+            None => self.sphere_surface_at(prim as usize, origin, direction, t, b1, b2),
+        }
+    }
+
+    /// [`Self::surface_at`] when `prim` is a triangle, `None` for a sphere. A few instructions
+    /// and the common case, so batch loops inline it and branch to `surface_at` for spheres
+    /// (writing the result of each branch directly, instead of merging two results through
+    /// memory).
+    #[inline(always)]
+    pub fn triangle_surface_at(&self, prim: u32, b1: f32, b2: f32) -> Option<SurfaceSample> {
         let prim = prim as usize;
-        if prim < self.triangles.len() {
-            let [v0, v1, v2] = self.triangles[prim];
-            let b0 = 1.0 - b1 - b2;
-            SurfaceSample {
-                p: v0 * b0 + v1 * b1 + v2 * b2,
-                ng: self.triangle_normal_area[prim].0,
-                uv: Vec2::new(b1, b2),
-            }
+        let (&[v0, v1, v2], &(ng, _)) = (
+            self.triangles.get(prim)?,
+            self.triangle_normal_area.get(prim)?,
+        );
+        let b0 = 1.0 - b1 - b2;
+        Some(SurfaceSample {
+            p: v0 * b0 + v1 * b1 + v2 * b2,
+            ng,
+            uv: Vec2::new(b1, b2),
+        })
+    }
+
+    /// The sphere case of [`Self::surface_at`].
+    #[inline(never)]
+    fn sphere_surface_at(
+        &self,
+        prim: usize,
+        origin: Vec3,
+        direction: Vec3,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> SurfaceSample {
+        let s = self.spheres[prim - self.triangles.len()];
+        let uv = if b1.is_finite() && b2.is_finite() {
+            Vec2::new(b1, b2)
         } else {
-            let s = self.spheres[prim - self.triangles.len()];
-            let uv = if b1.is_finite() && b2.is_finite() {
-                Vec2::new(b1, b2)
-            } else {
-                let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
-                sphere_uv(h)
-            };
-            let n = sphere_dir_from_uv(uv);
-            SurfaceSample {
-                p: s.center + n * s.radius,
-                ng: n,
-                uv,
-            }
+            let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
+            sphere_uv(h)
+        };
+        let n = sphere_dir_from_uv(uv);
+        SurfaceSample {
+            p: s.center + n * s.radius,
+            ng: n,
+            uv,
         }
     }
 
