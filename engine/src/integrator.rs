@@ -18,7 +18,7 @@ use crate::stats::{System, SystemStats, Termination};
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::*;
-use risotto_systems::camera::{generate_camera_rays, FIRST_PATH_DIMENSION};
+use risotto_systems::camera::push_camera_rays;
 use risotto_systems::film::{splat, Film};
 use risotto_systems::lights::{power_heuristic, LightSample};
 use risotto_systems::partition::partition_by_key;
@@ -290,36 +290,19 @@ impl PathTracer {
         let seed = scene.settings.seed;
         t.seeds
             .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
-        // Camera rays, generated straight into the table's columns; every other column is
-        // written once with its start value.
-        let rays = &mut t.rays;
-        rays.clear();
-        rays.origin.resize(n, Vec3::ZERO);
-        rays.direction.resize(n, Vec3::Z);
+        // Camera rays, generated straight into the table's columns.
+        t.rays.clear();
         stats.time(System::Camera, n, || {
-            generate_camera_rays(
+            push_camera_rays(
                 &scene.camera,
                 &t.paths.pixel,
                 &t.paths.sample,
                 &t.seeds,
-                &mut rays.origin,
-                &mut rays.direction,
+                &scene.camera_stack,
+                &mut t.rays,
             )
         });
-        rays.tmin.resize(n, 0.0);
-        rays.tmax.resize(n, f32::INFINITY);
-        rays.path.extend(0..n as u32);
-        rays.throughput.resize(n, Rgb::WHITE);
-        rays.lobe.resize(n, LobeSampled::NONE);
-        rays.depth.resize(n, 0);
-        rays.passes.resize(n, 0);
-        rays.pdf.resize(n, 0.0);
-        rays.eta_scale.resize(n, 1.0);
-        rays.dimension.resize(n, FIRST_PATH_DIMENSION);
-        rays.shading_ctx_index.resize(n, u32::MAX);
-        rays.prev_p.extend_from_slice(&rays.origin);
-        rays.volume_stack.resize(n, scene.camera_stack.clone());
-        rays.debug_check();
+        t.rays.debug_check();
         stats.add_rays(n);
         // A point's material is its shape's (`IntegratorContext::nearest_hits`).
         t.emissive_material.clear();

@@ -6,6 +6,7 @@
 
 use crate::sampler::{sample_2d, PathSampler};
 use glam::{Vec2, Vec3};
+use risotto_components::{LobeSampled, Rays, Rgb, VolumeStack};
 
 /// Projection of a [`Camera`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,29 +70,84 @@ impl Camera {
     /// The ray through film position `film` (in pixels, (0,0) = top-left corner of the image).
     #[inline]
     pub fn ray(&self, film: Vec2) -> (Vec3, Vec3) {
-        let w = self.width as f32;
-        let h = self.height as f32;
-        // Normalised screen coordinates: x in [-1, 1] left to right, y in [-h/w, h/w] top to
-        // bottom flipped so +y is image up.
-        let sx = 2.0 * film.x / w - 1.0;
-        let sy = (1.0 - 2.0 * film.y / h) * (h / w);
-        match self.projection {
-            Projection::Perspective { fov_deg } => {
-                let tan_half = (0.5 * fov_deg.to_radians()).tan();
-                let d = self.forward + self.right * (sx * tan_half) + self.up * (sy * tan_half);
-                (self.from, d.normalize())
-            }
-            Projection::Orthographic { width } => {
-                let half = 0.5 * width;
-                let o = self.from + self.right * (sx * half) + self.up * (sy * half);
-                (o, self.forward)
-            }
+        self.ray_generator().ray(film)
+    }
+
+    /// The per-camera constants of [`Self::ray`], computed once for a batch of rays.
+    #[inline]
+    fn ray_generator(&self) -> RayGenerator {
+        let scale = match self.projection {
+            Projection::Perspective { fov_deg } => (0.5 * fov_deg.to_radians()).tan(),
+            Projection::Orthographic { width } => 0.5 * width,
+        };
+        RayGenerator {
+            camera: *self,
+            w: self.width as f32,
+            h: self.height as f32,
+            scale,
         }
     }
 }
 
+/// A [`Camera`] with the constants of its ray computation hoisted (the tangent of the half
+/// field of view costs a libm call, more than the rest of a ray).
+struct RayGenerator {
+    camera: Camera,
+    w: f32,
+    h: f32,
+    /// `tan(fov / 2)` (perspective) or half the view width (orthographic).
+    scale: f32,
+}
+
+impl RayGenerator {
+    /// Normalised screen coordinates: x in [-1, 1] left to right, y in [-h/w, h/w] top to
+    /// bottom flipped so +y is image up.
+    #[inline(always)]
+    fn screen(&self, film: Vec2) -> (f32, f32) {
+        let (w, h) = (self.w, self.h);
+        let sx = 2.0 * film.x / w - 1.0;
+        let sy = (1.0 - 2.0 * film.y / h) * (h / w);
+        (sx, sy)
+    }
+
+    /// Direction of a perspective ray.
+    #[inline(always)]
+    fn perspective(&self, film: Vec2) -> Vec3 {
+        let (sx, sy) = self.screen(film);
+        let c = &self.camera;
+        let d = c.forward + c.right * (sx * self.scale) + c.up * (sy * self.scale);
+        d.normalize()
+    }
+
+    /// Origin of an orthographic ray.
+    #[inline(always)]
+    fn orthographic(&self, film: Vec2) -> Vec3 {
+        let (sx, sy) = self.screen(film);
+        let c = &self.camera;
+        c.from + c.right * (sx * self.scale) + c.up * (sy * self.scale)
+    }
+
+    #[inline(always)]
+    fn ray(&self, film: Vec2) -> (Vec3, Vec3) {
+        match self.camera.projection {
+            Projection::Perspective { .. } => (self.camera.from, self.perspective(film)),
+            Projection::Orthographic { .. } => (self.orthographic(film), self.camera.forward),
+        }
+    }
+}
+
+/// Film position of camera sample `(pixel, sample)`: the pixel's corner plus the jitter,
+/// sampler dimensions 0 and 1.
+#[inline(always)]
+fn film_position(width: u32, pixel: u32, sample: u32, seed: u32) -> Vec2 {
+    let px = pixel % width;
+    let py = pixel / width;
+    let jitter = sample_2d(seed, sample, 0);
+    Vec2::new(px as f32 + jitter.x, py as f32 + jitter.y)
+}
+
 /// Generates one camera ray per `(pixel, sample)` entry. Pixel jitter consumes sampler
-/// dimensions 0 and 1; `next_dimension` is set to 2 for every ray.
+/// dimensions 0 and 1 (paths continue at [`FIRST_PATH_DIMENSION`]).
 ///
 /// Inputs: `pixel`, `sample`, `seed` (per-pixel scrambling seed). Outputs: `origin`,
 /// `direction`.
@@ -103,15 +159,64 @@ pub fn generate_camera_rays(
     origin: &mut [Vec3],
     direction: &mut [Vec3],
 ) {
-    let width = camera.width;
-    for i in 0..pixel.len() {
-        let px = pixel[i] % width;
-        let py = pixel[i] / width;
-        let jitter = sample_2d(seed[i], sample[i], 0);
-        let (o, d) = camera.ray(Vec2::new(px as f32 + jitter.x, py as f32 + jitter.y));
-        origin[i] = o;
-        direction[i] = d;
+    let gen = camera.ray_generator();
+    let n = pixel.len();
+    let (sample, seed) = (&sample[..n], &seed[..n]);
+    let (origin, direction) = (&mut origin[..n], &mut direction[..n]);
+    for i in 0..n {
+        let film = film_position(camera.width, pixel[i], sample[i], seed[i]);
+        (origin[i], direction[i]) = gen.ray(film);
     }
+}
+
+/// Appends one camera ray per `(pixel[i], sample[i], seed[i])` to `rays`: the first segment
+/// of path `i`, starting in the volumes `stack` (jitter as in [`generate_camera_rays`]).
+/// Written column by column: the projection decides which of origin and direction varies,
+/// and every other column is a constant of camera rays (`tmin` 0, `tmax` infinity,
+/// throughput 1, no lobe, depth and passes 0, pdf 0, `eta_scale` 1, dimension
+/// [`FIRST_PATH_DIMENSION`], no shading context, `prev_p` = origin).
+pub fn push_camera_rays(
+    camera: &Camera,
+    pixel: &[u32],
+    sample: &[u32],
+    seed: &[u32],
+    stack: &VolumeStack,
+    rays: &mut Rays,
+) {
+    let gen = camera.ray_generator();
+    let n = pixel.len();
+    let base = rays.len();
+    let end = base + n;
+    let films = pixel
+        .iter()
+        .zip(&sample[..n])
+        .zip(&seed[..n])
+        .map(|((&p, &s), &seed)| film_position(camera.width, p, s, seed));
+    match camera.projection {
+        Projection::Perspective { .. } => {
+            rays.origin.resize(end, camera.from);
+            rays.direction
+                .extend(films.map(|film| gen.perspective(film)));
+        }
+        Projection::Orthographic { .. } => {
+            rays.origin.extend(films.map(|film| gen.orthographic(film)));
+            rays.direction.resize(end, camera.forward);
+        }
+    }
+    rays.prev_p.extend_from_slice(&rays.origin[base..end]);
+    rays.tmin.resize(end, 0.0);
+    rays.tmax.resize(end, f32::INFINITY);
+    rays.path.extend(0..n as u32);
+    rays.throughput.resize(end, Rgb::WHITE);
+    rays.lobe.resize(end, LobeSampled::NONE);
+    rays.depth.resize(end, 0);
+    rays.passes.resize(end, 0);
+    rays.pdf.resize(end, 0.0);
+    rays.eta_scale.resize(end, 1.0);
+    rays.dimension.resize(end, FIRST_PATH_DIMENSION);
+    rays.shading_ctx_index.resize(end, u32::MAX);
+    rays.volume_stack.resize(end, stack.clone());
+    debug_assert!(rays.is_consistent(), "a ray column was not filled");
 }
 
 /// The sampler dimension the first bounce starts at: the pixel jitter uses 0 and 1, 2 and 3
