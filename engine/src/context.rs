@@ -5,8 +5,8 @@ use crate::plugin::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use glam::Vec3;
-use risotto_components::{Hits, Rays, Rgb, VolumeStack, NO_HIT};
-use risotto_systems::geometry::SurfaceSample;
+use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
+use risotto_systems::geometry::SceneGeometry;
 use risotto_systems::intersect::intersect_closest;
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
@@ -19,6 +19,11 @@ pub struct HitScratch {
     counts: Vec<u32>,
     cursor: Vec<u32>,
     sorted: Vec<u32>,
+    /// At least as many zero vectors and white colours as the largest batch so far: the
+    /// 12-byte columns are sized by copying from these (`Vec::resize` writes 12-byte values
+    /// one at a time; a copy is a memcpy).
+    zeros: Vec<Vec3>,
+    whites: Vec<Rgb>,
 }
 
 /// Ray-tracing services bound to one compiled scene and one worker.
@@ -91,123 +96,74 @@ impl<'s> IntegratorContext<'s> {
             )
         });
         // Counting sort of hit rays by material: groups come out contiguous and in material
-        // order, so each factory runs once per call.
+        // order, so each factory runs once per call. Every array is taken as a slice before
+        // its loop: stores into the scratch could otherwise alias the `Vec` headers, and the
+        // compiler would reload pointers and lengths on every iteration.
         let num_materials = scene.materials.len();
+        let (prim_shape, shapes) = (&scene.prim_shape[..], &scene.shapes[..]);
         s.counts.clear();
         s.counts.resize(num_materials + 1, 0);
         s.material.clear();
         s.material.resize(n, 0);
-        let (prims, material) = (&hits.prim[..n], &mut s.material[..n]);
-        for i in 0..n {
-            let prim = prims[i];
-            material[i] = if prim == NO_HIT {
-                out.push_miss(i as u32, Rgb::WHITE);
-                u32::MAX
-            } else {
-                let shape = scene.prim_shape[prim as usize];
-                let m = scene.shapes[shape as usize].material;
-                s.counts[m as usize + 1] += 1;
-                m
-            };
-        }
-        for m in 0..num_materials {
-            s.counts[m + 1] += s.counts[m];
+        let prims = &hits.prim[..n];
+        {
+            let (material, counts) = (&mut s.material[..n], &mut s.counts[..]);
+            for i in 0..n {
+                let prim = prims[i];
+                material[i] = if prim == NO_HIT {
+                    out.push_miss(i as u32, Rgb::WHITE);
+                    u32::MAX
+                } else {
+                    let m = shapes[prim_shape[prim as usize] as usize].material;
+                    counts[m as usize + 1] += 1;
+                    m
+                };
+            }
+            for m in 0..num_materials {
+                counts[m + 1] += counts[m];
+            }
         }
         let count = s.counts[num_materials] as usize;
         s.cursor.clear();
         s.cursor.extend_from_slice(&s.counts[..num_materials]);
         s.sorted.resize(count, 0);
-        for (i, &m) in material.iter().enumerate() {
-            if m != u32::MAX {
-                let slot = &mut s.cursor[m as usize];
-                s.sorted[*slot as usize] = i as u32;
-                *slot += 1;
+        {
+            let (cursor, sorted) = (&mut s.cursor[..], &mut s.sorted[..count]);
+            for (i, &m) in s.material.iter().enumerate() {
+                if m != u32::MAX {
+                    let slot = &mut cursor[m as usize];
+                    sorted[*slot as usize] = i as u32;
+                    *slot += 1;
+                }
             }
         }
         // The shading points of all hits, in sorted order. The columns that vary per point are
-        // sized first and then written in one pass over the sorted rays (every slice is cut to
-        // its exact length, so the compiler drops the bounds checks); the columns that are
-        // constant per group or copies of another column are filled in bulk afterwards.
+        // sized first (12-byte ones by copying from prepared constants: `Vec::resize` writes
+        // 12-byte values one at a time) and then written by index in passes over the sorted
+        // rays; the columns that are constant per group or copies of another column are
+        // filled in bulk afterwards.
+        if s.zeros.len() < count {
+            s.zeros.resize(count, Vec3::ZERO);
+            s.whites.resize(count, Rgb::WHITE);
+        }
         let base = out.points.len();
         let pts = &mut out.points;
         let end = base + count;
-        pts.p.resize(end, Vec3::ZERO);
-        pts.ng.resize(end, Vec3::ZERO);
-        pts.vn.resize(end, Vec3::ZERO);
+        pts.p.extend_from_slice(&s.zeros[..count]);
+        pts.ng.extend_from_slice(&s.zeros[..count]);
+        pts.vn.extend_from_slice(&s.zeros[..count]);
         pts.vlen.resize(end, 0.0);
         pts.u.resize(end, 0.0);
         pts.v.resize(end, 0.0);
         pts.shape.resize(end, 0);
         pts.front_face.resize(end, false);
         pts.ior_outside.resize(end, 0.0);
-        {
-            let sorted = &s.sorted[..count];
-            let (p, ng, vn, vlen) = (
-                &mut pts.p[base..end],
-                &mut pts.ng[base..end],
-                &mut pts.vn[base..end],
-                &mut pts.vlen[base..end],
-            );
-            let (u, v) = (&mut pts.u[base..end], &mut pts.v[base..end]);
-            let (shape_out, front_face, ior_out) = (
-                &mut pts.shape[base..end],
-                &mut pts.front_face[base..end],
-                &mut pts.ior_outside[base..end],
-            );
-            let (t, b1, b2) = (&hits.t[..n], &hits.b1[..n], &hits.b2[..n]);
-            let (origin, direction, stacks) = (
-                &rays.origin[..n],
-                &rays.direction[..n],
-                &rays.volume_stack[..n],
-            );
-            // Two passes over the sorted rays rather than one: each needs few enough pointers
-            // to stay in registers. First the surface geometry...
-            for k in 0..count {
-                let i = sorted[k] as usize;
-                let prim = prims[i];
-                // Written from each branch, so the triangle case stays in registers.
-                macro_rules! emit {
-                    ($surf:expr) => {{
-                        let surf: SurfaceSample = $surf;
-                        p[k] = surf.p;
-                        ng[k] = surf.ng;
-                        u[k] = surf.uv.x;
-                        v[k] = surf.uv.y;
-                    }};
-                }
-                match geometry.triangle_surface_at(prim, b1[i], b2[i]) {
-                    Some(surf) => emit!(surf),
-                    None => emit!(geometry.surface_at(
-                        prim,
-                        origin[i],
-                        direction[i],
-                        t[i],
-                        b1[i],
-                        b2[i]
-                    )),
-                }
-            }
-            // ...then what comes from the ray.
-            let ng = &*ng;
-            for k in 0..count {
-                let i = sorted[k] as usize;
-                let d = direction[i];
-                let shape = scene.prim_shape[prims[i] as usize];
-                vn[k] = -d;
-                vlen[k] = t[i];
-                front_face[k] = d.dot(ng[k]) < 0.0;
-                shape_out[k] = shape;
-                let stack = &stacks[i];
-                ior_out[k] = if stack.is_empty() {
-                    1.0
-                } else {
-                    ior_outside(scene, stack, shape)
-                };
-            }
-        }
+        let sorted = &s.sorted[..count];
+        write_surfaces(geometry, sorted, hits, rays, pts, base);
+        write_ray_columns(scene, sorted, hits, rays, pts, base);
         pts.nn.extend_from_slice(&pts.ng[base..end]);
         pts.w.resize(end, 0.0);
-        pts.transmission.resize(end, Rgb::WHITE);
+        pts.transmission.extend_from_slice(&s.whites[..count]);
         pts.ray_id.extend_from_slice(&s.sorted[..count]);
         for m in 0..num_materials {
             let range = s.counts[m] as usize..s.counts[m + 1] as usize;
@@ -221,6 +177,108 @@ impl<'s> IntegratorContext<'s> {
             }
         }
         debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
+    }
+}
+
+// The passes that write the shading-point columns `base..base + sorted.len()` from the hits
+// of the rays `sorted` (rows of `hits` and `rays`). Each is its own function, and each loop
+// leaves the rare cases (spheres, rays inside volumes) to a second loop: a loop with few
+// pointers and no call inside keeps everything in registers, where one loop inside the big
+// function spilled about a dozen values per point. Every slice is cut to its exact length
+// first, so the compiler drops the bounds checks on the outputs.
+
+/// Pass 1: `p`, `ng`, `u`, `v`.
+#[inline(never)]
+fn write_surfaces(
+    geometry: &SceneGeometry,
+    sorted: &[u32],
+    hits: &Hits,
+    rays: &Rays,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let (n, count) = (hits.len(), sorted.len());
+    let (p, ng) = (&mut pts.p[base..][..count], &mut pts.ng[base..][..count]);
+    let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
+    let (prims, b1, b2) = (&hits.prim[..n], &hits.b1[..n], &hits.b2[..n]);
+    let triangles = geometry.triangles();
+    let mut spheres = false;
+    for k in 0..count {
+        let i = sorted[k] as usize;
+        if let Some(surf) = triangles.surface_at(prims[i], b1[i], b2[i]) {
+            p[k] = surf.p;
+            ng[k] = surf.ng;
+            u[k] = surf.uv.x;
+            v[k] = surf.uv.y;
+        } else {
+            spheres = true;
+        }
+    }
+    if spheres {
+        for (k, &i) in sorted.iter().enumerate() {
+            let i = i as usize;
+            if triangles.surface_at(prims[i], b1[i], b2[i]).is_none() {
+                let surf = geometry.surface_at(
+                    prims[i],
+                    rays.origin[i],
+                    rays.direction[i],
+                    hits.t[i],
+                    b1[i],
+                    b2[i],
+                );
+                p[k] = surf.p;
+                ng[k] = surf.ng;
+                u[k] = surf.uv.x;
+                v[k] = surf.uv.y;
+            }
+        }
+    }
+}
+
+/// Pass 2 (after [`write_surfaces`], it reads `ng`): `vn`, `vlen`, `front_face`, `shape`,
+/// `ior_outside`.
+#[inline(never)]
+fn write_ray_columns(
+    scene: &CompiledScene,
+    sorted: &[u32],
+    hits: &Hits,
+    rays: &Rays,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let (n, count) = (hits.len(), sorted.len());
+    let (ng, vn, vlen) = (
+        &pts.ng[base..][..count],
+        &mut pts.vn[base..][..count],
+        &mut pts.vlen[base..][..count],
+    );
+    let (shape, front_face, ior) = (
+        &mut pts.shape[base..][..count],
+        &mut pts.front_face[base..][..count],
+        &mut pts.ior_outside[base..][..count],
+    );
+    let (prims, t) = (&hits.prim[..n], &hits.t[..n]);
+    let (direction, stacks) = (&rays.direction[..n], &rays.volume_stack[..n]);
+    let prim_shape = &scene.prim_shape[..];
+    let mut in_volumes = false;
+    for k in 0..count {
+        let i = sorted[k] as usize;
+        let d = direction[i];
+        vn[k] = -d;
+        vlen[k] = t[i];
+        front_face[k] = d.dot(ng[k]) < 0.0;
+        shape[k] = prim_shape[prims[i] as usize];
+        // In vacuum unless the ray travels inside volumes (below).
+        ior[k] = 1.0;
+        in_volumes |= !stacks[i].is_empty();
+    }
+    if in_volumes {
+        for (k, &i) in sorted.iter().enumerate() {
+            let stack = &stacks[i as usize];
+            if !stack.is_empty() {
+                ior[k] = ior_outside(scene, stack, shape[k]);
+            }
+        }
     }
 }
 
