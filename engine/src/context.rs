@@ -14,10 +14,11 @@ use risotto_systems::intersect::intersect_closest;
 #[derive(Debug, Default)]
 pub struct HitScratch {
     hits: Hits,
-    /// Material of each ray's hit (`u32::MAX` for a miss).
-    material: Vec<u32>,
-    counts: Vec<u32>,
-    cursor: Vec<u32>,
+    /// Rays that hit a surface of material `m`, in ray order.
+    buckets: Vec<Vec<u32>>,
+    /// Rays that hit nothing.
+    escaped: Vec<u32>,
+    /// The buckets concatenated: the rays of the shading points, in point order.
     sorted: Vec<u32>,
     /// At least as many zero vectors and white colours as the largest batch so far: the
     /// 12-byte columns are sized by copying from these (`Vec::resize` writes 12-byte values
@@ -95,57 +96,30 @@ impl<'s> IntegratorContext<'s> {
                 &mut hits.b2,
             )
         });
-        // Counting sort of hit rays by material: groups come out contiguous and in material
-        // order, so each factory runs once per call. Every array is taken as a slice before
-        // its loop: stores into the scratch could otherwise alias the `Vec` headers, and the
-        // compiler would reload pointers and lengths on every iteration.
-        let num_materials = scene.materials.len();
-        let (prim_shape, shapes) = (&scene.prim_shape[..], &scene.shapes[..]);
-        s.counts.clear();
-        s.counts.resize(num_materials + 1, 0);
-        s.material.clear();
-        s.material.resize(n, 0);
-        let prims = &hits.prim[..n];
-        {
-            let (material, counts) = (&mut s.material[..n], &mut s.counts[..]);
-            for i in 0..n {
-                let prim = prims[i];
-                material[i] = if prim == NO_HIT {
-                    out.push_miss(i as u32, Rgb::WHITE);
-                    u32::MAX
-                } else {
-                    let m = shapes[prim_shape[prim as usize] as usize].material;
-                    counts[m as usize + 1] += 1;
-                    m
-                };
-            }
-            for m in 0..num_materials {
-                counts[m + 1] += counts[m];
-            }
+        // Hit rays are grouped by material (a bucket per material, concatenated in material
+        // order: groups come out contiguous, so each factory runs once per call), escaped
+        // rays go to their own list. Every array is taken as a slice before its loop: stores
+        // into the scratch could otherwise alias the `Vec` headers, and the compiler would
+        // reload pointers and lengths on every iteration.
+        s.buckets.resize_with(scene.materials.len(), Vec::new);
+        group_by_material(scene, &hits.prim[..n], &mut s.buckets, &mut s.escaped);
+        s.sorted.clear();
+        for b in &s.buckets {
+            s.sorted.extend_from_slice(b);
         }
-        let count = s.counts[num_materials] as usize;
-        s.cursor.clear();
-        s.cursor.extend_from_slice(&s.counts[..num_materials]);
-        s.sorted.resize(count, 0);
-        {
-            let (cursor, sorted) = (&mut s.cursor[..], &mut s.sorted[..count]);
-            for (i, &m) in s.material.iter().enumerate() {
-                if m != u32::MAX {
-                    let slot = &mut cursor[m as usize];
-                    sorted[*slot as usize] = i as u32;
-                    *slot += 1;
-                }
-            }
+        let count = s.sorted.len();
+        if s.zeros.len() < n {
+            s.zeros.resize(n, Vec3::ZERO);
+            s.whites.resize(n, Rgb::WHITE);
         }
+        out.misses.extend_from_slice(&s.escaped);
+        out.miss_transmission
+            .extend_from_slice(&s.whites[..s.escaped.len()]);
         // The shading points of all hits, in sorted order. The columns that vary per point are
         // sized first (12-byte ones by copying from prepared constants: `Vec::resize` writes
         // 12-byte values one at a time) and then written by index in passes over the sorted
         // rays; the columns that are constant per group or copies of another column are
         // filled in bulk afterwards.
-        if s.zeros.len() < count {
-            s.zeros.resize(count, Vec3::ZERO);
-            s.whites.resize(count, Rgb::WHITE);
-        }
         let base = out.points.len();
         let pts = &mut out.points;
         let end = base + count;
@@ -157,7 +131,8 @@ impl<'s> IntegratorContext<'s> {
         pts.v.resize(end, 0.0);
         pts.shape.resize(end, 0);
         pts.front_face.resize(end, false);
-        pts.ior_outside.resize(end, 0.0);
+        // Vacuum unless the ray travels inside volumes (`write_ray_columns`).
+        pts.ior_outside.resize(end, 1.0);
         let sorted = &s.sorted[..count];
         write_surfaces(geometry, sorted, hits, rays, pts, base);
         write_ray_columns(scene, sorted, hits, rays, pts, base);
@@ -165,15 +140,17 @@ impl<'s> IntegratorContext<'s> {
         pts.w.resize(end, 0.0);
         pts.transmission.extend_from_slice(&s.whites[..count]);
         pts.ray_id.extend_from_slice(&s.sorted[..count]);
-        for m in 0..num_materials {
-            let range = s.counts[m] as usize..s.counts[m + 1] as usize;
-            if !range.is_empty() {
-                pts.material.resize(base + range.end, m as u32);
+        let mut start = base;
+        for (m, b) in s.buckets.iter().enumerate() {
+            if !b.is_empty() {
+                let end = start + b.len();
+                pts.material.resize(end, m as u32);
                 out.groups.push(ShadeGroup {
                     material: m as u32,
                     mode: ShadingMode::Scatter,
-                    range: base + range.start..base + range.end,
+                    range: start..end,
                 });
+                start = end;
             }
         }
         debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
@@ -186,6 +163,30 @@ impl<'s> IntegratorContext<'s> {
 // pointers and no call inside keeps everything in registers, where one loop inside the big
 // function spilled about a dozen values per point. Every slice is cut to its exact length
 // first, so the compiler drops the bounds checks on the outputs.
+
+/// Clears `buckets` (one per material) and `escaped`, then appends the index of every ray
+/// whose hit is on a surface of material `m` to `buckets[m]` and of every miss to `escaped`.
+/// Its own function for the same reason as the passes below.
+#[inline(never)]
+fn group_by_material(
+    scene: &CompiledScene,
+    prims: &[u32],
+    buckets: &mut [Vec<u32>],
+    escaped: &mut Vec<u32>,
+) {
+    for b in buckets.iter_mut() {
+        b.clear();
+    }
+    escaped.clear();
+    let prim_material = &scene.prim_material[..];
+    for (i, &prim) in prims.iter().enumerate() {
+        if prim == NO_HIT {
+            escaped.push(i as u32);
+        } else {
+            buckets[prim_material[prim as usize] as usize].push(i as u32);
+        }
+    }
+}
 
 /// Pass 1: `p`, `ng`, `u`, `v`.
 #[inline(never)]
@@ -268,8 +269,6 @@ fn write_ray_columns(
         vlen[k] = t[i];
         front_face[k] = d.dot(ng[k]) < 0.0;
         shape[k] = prim_shape[prims[i] as usize];
-        // In vacuum unless the ray travels inside volumes (below).
-        ior[k] = 1.0;
         in_volumes |= !stacks[i].is_empty();
     }
     if in_volumes {

@@ -202,6 +202,9 @@ pub struct CompiledScene {
     pub geometry: SceneGeometry,
     /// Shape index of every primitive.
     pub prim_shape: Vec<u32>,
+    /// Material index of every primitive (its shape's material; what grouping hits by
+    /// material reads, one lookup instead of two).
+    pub prim_material: Vec<u32>,
     /// Shapes.
     pub shapes: Vec<ShapeInfo>,
     /// Materials (factories).
@@ -440,9 +443,14 @@ impl Scene {
             features.transmission_shadows |= h.contains(InstanceHints::TRANSMISSION_SHADOWS);
         }
 
+        let prim_material = prim_shape
+            .iter()
+            .map(|&s| shapes[s as usize].material)
+            .collect();
         let mut compiled = CompiledScene {
             geometry,
             prim_shape,
+            prim_material,
             shapes,
             materials,
             material_info,
