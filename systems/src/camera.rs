@@ -278,6 +278,72 @@ mod tests {
         assert!(((o1 - o0).length() - 4.0).abs() < 1e-5);
     }
 
+    /// Both projections, appended after an existing row: each ray is the camera's ray
+    /// through the pixel corner plus the Sobol jitter of dimensions 0 and 1, and the other
+    /// columns are the camera-ray constants.
+    #[test]
+    fn push_camera_rays_matches_camera_ray_per_sample() {
+        use risotto_components::{RayRow, VolumeEntry};
+        let projections = [
+            Projection::Perspective { fov_deg: 35.0 },
+            Projection::Orthographic { width: 3.0 },
+        ];
+        for projection in projections {
+            let (w, h) = (7, 5);
+            let cam = Camera::look_at(
+                projection,
+                Vec3::new(0.5, 1.0, 4.0),
+                Vec3::new(0.0, 0.2, 0.0),
+                Vec3::Y,
+                w,
+                h,
+            )
+            .unwrap();
+            let pixel: Vec<u32> = (0..w * h).chain([0, 34, 17]).collect();
+            let sample: Vec<u32> = (0..pixel.len() as u32).map(|i| i % 4).collect();
+            let seed: Vec<u32> = pixel
+                .iter()
+                .map(|&p| p.wrapping_mul(2_654_435_761))
+                .collect();
+            let mut stack = VolumeStack::new();
+            stack.enter(VolumeEntry {
+                material: 3,
+                shape: 1,
+                priority: 0,
+            });
+            let mut rays = Rays::default();
+            rays.push(RayRow::default());
+            push_camera_rays(&cam, &pixel, &sample, &seed, &stack, &mut rays);
+            assert!(rays.is_consistent());
+            assert_eq!(rays.len(), pixel.len() + 1);
+            let n = pixel.len();
+            let (mut o2, mut d2) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+            generate_camera_rays(&cam, &pixel, &sample, &seed, &mut o2, &mut d2);
+            for i in 0..n {
+                let r = rays.row(i + 1);
+                let jitter = sample_2d(seed[i], sample[i], 0);
+                let film = Vec2::new(
+                    (pixel[i] % w) as f32 + jitter.x,
+                    (pixel[i] / w) as f32 + jitter.y,
+                );
+                let (o, d) = cam.ray(film);
+                assert_eq!((r.origin, r.direction), (o, d));
+                assert_eq!((o2[i], d2[i]), (o, d));
+                assert!((d.length() - 1.0).abs() < 1e-6);
+                assert_eq!(r.prev_p, o);
+                assert_eq!((r.tmin, r.tmax), (0.0, f32::INFINITY));
+                assert_eq!(r.path, i as u32);
+                assert_eq!(r.throughput, Rgb::WHITE);
+                assert_eq!(r.lobe, LobeSampled::NONE);
+                assert_eq!((r.depth, r.passes), (0, 0));
+                assert_eq!((r.pdf, r.eta_scale), (0.0, 1.0));
+                assert_eq!(r.dimension, FIRST_PATH_DIMENSION);
+                assert_eq!(r.shading_ctx_index, u32::MAX);
+                assert_eq!(r.volume_stack, stack);
+            }
+        }
+    }
+
     #[test]
     fn degenerate_look_at_is_rejected() {
         let p = Projection::Perspective { fov_deg: 40.0 };

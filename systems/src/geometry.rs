@@ -442,3 +442,46 @@ fn sphere_dir_from_uv(uv: Vec2) -> Vec3 {
     let (sp, cp) = phi.sin_cos();
     DVec3::new(st * cp, st * sp, ct).as_vec3()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::SplitMix64;
+
+    /// The triangle records against the vertices they were built from, in double precision:
+    /// interpolated points, normals, areas; spheres are not triangles.
+    #[test]
+    fn triangle_records_match_their_vertices() {
+        let mut rng = SplitMix64(3);
+        let mut v = || Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 20.0 - Vec3::splat(10.0);
+        let tris: Vec<[Vec3; 3]> = (0..50).map(|_| [v(), v(), v()]).collect();
+        let sphere = Sphere {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 0.5,
+        };
+        let geom = SceneGeometry::build(tris.clone(), vec![sphere]);
+        let view = geom.triangles();
+        let mut rng = SplitMix64(4);
+        for (i, t) in tris.iter().enumerate() {
+            assert_eq!(geom.triangle(i), *t);
+            let [a, b, c] = t.map(|x| x.as_dvec3());
+            let cross = (b - a).cross(c - a);
+            let area = geom.prim_area(i as u32) as f64;
+            assert!((area - 0.5 * cross.length()).abs() <= 1e-5 * area.max(1.0));
+            let (b1, b2) = (rng.f32() * 0.5, rng.f32() * 0.5);
+            let s = view.surface_at(i as u32, b1, b2).unwrap();
+            let d = f32::MAX;
+            assert_eq!(s, geom.surface_at(i as u32, Vec3::ZERO, Vec3::Z, d, b1, b2));
+            let (b1d, b2d) = (b1 as f64, b2 as f64);
+            let p = a * (1.0 - b1d - b2d) + b * b1d + c * b2d;
+            assert!((s.p.as_dvec3() - p).length() < 1e-5, "{:?} {p:?}", s.p);
+            assert!((s.ng.as_dvec3() - cross.normalize()).length() < 1e-6);
+            assert_eq!(s.uv, Vec2::new(b1, b2));
+            let (q, n) = geom.sample_prim(i as u32, Vec2::new(b1, b2));
+            assert_eq!(n, s.ng);
+            assert!((q.as_dvec3() - a).dot(n.as_dvec3()).abs() < 1e-4);
+        }
+        assert!(view.surface_at(tris.len() as u32, 0.25, 0.5).is_none());
+        assert_eq!(geom.num_prims(), tris.len() + 1);
+    }
+}
