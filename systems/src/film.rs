@@ -90,7 +90,9 @@ pub fn splat(film: &mut Film, pixel: &[u32], radiance: &[Rgb]) -> u64 {
         // x - x is 0 for every finite x and NaN for infinities and NaN, so the sum is 0
         // exactly when all three channels are finite (fewer instructions than three
         // is_finite tests).
-        if (l.r - l.r) + (l.g - l.g) + (l.b - l.b) == 0.0 {
+        #[allow(clippy::eq_op, reason = "x - x is the finiteness test")]
+        let finite = (l.r - l.r) + (l.g - l.g) + (l.b - l.b) == 0.0;
+        if finite {
             sum[p] += l;
             sum_sq[p] += l * l;
         } else {
