@@ -124,6 +124,75 @@ impl Bin {
     }
 }
 
+/// Largest scene for which [`sweep_tree`] is tried (it sorts every node's primitives three
+/// times).
+const SWEEP_MAX: usize = 4096;
+
+/// A binary tree over the primitives of `bvh2` by top-down full-sweep SAH (every centroid
+/// split on every axis, cost `A(L) N(L) + A(R) N(R)`), from the primitive boxes of its
+/// leaves.
+fn sweep_tree(bvh2: &Bvh2) -> Vec<Bin> {
+    let mut prims: Vec<(Aabb, u32)> = Vec::new();
+    for n in &bvh2.nodes {
+        for k in 0..n.prim_count {
+            prims.push((n.aabb, bvh2.primitive_indices[(n.first_index + k) as usize]));
+        }
+    }
+    let mut out = vec![Bin {
+        aabb: Aabb::INVALID,
+        kids: [0, 0],
+    }];
+    let mut stack = vec![(0usize, prims.len(), 0usize)];
+    let mut areas = vec![0.0f32; prims.len() + 1];
+    while let Some((lo, hi, slot)) = stack.pop() {
+        let set = &mut prims[lo..hi];
+        let aabb = set.iter().fold(Aabb::INVALID, |a, p| a.union(&p.0));
+        if set.len() == 1 {
+            out[slot] = Bin {
+                aabb,
+                kids: [set[0].1, u32::MAX],
+            };
+            continue;
+        }
+        let n = set.len();
+        let mut best = (f32::INFINITY, 0usize, n / 2);
+        for axis in 0..3 {
+            set.sort_by(|a, b| a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis)));
+            let mut acc = Aabb::INVALID;
+            for i in 0..n {
+                acc = acc.union(&set[i].0);
+                areas[i + 1] = acc.half_area();
+            }
+            let mut acc = Aabb::INVALID;
+            for i in (1..n).rev() {
+                acc = acc.union(&set[i].0);
+                let cost = areas[i] * i as f32 + acc.half_area() * (n - i) as f32;
+                if cost < best.0 {
+                    best = (cost, axis, i);
+                }
+            }
+        }
+        let (_, axis, split) = best;
+        set.sort_by(|a, b| a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis)));
+        let l = out.len();
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out[slot] = Bin {
+            aabb,
+            kids: [l as u32, l as u32 + 1],
+        };
+        stack.push((lo, lo + split, l));
+        stack.push((lo + split, hi, l + 1));
+    }
+    out
+}
+
 /// Copies `bvh2` into one-primitive leaves; returns the nodes, root first.
 fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
     let mut out = Vec::with_capacity(bvh2.nodes.len());
@@ -292,6 +361,11 @@ impl Collapse {
         c
     }
 
+    /// SAH cost of the 8-wide tree: the root node and everything below it.
+    fn root_cost(&self, bins: &[Bin]) -> f32 {
+        bins[0].aabb.half_area() * NODE_COST + self.cost[0][WIDTH - 1]
+    }
+
     /// The binary nodes that fill the slots of subtree `n` given `i` slots: each is either
     /// a leaf (`true`) or an 8-wide node (`false`).
     fn slots(&self, bins: &[Bin], n: u32, i: usize, out: &mut Vec<(u32, bool)>) {
@@ -321,8 +395,19 @@ impl Bvh8 {
     /// binary subtrees to child slots and leaves ([`Collapse`]).
     pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
         let tri_count = triangles.len() as u32;
+        let is_sphere = |p: u32| p >= tri_count;
+        // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
+        // to the lower SAH cost.
         let bins = binary_tree(bvh2);
-        let collapse = Collapse::new(&bins, |p| p >= tri_count);
+        let mut collapse = Collapse::new(&bins, is_sphere);
+        let mut bins = bins;
+        if bvh2.primitive_indices.len() <= SWEEP_MAX {
+            let sweep = sweep_tree(bvh2);
+            let sweep_collapse = Collapse::new(&sweep, is_sphere);
+            if sweep_collapse.root_cost(&sweep) < collapse.root_cost(&bins) {
+                (bins, collapse) = (sweep, sweep_collapse);
+            }
+        }
         let root = &bvh2.nodes[0];
         let mut out = Bvh8 {
             nodes: Vec::new(),
