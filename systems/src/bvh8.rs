@@ -106,6 +106,9 @@ pub(crate) struct Bvh8 {
 /// Cost of a node visit relative to one leaf-packet test (any number of triangles), for
 /// the SAH of the collapse.
 const NODE_COST: f32 = 1.0;
+/// Weight of the volume term of the visit probability relative to the area term (see
+/// [`Collapse::new`]).
+const VOLUME_WEIGHT: f32 = 1.0;
 /// Cost of a sphere test (double precision) relative to a packet test.
 const SPHERE_COST: f32 = 2.0;
 
@@ -288,15 +291,35 @@ enum Split {
 /// (binary node, number of child slots), the method of Ylitie, Karras and Laine 2017
 /// ("Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", sec. 4.1):
 /// `cost[n][i - 1]` is the least SAH cost of subtree `n` spread over at most `i` slots of
-/// its parent, with surface areas as visit probabilities. A leaf holds up to eight
-/// triangles (one packet test) or one sphere.
+/// its parent, with surface areas (plus a volume term, see [`Collapse::new`]) as visit
+/// probabilities. A leaf holds up to eight triangles (one packet test) or one sphere.
 struct Collapse {
+    /// Visit-probability weight of the root box.
+    root_weight: f32,
     cost: Vec<[f32; WIDTH]>,
     split: Vec<[Split; WIDTH]>,
 }
 
 impl Collapse {
     fn new(bins: &[Bin], is_sphere: impl Fn(u32) -> bool) -> Self {
+        let root = bins[0].aabb;
+        let volume = |b: &Aabb| {
+            let e = (b.max - b.min).max(Vec3A::ZERO);
+            e.x * e.y * e.z
+        };
+        let (root_area, root_volume) = (root.half_area().max(0.0), volume(&root));
+        // Visit probability up to a common factor: surface area (the share of random lines
+        // that cross the box, Cauchy-Crofton) plus volume (the share of ray origins inside
+        // it, which test it whatever their direction). Area alone prices a leaf spanning a
+        // room as cheaply as the three walls in it, though every ray in the room tests it.
+        let weight = |b: &Aabb| {
+            let a = b.half_area().max(0.0);
+            if root_volume > 0.0 {
+                a + VOLUME_WEIGHT * root_area * volume(b) / root_volume
+            } else {
+                a
+            }
+        };
         // Post-order with an explicit stack.
         let mut order = Vec::with_capacity(bins.len());
         let mut stack = vec![0u32];
@@ -308,6 +331,7 @@ impl Collapse {
             }
         }
         let mut c = Collapse {
+            root_weight: weight(&root),
             cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
         };
@@ -316,7 +340,7 @@ impl Collapse {
         for &n in order.iter().rev() {
             let n = n as usize;
             let b = &bins[n];
-            let area = b.aabb.half_area().max(0.0);
+            let area = weight(&b.aabb);
             if b.is_leaf() {
                 let sphere = is_sphere(b.kids[0]);
                 tris[n] = if sphere { u32::MAX } else { 1 };
@@ -362,8 +386,8 @@ impl Collapse {
     }
 
     /// SAH cost of the 8-wide tree: the root node and everything below it.
-    fn root_cost(&self, bins: &[Bin]) -> f32 {
-        bins[0].aabb.half_area() * NODE_COST + self.cost[0][WIDTH - 1]
+    fn root_cost(&self) -> f32 {
+        self.root_weight * NODE_COST + self.cost[0][WIDTH - 1]
     }
 
     /// The binary nodes that fill the slots of subtree `n` given `i` slots: each is either
@@ -404,7 +428,7 @@ impl Bvh8 {
         if bvh2.primitive_indices.len() <= SWEEP_MAX {
             let sweep = sweep_tree(bvh2);
             let sweep_collapse = Collapse::new(&sweep, is_sphere);
-            if sweep_collapse.root_cost(&sweep) < collapse.root_cost(&bins) {
+            if sweep_collapse.root_cost() < collapse.root_cost() {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
