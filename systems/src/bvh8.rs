@@ -37,6 +37,8 @@ pub(crate) struct Node8 {
     pub(crate) child: [u32; WIDTH],
     /// Bit `c` set when child `c` is a leaf.
     pub(crate) leaf_mask: u32,
+    /// Bit `c` set when slot `c` holds a child.
+    pub(crate) valid: u32,
 }
 
 /// Up to eight triangles of one leaf, coordinate by coordinate: `v[i][a]` holds coordinate
@@ -477,6 +479,7 @@ impl Bvh8 {
             ],
             child: [0; WIDTH],
             leaf_mask: 0,
+            valid: (1 << kids.len()) - 1,
         });
         for (c, &(k, is_leaf)) in kids.iter().enumerate() {
             let aabb = bins[k as usize].aabb;

@@ -413,19 +413,17 @@ impl Backend {
 struct NodeRay<F> {
     /// `1 / d` per axis, with components below [`MIN_DIR`] clamped.
     inv: [F; 3],
-    /// `-o / d - s` and `-o / d + s` per axis: slab distance offsets with the widening.
-    near_orig: [F; 3],
-    far_orig: [F; 3],
-    /// Per axis 1 where the direction is negative (the near plane is the box maximum).
-    neg: [usize; 3],
+    /// Per axis the slab distance offsets of the box minimum and maximum planes:
+    /// `-o / d - s` for the near one (the minimum where `d > 0`), `-o / d + s` for the
+    /// far one, so the widening moves both planes outwards.
+    lo_orig: [F; 3],
+    hi_orig: [F; 3],
     tmin: F,
 }
 
 impl<F: Lanes8> NodeRay<F> {
     #[inline(always)]
-    fn new<S: Simd<F = F>>(s: S, origin: Vec3, direction: Vec3, tmin: f32, max_abs: Vec3A) -> Self {
-        let d = Vec3A::from(direction);
-        let o = Vec3A::from(origin);
+    fn new<S: Simd<F = F>>(s: S, o: Vec3A, d: Vec3A, tmin: f32, max_abs: Vec3A) -> Self {
         let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
         let inv_dir = Vec3A::select(
             tiny,
@@ -433,41 +431,31 @@ impl<F: Lanes8> NodeRay<F> {
             Vec3A::ONE / d,
         );
         let c = -(o * inv_dir);
-        let slack = (max_abs + o.abs()) * (inv_dir.abs() * NODE_SLACK);
-        let near_orig = c - slack;
-        let far_orig = c + slack;
-        // From inv_dir, so -0.0 components pick planes consistently with their inverse.
-        let neg = inv_dir.cmplt(Vec3A::ZERO).bitmask() as usize;
+        // The widening, with the sign of `1 / d`: subtracted from the minimum plane's
+        // offset where that plane is the near one.
+        let slack = ((max_abs + o.abs()) * (inv_dir.abs() * NODE_SLACK)).copysign(inv_dir);
+        let lo_orig = c - slack;
+        let hi_orig = c + slack;
         Self {
             inv: [s.splat(inv_dir.x), s.splat(inv_dir.y), s.splat(inv_dir.z)],
-            near_orig: [
-                s.splat(near_orig.x),
-                s.splat(near_orig.y),
-                s.splat(near_orig.z),
-            ],
-            far_orig: [
-                s.splat(far_orig.x),
-                s.splat(far_orig.y),
-                s.splat(far_orig.z),
-            ],
-            neg: [neg & 1, (neg >> 1) & 1, (neg >> 2) & 1],
+            lo_orig: [s.splat(lo_orig.x), s.splat(lo_orig.y), s.splat(lo_orig.z)],
+            hi_orig: [s.splat(hi_orig.x), s.splat(hi_orig.y), s.splat(hi_orig.z)],
             tmin: s.splat(tmin),
         }
     }
 }
 
-/// Near and far slab distances of the eight child boxes along axis `a`. (Helpers of the
-/// kernels are functions, not closures: closures would not inherit the AVX2 target
-/// feature, and the intrinsics would not be inlined into them.)
+/// Near and far slab distances of the eight child boxes along axis `a`: the distances to
+/// the minimum and maximum planes, ordered (which one is near depends on the sign of
+/// `d[a]`; ordering them costs a min and a max, picking rows by the sign an address
+/// computation per row). (Helpers of the kernels are functions, not closures: closures
+/// would not inherit the AVX2 target feature, and the intrinsics would not be inlined into
+/// them.)
 #[inline(always)]
 fn slab<S: Simd>(s: S, b: &[Row8; 6], ray: &NodeRay<S::F>, a: usize) -> (S::F, S::F) {
-    // `& 1` keeps the row indices provably inside the array.
-    let near = s.load(&b[2 * a + (ray.neg[a] & 1)]);
-    let far = s.load(&b[2 * a + ((ray.neg[a] & 1) ^ 1)]);
-    (
-        near.mul_add(ray.inv[a], ray.near_orig[a]),
-        far.mul_add(ray.inv[a], ray.far_orig[a]),
-    )
+    let lo = s.load(&b[2 * a]).mul_add(ray.inv[a], ray.lo_orig[a]);
+    let hi = s.load(&b[2 * a + 1]).mul_add(ray.inv[a], ray.hi_orig[a]);
+    (lo.min(hi), lo.max(hi))
 }
 
 /// Slab test of the ray against the eight children of a node: the hit mask (bit `c` for
@@ -479,7 +467,7 @@ fn intersect_node8<S: Simd>(s: S, node: &Node8, ray: &NodeRay<S::F>, tmax: f32) 
     let (nz, fz) = slab(s, &node.bounds, ray, 2);
     let tnear = nx.max(ny).max(nz.max(ray.tmin));
     let tfar = fx.min(fy).min(fz.min(s.splat(tmax)));
-    (tnear.le(tfar).bits(), tnear)
+    (tnear.le(tfar).bits() & node.valid, tnear)
 }
 
 /// Per-ray constants of the packet triangle test: [`WatertightRay`]'s, splat across the
@@ -895,36 +883,42 @@ impl<S: Simd> ClosestRay<S> {
 #[inline(always)]
 fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     let mut stack = Vec::with_capacity(64);
-    for i in 0..c.origin.len() {
-        let (o, d, tmin) = (c.origin[i], c.direction[i], c.tmin[i]);
-        let node_ray = NodeRay::new(s, o, d, tmin, bvh.max_abs);
+    // Every column cut to the same length, so that indexing needs no bounds checks.
+    let n = c.origin.len();
+    let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
+    let (tmin, tmax) = (&c.tmin[..n], &c.tmax[..n]);
+    let (t, prim) = (&mut c.t[..n], &mut c.prim[..n]);
+    let (b1, b2) = (&mut c.b1[..n], &mut c.b2[..n]);
+    for i in 0..n {
+        let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
+        let node_ray = NodeRay::new(s, o.into(), d.into(), ray_tmin, bvh.max_abs);
         let mut ray = ClosestRay {
             s,
             tri: PacketRay::new(s, o, d),
             o,
             d,
-            tmin,
+            tmin: ray_tmin,
             prim: NO_HIT,
             sphere: NO_SPHERE,
             b1: 0.0,
             b2: 0.0,
         };
-        let mut best_t = c.tmax[i];
+        let mut best_t = tmax[i];
         traverse_closest(s, bvh, &node_ray, &mut stack, &mut best_t, &mut ray);
         if ray.prim == NO_HIT {
-            c.t[i] = f32::INFINITY;
-            c.prim[i] = NO_HIT;
-            c.b1[i] = 0.0;
-            c.b2[i] = 0.0;
+            t[i] = f32::INFINITY;
+            prim[i] = NO_HIT;
+            b1[i] = 0.0;
+            b2[i] = 0.0;
         } else {
             if ray.sphere != NO_SPHERE {
                 let leaf = &bvh.spheres[ray.sphere as usize];
-                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o, d, tmin, c.tmax[i]);
+                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
             }
-            c.t[i] = best_t;
-            c.prim[i] = ray.prim;
-            c.b1[i] = ray.b1;
-            c.b2[i] = ray.b2;
+            t[i] = best_t;
+            prim[i] = ray.prim;
+            b1[i] = ray.b1;
+            b2[i] = ray.b2;
         }
     }
 }
@@ -977,17 +971,21 @@ impl<S: Simd> AnyRay<S> {
 #[inline(always)]
 fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     let mut stack = Vec::with_capacity(64);
-    for i in 0..c.origin.len() {
-        let (o, d, tmin) = (c.origin[i], c.direction[i], c.tmin[i]);
-        let node_ray = NodeRay::new(s, o, d, tmin, bvh.max_abs);
+    // Every column cut to the same length, so that indexing needs no bounds checks.
+    let n = c.origin.len();
+    let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
+    let (tmin, tmax, occluded) = (&c.tmin[..n], &c.tmax[..n], &mut c.occluded[..n]);
+    for i in 0..n {
+        let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
+        let node_ray = NodeRay::new(s, o.into(), d.into(), ray_tmin, bvh.max_abs);
         let ray = AnyRay {
             s,
             tri: PacketRay::new(s, o, d),
             o,
             d,
-            tmin,
+            tmin: ray_tmin,
         };
-        c.occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, c.tmax[i], &ray);
+        occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
     }
 }
 
@@ -1195,7 +1193,7 @@ mod tests {
         tmax: f32,
         max_abs: Vec3A,
     ) -> u32 {
-        let ray = NodeRay::new(s, o, d, tmin, max_abs);
+        let ray = NodeRay::new(s, o.into(), d.into(), tmin, max_abs);
         intersect_node8(s, node, &ray, tmax).0
     }
 
@@ -1265,7 +1263,7 @@ mod tests {
                     let mask =
                         with_simd!(backend, s => node_mask(s, node, o, d, tmin, tmax, bvh.max_abs));
                     for c in 0..WIDTH {
-                        if !node.bounds[0].0[c].is_finite() {
+                        if node.valid & (1 << c) == 0 {
                             assert_eq!(mask & (1 << c), 0, "empty slot hit");
                             continue;
                         }
