@@ -89,7 +89,7 @@ enum Axis {
 /// `ky = (kx + 1) % 3`, the origin permuted to `(kx, ky, kz)`, and the shear constants
 /// `(Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz])` (paper eq. (2)).
 #[inline(always)]
-fn shear(origin: Vec3, direction: Vec3) -> (Axis, Axis, Axis, Vec3, Vec3A) {
+fn shear(origin: Vec3A, direction: Vec3A) -> (Axis, Axis, Axis, Vec3A, Vec3A) {
     let a = direction.abs();
     let (kx, ky, kz, o, d) = if a.x > a.y {
         if a.x > a.z {
@@ -134,7 +134,7 @@ impl WatertightRay {
     /// not necessarily unit).
     #[inline]
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
-        let (kx, ky, kz, o, s) = shear(origin, direction);
+        let (kx, ky, kz, o, s) = shear(origin.into(), direction.into());
         Self {
             ox: Vec4::splat(o.x),
             oy: Vec4::splat(o.y),
@@ -486,7 +486,7 @@ struct PacketRay<F> {
 
 impl<F: Lanes8> PacketRay<F> {
     #[inline(always)]
-    fn new<S: Simd<F = F>>(s: S, origin: Vec3, direction: Vec3) -> Self {
+    fn new<S: Simd<F = F>>(s: S, origin: Vec3A, direction: Vec3A) -> Self {
         let (kx, ky, kz, o, sh) = shear(origin, direction);
         Self {
             ox: s.splat(o.x),
@@ -605,13 +605,17 @@ fn intersect_packet<S: Simd>(
 fn packet_lane_scalar(
     p: &TriPacket8,
     l: usize,
-    o: Vec3,
-    d: Vec3,
+    o: Vec3A,
+    d: Vec3A,
     tmin: f32,
     tmax: f32,
 ) -> Option<TriangleHit> {
     let [v0, v1, v2] = p.triangle(l);
-    WatertightRay::new(o, d).intersect_packed(&PackedTriangle::new(v0, v1, v2), tmin, tmax)
+    WatertightRay::new(o.into(), d.into()).intersect_packed(
+        &PackedTriangle::new(v0, v1, v2),
+        tmin,
+        tmax,
+    )
 }
 
 /// A stacked child of the closest-hit traversal ([`Node8::child`] encoding) with its entry
@@ -800,6 +804,13 @@ fn check_lengths(n: usize, lens: &[usize]) {
     );
 }
 
+/// `v` in a SIMD register, loaded coordinate by coordinate (copying the 12-byte `Vec3`
+/// whole goes through the stack).
+#[inline(always)]
+fn load3(v: &Vec3) -> Vec3A {
+    Vec3A::new(v.x, v.y, v.z)
+}
+
 /// The columns of [`intersect_closest`].
 struct ClosestColumns<'a> {
     origin: &'a [Vec3],
@@ -819,8 +830,8 @@ const NO_SPHERE: u32 = u32::MAX;
 struct ClosestRay<S: Simd> {
     s: S,
     tri: PacketRay<S::F>,
-    o: Vec3,
-    d: Vec3,
+    o: Vec3A,
+    d: Vec3A,
     tmin: f32,
     prim: u32,
     /// Sphere leaf of the closest hit, or [`NO_SPHERE`].
@@ -836,7 +847,7 @@ impl<S: Simd> ClosestRay<S> {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
             let leaf = &bvh.spheres[index];
-            let ts = sphere_leaf_t(leaf, self.o, self.d, self.tmin, *tmax);
+            let ts = sphere_leaf_t(leaf, self.o.into(), self.d.into(), self.tmin, *tmax);
             if ts < *tmax {
                 *tmax = ts;
                 self.prim = leaf.prim;
@@ -890,8 +901,8 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     let (t, prim) = (&mut c.t[..n], &mut c.prim[..n]);
     let (b1, b2) = (&mut c.b1[..n], &mut c.b2[..n]);
     for i in 0..n {
-        let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
-        let node_ray = NodeRay::new(s, o.into(), d.into(), ray_tmin, bvh.max_abs);
+        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
+        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
         let mut ray = ClosestRay {
             s,
             tri: PacketRay::new(s, o, d),
@@ -913,7 +924,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
         } else {
             if ray.sphere != NO_SPHERE {
                 let leaf = &bvh.spheres[ray.sphere as usize];
-                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
+                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o.into(), d.into(), ray_tmin, tmax[i]);
             }
             t[i] = best_t;
             prim[i] = ray.prim;
@@ -936,8 +947,8 @@ struct OccludedColumns<'a> {
 struct AnyRay<S: Simd> {
     s: S,
     tri: PacketRay<S::F>,
-    o: Vec3,
-    d: Vec3,
+    o: Vec3A,
+    d: Vec3A,
     tmin: f32,
 }
 
@@ -947,7 +958,7 @@ impl<S: Simd> AnyRay<S> {
     fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
-            return sphere_leaf_t(&bvh.spheres[index], self.o, self.d, self.tmin, tmax)
+            return sphere_leaf_t(&bvh.spheres[index], self.o.into(), self.d.into(), self.tmin, tmax)
                 < f32::INFINITY;
         }
         let p = &bvh.packets[index];
@@ -976,8 +987,8 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
     let (tmin, tmax, occluded) = (&c.tmin[..n], &c.tmax[..n], &mut c.occluded[..n]);
     for i in 0..n {
-        let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
-        let node_ray = NodeRay::new(s, o.into(), d.into(), ray_tmin, bvh.max_abs);
+        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
+        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
         let ray = AnyRay {
             s,
             tri: PacketRay::new(s, o, d),
@@ -1393,7 +1404,7 @@ mod tests {
         tmin: f32,
         tmax: f32,
     ) -> (u32, u32, [f32; 8], [f32; 8], [f32; 8]) {
-        let r = intersect_packet(s, &PacketRay::new(s, o, d), p, tmin, tmax);
+        let r = intersect_packet(s, &PacketRay::new(s, o.into(), d.into()), p, tmin, tmax);
         (
             r.hit,
             r.fallback,
@@ -1457,7 +1468,7 @@ mod tests {
                     if fallback & (1 << l) != 0 {
                         fallbacks += 1;
                         assert_eq!(
-                            packet_lane_scalar(&p, l, o, d, tmin, tmax),
+                            packet_lane_scalar(&p, l, o.into(), d.into(), tmin, tmax),
                             want,
                             "{backend:?} ray {k} lane {l}"
                         );
