@@ -545,8 +545,8 @@ fn intersect_packet<S: Simd>(
     let w = x1 * y0 - y1 * x0;
     let zero = s.splat(0.0);
     let fallback = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
-    let (nu, nv, nw) = (u.sign_bits(), v.sign_bits(), w.sign_bits());
-    let same_sign = (nu & nv & nw) | !(nu | nv | nw);
+    let (all_neg, any_neg) = u.sign_bits_all_any(v, w);
+    let same_sign = all_neg | !any_neg;
     let mut hit = same_sign & !fallback & 0xff;
     if hit == 0 {
         return PacketHits {
@@ -958,8 +958,13 @@ impl<S: Simd> AnyRay<S> {
     fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
-            return sphere_leaf_t(&bvh.spheres[index], self.o.into(), self.d.into(), self.tmin, tmax)
-                < f32::INFINITY;
+            return sphere_leaf_t(
+                &bvh.spheres[index],
+                self.o.into(),
+                self.d.into(),
+                self.tmin,
+                tmax,
+            ) < f32::INFINITY;
         }
         let p = &bvh.packets[index];
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);

@@ -51,6 +51,13 @@ pub(crate) trait Lanes8:
     fn eq(self, o: Self) -> Self::Mask;
     /// Bit `l` set where lane `l` has its sign bit set.
     fn sign_bits(self) -> u32;
+    /// The sign bits of `self`, `b` and `c` (as [`Self::sign_bits`]) combined: set in all
+    /// three, and set in any.
+    #[inline(always)]
+    fn sign_bits_all_any(self, b: Self, c: Self) -> (u32, u32) {
+        let (x, y, z) = (self.sign_bits(), b.sign_bits(), c.sign_bits());
+        (x & y & z, x | y | z)
+    }
     /// The lanes in memory order.
     fn to_array(self) -> [f32; 8];
 }
@@ -310,6 +317,16 @@ mod avx2 {
         #[inline(always)]
         fn sign_bits(self) -> u32 {
             avx!(_mm256_movemask_ps(self.0)) as u32
+        }
+        #[inline(always)]
+        fn sign_bits_all_any(self, b: A8, c: A8) -> (u32, u32) {
+            // Bitwise and/or of the lanes first: one mask extraction each.
+            let all = avx!(_mm256_and_ps(_mm256_and_ps(self.0, b.0), c.0));
+            let any = avx!(_mm256_or_ps(_mm256_or_ps(self.0, b.0), c.0));
+            (
+                avx!(_mm256_movemask_ps(all)) as u32,
+                avx!(_mm256_movemask_ps(any)) as u32,
+            )
         }
         #[inline(always)]
         fn to_array(self) -> [f32; 8] {
