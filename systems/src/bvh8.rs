@@ -53,7 +53,14 @@ pub(crate) struct TriPacket8 {
     pub(crate) prim: [u32; WIDTH],
     /// Bit `l` set for the lanes that hold a triangle of the leaf.
     pub(crate) valid: u32,
+    /// An axis `a` along which every vertex of the leaf has the same coordinate
+    /// [`Self::plane_c`] (the triangles lie in the plane `x_a = plane_c`), or [`NO_PLANE`].
+    pub(crate) plane_axis: u32,
+    pub(crate) plane_c: f32,
 }
+
+/// [`TriPacket8::plane_axis`] of a leaf not in one axis-aligned plane.
+pub(crate) const NO_PLANE: u32 = 3;
 
 impl TriPacket8 {
     /// The packet of `tris` (one to eight `(primitive index, vertices)`).
@@ -67,7 +74,15 @@ impl TriPacket8 {
             v: [[Row8([0.0; WIDTH]); 3]; 3],
             prim: [0; WIDTH],
             valid: (1 << tris.len()) - 1,
+            plane_axis: NO_PLANE,
+            plane_c: 0.0,
         };
+        let c = tris[0].1[0];
+        if let Some(a) = (0..3).find(|&a| tris.iter().all(|(_, v)| v.iter().all(|v| v[a] == c[a])))
+        {
+            p.plane_axis = a as u32;
+            p.plane_c = c[a];
+        }
         for l in 0..WIDTH {
             let (prim, v) = tris.get(l).unwrap_or(&tris[0]);
             p.prim[l] = *prim;

@@ -34,7 +34,7 @@
 use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
-use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE, WIDTH};
+use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, NO_PLANE, SPHERE, WIDTH};
 use crate::geometry::{sphere_uv, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
@@ -599,6 +599,19 @@ fn intersect_packet<S: Simd>(
     }
 }
 
+/// Whether every triangle of an axis-aligned planar packet (`x_a = c`, see
+/// [`TriPacket8::plane_axis`]) meets the ray's line at `t* = (c - o_a) / d_a <= 0`, which is
+/// `c <= o_a` for `d_a > 0` and `c >= o_a` for `d_a < 0` (exact comparisons). Then, for
+/// `tmin >= 0`, the packet test would reject them all: a computed `t` is within its error
+/// bound of `t*`, and hits with `t <= tmin + bound` are rejected (`t_error_bound`). Rays
+/// spawned on a wall (origin offset off it, `tmin = 0`) test that wall's leaf first thing,
+/// as the node test's widening exceeds the spawn offset; this settles it with two compares.
+#[inline(always)]
+fn behind_plane(axis: usize, c: f32, [o, d]: &[[f32; 4]; 2], tmin: f32) -> bool {
+    let (oa, da) = (o[axis & 3], d[axis & 3]);
+    tmin >= 0.0 && ((da > 0.0 && c <= oa) || (da < 0.0 && c >= oa))
+}
+
 /// The scalar test on lane `l` of a packet, for lanes [`intersect_packet`] leaves to it.
 #[cold]
 #[inline(never)]
@@ -648,7 +661,7 @@ fn traverse_closest<S: Simd>(
     ray: &NodeRay<S::F>,
     stack: &mut Vec<Entry>,
     tmax: &mut f32,
-    leaf: &mut ClosestRay<S>,
+    leaf: &mut ClosestRay<'_, S>,
 ) {
     stack.clear();
     let nodes = &bvh.nodes;
@@ -724,7 +737,7 @@ fn traverse_any<S: Simd>(
     ray: &NodeRay<S::F>,
     stack: &mut Vec<u32>,
     tmax: f32,
-    leaf: &AnyRay<S>,
+    leaf: &AnyRay<'_, S>,
 ) -> bool {
     stack.clear();
     let nodes = &bvh.nodes;
@@ -827,11 +840,14 @@ struct ClosestColumns<'a> {
 const NO_SPHERE: u32 = u32::MAX;
 
 /// A closest-hit ray during traversal: its constants and the closest hit so far.
-struct ClosestRay<S: Simd> {
+struct ClosestRay<'a, S: Simd> {
     s: S,
     tri: PacketRay<S::F>,
     o: Vec3A,
     d: Vec3A,
+    /// `o` and `d` as arrays, for [`behind_plane`] (a reference: indexing a field at a
+    /// run-time position would keep the whole struct in memory).
+    od: &'a [[f32; 4]; 2],
     tmin: f32,
     prim: u32,
     /// Sphere leaf of the closest hit, or [`NO_SPHERE`].
@@ -840,7 +856,7 @@ struct ClosestRay<S: Simd> {
     b2: f32,
 }
 
-impl<S: Simd> ClosestRay<S> {
+impl<S: Simd> ClosestRay<'_, S> {
     /// Tests leaf child `child`, shrinking `tmax` to a closer hit.
     #[inline(always)]
     fn leaf(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) {
@@ -856,6 +872,10 @@ impl<S: Simd> ClosestRay<S> {
             return;
         }
         let p = &bvh.packets[index];
+        let axis = p.plane_axis as usize;
+        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+            return;
+        }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, *tmax);
         let mut lanes = (r.hit | r.fallback) & p.valid;
         if lanes == 0 {
@@ -903,11 +923,13 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     for i in 0..n {
         let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
         let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
+        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
         let mut ray = ClosestRay {
             s,
             tri: PacketRay::new(s, o, d),
             o,
             d,
+            od: &od,
             tmin: ray_tmin,
             prim: NO_HIT,
             sphere: NO_SPHERE,
@@ -944,15 +966,17 @@ struct OccludedColumns<'a> {
 }
 
 /// A shadow ray's constants during traversal.
-struct AnyRay<S: Simd> {
+struct AnyRay<'a, S: Simd> {
     s: S,
     tri: PacketRay<S::F>,
     o: Vec3A,
     d: Vec3A,
+    /// `o` and `d` as arrays, for [`behind_plane`].
+    od: &'a [[f32; 4]; 2],
     tmin: f32,
 }
 
-impl<S: Simd> AnyRay<S> {
+impl<S: Simd> AnyRay<'_, S> {
     /// Whether leaf child `child` has a hit before `tmax`.
     #[inline(always)]
     fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
@@ -967,6 +991,10 @@ impl<S: Simd> AnyRay<S> {
             ) < f32::INFINITY;
         }
         let p = &bvh.packets[index];
+        let axis = p.plane_axis as usize;
+        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+            return false;
+        }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);
         if r.hit != 0 {
             return true;
@@ -994,11 +1022,13 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     for i in 0..n {
         let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
         let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
+        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
         let ray = AnyRay {
             s,
             tri: PacketRay::new(s, o, d),
             o,
             d,
+            od: &od,
             tmin: ray_tmin,
         };
         occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
@@ -1379,6 +1409,12 @@ mod tests {
                         leaves.0[index] += 1;
                         let p = &bvh.packets[index];
                         assert_eq!(p.valid, (1 << p.valid.count_ones()) - 1);
+                        if p.plane_axis != NO_PLANE {
+                            let a = p.plane_axis as usize;
+                            for l in 0..WIDTH {
+                                assert!(p.triangle(l).iter().all(|v| v[a] == p.plane_c));
+                            }
+                        }
                         for l in 0..WIDTH {
                             let prim = p.prim[l] as usize;
                             assert_eq!(p.triangle(l), tris[prim]);
@@ -1493,6 +1529,66 @@ mod tests {
             assert!(
                 hits > 1000 && fallbacks > 50,
                 "{backend:?}: {hits} hits, {fallbacks} fallbacks"
+            );
+        }
+    }
+
+    /// The planar early-out only skips packets whose every lane the full test rejects: rays
+    /// leaving axis-aligned planar packets from a few ulps off their plane (spawned rays),
+    /// from on it, and from farther away, in every direction including parallel to it.
+    #[test]
+    fn behind_plane_only_skips_packets_the_test_rejects() {
+        for backend in backends() {
+            let mut rng = Rng(13);
+            let (mut skipped, mut hits) = (0, 0);
+            for k in 0..20_000 {
+                let axis = k % 3;
+                let c = (rng.f32() * 8.0 - 4.0) * if k % 5 == 0 { 1e3 } else { 1.0 };
+                let n = 1 + (k / 3) % WIDTH;
+                let tris: Vec<(u32, [Vec3; 3])> = (0..n as u32)
+                    .map(|i| {
+                        let mut v = [rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0)];
+                        for vi in &mut v {
+                            vi[axis] = c;
+                        }
+                        (i, v)
+                    })
+                    .collect();
+                let p = TriPacket8::new(&tris);
+                assert_eq!(p.plane_axis as usize, axis);
+                let mut o = rng.vec(-1.5, 1.5);
+                let ulps = (rng.next_u64() % 9) as i32 - 4;
+                o[axis] = match k % 4 {
+                    0 => f32::from_bits((c.to_bits() as i32 + ulps) as u32),
+                    1 => c + (rng.f32() - 0.5) * 1e-5 * c.abs().max(1.0),
+                    2 => c,
+                    _ => c + rng.f32() * 4.0 - 2.0,
+                };
+                let mut d = rng.vec(-1.0, 1.0);
+                if k % 11 == 0 {
+                    d[axis] = 0.0;
+                }
+                let tmin = if k % 2 == 0 { 0.0 } else { rng.f32() * 1e-3 };
+                let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
+                let skip = behind_plane(axis, p.plane_c, &od, tmin);
+                let (hit, fallback, ..) =
+                    with_simd!(backend, s => packet_hits(s, &p, o, d, tmin, f32::INFINITY));
+                let fallback_hit = (0..WIDTH).any(|l| {
+                    fallback & p.valid & (1 << l) != 0
+                        && packet_lane_scalar(&p, l, o.into(), d.into(), tmin, f32::INFINITY)
+                            .is_some()
+                });
+                let any = hit & p.valid != 0 || fallback_hit;
+                assert!(
+                    !(skip && any),
+                    "{backend:?} ray {k}: o={o:?} d={d:?} skipped a hit"
+                );
+                skipped += skip as usize;
+                hits += any as usize;
+            }
+            assert!(
+                skipped > 5000 && hits > 500,
+                "{skipped} skipped, {hits} hits"
             );
         }
     }
