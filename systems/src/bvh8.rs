@@ -551,3 +551,94 @@ impl Bvh8 {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obvhs::bvh2::node::Bvh2Node;
+
+    fn leaf_node(aabb: Aabb, first: u32, count: u32) -> Bvh2Node {
+        Bvh2Node {
+            aabb,
+            prim_count: count,
+            first_index: first,
+            ..Default::default()
+        }
+    }
+
+    /// obvhs' builder makes one-primitive leaves, but a binary tree with larger leaves (13
+    /// triangles; two triangles and a sphere) still collapses to a tree holding every
+    /// primitive once, triangles in packets and the sphere alone, inside its child box.
+    #[test]
+    fn multi_primitive_leaves_are_split() {
+        let tris: Vec<[Vec3; 3]> = (0..15)
+            .map(|i| {
+                let c = Vec3::new(i as f32, 0.0, 0.0);
+                [c, c + Vec3::X * 0.5, c + Vec3::Y]
+            })
+            .collect();
+        let spheres = vec![Sphere {
+            center: Vec3::new(20.0, 0.0, 0.0),
+            radius: 0.5,
+        }];
+        let bounds = |prims: &[u32]| {
+            let mut b = Aabb::INVALID;
+            for &p in prims {
+                if p < 15 {
+                    for v in tris[p as usize] {
+                        b.extend(v.into());
+                    }
+                } else {
+                    b.extend(Vec3A::new(19.5, -0.5, -0.5));
+                    b.extend(Vec3A::new(20.5, 0.5, 0.5));
+                }
+            }
+            b
+        };
+        let left: Vec<u32> = (0..13).collect();
+        let right = [13, 14, 15];
+        let all: Vec<u32> = (0..16).collect();
+        let bvh2 = Bvh2 {
+            nodes: vec![
+                Bvh2Node {
+                    aabb: bounds(&all),
+                    prim_count: 0,
+                    first_index: 1,
+                    ..Default::default()
+                },
+                leaf_node(bounds(&left), 0, 13),
+                leaf_node(bounds(&right), 13, 3),
+            ],
+            primitive_indices: all.clone(),
+            ..Default::default()
+        };
+        let bvh = Bvh8::from_bvh2(&bvh2, &tris, &spheres);
+        let mut seen = [0u32; 16];
+        for node in &bvh.nodes {
+            for c in 0..WIDTH {
+                let child = node.child[c];
+                if node.valid & (1 << c) == 0 || child & LEAF == 0 {
+                    continue;
+                }
+                let b = |r: usize| node.bounds[r].0[c];
+                let (lo, hi) = (Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)));
+                let index = (child & INDEX_MASK) as usize;
+                let prims: Vec<u32> = if child & SPHERE != 0 {
+                    vec![bvh.spheres[index].prim]
+                } else {
+                    let p = &bvh.packets[index];
+                    (0..p.valid.count_ones() as usize)
+                        .map(|l| p.prim[l])
+                        .collect()
+                };
+                let pb = bounds(&prims);
+                assert!(Vec3::from(pb.min).cmpge(lo).all() && Vec3::from(pb.max).cmple(hi).all());
+                for p in prims {
+                    seen[p as usize] += 1;
+                }
+            }
+        }
+        assert_eq!(seen, [1; 16]);
+        assert_eq!(bvh.spheres.len(), 1);
+    }
+}
