@@ -7,7 +7,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{DVec3, Vec2, Vec3, Vec3A, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
     bvh2::reinsertion::ReinsertionOptimizer,
@@ -16,8 +16,8 @@ use obvhs::{
     BvhBuildParams,
 };
 
-use crate::bvh4::Bvh4;
-use crate::intersect::PackedTriangle;
+use crate::bvh8::Bvh8;
+use crate::intersect::{Backend, Kernel};
 
 /// An analytic sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,46 +41,11 @@ pub struct SurfaceSample {
     pub uv: Vec2,
 }
 
-/// One BVH leaf entry, in BVH order, in the layout of [`crate::intersect::PackedTriangle`]:
-/// `rows[a]` holds coordinate `a` of the three vertices in lanes 0..3, lane 3 zero. A sphere
-/// stores `(center, radius)` in `rows[0]` and sets `rows[2].w = 1` (a triangle's is 0), so
-/// the kind is known without another memory access. The scene primitive index of leaf slot
-/// `i` of the 4-wide BVH is `bvh4.prim_indices[i]`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct LeafPrim {
-    pub(crate) rows: [Vec4; 3],
-}
-
-impl LeafPrim {
-    fn triangle(v: &[Vec3; 3]) -> Self {
-        Self {
-            rows: PackedTriangle::new(v[0], v[1], v[2]).rows,
-        }
-    }
-
-    fn sphere(s: &Sphere) -> Self {
-        Self {
-            rows: [s.center.extend(s.radius), Vec4::ZERO, Vec4::W],
-        }
-    }
-
-    #[inline(always)]
-    pub(crate) fn is_sphere(&self) -> bool {
-        self.rows[2].w != 0.0
-    }
-
-    /// Centre and radius of a sphere leaf.
-    #[inline(always)]
-    pub(crate) fn sphere_center_radius(&self) -> (Vec3, f32) {
-        (self.rows[0].truncate(), self.rows[0].w)
-    }
-}
-
 /// All primitives of a compiled scene and the BVH over them.
 ///
 /// One binary BVH (obvhs' PLOC builder and reinsertion optimizer) over the triangles and the
 /// spheres' bounding boxes, so a ray visits every primitive kind in a single traversal. The
-/// intersection systems traverse it collapsed to uncompressed 4-wide nodes; the obvhs
+/// intersection systems traverse it collapsed to uncompressed 8-wide nodes; the obvhs
 /// CWBVH collapse (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through
 /// Compressed Wide BVHs") is kept alongside for [`Self::bvh`].
 #[derive(Clone, Debug)]
@@ -89,11 +54,11 @@ pub struct SceneGeometry {
     spheres: Vec<Sphere>,
     /// `None` for an empty scene (obvhs cannot build an empty tree).
     bvh: Option<CwBvh>,
-    /// The same binary BVH collapsed to an uncompressed 4-wide BVH (what the intersection
-    /// systems traverse; see [`crate::intersect`]; 4-wide nodes of f32 boxes beat the
-    /// quantized 8-wide ones there, benches/README.md), and its leaf entries in leaf order.
-    bvh4: Option<Bvh4>,
-    leaves4: Vec<LeafPrim>,
+    /// The same binary BVH collapsed to an uncompressed 8-wide BVH with triangle-packet
+    /// leaves (what the intersection systems traverse; see [`crate::intersect`]).
+    bvh8: Option<Bvh8>,
+    /// The intersection kernel, checked to run on this CPU.
+    backend: Backend,
     bounds: (Vec3, Vec3),
 }
 
@@ -220,8 +185,8 @@ impl SceneGeometry {
         }
 
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
-        let (bvh, bvh4, leaves4) = if aabbs.is_empty() {
-            (None, None, Vec::new())
+        let (bvh, bvh8) = if aabbs.is_empty() {
+            (None, None)
         } else {
             let mut lo = Vec3::splat(f32::INFINITY);
             let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -249,27 +214,16 @@ impl SceneGeometry {
             );
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
             let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
-            let bvh4 = Bvh4::from_bvh2(&bvh2);
-            let leaves4 = bvh4
-                .prim_indices
-                .iter()
-                .map(|&p| {
-                    if p < tri_count {
-                        LeafPrim::triangle(&triangles[p as usize])
-                    } else {
-                        LeafPrim::sphere(&spheres[(p - tri_count) as usize])
-                    }
-                })
-                .collect();
-            (Some(bvh), Some(bvh4), leaves4)
+            let bvh8 = Bvh8::from_bvh2(&bvh2, &triangles, &spheres);
+            (Some(bvh), Some(bvh8))
         };
 
         Self {
             triangles: triangles.into_iter().map(Triangle::new).collect(),
             spheres,
             bvh,
-            bvh4,
-            leaves4,
+            bvh8,
+            backend: Kernel::best().backend().expect("the best kernel runs here"),
             bounds,
         }
     }
@@ -306,15 +260,31 @@ impl SceneGeometry {
 
     /// The scene's BVH collapsed to obvhs' compressed 8-wide CWBVH (`None` for an empty
     /// scene). Its `primitive_indices` map leaf slots to primitive indices. Exposed for
-    /// benchmarks and diagnostics; the intersection systems traverse an uncompressed 4-wide
+    /// benchmarks and diagnostics; the intersection systems traverse an uncompressed 8-wide
     /// collapse of the same binary BVH instead.
     pub fn bvh(&self) -> Option<&CwBvh> {
         self.bvh.as_ref()
     }
 
-    /// The 4-wide BVH (`None` for an empty scene) and its leaf entries in its leaf order.
-    pub(crate) fn bvh4(&self) -> Option<(&Bvh4, &[LeafPrim])> {
-        self.bvh4.as_ref().map(|b| (b, self.leaves4.as_slice()))
+    /// The 8-wide BVH (`None` for an empty scene) and the kernel that traverses it.
+    pub(crate) fn bvh8(&self) -> Option<(&Bvh8, Backend)> {
+        self.bvh8.as_ref().map(|b| (b, self.backend))
+    }
+
+    /// The intersection kernel in use ([`Kernel::best`] unless set).
+    pub fn kernel(&self) -> Kernel {
+        self.backend.kernel()
+    }
+
+    /// Selects the intersection kernel (tests and benchmarks compare them; all report the
+    /// same hits).
+    ///
+    /// # Panics
+    /// If this CPU does not run `kernel` ([`Kernel::is_supported`]).
+    pub fn set_kernel(&mut self, kernel: Kernel) {
+        self.backend = kernel
+            .backend()
+            .unwrap_or_else(|| panic!("{kernel:?} kernel not supported on this CPU"));
     }
 
     /// Geometry at a hit of the ray `origin + t * direction` on primitive `prim`, with the

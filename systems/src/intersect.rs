@@ -1,20 +1,27 @@
 //! Ray/scene intersection systems: closest hit and occlusion over columns of rays.
 //!
-//! Traversal runs over the uncompressed 4-wide BVH of [`SceneGeometry`] (f32 child boxes
-//! stored as SoA rows, see `crate::bvh4`): one ray against four child boxes is a dozen SIMD
-//! multiply-adds and min/max with no decoding. The node test honours the ray's `tmin` and
-//! widens every slab by a bound on its floating-point error (a per-ray constant, see
-//! [`NODE_SLACK`]), so a box is never culled when the primitive test would report a hit
-//! inside it (a plain slab test loses rays grazing box faces, e.g. along the edges of an
-//! axis-aligned mesh). Closest-hit rays visit hit children, leaves included, nearest entry
-//! distance first and skip stacked ones beyond the closest hit so far; shadow rays test a
-//! node's hit leaves at once and stop at the first hit.
+//! Traversal runs over the uncompressed 8-wide BVH of [`SceneGeometry`] (f32 child boxes
+//! stored as SoA rows, triangle leaves as 8-lane packets, see `crate::bvh8`), with eight
+//! SIMD lanes: one ray against eight child boxes is a dozen lane-wise multiply-adds and
+//! min/max with no decoding, and one ray against the up to eight triangles of a leaf is one
+//! pass of the watertight test. The kernels are generic over the lane implementation
+//! (`crate::simd8`) and instantiated twice, selected by [`Kernel`]: portable code, and AVX2
+//! with FMA in the node test, chosen at run time when the CPU has them. The node test
+//! honours the ray's `tmin` and widens every slab by a bound on its floating-point error (a
+//! per-ray constant, see [`NODE_SLACK`]), so a box is never culled when the primitive test
+//! would report a hit inside it (a plain slab test loses rays grazing box faces, e.g. along
+//! the edges of an axis-aligned mesh). Closest-hit rays visit hit children, leaves
+//! included, nearest entry distance first and skip stacked ones beyond the closest hit so
+//! far; shadow rays test a node's hit leaves at once and stop at the first hit.
 //! Primitive tests:
 //! - triangles: watertight test of Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle
-//!   Intersection", JCGT 2(1)), two-sided, on triangles stored coordinate by coordinate
-//!   ([`PackedTriangle`]) so the three vertices are sheared and the three edge functions
-//!   evaluated together; rays through shared edges and vertices of a closed mesh cannot
-//!   slip through;
+//!   Intersection", JCGT 2(1)), two-sided. The scalar form ([`WatertightRay`]) works on
+//!   triangles stored coordinate by coordinate ([`PackedTriangle`]) so the three vertices
+//!   are sheared and the three edge functions evaluated together; the leaf packets run the
+//!   same operations in the same order with one triangle per lane (bit-identical results,
+//!   no fused multiply-add), and leave lanes with an edge function exactly zero to the
+//!   scalar test and its double-precision fallback. Rays through shared edges and vertices
+//!   of a closed mesh cannot slip through;
 //! - spheres: the quadratic in the form of Haines et al. 2019 ("Precision Improvements for
 //!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7), evaluated in double precision so
 //!   tiny spheres far away and huge spheres seen from close by stay accurate.
@@ -27,8 +34,11 @@
 use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
-use crate::bvh4::{Bvh4, Bvh4Node};
-use crate::geometry::{sphere_uv, LeafPrim, SceneGeometry};
+use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, NO_PLANE, SPHERE, WIDTH};
+use crate::geometry::{sphere_uv, SceneGeometry};
+#[cfg(target_arch = "x86_64")]
+use crate::simd8::Avx2;
+use crate::simd8::{Lanes8, Mask8, Portable, Row8, Simd};
 
 /// A ray/triangle hit: distance and the barycentrics of `v1` and `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +84,28 @@ enum Axis {
     Z = 2,
 }
 
+/// The ray transform of the watertight test (Woop et al. 2013, sec. 3): the axis
+/// permutation `(kx, ky, kz)` with `kz` the dominant direction axis, `kx = (kz + 1) % 3`,
+/// `ky = (kx + 1) % 3`, the origin permuted to `(kx, ky, kz)`, and the shear constants
+/// `(Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz])` (paper eq. (2)).
+#[inline(always)]
+fn shear(origin: Vec3A, direction: Vec3A) -> (Axis, Axis, Axis, Vec3A, Vec3A) {
+    let a = direction.abs();
+    let (kx, ky, kz, o, d) = if a.x > a.y {
+        if a.x > a.z {
+            (Axis::Y, Axis::Z, Axis::X, origin.yzx(), direction.yzx())
+        } else {
+            (Axis::X, Axis::Y, Axis::Z, origin, direction)
+        }
+    } else if a.y > a.z {
+        (Axis::Z, Axis::X, Axis::Y, origin.zxy(), direction.zxy())
+    } else {
+        (Axis::X, Axis::Y, Axis::Z, origin, direction)
+    };
+    // Each one division.
+    (kx, ky, kz, o, Vec3A::new(d.x, d.y, 1.0) / d.z)
+}
+
 /// Per-ray precomputation of the watertight ray/triangle test (Woop et al. 2013, sec. 3):
 /// the affine map that moves the origin to zero, makes the dominant direction axis `z` and
 /// shears the ray onto the `+z` axis, so the 2D edge functions of the transformed vertices
@@ -102,21 +134,7 @@ impl WatertightRay {
     /// not necessarily unit).
     #[inline]
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
-        let a = direction.abs();
-        // Origin and direction permuted to (kx, ky, kz).
-        let (kx, ky, kz, o, d) = if a.x > a.y {
-            if a.x > a.z {
-                (Axis::Y, Axis::Z, Axis::X, origin.yzx(), direction.yzx())
-            } else {
-                (Axis::X, Axis::Y, Axis::Z, origin, direction)
-            }
-        } else if a.y > a.z {
-            (Axis::Z, Axis::X, Axis::Y, origin.zxy(), direction.zxy())
-        } else {
-            (Axis::X, Axis::Y, Axis::Z, origin, direction)
-        };
-        // (Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]), each one division.
-        let s = Vec3A::new(d.x, d.y, 1.0) / d.z;
+        let (kx, ky, kz, o, s) = shear(origin.into(), direction.into());
         Self {
             ox: Vec4::splat(o.x),
             oy: Vec4::splat(o.y),
@@ -321,33 +339,91 @@ pub fn intersect_sphere(
 /// infinities (and `0 * inf` NaNs) arise for axis-parallel rays.
 const MIN_DIR: f32 = 1e-20;
 
-/// Relative slab widening of the 4-wide node test. A slab distance is computed as
+/// Relative slab widening of the node test. A slab distance is computed as
 /// `b * inv + near_orig` with `inv = fl(1/d)` and `near_orig = fl(fl(-o * inv) -+ s)`: with
 /// unit roundoff `u = 2^-24` its error against `(b - o) / d` is below
 /// `u (3 |b| + 4 |o|) / |d| + 2 u s` (standard model, Higham 2002 ch. 3: two roundings in
-/// `b * inv`, two in `-o * inv`, one in the widening and one in the sum), and `|b|` is at
-/// most the largest box coordinate magnitude `B` on that axis. Widening by
-/// `s = 8 u (B + |o|) |inv|` therefore covers it on every axis, for every node of the tree,
-/// so the widening is a per-ray constant folded into `near_orig`/`far_orig`.
+/// `b * inv`, two in `-o * inv`, one in the widening and one in the sum; a fused
+/// multiply-add drops one of them), and `|b|` is at most the largest box coordinate
+/// magnitude `B` on that axis. Widening by `s = 8 u (B + |o|) |inv|` therefore covers it on
+/// every axis, for every node of the tree, so the widening is a per-ray constant folded
+/// into `near_orig`/`far_orig`.
 const NODE_SLACK: f32 = 4.0 * f32::EPSILON;
 
-/// Per-ray constants of the 4-wide node test, each splat across the four child lanes.
-struct Ray4 {
-    /// `1 / d` per axis, with components below [`MIN_DIR`] clamped.
-    inv: [Vec4; 3],
-    /// `-o / d - s` and `-o / d + s` per axis: slab distance offsets with the widening.
-    near_orig: [Vec4; 3],
-    far_orig: [Vec4; 3],
-    /// Per axis 1 where the direction is negative (the near plane is the box maximum).
-    neg: [usize; 3],
-    tmin: Vec4,
+/// Which implementation runs the intersection kernels ([`intersect_closest`],
+/// [`intersect_occluded`]). Both traverse the same tree and run the same watertight test
+/// with the same roundings, so they report the same hits; only the node test may differ in
+/// the last bit (fused multiply-add), which its widening covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// Eight lanes as two glam `Vec4` (SSE on x86-64); runs everywhere.
+    Portable,
+    /// Eight lanes in one AVX2 register, with FMA in the node test; x86-64 CPUs with AVX2
+    /// and FMA only.
+    Avx2,
 }
 
-impl Ray4 {
+impl Kernel {
+    /// The fastest kernel this CPU runs (what [`SceneGeometry::build`] selects).
+    pub fn best() -> Self {
+        if Self::Avx2.is_supported() {
+            Self::Avx2
+        } else {
+            Self::Portable
+        }
+    }
+
+    /// Whether this CPU runs the kernel.
+    pub fn is_supported(self) -> bool {
+        self.backend().is_some()
+    }
+
+    /// The backend token, if this CPU runs the kernel.
+    pub(crate) fn backend(self) -> Option<Backend> {
+        match self {
+            Kernel::Portable => Some(Backend::Portable),
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => Avx2::detect().map(Backend::Avx2),
+            #[cfg(not(target_arch = "x86_64"))]
+            Kernel::Avx2 => None,
+        }
+    }
+}
+
+/// A [`Kernel`] that this CPU was checked to run (the AVX2 variant holds the token).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Backend {
+    Portable,
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+}
+
+impl Backend {
+    /// The public name.
+    pub(crate) fn kernel(self) -> Kernel {
+        match self {
+            Backend::Portable => Kernel::Portable,
+            #[cfg(target_arch = "x86_64")]
+            Backend::Avx2(_) => Kernel::Avx2,
+        }
+    }
+}
+
+/// Per-ray constants of the 8-wide node test, each splat across the child lanes.
+struct NodeRay<F> {
+    /// `1 / d` per axis, with components below [`MIN_DIR`] clamped.
+    inv: [F; 3],
+    /// Per axis the slab distance offsets of the box minimum and maximum planes:
+    /// `-o / d - s` for the near one (the minimum where `d > 0`), `-o / d + s` for the
+    /// far one, so the widening moves both planes outwards.
+    lo_orig: [F; 3],
+    hi_orig: [F; 3],
+    tmin: F,
+}
+
+impl<F: Lanes8> NodeRay<F> {
     #[inline(always)]
-    fn new(origin: Vec3, direction: Vec3, tmin: f32, max_abs: Vec3A) -> Self {
-        let d = Vec3A::from(direction);
-        let o = Vec3A::from(origin);
+    fn new<S: Simd<F = F>>(s: S, o: Vec3A, d: Vec3A, tmin: f32, max_abs: Vec3A) -> Self {
         let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
         let inv_dir = Vec3A::select(
             tiny,
@@ -355,143 +431,292 @@ impl Ray4 {
             Vec3A::ONE / d,
         );
         let c = -(o * inv_dir);
-        let slack = (max_abs + o.abs()) * (inv_dir.abs() * NODE_SLACK);
-        let near_orig = c - slack;
-        let far_orig = c + slack;
-        // From inv_dir, so -0.0 components pick planes consistently with their inverse.
-        let neg = inv_dir.cmplt(Vec3A::ZERO).bitmask() as usize;
+        // The widening, with the sign of `1 / d`: subtracted from the minimum plane's
+        // offset where that plane is the near one.
+        let slack = ((max_abs + o.abs()) * (inv_dir.abs() * NODE_SLACK)).copysign(inv_dir);
+        let lo_orig = c - slack;
+        let hi_orig = c + slack;
         Self {
-            inv: [
-                Vec4::splat(inv_dir.x),
-                Vec4::splat(inv_dir.y),
-                Vec4::splat(inv_dir.z),
-            ],
-            near_orig: [
-                Vec4::splat(near_orig.x),
-                Vec4::splat(near_orig.y),
-                Vec4::splat(near_orig.z),
-            ],
-            far_orig: [
-                Vec4::splat(far_orig.x),
-                Vec4::splat(far_orig.y),
-                Vec4::splat(far_orig.z),
-            ],
-            neg: [neg & 1, (neg >> 1) & 1, (neg >> 2) & 1],
-            tmin: Vec4::splat(tmin),
+            inv: [s.splat(inv_dir.x), s.splat(inv_dir.y), s.splat(inv_dir.z)],
+            lo_orig: [s.splat(lo_orig.x), s.splat(lo_orig.y), s.splat(lo_orig.z)],
+            hi_orig: [s.splat(hi_orig.x), s.splat(hi_orig.y), s.splat(hi_orig.z)],
+            tmin: s.splat(tmin),
         }
     }
 }
 
-/// Slab test of the ray against the four children of a 4-wide node: the hit mask (bit `c`
-/// for child `c`) and the entry distances.
+/// Near and far slab distances of the eight child boxes along axis `a`: the distances to
+/// the minimum and maximum planes, ordered (which one is near depends on the sign of
+/// `d[a]`; ordering them costs a min and a max, picking rows by the sign an address
+/// computation per row). (Helpers of the kernels are functions, not closures: closures
+/// would not inherit the AVX2 target feature, and the intrinsics would not be inlined into
+/// them.)
 #[inline(always)]
-fn intersect_node4(node: &Bvh4Node, ray: &Ray4, tmax: f32) -> (u32, Vec4) {
-    let b = &node.bounds;
-    let slab = |a: usize| {
-        // `& 1` keeps the row indices provably inside the array.
-        let near = b[2 * a + (ray.neg[a] & 1)];
-        let far = b[2 * a + ((ray.neg[a] & 1) ^ 1)];
-        (
-            near * ray.inv[a] + ray.near_orig[a],
-            far * ray.inv[a] + ray.far_orig[a],
-        )
-    };
-    let (nx, fx) = slab(0);
-    let (ny, fy) = slab(1);
-    let (nz, fz) = slab(2);
-    let tnear = nx.max(ny).max(nz.max(ray.tmin));
-    let tfar = fx.min(fy).min(fz.min(Vec4::splat(tmax)));
-    (tnear.cmple(tfar).bitmask(), tnear)
+fn slab<S: Simd>(s: S, b: &[Row8; 6], ray: &NodeRay<S::F>, a: usize) -> (S::F, S::F) {
+    let lo = s.load(&b[2 * a]).mul_add(ray.inv[a], ray.lo_orig[a]);
+    let hi = s.load(&b[2 * a + 1]).mul_add(ray.inv[a], ray.hi_orig[a]);
+    (lo.min(hi), lo.max(hi))
 }
 
-/// A stacked child of the 4-wide traversal: an inner node (`count == 0`, `index` the node)
-/// or a leaf (`index` its first leaf slot), with its entry distance.
+/// Slab test of the ray against the eight children of a node: the hit mask (bit `c` for
+/// child `c`) and the entry distances.
+#[inline(always)]
+fn intersect_node8<S: Simd>(s: S, node: &Node8, ray: &NodeRay<S::F>, tmax: f32) -> (u32, S::F) {
+    let (nx, fx) = slab(s, &node.bounds, ray, 0);
+    let (ny, fy) = slab(s, &node.bounds, ray, 1);
+    let (nz, fz) = slab(s, &node.bounds, ray, 2);
+    let tnear = nx.max(ny).max(nz.max(ray.tmin));
+    let tfar = fx.min(fy).min(fz.min(s.splat(tmax)));
+    (tnear.le(tfar).bits() & node.valid, tnear)
+}
+
+/// Per-ray constants of the packet triangle test: [`WatertightRay`]'s, splat across the
+/// triangle lanes.
+struct PacketRay<F> {
+    ox: F,
+    oy: F,
+    oz: F,
+    sx: F,
+    sy: F,
+    sz: F,
+    kx: Axis,
+    ky: Axis,
+    kz: Axis,
+}
+
+impl<F: Lanes8> PacketRay<F> {
+    #[inline(always)]
+    fn new<S: Simd<F = F>>(s: S, origin: Vec3A, direction: Vec3A) -> Self {
+        let (kx, ky, kz, o, sh) = shear(origin, direction);
+        Self {
+            ox: s.splat(o.x),
+            oy: s.splat(o.y),
+            oz: s.splat(o.z),
+            sx: s.splat(sh.x),
+            sy: s.splat(sh.y),
+            sz: s.splat(sh.z),
+            kx,
+            ky,
+            kz,
+        }
+    }
+}
+
+/// The outcome of [`intersect_packet`]: lanes accepted (`hit`, with their `t` and
+/// barycentrics; the vectors are meaningless where `hit` is 0) and lanes left to the scalar
+/// test (`fallback`: an edge function is exactly zero, resolved in f64 there).
+struct PacketHits<F> {
+    hit: u32,
+    fallback: u32,
+    t: F,
+    b1: F,
+    b2: F,
+}
+
+/// One vertex of eight triangles translated, permuted and sheared, as in the scalar test:
+/// `(A[kx] - Sx A[kz], A[ky] - Sy A[kz], A[kz])` with `A` relative to the origin.
+#[inline(always)]
+fn shear_vertex<S: Simd>(s: S, r: &PacketRay<S::F>, v: &[Row8; 3]) -> (S::F, S::F, S::F) {
+    let z = s.load(&v[r.kz as usize]) - r.oz;
+    let x = (s.load(&v[r.kx as usize]) - r.ox) - r.sx * z;
+    let y = (s.load(&v[r.ky as usize]) - r.oy) - r.sy * z;
+    (x, y, z)
+}
+
+/// The watertight test of [`WatertightRay::intersect_packed`] on the eight triangles of a
+/// packet at once, with the same operations in the same order on every lane (no fused
+/// multiply-add), so a lane's `t`, barycentrics and decision are bit-identical to the
+/// scalar test's on that triangle. Lanes with an edge function exactly zero are reported in
+/// `fallback` instead.
+#[inline(always)]
+fn intersect_packet<S: Simd>(
+    s: S,
+    r: &PacketRay<S::F>,
+    p: &TriPacket8,
+    tmin: f32,
+    tmax: f32,
+) -> PacketHits<S::F> {
+    let (x0, y0, z0) = shear_vertex(s, r, &p.v[0]);
+    let (x1, y1, z1) = shear_vertex(s, r, &p.v[1]);
+    let (x2, y2, z2) = shear_vertex(s, r, &p.v[2]);
+    // The lanes (U, V, W) of the scalar test, one triangle per lane.
+    let u = x2 * y1 - y2 * x1;
+    let v = x0 * y2 - y0 * x2;
+    let w = x1 * y0 - y1 * x0;
+    let zero = s.splat(0.0);
+    let fallback = (u.eq(zero) | v.eq(zero) | w.eq(zero)).bits();
+    let (all_neg, any_neg) = u.sign_bits_all_any(v, w);
+    let same_sign = all_neg | !any_neg;
+    let mut hit = same_sign & !fallback & 0xff;
+    if hit == 0 {
+        return PacketHits {
+            hit,
+            fallback,
+            t: u,
+            b1: v,
+            b2: w,
+        };
+    }
+    let det = u + v + w;
+    hit &= !det.eq(zero).bits();
+    let (z0, z1, z2) = (z0 * r.sz, z1 * r.sz, z2 * r.sz);
+    let scaled_t = u * z0 + v * z1 + w * z2;
+    let inv_det = s.splat(1.0) / det;
+    let t = scaled_t * inv_det;
+    hit &= (t.gt(s.splat(tmin)) & t.lt(s.splat(tmax))).bits();
+    if hit == 0 {
+        return PacketHits {
+            hit,
+            fallback,
+            t,
+            b1: v,
+            b2: w,
+        };
+    }
+    // `t_error_bound` per lane (max is exact, so the order of the maxima is free).
+    let max_x = x0.abs().max(x1.abs()).max(x2.abs());
+    let max_y = y0.abs().max(y1.abs()).max(y2.abs());
+    let max_z = z0.abs().max(z1.abs()).max(z2.abs());
+    let (g2, g3, g5) = (
+        s.splat(gamma(2.0)),
+        s.splat(gamma(3.0)),
+        s.splat(gamma(5.0)),
+    );
+    let delta_z = g3 * max_z;
+    let delta_x = g5 * (max_x + max_z);
+    let delta_y = g5 * (max_y + max_z);
+    let delta_e = s.splat(2.0) * (g2 * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let bound =
+        s.splat(3.0) * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
+    hit &= !(t - s.splat(tmin)).le(bound).bits();
+    PacketHits {
+        hit,
+        fallback,
+        t,
+        b1: v * inv_det,
+        b2: w * inv_det,
+    }
+}
+
+/// Whether every triangle of an axis-aligned planar packet (`x_a = c`, see
+/// [`TriPacket8::plane_axis`]) meets the ray's line at `t* = (c - o_a) / d_a <= 0`, which is
+/// `c <= o_a` for `d_a > 0` and `c >= o_a` for `d_a < 0` (exact comparisons). Then, for
+/// `tmin >= 0`, the packet test would reject them all: a computed `t` is within its error
+/// bound of `t*`, and hits with `t <= tmin + bound` are rejected (`t_error_bound`). Rays
+/// spawned on a wall (origin offset off it, `tmin = 0`) test that wall's leaf first thing,
+/// as the node test's widening exceeds the spawn offset; this settles it with two compares.
+#[inline(always)]
+fn behind_plane(axis: usize, c: f32, [o, d]: &[[f32; 4]; 2], tmin: f32) -> bool {
+    let (oa, da) = (o[axis & 3], d[axis & 3]);
+    tmin >= 0.0 && ((da > 0.0 && c <= oa) || (da < 0.0 && c >= oa))
+}
+
+/// The scalar test on lane `l` of a packet, for lanes [`intersect_packet`] leaves to it.
+#[cold]
+#[inline(never)]
+fn packet_lane_scalar(
+    p: &TriPacket8,
+    l: usize,
+    o: Vec3A,
+    d: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<TriangleHit> {
+    let [v0, v1, v2] = p.triangle(l);
+    WatertightRay::new(o.into(), d.into()).intersect_packed(
+        &PackedTriangle::new(v0, v1, v2),
+        tmin,
+        tmax,
+    )
+}
+
+/// A stacked child of the closest-hit traversal ([`Node8::child`] encoding) with its entry
+/// distance.
 #[derive(Clone, Copy)]
-struct Entry4 {
-    index: u32,
-    count: u32,
+struct Entry {
+    child: u32,
     t: f32,
 }
 
-/// Closest-hit traversal of the 4-wide BVH: hit children, leaves and inner nodes alike, are
+impl Entry {
+    /// Child `c` of `node` with entry distance `t[c]`.
+    #[inline(always)]
+    fn new(node: &Node8, t: &[f32; WIDTH], c: usize) -> Self {
+        Self {
+            child: node.child[c],
+            t: t[c],
+        }
+    }
+}
+
+/// Closest-hit traversal of the 8-wide BVH: hit children, leaves and inner nodes alike, are
 /// visited nearest entry distance first, and stacked children that start beyond the shrunk
-/// `tmax` are skipped, so leaves behind the closest hit are never tested. `leaf(slot, tmax)`
-/// tests the primitive in leaf slot `slot`, may shrink `tmax` and returns true to stop.
+/// `tmax` are skipped, so leaves behind the closest hit are never tested.
+/// [`ClosestRay::leaf`] tests a leaf child and may shrink `tmax`.
 #[inline(always)]
-fn traverse4(
-    bvh: &Bvh4,
-    ray: &Ray4,
-    stack: &mut Vec<Entry4>,
+fn traverse_closest<S: Simd>(
+    s: S,
+    bvh: &Bvh8,
+    ray: &NodeRay<S::F>,
+    stack: &mut Vec<Entry>,
     tmax: &mut f32,
-    mut leaf: impl FnMut(u32, &mut f32) -> bool,
+    leaf: &mut ClosestRay<'_, S>,
 ) {
     stack.clear();
     let nodes = &bvh.nodes;
-    let mut cur = Entry4 {
-        index: 0,
-        count: 0,
-        t: 0.0,
-    };
+    let mut cur = 0u32;
     loop {
-        if cur.count == 0 {
-            let node = &nodes[cur.index as usize];
-            let (mask, tnear) = intersect_node4(node, ray, *tmax);
+        if cur & LEAF == 0 {
+            let node = &nodes[cur as usize];
+            let (mask, tnear) = intersect_node8(s, node, ray, *tmax);
             if mask != 0 {
-                let t = tnear.to_array();
-                let entry = |c: usize| Entry4 {
-                    index: node.child[c],
-                    count: node.count[c] as u32,
-                    t: t[c],
-                };
-                let c0 = mask.trailing_zeros() as usize & 3;
+                let c0 = mask.trailing_zeros() as usize & 7;
                 let rest = mask & (mask - 1);
                 if rest == 0 {
-                    cur = entry(c0);
+                    cur = node.child[c0];
                     continue;
                 }
-                let c1 = rest.trailing_zeros() as usize & 3;
+                let t = tnear.to_array();
+                let c1 = rest.trailing_zeros() as usize & 7;
                 let rest = rest & (rest - 1);
                 if rest == 0 {
                     // Two children: stack the farther, visit the nearer.
                     let (near, far) = if t[c1] < t[c0] { (c1, c0) } else { (c0, c1) };
-                    stack.push(entry(far));
-                    cur = entry(near);
+                    stack.push(Entry::new(node, &t, far));
+                    cur = node.child[near];
                     continue;
                 }
-                // Three or four: stack all, sorted far to near (insertion sort of at most
-                // four), and visit the nearest.
+                // Three or more: stack all, sorted far to near (insertion sort), and visit
+                // the nearest.
                 let base = stack.len();
-                stack.push(entry(c0));
-                stack.push(entry(c1));
+                stack.push(Entry::new(node, &t, c0));
+                stack.push(Entry::new(node, &t, c1));
                 let mut m = rest;
                 while m != 0 {
-                    let c = m.trailing_zeros() as usize & 3;
+                    let c = m.trailing_zeros() as usize & 7;
                     m &= m - 1;
-                    stack.push(entry(c));
+                    stack.push(Entry::new(node, &t, c));
                 }
-                let s = &mut stack[base..];
-                for i in 1..s.len() {
-                    let e = s[i];
+                let st = &mut stack[base..];
+                for i in 1..st.len() {
+                    let e = st[i];
                     let mut j = i;
-                    while j > 0 && s[j - 1].t < e.t {
-                        s[j] = s[j - 1];
+                    while j > 0 && st[j - 1].t < e.t {
+                        st[j] = st[j - 1];
                         j -= 1;
                     }
-                    s[j] = e;
+                    st[j] = e;
                 }
             }
         } else {
-            for slot in cur.index..cur.index + cur.count {
-                if leaf(slot, tmax) {
-                    return;
-                }
-            }
+            leaf.leaf(bvh, cur, tmax);
         }
         loop {
             match stack.pop() {
                 Some(e) => {
                     if e.t <= *tmax {
-                        cur = e;
+                        cur = e.child;
                         break;
                     }
                 }
@@ -501,47 +726,52 @@ fn traverse4(
     }
 }
 
-/// Any-hit traversal of the 4-wide BVH for shadow rays: the hit leaf children of a node are
+/// Any-hit traversal of the 8-wide BVH for shadow rays: the hit leaf children of a node are
 /// tested as soon as the node is visited (a blocker found early ends the ray, and testing
 /// them costs less than stacking them), then the hit inner children are visited nearest
-/// first. `leaf(slot)` returns true to stop.
+/// first. Returns whether a leaf ([`AnyRay::leaf`]) reported a hit.
 #[inline(always)]
-fn traverse4_any(
-    bvh: &Bvh4,
-    ray: &Ray4,
+fn traverse_any<S: Simd>(
+    s: S,
+    bvh: &Bvh8,
+    ray: &NodeRay<S::F>,
     stack: &mut Vec<u32>,
     tmax: f32,
-    mut leaf: impl FnMut(u32) -> bool,
-) {
+    leaf: &AnyRay<'_, S>,
+) -> bool {
     stack.clear();
     let nodes = &bvh.nodes;
     let mut index = 0usize;
     loop {
         let node = &nodes[index];
-        let (mask, tnear) = intersect_node4(node, ray, tmax);
+        let (mask, tnear) = intersect_node8(s, node, ray, tmax);
         let mut leaves = mask & node.leaf_mask;
         while leaves != 0 {
-            let c = leaves.trailing_zeros() as usize & 3;
+            let c = leaves.trailing_zeros() as usize & 7;
             leaves &= leaves - 1;
-            let first = node.child[c];
-            for slot in first..first + node.count[c] as u32 {
-                if leaf(slot) {
-                    return;
-                }
+            if leaf.leaf(bvh, node.child[c], tmax) {
+                return true;
             }
         }
         let mut inner = mask & !node.leaf_mask;
         if inner != 0 {
+            let c0 = inner.trailing_zeros() as usize & 7;
+            inner &= inner - 1;
+            if inner == 0 {
+                index = node.child[c0] as usize;
+                continue;
+            }
             let t = tnear.to_array();
-            // The hit inner children sorted far to near (insertion sort of at most four):
-            // all but the nearest are stacked, so they are popped nearest first.
-            let mut order = [0usize; 4];
-            let mut k = 0;
+            // The hit inner children sorted far to near (insertion sort): all but the
+            // nearest are stacked, so they are popped nearest first.
+            let mut order = [0usize; WIDTH];
+            order[0] = c0;
+            let mut k = 1;
             while inner != 0 {
-                let c = inner.trailing_zeros() as usize & 3;
+                let c = inner.trailing_zeros() as usize & 7;
                 inner &= inner - 1;
                 let mut j = k;
-                while j > 0 && t[order[j - 1]] < t[c] {
+                while j > 0 && t[order[j - 1] & 7] < t[c] {
                     order[j] = order[j - 1];
                     j -= 1;
                 }
@@ -549,14 +779,14 @@ fn traverse4_any(
                 k += 1;
             }
             for &c in &order[..k - 1] {
-                stack.push(node.child[c]);
+                stack.push(node.child[c & 7]);
             }
-            index = node.child[order[k - 1]] as usize;
+            index = node.child[order[k - 1] & 7] as usize;
             continue;
         }
         match stack.pop() {
             Some(n) => index = n as usize,
-            None => return,
+            None => return false,
         }
     }
 }
@@ -564,15 +794,15 @@ fn traverse4_any(
 /// [`intersect_sphere`] on a sphere leaf; out of line, so that the traversal loops of
 /// triangle-only scenes carry no sphere set-up.
 #[inline(never)]
-fn sphere_leaf_t(leaf: &LeafPrim, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f32 {
-    let (c, r) = leaf.sphere_center_radius();
-    intersect_sphere(o, d, c, r, tmin, tmax)
+fn sphere_leaf_t(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f32 {
+    let cr = leaf.center_radius;
+    intersect_sphere(o, d, cr.truncate(), cr.w, tmin, tmax)
 }
 
 /// Surface parameters of the closest hit on a sphere leaf, from the double-precision root.
 #[inline(never)]
-fn sphere_leaf_uv(leaf: &LeafPrim, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> (f32, f32) {
-    let (c, r) = leaf.sphere_center_radius();
+fn sphere_leaf_uv(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> (f32, f32) {
+    let (c, r) = (leaf.center_radius.truncate(), leaf.center_radius.w);
     let uv = sphere_t64(o, d, c, r, tmin, tmax)
         .map(|t64| sphere_uv((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64))
         .unwrap_or_else(|| sphere_uv(DVec3::Z));
@@ -587,13 +817,289 @@ fn check_lengths(n: usize, lens: &[usize]) {
     );
 }
 
+/// `v` in a SIMD register, loaded coordinate by coordinate (copying the 12-byte `Vec3`
+/// whole goes through the stack).
+#[inline(always)]
+fn load3(v: &Vec3) -> Vec3A {
+    Vec3A::new(v.x, v.y, v.z)
+}
+
+/// The columns of [`intersect_closest`].
+struct ClosestColumns<'a> {
+    origin: &'a [Vec3],
+    direction: &'a [Vec3],
+    tmin: &'a [f32],
+    tmax: &'a [f32],
+    t: &'a mut [f32],
+    prim: &'a mut [u32],
+    b1: &'a mut [f32],
+    b2: &'a mut [f32],
+}
+
+/// No sphere hit: the closest hit so far is a triangle or nothing.
+const NO_SPHERE: u32 = u32::MAX;
+
+/// A closest-hit ray during traversal: its constants and the closest hit so far.
+struct ClosestRay<'a, S: Simd> {
+    s: S,
+    tri: PacketRay<S::F>,
+    o: Vec3A,
+    d: Vec3A,
+    /// `o` and `d` as arrays, for [`behind_plane`] (a reference: indexing a field at a
+    /// run-time position would keep the whole struct in memory).
+    od: &'a [[f32; 4]; 2],
+    tmin: f32,
+    prim: u32,
+    /// Sphere leaf of the closest hit, or [`NO_SPHERE`].
+    sphere: u32,
+    b1: f32,
+    b2: f32,
+}
+
+impl<S: Simd> ClosestRay<'_, S> {
+    /// Tests leaf child `child`, shrinking `tmax` to a closer hit.
+    #[inline(always)]
+    fn leaf(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) {
+        let index = (child & INDEX_MASK) as usize;
+        if child & SPHERE != 0 {
+            let leaf = &bvh.spheres[index];
+            let ts = sphere_leaf_t(leaf, self.o.into(), self.d.into(), self.tmin, *tmax);
+            if ts < *tmax {
+                *tmax = ts;
+                self.prim = leaf.prim;
+                self.sphere = index as u32;
+            }
+            return;
+        }
+        let p = &bvh.packets[index];
+        let axis = p.plane_axis as usize;
+        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+            return;
+        }
+        let r = intersect_packet(self.s, &self.tri, p, self.tmin, *tmax);
+        let mut lanes = (r.hit | r.fallback) & p.valid;
+        if lanes == 0 {
+            return;
+        }
+        let (t, b1, b2) = (r.t.to_array(), r.b1.to_array(), r.b2.to_array());
+        // Lanes in order, each kept only if nearer than the best so far: the same hit as
+        // testing the triangles one by one (ties go to the lower lane).
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize & 7;
+            lanes &= lanes - 1;
+            let h = if r.fallback & (1 << l) == 0 {
+                TriangleHit {
+                    t: t[l],
+                    b1: b1[l],
+                    b2: b2[l],
+                }
+            } else {
+                match packet_lane_scalar(p, l, self.o, self.d, self.tmin, *tmax) {
+                    Some(h) => h,
+                    None => continue,
+                }
+            };
+            if h.t < *tmax {
+                *tmax = h.t;
+                self.prim = p.prim[l];
+                self.sphere = NO_SPHERE;
+                self.b1 = h.b1;
+                self.b2 = h.b2;
+            }
+        }
+    }
+}
+
+/// [`intersect_closest`] on the lanes of `s`.
+#[inline(always)]
+fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
+    let mut stack = Vec::with_capacity(64);
+    // Every column cut to the same length, so that indexing needs no bounds checks.
+    let n = c.origin.len();
+    let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
+    let (tmin, tmax) = (&c.tmin[..n], &c.tmax[..n]);
+    let (t, prim) = (&mut c.t[..n], &mut c.prim[..n]);
+    let (b1, b2) = (&mut c.b1[..n], &mut c.b2[..n]);
+    for i in 0..n {
+        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
+        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
+        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
+        let mut ray = ClosestRay {
+            s,
+            tri: PacketRay::new(s, o, d),
+            o,
+            d,
+            od: &od,
+            tmin: ray_tmin,
+            prim: NO_HIT,
+            sphere: NO_SPHERE,
+            b1: 0.0,
+            b2: 0.0,
+        };
+        let mut best_t = tmax[i];
+        traverse_closest(s, bvh, &node_ray, &mut stack, &mut best_t, &mut ray);
+        if ray.prim == NO_HIT {
+            t[i] = f32::INFINITY;
+            prim[i] = NO_HIT;
+            b1[i] = 0.0;
+            b2[i] = 0.0;
+        } else {
+            if ray.sphere != NO_SPHERE {
+                let leaf = &bvh.spheres[ray.sphere as usize];
+                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o.into(), d.into(), ray_tmin, tmax[i]);
+            }
+            t[i] = best_t;
+            prim[i] = ray.prim;
+            b1[i] = ray.b1;
+            b2[i] = ray.b2;
+        }
+    }
+}
+
+/// The columns of [`intersect_occluded`].
+struct OccludedColumns<'a> {
+    origin: &'a [Vec3],
+    direction: &'a [Vec3],
+    tmin: &'a [f32],
+    tmax: &'a [f32],
+    occluded: &'a mut [bool],
+}
+
+/// A shadow ray's constants during traversal.
+struct AnyRay<'a, S: Simd> {
+    s: S,
+    tri: PacketRay<S::F>,
+    o: Vec3A,
+    d: Vec3A,
+    /// `o` and `d` as arrays, for [`behind_plane`].
+    od: &'a [[f32; 4]; 2],
+    tmin: f32,
+}
+
+impl<S: Simd> AnyRay<'_, S> {
+    /// Whether leaf child `child` has a hit before `tmax`.
+    #[inline(always)]
+    fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
+        let index = (child & INDEX_MASK) as usize;
+        if child & SPHERE != 0 {
+            return sphere_leaf_t(
+                &bvh.spheres[index],
+                self.o.into(),
+                self.d.into(),
+                self.tmin,
+                tmax,
+            ) < f32::INFINITY;
+        }
+        let p = &bvh.packets[index];
+        let axis = p.plane_axis as usize;
+        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+            return false;
+        }
+        let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);
+        if r.hit != 0 {
+            return true;
+        }
+        let mut fallback = r.fallback & p.valid;
+        while fallback != 0 {
+            let l = fallback.trailing_zeros() as usize & 7;
+            fallback &= fallback - 1;
+            if packet_lane_scalar(p, l, self.o, self.d, self.tmin, tmax).is_some() {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// [`intersect_occluded`] on the lanes of `s`.
+#[inline(always)]
+fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
+    let mut stack = Vec::with_capacity(64);
+    // Every column cut to the same length, so that indexing needs no bounds checks.
+    let n = c.origin.len();
+    let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
+    let (tmin, tmax, occluded) = (&c.tmin[..n], &c.tmax[..n], &mut c.occluded[..n]);
+    for i in 0..n {
+        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
+        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
+        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
+        let ray = AnyRay {
+            s,
+            tri: PacketRay::new(s, o, d),
+            o,
+            d,
+            od: &od,
+            tmin: ray_tmin,
+        };
+        occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
+    }
+}
+
+#[inline(never)]
+fn closest_portable(bvh: &Bvh8, c: ClosestColumns) {
+    closest_kernel(Portable, bvh, c)
+}
+
+#[inline(never)]
+fn occluded_portable(bvh: &Bvh8, c: OccludedColumns) {
+    occluded_kernel(Portable, bvh, c)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "enables AVX2 and FMA for the kernel instantiation"
+)]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn closest_avx2(s: Avx2, bvh: &Bvh8, c: ClosestColumns) {
+    closest_kernel(s, bvh, c)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "enables AVX2 and FMA for the kernel instantiation"
+)]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn occluded_avx2(s: Avx2, bvh: &Bvh8, c: OccludedColumns) {
+    occluded_kernel(s, bvh, c)
+}
+
+/// Runs the closest-hit kernel of `backend`.
+#[allow(
+    unsafe_code,
+    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
+)]
+fn closest_dispatch(backend: Backend, bvh: &Bvh8, c: ClosestColumns) {
+    match backend {
+        Backend::Portable => closest_portable(bvh, c),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
+        Backend::Avx2(s) => unsafe { closest_avx2(s, bvh, c) },
+    }
+}
+
+/// Runs the occlusion kernel of `backend`.
+#[allow(
+    unsafe_code,
+    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
+)]
+fn occluded_dispatch(backend: Backend, bvh: &Bvh8, c: OccludedColumns) {
+    match backend {
+        Backend::Portable => occluded_portable(bvh, c),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
+        Backend::Avx2(s) => unsafe { occluded_avx2(s, bvh, c) },
+    }
+}
+
 /// Closest hit of every ray `origin[i] + t * direction[i]` with `tmin[i] < t < tmax[i]`.
 ///
 /// Writes the hit distance, the primitive index (see [`SceneGeometry`]) and the surface
 /// parameters: barycentrics `(b1, b2)` for triangles, `(phi / 2pi, theta / pi)` for spheres
 /// (as [`SceneGeometry::surface_at`] expects). A miss writes `prim = NO_HIT`,
 /// `t = f32::INFINITY` and zero parameters. Of two hits at exactly the same distance either
-/// may be reported.
+/// may be reported. Runs the geometry's [`Kernel`].
 ///
 /// # Panics
 /// If the columns have different lengths.
@@ -622,59 +1128,32 @@ pub fn intersect_closest(
             b2.len(),
         ],
     );
-    let Some((bvh, leaves)) = geom.bvh4() else {
+    let Some((bvh, backend)) = geom.bvh8() else {
         t.fill(f32::INFINITY);
         prim.fill(NO_HIT);
         b1.fill(0.0);
         b2.fill(0.0);
         return;
     };
-    let mut stack = Vec::with_capacity(64);
-    for i in 0..n {
-        let (o, d, ray_tmin) = (origin[i], direction[i], tmin[i]);
-        let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
-        let tri_ray = WatertightRay::new(o, d);
-        let mut best_t = tmax[i];
-        let mut best_slot = u32::MAX;
-        let (mut hit_b1, mut hit_b2) = (0.0f32, 0.0f32);
-        traverse4(bvh, &node_ray, &mut stack, &mut best_t, |slot, best_t| {
-            let leaf = &leaves[slot as usize];
-            if !leaf.is_sphere() {
-                if let Some(h) = tri_ray.intersect_rows(&leaf.rows, ray_tmin, *best_t) {
-                    *best_t = h.t;
-                    best_slot = slot;
-                    hit_b1 = h.b1;
-                    hit_b2 = h.b2;
-                }
-            } else {
-                let ts = sphere_leaf_t(leaf, o, d, ray_tmin, *best_t);
-                if ts < *best_t {
-                    *best_t = ts;
-                    best_slot = slot;
-                }
-            }
-            false
-        });
-        if best_slot == u32::MAX {
-            t[i] = f32::INFINITY;
-            prim[i] = NO_HIT;
-            b1[i] = 0.0;
-            b2[i] = 0.0;
-        } else {
-            let leaf = &leaves[best_slot as usize];
-            if leaf.is_sphere() {
-                (hit_b1, hit_b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
-            }
-            t[i] = best_t;
-            prim[i] = bvh.prim_indices[best_slot as usize];
-            b1[i] = hit_b1;
-            b2[i] = hit_b2;
-        }
-    }
+    closest_dispatch(
+        backend,
+        bvh,
+        ClosestColumns {
+            origin,
+            direction,
+            tmin,
+            tmax,
+            t,
+            prim,
+            b1,
+            b2,
+        },
+    );
 }
 
 /// Whether each ray `origin[i] + t * direction[i]` hits anything with
-/// `tmin[i] < t < tmax[i]` (shadow rays). Stops at the first hit found.
+/// `tmin[i] < t < tmax[i]` (shadow rays). Stops at the first hit found. Runs the
+/// geometry's [`Kernel`].
 ///
 /// # Panics
 /// If the columns have different lengths.
@@ -691,29 +1170,21 @@ pub fn intersect_occluded(
         n,
         &[direction.len(), tmin.len(), tmax.len(), occluded.len()],
     );
-    let Some((bvh, leaves)) = geom.bvh4() else {
+    let Some((bvh, backend)) = geom.bvh8() else {
         occluded.fill(false);
         return;
     };
-    let mut stack = Vec::with_capacity(64);
-    for i in 0..n {
-        let (o, d, ray_tmin, ray_tmax) = (origin[i], direction[i], tmin[i], tmax[i]);
-        let node_ray = Ray4::new(o, d, ray_tmin, bvh.max_abs);
-        let tri_ray = WatertightRay::new(o, d);
-        let mut hit = false;
-        traverse4_any(bvh, &node_ray, &mut stack, ray_tmax, |slot| {
-            let leaf = &leaves[slot as usize];
-            hit = if !leaf.is_sphere() {
-                tri_ray
-                    .intersect_rows(&leaf.rows, ray_tmin, ray_tmax)
-                    .is_some()
-            } else {
-                sphere_leaf_t(leaf, o, d, ray_tmin, ray_tmax) < f32::INFINITY
-            };
-            hit
-        });
-        occluded[i] = hit;
-    }
+    occluded_dispatch(
+        backend,
+        bvh,
+        OccludedColumns {
+            origin,
+            direction,
+            tmin,
+            tmax,
+            occluded,
+        },
+    );
 }
 
 #[cfg(test)]
@@ -734,160 +1205,391 @@ mod tests {
         }
     }
 
-    /// The 4-wide node test against an exact slab test in f64 on the same clamped inverse
-    /// direction: every child box the ray truly meets within `[tmin, tmax]` must be hit
-    /// (conservative), and boxes it misses by more than the widening must not be.
+    /// Every kernel this CPU runs.
+    fn backends() -> Vec<Backend> {
+        let all = [Kernel::Portable, Kernel::Avx2];
+        let b: Vec<Backend> = all.iter().filter_map(|k| k.backend()).collect();
+        assert!(!b.is_empty());
+        b
+    }
+
+    /// Evaluates `$e` with `$s` bound to the lane implementation of backend `$b`.
+    macro_rules! with_simd {
+        ($b:expr, $s:ident => $e:expr) => {
+            match $b {
+                Backend::Portable => {
+                    let $s = Portable;
+                    $e
+                }
+                #[cfg(target_arch = "x86_64")]
+                Backend::Avx2(tok) => {
+                    let $s = tok;
+                    $e
+                }
+            }
+        };
+    }
+
+    fn node_mask<S: Simd>(
+        s: S,
+        node: &Node8,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+        max_abs: Vec3A,
+    ) -> u32 {
+        let ray = NodeRay::new(s, o.into(), d.into(), tmin, max_abs);
+        intersect_node8(s, node, &ray, tmax).0
+    }
+
+    /// The 8-wide node test of every kernel against an exact slab test in f64 on the same
+    /// clamped inverse direction: every child box the ray truly meets within `[tmin, tmax]`
+    /// must be hit (conservative), and boxes it misses by more than the widening must not be.
     #[test]
-    fn node4_test_is_conservative_and_tight() {
-        let mut rng = Rng(3);
-        let tris: Vec<[Vec3; 3]> = (0..3000)
-            .map(|_| {
-                let c = rng.vec(-10.0, 10.0);
-                [
-                    c + rng.vec(-0.5, 0.5),
-                    c + rng.vec(-0.5, 0.5),
-                    c + rng.vec(-0.5, 0.5),
-                ]
-            })
-            .collect();
-        let spheres = vec![Sphere {
-            center: Vec3::ONE,
-            radius: 0.3,
-        }];
-        let geom = SceneGeometry::build(tris, spheres);
-        let (bvh, _) = geom.bvh4().unwrap();
-        let (mut hits, mut misses, mut touching) = (0, 0, 0);
-        for k in 0..3000 {
-            let o = rng.vec(-12.0, 12.0);
-            // Mostly aimed at a box corner, so the ray grazes that box (without the widening
-            // rounding culls some of these boxes; checked), else near a triangle.
-            let node = &bvh.nodes[(rng.next_u64() % bvh.nodes.len() as u64) as usize];
-            let c = (rng.next_u64() % 4) as usize;
-            let target = if k % 3 != 2 && node.bounds[0][c].is_finite() {
-                Vec3::new(node.bounds[0][c], node.bounds[3][c], node.bounds[4][c])
-            } else {
-                geom.triangle((rng.next_u64() % 3000) as usize)[0] + rng.vec(-0.1, 0.1)
-            };
-            let mut d = target - o;
-            // Axis-parallel directions, including negative zeros.
-            match k % 7 {
-                1 => d.x = 0.0,
-                2 => d.y = -0.0,
-                4 => d = Vec3::new(0.0, -0.0, d.z),
-                _ => {}
-            }
-            let (tmin, tmax) = if k % 2 == 0 {
-                (0.0, f32::INFINITY)
-            } else {
-                (rng.f32() * 0.5, 0.5 + rng.f32())
-            };
-            let ray = Ray4::new(o, d, tmin, bvh.max_abs);
-            let inv = |x: f32| -> f64 {
-                if x.abs() < MIN_DIR {
-                    (1.0 / MIN_DIR as f64).copysign(x as f64)
+    fn node8_test_is_conservative_and_tight() {
+        for backend in backends() {
+            let mut rng = Rng(3);
+            let tris: Vec<[Vec3; 3]> = (0..3000)
+                .map(|_| {
+                    let c = rng.vec(-10.0, 10.0);
+                    [
+                        c + rng.vec(-0.5, 0.5),
+                        c + rng.vec(-0.5, 0.5),
+                        c + rng.vec(-0.5, 0.5),
+                    ]
+                })
+                .collect();
+            let spheres = vec![Sphere {
+                center: Vec3::ONE,
+                radius: 0.3,
+            }];
+            let geom = SceneGeometry::build(tris, spheres);
+            let (bvh, _) = geom.bvh8().unwrap();
+            let (mut hits, mut misses, mut touching) = (0, 0, 0);
+            for k in 0..3000 {
+                let o = rng.vec(-12.0, 12.0);
+                // Mostly aimed at a box corner, so the ray grazes that box (without the
+                // widening rounding culls some of these boxes; checked), else near a
+                // triangle.
+                let node = &bvh.nodes[(rng.next_u64() % bvh.nodes.len() as u64) as usize];
+                let c = (rng.next_u64() % WIDTH as u64) as usize;
+                let target = if k % 3 != 2 && node.bounds[0].0[c].is_finite() {
+                    Vec3::new(
+                        node.bounds[0].0[c],
+                        node.bounds[3].0[c],
+                        node.bounds[4].0[c],
+                    )
                 } else {
-                    1.0 / x as f64
+                    geom.triangle((rng.next_u64() % 3000) as usize)[0] + rng.vec(-0.1, 0.1)
+                };
+                let mut d = target - o;
+                // Axis-parallel directions, including negative zeros.
+                match k % 7 {
+                    1 => d.x = 0.0,
+                    2 => d.y = -0.0,
+                    4 => d = Vec3::new(0.0, -0.0, d.z),
+                    _ => {}
                 }
-            };
-            let inv = [inv(d.x), inv(d.y), inv(d.z)];
-            let (o64, b64) = (o.as_dvec3().to_array(), bvh.max_abs.as_dvec3().to_array());
-            for node in &bvh.nodes {
-                let (mask, _) = intersect_node4(node, &ray, tmax);
-                for c in 0..4 {
-                    if !node.bounds[0][c].is_finite() {
-                        assert_eq!(mask & (1 << c), 0, "empty slot hit");
-                        continue;
+                let (tmin, tmax) = if k % 2 == 0 {
+                    (0.0, f32::INFINITY)
+                } else {
+                    (rng.f32() * 0.5, 0.5 + rng.f32())
+                };
+                let inv = |x: f32| -> f64 {
+                    if x.abs() < MIN_DIR {
+                        (1.0 / MIN_DIR as f64).copysign(x as f64)
+                    } else {
+                        1.0 / x as f64
                     }
-                    let (mut tn, mut tf) = (tmin as f64, tmax as f64);
-                    let mut margin = 0.0f64;
-                    for a in 0..3 {
-                        let lo = (node.bounds[2 * a][c] as f64 - o64[a]) * inv[a];
-                        let hi = (node.bounds[2 * a + 1][c] as f64 - o64[a]) * inv[a];
-                        tn = tn.max(lo.min(hi));
-                        tf = tf.min(lo.max(hi));
-                        margin = margin.max(1e-5 * (b64[a] + o64[a].abs()) * inv[a].abs());
-                    }
-                    let got = mask & (1 << c) != 0;
-                    if tn <= tf {
-                        assert!(got, "ray {k}: o={o:?} d={d:?} misses child {c} of {node:?}");
-                        hits += 1;
-                        touching += (tn == tf) as usize;
-                    } else if tn > tf + margin {
-                        assert!(!got, "ray {k}: o={o:?} d={d:?} hits child {c} of {node:?}");
-                        misses += 1;
+                };
+                let inv = [inv(d.x), inv(d.y), inv(d.z)];
+                let (o64, b64) = (o.as_dvec3().to_array(), bvh.max_abs.as_dvec3().to_array());
+                for node in &bvh.nodes {
+                    let mask =
+                        with_simd!(backend, s => node_mask(s, node, o, d, tmin, tmax, bvh.max_abs));
+                    for c in 0..WIDTH {
+                        if node.valid & (1 << c) == 0 {
+                            assert_eq!(mask & (1 << c), 0, "empty slot hit");
+                            continue;
+                        }
+                        let (mut tn, mut tf) = (tmin as f64, tmax as f64);
+                        let mut margin = 0.0f64;
+                        for a in 0..3 {
+                            let lo = (node.bounds[2 * a].0[c] as f64 - o64[a]) * inv[a];
+                            let hi = (node.bounds[2 * a + 1].0[c] as f64 - o64[a]) * inv[a];
+                            tn = tn.max(lo.min(hi));
+                            tf = tf.min(lo.max(hi));
+                            margin = margin.max(1e-5 * (b64[a] + o64[a].abs()) * inv[a].abs());
+                        }
+                        let got = mask & (1 << c) != 0;
+                        if tn <= tf {
+                            assert!(
+                                got,
+                                "{backend:?} ray {k}: o={o:?} d={d:?} misses child {c} of {node:?}"
+                            );
+                            hits += 1;
+                            touching += (tn == tf) as usize;
+                        } else if tn > tf + margin {
+                            assert!(
+                                !got,
+                                "{backend:?} ray {k}: o={o:?} d={d:?} hits child {c} of {node:?}"
+                            );
+                            misses += 1;
+                        }
                     }
                 }
             }
+            assert!(
+                hits > 3_000 && misses > 50_000 && touching > 10,
+                "{backend:?}: {hits} child hits ({touching} touching), {misses} misses"
+            );
         }
-        assert!(
-            hits > 3_000 && misses > 100_000 && touching > 10,
-            "{hits} child hits ({touching} touching), {misses} misses"
-        );
     }
 
     /// The collapse keeps every primitive exactly once, every child box contains what it
-    /// holds, and every node is reachable from the root exactly once.
+    /// holds, packets hold their triangles' vertices exactly (padding repeats lane 0), and
+    /// every node is reachable from the root exactly once.
     #[test]
-    fn bvh4_collapse_is_a_complete_bounding_tree() {
+    fn bvh8_collapse_is_a_complete_bounding_tree() {
         let mut rng = Rng(5);
-        for n in [1usize, 2, 3, 5, 17, 2000] {
+        for n in [1usize, 2, 3, 5, 8, 9, 17, 2000] {
             let tris: Vec<[Vec3; 3]> = (0..n)
                 .map(|_| {
                     let c = rng.vec(-10.0, 10.0);
                     [c, c + rng.vec(-0.5, 0.5), c + rng.vec(-3.0, 3.0)]
                 })
                 .collect();
-            let geom = SceneGeometry::build(tris.clone(), Vec::new());
-            let (bvh, leaves) = geom.bvh4().unwrap();
-            let mut seen = vec![0u32; n];
-            for &p in &bvh.prim_indices {
-                seen[p as usize] += 1;
-            }
-            assert!(seen.iter().all(|&s| s == 1), "n = {n}: {seen:?}");
-            assert_eq!(leaves.len(), n);
+            let spheres: Vec<Sphere> = (0..n / 4)
+                .map(|_| Sphere {
+                    center: rng.vec(-10.0, 10.0),
+                    radius: 0.1 + rng.f32(),
+                })
+                .collect();
+            let geom = SceneGeometry::build(tris.clone(), spheres.clone());
+            let (bvh, _) = geom.bvh8().unwrap();
+            let mut seen = vec![0u32; n + spheres.len()];
             let mut reached = vec![0u32; bvh.nodes.len()];
+            let mut leaves = (vec![0u32; bvh.packets.len()], vec![0u32; bvh.spheres.len()]);
             let mut stack = vec![0usize];
             reached[0] = 1;
-            let child_box = |node: &Bvh4Node, c: usize| {
-                (
-                    Vec3::new(node.bounds[0][c], node.bounds[2][c], node.bounds[4][c]),
-                    Vec3::new(node.bounds[1][c], node.bounds[3][c], node.bounds[5][c]),
-                )
+            let child_box = |node: &Node8, c: usize| {
+                let b = |r: usize| node.bounds[r].0[c];
+                (Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)))
             };
             while let Some(i) = stack.pop() {
                 let node = &bvh.nodes[i];
-                for c in 0..4 {
+                for c in 0..WIDTH {
                     let (lo, hi) = child_box(node, c);
                     if !lo.is_finite() {
                         continue;
                     }
-                    if node.leaf_mask & (1 << c) != 0 {
-                        let first = node.child[c] as usize;
-                        assert!(node.count[c] >= 1);
-                        for s in first..first + node.count[c] as usize {
-                            let tri = tris[bvh.prim_indices[s] as usize];
-                            for v in tri {
-                                assert!(v.cmpge(lo).all() && v.cmple(hi).all());
-                            }
-                            assert_eq!(
-                                leaves[s].rows,
-                                PackedTriangle::new(tri[0], tri[1], tri[2]).rows
-                            );
-                        }
-                    } else {
-                        let k = node.child[c] as usize;
-                        reached[k] += 1;
-                        stack.push(k);
-                        for cc in 0..4 {
-                            let (clo, chi) = child_box(&bvh.nodes[k], cc);
+                    let child = node.child[c];
+                    assert_eq!(node.leaf_mask & (1 << c) != 0, child & LEAF != 0);
+                    let index = (child & INDEX_MASK) as usize;
+                    if child & LEAF == 0 {
+                        reached[index] += 1;
+                        stack.push(index);
+                        for cc in 0..WIDTH {
+                            let (clo, chi) = child_box(&bvh.nodes[index], cc);
                             if clo.is_finite() {
                                 assert!(clo.cmpge(lo).all() && chi.cmple(hi).all());
+                            }
+                        }
+                    } else if child & SPHERE != 0 {
+                        leaves.1[index] += 1;
+                        let s = &bvh.spheres[index];
+                        seen[s.prim as usize] += 1;
+                        let want = spheres[s.prim as usize - n];
+                        assert_eq!(s.center_radius, want.center.extend(want.radius));
+                        let r = Vec3::splat(want.radius);
+                        assert!((want.center - r).cmpge(lo).all());
+                        assert!((want.center + r).cmple(hi).all());
+                    } else {
+                        leaves.0[index] += 1;
+                        let p = &bvh.packets[index];
+                        assert_eq!(p.valid, (1 << p.valid.count_ones()) - 1);
+                        if p.plane_axis != NO_PLANE {
+                            let a = p.plane_axis as usize;
+                            for l in 0..WIDTH {
+                                assert!(p.triangle(l).iter().all(|v| v[a] == p.plane_c));
+                            }
+                        }
+                        for l in 0..WIDTH {
+                            let prim = p.prim[l] as usize;
+                            assert_eq!(p.triangle(l), tris[prim]);
+                            if p.valid & (1 << l) != 0 {
+                                seen[prim] += 1;
+                            } else {
+                                // Padding: a copy of lane 0.
+                                assert_eq!(p.prim[l], p.prim[0]);
+                            }
+                            for v in tris[prim] {
+                                assert!(v.cmpge(lo).all() && v.cmple(hi).all());
                             }
                         }
                     }
                 }
             }
+            assert!(seen.iter().all(|&s| s == 1), "n = {n}: {seen:?}");
             assert!(reached.iter().all(|&r| r == 1), "n = {n}: {reached:?}");
+            assert!(leaves.0.iter().chain(&leaves.1).all(|&r| r == 1));
+        }
+    }
+
+    fn packet_hits<S: Simd>(
+        s: S,
+        p: &TriPacket8,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> (u32, u32, [f32; 8], [f32; 8], [f32; 8]) {
+        let r = intersect_packet(s, &PacketRay::new(s, o.into(), d.into()), p, tmin, tmax);
+        (
+            r.hit,
+            r.fallback,
+            r.t.to_array(),
+            r.b1.to_array(),
+            r.b2.to_array(),
+        )
+    }
+
+    /// The 8-lane test of every kernel against the scalar test on each lane's triangle: the
+    /// same accepted lanes with bit-identical `t` and barycentrics, on rays aimed at
+    /// vertices and edges of a grid of triangles with small integer coordinates (edge
+    /// functions exactly zero, so lanes go to the scalar fallback) and at random points.
+    #[test]
+    fn packet_test_matches_scalar_test_bit_for_bit() {
+        for backend in backends() {
+            let mut rng = Rng(11);
+            let (mut hits, mut fallbacks) = (0, 0);
+            for k in 0..20_000 {
+                let n = 1 + (k % WIDTH);
+                let grid = k % 2 == 0;
+                let tris: Vec<(u32, [Vec3; 3])> = (0..n as u32)
+                    .map(|i| {
+                        let mut v = [Vec3::ZERO; 3];
+                        for vi in &mut v {
+                            *vi = if grid {
+                                (rng.vec(0.0, 4.0) * 4.0).floor() * 0.25
+                            } else {
+                                rng.vec(-1.0, 1.0)
+                            };
+                        }
+                        (i, v)
+                    })
+                    .collect();
+                let p = TriPacket8::new(&tris);
+                let o = if grid {
+                    // Origins on the grid too, so the sheared coordinates are often exact.
+                    (rng.vec(0.0, 4.0)).floor() * 0.5 + Vec3::new(0.0, 0.0, 5.0)
+                } else {
+                    rng.vec(-3.0, 3.0) + Vec3::new(0.0, 0.0, 5.0)
+                };
+                let target = if grid {
+                    (rng.vec(0.0, 4.0) * 8.0).floor() * 0.125
+                } else {
+                    rng.vec(-1.0, 1.0)
+                };
+                let d = target - o;
+                let ray = WatertightRay::new(o, d);
+                let (tmin, tmax) = if k % 3 == 0 {
+                    (0.0, f32::INFINITY)
+                } else {
+                    (rng.f32() * 0.9, 0.9 + rng.f32())
+                };
+                let (hit, fallback, t, b1, b2) =
+                    with_simd!(backend, s => packet_hits(s, &p, o, d, tmin, tmax));
+                assert_eq!(hit & fallback, 0);
+                assert_eq!(hit >> WIDTH, 0);
+                for l in 0..WIDTH {
+                    let [v0, v1, v2] = p.triangle(l);
+                    let want = ray.intersect_triangle(v0.into(), v1.into(), v2.into(), tmin, tmax);
+                    if fallback & (1 << l) != 0 {
+                        fallbacks += 1;
+                        assert_eq!(
+                            packet_lane_scalar(&p, l, o.into(), d.into(), tmin, tmax),
+                            want,
+                            "{backend:?} ray {k} lane {l}"
+                        );
+                        continue;
+                    }
+                    let got = (hit & (1 << l) != 0).then(|| TriangleHit {
+                        t: t[l],
+                        b1: b1[l],
+                        b2: b2[l],
+                    });
+                    let bits =
+                        |h: Option<TriangleHit>| h.map(|h| [h.t, h.b1, h.b2].map(f32::to_bits));
+                    assert_eq!(bits(got), bits(want), "{backend:?} ray {k} lane {l}");
+                    hits += got.is_some() as usize;
+                }
+            }
+            assert!(
+                hits > 1000 && fallbacks > 50,
+                "{backend:?}: {hits} hits, {fallbacks} fallbacks"
+            );
+        }
+    }
+
+    /// The planar early-out only skips packets whose every lane the full test rejects: rays
+    /// leaving axis-aligned planar packets from a few ulps off their plane (spawned rays),
+    /// from on it, and from farther away, in every direction including parallel to it.
+    #[test]
+    fn behind_plane_only_skips_packets_the_test_rejects() {
+        for backend in backends() {
+            let mut rng = Rng(13);
+            let (mut skipped, mut hits) = (0, 0);
+            for k in 0..20_000 {
+                let axis = k % 3;
+                let c = (rng.f32() * 8.0 - 4.0) * if k % 5 == 0 { 1e3 } else { 1.0 };
+                let n = 1 + (k / 3) % WIDTH;
+                let tris: Vec<(u32, [Vec3; 3])> = (0..n as u32)
+                    .map(|i| {
+                        let mut v = [rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0)];
+                        for vi in &mut v {
+                            vi[axis] = c;
+                        }
+                        (i, v)
+                    })
+                    .collect();
+                let p = TriPacket8::new(&tris);
+                assert_eq!(p.plane_axis as usize, axis);
+                let mut o = rng.vec(-1.5, 1.5);
+                let ulps = (rng.next_u64() % 9) as i32 - 4;
+                o[axis] = match k % 4 {
+                    0 => f32::from_bits((c.to_bits() as i32 + ulps) as u32),
+                    1 => c + (rng.f32() - 0.5) * 1e-5 * c.abs().max(1.0),
+                    2 => c,
+                    _ => c + rng.f32() * 4.0 - 2.0,
+                };
+                let mut d = rng.vec(-1.0, 1.0);
+                if k % 11 == 0 {
+                    d[axis] = 0.0;
+                }
+                let tmin = if k % 2 == 0 { 0.0 } else { rng.f32() * 1e-3 };
+                let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
+                let skip = behind_plane(axis, p.plane_c, &od, tmin);
+                let (hit, fallback, ..) =
+                    with_simd!(backend, s => packet_hits(s, &p, o, d, tmin, f32::INFINITY));
+                let fallback_hit = (0..WIDTH).any(|l| {
+                    fallback & p.valid & (1 << l) != 0
+                        && packet_lane_scalar(&p, l, o.into(), d.into(), tmin, f32::INFINITY)
+                            .is_some()
+                });
+                let any = hit & p.valid != 0 || fallback_hit;
+                assert!(
+                    !(skip && any),
+                    "{backend:?} ray {k}: o={o:?} d={d:?} skipped a hit"
+                );
+                skipped += skip as usize;
+                hits += any as usize;
+            }
+            assert!(
+                skipped > 5000 && hits > 500,
+                "{skipped} skipped, {hits} hits"
+            );
         }
     }
 }

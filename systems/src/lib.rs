@@ -2,7 +2,7 @@
 //! the slices it writes, knows nothing of the scene world, the scheduler or the global
 //! integrator, and can be benchmarked alone.
 
-mod bvh4;
+mod bvh8;
 pub mod bxdf;
 pub mod camera;
 pub mod distribution;
@@ -12,3 +12,4 @@ pub mod intersect;
 pub mod lights;
 pub mod partition;
 pub mod sampler;
+mod simd8;

@@ -10,7 +10,7 @@ use glam::{DVec3, Mat3A, Vec2, Vec3, Vec3A};
 use risotto_components::NO_HIT;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::intersect::{
-    intersect_closest, intersect_occluded, intersect_sphere, PackedTriangle, WatertightRay,
+    intersect_closest, intersect_occluded, intersect_sphere, Kernel, PackedTriangle, WatertightRay,
 };
 
 use risotto_systems::sampler::SplitMix64 as Rng;
@@ -69,7 +69,50 @@ impl Batch {
         self.tmax.push(tmax);
     }
 
+    /// Runs both systems with every kernel this CPU supports, checks that the kernels
+    /// agree bit for bit, and returns the results.
     fn run(&self, geom: &SceneGeometry) -> Results {
+        let mut results: Vec<(Kernel, Results)> = [Kernel::Portable, Kernel::Avx2]
+            .into_iter()
+            .filter(|k| k.is_supported())
+            .map(|k| {
+                let mut g = geom.clone();
+                g.set_kernel(k);
+                assert_eq!(g.kernel(), k);
+                (k, self.run_kernel(&g))
+            })
+            .collect();
+        let (k0, first) = results.remove(0);
+        for (k, r) in &results {
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&r.t), bits(&first.t), "{k:?} vs {k0:?}: t");
+            assert_eq!(r.occluded, first.occluded, "{k:?} vs {k0:?}: occluded");
+            for i in 0..r.prim.len() {
+                let same = (r.prim[i], r.b1[i].to_bits(), r.b2[i].to_bits())
+                    == (first.prim[i], first.b1[i].to_bits(), first.b2[i].to_bits());
+                if same {
+                    continue;
+                }
+                // The kernels' node tests may round entry distances differently (fused
+                // multiply-add), so of two primitives hit at exactly the same distance each
+                // may report another: that primitive alone must give the reported hit.
+                assert!(
+                    r.prim[i] != NO_HIT && first.prim[i] != NO_HIT,
+                    "{k:?} ray {i}"
+                );
+                let (o, d, tmin, tmax) = (self.o[i], self.d[i], self.tmin[i], self.tmax[i]);
+                let own = test_prim(geom, r.prim[i] as usize, o, d, tmin, tmax)
+                    .unwrap_or_else(|| panic!("{k:?} ray {i}: prim {} misses", r.prim[i]));
+                assert_eq!(own.0, r.t[i], "{k:?} ray {i}");
+                if (r.prim[i] as usize) < geom.num_triangles() {
+                    assert_eq!((own.1, own.2), (r.b1[i], r.b2[i]), "{k:?} ray {i}");
+                }
+            }
+        }
+        first
+    }
+
+    fn run_kernel(&self, geom: &SceneGeometry) -> Results {
         let n = self.o.len();
         let mut r = Results {
             t: vec![0.0; n],

@@ -1,0 +1,644 @@
+//! An uncompressed 8-wide BVH with triangle-packet leaves, collapsed from obvhs' binary BVH,
+//! for the traversal kernels in [`crate::intersect`].
+//!
+//! Every node stores the boxes of its up to eight children as f32 structure-of-arrays rows
+//! (`bounds[2a]` the minima and `bounds[2a + 1]` the maxima along axis `a`, one child per
+//! lane), so one ray is tested against eight children with a handful of 8-lane operations
+//! and no decoding; empty slots hold inverted boxes (`+inf` minima, `-inf` maxima) that no
+//! ray hits. A leaf child is either a packet of up to eight triangles, stored coordinate by
+//! coordinate with one triangle per lane so that the watertight test runs on all of them at
+//! once, or a single sphere.
+
+use glam::{Vec3, Vec3A, Vec4};
+use obvhs::{aabb::Aabb, bvh2::Bvh2};
+
+use crate::geometry::Sphere;
+use crate::simd8::Row8;
+
+/// Number of children of a node and of triangles in a leaf packet.
+pub(crate) const WIDTH: usize = 8;
+
+/// [`Node8::child`] flag: the child is a leaf (the low bits index [`Bvh8::packets`], or
+/// [`Bvh8::spheres`] with [`SPHERE`] also set).
+pub(crate) const LEAF: u32 = 1 << 31;
+/// [`Node8::child`] flag of a sphere leaf.
+pub(crate) const SPHERE: u32 = 1 << 30;
+/// The index bits of a leaf child.
+pub(crate) const INDEX_MASK: u32 = SPHERE - 1;
+
+/// One node of the 8-wide BVH.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Node8 {
+    /// Child boxes: `bounds[2a]` minima, `bounds[2a + 1]` maxima along axis `a`, lane `c`
+    /// child `c`.
+    pub(crate) bounds: [Row8; 6],
+    /// Inner child: node index. Leaf child: [`LEAF`] (and [`SPHERE`]) plus its index.
+    pub(crate) child: [u32; WIDTH],
+    /// Bit `c` set when child `c` is a leaf.
+    pub(crate) leaf_mask: u32,
+    /// Bit `c` set when slot `c` holds a child.
+    pub(crate) valid: u32,
+}
+
+/// Up to eight triangles of one leaf, coordinate by coordinate: `v[i][a]` holds coordinate
+/// `a` of vertex `i`, lane `l` triangle `l`. A leaf of fewer than eight triangles repeats
+/// its first triangle in the remaining lanes (finite values, the same result as lane 0),
+/// which [`TriPacket8::valid`] masks off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct TriPacket8 {
+    pub(crate) v: [[Row8; 3]; 3],
+    /// Scene primitive index of lane `l`.
+    pub(crate) prim: [u32; WIDTH],
+    /// Bit `l` set for the lanes that hold a triangle of the leaf.
+    pub(crate) valid: u32,
+    /// An axis `a` along which every vertex of the leaf has the same coordinate
+    /// [`Self::plane_c`] (the triangles lie in the plane `x_a = plane_c`), or [`NO_PLANE`].
+    pub(crate) plane_axis: u32,
+    pub(crate) plane_c: f32,
+}
+
+/// [`TriPacket8::plane_axis`] of a leaf not in one axis-aligned plane.
+pub(crate) const NO_PLANE: u32 = 3;
+
+impl TriPacket8 {
+    /// The packet of `tris` (one to eight `(primitive index, vertices)`).
+    pub(crate) fn new(tris: &[(u32, [Vec3; 3])]) -> Self {
+        assert!(
+            (1..=WIDTH).contains(&tris.len()),
+            "{} triangles",
+            tris.len()
+        );
+        let mut p = TriPacket8 {
+            v: [[Row8([0.0; WIDTH]); 3]; 3],
+            prim: [0; WIDTH],
+            valid: (1 << tris.len()) - 1,
+            plane_axis: NO_PLANE,
+            plane_c: 0.0,
+        };
+        let c = tris[0].1[0];
+        if let Some(a) = (0..3).find(|&a| tris.iter().all(|(_, v)| v.iter().all(|v| v[a] == c[a])))
+        {
+            p.plane_axis = a as u32;
+            p.plane_c = c[a];
+        }
+        for l in 0..WIDTH {
+            let (prim, v) = tris.get(l).unwrap_or(&tris[0]);
+            p.prim[l] = *prim;
+            for i in 0..3 {
+                for a in 0..3 {
+                    p.v[i][a].0[l] = v[i][a];
+                }
+            }
+        }
+        p
+    }
+
+    /// Vertices of lane `l`.
+    pub(crate) fn triangle(&self, l: usize) -> [Vec3; 3] {
+        let v = |i: usize| Vec3::new(self.v[i][0].0[l], self.v[i][1].0[l], self.v[i][2].0[l]);
+        [v(0), v(1), v(2)]
+    }
+}
+
+/// A sphere leaf: `(center, radius)` and its scene primitive index.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SphereLeaf {
+    pub(crate) center_radius: Vec4,
+    pub(crate) prim: u32,
+}
+
+/// The 8-wide BVH: nodes (root at 0), triangle packets and sphere leaves.
+#[derive(Clone, Debug)]
+pub(crate) struct Bvh8 {
+    pub(crate) nodes: Vec<Node8>,
+    pub(crate) packets: Vec<TriPacket8>,
+    pub(crate) spheres: Vec<SphereLeaf>,
+    /// Per axis, the largest magnitude of any box coordinate: bounds the rounding error of
+    /// the slab distances (see [`crate::intersect`]).
+    pub(crate) max_abs: Vec3A,
+}
+
+/// Cost of a node visit relative to one leaf-packet test (any number of triangles), for
+/// the SAH of the collapse.
+const NODE_COST: f32 = 1.0;
+/// Weight of the volume term of the visit probability relative to the area term (see
+/// [`Collapse::new`]).
+const VOLUME_WEIGHT: f32 = 1.0;
+/// Cost of a sphere test (double precision) relative to a packet test.
+const SPHERE_COST: f32 = 2.0;
+
+/// A node of the binary BVH with every leaf holding exactly one primitive (multi-primitive
+/// leaves of obvhs' tree are split, their box repeated).
+#[derive(Clone, Copy, Debug)]
+struct Bin {
+    aabb: Aabb,
+    /// Children (inner node) or `[primitive, u32::MAX]` (leaf).
+    kids: [u32; 2],
+}
+
+impl Bin {
+    fn is_leaf(&self) -> bool {
+        self.kids[1] == u32::MAX
+    }
+}
+
+/// Largest scene for which [`sweep_tree`] is tried (it sorts every node's primitives three
+/// times).
+const SWEEP_MAX: usize = 4096;
+
+/// A binary tree over the primitives of `bvh2` by top-down full-sweep SAH (every centroid
+/// split on every axis, cost `A(L) N(L) + A(R) N(R)`), from the primitive boxes of its
+/// leaves.
+fn sweep_tree(bvh2: &Bvh2) -> Vec<Bin> {
+    let mut prims: Vec<(Aabb, u32)> = Vec::new();
+    for n in &bvh2.nodes {
+        for k in 0..n.prim_count {
+            prims.push((n.aabb, bvh2.primitive_indices[(n.first_index + k) as usize]));
+        }
+    }
+    let mut out = vec![Bin {
+        aabb: Aabb::INVALID,
+        kids: [0, 0],
+    }];
+    let mut stack = vec![(0usize, prims.len(), 0usize)];
+    let mut areas = vec![0.0f32; prims.len() + 1];
+    while let Some((lo, hi, slot)) = stack.pop() {
+        let set = &mut prims[lo..hi];
+        let aabb = set.iter().fold(Aabb::INVALID, |a, p| a.union(&p.0));
+        if set.len() == 1 {
+            out[slot] = Bin {
+                aabb,
+                kids: [set[0].1, u32::MAX],
+            };
+            continue;
+        }
+        let n = set.len();
+        let mut best = (f32::INFINITY, 0usize, n / 2);
+        for axis in 0..3 {
+            set.sort_by(|a, b| a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis)));
+            let mut acc = Aabb::INVALID;
+            for i in 0..n {
+                acc = acc.union(&set[i].0);
+                areas[i + 1] = acc.half_area();
+            }
+            let mut acc = Aabb::INVALID;
+            for i in (1..n).rev() {
+                acc = acc.union(&set[i].0);
+                let cost = areas[i] * i as f32 + acc.half_area() * (n - i) as f32;
+                if cost < best.0 {
+                    best = (cost, axis, i);
+                }
+            }
+        }
+        let (_, axis, split) = best;
+        set.sort_by(|a, b| a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis)));
+        let l = out.len();
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out[slot] = Bin {
+            aabb,
+            kids: [l as u32, l as u32 + 1],
+        };
+        stack.push((lo, lo + split, l));
+        stack.push((lo + split, hi, l + 1));
+    }
+    out
+}
+
+/// Copies `bvh2` into one-primitive leaves; returns the nodes, root first.
+fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
+    let mut out = Vec::with_capacity(bvh2.nodes.len());
+    // (bvh2 node or primitive range, output slot)
+    enum Src {
+        Node(u32),
+        Prims(Aabb, u32, u32),
+    }
+    out.push(Bin {
+        aabb: bvh2.nodes[0].aabb,
+        kids: [0, 0],
+    });
+    let mut stack = vec![(Src::Node(0), 0usize)];
+    while let Some((src, slot)) = stack.pop() {
+        let (aabb, kids) = match src {
+            Src::Node(n) => {
+                let node = &bvh2.nodes[n as usize];
+                if node.prim_count == 0 {
+                    (
+                        node.aabb,
+                        [Src::Node(node.first_index), Src::Node(node.first_index + 1)],
+                    )
+                } else {
+                    let (first, count) = (node.first_index, node.prim_count);
+                    if count == 1 {
+                        out[slot] = Bin {
+                            aabb: node.aabb,
+                            kids: [bvh2.primitive_indices[first as usize], u32::MAX],
+                        };
+                        continue;
+                    }
+                    let half = count / 2;
+                    (
+                        node.aabb,
+                        [
+                            Src::Prims(node.aabb, first, half),
+                            Src::Prims(node.aabb, first + half, count - half),
+                        ],
+                    )
+                }
+            }
+            Src::Prims(aabb, first, count) => {
+                if count == 1 {
+                    out[slot] = Bin {
+                        aabb,
+                        kids: [bvh2.primitive_indices[first as usize], u32::MAX],
+                    };
+                    continue;
+                }
+                let half = count / 2;
+                (
+                    aabb,
+                    [
+                        Src::Prims(aabb, first, half),
+                        Src::Prims(aabb, first + half, count - half),
+                    ],
+                )
+            }
+        };
+        let l = out.len();
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out.push(Bin {
+            aabb: Aabb::INVALID,
+            kids: [0, 0],
+        });
+        out[slot] = Bin {
+            aabb,
+            kids: [l as u32, l as u32 + 1],
+        };
+        let [a, b] = kids;
+        stack.push((a, l));
+        stack.push((b, l + 1));
+    }
+    out
+}
+
+/// How a binary subtree is represented in the 8-wide BVH when it is given `i` child slots
+/// of a parent (`i` in 1..=8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Split {
+    /// One slot: a leaf with all of the subtree's primitives.
+    Leaf,
+    /// One slot: an 8-wide node whose children are the subtree's split into 8 slots.
+    Node,
+    /// `k` slots to the left binary child and `i - k` to the right one.
+    Distribute(u8),
+}
+
+/// The SAH-optimal collapse of a binary BVH into 8-wide nodes by dynamic programming over
+/// (binary node, number of child slots), the method of Ylitie, Karras and Laine 2017
+/// ("Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", sec. 4.1):
+/// `cost[n][i - 1]` is the least SAH cost of subtree `n` spread over at most `i` slots of
+/// its parent, with surface areas (plus a volume term, see [`Collapse::new`]) as visit
+/// probabilities. A leaf holds up to eight triangles (one packet test) or one sphere.
+struct Collapse {
+    /// Visit-probability weight of the root box.
+    root_weight: f32,
+    cost: Vec<[f32; WIDTH]>,
+    split: Vec<[Split; WIDTH]>,
+}
+
+impl Collapse {
+    fn new(bins: &[Bin], is_sphere: impl Fn(u32) -> bool) -> Self {
+        let root = bins[0].aabb;
+        let volume = |b: &Aabb| {
+            let e = (b.max - b.min).max(Vec3A::ZERO);
+            e.x * e.y * e.z
+        };
+        let (root_area, root_volume) = (root.half_area().max(0.0), volume(&root));
+        // Visit probability up to a common factor: surface area (the share of random lines
+        // that cross the box, Cauchy-Crofton) plus volume (the share of ray origins inside
+        // it, which test it whatever their direction). Area alone prices a leaf spanning a
+        // room as cheaply as the three walls in it, though every ray in the room tests it.
+        let weight = |b: &Aabb| {
+            let a = b.half_area().max(0.0);
+            if root_volume > 0.0 {
+                a + VOLUME_WEIGHT * root_area * volume(b) / root_volume
+            } else {
+                a
+            }
+        };
+        // Post-order with an explicit stack.
+        let mut order = Vec::with_capacity(bins.len());
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            order.push(n);
+            let b = &bins[n as usize];
+            if !b.is_leaf() {
+                stack.extend(b.kids);
+            }
+        }
+        let mut c = Collapse {
+            root_weight: weight(&root),
+            cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
+            split: vec![[Split::Leaf; WIDTH]; bins.len()],
+        };
+        // Triangles under each node, or `u32::MAX` if a sphere is among its primitives.
+        let mut tris = vec![0u32; bins.len()];
+        for &n in order.iter().rev() {
+            let n = n as usize;
+            let b = &bins[n];
+            let area = weight(&b.aabb);
+            if b.is_leaf() {
+                let sphere = is_sphere(b.kids[0]);
+                tris[n] = if sphere { u32::MAX } else { 1 };
+                c.cost[n] = [area * if sphere { SPHERE_COST } else { 1.0 }; WIDTH];
+                continue;
+            }
+            let [l, r] = b.kids.map(|k| k as usize);
+            tris[n] = tris[l].saturating_add(tris[r]);
+            // Spread over i >= 2 slots: the best split of the slots between the children,
+            // or fewer slots.
+            for i in 2..=WIDTH {
+                let (mut best, mut how) = (c.cost[n][i - 2], c.split[n][i - 2]);
+                for k in 1..i {
+                    let v = c.cost[l][k - 1] + c.cost[r][i - k - 1];
+                    if v < best {
+                        (best, how) = (v, Split::Distribute(k as u8));
+                    }
+                }
+                c.cost[n][i - 1] = best;
+                c.split[n][i - 1] = how;
+            }
+            // One slot: a leaf, or a node with all slots below it.
+            let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
+            let leaf_cost = if tris[n] as usize <= WIDTH {
+                area
+            } else {
+                f32::INFINITY
+            };
+            (c.cost[n][0], c.split[n][0]) = if leaf_cost <= node_cost {
+                (leaf_cost, Split::Leaf)
+            } else {
+                (node_cost, Split::Node)
+            };
+            // "At most i slots" also allows one slot.
+            for i in 2..=WIDTH {
+                if c.cost[n][0] < c.cost[n][i - 1] {
+                    c.cost[n][i - 1] = c.cost[n][0];
+                    c.split[n][i - 1] = c.split[n][0];
+                }
+            }
+        }
+        c
+    }
+
+    /// SAH cost of the 8-wide tree: the root node and everything below it.
+    fn root_cost(&self) -> f32 {
+        self.root_weight * NODE_COST + self.cost[0][WIDTH - 1]
+    }
+
+    /// The binary nodes that fill the slots of subtree `n` given `i` slots: each is either
+    /// a leaf (`true`) or an 8-wide node (`false`).
+    fn slots(&self, bins: &[Bin], n: u32, i: usize, out: &mut Vec<(u32, bool)>) {
+        match self.split[n as usize][i - 1] {
+            Split::Leaf => out.push((n, true)),
+            Split::Node => out.push((n, false)),
+            Split::Distribute(k) => {
+                let [l, r] = bins[n as usize].kids;
+                self.slots(bins, l, k as usize, out);
+                self.slots(bins, r, i - k as usize, out);
+            }
+        }
+    }
+}
+
+/// Inputs of the build that the recursion reads.
+struct Source<'a> {
+    bins: &'a [Bin],
+    collapse: &'a Collapse,
+    triangles: &'a [[Vec3; 3]],
+    spheres: &'a [Sphere],
+}
+
+impl Bvh8 {
+    /// Collapses `bvh2` (non-empty, over `triangles` as primitives `0..triangles.len()`
+    /// and `spheres` after them) into 8-wide nodes with the SAH-optimal assignment of
+    /// binary subtrees to child slots and leaves ([`Collapse`]).
+    pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
+        let tri_count = triangles.len() as u32;
+        let is_sphere = |p: u32| p >= tri_count;
+        // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
+        // to the lower SAH cost.
+        let bins = binary_tree(bvh2);
+        let mut collapse = Collapse::new(&bins, is_sphere);
+        let mut bins = bins;
+        if bvh2.primitive_indices.len() <= SWEEP_MAX {
+            let sweep = sweep_tree(bvh2);
+            let sweep_collapse = Collapse::new(&sweep, is_sphere);
+            if sweep_collapse.root_cost() < collapse.root_cost() {
+                (bins, collapse) = (sweep, sweep_collapse);
+            }
+        }
+        let root = &bvh2.nodes[0];
+        let mut out = Bvh8 {
+            nodes: Vec::new(),
+            packets: Vec::new(),
+            spheres: Vec::new(),
+            max_abs: root.aabb.min.abs().max(root.aabb.max.abs()),
+        };
+        let src = Source {
+            bins: &bins,
+            collapse: &collapse,
+            triangles,
+            spheres,
+        };
+        out.build_node(&src, 0);
+        out
+    }
+
+    /// Appends the 8-wide node whose children are the slots of binary subtree `n`, and the
+    /// nodes below it; returns its index.
+    fn build_node(&mut self, src: &Source, n: u32) -> u32 {
+        let (bins, collapse) = (src.bins, src.collapse);
+        let mut kids = Vec::with_capacity(WIDTH);
+        if bins[n as usize].is_leaf() || collapse.split[n as usize][0] == Split::Leaf {
+            // Only for the root of a tiny scene: one node with one leaf child.
+            kids.push((n, true));
+        } else {
+            let [l, r] = bins[n as usize].kids;
+            let cost = |k: usize| {
+                collapse.cost[l as usize][k - 1] + collapse.cost[r as usize][WIDTH - 1 - k]
+            };
+            let best = (1..WIDTH)
+                .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
+                .expect("non-empty range");
+            collapse.slots(bins, l, best, &mut kids);
+            collapse.slots(bins, r, WIDTH - best, &mut kids);
+        }
+        let index = self.nodes.len() as u32;
+        let empty_min = Row8([f32::INFINITY; WIDTH]);
+        let empty_max = Row8([f32::NEG_INFINITY; WIDTH]);
+        self.nodes.push(Node8 {
+            bounds: [
+                empty_min, empty_max, empty_min, empty_max, empty_min, empty_max,
+            ],
+            child: [0; WIDTH],
+            leaf_mask: 0,
+            valid: (1 << kids.len()) - 1,
+        });
+        for (c, &(k, is_leaf)) in kids.iter().enumerate() {
+            let aabb = bins[k as usize].aabb;
+            let node = &mut self.nodes[index as usize];
+            for a in 0..3 {
+                node.bounds[2 * a].0[c] = aabb.min[a];
+                node.bounds[2 * a + 1].0[c] = aabb.max[a];
+            }
+            let child = if is_leaf {
+                self.nodes[index as usize].leaf_mask |= 1 << c;
+                self.build_leaf(src, k)
+            } else {
+                self.build_node(src, k)
+            };
+            self.nodes[index as usize].child[c] = child;
+        }
+        index
+    }
+
+    /// Appends the leaf of binary subtree `n` (a sphere, or up to eight triangles) and
+    /// returns its child entry.
+    fn build_leaf(&mut self, src: &Source, n: u32) -> u32 {
+        let mut prims = Vec::with_capacity(WIDTH);
+        let mut stack = vec![n];
+        while let Some(k) = stack.pop() {
+            let b = &src.bins[k as usize];
+            if b.is_leaf() {
+                prims.push(b.kids[0]);
+            } else {
+                // Right first, so the primitives come out left to right.
+                stack.push(b.kids[1]);
+                stack.push(b.kids[0]);
+            }
+        }
+        let tri_count = src.triangles.len() as u32;
+        if prims[0] >= tri_count {
+            assert_eq!(prims.len(), 1, "sphere leaves hold one sphere");
+            let s = src.spheres[(prims[0] - tri_count) as usize];
+            let index = self.spheres.len() as u32;
+            self.spheres.push(SphereLeaf {
+                center_radius: s.center.extend(s.radius),
+                prim: prims[0],
+            });
+            LEAF | SPHERE | index
+        } else {
+            let tris: Vec<(u32, [Vec3; 3])> = prims
+                .iter()
+                .map(|&p| (p, src.triangles[p as usize]))
+                .collect();
+            let index = self.packets.len() as u32;
+            assert!(index <= INDEX_MASK, "too many leaves");
+            self.packets.push(TriPacket8::new(&tris));
+            LEAF | index
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obvhs::bvh2::node::Bvh2Node;
+
+    fn leaf_node(aabb: Aabb, first: u32, count: u32) -> Bvh2Node {
+        Bvh2Node {
+            aabb,
+            prim_count: count,
+            first_index: first,
+            ..Default::default()
+        }
+    }
+
+    /// obvhs' builder makes one-primitive leaves, but a binary tree with larger leaves (13
+    /// triangles; two triangles and a sphere) still collapses to a tree holding every
+    /// primitive once, triangles in packets and the sphere alone, inside its child box.
+    #[test]
+    fn multi_primitive_leaves_are_split() {
+        let tris: Vec<[Vec3; 3]> = (0..15)
+            .map(|i| {
+                let c = Vec3::new(i as f32, 0.0, 0.0);
+                [c, c + Vec3::X * 0.5, c + Vec3::Y]
+            })
+            .collect();
+        let spheres = vec![Sphere {
+            center: Vec3::new(20.0, 0.0, 0.0),
+            radius: 0.5,
+        }];
+        let bounds = |prims: &[u32]| {
+            let mut b = Aabb::INVALID;
+            for &p in prims {
+                if p < 15 {
+                    for v in tris[p as usize] {
+                        b.extend(v.into());
+                    }
+                } else {
+                    b.extend(Vec3A::new(19.5, -0.5, -0.5));
+                    b.extend(Vec3A::new(20.5, 0.5, 0.5));
+                }
+            }
+            b
+        };
+        let left: Vec<u32> = (0..13).collect();
+        let right = [13, 14, 15];
+        let all: Vec<u32> = (0..16).collect();
+        let bvh2 = Bvh2 {
+            nodes: vec![
+                Bvh2Node {
+                    aabb: bounds(&all),
+                    prim_count: 0,
+                    first_index: 1,
+                    ..Default::default()
+                },
+                leaf_node(bounds(&left), 0, 13),
+                leaf_node(bounds(&right), 13, 3),
+            ],
+            primitive_indices: all.clone(),
+            ..Default::default()
+        };
+        let bvh = Bvh8::from_bvh2(&bvh2, &tris, &spheres);
+        let mut seen = [0u32; 16];
+        for node in &bvh.nodes {
+            for c in 0..WIDTH {
+                let child = node.child[c];
+                if node.valid & (1 << c) == 0 || child & LEAF == 0 {
+                    continue;
+                }
+                let b = |r: usize| node.bounds[r].0[c];
+                let (lo, hi) = (Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)));
+                let index = (child & INDEX_MASK) as usize;
+                let prims: Vec<u32> = if child & SPHERE != 0 {
+                    vec![bvh.spheres[index].prim]
+                } else {
+                    let p = &bvh.packets[index];
+                    (0..p.valid.count_ones() as usize)
+                        .map(|l| p.prim[l])
+                        .collect()
+                };
+                let pb = bounds(&prims);
+                assert!(Vec3::from(pb.min).cmpge(lo).all() && Vec3::from(pb.max).cmple(hi).all());
+                for p in prims {
+                    seen[p as usize] += 1;
+                }
+            }
+        }
+        assert_eq!(seen, [1; 16]);
+        assert_eq!(bvh.spheres.len(), 1);
+    }
+}

@@ -1,0 +1,336 @@
+//! Eight f32 lanes for the wide-BVH kernels of [`crate::intersect`]: one lane per child box
+//! of a node or per triangle of a leaf packet.
+//!
+//! The kernels are written once, generic over [`Simd`], and instantiated twice: with
+//! [`Portable`] (two glam `Vec4`, i.e. SSE on x86-64 and scalar code elsewhere) and, on
+//! x86-64, with [`Avx2`] (one 256-bit register per value). An [`Avx2`] token can only be
+//! obtained from [`Avx2::detect`], which checks that the CPU has AVX2 and FMA, so every
+//! operation on [`Avx2`] lanes runs on a CPU that has those instructions. The AVX2
+//! instantiation is compiled inside a `#[target_feature(enable = "avx2,fma")]` function
+//! (see [`crate::intersect`]), into which these `#[inline(always)]` wrappers and the
+//! intrinsics they call are inlined.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
+
+use glam::{BVec4A, Vec4};
+
+/// Eight f32 in memory, aligned for one 256-bit load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct Row8(pub(crate) [f32; 8]);
+
+/// A lane-wise comparison result.
+pub(crate) trait Mask8: Copy + BitAnd<Output = Self> + BitOr<Output = Self> {
+    /// Bit `l` set where lane `l` is true.
+    fn bits(self) -> u32;
+}
+
+/// Eight f32 lanes.
+pub(crate) trait Lanes8:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    /// The comparison result.
+    type Mask: Mask8;
+    /// Lane-wise minimum (either operand where one is NaN).
+    fn min(self, o: Self) -> Self;
+    /// Lane-wise maximum (either operand where one is NaN).
+    fn max(self, o: Self) -> Self;
+    /// Lane-wise magnitude.
+    fn abs(self) -> Self;
+    /// `self * a + b`, with one rounding where the CPU has FMA and two otherwise. Only for
+    /// the node test, whose error bound holds either way; the triangle test never fuses,
+    /// so that both kernels compute the same bits.
+    fn mul_add(self, a: Self, b: Self) -> Self;
+    /// `self <= o` (false for NaN).
+    fn le(self, o: Self) -> Self::Mask;
+    /// `self < o` (false for NaN).
+    fn lt(self, o: Self) -> Self::Mask;
+    /// `self > o` (false for NaN).
+    fn gt(self, o: Self) -> Self::Mask;
+    /// `self == o` (false for NaN; `-0 == 0`).
+    fn eq(self, o: Self) -> Self::Mask;
+    /// Bit `l` set where lane `l` has its sign bit set.
+    fn sign_bits(self) -> u32;
+    /// The sign bits of `self`, `b` and `c` (as [`Self::sign_bits`]) combined: set in all
+    /// three, and set in any.
+    #[inline(always)]
+    fn sign_bits_all_any(self, b: Self, c: Self) -> (u32, u32) {
+        let (x, y, z) = (self.sign_bits(), b.sign_bits(), c.sign_bits());
+        (x & y & z, x | y | z)
+    }
+    /// The lanes in memory order.
+    fn to_array(self) -> [f32; 8];
+}
+
+/// An instruction set the kernels run on: creates lanes.
+pub(crate) trait Simd: Copy {
+    /// The lane type.
+    type F: Lanes8;
+    /// All lanes `x`.
+    fn splat(self, x: f32) -> Self::F;
+    /// The eight values of `r`.
+    fn load(self, r: &Row8) -> Self::F;
+}
+
+/// Portable lanes: two glam `Vec4`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable;
+
+/// [`Portable`]'s lanes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct P8([Vec4; 2]);
+
+/// [`Portable`]'s comparison result.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PMask([BVec4A; 2]);
+
+impl Simd for Portable {
+    type F = P8;
+    #[inline(always)]
+    fn splat(self, x: f32) -> P8 {
+        P8([Vec4::splat(x); 2])
+    }
+    #[inline(always)]
+    fn load(self, r: &Row8) -> P8 {
+        let [a, b, c, d, e, f, g, h] = r.0;
+        P8([Vec4::new(a, b, c, d), Vec4::new(e, f, g, h)])
+    }
+}
+
+macro_rules! portable_binop {
+    ($tr:ident, $f:ident) => {
+        impl $tr for P8 {
+            type Output = P8;
+            #[inline(always)]
+            fn $f(self, o: P8) -> P8 {
+                P8([self.0[0].$f(o.0[0]), self.0[1].$f(o.0[1])])
+            }
+        }
+    };
+}
+portable_binop!(Add, add);
+portable_binop!(Sub, sub);
+portable_binop!(Mul, mul);
+portable_binop!(Div, div);
+
+impl BitAnd for PMask {
+    type Output = PMask;
+    #[inline(always)]
+    fn bitand(self, o: PMask) -> PMask {
+        PMask([self.0[0] & o.0[0], self.0[1] & o.0[1]])
+    }
+}
+
+impl BitOr for PMask {
+    type Output = PMask;
+    #[inline(always)]
+    fn bitor(self, o: PMask) -> PMask {
+        PMask([self.0[0] | o.0[0], self.0[1] | o.0[1]])
+    }
+}
+
+impl Mask8 for PMask {
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.0[0].bitmask() | (self.0[1].bitmask() << 4)
+    }
+}
+
+impl Lanes8 for P8 {
+    type Mask = PMask;
+    #[inline(always)]
+    fn min(self, o: P8) -> P8 {
+        P8([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
+    }
+    #[inline(always)]
+    fn max(self, o: P8) -> P8 {
+        P8([self.0[0].max(o.0[0]), self.0[1].max(o.0[1])])
+    }
+    #[inline(always)]
+    fn abs(self) -> P8 {
+        P8([self.0[0].abs(), self.0[1].abs()])
+    }
+    #[inline(always)]
+    fn mul_add(self, a: P8, b: P8) -> P8 {
+        self * a + b
+    }
+    #[inline(always)]
+    fn le(self, o: P8) -> PMask {
+        PMask([self.0[0].cmple(o.0[0]), self.0[1].cmple(o.0[1])])
+    }
+    #[inline(always)]
+    fn lt(self, o: P8) -> PMask {
+        PMask([self.0[0].cmplt(o.0[0]), self.0[1].cmplt(o.0[1])])
+    }
+    #[inline(always)]
+    fn gt(self, o: P8) -> PMask {
+        PMask([self.0[0].cmpgt(o.0[0]), self.0[1].cmpgt(o.0[1])])
+    }
+    #[inline(always)]
+    fn eq(self, o: P8) -> PMask {
+        PMask([self.0[0].cmpeq(o.0[0]), self.0[1].cmpeq(o.0[1])])
+    }
+    #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        self.0[0].is_negative_bitmask() | (self.0[1].is_negative_bitmask() << 4)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 8] {
+        let (a, b) = (self.0[0].to_array(), self.0[1].to_array());
+        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx2::Avx2;
+
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "AVX2 intrinsics, only reachable through an `Avx2` token (CPU support checked)"
+)]
+mod avx2 {
+    use std::arch::x86_64::*;
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
+
+    use super::{Lanes8, Mask8, Row8, Simd};
+
+    /// Proof that the CPU runs AVX2 and FMA: the private field keeps it from being made
+    /// anywhere but [`Avx2::detect`].
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub(crate) struct Avx2(());
+
+    impl Avx2 {
+        /// The token, if this CPU has AVX2 and FMA.
+        pub(crate) fn detect() -> Option<Self> {
+            (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
+                .then_some(Avx2(()))
+        }
+    }
+
+    /// [`Avx2`]'s lanes. Values exist only where an [`Avx2`] token does (they are made by
+    /// its [`Simd`] methods and by operations on other values), so the CPU has AVX2 and FMA
+    /// wherever one is used.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct A8(__m256);
+
+    /// [`Avx2`]'s comparison result (all-ones or all-zeros lanes), made like [`A8`].
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct AMask(__m256);
+
+    /// Calls an AVX/AVX2/FMA intrinsic.
+    macro_rules! avx {
+        ($e:expr) => {
+            // SAFETY: only reached through an `A8`/`AMask` value or an `Avx2` token, which
+            // exist only after `Avx2::detect` found AVX2 and FMA on this CPU.
+            unsafe { $e }
+        };
+    }
+
+    impl Simd for Avx2 {
+        type F = A8;
+        #[inline(always)]
+        fn splat(self, x: f32) -> A8 {
+            A8(avx!(_mm256_set1_ps(x)))
+        }
+        #[inline(always)]
+        fn load(self, r: &Row8) -> A8 {
+            // SAFETY: `r` is a reference to 32 readable bytes aligned to 32 (`Row8`), and
+            // the token guarantees AVX.
+            A8(unsafe { _mm256_load_ps(r.0.as_ptr()) })
+        }
+    }
+
+    macro_rules! avx_binop {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for A8 {
+                type Output = A8;
+                #[inline(always)]
+                fn $f(self, o: A8) -> A8 {
+                    A8(avx!($intr(self.0, o.0)))
+                }
+            }
+        };
+    }
+    avx_binop!(Add, add, _mm256_add_ps);
+    avx_binop!(Sub, sub, _mm256_sub_ps);
+    avx_binop!(Mul, mul, _mm256_mul_ps);
+    avx_binop!(Div, div, _mm256_div_ps);
+
+    impl BitAnd for AMask {
+        type Output = AMask;
+        #[inline(always)]
+        fn bitand(self, o: AMask) -> AMask {
+            AMask(avx!(_mm256_and_ps(self.0, o.0)))
+        }
+    }
+
+    impl BitOr for AMask {
+        type Output = AMask;
+        #[inline(always)]
+        fn bitor(self, o: AMask) -> AMask {
+            AMask(avx!(_mm256_or_ps(self.0, o.0)))
+        }
+    }
+
+    impl Mask8 for AMask {
+        #[inline(always)]
+        fn bits(self) -> u32 {
+            avx!(_mm256_movemask_ps(self.0)) as u32
+        }
+    }
+
+    impl Lanes8 for A8 {
+        type Mask = AMask;
+        #[inline(always)]
+        fn min(self, o: A8) -> A8 {
+            A8(avx!(_mm256_min_ps(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn max(self, o: A8) -> A8 {
+            A8(avx!(_mm256_max_ps(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn abs(self) -> A8 {
+            A8(avx!(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)))
+        }
+        #[inline(always)]
+        fn mul_add(self, a: A8, b: A8) -> A8 {
+            A8(avx!(_mm256_fmadd_ps(self.0, a.0, b.0)))
+        }
+        #[inline(always)]
+        fn le(self, o: A8) -> AMask {
+            AMask(avx!(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn lt(self, o: A8) -> AMask {
+            AMask(avx!(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn gt(self, o: A8) -> AMask {
+            AMask(avx!(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn eq(self, o: A8) -> AMask {
+            AMask(avx!(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0)))
+        }
+        #[inline(always)]
+        fn sign_bits(self) -> u32 {
+            avx!(_mm256_movemask_ps(self.0)) as u32
+        }
+        #[inline(always)]
+        fn sign_bits_all_any(self, b: A8, c: A8) -> (u32, u32) {
+            // Bitwise and/or of the lanes first: one mask extraction each.
+            let all = avx!(_mm256_and_ps(_mm256_and_ps(self.0, b.0), c.0));
+            let any = avx!(_mm256_or_ps(_mm256_or_ps(self.0, b.0), c.0));
+            (
+                avx!(_mm256_movemask_ps(all)) as u32,
+                avx!(_mm256_movemask_ps(any)) as u32,
+            )
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f32; 8] {
+            bytemuck::cast(self.0)
+        }
+    }
+}
