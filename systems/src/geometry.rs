@@ -7,7 +7,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{DVec3, Vec2, Vec3, Vec3A};
+use glam::{DVec3, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::{
     aabb::Aabb,
     bvh2::reinsertion::ReinsertionOptimizer,

@@ -334,20 +334,24 @@ fn grid_cube(n: usize) -> Vec<[Vec3; 3]> {
     tris
 }
 
+/// A uniformly distributed point of triangle `[v0, v1, v2]`.
+fn point_on(rng: &mut Rng, [v0, v1, v2]: [Vec3; 3]) -> Vec3 {
+    let (a, b) = (rng.f32(), rng.f32());
+    let (a, b) = if a + b > 1.0 {
+        (1.0 - a, 1.0 - b)
+    } else {
+        (a, b)
+    };
+    v0 + (v1 - v0) * a + (v2 - v0) * b
+}
+
 fn random_rays(rng: &mut Rng, geom: &SceneGeometry, n: usize, batch: &mut Batch) {
     for k in 0..n {
         let o = rng.vec_in(-2.5, 2.5);
         let d = if k % 2 == 0 && geom.num_triangles() > 0 {
             // Aim at a random point of a random triangle so many rays hit.
-            let [v0, v1, v2] = geom.triangle(rng.usize(geom.num_triangles()));
-            let (a, b) = (rng.f32(), rng.f32());
-            let (a, b) = if a + b > 1.0 {
-                (1.0 - a, 1.0 - b)
-            } else {
-                (a, b)
-            };
-            let target = v0 + (v1 - v0) * a + (v2 - v0) * b;
-            (target - o).normalize()
+            let tri = geom.triangle(rng.usize(geom.num_triangles()));
+            (point_on(rng, tri) - o).normalize()
         } else {
             rng.unit()
         };
@@ -1341,4 +1345,62 @@ fn packed_triangle_test_matches_matrix_form_bit_for_bit() {
         hits > 4000 && zero_edges > 500,
         "{hits} hits, {zero_edges} zero edge functions"
     );
+}
+
+/// Triangles of a committed OBJ file (`v` and `f` lines; polygons as fans).
+fn load_obj(path: &str) -> Vec<[Vec3; 3]> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let (mut v, mut tris) = (Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f32> = it.map(|x| x.parse().unwrap()).collect();
+                v.push(Vec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let idx: Vec<usize> = it
+                    .map(|x| x.split('/').next().unwrap().parse::<usize>().unwrap() - 1)
+                    .collect();
+                for k in 1..idx.len() - 1 {
+                    tris.push([v[idx[0]], v[idx[k]], v[idx[k + 1]]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    tris
+}
+
+/// The overlapping glass and liquid meshes of scenes/liquid-in-glass.toml (many flat
+/// axis-aligned leaves, thin walls, overlapping shells), with rays made as the renderer
+/// makes them: spawned just off a surface point in a random direction, and pass-through
+/// restarts on the surface with `tmin > 0`.
+#[test]
+fn overlapping_shells_match_brute_force() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/meshes/");
+    let mut tris = load_obj(&format!("{root}tumbler.obj"));
+    tris.extend(load_obj(&format!("{root}liquid.obj")));
+    // The scene's 20 x 20 floor quad at y = 0 (both triangles).
+    let (c, e1, e2) = (Vec3::new(-10.0, 0.0, -10.0), Vec3::Z * 20.0, Vec3::X * 20.0);
+    tris.push([c, c + e1, c + e1 + e2]);
+    tris.push([c, c + e1 + e2, c + e2]);
+    let geom = SceneGeometry::build(tris, Vec::new());
+    let mut rng = Rng(11);
+    let mut batch = Batch::default();
+    for k in 0..20000 {
+        let [v0, v1, v2] = geom.triangle(rng.usize(geom.num_triangles()));
+        let p = point_on(&mut rng, [v0, v1, v2]);
+        let ng = (v1 - v0).cross(v2 - v0).normalize();
+        let d = rng.unit();
+        let side = if d.dot(ng) >= 0.0 { ng } else { -ng };
+        let offset = 5e-7 * p.abs().max_element() + 1e-9;
+        match k % 3 {
+            0 => batch.push(p + side * offset, d, 0.0, f32::INFINITY),
+            1 => batch.push(p, d, offset / d.dot(ng).abs().max(1e-3), f32::INFINITY),
+            _ => batch.push(p + side * offset, d, 0.0, rng.range(0.0, 2.0)),
+        }
+    }
+    let hits = check_against_brute_force(&geom, &batch);
+    assert!(hits > 10000, "{hits} hits");
 }
