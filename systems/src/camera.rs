@@ -4,7 +4,7 @@
 //! `image up = cross(right, forward)`. The perspective field of view is the full *horizontal*
 //! angle. Samples are uniform over each pixel's square (a box pixel filter).
 
-use crate::sampler::{sample_2d, PathSampler};
+use crate::sampler::{first_2d_column, sample_2d, PathSampler};
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, VolumeStack};
 
@@ -187,11 +187,14 @@ pub fn push_camera_rays(
     let n = pixel.len();
     let base = rays.len();
     let end = base + n;
+    // The jitter of every sample first, eight per call of the column sampler.
+    let mut jitter = vec![Vec2::ZERO; n];
+    first_2d_column(&seed[..n], &sample[..n], &mut jitter);
+    let width = camera.width;
     let films = pixel
         .iter()
-        .zip(&sample[..n])
-        .zip(&seed[..n])
-        .map(|((&p, &s), &seed)| film_position(camera.width, p, s, seed));
+        .zip(&jitter)
+        .map(|(&p, &j)| Vec2::new((p % width) as f32 + j.x, (p / width) as f32 + j.y));
     match camera.projection {
         Projection::Perspective { .. } => {
             rays.origin.resize(end, camera.from);

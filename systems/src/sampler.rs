@@ -276,6 +276,18 @@ fn for_lane_groups<T: Copy>(
 pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
     assert_eq!(samplers.len(), out.len(), "next_4d_column: column lengths");
     let table = sobol_byte_table();
+    #[cfg(target_arch = "x86_64")]
+    if avx2::detected() {
+        // SAFETY: `avx2::detected` found AVX2 on this CPU.
+        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+        unsafe {
+            avx2::column_4d(table, samplers, out)
+        };
+        for s in samplers.iter_mut() {
+            s.dimension += 4;
+        }
+        return;
+    }
     for_lane_groups(samplers, out, table, kernel_4d, |&s| {
         let mut s = s;
         s.next_4d()
@@ -296,6 +308,18 @@ pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
 pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
     assert_eq!(samplers.len(), out.len(), "next_2d_column: column lengths");
     let table = sobol_byte_table();
+    #[cfg(target_arch = "x86_64")]
+    if avx2::detected() {
+        // SAFETY: `avx2::detected` found AVX2 on this CPU.
+        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+        unsafe {
+            avx2::column_2d(table, samplers, out)
+        };
+        for s in samplers.iter_mut() {
+            s.dimension += 2;
+        }
+        return;
+    }
     for_lane_groups(samplers, out, table, kernel_2d, |&s| {
         let mut s = s;
         s.next_2d()
@@ -305,9 +329,444 @@ pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
     }
 }
 
+/// Dimensions 0 and 1 (set 0) of `(seed[i], sample[i])` into `out[i]`: exactly
+/// `sample_2d(seed[i], sample[i], 0)` (the camera jitter), eight points per AVX2 kernel call
+/// where the CPU has AVX2.
+///
+/// # Panics
+/// When the three columns differ in length.
+pub fn first_2d_column(seed: &[u32], sample: &[u32], out: &mut [Vec2]) {
+    assert_eq!(seed.len(), out.len(), "first_2d_column: column lengths");
+    assert_eq!(sample.len(), out.len(), "first_2d_column: column lengths");
+    #[cfg(target_arch = "x86_64")]
+    if avx2::detected() {
+        // SAFETY: `avx2::detected` found AVX2 on this CPU.
+        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+        unsafe {
+            avx2::first_2d(sobol_byte_table(), seed, sample, out)
+        };
+        return;
+    }
+    for ((o, &seed), &sample) in out.iter_mut().zip(seed).zip(sample) {
+        *o = sample_2d(seed, sample, 0);
+    }
+}
+
+/// The column kernels on eight points per call with AVX2 (one 256-bit vector holds two
+/// points' four dimensions or four points' two dimensions), including the set seeds'
+/// SplitMix64 (AVX2's `vpmuludq` gives the 32x32->64-bit products a 64-bit multiply is made
+/// of). Same arithmetic as [`sample_4d`], so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "AVX2 intrinsics: loads and stores of references' memory, and the calls into \
+              `#[target_feature]` functions, reached only after `detected`"
+)]
+mod avx2 {
+    use super::{PathSampler, SobolTable, DIM_SALT, GOLDEN_GAMMA, MAX_SPP};
+    use glam::Vec2;
+    use std::arch::x86_64::*;
+
+    /// Points per kernel call.
+    const N: usize = 8;
+
+    /// Whether this CPU has AVX2 (cached by the standard library after the first call).
+    #[inline]
+    pub(super) fn detected() -> bool {
+        is_x86_feature_detected!("avx2")
+    }
+
+    /// All lanes `x`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn splat(x: u32) -> __m256i {
+        _mm256_set1_epi32(x as i32)
+    }
+
+    /// `sobol_burley::parts::hash_int4` on eight lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn hash(mut n: __m256i) -> __m256i {
+        n = _mm256_xor_si256(n, splat(0xe6fe_3beb));
+        n = _mm256_xor_si256(n, _mm256_srli_epi32::<16>(n));
+        n = _mm256_mullo_epi32(n, splat(0x7feb_352d));
+        n = _mm256_xor_si256(n, _mm256_srli_epi32::<15>(n));
+        n = _mm256_mullo_epi32(n, splat(0x846c_a68b));
+        _mm256_xor_si256(n, _mm256_srli_epi32::<16>(n))
+    }
+
+    /// `sobol_burley::parts::owen_scramble_int4_rev` on eight lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn owen(mut n: __m256i, scramble: __m256i) -> __m256i {
+        n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, splat(0x3d20_adea)));
+        n = _mm256_add_epi32(n, scramble);
+        let m = _mm256_or_si256(_mm256_srli_epi32::<16>(scramble), splat(1));
+        n = _mm256_mullo_epi32(n, m);
+        n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, splat(0x0552_6c56)));
+        _mm256_xor_si256(n, _mm256_mullo_epi32(n, splat(0x53a2_2864)))
+    }
+
+    /// `u32::reverse_bits` on eight lanes: each byte's two nibbles through a 16-entry
+    /// table (`vpshufb`), then the bytes of each lane in reverse order.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn reverse_bits(n: __m256i) -> __m256i {
+        const REV: [i8; 16] = [0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15];
+        const fn shifted() -> [i8; 16] {
+            let mut t = [0i8; 16];
+            let mut i = 0;
+            while i < 16 {
+                t[i] = ((REV[i] as u8) << 4) as i8;
+                i += 1;
+            }
+            t
+        }
+        const REV_HI: [i8; 16] = shifted();
+        let rev = _mm256_broadcastsi128_si256(_mm_setr_epi8(
+            REV[0], REV[1], REV[2], REV[3], REV[4], REV[5], REV[6], REV[7], REV[8], REV[9],
+            REV[10], REV[11], REV[12], REV[13], REV[14], REV[15],
+        ));
+        let rev_hi = _mm256_broadcastsi128_si256(_mm_setr_epi8(
+            REV_HI[0], REV_HI[1], REV_HI[2], REV_HI[3], REV_HI[4], REV_HI[5], REV_HI[6], REV_HI[7],
+            REV_HI[8], REV_HI[9], REV_HI[10], REV_HI[11], REV_HI[12], REV_HI[13], REV_HI[14],
+            REV_HI[15],
+        ));
+        let nibble = _mm256_set1_epi8(0x0f);
+        let lo = _mm256_and_si256(n, nibble);
+        let hi = _mm256_and_si256(_mm256_srli_epi16::<4>(n), nibble);
+        // Reversed byte: the low nibble reversed into the high half, and vice versa.
+        let bytes = _mm256_or_si256(
+            _mm256_shuffle_epi8(rev_hi, lo),
+            _mm256_shuffle_epi8(rev, hi),
+        );
+        let order = _mm256_setr_epi8(
+            3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10,
+            9, 8, 15, 14, 13, 12,
+        );
+        _mm256_shuffle_epi8(bytes, order)
+    }
+
+    /// `Int4::to_f32_norm` on eight lanes: the top 23 bits as a float in [0, 1).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn to_f32_norm(n: __m256i) -> __m256 {
+        let one_bits = _mm256_or_si256(_mm256_srli_epi32::<9>(n), splat(0x3f80_0000));
+        _mm256_sub_ps(_mm256_castsi256_ps(one_bits), _mm256_set1_ps(1.0))
+    }
+
+    /// Wrapping `a * c` on four u64 lanes from 32x32->64-bit products (the `hi * hi` term
+    /// falls out of the low 64 bits).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn mul64(a: __m256i, c: u64) -> __m256i {
+        let c_lo = _mm256_set1_epi64x((c & 0xffff_ffff) as i64);
+        let c_hi = _mm256_set1_epi64x((c >> 32) as i64);
+        let cross = _mm256_add_epi64(
+            _mm256_mul_epu32(_mm256_srli_epi64::<32>(a), c_lo),
+            _mm256_mul_epu32(a, c_hi),
+        );
+        _mm256_add_epi64(_mm256_mul_epu32(a, c_lo), _mm256_slli_epi64::<32>(cross))
+    }
+
+    /// The low 32 bits of `pixel_seed(seed, set)` on four u64 lanes holding u32 values.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn pixel_seed4(seed: __m256i, set: __m256i) -> __m256i {
+        // set < 2^32: its product with the constant needs no high-half term.
+        let k: u64 = 0xD1B5_4A32_D192_ED03;
+        let set_k = _mm256_add_epi64(
+            _mm256_mul_epu32(set, _mm256_set1_epi64x((k & 0xffff_ffff) as i64)),
+            _mm256_slli_epi64::<32>(_mm256_mul_epu32(set, _mm256_set1_epi64x((k >> 32) as i64))),
+        );
+        let mut z = _mm256_add_epi64(
+            _mm256_add_epi64(seed, _mm256_set1_epi64x(GOLDEN_GAMMA as i64)),
+            set_k,
+        );
+        // mix64 (SplitMix64's output function).
+        z = mul64(
+            _mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)),
+            0xBF58_476D_1CE4_E5B9,
+        );
+        z = mul64(
+            _mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)),
+            0x94D0_49BB_1331_11EB,
+        );
+        _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
+    }
+
+    /// `set_seed(seed, set)` on eight lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn set_seeds(seed: __m256i, set: __m256i) -> __m256i {
+        let widen = |v: __m128i| _mm256_cvtepu32_epi64(v);
+        let (s_lo, s_hi) = (
+            _mm256_castsi256_si128(seed),
+            _mm256_extracti128_si256::<1>(seed),
+        );
+        let (t_lo, t_hi) = (
+            _mm256_castsi256_si128(set),
+            _mm256_extracti128_si256::<1>(set),
+        );
+        let a = pixel_seed4(widen(s_lo), widen(t_lo));
+        let b = pixel_seed4(widen(s_hi), widen(t_hi));
+        // The low halves of a's and b's u64 lanes, back in point order.
+        let packed = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
+            _mm256_castsi256_ps(a),
+            _mm256_castsi256_ps(b),
+        ));
+        let mixed = _mm256_permute4x64_epi64::<0b11_01_10_00>(packed);
+        let first = _mm256_cmpeq_epi32(set, _mm256_setzero_si256());
+        _mm256_blendv_epi8(mixed, seed, first)
+    }
+
+    /// Field `K` (0 seed, 1 sample, 2 dimension) of eight `repr(C)` samplers held in three
+    /// vectors: lane `i` is u32 number `3 i + K`, which lies in vector `(3 i + K) / 8` at
+    /// position `(3 i + K) % 8`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn field<const K: i32>(v: [__m256i; 3]) -> __m256i {
+        let idx = _mm256_setr_epi32(K, 3 + K, 6 + K, 9 + K, 12 + K, 15 + K, 18 + K, 21 + K);
+        let idx = _mm256_and_si256(idx, splat(7));
+        let p = v.map(|v| _mm256_permutevar8x32_epi32(v, idx));
+        // Lanes from the second and third vectors.
+        let (in_b, in_c) = match K {
+            0 => (0b0011_1000, 0b1100_0000),
+            1 => (0b0001_1000, 0b1110_0000),
+            _ => (0b0001_1100, 0b1110_0000),
+        };
+        let pick = |mask: i32| {
+            let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            _mm256_cmpeq_epi32(_mm256_and_si256(bits, splat(mask as u32)), bits)
+        };
+        let ab = _mm256_blendv_epi8(p[0], p[1], pick(in_b));
+        _mm256_blendv_epi8(ab, p[2], pick(in_c))
+    }
+
+    /// Per-point prefix of eight points: the shuffled reversed sample index (its top two
+    /// bytes address the Sobol tables) and the set seed times the scramble multiplier.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn prefix(seed: __m256i, sample: __m256i) -> ([u32; N], __m256i) {
+        let index = _mm256_and_si256(sample, splat(MAX_SPP - 1));
+        let index_rev = owen(
+            reverse_bits(index),
+            hash(_mm256_xor_si256(seed, splat(0x79c6_8e4a))),
+        );
+        let mut idx = [0u32; N];
+        // SAFETY: `idx` is 32 writable bytes.
+        unsafe { _mm256_storeu_si256(idx.as_mut_ptr().cast(), index_rev) };
+        (idx, _mm256_mullo_epi32(seed, splat(0x9c8f_2d3b)))
+    }
+
+    /// The Sobol table rows of a reversed shuffled index.
+    #[inline(always)]
+    fn rows(table: &SobolTable, index_rev: u32) -> (&[u32; 4], &[u32; 4]) {
+        (
+            &table[0][(index_rev >> 24) as usize],
+            &table[1][((index_rev >> 16) & 0xff) as usize],
+        )
+    }
+
+    /// Scramble, reverse and convert eight (point, dimension) lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn finish(sobol: __m256i, seed_mul: __m256i, salt: __m256i) -> __m256 {
+        let scramble = hash(_mm256_xor_si256(seed_mul, salt));
+        to_f32_norm(reverse_bits(owen(sobol, scramble)))
+    }
+
+    /// Four dimensions of eight points whose set seeds and samples are given.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn kernel_4d(table: &SobolTable, seed: __m256i, sample: __m256i, out: &mut [[f32; 4]; N]) {
+        let (idx, seed_mul) = prefix(seed, sample);
+        let s = DIM_SALT;
+        let salt = _mm256_setr_epi32(
+            s[0] as i32,
+            s[1] as i32,
+            s[2] as i32,
+            s[3] as i32,
+            s[0] as i32,
+            s[1] as i32,
+            s[2] as i32,
+            s[3] as i32,
+        );
+        for (p, pair) in out.as_chunks_mut::<2>().0.iter_mut().enumerate() {
+            let (a, b) = (2 * p as i32, 2 * p as i32 + 1);
+            let (ha, la) = rows(table, idx[2 * p]);
+            let (hb, lb) = rows(table, idx[2 * p + 1]);
+            // SAFETY: every row is 16 readable bytes; `pair` is 32 writable bytes.
+            unsafe {
+                let h = _mm256_loadu2_m128i(hb.as_ptr().cast(), ha.as_ptr().cast());
+                let l = _mm256_loadu2_m128i(lb.as_ptr().cast(), la.as_ptr().cast());
+                let m = _mm256_permutevar8x32_epi32(
+                    seed_mul,
+                    _mm256_setr_epi32(a, a, a, a, b, b, b, b),
+                );
+                let r = finish(_mm256_xor_si256(h, l), m, salt);
+                _mm256_storeu_ps(pair.as_mut_ptr().cast(), r);
+            }
+        }
+    }
+
+    /// Two dimensions of eight points whose set seeds and samples are given.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn kernel_2d(table: &SobolTable, seed: __m256i, sample: __m256i, out: &mut [Vec2; N]) {
+        let (idx, seed_mul) = prefix(seed, sample);
+        let (s0, s1) = (DIM_SALT[0] as i32, DIM_SALT[1] as i32);
+        let salt = _mm256_setr_epi32(s0, s1, s0, s1, s0, s1, s0, s1);
+        let pair = |i: usize| {
+            let (h, l) = rows(table, idx[i]);
+            let v = [h[0] ^ l[0], h[1] ^ l[1]];
+            (u64::from(v[1]) << 32 | u64::from(v[0])) as i64
+        };
+        for (g, quad) in out.as_chunks_mut::<4>().0.iter_mut().enumerate() {
+            let i = 4 * g;
+            let sobol = _mm256_setr_epi64x(pair(i), pair(i + 1), pair(i + 2), pair(i + 3));
+            let (a, b, c, d) = (i as i32, i as i32 + 1, i as i32 + 2, i as i32 + 3);
+            let m =
+                _mm256_permutevar8x32_epi32(seed_mul, _mm256_setr_epi32(a, a, b, b, c, c, d, d));
+            let r = finish(sobol, m, salt);
+            // SAFETY: `quad` is four `Vec2` (`repr(C)`, two f32 each): 32 writable bytes.
+            unsafe { _mm256_storeu_ps(quad.as_mut_ptr().cast(), r) };
+        }
+    }
+
+    /// Seeds, samples and dimensions of eight samplers.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn load(s: &[PathSampler; N]) -> (__m256i, __m256i, __m256i) {
+        let p = s.as_ptr().cast::<__m256i>();
+        // SAFETY: `PathSampler` is `repr(C)` of three u32, so eight are 96 readable bytes.
+        let v = unsafe {
+            [
+                _mm256_loadu_si256(p),
+                _mm256_loadu_si256(p.add(1)),
+                _mm256_loadu_si256(p.add(2)),
+            ]
+        };
+        (field::<0>(v), field::<1>(v), field::<2>(v))
+    }
+
+    /// Runs `kernel(seed of the set, sample)` on groups of eight samplers (the last padded
+    /// with copies of its first sampler) whose dimensions all start a set; other groups go
+    /// through the four-lane path, `portable`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn groups<T: Copy>(
+        samplers: &[PathSampler],
+        out: &mut [T],
+        kernel: impl Fn(__m256i, __m256i, &mut [T; N]),
+        portable: impl Fn(&[PathSampler], &mut [T]),
+    ) {
+        let run = |s: &[PathSampler; N], o: &mut [T; N]| {
+            let (seed, sample, dimension) = load(s);
+            if _mm256_testz_si256(dimension, splat(3)) == 0 {
+                portable(s, o);
+                return;
+            }
+            kernel(
+                set_seeds(seed, _mm256_srli_epi32::<2>(dimension)),
+                sample,
+                o,
+            );
+        };
+        let (lanes, rest) = samplers.as_chunks::<N>();
+        let (rows, rest_out) = out.as_chunks_mut::<N>();
+        for (s, o) in lanes.iter().zip(rows) {
+            run(s, o);
+        }
+        if let Some(&first) = rest.first() {
+            let mut s = [first; N];
+            s[..rest.len()].copy_from_slice(rest);
+            let mut o = [rest_out[0]; N];
+            run(&s, &mut o);
+            rest_out.copy_from_slice(&o[..rest_out.len()]);
+        }
+    }
+
+    /// `next_4d_column`'s draws (without advancing the samplers).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn column_4d(
+        table: &SobolTable,
+        samplers: &[PathSampler],
+        out: &mut [[f32; 4]],
+    ) {
+        groups(
+            samplers,
+            out,
+            |seed, sample, o| kernel_4d(table, seed, sample, o),
+            |s, o| {
+                super::for_lane_groups(s, o, table, super::kernel_4d, |&s| {
+                    let mut s = s;
+                    s.next_4d()
+                })
+            },
+        );
+    }
+
+    /// `next_2d_column`'s draws (without advancing the samplers).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn column_2d(table: &SobolTable, samplers: &[PathSampler], out: &mut [Vec2]) {
+        groups(
+            samplers,
+            out,
+            |seed, sample, o| kernel_2d(table, seed, sample, o),
+            |s, o| {
+                super::for_lane_groups(s, o, table, super::kernel_2d, |&s| {
+                    let mut s = s;
+                    s.next_2d()
+                })
+            },
+        );
+    }
+
+    /// `first_2d_column` (set 0: the seeds are the set seeds).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn first_2d(
+        table: &SobolTable,
+        seed: &[u32],
+        sample: &[u32],
+        out: &mut [Vec2],
+    ) {
+        let (seeds, seed_rest) = seed.as_chunks::<N>();
+        let samples = sample.as_chunks::<N>().0;
+        let (rows, rest_out) = out.as_chunks_mut::<N>();
+        let ld = |v: &[u32; N]| {
+            // SAFETY: `v` is 32 readable bytes.
+            unsafe { _mm256_loadu_si256(v.as_ptr().cast()) }
+        };
+        for ((s, t), o) in seeds.iter().zip(samples).zip(rows) {
+            kernel_2d(table, ld(s), ld(t), o);
+        }
+        if !rest_out.is_empty() {
+            let n = rest_out.len();
+            let start = seed.len() - n;
+            let (mut s, mut t) = ([0u32; N], [0u32; N]);
+            s[..n].copy_from_slice(seed_rest);
+            t[..n].copy_from_slice(&sample[start..]);
+            let mut o = [Vec2::ZERO; N];
+            kernel_2d(table, ld(&s), ld(&t), &mut o);
+            rest_out.copy_from_slice(&o[..n]);
+        }
+    }
+}
+
 /// Per-ray sample source handed to plug-ins: each call consumes the next dimensions of the
 /// ray's path, so plug-ins never need to know the sampler's addressing.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)] // Three u32 in this order: the AVX2 column kernels load eight samplers at once.
 pub struct PathSampler {
     /// Per-pixel scrambling seed ([`pixel_seed`]).
     pub seed: u32,
@@ -432,6 +891,49 @@ mod tests {
                     assert_eq!(col[i].dimension, one.dimension);
                     assert_eq!((col[i].seed, col[i].sample), (s.seed, s.sample));
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn portable_column_path_and_camera_column_equal_per_sampler_draws() {
+        // On AVX2 machines the column functions take the AVX2 kernels (checked above); the
+        // four-lane path they fall back to elsewhere must give the same values, and the
+        // camera's set-0 column must equal sample_2d at dimension 0 for every length.
+        let mut rng = SplitMix64(7);
+        let table = sobol_byte_table();
+        for n in [0usize, 1, 4, 7, 8, 9, 16, 23] {
+            let samplers: Vec<PathSampler> = (0..n)
+                .map(|i| PathSampler {
+                    seed: rng.next_u64() as u32,
+                    sample: rng.next_u64() as u32 % MAX_SPP,
+                    dimension: 4 * [0u32, 1, 5, 70, 3][i % 5] + [0, 0, 0, 2][i % 4],
+                })
+                .collect();
+            let mut out4 = vec![[0.0f32; 4]; n];
+            for_lane_groups(&samplers, &mut out4, table, kernel_4d, |&s| {
+                let mut s = s;
+                s.next_4d()
+            });
+            let mut out2 = vec![Vec2::ZERO; n];
+            for_lane_groups(&samplers, &mut out2, table, kernel_2d, |&s| {
+                let mut s = s;
+                s.next_2d()
+            });
+            for (i, s) in samplers.iter().enumerate() {
+                assert_eq!(out4[i], { *s }.next_4d(), "4d: n {n}, point {i}");
+                assert_eq!(out2[i], { *s }.next_2d(), "2d: n {n}, point {i}");
+            }
+            let seed: Vec<u32> = samplers.iter().map(|s| s.seed).collect();
+            let sample: Vec<u32> = samplers.iter().map(|s| s.sample).collect();
+            let mut jitter = vec![Vec2::ZERO; n];
+            first_2d_column(&seed, &sample, &mut jitter);
+            for i in 0..n {
+                assert_eq!(
+                    jitter[i],
+                    sample_2d(seed[i], sample[i], 0),
+                    "n {n}, point {i}"
+                );
             }
         }
     }
