@@ -237,6 +237,42 @@ pub fn diffuse_sample_world(n: &[Vec3], vn: &[Vec3], u: &[Vec2], wi: &mut [Vec3]
         vn.len() == len && u.len() == len && wi.len() == len && pdf.len() == len,
         "diffuse_sample_world: column lengths"
     );
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") {
+        // SAFETY: this CPU has AVX2 (checked on the line above).
+        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+        unsafe {
+            diffuse_sample_world_avx2(n, vn, u, wi, pdf)
+        };
+        return;
+    }
+    diffuse_sample_world_lanes(n, vn, u, wi, pdf);
+}
+
+/// [`diffuse_sample_world_lanes`] compiled for AVX2: the same four-lane operations in VEX
+/// encoding (three operands, fewer register copies, broadcast loads). No FMA is enabled,
+/// so every product and sum rounds as in the SSE build: the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn diffuse_sample_world_avx2(
+    n: &[Vec3],
+    vn: &[Vec3],
+    u: &[Vec2],
+    wi: &mut [Vec3],
+    pdf: &mut [f32],
+) {
+    diffuse_sample_world_lanes(n, vn, u, wi, pdf);
+}
+
+/// The body of [`diffuse_sample_world`] (columns of equal length).
+#[inline(always)]
+fn diffuse_sample_world_lanes(
+    n: &[Vec3],
+    vn: &[Vec3],
+    u: &[Vec2],
+    wi: &mut [Vec3],
+    pdf: &mut [f32],
+) {
     let (n4, n_rest) = n.as_chunks::<4>();
     let (vn4, vn_rest) = vn.as_chunks::<4>();
     let (u4, u_rest) = u.as_chunks::<4>();

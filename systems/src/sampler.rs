@@ -634,6 +634,14 @@ mod avx2 {
         }
     }
 
+    /// Runs `f` out of line: keeps the rare unaligned path's registers and stack out of the
+    /// kernel loop.
+    #[cold]
+    #[inline(never)]
+    fn cold(f: impl FnOnce()) {
+        f()
+    }
+
     /// Seeds, samples and dimensions of eight samplers.
     #[target_feature(enable = "avx2")]
     #[inline]
@@ -664,7 +672,7 @@ mod avx2 {
         let run = |s: &[PathSampler; N], o: &mut [T; N]| {
             let (seed, sample, dimension) = load(s);
             if _mm256_testz_si256(dimension, splat(3)) == 0 {
-                portable(s, o);
+                cold(|| portable(s, o));
                 return;
             }
             kernel(
