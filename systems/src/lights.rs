@@ -356,6 +356,46 @@ impl LightSet {
             out.fill(None);
             return;
         };
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") {
+            // SAFETY: this CPU has AVX2 (checked on the line above).
+            #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+            unsafe {
+                self.sample_column_avx2(geometry, selection, p, u, active, out)
+            };
+            return;
+        }
+        self.sample_column_lanes(geometry, selection, p, u, active, out);
+    }
+
+    /// [`Self::sample_column_lanes`] compiled for AVX2: the same four-lane operations in
+    /// VEX encoding (three operands, `blendv` selects). No FMA is enabled, so every product
+    /// and sum rounds as in the SSE build: the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn sample_column_avx2(
+        &self,
+        geometry: &SceneGeometry,
+        selection: &Distribution1D,
+        p: &[Vec3],
+        u: &[[f32; 4]],
+        active: &[bool],
+        out: &mut [Option<LightSample>],
+    ) {
+        self.sample_column_lanes(geometry, selection, p, u, active, out);
+    }
+
+    /// The body of [`Self::sample_column`] (columns of equal length, a selection exists).
+    #[inline(always)]
+    fn sample_column_lanes(
+        &self,
+        geometry: &SceneGeometry,
+        selection: &Distribution1D,
+        p: &[Vec3],
+        u: &[[f32; 4]],
+        active: &[bool],
+        out: &mut [Option<LightSample>],
+    ) {
         let (p4, p_rest) = p.as_chunks::<4>();
         let (u4, u_rest) = u.as_chunks::<4>();
         let (a4, a_rest) = active.as_chunks::<4>();
