@@ -261,7 +261,142 @@ fn diffuse_sample_world_avx2(
     wi: &mut [Vec3],
     pdf: &mut [f32],
 ) {
-    diffuse_sample_world_lanes(n, vn, u, wi, pdf);
+    let (n8, _) = n.as_chunks::<8>();
+    let (vn8, _) = vn.as_chunks::<8>();
+    let (u8, _) = u.as_chunks::<8>();
+    let (wi8, _) = wi.as_chunks_mut::<8>();
+    let (pdf8, _) = pdf.as_chunks_mut::<8>();
+    for ((((n, vn), u), wi), pdf) in n8.iter().zip(vn8).zip(u8).zip(wi8).zip(pdf8) {
+        avx2::diffuse_sample_eight(n, vn, u, wi, pdf);
+    }
+    // The rest (fewer than eight points) four lanes at a time.
+    let done = 8 * n8.len();
+    diffuse_sample_world_lanes(
+        &n[done..],
+        &vn[done..],
+        &u[done..],
+        &mut wi[done..],
+        &mut pdf[done..],
+    );
+}
+
+/// [`diffuse_sample_lanes`] on eight points in one AVX register per value: the same
+/// float operations in the same order (no FMA), so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "AVX intrinsics: stores into references' memory, in `#[target_feature]` functions"
+)]
+mod avx2 {
+    use super::{FRAC_1_PI, FRAC_PI_4};
+    use risotto_components::{Vec2, Vec3};
+    use std::arch::x86_64::*;
+
+    /// Lane-wise `m ? a : b` (`m` all-ones or all-zeros per lane).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn select(m: __m256, a: __m256, b: __m256) -> __m256 {
+        _mm256_blendv_ps(b, a, m)
+    }
+
+    /// Eight points of `diffuse_sample_world`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(super) fn diffuse_sample_eight(
+        n: &[Vec3; 8],
+        vn: &[Vec3; 8],
+        u: &[Vec2; 8],
+        wi: &mut [Vec3; 8],
+        pdf: &mut [f32; 8],
+    ) {
+        let lanes = |f: &dyn Fn(usize) -> f32| {
+            _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7))
+        };
+        let (nx, ny, nz) = (lanes(&|j| n[j].x), lanes(&|j| n[j].y), lanes(&|j| n[j].z));
+        // Frame::to_local(vn).z, as Vec3::dot: (x x' + y y') + z z'.
+        let cos_o = lanes(&|j| vn[j].dot(n[j]));
+        let (ux, uy) = (lanes(&|j| u[j].x), lanes(&|j| u[j].y));
+        let splat = |x: f32| _mm256_set1_ps(x);
+        let (zero, one) = (_mm256_setzero_ps(), splat(1.0));
+        let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
+        let abs = |x: __m256| _mm256_and_ps(x, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+        let gt = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GT_OQ>(a, b);
+        // sample_concentric_disk, the wedge test as a select.
+        let px = sub(mul(splat(2.0), ux), one);
+        let py = sub(mul(splat(2.0), uy), one);
+        let wedge_x = gt(abs(px), abs(py));
+        let big = select(wedge_x, px, py);
+        let small = select(wedge_x, py, px);
+        // sin_cos_quarter_pi_lanes, operation for operation.
+        let x = mul(splat(FRAC_PI_4), _mm256_div_ps(small, big));
+        let z = mul(x, x);
+        let sin = add(
+            mul(
+                mul(
+                    sub(
+                        mul(add(mul(splat(-1.951_529_6e-4), z), splat(8.332_161e-3)), z),
+                        splat(1.666_665_5e-1),
+                    ),
+                    z,
+                ),
+                x,
+            ),
+            x,
+        );
+        let cos = add(
+            sub(
+                mul(
+                    mul(
+                        add(
+                            mul(sub(mul(splat(2.443_315_7e-5), z), splat(1.388_731_6e-3)), z),
+                            splat(4.166_664_6e-2),
+                        ),
+                        z,
+                    ),
+                    z,
+                ),
+                mul(splat(0.5), z),
+            ),
+            one,
+        );
+        let centre = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(px, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(py, zero),
+        );
+        let dx = select(centre, zero, mul(big, select(wedge_x, cos, sin)));
+        let dy = select(centre, zero, mul(big, select(wedge_x, sin, cos)));
+        // sample_cosine_hemisphere.
+        let r2 = sub(one, add(mul(dx, dx), mul(dy, dy)));
+        let lz = _mm256_sqrt_ps(select(gt(r2, zero), r2, zero));
+        // Frame::from_normal and Frame::to_world, term for term.
+        let sign_bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
+        let sign = _mm256_or_ps(one, _mm256_and_ps(nz, sign_bit));
+        let neg = |x: __m256| _mm256_xor_ps(x, sign_bit);
+        let a = _mm256_div_ps(splat(-1.0), add(sign, nz));
+        let b = mul(mul(nx, ny), a);
+        let (sx, sy, sz) = (
+            add(one, mul(mul(mul(sign, nx), nx), a)),
+            mul(sign, b),
+            mul(neg(sign), nx),
+        );
+        let (tx, ty, tz) = (b, add(sign, mul(mul(ny, ny), a)), neg(ny));
+        let ok = _mm256_and_ps(gt(cos_o, zero), gt(lz, zero));
+        let world = |s: __m256, t: __m256, n: __m256| add(add(mul(s, dx), mul(t, dy)), mul(n, lz));
+        let mut out = [[0.0f32; 8]; 3];
+        // SAFETY: each row of `out` and `pdf` is 32 writable bytes.
+        unsafe {
+            _mm256_storeu_ps(out[0].as_mut_ptr(), select(ok, world(sx, tx, nx), zero));
+            _mm256_storeu_ps(out[1].as_mut_ptr(), select(ok, world(sy, ty, ny), zero));
+            _mm256_storeu_ps(out[2].as_mut_ptr(), select(ok, world(sz, tz, nz), one));
+            _mm256_storeu_ps(
+                pdf.as_mut_ptr(),
+                select(ok, mul(lz, splat(FRAC_1_PI)), zero),
+            );
+        }
+        for (j, w) in wi.iter_mut().enumerate() {
+            *w = Vec3::new(out[0][j], out[1][j], out[2][j]);
+        }
+    }
 }
 
 /// The body of [`diffuse_sample_world`] (columns of equal length).
@@ -1012,7 +1147,7 @@ mod tests {
             Vec3::Y,
             Vec3::new(0.6, 0.0, -0.8),
         ];
-        for len in [0usize, 1, 2, 3, 4, 5, 7, 64, 203] {
+        for len in [0usize, 1, 2, 3, 4, 5, 7, 8, 9, 15, 64, 203] {
             let mut n = Vec::new();
             let mut vn = Vec::new();
             let mut u = Vec::new();
