@@ -198,6 +198,19 @@ pub fn push_camera_rays(
     match camera.projection {
         Projection::Perspective { .. } => {
             rays.origin.resize(end, camera.from);
+            #[cfg(target_arch = "x86_64")]
+            if is_x86_feature_detected!("avx2") {
+                let films: Vec<Vec2> = films.collect();
+                // SAFETY: this CPU has AVX2 (checked on the line above).
+                #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
+                unsafe {
+                    avx2::extend_perspective(&gen, &films, &mut rays.direction)
+                };
+            } else {
+                rays.direction
+                    .extend(films.map(|film| gen.perspective(film)));
+            }
+            #[cfg(not(target_arch = "x86_64"))]
             rays.direction
                 .extend(films.map(|film| gen.perspective(film)));
         }
@@ -220,6 +233,67 @@ pub fn push_camera_rays(
     rays.shading_ctx_index.resize(end, u32::MAX);
     rays.volume_stack.resize(end, stack.clone());
     debug_assert!(rays.is_consistent(), "a ray column was not filled");
+}
+
+/// [`RayGenerator::perspective`] eight rays at a time in AVX registers: the same float
+/// operations in the same order (no FMA), so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "AVX intrinsics: stores into local arrays, in `#[target_feature]` functions"
+)]
+mod avx2 {
+    use super::RayGenerator;
+    use glam::{Vec2, Vec3};
+    use std::arch::x86_64::*;
+
+    /// Appends `gen.perspective(film)` for every film position to `out`.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn extend_perspective(
+        gen: &RayGenerator,
+        films: &[Vec2],
+        out: &mut Vec<Vec3>,
+    ) {
+        out.reserve(films.len());
+        let (chunks, rest) = films.as_chunks::<8>();
+        let splat = _mm256_set1_ps;
+        let (add, sub, mul, div) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps, _mm256_div_ps);
+        let c = &gen.camera;
+        let (w, h, scale) = (splat(gen.w), splat(gen.h), splat(gen.scale));
+        let aspect = splat(gen.h / gen.w);
+        let (two, one) = (splat(2.0), splat(1.0));
+        for f in chunks {
+            let lanes = |g: &dyn Fn(usize) -> f32| {
+                _mm256_setr_ps(g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7))
+            };
+            let (fx, fy) = (lanes(&|j| f[j].x), lanes(&|j| f[j].y));
+            // RayGenerator::screen.
+            let sx = sub(div(mul(two, fx), w), one);
+            let sy = mul(sub(one, div(mul(two, fy), h)), aspect);
+            let (a, b) = (mul(sx, scale), mul(sy, scale));
+            // forward + right * a + up * b, per component.
+            let comp =
+                |f: f32, r: f32, u: f32| add(add(splat(f), mul(splat(r), a)), mul(splat(u), b));
+            let dx = comp(c.forward.x, c.right.x, c.up.x);
+            let dy = comp(c.forward.y, c.right.y, c.up.y);
+            let dz = comp(c.forward.z, c.right.z, c.up.z);
+            // Vec3::normalize: d * (1 / sqrt((x x + y y) + z z)).
+            let len = _mm256_sqrt_ps(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
+            let recip = div(one, len);
+            let mut v = [[0.0f32; 8]; 3];
+            // SAFETY: every row of `v` is 32 writable bytes.
+            unsafe {
+                _mm256_storeu_ps(v[0].as_mut_ptr(), mul(dx, recip));
+                _mm256_storeu_ps(v[1].as_mut_ptr(), mul(dy, recip));
+                _mm256_storeu_ps(v[2].as_mut_ptr(), mul(dz, recip));
+            }
+            out.extend((0..8).map(|j| Vec3::new(v[0][j], v[1][j], v[2][j])));
+        }
+        out.extend(rest.iter().map(|&film| gen.perspective(film)));
+    }
 }
 
 /// The sampler dimension the first bounce starts at: the pixel jitter uses 0 and 1, 2 and 3
