@@ -617,14 +617,26 @@ mod avx2 {
         let (idx, seed_mul) = prefix(seed, sample);
         let (s0, s1) = (DIM_SALT[0] as i32, DIM_SALT[1] as i32);
         let salt = _mm256_setr_epi32(s0, s1, s0, s1, s0, s1, s0, s1);
-        let pair = |i: usize| {
-            let (h, l) = rows(table, idx[i]);
-            let v = [h[0] ^ l[0], h[1] ^ l[1]];
-            (u64::from(v[1]) << 32 | u64::from(v[0])) as i64
+        // Two points' table rows (all four dimensions) in one vector.
+        let two = |i: usize| {
+            let (ha, la) = rows(table, idx[i]);
+            let (hb, lb) = rows(table, idx[i + 1]);
+            // SAFETY: every row is 16 readable bytes.
+            unsafe {
+                _mm256_xor_si256(
+                    _mm256_loadu2_m128i(hb.as_ptr().cast(), ha.as_ptr().cast()),
+                    _mm256_loadu2_m128i(lb.as_ptr().cast(), la.as_ptr().cast()),
+                )
+            }
         };
         for (g, quad) in out.as_chunks_mut::<4>().0.iter_mut().enumerate() {
             let i = 4 * g;
-            let sobol = _mm256_setr_epi64x(pair(i), pair(i + 1), pair(i + 2), pair(i + 3));
+            // Dimensions 0 and 1 of points i, i+2 | i+1, i+3, then the 64-bit quarters
+            // back in point order.
+            let sobol = _mm256_permute4x64_epi64::<0b11_01_10_00>(_mm256_unpacklo_epi64(
+                two(i),
+                two(i + 2),
+            ));
             let (a, b, c, d) = (i as i32, i as i32 + 1, i as i32 + 2, i as i32 + 3);
             let m =
                 _mm256_permutevar8x32_epi32(seed_mul, _mm256_setr_epi32(a, a, b, b, c, c, d, d));
