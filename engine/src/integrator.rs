@@ -1127,9 +1127,10 @@ fn spawn_shadow_rays(
 /// boundary. The caller sets `tmin` and `tmax`; `stacks` being `None` means every stack is
 /// empty, and the rows' stacks are left as they are.
 ///
-/// Written like [`spawn_shadow_rays`]: a first pass decides which points continue and
-/// writes the columns it computes, the `shading_ctx_index` column (the point index `k`)
-/// then drives passes over the other columns.
+/// One pass decides which points continue and writes every column of their rows but the
+/// stacks: it reads the point columns in order, whereas a later pass driven by the
+/// `shading_ctx_index` column (the point index `k`) would gather them again (measured: 3.3M
+/// fewer Ir at cornell 2 spp than three passes). The stack pass, when needed, follows.
 #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
 #[inline(never)]
 fn continue_paths(
@@ -1179,7 +1180,20 @@ fn continue_paths(
         &rr_u[..m],
     );
     let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
+    let (p, ng, s_wi) = (
+        &pts.p[range.clone()][..m],
+        &pts.ng[range.clone()][..m],
+        &samples.wi[..m],
+    );
+    let (in_path, in_passes, in_dimension) = (
+        &incoming.path[..n],
+        &incoming.passes[..n],
+        &incoming.dimension[..n],
+    );
+    let scatter = mode == ShadingMode::Scatter;
     let mut count = 0;
+    // One pass: the point columns are read in order (no gather by a point index), and the
+    // incoming-ray columns through the one `r` loaded per point.
     for k in 0..m {
         let r = ray_id[k] as usize;
         // The next segment must fit in max_depth.
@@ -1213,49 +1227,24 @@ fn continue_paths(
         o_lobe[count] = lobe;
         o_pdf[count] = if lobe.is_specular() { 0.0 } else { pdf };
         o_ctx[count] = k as u32;
-        count += 1;
-    }
-    let ctx = &o_ctx[..count];
-    // Pass 2: geometry. Rays leave from the side of the surface they go to.
-    let (p, ng, s_wi) = (
-        &pts.p[range.clone()][..m],
-        &pts.ng[range.clone()][..m],
-        &samples.wi[..m],
-    );
-    for (((origin, direction), prev_p), &k) in o_origin[..count]
-        .iter_mut()
-        .zip(&mut o_direction[..count])
-        .zip(&mut o_prev_p[..count])
-        .zip(ctx)
-    {
-        let k = k as usize;
-        let (p, ng, wi) = (p[k], ng[k], s_wi[k]);
-        *origin = if mode == ShadingMode::Scatter {
+        // Geometry: rays leave from the side of the surface they go to.
+        let (p, wi) = (p[k], s_wi[k]);
+        o_origin[count] = if scatter {
+            let ng = ng[k];
             let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
             p + side * ray_offset(p)
         } else {
             p
         };
-        *direction = wi;
-        *prev_p = p;
+        o_direction[count] = wi;
+        o_prev_p[count] = p;
+        // What the path carries over from the incoming ray.
+        o_path[count] = in_path[r];
+        o_passes[count] = in_passes[r];
+        o_dimension[count] = in_dimension[r] + DIMS_PER_VERTEX;
+        count += 1;
     }
-    // Pass 3: what the path carries over from the incoming ray.
-    let (in_path, in_passes, in_dimension) = (
-        &incoming.path[..n],
-        &incoming.passes[..n],
-        &incoming.dimension[..n],
-    );
-    for (((path, passes), dimension), &k) in o_path[..count]
-        .iter_mut()
-        .zip(&mut o_passes[..count])
-        .zip(&mut o_dimension[..count])
-        .zip(ctx)
-    {
-        let r = ray_id[k as usize] as usize;
-        *path = in_path[r];
-        *passes = in_passes[r];
-        *dimension = in_dimension[r] + DIMS_PER_VERTEX;
-    }
+    let ctx = &o_ctx[..count];
     // Pass 4: volume stacks; a transmitted ray crosses the surface's interior boundary.
     if let Some(scene) = stacks {
         let in_stack = &incoming.volume_stack[..n];
