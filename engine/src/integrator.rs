@@ -84,8 +84,10 @@ pub struct BatchTables {
     runs: Vec<(u32, std::ops::Range<usize>)>,
     albedo_tmp: Vec<Rgb>,
     hit_scratch: HitScratch,
-    /// Russian-roulette sample of each point of the group being shaded.
-    rr_u: Vec<f32>,
+    /// The vertex's first four sampler dimensions (light position, light selection, Russian
+    /// roulette) of each point of the group being shaded; without light sampling only the
+    /// roulette's (index 3) is drawn.
+    u4: Vec<[f32; 4]>,
     /// Whether some emissive shape has the material (per material index): the shade stage
     /// looks for emitters only in the groups of those materials.
     emissive_material: Vec<bool>,
@@ -751,7 +753,7 @@ impl PathTracer {
             eval_pdf,
             wi_tmp,
             albedo_tmp,
-            rr_u,
+            u4,
             emissive_material,
             ..
         } = t;
@@ -866,27 +868,27 @@ impl PathTracer {
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
-            let rr_u = scratch(rr_u, m, 0.0);
+            // A buffer kept across groups: the draw overwrites it (an arena slice would be
+            // zero-filled for every group first).
+            let u4 = scratch(u4, m, [0.0; 4]);
             if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
                 let lstart = std::time::Instant::now();
                 let light_samples = scratch(light_samples, m, None);
                 let wi = scratch(wi_tmp, m, Vec3::Z);
                 // One column draw for the group; leaves the samplers at the vertex's
                 // dimension 4, where the Bxdf starts.
-                let u4 = arena.alloc_slice_fill_copy(m, [0.0f32; 4]);
                 next_4d_column(&mut samplers[..m], u4);
                 let active =
                     arena.alloc_slice_fill_iter(ray_id.iter().map(|&r| can_continue(r as usize)));
                 scene.lights.sample_column(
                     &scene.geometry,
                     &pts.p[range.clone()][..m],
-                    u4,
+                    &*u4,
                     active,
                     light_samples,
                 );
-                for k in 0..m {
-                    rr_u[k] = u4[k][3];
-                    wi[k] = light_samples[k].map_or(Vec3::Z, |l| l.wi);
+                for (wi, ls) in wi.iter_mut().zip(&*light_samples) {
+                    *wi = ls.map_or(Vec3::Z, |l| l.wi);
                 }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
                 let (value, pdf) = (
@@ -913,8 +915,8 @@ impl PathTracer {
                     shadow_len,
                 );
             } else {
-                for (s, rr) in samplers.iter_mut().zip(rr_u.iter_mut()) {
-                    *rr = sample_1d(s.seed, s.sample, s.dimension + 3);
+                for (s, u) in samplers.iter_mut().zip(u4.iter_mut()) {
+                    u[3] = sample_1d(s.seed, s.sample, s.dimension + 3);
                     // The Bxdf starts at the vertex's dimension 4.
                     s.dimension += 4;
                 }
@@ -934,7 +936,7 @@ impl PathTracer {
                 range.clone(),
                 incoming,
                 samples,
-                rr_u,
+                u4,
                 &mut next_out,
                 next_len,
                 stats,
@@ -1103,7 +1105,7 @@ fn spawn_shadow_rays(
 
 /// Path-continuation system: writes to `out` from row `start` on the ray each point of
 /// `range` continues its path with (direction, weight, pdf and lobe from `samples`, Russian
-/// roulette with `rr_u`), unless the path reached `max_depth`, the sample was absorbed or
+/// roulette with `u4[k][3]`), unless the path reached `max_depth`, the sample was absorbed or
 /// the roulette ended it. Returns the number of rows written and those three counts.
 /// `stacks` as in [`spawn_shadow_rays`]; a transmitted ray crosses the surface's interior
 /// boundary. The caller sets `tmin` and `tmax`; `stacks` being `None` means every stack is
@@ -1123,7 +1125,7 @@ fn continue_paths(
     range: std::ops::Range<usize>,
     incoming: &Rays,
     samples: &BxdfSamples,
-    rr_u: &[f32],
+    u4: &[[f32; 4]],
     out: &mut RayColumns<'_>,
     start: usize,
     stats: &mut SystemStats,
@@ -1159,7 +1161,7 @@ fn continue_paths(
         &samples.weight[..m],
         &samples.lobe[..m],
         &samples.eta[..m],
-        &rr_u[..m],
+        &u4[..m],
     );
     let (mut max_depth, mut absorbed, mut roulette) = (0, 0, 0);
     let (p, ng, s_wi) = (
@@ -1197,7 +1199,7 @@ fn continue_paths(
         // Russian roulette (pbrt-v4 / Mitsuba: survival min(max(beta) * eta^2, 0.95)).
         if depth as u32 > settings.rr_depth {
             let q = (throughput.max_channel() * eta_scale).min(0.95);
-            if rr_u[k] >= q {
+            if rr_u[k][3] >= q {
                 roulette += 1;
                 continue;
             }
