@@ -261,7 +261,6 @@ fn write_ray_columns(
     let (prims, t) = (&hits.prim[..n], &hits.t[..n]);
     let (direction, stacks) = (&rays.direction[..n], &rays.volume_stack[..n]);
     let prim_shape = &scene.prim_shape[..];
-    let mut in_volumes = false;
     for k in 0..count {
         let i = sorted[k] as usize;
         let d = direction[i];
@@ -269,9 +268,14 @@ fn write_ray_columns(
         vlen[k] = t[i];
         front_face[k] = d.dot(ng[k]) < 0.0;
         shape[k] = prim_shape[prims[i] as usize];
-        in_volumes |= !stacks[i].is_empty();
     }
-    if in_volumes {
+    // Stacks get entries only in scenes with volumes, transmissive materials or a camera
+    // inside a shape (only such shapes are tracked, `CompiledScene::tracks_interior`);
+    // elsewhere the stack column is not read at all.
+    let features = scene.features;
+    let stacks_possible =
+        features.volumes || features.transmissive || !scene.camera_stack.is_empty();
+    if stacks_possible && sorted.iter().any(|&i| !stacks[i as usize].is_empty()) {
         for (k, &i) in sorted.iter().enumerate() {
             let stack = &stacks[i as usize];
             if !stack.is_empty() {
