@@ -31,6 +31,8 @@
 //! that rays spawned on a large triangle, or walks that restart just past a hit, do not find
 //! the same surface again.
 
+use std::marker::PhantomData;
+
 use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
@@ -479,36 +481,41 @@ fn intersect_node8<S: Simd>(s: S, node: &Node8, ray: &NodeRay<S::F>, tmax: f32) 
     (tnear.le(tfar).bits() & node.valid, tnear)
 }
 
-/// Per-ray constants of the packet triangle test: [`WatertightRay`]'s, splat across the
-/// triangle lanes.
+/// Per-ray constants of the packet triangle test: [`WatertightRay`]'s, kept as scalars
+/// and broadcast to the triangle lanes in [`intersect_packet`] (as [`NodeRay`]'s: a ray
+/// tests few packets, so splatting all six at set-up costs more than broadcasting them at
+/// each test).
 struct PacketRay<F> {
+    /// Rows: the permuted origin `o`, the shear `(Sx, Sy, Sz)`.
+    k: [[f32; 4]; 2],
+    kx: Axis,
+    ky: Axis,
+    kz: Axis,
+    lanes: PhantomData<F>,
+}
+
+impl<F: Lanes8> PacketRay<F> {
+    #[inline(always)]
+    fn new<S: Simd<F = F>>(_: S, origin: Vec3A, direction: Vec3A) -> Self {
+        let (kx, ky, kz, o, sh) = shear(origin, direction);
+        Self {
+            k: [o.extend(0.0).to_array(), sh.extend(0.0).to_array()],
+            kx,
+            ky,
+            kz,
+            lanes: PhantomData,
+        }
+    }
+}
+
+/// [`PacketRay`]'s constants on every lane, for one packet test.
+struct PacketLanes<F> {
     ox: F,
     oy: F,
     oz: F,
     sx: F,
     sy: F,
     sz: F,
-    kx: Axis,
-    ky: Axis,
-    kz: Axis,
-}
-
-impl<F: Lanes8> PacketRay<F> {
-    #[inline(always)]
-    fn new<S: Simd<F = F>>(s: S, origin: Vec3A, direction: Vec3A) -> Self {
-        let (kx, ky, kz, o, sh) = shear(origin, direction);
-        Self {
-            ox: s.splat(o.x),
-            oy: s.splat(o.y),
-            oz: s.splat(o.z),
-            sx: s.splat(sh.x),
-            sy: s.splat(sh.y),
-            sz: s.splat(sh.z),
-            kx,
-            ky,
-            kz,
-        }
-    }
 }
 
 /// The outcome of [`intersect_packet`]: lanes accepted (`hit`, with their `t` and
@@ -525,10 +532,15 @@ struct PacketHits<F> {
 /// One vertex of eight triangles translated, permuted and sheared, as in the scalar test:
 /// `(A[kx] - Sx A[kz], A[ky] - Sy A[kz], A[kz])` with `A` relative to the origin.
 #[inline(always)]
-fn shear_vertex<S: Simd>(s: S, r: &PacketRay<S::F>, v: &[Row8; 3]) -> (S::F, S::F, S::F) {
-    let z = s.load(&v[r.kz as usize]) - r.oz;
-    let x = (s.load(&v[r.kx as usize]) - r.ox) - r.sx * z;
-    let y = (s.load(&v[r.ky as usize]) - r.oy) - r.sy * z;
+fn shear_vertex<S: Simd>(
+    s: S,
+    r: &PacketRay<S::F>,
+    l: &PacketLanes<S::F>,
+    v: &[Row8; 3],
+) -> (S::F, S::F, S::F) {
+    let z = s.load(&v[r.kz as usize]) - l.oz;
+    let x = (s.load(&v[r.kx as usize]) - l.ox) - l.sx * z;
+    let y = (s.load(&v[r.ky as usize]) - l.oy) - l.sy * z;
     (x, y, z)
 }
 
@@ -545,9 +557,19 @@ fn intersect_packet<S: Simd>(
     tmin: f32,
     tmax: f32,
 ) -> PacketHits<S::F> {
-    let (x0, y0, z0) = shear_vertex(s, r, &p.v[0]);
-    let (x1, y1, z1) = shear_vertex(s, r, &p.v[1]);
-    let (x2, y2, z2) = shear_vertex(s, r, &p.v[2]);
+    // `black_box`: see `intersect_node8` (keeps the broadcasts here, out of the set-up).
+    let k = std::hint::black_box(&r.k);
+    let l = PacketLanes {
+        ox: s.splat(k[0][0]),
+        oy: s.splat(k[0][1]),
+        oz: s.splat(k[0][2]),
+        sx: s.splat(k[1][0]),
+        sy: s.splat(k[1][1]),
+        sz: s.splat(k[1][2]),
+    };
+    let (x0, y0, z0) = shear_vertex(s, r, &l, &p.v[0]);
+    let (x1, y1, z1) = shear_vertex(s, r, &l, &p.v[1]);
+    let (x2, y2, z2) = shear_vertex(s, r, &l, &p.v[2]);
     // The lanes (U, V, W) of the scalar test, one triangle per lane.
     let u = x2 * y1 - y2 * x1;
     let v = x0 * y2 - y0 * x2;
@@ -568,7 +590,7 @@ fn intersect_packet<S: Simd>(
     }
     let det = u + v + w;
     hit &= !det.eq(zero).bits();
-    let (z0, z1, z2) = (z0 * r.sz, z1 * r.sz, z2 * r.sz);
+    let (z0, z1, z2) = (z0 * l.sz, z1 * l.sz, z2 * l.sz);
     let scaled_t = u * z0 + v * z1 + w * z2;
     let inv_det = s.splat(1.0) / det;
     let t = scaled_t * inv_det;
