@@ -148,6 +148,22 @@ impl Bin {
 /// times).
 const SWEEP_MAX: usize = 4096;
 
+/// Makes `out[slot]` an inner node with box `aabb` over two new (yet unfilled) slots
+/// appended to `out`; returns the index of the first.
+fn split_slot(out: &mut Vec<Bin>, slot: usize, aabb: Aabb) -> usize {
+    let l = out.len();
+    let empty = Bin {
+        aabb: Aabb::INVALID,
+        kids: [0, 0],
+    };
+    out.extend([empty, empty]);
+    out[slot] = Bin {
+        aabb,
+        kids: [l as u32, l as u32 + 1],
+    };
+    l
+}
+
 /// A binary tree over the primitives of `bvh2` by top-down full-sweep SAH (every centroid
 /// split on every axis, cost `A(L) N(L) + A(R) N(R)`), from the primitive boxes of its
 /// leaves.
@@ -194,19 +210,7 @@ fn sweep_tree(bvh2: &Bvh2) -> Vec<Bin> {
         }
         let (_, axis, split) = best;
         set.sort_by(|a, b| a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis)));
-        let l = out.len();
-        out.push(Bin {
-            aabb: Aabb::INVALID,
-            kids: [0, 0],
-        });
-        out.push(Bin {
-            aabb: Aabb::INVALID,
-            kids: [0, 0],
-        });
-        out[slot] = Bin {
-            aabb,
-            kids: [l as u32, l as u32 + 1],
-        };
+        let l = split_slot(&mut out, slot, aabb);
         stack.push((lo, lo + split, l));
         stack.push((lo + split, hi, l + 1));
     }
@@ -272,19 +276,7 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
                 )
             }
         };
-        let l = out.len();
-        out.push(Bin {
-            aabb: Aabb::INVALID,
-            kids: [0, 0],
-        });
-        out.push(Bin {
-            aabb: Aabb::INVALID,
-            kids: [0, 0],
-        });
-        out[slot] = Bin {
-            aabb,
-            kids: [l as u32, l as u32 + 1],
-        };
+        let l = split_slot(&mut out, slot, aabb);
         let [a, b] = kids;
         stack.push((a, l));
         stack.push((b, l + 1));
