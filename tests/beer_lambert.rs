@@ -21,7 +21,7 @@ use risotto::engine::builtin::{beer, Interior, NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::Image;
 use risotto::engine::plugin::*;
-use risotto::engine::scene::{LightComponent, RenderSettings, Scene, ShapeGeometry};
+use risotto::engine::scene::{RenderSettings, Scene, ShapeGeometry};
 use risotto::systems::camera::{Camera, Projection};
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{LobeSampled, Rays, Rgb};
@@ -119,14 +119,12 @@ fn camera_rays_through_an_index_matched_absorber() {
         settings_depth(1),
     );
     let m = beer_boundary(&mut scene, "absorber", sigma);
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "slab",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-3.0, -3.0, -0.5 * d),
-            Vec3::new(3.0, 3.0, 0.5 * d),
-        )),
+        Vec3::new(-3.0, -3.0, -0.5 * d),
+        Vec3::new(3.0, 3.0, 0.5 * d),
         m,
-        None,
     );
     emitter_at(&mut scene, -2.0);
     let expected = L * beer(sigma, d);
@@ -143,23 +141,15 @@ fn shadow_scene(sigma: Rgb, d: f32, theta: f32, camera_y: f32) -> (Scene, Rgb, f
     let albedo = Rgb::new(0.8, 0.6, 0.4);
     add_floor(&mut scene, Vec3::ZERO, albedo);
     let m = beer_boundary(&mut scene, "absorber", sigma);
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "slab",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-20.0, 0.5, -20.0),
-            Vec3::new(20.0, 0.5 + d, 20.0),
-        )),
+        Vec3::new(-20.0, 0.5, -20.0),
+        Vec3::new(20.0, 0.5 + d, 20.0),
         m,
-        None,
     );
     let e = Rgb::new(3.0, 2.0, 1.5);
-    scene.add_light(
-        "sun",
-        LightComponent::Distant {
-            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
-            irradiance: e,
-        },
-    );
+    add_sun(&mut scene, theta, e);
     // Lambert: L = albedo / pi * E * cos(theta), before the slab's transmittance.
     (
         scene,
@@ -195,23 +185,19 @@ fn nested_volumes_run_the_innermost_integrator() {
     let inner = beer_boundary(&mut scene, "inner", si);
     // The outer cube is wider than the view (its side faces are never hit); the inner one
     // covers pixels 4..12 exactly.
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "outer",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-1.5, -1.5, -1.0),
-            Vec3::new(1.5, 1.5, 1.0),
-        )),
+        Vec3::new(-1.5, -1.5, -1.0),
+        Vec3::new(1.5, 1.5, 1.0),
         outer,
-        None,
     );
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "inner",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-0.5, -0.5, -0.4),
-            Vec3::new(0.5, 0.5, 0.4),
-        )),
+        Vec3::new(-0.5, -0.5, -0.4),
+        Vec3::new(0.5, 0.5, 0.4),
         inner,
-        None,
     );
     emitter_at(&mut scene, -3.0);
     let (d_outer, d_inner) = (2.0, 0.8);
@@ -335,23 +321,19 @@ fn overlapping_volumes_are_visible_to_the_innermost_integrator() {
     let m2 = scene.add_material("b", 0, Box::new(SummingAbsorber { sigma_a: s2 }));
     // Along -z: box b alone on z in [0.4, 1], both on [-0.2, 0.4], box a alone on [-1, -0.2].
     // Box b only covers x > 0 (pixel columns 8..16).
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "a",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-1.5, -1.5, -1.0),
-            Vec3::new(1.5, 1.5, 0.4),
-        )),
+        Vec3::new(-1.5, -1.5, -1.0),
+        Vec3::new(1.5, 1.5, 0.4),
         m1,
-        None,
     );
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "b",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(0.0, -1.6, -0.2),
-            Vec3::new(1.6, 1.6, 1.0),
-        )),
+        Vec3::new(0.0, -1.6, -0.2),
+        Vec3::new(1.6, 1.6, 1.0),
         m2,
-        None,
     );
     emitter_at(&mut scene, -3.0);
     let (only2, overlap, only1) = (0.6, 0.6, 0.8);
@@ -386,23 +368,19 @@ fn overlapping_volumes_are_visible_to_shadow_rays() {
     scene.world.despawn(slab).unwrap();
     let m1 = scene.add_material("a", 0, Box::new(SummingAbsorber { sigma_a: s1 }));
     let m2 = scene.add_material("b", 0, Box::new(SummingAbsorber { sigma_a: s2 }));
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "a",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-20.0, 0.5, -20.0),
-            Vec3::new(20.0, 1.5, 20.0),
-        )),
+        Vec3::new(-20.0, 0.5, -20.0),
+        Vec3::new(20.0, 1.5, 20.0),
         m1,
-        None,
     );
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "b",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-21.0, 1.0, -21.0),
-            Vec3::new(21.0, 2.2, 21.0),
-        )),
+        Vec3::new(-21.0, 1.0, -21.0),
+        Vec3::new(21.0, 2.2, 21.0),
         m2,
-        None,
     );
     let expected = unlit * beer(s1, 0.5 / cos) * beer(s1 + s2, 0.5 / cos) * beer(s2, 0.7 / cos);
     render_and_check(scene, |_, _| Some(expected));
@@ -420,25 +398,21 @@ fn camera_inside(with_mist: bool, camera_volume: Option<Vec<String>>) -> Scene {
     );
     scene.camera_volume = camera_volume;
     let fog = beer_boundary(&mut scene, "fog", Rgb::new(0.4, 0.8, 1.6));
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "fog",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-3.0, -3.0, -1.0),
-            Vec3::new(3.0, 3.0, 1.0),
-        )),
+        Vec3::new(-3.0, -3.0, -1.0),
+        Vec3::new(3.0, 3.0, 1.0),
         fog,
-        None,
     );
     if with_mist {
         let mist = beer_boundary(&mut scene, "mist", Rgb::new(2.0, 1.0, 0.1));
-        scene.add_shape(
+        add_box(
+            &mut scene,
             "mist",
-            ShapeGeometry::Triangles(box_tris(
-                Vec3::new(-2.0, -2.0, -0.6),
-                Vec3::new(2.0, 2.0, 0.5),
-            )),
+            Vec3::new(-2.0, -2.0, -0.6),
+            Vec3::new(2.0, 2.0, 0.5),
             mist,
-            None,
         );
     }
     emitter_at(&mut scene, -3.0);

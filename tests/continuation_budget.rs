@@ -18,7 +18,7 @@ use common::*;
 use glam::Vec3;
 use risotto::engine::builtin::{beer, Interior, Surface};
 use risotto::engine::render::RenderOutput;
-use risotto::engine::scene::{LightComponent, Scene, ShapeGeometry};
+use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::engine::stats::{System, Termination};
 use risotto::systems::geometry::Sphere;
 use risotto_components::Rgb;
@@ -130,14 +130,12 @@ fn layer_scene(origin: Vec3, gap: f32, x_max: f32, max_passes: u32, interior: In
     let m = scene.add_material("layer", 0, mat_in(Surface::Interface, interior));
     for k in 0..LAYERS {
         let top = 1.0 - 2.0 * k as f32 * gap;
-        scene.add_shape(
+        add_box(
+            &mut scene,
             &format!("layer{k}"),
-            ShapeGeometry::Triangles(box_tris(
-                origin + Vec3::new(-3.0, -3.0, top - gap),
-                origin + Vec3::new(x_max, 3.0, top),
-            )),
+            origin + Vec3::new(-3.0, -3.0, top - gap),
+            origin + Vec3::new(x_max, 3.0, top),
             m,
-            None,
         );
     }
     emitter(&mut scene, origin, -3.0);
@@ -360,24 +358,16 @@ fn shadow_rays_through_thin_absorbing_layers_follow_beer_lambert() {
     );
     for k in 0..LAYERS {
         let bottom = 0.5 + 2.0 * k as f32 * gap;
-        scene.add_shape(
+        add_box(
+            &mut scene,
             &format!("layer{k}"),
-            ShapeGeometry::Triangles(box_tris(
-                origin + Vec3::new(-20.0, bottom, -20.0),
-                origin + Vec3::new(20.0, bottom + gap, 20.0),
-            )),
+            origin + Vec3::new(-20.0, bottom, -20.0),
+            origin + Vec3::new(20.0, bottom + gap, 20.0),
             m,
-            None,
         );
     }
     let e = Rgb::new(3.0, 2.0, 1.5);
-    scene.add_light(
-        "sun",
-        LightComponent::Distant {
-            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
-            irradiance: e,
-        },
-    );
+    add_sun(&mut scene, theta, e);
     let out = render_default(&scene.compile().unwrap());
     let unlit = albedo * e * (theta.cos() / std::f32::consts::PI);
     let extent = origin.abs().max_element() + 20.0;
@@ -446,14 +436,12 @@ fn false_boundaries_neither_refract_nor_shade_nor_cost_depth() {
     let mut shell = box_tris(Vec3::new(-1.5, -1.5, -1.0), Vec3::new(1.5, 1.5, 1.0));
     shell.extend(inverted_box_tris(Vec3::splat(-0.5), Vec3::splat(0.5)));
     scene.add_shape("glass", ShapeGeometry::Triangles(shell), glass, None);
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "liquid",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-0.75, -0.75, -0.7),
-            Vec3::new(0.75, 0.75, 0.8),
-        )),
+        Vec3::new(-0.75, -0.75, -0.7),
+        Vec3::new(0.75, 0.75, 0.8),
         liquid,
-        None,
     );
     emitter(&mut scene, Vec3::ZERO, -3.0);
 
@@ -507,32 +495,22 @@ fn shadow_rays_pass_false_boundaries_unchanged() {
     let albedo = Rgb::new(0.8, 0.6, 0.4);
     add_floor(&mut scene, Vec3::ZERO, albedo);
     let (glass, liquid) = glass_and_liquid(&mut scene);
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "glass",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-20.0, 0.5, -20.0),
-            Vec3::new(20.0, 2.5, 20.0),
-        )),
+        Vec3::new(-20.0, 0.5, -20.0),
+        Vec3::new(20.0, 2.5, 20.0),
         glass,
-        None,
     );
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "liquid",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-15.0, 1.0, -15.0),
-            Vec3::new(15.0, 2.0, 15.0),
-        )),
+        Vec3::new(-15.0, 1.0, -15.0),
+        Vec3::new(15.0, 2.0, 15.0),
         liquid,
-        None,
     );
     let e = Rgb::new(3.0, 2.0, 1.5);
-    scene.add_light(
-        "sun",
-        LightComponent::Distant {
-            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
-            irradiance: e,
-        },
-    );
+    add_sun(&mut scene, theta, e);
     // Lambert: albedo / pi * E * cos(theta), times the glass's transmittance.
     let expected =
         albedo * e * (theta.cos() / std::f32::consts::PI) * beer(SIGMA_GLASS, 2.0 / theta.cos());

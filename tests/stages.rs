@@ -52,14 +52,12 @@ fn render_room(extra: impl FnOnce(&mut Scene)) -> RenderOutput {
         grey,
         None,
     );
-    scene.add_shape(
+    add_box(
+        &mut scene,
         "block",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(0.6, 0.0, -0.5),
-            Vec3::new(1.4, 0.8, 0.3),
-        )),
+        Vec3::new(0.6, 0.0, -0.5),
+        Vec3::new(1.4, 0.8, 0.3),
         grey,
-        None,
     );
     // A 1 x 1 lamp at y = 3 facing down (e1 x e2 = x x z = -y).
     scene.add_shape(
@@ -92,14 +90,12 @@ fn render_room(extra: impl FnOnce(&mut Scene)) -> RenderOutput {
 /// An object in front of the block (left of centre) with the given material.
 fn add_object(scene: &mut Scene, material: Box<risotto::engine::builtin::BuiltinMaterial>) {
     let m = scene.add_material("object", 0, material);
-    scene.add_shape(
+    add_box(
+        scene,
         "object",
-        ShapeGeometry::Triangles(box_tris(
-            Vec3::new(-1.2, 0.0, -0.2),
-            Vec3::new(-0.2, 1.0, 0.8),
-        )),
+        Vec3::new(-1.2, 0.0, -0.2),
+        Vec3::new(-0.2, 1.0, 0.8),
         m,
-        None,
     );
 }
 

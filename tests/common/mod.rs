@@ -167,6 +167,29 @@ pub fn box_tris(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
     t
 }
 
+/// Adds the axis-aligned box `[lo, hi]` ([`box_tris`]) as shape `name` of `material`,
+/// without emission.
+pub fn add_box(scene: &mut Scene, name: &str, lo: Vec3, hi: Vec3, material: u32) {
+    scene.add_shape(
+        name,
+        ShapeGeometry::Triangles(box_tris(lo, hi)),
+        material,
+        None,
+    );
+}
+
+/// Adds a distant light "sun" of irradiance `e` travelling down (-y), tilted by `theta`
+/// radians towards +x.
+pub fn add_sun(scene: &mut Scene, theta: f32, e: Rgb) {
+    scene.add_light(
+        "sun",
+        LightComponent::Distant {
+            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
+            irradiance: e,
+        },
+    );
+}
+
 /// A diffuse floor: the 40 x 40 square of the plane `y = center.y` around `center`, facing
 /// up, with its own material `floor` of the given albedo.
 pub fn add_floor(scene: &mut Scene, center: Vec3, albedo: Rgb) {
