@@ -33,10 +33,10 @@
 
 use std::marker::PhantomData;
 
-use glam::{DVec3, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
+use glam::{DVec3, Vec3, Vec3A, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
-use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, NO_PLANE, SPHERE, WIDTH};
+use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE, WIDTH};
 use crate::geometry::{sphere_uv, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
@@ -92,18 +92,22 @@ enum Axis {
 /// `(Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz])` (paper eq. (2)).
 #[inline(always)]
 fn shear(origin: Vec3A, direction: Vec3A) -> (Axis, Axis, Axis, Vec3A, Vec3A) {
+    // Branch-free: ray directions are random, so the axis choice is a coin toss that a
+    // branch predictor gets wrong about every other ray. `kz` is X where `|d.x|` beats both
+    // others, else Y where `|d.y|` beats `|d.z|` (and `|d.x|` does not beat `|d.y|`), else Z:
+    // the same strict comparisons, so the same choice on ties, as the nested `if`s of the
+    // paper's reference code.
     let a = direction.abs();
-    let (kx, ky, kz, o, d) = if a.x > a.y {
-        if a.x > a.z {
-            (Axis::Y, Axis::Z, Axis::X, origin.yzx(), direction.yzx())
-        } else {
-            (Axis::X, Axis::Y, Axis::Z, origin, direction)
-        }
-    } else if a.y > a.z {
-        (Axis::Z, Axis::X, Axis::Y, origin.zxy(), direction.zxy())
-    } else {
-        (Axis::X, Axis::Y, Axis::Z, origin, direction)
+    let x_dominant = (a.x > a.y) & (a.x > a.z);
+    let y_dominant = !(a.x > a.y) & (a.y > a.z);
+    let kz = (!x_dominant as usize) * (1 + !y_dominant as usize);
+    const AXES: [Axis; 5] = [Axis::X, Axis::Y, Axis::Z, Axis::X, Axis::Y];
+    let (kx, ky, kz) = (AXES[kz + 1], AXES[kz + 2], AXES[kz]);
+    let permute = |v: Vec3A| {
+        let v = v.to_array();
+        Vec3A::new(v[kx as usize], v[ky as usize], v[kz as usize])
     };
+    let (o, d) = (permute(origin), permute(direction));
     // Each one division.
     (kx, ky, kz, o, Vec3A::new(d.x, d.y, 1.0) / d.z)
 }
@@ -637,10 +641,12 @@ fn intersect_packet<S: Simd>(
 /// bound of `t*`, and hits with `t <= tmin + bound` are rejected (`t_error_bound`). Rays
 /// spawned on a wall (origin offset off it, `tmin = 0`) test that wall's leaf first thing,
 /// as the node test's widening exceeds the spawn offset; this settles it with two compares.
+/// For [`NO_PLANE`](crate::bvh8::NO_PLANE) (3) it reads the rows' fourth entries, where `d` is 0, and is false.
 #[inline(always)]
 fn behind_plane(axis: usize, c: f32, [o, d]: &[[f32; 4]; 2], tmin: f32) -> bool {
     let (oa, da) = (o[axis & 3], d[axis & 3]);
-    tmin >= 0.0 && ((da > 0.0 && c <= oa) || (da < 0.0 && c >= oa))
+    // Non-short-circuit `&`/`|`: one branch on the result instead of one per comparison.
+    (tmin >= 0.0) & (((da > 0.0) & (c <= oa)) | ((da < 0.0) & (c >= oa)))
 }
 
 /// The scalar test on lane `l` of a packet, for lanes [`intersect_packet`] leaves to it.
@@ -903,8 +909,7 @@ impl<S: Simd> ClosestRay<'_, S> {
             return;
         }
         let p = &bvh.packets[index];
-        let axis = p.plane_axis as usize;
-        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+        if behind_plane(p.plane_axis as usize, p.plane_c, self.od, self.tmin) {
             return;
         }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, *tmax);
@@ -1022,8 +1027,7 @@ impl<S: Simd> AnyRay<'_, S> {
             ) < f32::INFINITY;
         }
         let p = &bvh.packets[index];
-        let axis = p.plane_axis as usize;
-        if axis < NO_PLANE as usize && behind_plane(axis, p.plane_c, self.od, self.tmin) {
+        if behind_plane(p.plane_axis as usize, p.plane_c, self.od, self.tmin) {
             return false;
         }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);
@@ -1224,6 +1228,40 @@ mod tests {
     use crate::geometry::Sphere;
 
     use crate::sampler::SplitMix64 as Rng;
+
+    /// The branch-free axis choice of `shear` against the paper's nested comparisons,
+    /// ties included (a tie never picks the earlier axis: `>` is strict).
+    #[test]
+    fn shear_picks_the_dominant_axis_as_the_nested_comparisons_do() {
+        let reference = |a: Vec3A| {
+            if a.x > a.y {
+                if a.x > a.z {
+                    Axis::X
+                } else {
+                    Axis::Z
+                }
+            } else if a.y > a.z {
+                Axis::Y
+            } else {
+                Axis::Z
+            }
+        };
+        let values = [0.0f32, 0.5, 1.0, -1.0, 2.0, -2.0];
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let d = Vec3A::new(x, y, z);
+                    let o = Vec3A::new(10.0, 20.0, 30.0);
+                    let (kx, ky, kz, po, _) = shear(o, d);
+                    assert_eq!(kz, reference(d.abs()), "direction {d}");
+                    assert_eq!(kx as usize, (kz as usize + 1) % 3, "direction {d}");
+                    assert_eq!(ky as usize, (kx as usize + 1) % 3, "direction {d}");
+                    let expected = Vec3A::new(o[kx as usize], o[ky as usize], o[kz as usize]);
+                    assert_eq!(po, expected, "direction {d}");
+                }
+            }
+        }
+    }
 
     /// Test-input helpers on top of the shared generator.
     trait RngExt {
@@ -1440,7 +1478,7 @@ mod tests {
                         leaves.0[index] += 1;
                         let p = &bvh.packets[index];
                         assert_eq!(p.valid, (1 << p.valid.count_ones()) - 1);
-                        if p.plane_axis != NO_PLANE {
+                        if p.plane_axis != crate::bvh8::NO_PLANE {
                             let a = p.plane_axis as usize;
                             for l in 0..WIDTH {
                                 assert!(p.triangle(l).iter().all(|v| v[a] == p.plane_c));
