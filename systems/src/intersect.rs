@@ -98,8 +98,9 @@ fn shear(origin: Vec3A, direction: Vec3A) -> (Axis, Axis, Axis, Vec3A, Vec3A) {
     // the same strict comparisons, so the same choice on ties, as the nested `if`s of the
     // paper's reference code.
     let a = direction.abs();
-    let x_dominant = (a.x > a.y) & (a.x > a.z);
-    let y_dominant = !(a.x > a.y) & (a.y > a.z);
+    let x_beats_y = a.x > a.y;
+    let x_dominant = x_beats_y & (a.x > a.z);
+    let y_dominant = !x_beats_y & (a.y > a.z);
     let kz = (!x_dominant as usize) * (1 + !y_dominant as usize);
     const AXES: [Axis; 5] = [Axis::X, Axis::Y, Axis::Z, Axis::X, Axis::Y];
     let (kx, ky, kz) = (AXES[kz + 1], AXES[kz + 2], AXES[kz]);
