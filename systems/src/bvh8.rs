@@ -118,6 +118,9 @@ pub(crate) struct Bvh8 {
     /// Per axis, the largest magnitude of any box coordinate: bounds the rounding error of
     /// the slab distances (see [`crate::intersect`]).
     pub(crate) max_abs: Vec3A,
+    /// Number of node levels on the longest root-to-leaf path (1 for a root with only
+    /// leaf children): bounds the traversal stacks ([`Self::stack_capacity`]).
+    pub(crate) depth: usize,
 }
 
 /// Cost of a node visit relative to one leaf-packet test (any number of triangles), for
@@ -447,6 +450,7 @@ impl Bvh8 {
             packets: Vec::new(),
             spheres: Vec::new(),
             max_abs: root.aabb.min.abs().max(root.aabb.max.abs()),
+            depth: 0,
         };
         let src = Source {
             bins: &bins,
@@ -454,13 +458,21 @@ impl Bvh8 {
             triangles,
             spheres,
         };
-        out.build_node(&src, 0);
+        out.build_node(&src, 0, 1);
         out
+    }
+
+    /// Entries a traversal stack can hold at most: a node pushes at most its [`WIDTH`] hit
+    /// children and the traversal then takes one of them, so the stack holds at most
+    /// `WIDTH - 1` entries per level above the current node plus `WIDTH` for it.
+    pub(crate) fn stack_capacity(&self) -> usize {
+        (WIDTH - 1) * self.depth + 1
     }
 
     /// Appends the 8-wide node whose children are the slots of binary subtree `n`, and the
     /// nodes below it; returns its index.
-    fn build_node(&mut self, src: &Source, n: u32) -> u32 {
+    fn build_node(&mut self, src: &Source, n: u32, level: usize) -> u32 {
+        self.depth = self.depth.max(level);
         let (bins, collapse) = (src.bins, src.collapse);
         let mut kids = Vec::with_capacity(WIDTH);
         if bins[n as usize].is_leaf() || collapse.split[n as usize][0] == Split::Leaf {
@@ -499,7 +511,7 @@ impl Bvh8 {
                 self.nodes[index as usize].leaf_mask |= 1 << c;
                 self.build_leaf(src, k)
             } else {
-                self.build_node(src, k)
+                self.build_node(src, k, level + 1)
             };
             self.nodes[index as usize].child[c] = child;
         }

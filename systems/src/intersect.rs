@@ -697,11 +697,13 @@ fn traverse_closest<S: Simd>(
     s: S,
     bvh: &Bvh8,
     ray: &NodeRay<S::F>,
-    stack: &mut Vec<Entry>,
+    stack: &mut [Entry],
     tmax: &mut f32,
     leaf: &mut ClosestRay<'_, S>,
 ) {
-    stack.clear();
+    // A fixed slice ([`Bvh8::stack_capacity`] entries) and a local depth `sp` (a register,
+    // where a `Vec`'s length would be loaded and stored through memory at every push).
+    let mut sp = 0usize;
     let nodes = &bvh.nodes;
     let mut cur = 0u32;
     loop {
@@ -721,22 +723,25 @@ fn traverse_closest<S: Simd>(
                 if rest == 0 {
                     // Two children: stack the farther, visit the nearer.
                     let (near, far) = if t[c1] < t[c0] { (c1, c0) } else { (c0, c1) };
-                    stack.push(Entry::new(node, &t, far));
+                    stack[sp] = Entry::new(node, &t, far);
+                    sp += 1;
                     cur = node.child[near];
                     continue;
                 }
                 // Three or more: stack all, sorted far to near (insertion sort), and visit
                 // the nearest.
-                let base = stack.len();
-                stack.push(Entry::new(node, &t, c0));
-                stack.push(Entry::new(node, &t, c1));
+                let base = sp;
+                stack[sp] = Entry::new(node, &t, c0);
+                stack[sp + 1] = Entry::new(node, &t, c1);
+                sp += 2;
                 let mut m = rest;
                 while m != 0 {
                     let c = m.trailing_zeros() as usize & 7;
                     m &= m - 1;
-                    stack.push(Entry::new(node, &t, c));
+                    stack[sp] = Entry::new(node, &t, c);
+                    sp += 1;
                 }
-                let st = &mut stack[base..];
+                let st = &mut stack[base..sp];
                 for i in 1..st.len() {
                     let e = st[i];
                     let mut j = i;
@@ -751,14 +756,14 @@ fn traverse_closest<S: Simd>(
             leaf.leaf(bvh, cur, tmax);
         }
         loop {
-            match stack.pop() {
-                Some(e) => {
-                    if e.t <= *tmax {
-                        cur = e.child;
-                        break;
-                    }
-                }
-                None => return,
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            let e = stack[sp];
+            if e.t <= *tmax {
+                cur = e.child;
+                break;
             }
         }
     }
@@ -773,11 +778,12 @@ fn traverse_any<S: Simd>(
     s: S,
     bvh: &Bvh8,
     ray: &NodeRay<S::F>,
-    stack: &mut Vec<u32>,
+    stack: &mut [u32],
     tmax: f32,
     leaf: &AnyRay<'_, S>,
 ) -> bool {
-    stack.clear();
+    // As in `traverse_closest`: a fixed slice and a local depth.
+    let mut sp = 0usize;
     let nodes = &bvh.nodes;
     let mut index = 0usize;
     loop {
@@ -817,15 +823,17 @@ fn traverse_any<S: Simd>(
                 k += 1;
             }
             for &c in &order[..k - 1] {
-                stack.push(node.child[c & 7]);
+                stack[sp] = node.child[c & 7];
+                sp += 1;
             }
             index = node.child[order[k - 1] & 7] as usize;
             continue;
         }
-        match stack.pop() {
-            Some(n) => index = n as usize,
-            None => return false,
+        if sp == 0 {
+            return false;
         }
+        sp -= 1;
+        index = stack[sp] as usize;
     }
 }
 
@@ -950,7 +958,7 @@ impl<S: Simd> ClosestRay<'_, S> {
 /// [`intersect_closest`] on the lanes of `s`.
 #[inline(always)]
 fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
-    let mut stack = Vec::with_capacity(64);
+    let mut stack = vec![Entry { child: 0, t: 0.0 }; bvh.stack_capacity()];
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
@@ -1050,7 +1058,7 @@ impl<S: Simd> AnyRay<'_, S> {
 /// [`intersect_occluded`] on the lanes of `s`.
 #[inline(always)]
 fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
-    let mut stack = Vec::with_capacity(64);
+    let mut stack = vec![0u32; bvh.stack_capacity()];
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
@@ -1441,13 +1449,15 @@ mod tests {
             let mut seen = vec![0u32; n + spheres.len()];
             let mut reached = vec![0u32; bvh.nodes.len()];
             let mut leaves = (vec![0u32; bvh.packets.len()], vec![0u32; bvh.spheres.len()]);
-            let mut stack = vec![0usize];
+            let mut stack = vec![(0usize, 1usize)];
+            let mut depth = 0;
             reached[0] = 1;
             let child_box = |node: &Node8, c: usize| {
                 let b = |r: usize| node.bounds[r].0[c];
                 (Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)))
             };
-            while let Some(i) = stack.pop() {
+            while let Some((i, level)) = stack.pop() {
+                depth = depth.max(level);
                 let node = &bvh.nodes[i];
                 for c in 0..WIDTH {
                     let (lo, hi) = child_box(node, c);
@@ -1459,7 +1469,7 @@ mod tests {
                     let index = (child & INDEX_MASK) as usize;
                     if child & LEAF == 0 {
                         reached[index] += 1;
-                        stack.push(index);
+                        stack.push((index, level + 1));
                         for cc in 0..WIDTH {
                             let (clo, chi) = child_box(&bvh.nodes[index], cc);
                             if clo.is_finite() {
@@ -1504,6 +1514,78 @@ mod tests {
             assert!(seen.iter().all(|&s| s == 1), "n = {n}: {seen:?}");
             assert!(reached.iter().all(|&r| r == 1), "n = {n}: {reached:?}");
             assert!(leaves.0.iter().chain(&leaves.1).all(|&r| r == 1));
+            assert_eq!(
+                bvh.depth, depth,
+                "n = {n}: depth (sizes the traversal stacks)"
+            );
+        }
+    }
+
+    /// A chain of triangles at geometrically shrinking scales around one point builds a
+    /// deep, lopsided tree; rays through the point visit every level, with many children
+    /// stacked at each. The fixed-size traversal stacks must hold them
+    /// ([`Bvh8::stack_capacity`]) and the hits must equal brute force.
+    #[test]
+    fn deep_tree_traversal_matches_brute_force() {
+        let mut rng = Rng(11);
+        let mut tris = Vec::new();
+        for k in 0..400 {
+            let scale = 0.9f32.powi(k);
+            for _ in 0..3 {
+                let c = rng.vec(-1.0, 1.0) * scale;
+                tris.push([
+                    c,
+                    c + rng.vec(-0.3, 0.3) * scale,
+                    c + rng.vec(-0.3, 0.3) * scale,
+                ]);
+            }
+        }
+        let geom = SceneGeometry::build(tris.clone(), Vec::new());
+        let (bvh, _) = geom.bvh8().unwrap();
+        assert!(bvh.depth >= 6, "tree only {} levels deep", bvh.depth);
+        for backend in backends() {
+            let mut g = SceneGeometry::build(tris.clone(), Vec::new());
+            g.set_kernel(backend.kernel());
+            for _ in 0..500 {
+                // From outside, through a point near the centre of the chain.
+                let o = rng.vec(-1.0, 1.0).normalize() * 3.0;
+                let target = rng.vec(-1.0, 1.0) * 1e-3;
+                let d = (target - o).normalize();
+                let brute = tris
+                    .iter()
+                    .filter_map(|t| {
+                        WatertightRay::new(o, d)
+                            .intersect_triangle(
+                                t[0].into(),
+                                t[1].into(),
+                                t[2].into(),
+                                0.0,
+                                f32::INFINITY,
+                            )
+                            .map(|h| h.t)
+                    })
+                    .fold(f32::INFINITY, f32::min);
+                let (mut t, mut prim, mut b1, mut b2) = ([0.0], [0], [0.0], [0.0]);
+                intersect_closest(
+                    &g,
+                    &[o],
+                    &[d],
+                    &[0.0],
+                    &[f32::INFINITY],
+                    &mut t,
+                    &mut prim,
+                    &mut b1,
+                    &mut b2,
+                );
+                assert_eq!(t[0], brute, "{backend:?}: o {o} d {d}");
+                let mut occluded = [false];
+                intersect_occluded(&g, &[o], &[d], &[0.0], &[f32::INFINITY], &mut occluded);
+                assert_eq!(
+                    occluded[0],
+                    brute < f32::INFINITY,
+                    "{backend:?}: o {o} d {d}"
+                );
+            }
         }
     }
 
