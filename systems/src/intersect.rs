@@ -416,41 +416,159 @@ impl Backend {
     }
 }
 
-/// Per-ray constants of the 8-wide node test. The per-axis values are kept as scalars and
-/// broadcast to the child lanes where the node test reads them (one `vbroadcastss` from
-/// memory each, see [`intersect_node8`]): a ray visits little more than one node on
-/// average in small scenes, and splatting all nine at set-up costs a shuffle, a broadcast
-/// and a spill each (cornell, 2 spp: 505 -> 494 Ir per closest-hit ray).
-struct NodeRay<F> {
-    /// Rows: `1 / d` per axis, with components below [`MIN_DIR`] clamped; per axis the
-    /// slab distance offsets of the box minimum and maximum planes: `-o / d - s` for the
-    /// near one (the minimum where `d > 0`), `-o / d + s` for the far one, so the widening
+/// Rays set up together: one lane of a [`RayBlock`] each.
+const BLOCK: usize = 8;
+
+/// The per-ray constants of both tests for up to [`BLOCK`] rays, one row per constant and
+/// one lane per ray. [`RayBlock::set`] computes them for all lanes at once, with the same
+/// operations per lane as [`shear`] and the per-ray formulas documented on the rows (so the
+/// same bits), in the kernels' 8-lane operations: about 15 instructions per ray, where one
+/// ray at a time it took about a hundred (cornell, 1 spp: closest-hit kernel 128.8M ->
+/// 116.8M instructions, occlusion 37.2M -> 31.2M). The
+/// traversal then reads ray `l`'s constants straight from lane `l` of the rows (one
+/// broadcast from memory each, where a test needs them).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct RayBlock {
+    /// The node test's rows `3 r + a`, axis `a`: `r = 0` is `1 / d`, with components below
+    /// [`MIN_DIR`] clamped; `r = 1` and `r = 2` are the slab distance offsets of the box
+    /// minimum and maximum planes, `-o / d - s` for the near one (the minimum where
+    /// `d > 0`) and `-o / d + s` for the far one, so the widening `s` (see [`NODE_SLACK`])
     /// moves both planes outwards.
-    k: [[f32; 4]; 3],
+    node: [[f32; BLOCK]; 9],
+    /// The triangle test's rows ([`WatertightRay`]'s constants): the origin permuted to
+    /// `(kx, ky, kz)`, then the shear `(Sx, Sy, Sz)`.
+    tri: [[f32; BLOCK]; 6],
+    /// The origin (rows 0 to 2), a zero row, the direction (rows 4 to 6), a zero row.
+    od: [[f32; BLOCK]; 8],
+    /// Bit `l` set where ray `l`'s dominant direction axis is X, and where it is Y (the
+    /// permutation of [`shear`], see [`RayBlock::axes`]).
+    x_dominant: u32,
+    y_dominant: u32,
+}
+
+/// `(kx, ky, kz)` of [`shear`], indexed by "X dominant" + 2 "Y dominant" (never both).
+const SHEAR_AXES: [[Axis; 3]; 4] = [
+    [Axis::X, Axis::Y, Axis::Z],
+    [Axis::Y, Axis::Z, Axis::X],
+    [Axis::Z, Axis::X, Axis::Y],
+    [Axis::X, Axis::Y, Axis::Z],
+];
+
+impl RayBlock {
+    /// A block to [`Self::set`] (all zero).
+    fn zero() -> Self {
+        RayBlock {
+            node: [[0.0; BLOCK]; 9],
+            tri: [[0.0; BLOCK]; 6],
+            od: [[0.0; BLOCK]; 8],
+            x_dominant: 0,
+            y_dominant: 0,
+        }
+    }
+
+    /// Sets the constants of the rays `origin[l] + t * direction[l]` (at most [`BLOCK`];
+    /// lanes past them get a zero ray, never read) in a tree whose box coordinates are at
+    /// most `max_abs` in magnitude per axis, computed on the lanes of `s`. Every row is
+    /// overwritten.
+    #[inline(always)]
+    fn set<S: Simd>(&mut self, s: S, origin: &[Vec3], direction: &[Vec3], max_abs: Vec3A) {
+        let b = self;
+        if let (Some(origin), Some(direction)) = (
+            origin.first_chunk::<BLOCK>(),
+            direction.first_chunk::<BLOCK>(),
+        ) {
+            for l in 0..BLOCK {
+                for a in 0..3 {
+                    b.od[a][l] = origin[l][a];
+                    b.od[4 + a][l] = direction[l][a];
+                }
+            }
+        } else {
+            for l in 0..BLOCK {
+                let (o, d) = match (origin.get(l), direction.get(l)) {
+                    (Some(o), Some(d)) => (*o, *d),
+                    _ => (Vec3::ZERO, Vec3::ZERO),
+                };
+                for a in 0..3 {
+                    b.od[a][l] = o[a];
+                    b.od[4 + a][l] = d[a];
+                }
+            }
+        }
+        let load = |r: usize| s.load(&Row8(b.od[r]));
+        let (o, d) = ([load(0), load(1), load(2)], [load(4), load(5), load(6)]);
+        for a in 0..3 {
+            // NodeRay: `1 / d` clamped, and the widened plane offsets.
+            let tiny = d[a].abs().lt(s.splat(MIN_DIR));
+            let clamped = s.splat(1.0 / MIN_DIR).copysign(d[a]);
+            let inv = S::F::select(tiny, clamped, s.splat(1.0) / d[a]);
+            let c = (o[a] * inv).neg();
+            let widening = inv.abs() * s.splat(NODE_SLACK);
+            let slack = ((s.splat(max_abs[a]) + o[a].abs()) * widening).copysign(inv);
+            b.node[a] = inv.to_array();
+            b.node[3 + a] = (c - slack).to_array();
+            b.node[6 + a] = (c + slack).to_array();
+        }
+        // `shear` on every lane: selects for its branches, the same comparisons.
+        let (ax, ay, az) = (d[0].abs(), d[1].abs(), d[2].abs());
+        let x_beats_y = ax.gt(ay);
+        let x_dominant = x_beats_y & ax.gt(az);
+        let y_dominant = ay.gt(az).and_not(x_beats_y);
+        let pick = |v: &[S::F; 3], x: usize, y: usize, z: usize| {
+            S::F::select(x_dominant, v[x], S::F::select(y_dominant, v[y], v[z]))
+        };
+        // kz is X, Y or Z; kx and ky follow it cyclically.
+        let (dkx, dky, dkz) = (pick(&d, 1, 2, 0), pick(&d, 2, 0, 1), pick(&d, 0, 1, 2));
+        b.tri[0] = pick(&o, 1, 2, 0).to_array();
+        b.tri[1] = pick(&o, 2, 0, 1).to_array();
+        b.tri[2] = pick(&o, 0, 1, 2).to_array();
+        b.tri[3] = (dkx / dkz).to_array();
+        b.tri[4] = (dky / dkz).to_array();
+        b.tri[5] = (s.splat(1.0) / dkz).to_array();
+        b.x_dominant = x_dominant.bits();
+        b.y_dominant = y_dominant.bits();
+    }
+
+    /// Ray `l`'s `(kx, ky, kz)`.
+    #[inline(always)]
+    fn axes(&self, l: usize) -> [Axis; 3] {
+        let l = l % BLOCK;
+        SHEAR_AXES[((self.x_dominant >> l) & 1 | ((self.y_dominant >> l) & 1) << 1) as usize]
+    }
+
+    /// Ray `l`'s origin.
+    #[inline(always)]
+    fn origin(&self, l: usize) -> Vec3 {
+        let l = l % BLOCK;
+        Vec3::new(self.od[0][l], self.od[1][l], self.od[2][l])
+    }
+
+    /// Ray `l`'s direction.
+    #[inline(always)]
+    fn direction(&self, l: usize) -> Vec3 {
+        let l = l % BLOCK;
+        Vec3::new(self.od[4][l], self.od[5][l], self.od[6][l])
+    }
+}
+
+/// Ray `l` of a [`RayBlock`] for the 8-wide node test. Its per-axis values stay in the
+/// block and are broadcast to the child lanes where the node test reads them (one
+/// `vbroadcastss` from memory each, see [`intersect_node8`]): a ray visits little more than
+/// one node on average in small scenes, and splatting all nine once per ray costs a
+/// broadcast and a spill each.
+struct NodeRay<'a, F> {
+    block: &'a RayBlock,
+    lane: usize,
     tmin: F,
 }
 
-impl<F: Lanes8> NodeRay<F> {
+impl<'a, F: Lanes8> NodeRay<'a, F> {
     #[inline(always)]
-    fn new<S: Simd<F = F>>(s: S, o: Vec3A, d: Vec3A, tmin: f32, max_abs: Vec3A) -> Self {
-        let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
-        let inv_dir = Vec3A::select(
-            tiny,
-            Vec3A::splat(1.0 / MIN_DIR).copysign(d),
-            Vec3A::ONE / d,
-        );
-        let c = -(o * inv_dir);
-        // The widening, with the sign of `1 / d`: subtracted from the minimum plane's
-        // offset where that plane is the near one.
-        let slack = ((max_abs + o.abs()) * (inv_dir.abs() * NODE_SLACK)).copysign(inv_dir);
-        let lo_orig = c - slack;
-        let hi_orig = c + slack;
+    fn new<S: Simd<F = F>>(s: S, block: &'a RayBlock, lane: usize, tmin: f32) -> Self {
         Self {
-            k: [
-                inv_dir.extend(0.0).to_array(),
-                lo_orig.extend(0.0).to_array(),
-                hi_orig.extend(0.0).to_array(),
-            ],
+            block,
+            lane: lane % BLOCK,
             tmin: s.splat(tmin),
         }
     }
@@ -463,10 +581,11 @@ impl<F: Lanes8> NodeRay<F> {
 /// would not inherit the AVX2 target feature, and the intrinsics would not be inlined into
 /// them.)
 #[inline(always)]
-fn slab<S: Simd>(s: S, b: &[Row8; 6], k: &[[f32; 4]; 3], a: usize) -> (S::F, S::F) {
-    let inv = s.splat(k[0][a]);
-    let lo = s.load(&b[2 * a]).mul_add(inv, s.splat(k[1][a]));
-    let hi = s.load(&b[2 * a + 1]).mul_add(inv, s.splat(k[2][a]));
+fn slab<S: Simd>(s: S, b: &[Row8; 6], k: &[[f32; BLOCK]; 9], l: usize, a: usize) -> (S::F, S::F) {
+    let l = l % BLOCK;
+    let inv = s.splat(k[a][l]);
+    let lo = s.load(&b[2 * a]).mul_add(inv, s.splat(k[3 + a][l]));
+    let hi = s.load(&b[2 * a + 1]).mul_add(inv, s.splat(k[6 + a][l]));
     (lo.min(hi), lo.max(hi))
 }
 
@@ -477,39 +596,52 @@ fn intersect_node8<S: Simd>(s: S, node: &Node8, ray: &NodeRay<S::F>, tmax: f32) 
     // `black_box` only keeps the compiler from hoisting the nine broadcasts out of the
     // traversal loop into the per-ray set-up (and spilling them there); the values read are
     // those of `ray` either way, so correctness does not depend on it.
-    let k = std::hint::black_box(&ray.k);
-    let (nx, fx) = slab(s, &node.bounds, k, 0);
-    let (ny, fy) = slab(s, &node.bounds, k, 1);
-    let (nz, fz) = slab(s, &node.bounds, k, 2);
+    let k = std::hint::black_box(&ray.block.node);
+    let (nx, fx) = slab(s, &node.bounds, k, ray.lane, 0);
+    let (ny, fy) = slab(s, &node.bounds, k, ray.lane, 1);
+    let (nz, fz) = slab(s, &node.bounds, k, ray.lane, 2);
     let tnear = nx.max(ny).max(nz.max(ray.tmin));
     let tfar = fx.min(fy).min(fz.min(s.splat(tmax)));
     (tnear.le(tfar).bits() & node.valid, tnear)
 }
 
-/// Per-ray constants of the packet triangle test: [`WatertightRay`]'s, kept as scalars
-/// and broadcast to the triangle lanes in [`intersect_packet`] (as [`NodeRay`]'s: a ray
-/// tests few packets, so splatting all six at set-up costs more than broadcasting them at
-/// each test).
-struct PacketRay<F> {
-    /// Rows: the permuted origin `o`, the shear `(Sx, Sy, Sz)`.
-    k: [[f32; 4]; 2],
+/// Ray `l` of a [`RayBlock`] for the packet triangle test: [`WatertightRay`]'s constants,
+/// kept in the block and broadcast to the triangle lanes in [`intersect_packet`] (as
+/// [`NodeRay`]'s).
+struct PacketRay<'a, F> {
+    block: &'a RayBlock,
+    lane: usize,
     kx: Axis,
     ky: Axis,
     kz: Axis,
     lanes: PhantomData<F>,
 }
 
-impl<F: Lanes8> PacketRay<F> {
+impl<'a, F: Lanes8> PacketRay<'a, F> {
     #[inline(always)]
-    fn new<S: Simd<F = F>>(_: S, origin: Vec3A, direction: Vec3A) -> Self {
-        let (kx, ky, kz, o, sh) = shear(origin, direction);
+    fn new<S: Simd<F = F>>(_: S, block: &'a RayBlock, lane: usize) -> Self {
+        let lane = lane % BLOCK;
+        let [kx, ky, kz] = block.axes(lane);
         Self {
-            k: [o.extend(0.0).to_array(), sh.extend(0.0).to_array()],
+            block,
+            lane,
             kx,
             ky,
             kz,
             lanes: PhantomData,
         }
+    }
+
+    /// The ray's origin (for the sphere and scalar fallback tests).
+    #[inline(always)]
+    fn origin(&self) -> Vec3 {
+        self.block.origin(self.lane)
+    }
+
+    /// The ray's direction.
+    #[inline(always)]
+    fn direction(&self) -> Vec3 {
+        self.block.direction(self.lane)
     }
 }
 
@@ -563,14 +695,15 @@ fn intersect_packet<S: Simd>(
     tmax: f32,
 ) -> PacketHits<S::F> {
     // `black_box`: see `intersect_node8` (keeps the broadcasts here, out of the set-up).
-    let k = std::hint::black_box(&r.k);
+    let k = std::hint::black_box(&r.block.tri);
+    let lane = r.lane % BLOCK;
     let l = PacketLanes {
-        ox: s.splat(k[0][0]),
-        oy: s.splat(k[0][1]),
-        oz: s.splat(k[0][2]),
-        sx: s.splat(k[1][0]),
-        sy: s.splat(k[1][1]),
-        sz: s.splat(k[1][2]),
+        ox: s.splat(k[0][lane]),
+        oy: s.splat(k[1][lane]),
+        oz: s.splat(k[2][lane]),
+        sx: s.splat(k[3][lane]),
+        sy: s.splat(k[4][lane]),
+        sz: s.splat(k[5][lane]),
     };
     let (x0, y0, z0) = shear_vertex(s, r, &l, &p.v[0]);
     let (x1, y1, z1) = shear_vertex(s, r, &l, &p.v[1]);
@@ -642,10 +775,11 @@ fn intersect_packet<S: Simd>(
 /// bound of `t*`, and hits with `t <= tmin + bound` are rejected (`t_error_bound`). Rays
 /// spawned on a wall (origin offset off it, `tmin = 0`) test that wall's leaf first thing,
 /// as the node test's widening exceeds the spawn offset; this settles it with two compares.
-/// For [`NO_PLANE`](crate::bvh8::NO_PLANE) (3) it reads the rows' fourth entries, where `d` is 0, and is false.
+/// `od` and `lane` are a [`RayBlock`]'s origin and direction rows and the ray's lane. For
+/// [`NO_PLANE`](crate::bvh8::NO_PLANE) (3) it reads the zero rows, where `d` is 0, and is false.
 #[inline(always)]
-fn behind_plane(axis: usize, c: f32, [o, d]: &[[f32; 4]; 2], tmin: f32) -> bool {
-    let (oa, da) = (o[axis & 3], d[axis & 3]);
+fn behind_plane(axis: usize, c: f32, od: &[[f32; BLOCK]; 8], lane: usize, tmin: f32) -> bool {
+    let (oa, da) = (od[axis & 3][lane % BLOCK], od[4 + (axis & 3)][lane % BLOCK]);
     // Non-short-circuit `&`/`|`: one branch on the result instead of one per comparison.
     (tmin >= 0.0) & (((da > 0.0) & (c <= oa)) | ((da < 0.0) & (c >= oa)))
 }
@@ -863,13 +997,6 @@ fn check_lengths(n: usize, lens: &[usize]) {
     );
 }
 
-/// `v` in a SIMD register, loaded coordinate by coordinate (copying the 12-byte `Vec3`
-/// whole goes through the stack).
-#[inline(always)]
-fn load3(v: &Vec3) -> Vec3A {
-    Vec3A::new(v.x, v.y, v.z)
-}
-
 /// The columns of [`intersect_closest`].
 struct ClosestColumns<'a> {
     origin: &'a [Vec3],
@@ -888,12 +1015,7 @@ const NO_SPHERE: u32 = u32::MAX;
 /// A closest-hit ray during traversal: its constants and the closest hit so far.
 struct ClosestRay<'a, S: Simd> {
     s: S,
-    tri: PacketRay<S::F>,
-    o: Vec3A,
-    d: Vec3A,
-    /// `o` and `d` as arrays, for [`behind_plane`] (a reference: indexing a field at a
-    /// run-time position would keep the whole struct in memory).
-    od: &'a [[f32; 4]; 2],
+    tri: PacketRay<'a, S::F>,
     tmin: f32,
     prim: u32,
     /// Sphere leaf of the closest hit, or [`NO_SPHERE`].
@@ -909,7 +1031,8 @@ impl<S: Simd> ClosestRay<'_, S> {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
             let leaf = &bvh.spheres[index];
-            let ts = sphere_leaf_t(leaf, self.o.into(), self.d.into(), self.tmin, *tmax);
+            let (o, d) = (self.tri.origin(), self.tri.direction());
+            let ts = sphere_leaf_t(leaf, o, d, self.tmin, *tmax);
             if ts < *tmax {
                 *tmax = ts;
                 self.prim = leaf.prim;
@@ -918,7 +1041,8 @@ impl<S: Simd> ClosestRay<'_, S> {
             return;
         }
         let p = &bvh.packets[index];
-        if behind_plane(p.plane_axis as usize, p.plane_c, self.od, self.tmin) {
+        let (od, lane) = (&self.tri.block.od, self.tri.lane);
+        if behind_plane(p.plane_axis as usize, p.plane_c, od, lane, self.tmin) {
             return;
         }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, *tmax);
@@ -939,7 +1063,8 @@ impl<S: Simd> ClosestRay<'_, S> {
                     b2: b2[l],
                 }
             } else {
-                match packet_lane_scalar(p, l, self.o, self.d, self.tmin, *tmax) {
+                let (o, d) = (self.tri.origin().into(), self.tri.direction().into());
+                match packet_lane_scalar(p, l, o, d, self.tmin, *tmax) {
                     Some(h) => h,
                     None => continue,
                 }
@@ -959,44 +1084,46 @@ impl<S: Simd> ClosestRay<'_, S> {
 #[inline(always)]
 fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     let mut stack = vec![Entry { child: 0, t: 0.0 }; bvh.stack_capacity()];
+    let mut block = RayBlock::zero();
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
     let (tmin, tmax) = (&c.tmin[..n], &c.tmax[..n]);
     let (t, prim) = (&mut c.t[..n], &mut c.prim[..n]);
     let (b1, b2) = (&mut c.b1[..n], &mut c.b2[..n]);
-    for i in 0..n {
-        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
-        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
-        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
-        let mut ray = ClosestRay {
-            s,
-            tri: PacketRay::new(s, o, d),
-            o,
-            d,
-            od: &od,
-            tmin: ray_tmin,
-            prim: NO_HIT,
-            sphere: NO_SPHERE,
-            b1: 0.0,
-            b2: 0.0,
-        };
-        let mut best_t = tmax[i];
-        traverse_closest(s, bvh, &node_ray, &mut stack, &mut best_t, &mut ray);
-        if ray.prim == NO_HIT {
-            t[i] = f32::INFINITY;
-            prim[i] = NO_HIT;
-            b1[i] = 0.0;
-            b2[i] = 0.0;
-        } else {
-            if ray.sphere != NO_SPHERE {
-                let leaf = &bvh.spheres[ray.sphere as usize];
-                (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o.into(), d.into(), ray_tmin, tmax[i]);
+    for start in (0..n).step_by(BLOCK) {
+        let end = n.min(start + BLOCK);
+        block.set(s, &origin[start..end], &direction[start..end], bvh.max_abs);
+        for i in start..end {
+            let (lane, ray_tmin) = (i - start, tmin[i]);
+            let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
+            let mut ray = ClosestRay {
+                s,
+                tri: PacketRay::new(s, &block, lane),
+                tmin: ray_tmin,
+                prim: NO_HIT,
+                sphere: NO_SPHERE,
+                b1: 0.0,
+                b2: 0.0,
+            };
+            let mut best_t = tmax[i];
+            traverse_closest(s, bvh, &node_ray, &mut stack, &mut best_t, &mut ray);
+            if ray.prim == NO_HIT {
+                t[i] = f32::INFINITY;
+                prim[i] = NO_HIT;
+                b1[i] = 0.0;
+                b2[i] = 0.0;
+            } else {
+                if ray.sphere != NO_SPHERE {
+                    let leaf = &bvh.spheres[ray.sphere as usize];
+                    let (o, d) = (origin[i], direction[i]);
+                    (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
+                }
+                t[i] = best_t;
+                prim[i] = ray.prim;
+                b1[i] = ray.b1;
+                b2[i] = ray.b2;
             }
-            t[i] = best_t;
-            prim[i] = ray.prim;
-            b1[i] = ray.b1;
-            b2[i] = ray.b2;
         }
     }
 }
@@ -1013,11 +1140,7 @@ struct OccludedColumns<'a> {
 /// A shadow ray's constants during traversal.
 struct AnyRay<'a, S: Simd> {
     s: S,
-    tri: PacketRay<S::F>,
-    o: Vec3A,
-    d: Vec3A,
-    /// `o` and `d` as arrays, for [`behind_plane`].
-    od: &'a [[f32; 4]; 2],
+    tri: PacketRay<'a, S::F>,
     tmin: f32,
 }
 
@@ -1027,16 +1150,12 @@ impl<S: Simd> AnyRay<'_, S> {
     fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
-            return sphere_leaf_t(
-                &bvh.spheres[index],
-                self.o.into(),
-                self.d.into(),
-                self.tmin,
-                tmax,
-            ) < f32::INFINITY;
+            let (o, d) = (self.tri.origin(), self.tri.direction());
+            return sphere_leaf_t(&bvh.spheres[index], o, d, self.tmin, tmax) < f32::INFINITY;
         }
         let p = &bvh.packets[index];
-        if behind_plane(p.plane_axis as usize, p.plane_c, self.od, self.tmin) {
+        let (od, lane) = (&self.tri.block.od, self.tri.lane);
+        if behind_plane(p.plane_axis as usize, p.plane_c, od, lane, self.tmin) {
             return false;
         }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);
@@ -1047,7 +1166,8 @@ impl<S: Simd> AnyRay<'_, S> {
         while fallback != 0 {
             let l = fallback.trailing_zeros() as usize & 7;
             fallback &= fallback - 1;
-            if packet_lane_scalar(p, l, self.o, self.d, self.tmin, tmax).is_some() {
+            let (o, d) = (self.tri.origin().into(), self.tri.direction().into());
+            if packet_lane_scalar(p, l, o, d, self.tmin, tmax).is_some() {
                 return true;
             }
         }
@@ -1059,23 +1179,24 @@ impl<S: Simd> AnyRay<'_, S> {
 #[inline(always)]
 fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     let mut stack = vec![0u32; bvh.stack_capacity()];
+    let mut block = RayBlock::zero();
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
     let (tmin, tmax, occluded) = (&c.tmin[..n], &c.tmax[..n], &mut c.occluded[..n]);
-    for i in 0..n {
-        let (o, d, ray_tmin) = (load3(&origin[i]), load3(&direction[i]), tmin[i]);
-        let node_ray = NodeRay::new(s, o, d, ray_tmin, bvh.max_abs);
-        let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
-        let ray = AnyRay {
-            s,
-            tri: PacketRay::new(s, o, d),
-            o,
-            d,
-            od: &od,
-            tmin: ray_tmin,
-        };
-        occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
+    for start in (0..n).step_by(BLOCK) {
+        let end = n.min(start + BLOCK);
+        block.set(s, &origin[start..end], &direction[start..end], bvh.max_abs);
+        for i in start..end {
+            let (lane, ray_tmin) = (i - start, tmin[i]);
+            let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
+            let ray = AnyRay {
+                s,
+                tri: PacketRay::new(s, &block, lane),
+                tmin: ray_tmin,
+            };
+            occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
+        }
     }
 }
 
@@ -1317,7 +1438,9 @@ mod tests {
         tmax: f32,
         max_abs: Vec3A,
     ) -> u32 {
-        let ray = NodeRay::new(s, o.into(), d.into(), tmin, max_abs);
+        let mut block = RayBlock::zero();
+        block.set(s, &[o], &[d], max_abs);
+        let ray = NodeRay::new(s, &block, 0, tmin);
         intersect_node8(s, node, &ray, tmax).0
     }
 
@@ -1597,7 +1720,9 @@ mod tests {
         tmin: f32,
         tmax: f32,
     ) -> (u32, u32, [f32; 8], [f32; 8], [f32; 8]) {
-        let r = intersect_packet(s, &PacketRay::new(s, o.into(), d.into()), p, tmin, tmax);
+        let mut block = RayBlock::zero();
+        block.set(s, &[o], &[d], Vec3A::ONE);
+        let r = intersect_packet(s, &PacketRay::new(s, &block, 0), p, tmin, tmax);
         (
             r.hit,
             r.fallback,
@@ -1721,8 +1846,9 @@ mod tests {
                     d[axis] = 0.0;
                 }
                 let tmin = if k % 2 == 0 { 0.0 } else { rng.f32() * 1e-3 };
-                let od = [o.extend(0.0).to_array(), d.extend(0.0).to_array()];
-                let skip = behind_plane(axis, p.plane_c, &od, tmin);
+                let mut block = RayBlock::zero();
+                block.set(Portable, &[o], &[d], Vec3A::ONE);
+                let skip = behind_plane(axis, p.plane_c, &block.od, 0, tmin);
                 let (hit, fallback, ..) =
                     with_simd!(backend, s => packet_hits(s, &p, o, d, tmin, f32::INFINITY));
                 let fallback_hit = (0..WIDTH).any(|l| {
@@ -1742,6 +1868,79 @@ mod tests {
                 skipped > 5000 && hits > 500,
                 "{skipped} skipped, {hits} hits"
             );
+        }
+    }
+
+    /// Every lane of a [`RayBlock`], on every backend and for full and partial blocks,
+    /// holds the bits of the per-ray formulas: `NodeRay`'s documented rows computed one
+    /// ray at a time with `Vec3A` operations, and [`shear`]'s permutation and constants.
+    /// Directions include zero, negative zero, tiny and axis-tied components.
+    #[test]
+    fn ray_block_lanes_equal_the_per_ray_constants() {
+        let mut rng = Rng(21);
+        let max_abs = Vec3A::new(3.0, 1e4, 0.5);
+        let special = [0.0f32, -0.0, 1e-25, -1e-25, 1e-20, 0.5, -0.5, 1.0, 1e30];
+        for backend in backends() {
+            for k in 0..400 {
+                let len = 1 + k % BLOCK;
+                let mut origin = Vec::new();
+                let mut direction = Vec::new();
+                for _ in 0..len {
+                    origin.push(rng.vec(-10.0, 10.0));
+                    let mut d = rng.vec(-1.0, 1.0);
+                    for a in 0..3 {
+                        if rng.next_u64().is_multiple_of(3) {
+                            d[a] = special[(rng.next_u64() % special.len() as u64) as usize];
+                        }
+                    }
+                    if k % 7 == 0 {
+                        d.y = d.x.abs().copysign(d.y);
+                    }
+                    direction.push(d);
+                }
+                let mut block = RayBlock::zero();
+                with_simd!(backend, s => block.set(s, &origin, &direction, max_abs));
+                for l in 0..len {
+                    let (o, d) = (Vec3A::from(origin[l]), Vec3A::from(direction[l]));
+                    let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
+                    let inv = Vec3A::select(
+                        tiny,
+                        Vec3A::splat(1.0 / MIN_DIR).copysign(d),
+                        Vec3A::ONE / d,
+                    );
+                    let c = -(o * inv);
+                    let slack = ((max_abs + o.abs()) * (inv.abs() * NODE_SLACK)).copysign(inv);
+                    let (kx, ky, kz, po, sh) = shear(o, d);
+                    let rows = [inv, c - slack, c + slack];
+                    for a in 0..3 {
+                        for (r, row) in rows.iter().enumerate() {
+                            let got = block.node[3 * r + a][l];
+                            assert_eq!(
+                                got.to_bits(),
+                                row[a].to_bits(),
+                                "{backend:?} ray {k}/{l} row {r} axis {a}: d {d}"
+                            );
+                        }
+                        assert_eq!(
+                            block.tri[a][l].to_bits(),
+                            po[a].to_bits(),
+                            "{backend:?} ray {k}/{l} origin {a}: d {d}"
+                        );
+                        assert_eq!(
+                            block.tri[3 + a][l].to_bits(),
+                            sh[a].to_bits(),
+                            "{backend:?} ray {k}/{l} shear {a}: d {d}"
+                        );
+                    }
+                    assert_eq!(
+                        block.axes(l),
+                        [kx, ky, kz],
+                        "{backend:?} ray {k}/{l}: d {d}"
+                    );
+                    assert_eq!(block.origin(l), origin[l]);
+                    assert_eq!(block.direction(l), direction[l]);
+                }
+            }
         }
     }
 }

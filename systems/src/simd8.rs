@@ -23,6 +23,8 @@ pub(crate) struct Row8(pub(crate) [f32; 8]);
 pub(crate) trait Mask8: Copy + BitAnd<Output = Self> + BitOr<Output = Self> {
     /// Bit `l` set where lane `l` is true.
     fn bits(self) -> u32;
+    /// True where `self` is and `o` is not.
+    fn and_not(self, o: Self) -> Self;
 }
 
 /// Eight f32 lanes.
@@ -37,6 +39,12 @@ pub(crate) trait Lanes8:
     fn max(self, o: Self) -> Self;
     /// Lane-wise magnitude.
     fn abs(self) -> Self;
+    /// The sign bit flipped (as `-x` on `f32`).
+    fn neg(self) -> Self;
+    /// The magnitude of `self` with the sign bit of `sign` (as `f32::copysign`).
+    fn copysign(self, sign: Self) -> Self;
+    /// `a` where `m` is true, else `b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// `self * a + b`, with one rounding where the CPU has FMA and two otherwise. Only for
     /// the node test, whose error bound holds either way; the triangle test never fuses,
     /// so that both kernels compute the same bits.
@@ -134,6 +142,10 @@ impl Mask8 for PMask {
     fn bits(self) -> u32 {
         self.0[0].bitmask() | (self.0[1].bitmask() << 4)
     }
+    #[inline(always)]
+    fn and_not(self, o: PMask) -> PMask {
+        PMask([self.0[0] & !o.0[0], self.0[1] & !o.0[1]])
+    }
 }
 
 impl Lanes8 for P8 {
@@ -149,6 +161,21 @@ impl Lanes8 for P8 {
     #[inline(always)]
     fn abs(self) -> P8 {
         P8([self.0[0].abs(), self.0[1].abs()])
+    }
+    #[inline(always)]
+    fn neg(self) -> P8 {
+        P8([-self.0[0], -self.0[1]])
+    }
+    #[inline(always)]
+    fn copysign(self, sign: P8) -> P8 {
+        P8([self.0[0].copysign(sign.0[0]), self.0[1].copysign(sign.0[1])])
+    }
+    #[inline(always)]
+    fn select(m: PMask, a: P8, b: P8) -> P8 {
+        P8([
+            Vec4::select(m.0[0], a.0[0], b.0[0]),
+            Vec4::select(m.0[1], a.0[1], b.0[1]),
+        ])
     }
     #[inline(always)]
     fn mul_add(self, a: P8, b: P8) -> P8 {
@@ -278,6 +305,10 @@ mod avx2 {
         fn bits(self) -> u32 {
             avx!(_mm256_movemask_ps(self.0)) as u32
         }
+        #[inline(always)]
+        fn and_not(self, o: AMask) -> AMask {
+            AMask(avx!(_mm256_andnot_ps(o.0, self.0)))
+        }
     }
 
     impl Lanes8 for A8 {
@@ -293,6 +324,22 @@ mod avx2 {
         #[inline(always)]
         fn abs(self) -> A8 {
             A8(avx!(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)))
+        }
+        #[inline(always)]
+        fn neg(self) -> A8 {
+            A8(avx!(_mm256_xor_ps(_mm256_set1_ps(-0.0), self.0)))
+        }
+        #[inline(always)]
+        fn copysign(self, sign: A8) -> A8 {
+            let m = avx!(_mm256_set1_ps(-0.0));
+            A8(avx!(_mm256_or_ps(
+                _mm256_andnot_ps(m, self.0),
+                _mm256_and_ps(m, sign.0)
+            )))
+        }
+        #[inline(always)]
+        fn select(m: AMask, a: A8, b: A8) -> A8 {
+            A8(avx!(_mm256_blendv_ps(b.0, a.0, m.0)))
         }
         #[inline(always)]
         fn mul_add(self, a: A8, b: A8) -> A8 {
