@@ -474,30 +474,21 @@ impl RayBlock {
     #[inline(always)]
     fn set<S: Simd>(&mut self, s: S, origin: &[Vec3], direction: &[Vec3], max_abs: Vec3A) {
         let b = self;
-        if let (Some(origin), Some(direction)) = (
-            origin.first_chunk::<BLOCK>(),
-            direction.first_chunk::<BLOCK>(),
-        ) {
-            for l in 0..BLOCK {
-                for a in 0..3 {
-                    b.od[a][l] = origin[l][a];
-                    b.od[4 + a][l] = direction[l][a];
+        let (o, d) = match (origin.first_chunk(), direction.first_chunk()) {
+            (Some(origin), Some(direction)) => (s.load_xyz(origin), s.load_xyz(direction)),
+            _ => {
+                // A partial block: the rays, then zero rays.
+                let mut rays = [[Vec3::ZERO; BLOCK]; 2];
+                for (l, (o, d)) in origin.iter().zip(direction).take(BLOCK).enumerate() {
+                    (rays[0][l], rays[1][l]) = (*o, *d);
                 }
+                (s.load_xyz(&rays[0]), s.load_xyz(&rays[1]))
             }
-        } else {
-            for l in 0..BLOCK {
-                let (o, d) = match (origin.get(l), direction.get(l)) {
-                    (Some(o), Some(d)) => (*o, *d),
-                    _ => (Vec3::ZERO, Vec3::ZERO),
-                };
-                for a in 0..3 {
-                    b.od[a][l] = o[a];
-                    b.od[4 + a][l] = d[a];
-                }
-            }
+        };
+        for a in 0..3 {
+            b.od[a] = o[a].to_array();
+            b.od[4 + a] = d[a].to_array();
         }
-        let load = |r: usize| s.load(&Row8(b.od[r]));
-        let (o, d) = ([load(0), load(1), load(2)], [load(4), load(5), load(6)]);
         for a in 0..3 {
             // NodeRay: `1 / d` clamped, and the widened plane offsets.
             let tiny = d[a].abs().lt(s.splat(MIN_DIR));

@@ -12,7 +12,7 @@
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
 
-use glam::{BVec4A, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 
 /// Eight f32 in memory, aligned for one 256-bit load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,6 +78,8 @@ pub(crate) trait Simd: Copy {
     fn splat(self, x: f32) -> Self::F;
     /// The eight values of `r`.
     fn load(self, r: &Row8) -> Self::F;
+    /// The x, y and z coordinates of eight points, as three rows (lane `l` point `l`).
+    fn load_xyz(self, v: &[Vec3; 8]) -> [Self::F; 3];
 }
 
 /// Portable lanes: two glam `Vec4`.
@@ -102,6 +104,16 @@ impl Simd for Portable {
     fn load(self, r: &Row8) -> P8 {
         let [a, b, c, d, e, f, g, h] = r.0;
         P8([Vec4::new(a, b, c, d), Vec4::new(e, f, g, h)])
+    }
+    #[inline(always)]
+    fn load_xyz(self, v: &[Vec3; 8]) -> [P8; 3] {
+        let row = |a: usize| {
+            P8([
+                Vec4::new(v[0][a], v[1][a], v[2][a], v[3][a]),
+                Vec4::new(v[4][a], v[5][a], v[6][a], v[7][a]),
+            ])
+        };
+        [row(0), row(1), row(2)]
     }
 }
 
@@ -220,6 +232,8 @@ mod avx2 {
     use std::arch::x86_64::*;
     use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
 
+    use glam::Vec3;
+
     use super::{Lanes8, Mask8, Row8, Simd};
 
     /// Proof that the CPU runs AVX2 and FMA: the private field keeps it from being made
@@ -266,6 +280,62 @@ mod avx2 {
             // the token guarantees AVX.
             A8(unsafe { _mm256_load_ps(r.0.as_ptr()) })
         }
+        #[inline(always)]
+        fn load_xyz(self, v: &[Vec3; 8]) -> [A8; 3] {
+            // Three loads of eight floats: `m0 = x0 y0 z0 x1 y1 z1 x2 y2`,
+            // `m1 = z2 x3 y3 z3 x4 y4 z4 x5`, `m2 = y5 z5 x6 y6 z6 x7 y7 z7`. Each coordinate
+            // sits at lanes that differ between the three (x: m0 {0, 3, 6}, m1 {1, 4, 7},
+            // m2 {2, 5}), so two blends gather it into one register and one permutation
+            // puts it in order.
+            let p = v.as_ptr().cast::<f32>();
+            // SAFETY: `Vec3` is `#[repr(C)]` with three `f32` fields and no padding (12
+            // bytes), so `v` is 24 contiguous readable `f32`: the loads read floats 0..8,
+            // 8..16 and 16..24 (unaligned loads); the token guarantees AVX2.
+            let (m0, m1, m2) = unsafe {
+                (
+                    _mm256_loadu_ps(p),
+                    _mm256_loadu_ps(p.add(8)),
+                    _mm256_loadu_ps(p.add(16)),
+                )
+            };
+            [
+                A8(gather::<0b1001_0010, 0b0010_0100>(
+                    m0,
+                    m1,
+                    m2,
+                    [0, 3, 6, 1, 4, 7, 2, 5],
+                )),
+                A8(gather::<0b0010_0100, 0b0100_1001>(
+                    m0,
+                    m1,
+                    m2,
+                    [1, 4, 7, 2, 5, 0, 3, 6],
+                )),
+                A8(gather::<0b0100_1001, 0b1001_0010>(
+                    m0,
+                    m1,
+                    m2,
+                    [2, 5, 0, 3, 6, 1, 4, 7],
+                )),
+            ]
+        }
+    }
+
+    /// One coordinate of [`Avx2::load_xyz`]'s three loads: lanes set in `FROM1` taken from
+    /// `m1`, those in `FROM2` from `m2`, the rest from `m0`, then lane `order[i]` moved to
+    /// lane `i`.
+    #[inline(always)]
+    fn gather<const FROM1: i32, const FROM2: i32>(
+        m0: __m256,
+        m1: __m256,
+        m2: __m256,
+        order: [i32; 8],
+    ) -> __m256 {
+        let [a, b, c, d, e, f, g, h] = order;
+        avx!(_mm256_permutevar8x32_ps(
+            _mm256_blend_ps::<FROM2>(_mm256_blend_ps::<FROM1>(m0, m1), m2),
+            _mm256_setr_epi32(a, b, c, d, e, f, g, h)
+        ))
     }
 
     macro_rules! avx_binop {
