@@ -16,7 +16,7 @@ use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats, Termination};
 use bumpalo::Bump;
-use glam::Vec3;
+use glam::{BVec4A, Vec3, Vec4};
 use risotto_components::*;
 use risotto_systems::camera::push_camera_rays;
 use risotto_systems::film::{splat, Film};
@@ -98,6 +98,8 @@ pub struct BatchTables {
     emissive_material: Vec<bool>,
     /// Contributions of the shadow rays, attenuated by the transmission stage.
     contribution: Vec<Rgb>,
+    /// Points of the group being shaded whose light sample may give a shadow ray.
+    shadow_points: Vec<u32>,
     /// Which shading points stay in the groups (pass-through points leave).
     keep: Vec<bool>,
     /// Number of kept points before each point (prefix sums of `keep`).
@@ -763,6 +765,7 @@ impl PathTracer {
             albedo_tmp,
             u4,
             emissive_material,
+            shadow_points,
             ..
         } = t;
         let groups = std::mem::take(&mut shade_groups.groups);
@@ -914,6 +917,7 @@ impl PathTracer {
                     samples: light,
                     value,
                     pdf,
+                    points: scratch(shadow_points, m, 0),
                 };
                 shadow_len += spawn_shadow_rays(
                     shadow_scene,
@@ -1011,8 +1015,43 @@ struct LightColumns<'a> {
     samples: LightSampleColumns<'a>,
     /// Bxdf value `f * |cos|` for the sample's direction.
     value: &'a [Rgb],
-    /// Bxdf pdf of the sample's direction (for MIS).
-    pdf: &'a [f32],
+    /// Bxdf pdf of the sample's direction (for MIS); overwritten with the contribution
+    /// factor [`light_weights`].
+    pdf: &'a mut [f32],
+    /// Scratch: the points that may get a shadow ray.
+    points: &'a mut [u32],
+}
+
+/// Overwrites `b_pdf[k]` (the Bxdf pdf of light sample `k`) with `w / l_pdf[k]`, the factor
+/// of the sample's shadow-ray contribution: `w` the power heuristic against the Bxdf pdf,
+/// or 1 for Dirac lights and without MIS. Four points per SSE operation, the operations of
+/// `power_heuristic` and the division in the same order (IEEE operations round the same in
+/// any lane), so the same bits as the scalar formula; the two divisions leave the
+/// spawn loop's dependency chain. Values where `l_pdf` is 0 are meaningless.
+fn light_weights(l_pdf: &[f32], b_pdf: &mut [f32], delta: &[bool], no_mis: bool) {
+    let m = b_pdf.len();
+    let (l_pdf, delta) = (&l_pdf[..m], &delta[..m]);
+    let (l4, l_rest) = l_pdf.as_chunks::<4>();
+    let (d4, d_rest) = delta.as_chunks::<4>();
+    let (b4, b_rest) = b_pdf.as_chunks_mut::<4>();
+    for ((l, d), b) in l4.iter().zip(d4).zip(b4) {
+        let (pa, pb) = (Vec4::from_array(*l), Vec4::from_array(*b));
+        let (a, bb) = (pa * pa, pb * pb);
+        let w = a / (a + bb);
+        let w = Vec4::select(w.is_finite_mask() & a.is_finite_mask(), w, Vec4::ONE);
+        let w = Vec4::select(a.cmpne(Vec4::ZERO), w, Vec4::ZERO);
+        let dirac = BVec4A::new(d[0] | no_mis, d[1] | no_mis, d[2] | no_mis, d[3] | no_mis);
+        let w = Vec4::select(dirac, Vec4::ONE, w);
+        *b = (w / pa).to_array();
+    }
+    for ((&l, &d), b) in l_rest.iter().zip(d_rest).zip(b_rest) {
+        let w = if d | no_mis {
+            1.0
+        } else {
+            power_heuristic(l, *b)
+        };
+        *b = w / l;
+    }
 }
 
 /// Direct-lighting system: writes to `out` from row `start` on one shadow ray per point of
@@ -1058,25 +1097,26 @@ fn spawn_shadow_rays(
     let in_path = &incoming.path[..n];
     let ls = &light.samples;
     let (l_wi, l_distance, l_radiance) = (&ls.wi[..m], &ls.distance[..m], &ls.radiance[..m]);
-    let (l_pdf, l_delta) = (&ls.pdf[..m], &ls.delta[..m]);
-    let (value, pdf) = (&light.value[..m], &light.pdf[..m]);
+    let l_pdf = &ls.pdf[..m];
+    let value = &light.value[..m];
     let (p, ng) = (&pts.p[range.clone()][..m], &pts.ng[range.clone()][..m]);
     let scatter = mode == ShadingMode::Scatter;
-    let mut count = 0;
+    // The factors `w / pdf` of all points, vectorised.
+    light_weights(l_pdf, &mut light.pdf[..m], &ls.delta[..m], no_mis);
+    let factor = &light.pdf[..m];
+    // The points with a sample the Bxdf reflects (two thirds at cornell), listed without a
+    // branch: a branch on it in the loop below mispredicted about 55k times per spp.
+    let points = &mut light.points[..m];
+    let mut listed = 0;
     for k in 0..m {
-        let (l_pdf, f) = (l_pdf[k], value[k]);
-        // No sample, or the Bxdf does not reflect towards it (a third of the points at
-        // cornell): skipped by a branch, which costs fewer cycles in mispredicts than
-        // computing those rows would in instructions (measured).
-        if l_pdf == 0.0 || is_black(f) {
-            continue;
-        }
-        // The MIS weight by bit selects: branches on the pdfs mispredict.
-        let mis = power_heuristic(l_pdf, pdf[k]);
-        let m = ((l_delta[k] | no_mis) as u32).wrapping_neg();
-        let w = f32::from_bits((1f32.to_bits() & m) | (mis.to_bits() & !m));
+        points[listed] = k as u32;
+        listed += ((l_pdf[k] != 0.0) & !is_black(value[k])) as usize;
+    }
+    let mut count = 0;
+    for &k in &points[..listed] {
+        let k = k as usize;
         let r = ray_id[k] as usize;
-        let c = in_throughput[r] * f * l_radiance[k] * (w / l_pdf);
+        let c = in_throughput[r] * value[k] * l_radiance[k] * factor[k];
         if is_black(c) {
             continue;
         }
