@@ -297,8 +297,17 @@ impl PathTracer {
         let n = t.paths.len();
         t.seeds.clear();
         let seed = scene.settings.seed;
+        // Paths come in runs of one pixel's samples: mix each pixel's seed once per run.
+        let mut last: Option<(u32, u32)> = None;
         t.seeds
-            .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
+            .extend(t.paths.pixel.iter().map(|&pixel| match last {
+                Some((p, s)) if p == pixel => s,
+                _ => {
+                    let s = pixel_seed(seed, pixel);
+                    last = Some((pixel, s));
+                    s
+                }
+            }));
         // Camera rays, generated straight into the table's columns.
         t.rays.clear();
         stats.time(System::Camera, n, || {
