@@ -256,13 +256,21 @@ impl PathTracer {
                 }
             }
             paths.depth.fill(f32::INFINITY);
+            // The film pixel of each path: row `y * w + x` of the tile for the run of
+            // pixel (x, y) (`TileFilm::local` of its image pixel, without two integer
+            // divisions per path).
+            t.pixel_tmp.clear();
+            for local in 0..pixels as u32 {
+                t.pixel_tmp.extend(std::iter::repeat_n(local, spp));
+            }
+            debug_assert!(t
+                .pixel_tmp
+                .iter()
+                .zip(&t.paths.pixel)
+                .all(|(&local, &pixel)| local == tile.local(pixel, scene.camera.width)));
             self.run_batch(scene, t, stats, arena);
             // Splat: the film gets one sample per path.
             let n = t.paths.len();
-            t.pixel_tmp.clear();
-            let image_width = scene.camera.width;
-            t.pixel_tmp
-                .extend(t.paths.pixel.iter().map(|&p| tile.local(p, image_width)));
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
             });
