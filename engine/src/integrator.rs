@@ -281,11 +281,25 @@ impl PathTracer {
                 .iter()
                 .zip(&t.paths.normal)
                 .zip(&t.paths.depth);
-            for (&p, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
-                let p = p as usize;
-                tile.albedo[p] += albedo;
-                tile.normal[p] += normal;
-                tile.depth[p] += if d.is_finite() { d } else { 0.0 };
+            // Runs of `spp` paths per film pixel (see `pixel_tmp`): each pixel's sums are
+            // added up in registers, in path order (the same bits as adding to the film
+            // per path, without a store and reload between additions).
+            let (mut p, mut sums) = (usize::MAX, (Rgb::BLACK, Vec3::ZERO, 0.0));
+            for (&q, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
+                let q = q as usize;
+                if q != p {
+                    if p != usize::MAX {
+                        (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
+                    }
+                    p = q;
+                    sums = (tile.albedo[p], tile.normal[p], tile.depth[p]);
+                }
+                sums.0 += albedo;
+                sums.1 += normal;
+                sums.2 += if d.is_finite() { d } else { 0.0 };
+            }
+            if p != usize::MAX {
+                (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
             }
             stats.add_samples(n);
             arena.reset();
