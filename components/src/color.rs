@@ -4,7 +4,11 @@ use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Sub};
 
 /// A linear Rec.709 RGB triple (radiance, reflectance, throughput or transmittance,
 /// depending on the column it lives in).
+///
+/// `repr(C)`: three f32 in the order r, g, b, so that SIMD kernels can store columns of it
+/// as flat floats (as glam's `Vec3`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub struct Rgb {
     /// Red channel.
     pub r: f32,

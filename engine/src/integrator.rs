@@ -16,11 +16,11 @@ use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats, Termination};
 use bumpalo::Bump;
-use glam::Vec3;
+use glam::{BVec4A, Vec3, Vec4};
 use risotto_components::*;
 use risotto_systems::camera::push_camera_rays;
 use risotto_systems::film::{splat, Film};
-use risotto_systems::lights::{power_heuristic, LightSample};
+use risotto_systems::lights::{power_heuristic, LightSample, LightSampleColumns};
 use risotto_systems::partition::partition_by_key;
 use risotto_systems::sampler::{next_4d_column, pixel_seed, sample_1d, PathSampler};
 
@@ -75,7 +75,12 @@ pub struct BatchTables {
     samplers: Vec<PathSampler>,
     seeds: Vec<u32>,
     pixel_tmp: Vec<u32>,
-    light_samples: Vec<Option<LightSample>>,
+    /// Light-sample columns of the group being shaded (`LightSampleColumns`; the
+    /// directions are `wi_tmp`).
+    light_distance: Vec<f32>,
+    light_radiance: Vec<Rgb>,
+    light_pdf: Vec<f32>,
+    light_delta: Vec<bool>,
     eval_value: Vec<Rgb>,
     eval_pdf: Vec<f32>,
     wi_tmp: Vec<Vec3>,
@@ -93,6 +98,8 @@ pub struct BatchTables {
     emissive_material: Vec<bool>,
     /// Contributions of the shadow rays, attenuated by the transmission stage.
     contribution: Vec<Rgb>,
+    /// Points of the group being shaded whose light sample may give a shadow ray.
+    shadow_points: Vec<u32>,
     /// Which shading points stay in the groups (pass-through points leave).
     keep: Vec<bool>,
     /// Number of kept points before each point (prefix sums of `keep`).
@@ -249,13 +256,21 @@ impl PathTracer {
                 }
             }
             paths.depth.fill(f32::INFINITY);
+            // The film pixel of each path: row `y * w + x` of the tile for the run of
+            // pixel (x, y) (`TileFilm::local` of its image pixel, without two integer
+            // divisions per path).
+            t.pixel_tmp.clear();
+            for local in 0..pixels as u32 {
+                t.pixel_tmp.extend(std::iter::repeat_n(local, spp));
+            }
+            debug_assert!(t
+                .pixel_tmp
+                .iter()
+                .zip(&t.paths.pixel)
+                .all(|(&local, &pixel)| local == tile.local(pixel, scene.camera.width)));
             self.run_batch(scene, t, stats, arena);
             // Splat: the film gets one sample per path.
             let n = t.paths.len();
-            t.pixel_tmp.clear();
-            let image_width = scene.camera.width;
-            t.pixel_tmp
-                .extend(t.paths.pixel.iter().map(|&p| tile.local(p, image_width)));
             let dropped = stats.time(System::Splat, n, || {
                 splat(&mut tile.film, &t.pixel_tmp, &t.paths.radiance)
             });
@@ -266,11 +281,25 @@ impl PathTracer {
                 .iter()
                 .zip(&t.paths.normal)
                 .zip(&t.paths.depth);
-            for (&p, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
-                let p = p as usize;
-                tile.albedo[p] += albedo;
-                tile.normal[p] += normal;
-                tile.depth[p] += if d.is_finite() { d } else { 0.0 };
+            // Runs of `spp` paths per film pixel (see `pixel_tmp`): each pixel's sums are
+            // added up in registers, in path order (the same bits as adding to the film
+            // per path, without a store and reload between additions).
+            let (mut p, mut sums) = (usize::MAX, (Rgb::BLACK, Vec3::ZERO, 0.0));
+            for (&q, ((&albedo, &normal), &d)) in t.pixel_tmp.iter().zip(aovs) {
+                let q = q as usize;
+                if q != p {
+                    if p != usize::MAX {
+                        (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
+                    }
+                    p = q;
+                    sums = (tile.albedo[p], tile.normal[p], tile.depth[p]);
+                }
+                sums.0 += albedo;
+                sums.1 += normal;
+                sums.2 += if d.is_finite() { d } else { 0.0 };
+            }
+            if p != usize::MAX {
+                (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
             }
             stats.add_samples(n);
             arena.reset();
@@ -290,8 +319,17 @@ impl PathTracer {
         let n = t.paths.len();
         t.seeds.clear();
         let seed = scene.settings.seed;
+        // Paths come in runs of one pixel's samples: mix each pixel's seed once per run.
+        let mut last: Option<(u32, u32)> = None;
         t.seeds
-            .extend(t.paths.pixel.iter().map(|&pixel| pixel_seed(seed, pixel)));
+            .extend(t.paths.pixel.iter().map(|&pixel| match last {
+                Some((p, s)) if p == pixel => s,
+                _ => {
+                    let s = pixel_seed(seed, pixel);
+                    last = Some((pixel, s));
+                    s
+                }
+            }));
         // Camera rays, generated straight into the table's columns.
         t.rays.clear();
         stats.time(System::Camera, n, || {
@@ -748,13 +786,17 @@ impl PathTracer {
             samples,
             samplers,
             seeds,
-            light_samples,
+            light_distance,
+            light_radiance,
+            light_pdf,
+            light_delta,
             eval_value,
             eval_pdf,
             wi_tmp,
             albedo_tmp,
             u4,
             emissive_material,
+            shadow_points,
             ..
         } = t;
         let groups = std::mem::take(&mut shade_groups.groups);
@@ -873,8 +915,15 @@ impl PathTracer {
             let u4 = scratch(u4, m, [0.0; 4]);
             if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
                 let lstart = std::time::Instant::now();
-                let light_samples = scratch(light_samples, m, None);
-                let wi = scratch(wi_tmp, m, Vec3::Z);
+                // The light samples' directions are where the Bxdf evaluates (`Vec3::Z`
+                // where there is no sample).
+                let mut light = LightSampleColumns {
+                    wi: scratch(wi_tmp, m, Vec3::Z),
+                    distance: scratch(light_distance, m, 0.0),
+                    radiance: scratch(light_radiance, m, Rgb::BLACK),
+                    pdf: scratch(light_pdf, m, 0.0),
+                    delta: scratch(light_delta, m, false),
+                };
                 // One column draw for the group; leaves the samplers at the vertex's
                 // dimension 4, where the Bxdf starts.
                 next_4d_column(&mut samplers[..m], u4);
@@ -885,23 +934,21 @@ impl PathTracer {
                     &pts.p[range.clone()][..m],
                     &*u4,
                     active,
-                    light_samples,
+                    &mut light,
                 );
-                for (wi, ls) in wi.iter_mut().zip(&*light_samples) {
-                    *wi = ls.map_or(Vec3::Z, |l| l.wi);
-                }
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
                 let (value, pdf) = (
                     scratch(eval_value, m, Rgb::BLACK),
                     scratch(eval_pdf, m, 0.0),
                 );
-                bxdf.evaluate_samples(&ctx, wi, value, pdf);
+                bxdf.evaluate_samples(&ctx, light.wi, value, pdf);
                 let (no_mis, mode) = (self.technique == LightingTechnique::NeeOnly, g.mode);
                 let (shadow_scene, incoming) = (stacks.then_some(scene), &*incoming);
                 let light = LightColumns {
-                    samples: light_samples,
+                    samples: light,
                     value,
                     pdf,
+                    points: scratch(shadow_points, m, 0),
                 };
                 shadow_len += spawn_shadow_rays(
                     shadow_scene,
@@ -995,12 +1042,47 @@ impl PathTracer {
 
 /// Light samples of a group's points and the Bxdf's response to them.
 struct LightColumns<'a> {
-    /// Light sample per point (`None`: no shadow ray).
-    samples: &'a [Option<LightSample>],
+    /// Light sample per point (pdf 0: no shadow ray).
+    samples: LightSampleColumns<'a>,
     /// Bxdf value `f * |cos|` for the sample's direction.
     value: &'a [Rgb],
-    /// Bxdf pdf of the sample's direction (for MIS).
-    pdf: &'a [f32],
+    /// Bxdf pdf of the sample's direction (for MIS); overwritten with the contribution
+    /// factor [`light_weights`].
+    pdf: &'a mut [f32],
+    /// Scratch: the points that may get a shadow ray.
+    points: &'a mut [u32],
+}
+
+/// Overwrites `b_pdf[k]` (the Bxdf pdf of light sample `k`) with `w / l_pdf[k]`, the factor
+/// of the sample's shadow-ray contribution: `w` the power heuristic against the Bxdf pdf,
+/// or 1 for Dirac lights and without MIS. Four points per SSE operation, the operations of
+/// `power_heuristic` and the division in the same order (IEEE operations round the same in
+/// any lane), so the same bits as the scalar formula; the two divisions leave the
+/// spawn loop's dependency chain. Values where `l_pdf` is 0 are meaningless.
+fn light_weights(l_pdf: &[f32], b_pdf: &mut [f32], delta: &[bool], no_mis: bool) {
+    let m = b_pdf.len();
+    let (l_pdf, delta) = (&l_pdf[..m], &delta[..m]);
+    let (l4, l_rest) = l_pdf.as_chunks::<4>();
+    let (d4, d_rest) = delta.as_chunks::<4>();
+    let (b4, b_rest) = b_pdf.as_chunks_mut::<4>();
+    for ((l, d), b) in l4.iter().zip(d4).zip(b4) {
+        let (pa, pb) = (Vec4::from_array(*l), Vec4::from_array(*b));
+        let (a, bb) = (pa * pa, pb * pb);
+        let w = a / (a + bb);
+        let w = Vec4::select(w.is_finite_mask() & a.is_finite_mask(), w, Vec4::ONE);
+        let w = Vec4::select(a.cmpne(Vec4::ZERO), w, Vec4::ZERO);
+        let dirac = BVec4A::new(d[0] | no_mis, d[1] | no_mis, d[2] | no_mis, d[3] | no_mis);
+        let w = Vec4::select(dirac, Vec4::ONE, w);
+        *b = (w / pa).to_array();
+    }
+    for ((&l, &d), b) in l_rest.iter().zip(d_rest).zip(b_rest) {
+        let w = if d | no_mis {
+            1.0
+        } else {
+            power_heuristic(l, *b)
+        };
+        *b = w / l;
+    }
 }
 
 /// Direct-lighting system: writes to `out` from row `start` on one shadow ray per point of
@@ -1044,43 +1126,47 @@ fn spawn_shadow_rays(
     // one `r` loaded per point.
     let in_throughput = &incoming.throughput[..n];
     let in_path = &incoming.path[..n];
-    let (samples, value, pdf) = (&light.samples[..m], &light.value[..m], &light.pdf[..m]);
+    let ls = &light.samples;
+    let (l_wi, l_distance, l_radiance) = (&ls.wi[..m], &ls.distance[..m], &ls.radiance[..m]);
+    let l_pdf = &ls.pdf[..m];
+    let value = &light.value[..m];
     let (p, ng) = (&pts.p[range.clone()][..m], &pts.ng[range.clone()][..m]);
     let scatter = mode == ShadingMode::Scatter;
-    let mut count = 0;
+    // The factors `w / pdf` of all points, vectorised.
+    light_weights(l_pdf, &mut light.pdf[..m], &ls.delta[..m], no_mis);
+    let factor = &light.pdf[..m];
+    // The points with a sample the Bxdf reflects (two thirds at cornell), listed without a
+    // branch: a branch on it in the loop below mispredicted about 55k times per spp.
+    let points = &mut light.points[..m];
+    let mut listed = 0;
     for k in 0..m {
-        let Some(ls) = samples[k] else {
-            continue;
-        };
-        let f = value[k];
-        if f.is_black() {
-            continue;
-        }
-        let w = if ls.delta || no_mis {
-            1.0
-        } else {
-            power_heuristic(ls.pdf, pdf[k])
-        };
+        points[listed] = k as u32;
+        listed += ((l_pdf[k] != 0.0) & !is_black(value[k])) as usize;
+    }
+    let mut count = 0;
+    for &k in &points[..listed] {
+        let k = k as usize;
         let r = ray_id[k] as usize;
-        let c = in_throughput[r] * f * ls.radiance * (w / ls.pdf);
-        if c.is_black() {
+        let c = in_throughput[r] * value[k] * l_radiance[k] * factor[k];
+        if is_black(c) {
             continue;
         }
+        let wi = l_wi[k];
         o_contribution[count] = c;
-        o_direction[count] = ls.wi;
+        o_direction[count] = wi;
         o_path[count] = in_path[r];
         // Origin offset to the side of the surface the ray leaves to; the length stops
         // short of the light by the same offset.
-        let (p, ng, wi) = (p[k], ng[k], ls.wi);
+        let (p, ng) = (p[k], ng[k]);
         let offset = ray_offset(p);
         o_origin[count] = if scatter {
-            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
-            p + side * offset
+            p + ng * toward(wi, ng, offset)
         } else {
             p
         };
-        o_tmax[count] = if ls.distance.is_finite() {
-            ls.distance * (1.0 - 1e-4) - offset
+        let distance = l_distance[k];
+        o_tmax[count] = if distance.is_finite() {
+            distance * (1.0 - 1e-4) - offset
         } else {
             f32::INFINITY
         };
@@ -1215,8 +1301,7 @@ fn continue_paths(
         let (p, wi) = (p[k], s_wi[k]);
         o_origin[count] = if scatter {
             let ng = ng[k];
-            let side = if wi.dot(ng) >= 0.0 { ng } else { -ng };
-            p + side * ray_offset(p)
+            p + ng * toward(wi, ng, ray_offset(p))
         } else {
             p
         };
@@ -1259,6 +1344,23 @@ fn scratch<T: Clone>(v: &mut Vec<T>, n: usize, fill: T) -> &mut [T] {
         v.resize(n, fill);
     }
     &mut v[..n]
+}
+
+/// `offset` signed to move a point along `ng` to the side `wi` points to: `(side of ng) *
+/// offset` as `ng * toward(..)`, the same bits (negating a product's factor negates the
+/// product), with the sign set by a bit operation instead of a branch on the (random)
+/// direction.
+#[inline]
+fn toward(wi: Vec3, ng: Vec3, offset: f32) -> f32 {
+    // Flip unless `wi . ng >= 0` (a NaN dot product flips, as the branch did).
+    let keep_side = (wi.dot(ng) >= 0.0) as u32;
+    f32::from_bits(offset.to_bits() ^ ((keep_side ^ 1) << 31))
+}
+
+/// `c.is_black()` without a branch per channel.
+#[inline]
+fn is_black(c: Rgb) -> bool {
+    (c.r == 0.0) & (c.g == 0.0) & (c.b == 0.0)
 }
 
 /// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is

@@ -191,10 +191,20 @@ pub fn push_camera_rays(
     let mut jitter = vec![Vec2::ZERO; n];
     first_2d_column(&seed[..n], &sample[..n], &mut jitter);
     let width = camera.width;
-    let films = pixel
-        .iter()
-        .zip(&jitter)
-        .map(|(&p, &j)| Vec2::new((p % width) as f32 + j.x, (p / width) as f32 + j.y));
+    // A batch holds each pixel's samples together: the pixel's coordinates (an integer
+    // division and remainder) are computed once per run of equal pixel indices.
+    let mut last: Option<(u32, f32, f32)> = None;
+    let films = pixel.iter().zip(&jitter).map(move |(&p, &j)| {
+        let (x, y) = match last {
+            Some((q, x, y)) if q == p => (x, y),
+            _ => {
+                let (x, y) = ((p % width) as f32, (p / width) as f32);
+                last = Some((p, x, y));
+                (x, y)
+            }
+        };
+        Vec2::new(x + j.x, y + j.y)
+    });
     match camera.projection {
         Projection::Perspective { .. } => {
             rays.origin.resize(end, camera.from);

@@ -84,21 +84,36 @@ pub fn splat(film: &mut Film, pixel: &[u32], radiance: &[Rgb]) -> u64 {
     let n = film.count.len();
     let (sum, sum_sq, count) = (&mut film.sum[..n], &mut film.sum_sq[..n], &mut film.count);
     let mut dropped = 0;
-    for (&p, &l) in pixel.iter().zip(radiance) {
-        let p = p as usize;
-        count[p] += 1;
+    // Samples come in runs of one pixel (a batch holds each pixel's samples together): the
+    // pixel's sums stay in registers during a run and are stored when the pixel changes.
+    // Adding to memory per sample chained every sum through a store and a reload; the
+    // additions happen in the same order, so the sums are the same bits.
+    let Some(&first) = pixel.first() else {
+        return 0;
+    };
+    let mut p = first as usize;
+    let (mut s, mut sq, mut c) = (sum[p], sum_sq[p], count[p]);
+    for (&q, &l) in pixel.iter().zip(radiance) {
+        let q = q as usize;
+        if q != p {
+            (sum[p], sum_sq[p], count[p]) = (s, sq, c);
+            p = q;
+            (s, sq, c) = (sum[p], sum_sq[p], count[p]);
+        }
+        c += 1;
         // x - x is 0 for every finite x and NaN for infinities and NaN, so the sum is 0
         // exactly when all three channels are finite (fewer instructions than three
         // is_finite tests).
         #[allow(clippy::eq_op, reason = "x - x is the finiteness test")]
         let finite = (l.r - l.r) + (l.g - l.g) + (l.b - l.b) == 0.0;
         if finite {
-            sum[p] += l;
-            sum_sq[p] += l * l;
+            s += l;
+            sq += l * l;
         } else {
             dropped += 1;
         }
     }
+    (sum[p], sum_sq[p], count[p]) = (s, sq, c);
     film.nan_dropped += dropped;
     dropped
 }
@@ -117,6 +132,35 @@ mod tests {
         // sample variance of {1,2,4,7} = 7, variance of the mean = 7/4.
         assert!((f.variance_of_mean(1).r - 1.75).abs() < 1e-6);
         assert_eq!(f.count[0], 0);
+    }
+
+    #[test]
+    fn splat_in_any_pixel_order_equals_per_sample_sums() {
+        // Runs, revisits and single samples, in two calls (sums carry over): every sum must
+        // be the in-order sum of its pixel's samples, bit for bit.
+        let mut f = Film::new(3, 1);
+        let pixel = [2u32, 2, 0, 0, 0, 2, 1, 2, 2, 0];
+        let rad: Vec<Rgb> = (0..pixel.len())
+            .map(|i| {
+                Rgb::new(
+                    0.1 * i as f32 + 0.3,
+                    1.0 / (i as f32 + 3.0),
+                    7.77 * i as f32,
+                )
+            })
+            .collect();
+        splat(&mut f, &pixel[..6], &rad[..6]);
+        splat(&mut f, &pixel[6..], &rad[6..]);
+        let (mut sum, mut sq, mut count) = ([Rgb::BLACK; 3], [Rgb::BLACK; 3], [0u32; 3]);
+        for (&p, &l) in pixel.iter().zip(&rad) {
+            sum[p as usize] += l;
+            sq[p as usize] += l * l;
+            count[p as usize] += 1;
+        }
+        assert_eq!(f.sum, sum.to_vec());
+        assert_eq!(f.sum_sq, sq.to_vec());
+        assert_eq!(f.count, count.to_vec());
+        assert_eq!(splat(&mut f, &[], &[]), 0, "empty input");
     }
 
     #[test]

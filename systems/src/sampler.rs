@@ -278,10 +278,15 @@ pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
     let table = sobol_byte_table();
     #[cfg(target_arch = "x86_64")]
     if avx2::detected() {
-        // SAFETY: `avx2::detected` found AVX2 on this CPU.
+        // SAFETY: `avx2::detected_dq` found AVX2, AVX-512 F, DQ and VL; else
+        // `avx2::detected` found AVX2 on this CPU.
         #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
         unsafe {
-            avx2::column_4d(table, samplers, out)
+            if avx2::detected_dq() {
+                avx2::column_4d_dq(table, samplers, out)
+            } else {
+                avx2::column_4d(table, samplers, out)
+            }
         };
         for s in samplers.iter_mut() {
             s.dimension += 4;
@@ -310,10 +315,15 @@ pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
     let table = sobol_byte_table();
     #[cfg(target_arch = "x86_64")]
     if avx2::detected() {
-        // SAFETY: `avx2::detected` found AVX2 on this CPU.
+        // SAFETY: `avx2::detected_dq` found AVX2, AVX-512 F, DQ and VL; else
+        // `avx2::detected` found AVX2 on this CPU.
         #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
         unsafe {
-            avx2::column_2d(table, samplers, out)
+            if avx2::detected_dq() {
+                avx2::column_2d_dq(table, samplers, out)
+            } else {
+                avx2::column_2d(table, samplers, out)
+            }
         };
         for s in samplers.iter_mut() {
             s.dimension += 2;
@@ -678,6 +688,7 @@ mod avx2 {
     fn groups<T: Copy>(
         samplers: &[PathSampler],
         out: &mut [T],
+        seeds: impl Fn(__m256i, __m256i) -> __m256i,
         kernel: impl Fn(__m256i, __m256i, &mut [T; N]),
         portable: impl Fn(&[PathSampler], &mut [T]),
     ) {
@@ -687,11 +698,7 @@ mod avx2 {
                 cold(|| portable(s, o));
                 return;
             }
-            kernel(
-                set_seeds(seed, _mm256_srli_epi32::<2>(dimension)),
-                sample,
-                o,
-            );
+            kernel(seeds(seed, _mm256_srli_epi32::<2>(dimension)), sample, o);
         };
         let (lanes, rest) = samplers.as_chunks::<N>();
         let (rows, rest_out) = out.as_chunks_mut::<N>();
@@ -699,11 +706,17 @@ mod avx2 {
             run(s, o);
         }
         if let Some(&first) = rest.first() {
+            // Element loops, not `copy_from_slice`: a `memcpy` call of a varying small
+            // length mispredicts inside.
             let mut s = [first; N];
-            s[..rest.len()].copy_from_slice(rest);
+            for (s, &r) in s.iter_mut().zip(rest) {
+                *s = r;
+            }
             let mut o = [rest_out[0]; N];
             run(&s, &mut o);
-            rest_out.copy_from_slice(&o[..rest_out.len()]);
+            for (r, &o) in rest_out.iter_mut().zip(&o) {
+                *r = o;
+            }
         }
     }
 
@@ -720,6 +733,7 @@ mod avx2 {
         groups(
             samplers,
             out,
+            |seed, set| set_seeds(seed, set),
             |seed, sample, o| kernel_4d(table, seed, sample, o),
             |s, o| {
                 super::for_lane_groups(s, o, table, super::kernel_4d, |&s| {
@@ -739,6 +753,111 @@ mod avx2 {
         groups(
             samplers,
             out,
+            |seed, set| set_seeds(seed, set),
+            |seed, sample, o| kernel_2d(table, seed, sample, o),
+            |s, o| {
+                super::for_lane_groups(s, o, table, super::kernel_2d, |&s| {
+                    let mut s = s;
+                    s.next_2d()
+                })
+            },
+        );
+    }
+
+    /// Whether this CPU also has AVX-512 DQ and VL: 64-bit lane multiplies (`vpmullq`) on
+    /// 256-bit vectors for the set seeds' SplitMix64 (cached by the standard library).
+    #[inline]
+    pub(super) fn detected_dq() -> bool {
+        is_x86_feature_detected!("avx2")
+            && is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512dq")
+            && is_x86_feature_detected!("avx512vl")
+    }
+
+    /// [`pixel_seed4`] with native 64-bit multiplies (one `vpmullq` where [`mul64`] takes
+    /// three 32-bit products and four shifts and adds): the same wrapping products.
+    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+    #[inline]
+    fn pixel_seed4_dq(seed: __m256i, set: __m256i) -> __m256i {
+        let mul = |a: __m256i, c: u64| _mm256_mullo_epi64(a, _mm256_set1_epi64x(c as i64));
+        let set_k = mul(set, 0xD1B5_4A32_D192_ED03);
+        let mut z = _mm256_add_epi64(
+            _mm256_add_epi64(seed, _mm256_set1_epi64x(GOLDEN_GAMMA as i64)),
+            set_k,
+        );
+        z = mul(
+            _mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)),
+            0xBF58_476D_1CE4_E5B9,
+        );
+        z = mul(
+            _mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)),
+            0x94D0_49BB_1331_11EB,
+        );
+        _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
+    }
+
+    /// [`set_seeds`] through [`pixel_seed4_dq`].
+    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+    #[inline]
+    fn set_seeds_dq(seed: __m256i, set: __m256i) -> __m256i {
+        let widen = |v: __m128i| _mm256_cvtepu32_epi64(v);
+        let (s_lo, s_hi) = (
+            _mm256_castsi256_si128(seed),
+            _mm256_extracti128_si256::<1>(seed),
+        );
+        let (t_lo, t_hi) = (
+            _mm256_castsi256_si128(set),
+            _mm256_extracti128_si256::<1>(set),
+        );
+        let a = pixel_seed4_dq(widen(s_lo), widen(t_lo));
+        let b = pixel_seed4_dq(widen(s_hi), widen(t_hi));
+        let packed = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
+            _mm256_castsi256_ps(a),
+            _mm256_castsi256_ps(b),
+        ));
+        let mixed = _mm256_permute4x64_epi64::<0b11_01_10_00>(packed);
+        let first = _mm256_cmpeq_epi32(set, _mm256_setzero_si256());
+        _mm256_blendv_epi8(mixed, seed, first)
+    }
+
+    /// [`column_4d`] with the set seeds of [`set_seeds_dq`].
+    ///
+    /// # Safety
+    /// The CPU must have what [`detected_dq`] checks.
+    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+    pub(super) unsafe fn column_4d_dq(
+        table: &SobolTable,
+        samplers: &[PathSampler],
+        out: &mut [[f32; 4]],
+    ) {
+        groups(
+            samplers,
+            out,
+            |seed, set| set_seeds_dq(seed, set),
+            |seed, sample, o| kernel_4d(table, seed, sample, o),
+            |s, o| {
+                super::for_lane_groups(s, o, table, super::kernel_4d, |&s| {
+                    let mut s = s;
+                    s.next_4d()
+                })
+            },
+        );
+    }
+
+    /// [`column_2d`] with the set seeds of [`set_seeds_dq`].
+    ///
+    /// # Safety
+    /// The CPU must have what [`detected_dq`] checks.
+    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+    pub(super) unsafe fn column_2d_dq(
+        table: &SobolTable,
+        samplers: &[PathSampler],
+        out: &mut [Vec2],
+    ) {
+        groups(
+            samplers,
+            out,
+            |seed, set| set_seeds_dq(seed, set),
             |seed, sample, o| kernel_2d(table, seed, sample, o),
             |s, o| {
                 super::for_lane_groups(s, o, table, super::kernel_2d, |&s| {
@@ -911,6 +1030,54 @@ mod tests {
                     assert_eq!(col[i].dimension, one.dimension);
                     assert_eq!((col[i].seed, col[i].sample), (s.seed, s.sample));
                 }
+            }
+        }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    #[allow(
+        unsafe_code,
+        reason = "calls the AVX2 kernels after run-time detection"
+    )]
+    fn avx2_kernels_with_and_without_avx512_equal_per_sampler_draws() {
+        // The column functions take the AVX-512 DQ seeds where the CPU has them; the plain
+        // AVX2 kernels must give the same draws on machines without.
+        if !avx2::detected() {
+            return;
+        }
+        let mut rng = SplitMix64(7);
+        let table = sobol_byte_table();
+        for n in [1usize, 5, 8, 13, 64] {
+            let samplers: Vec<PathSampler> = (0..n)
+                .map(|i| PathSampler {
+                    seed: rng.next_u64() as u32,
+                    sample: (rng.next_u64() % (2 * MAX_SPP as u64)) as u32,
+                    dimension: 4 * [0u32, 1, 2, 63, 64, 1000, 1 << 29][i % 7],
+                })
+                .collect();
+            let (mut out4, mut out2) = (vec![[0.0f32; 4]; n], vec![Vec2::ZERO; n]);
+            // SAFETY: `avx2::detected` found AVX2.
+            unsafe { avx2::column_4d(table, &samplers, &mut out4) };
+            let mut two = samplers.clone();
+            for s in two.iter_mut() {
+                s.dimension += 4;
+            }
+            // SAFETY: as above.
+            unsafe { avx2::column_2d(table, &two, &mut out2) };
+            for (i, s) in samplers.iter().enumerate() {
+                let mut one = *s;
+                assert_eq!(out4[i], one.next_4d(), "4d: n {n}, point {i}");
+                assert_eq!(out2[i], one.next_2d(), "2d: n {n}, point {i}");
+            }
+            if avx2::detected_dq() {
+                let (mut dq4, mut dq2) = (vec![[0.0f32; 4]; n], vec![Vec2::ZERO; n]);
+                // SAFETY: `avx2::detected_dq` found AVX2 and AVX-512 F, DQ and VL.
+                unsafe {
+                    avx2::column_4d_dq(table, &samplers, &mut dq4);
+                    avx2::column_2d_dq(table, &two, &mut dq2);
+                }
+                assert_eq!((dq4, dq2), (out4, out2), "n {n}");
             }
         }
     }
