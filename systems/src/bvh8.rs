@@ -39,6 +39,10 @@ pub(crate) struct Node8 {
     pub(crate) leaf_mask: u32,
     /// Bit `c` set when slot `c` holds a child.
     pub(crate) valid: u32,
+    /// Bit `c` set when child `c`'s subtree holds triangles only, no sphere: the node
+    /// test's exact cull of boxes behind the ray origin applies to it (see
+    /// `intersect_node8` in [`crate::intersect`]).
+    pub(crate) tri_only: u32,
 }
 
 /// Up to eight triangles of one leaf, coordinate by coordinate: `v[i][a]` holds coordinate
@@ -53,14 +57,7 @@ pub(crate) struct TriPacket8 {
     pub(crate) prim: [u32; WIDTH],
     /// Bit `l` set for the lanes that hold a triangle of the leaf.
     pub(crate) valid: u32,
-    /// An axis `a` along which every vertex of the leaf has the same coordinate
-    /// [`Self::plane_c`] (the triangles lie in the plane `x_a = plane_c`), or [`NO_PLANE`].
-    pub(crate) plane_axis: u32,
-    pub(crate) plane_c: f32,
 }
-
-/// [`TriPacket8::plane_axis`] of a leaf not in one axis-aligned plane.
-pub(crate) const NO_PLANE: u32 = 3;
 
 impl TriPacket8 {
     /// The packet of `tris` (one to eight `(primitive index, vertices)`).
@@ -74,15 +71,7 @@ impl TriPacket8 {
             v: [[Row8([0.0; WIDTH]); 3]; 3],
             prim: [0; WIDTH],
             valid: (1 << tris.len()) - 1,
-            plane_axis: NO_PLANE,
-            plane_c: 0.0,
         };
-        let c = tris[0].1[0];
-        if let Some(a) = (0..3).find(|&a| tris.iter().all(|(_, v)| v.iter().all(|v| v[a] == c[a])))
-        {
-            p.plane_axis = a as u32;
-            p.plane_c = c[a];
-        }
         for l in 0..WIDTH {
             let (prim, v) = tris.get(l).unwrap_or(&tris[0]);
             p.prim[l] = *prim;
@@ -499,6 +488,7 @@ impl Bvh8 {
             child: [0; WIDTH],
             leaf_mask: 0,
             valid: (1 << kids.len()) - 1,
+            tri_only: 0,
         });
         for (c, &(k, is_leaf)) in kids.iter().enumerate() {
             let aabb = bins[k as usize].aabb;
@@ -507,13 +497,18 @@ impl Bvh8 {
                 node.bounds[2 * a].0[c] = aabb.min[a];
                 node.bounds[2 * a + 1].0[c] = aabb.max[a];
             }
-            let child = if is_leaf {
+            let (child, tri_only) = if is_leaf {
                 self.nodes[index as usize].leaf_mask |= 1 << c;
-                self.build_leaf(src, k)
+                let child = self.build_leaf(src, k);
+                (child, child & SPHERE == 0)
             } else {
-                self.build_node(src, k, level + 1)
+                let child = self.build_node(src, k, level + 1);
+                let below = &self.nodes[child as usize];
+                (child, below.tri_only == below.valid)
             };
-            self.nodes[index as usize].child[c] = child;
+            let node = &mut self.nodes[index as usize];
+            node.child[c] = child;
+            node.tri_only |= (tri_only as u32) << c;
         }
         index
     }

@@ -10,7 +10,10 @@
 //! honours the ray's `tmin` and widens every slab by a bound on its floating-point error (a
 //! per-ray constant, see [`NODE_SLACK`]), so a box is never culled when the primitive test
 //! would report a hit inside it (a plain slab test loses rays grazing box faces, e.g. along
-//! the edges of an axis-aligned mesh). Closest-hit rays visit hit children, leaves
+//! the edges of an axis-aligned mesh); it also culls, with exact comparisons, children
+//! whose box lies wholly behind the origin across an axis, which the triangle test would
+//! reject anyway, so a ray spawned on a wall does not visit the wall's leaf (a third of
+//! the leaf visits on the Cornell box). Closest-hit rays visit hit children, leaves
 //! included, nearest entry distance first and skip stacked ones beyond the closest hit so
 //! far; shadow rays test a node's hit leaves at once and stop at the first hit.
 //! Primitive tests:
@@ -441,6 +444,12 @@ struct RayBlock {
     tri: [[f32; BLOCK]; 6],
     /// The origin (rows 0 to 2), a zero row, the direction (rows 4 to 6), a zero row.
     od: [[f32; BLOCK]; 8],
+    /// The node test's exact cull of boxes behind the origin (see [`intersect_node8`]),
+    /// axis `a`: row `a` the sign `±1` of `d[a]`, row `3 + a` the threshold `±o[a]` (sign
+    /// times origin), so that `sign * bound <= threshold` on the box maximum (`d[a] > 0`)
+    /// or minimum (`d[a] < 0`) says the box is behind; `-inf` (nothing behind) where
+    /// `d[a] = 0` or `tmin < 0`.
+    cull: [[f32; BLOCK]; 6],
     /// Bit `l` set where ray `l`'s dominant direction axis is X, and where it is Y (the
     /// permutation of [`shear`], see [`RayBlock::axes`]).
     x_dominant: u32,
@@ -462,6 +471,7 @@ impl RayBlock {
             node: [[0.0; BLOCK]; 9],
             tri: [[0.0; BLOCK]; 6],
             od: [[0.0; BLOCK]; 8],
+            cull: [[0.0; BLOCK]; 6],
             x_dominant: 0,
             y_dominant: 0,
         }
@@ -472,7 +482,14 @@ impl RayBlock {
     /// most `max_abs` in magnitude per axis, computed on the lanes of `s`. Every row is
     /// overwritten.
     #[inline(always)]
-    fn set<S: Simd>(&mut self, s: S, origin: &[Vec3], direction: &[Vec3], max_abs: Vec3A) {
+    fn set<S: Simd>(
+        &mut self,
+        s: S,
+        origin: &[Vec3],
+        direction: &[Vec3],
+        tmin: &[f32],
+        max_abs: Vec3A,
+    ) {
         let b = self;
         let (o, d) = match (origin.first_chunk(), direction.first_chunk()) {
             (Some(origin), Some(direction)) => (s.load_xyz(origin), s.load_xyz(direction)),
@@ -488,6 +505,17 @@ impl RayBlock {
         for a in 0..3 {
             b.od[a] = o[a].to_array();
             b.od[4 + a] = d[a].to_array();
+        }
+        let mut tmins = [f32::NAN; BLOCK];
+        for (t, &tmin) in tmins.iter_mut().zip(tmin) {
+            *t = tmin;
+        }
+        let cull_on = s.splat(0.0).le(s.load(&Row8(tmins)));
+        for a in 0..3 {
+            let sign = S::F::select(d[a].lt(s.splat(0.0)), s.splat(-1.0), s.splat(1.0));
+            let live = (d[a].lt(s.splat(0.0)) | d[a].gt(s.splat(0.0))) & cull_on;
+            b.cull[a] = sign.to_array();
+            b.cull[3 + a] = S::F::select(live, sign * o[a], s.splat(f32::NEG_INFINITY)).to_array();
         }
         for a in 0..3 {
             // NodeRay: `1 / d` clamped, and the widened plane offsets.
@@ -593,7 +621,37 @@ fn intersect_node8<S: Simd>(s: S, node: &Node8, ray: &NodeRay<S::F>, tmax: f32) 
     let (nz, fz) = slab(s, &node.bounds, k, ray.lane, 2);
     let tnear = nx.max(ny).max(nz.max(ray.tmin));
     let tfar = fx.min(fy).min(fz.min(s.splat(tmax)));
-    (tnear.le(tfar).bits() & node.valid, tnear)
+    // Exact cull of children whose box lies wholly on or behind the plane through the
+    // origin across an axis `a` (`max_a <= o_a` for `d_a > 0`, `min_a >= o_a` for
+    // `d_a < 0`, exact comparisons): every point of such a box has `t* <= 0` on the ray's
+    // line, so for `tmin >= 0` the triangle test rejects all its triangles (a computed `t`
+    // is within its error bound of `t*`, and hits with `t <= tmin + bound` are rejected,
+    // see `t_error_bound`). The widened slab test above keeps such boxes, as the widening
+    // exceeds the offset of a ray spawned on a surface from that surface: without this
+    // the ray would visit the leaf it starts on. Spheres have no such bound, so subtrees
+    // holding one ([`Node8::tri_only`]) are kept.
+    let c = std::hint::black_box(&ray.block.cull);
+    let behind = behind_axis(s, &node.bounds, c, ray.lane, 0)
+        | behind_axis(s, &node.bounds, c, ray.lane, 1)
+        | behind_axis(s, &node.bounds, c, ray.lane, 2);
+    let culled = behind.bits() & node.tri_only;
+    (tnear.le(tfar).bits() & node.valid & !culled, tnear)
+}
+
+/// The children whose box is behind the ray origin across axis `a` (see
+/// [`intersect_node8`]; `c` is [`RayBlock::cull`], `l` the ray's lane).
+#[inline(always)]
+fn behind_axis<S: Simd>(
+    s: S,
+    b: &[Row8; 6],
+    c: &[[f32; BLOCK]; 6],
+    l: usize,
+    a: usize,
+) -> <S::F as Lanes8>::Mask {
+    let l = l % BLOCK;
+    let sign = s.splat(c[a][l]);
+    let bound = S::F::select_negative(sign, s.load(&b[2 * a]), s.load(&b[2 * a + 1]));
+    (bound * sign).le(s.splat(c[3 + a][l]))
 }
 
 /// Ray `l` of a [`RayBlock`] for the packet triangle test: [`WatertightRay`]'s constants,
@@ -757,22 +815,6 @@ fn intersect_packet<S: Simd>(
         b1: v * inv_det,
         b2: w * inv_det,
     }
-}
-
-/// Whether every triangle of an axis-aligned planar packet (`x_a = c`, see
-/// [`TriPacket8::plane_axis`]) meets the ray's line at `t* = (c - o_a) / d_a <= 0`, which is
-/// `c <= o_a` for `d_a > 0` and `c >= o_a` for `d_a < 0` (exact comparisons). Then, for
-/// `tmin >= 0`, the packet test would reject them all: a computed `t` is within its error
-/// bound of `t*`, and hits with `t <= tmin + bound` are rejected (`t_error_bound`). Rays
-/// spawned on a wall (origin offset off it, `tmin = 0`) test that wall's leaf first thing,
-/// as the node test's widening exceeds the spawn offset; this settles it with two compares.
-/// `od` and `lane` are a [`RayBlock`]'s origin and direction rows and the ray's lane. For
-/// [`NO_PLANE`](crate::bvh8::NO_PLANE) (3) it reads the zero rows, where `d` is 0, and is false.
-#[inline(always)]
-fn behind_plane(axis: usize, c: f32, od: &[[f32; BLOCK]; 8], lane: usize, tmin: f32) -> bool {
-    let (oa, da) = (od[axis & 3][lane % BLOCK], od[4 + (axis & 3)][lane % BLOCK]);
-    // Non-short-circuit `&`/`|`: one branch on the result instead of one per comparison.
-    (tmin >= 0.0) & (((da > 0.0) & (c <= oa)) | ((da < 0.0) & (c >= oa)))
 }
 
 /// The scalar test on lane `l` of a packet, for lanes [`intersect_packet`] leaves to it.
@@ -1032,10 +1074,6 @@ impl<S: Simd> ClosestRay<'_, S> {
             return;
         }
         let p = &bvh.packets[index];
-        let (od, lane) = (&self.tri.block.od, self.tri.lane);
-        if behind_plane(p.plane_axis as usize, p.plane_c, od, lane, self.tmin) {
-            return;
-        }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, *tmax);
         let mut lanes = (r.hit | r.fallback) & p.valid;
         if lanes == 0 {
@@ -1084,7 +1122,13 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     let (b1, b2) = (&mut c.b1[..n], &mut c.b2[..n]);
     for start in (0..n).step_by(BLOCK) {
         let end = n.min(start + BLOCK);
-        block.set(s, &origin[start..end], &direction[start..end], bvh.max_abs);
+        block.set(
+            s,
+            &origin[start..end],
+            &direction[start..end],
+            &tmin[start..end],
+            bvh.max_abs,
+        );
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
@@ -1145,10 +1189,6 @@ impl<S: Simd> AnyRay<'_, S> {
             return sphere_leaf_t(&bvh.spheres[index], o, d, self.tmin, tmax) < f32::INFINITY;
         }
         let p = &bvh.packets[index];
-        let (od, lane) = (&self.tri.block.od, self.tri.lane);
-        if behind_plane(p.plane_axis as usize, p.plane_c, od, lane, self.tmin) {
-            return false;
-        }
         let r = intersect_packet(self.s, &self.tri, p, self.tmin, tmax);
         if r.hit != 0 {
             return true;
@@ -1177,7 +1217,13 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     let (tmin, tmax, occluded) = (&c.tmin[..n], &c.tmax[..n], &mut c.occluded[..n]);
     for start in (0..n).step_by(BLOCK) {
         let end = n.min(start + BLOCK);
-        block.set(s, &origin[start..end], &direction[start..end], bvh.max_abs);
+        block.set(
+            s,
+            &origin[start..end],
+            &direction[start..end],
+            &tmin[start..end],
+            bvh.max_abs,
+        );
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
@@ -1430,7 +1476,9 @@ mod tests {
         max_abs: Vec3A,
     ) -> u32 {
         let mut block = RayBlock::zero();
-        block.set(s, &[o], &[d], max_abs);
+        // The slab test alone: a NaN `tmin` turns the cull off (see
+        // `node_cull_only_removes_children_the_packet_test_rejects` for the cull).
+        block.set(s, &[o], &[d], &[f32::NAN], max_abs);
         let ray = NodeRay::new(s, &block, 0, tmin);
         intersect_node8(s, node, &ray, tmax).0
     }
@@ -1581,6 +1629,14 @@ mod tests {
                     let child = node.child[c];
                     assert_eq!(node.leaf_mask & (1 << c) != 0, child & LEAF != 0);
                     let index = (child & INDEX_MASK) as usize;
+                    let tri_only = if child & LEAF != 0 {
+                        child & SPHERE == 0
+                    } else {
+                        let below = &bvh.nodes[index];
+                        below.tri_only == below.valid
+                    };
+                    assert_eq!(node.tri_only & (1 << c) != 0, tri_only, "n = {n}");
+                    let index = (child & INDEX_MASK) as usize;
                     if child & LEAF == 0 {
                         reached[index] += 1;
                         stack.push((index, level + 1));
@@ -1603,12 +1659,6 @@ mod tests {
                         leaves.0[index] += 1;
                         let p = &bvh.packets[index];
                         assert_eq!(p.valid, (1 << p.valid.count_ones()) - 1);
-                        if p.plane_axis != crate::bvh8::NO_PLANE {
-                            let a = p.plane_axis as usize;
-                            for l in 0..WIDTH {
-                                assert!(p.triangle(l).iter().all(|v| v[a] == p.plane_c));
-                            }
-                        }
                         for l in 0..WIDTH {
                             let prim = p.prim[l] as usize;
                             assert_eq!(p.triangle(l), tris[prim]);
@@ -1712,7 +1762,7 @@ mod tests {
         tmax: f32,
     ) -> (u32, u32, [f32; 8], [f32; 8], [f32; 8]) {
         let mut block = RayBlock::zero();
-        block.set(s, &[o], &[d], Vec3A::ONE);
+        block.set(s, &[o], &[d], &[0.0], Vec3A::ONE);
         let r = intersect_packet(s, &PacketRay::new(s, &block, 0), p, tmin, tmax);
         (
             r.hit,
@@ -1801,36 +1851,57 @@ mod tests {
         }
     }
 
-    /// The planar early-out only skips packets whose every lane the full test rejects: rays
-    /// leaving axis-aligned planar packets from a few ulps off their plane (spawned rays),
+    /// The node test's cull of boxes behind the origin only removes children whose every
+    /// triangle the packet test rejects: packets (axis-aligned planar ones, as walls, and
+    /// general ones) and rays leaving them from a few ulps off a box face (spawned rays),
     /// from on it, and from farther away, in every direction including parallel to it.
     #[test]
-    fn behind_plane_only_skips_packets_the_test_rejects() {
+    fn node_cull_only_removes_children_the_packet_test_rejects() {
         for backend in backends() {
             let mut rng = Rng(13);
-            let (mut skipped, mut hits) = (0, 0);
+            let (mut culled, mut hits) = (0, 0);
             for k in 0..20_000 {
                 let axis = k % 3;
-                let c = (rng.f32() * 8.0 - 4.0) * if k % 5 == 0 { 1e3 } else { 1.0 };
+                let scale = if k % 5 == 0 { 1e3 } else { 1.0 };
+                let c = (rng.f32() * 8.0 - 4.0) * scale;
                 let n = 1 + (k / 3) % WIDTH;
+                let planar = k % 4 != 3;
                 let tris: Vec<(u32, [Vec3; 3])> = (0..n as u32)
                     .map(|i| {
                         let mut v = [rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0), rng.vec(-2.0, 2.0)];
                         for vi in &mut v {
-                            vi[axis] = c;
+                            vi[axis] = if planar {
+                                c
+                            } else {
+                                c + rng.f32() * 0.5 * scale
+                            };
                         }
                         (i, v)
                     })
                     .collect();
                 let p = TriPacket8::new(&tris);
-                assert_eq!(p.plane_axis as usize, axis);
+                // The packet's box, in slot 0 of an otherwise empty node.
+                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                for (_, v) in &tris {
+                    for vi in v {
+                        (lo, hi) = (lo.min(*vi), hi.max(*vi));
+                    }
+                }
+                let mut bounds = [Row8([f32::INFINITY; WIDTH]); 6];
+                for a in 0..3 {
+                    bounds[2 * a].0[0] = lo[a];
+                    bounds[2 * a + 1] = Row8([f32::NEG_INFINITY; WIDTH]);
+                    bounds[2 * a + 1].0[0] = hi[a];
+                }
+                // Origins near the face at the box minimum along `axis` (the plane itself
+                // for planar packets).
                 let mut o = rng.vec(-1.5, 1.5);
                 let ulps = (rng.next_u64() % 9) as i32 - 4;
                 o[axis] = match k % 4 {
                     0 => f32::from_bits((c.to_bits() as i32 + ulps) as u32),
                     1 => c + (rng.f32() - 0.5) * 1e-5 * c.abs().max(1.0),
                     2 => c,
-                    _ => c + rng.f32() * 4.0 - 2.0,
+                    _ => c + (rng.f32() * 4.0 - 2.0) * scale,
                 };
                 let mut d = rng.vec(-1.0, 1.0);
                 if k % 11 == 0 {
@@ -1838,8 +1909,14 @@ mod tests {
                 }
                 let tmin = if k % 2 == 0 { 0.0 } else { rng.f32() * 1e-3 };
                 let mut block = RayBlock::zero();
-                block.set(Portable, &[o], &[d], Vec3A::ONE);
-                let skip = behind_plane(axis, p.plane_c, &block.od, 0, tmin);
+                block.set(Portable, &[o], &[d], &[tmin], Vec3A::ONE);
+                let cull = with_simd!(backend, s => {
+                    (behind_axis(s, &bounds, &block.cull, 0, 0)
+                        | behind_axis(s, &bounds, &block.cull, 0, 1)
+                        | behind_axis(s, &bounds, &block.cull, 0, 2))
+                    .bits()
+                }) & 1
+                    != 0;
                 let (hit, fallback, ..) =
                     with_simd!(backend, s => packet_hits(s, &p, o, d, tmin, f32::INFINITY));
                 let fallback_hit = (0..WIDTH).any(|l| {
@@ -1849,16 +1926,13 @@ mod tests {
                 });
                 let any = hit & p.valid != 0 || fallback_hit;
                 assert!(
-                    !(skip && any),
-                    "{backend:?} ray {k}: o={o:?} d={d:?} skipped a hit"
+                    !(cull && any),
+                    "{backend:?} ray {k}: o={o:?} d={d:?} culled a hit"
                 );
-                skipped += skip as usize;
+                culled += cull as usize;
                 hits += any as usize;
             }
-            assert!(
-                skipped > 5000 && hits > 500,
-                "{skipped} skipped, {hits} hits"
-            );
+            assert!(culled > 5000 && hits > 500, "{culled} culled, {hits} hits");
         }
     }
 
@@ -1890,7 +1964,10 @@ mod tests {
                     direction.push(d);
                 }
                 let mut block = RayBlock::zero();
-                with_simd!(backend, s => block.set(s, &origin, &direction, max_abs));
+                let tmin: Vec<f32> = (0..len)
+                    .map(|l| [0.0, 1e-4, -1.0, f32::NAN][(k + l) % 4])
+                    .collect();
+                with_simd!(backend, s => block.set(s, &origin, &direction, &tmin, max_abs));
                 for l in 0..len {
                     let (o, d) = (Vec3A::from(origin[l]), Vec3A::from(direction[l]));
                     let tiny = d.abs().cmplt(Vec3A::splat(MIN_DIR));
@@ -1928,6 +2005,18 @@ mod tests {
                         [kx, ky, kz],
                         "{backend:?} ray {k}/{l}: d {d}"
                     );
+                    for a in 0..3 {
+                        let sign = if d[a] < 0.0 { -1.0 } else { 1.0 };
+                        let live = d[a] != 0.0 && tmin[l] >= 0.0;
+                        let threshold = if live { sign * o[a] } else { f32::NEG_INFINITY };
+                        assert_eq!(block.cull[a][l], sign, "{backend:?} ray {k}/{l}: d {d}");
+                        assert_eq!(
+                            block.cull[3 + a][l].to_bits(),
+                            threshold.to_bits(),
+                            "{backend:?} ray {k}/{l}: d {d}, tmin {}",
+                            tmin[l]
+                        );
+                    }
                     assert_eq!(block.origin(l), origin[l]);
                     assert_eq!(block.direction(l), direction[l]);
                 }

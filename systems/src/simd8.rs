@@ -45,6 +45,8 @@ pub(crate) trait Lanes8:
     fn copysign(self, sign: Self) -> Self;
     /// `a` where `m` is true, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+    /// `neg` where `sign` is negative, else `pos` (`sign` is never zero or NaN).
+    fn select_negative(sign: Self, neg: Self, pos: Self) -> Self;
     /// `self * a + b`, with one rounding where the CPU has FMA and two otherwise. Only for
     /// the node test, whose error bound holds either way; the triangle test never fuses,
     /// so that both kernels compute the same bits.
@@ -181,6 +183,10 @@ impl Lanes8 for P8 {
     #[inline(always)]
     fn copysign(self, sign: P8) -> P8 {
         P8([self.0[0].copysign(sign.0[0]), self.0[1].copysign(sign.0[1])])
+    }
+    #[inline(always)]
+    fn select_negative(sign: P8, neg: P8, pos: P8) -> P8 {
+        P8::select(sign.lt(P8([Vec4::ZERO; 2])), neg, pos)
     }
     #[inline(always)]
     fn select(m: PMask, a: P8, b: P8) -> P8 {
@@ -406,6 +412,11 @@ mod avx2 {
                 _mm256_andnot_ps(m, self.0),
                 _mm256_and_ps(m, sign.0)
             )))
+        }
+        #[inline(always)]
+        fn select_negative(sign: A8, neg: A8, pos: A8) -> A8 {
+            // `blendv` reads only each lane's sign bit.
+            A8(avx!(_mm256_blendv_ps(pos.0, neg.0, sign.0)))
         }
         #[inline(always)]
         fn select(m: AMask, a: A8, b: A8) -> A8 {
