@@ -8,7 +8,7 @@
 //! (`crate::simd8`) and instantiated twice, selected by [`Kernel`]: portable code, and AVX2
 //! with FMA in the node test, chosen at run time when the CPU has them. The node test
 //! honours the ray's `tmin` and widens every slab by a bound on its floating-point error (a
-//! per-ray constant, see [`NODE_SLACK`]), so a box is never culled when the primitive test
+//! per-ray constant, see `NODE_SLACK`), so a box is never culled when the primitive test
 //! would report a hit inside it (a plain slab test loses rays grazing box faces, e.g. along
 //! the edges of an axis-aligned mesh); it also culls, with exact comparisons, children
 //! whose box lies wholly behind the origin across an axis, which the triangle test would
