@@ -6,7 +6,7 @@
 //! pass-throughs) -> `escaped` (environment) -> `shade` (emission, Bxdf, direct lighting,
 //! Russian roulette, next rays) -> `transmission` (shadow rays) -> next bounce; finished paths
 //! are splatted. Stages a scene does not need (volumes, partitioning, transmission walks
-//! through surfaces) are skipped according to the compiled scene's [`Features`].
+//! through surfaces) are skipped according to the compiled scene's [`Features`](crate::scene::Features).
 //!
 //! Depth convention (Mitsuba's `max_depth`): a path of `k` segments has `k - 1` scattering
 //! vertices; emitters seen along segment `k` count only if `k <= max_depth`.
