@@ -13,6 +13,7 @@
 //! still records the crossing so that leaving later is matched).
 
 use smallvec::SmallVec;
+use std::sync::Arc;
 
 /// One volume a ray is inside: the interior of `shape`, owned by `material`'s factory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -38,26 +39,55 @@ pub enum StackEvent {
     UnmatchedExit,
 }
 
-/// The volumes a ray is inside, in the order they were entered. Stored inline for up to four
-/// nested volumes (no heap allocation on the common path).
-#[derive(Debug, Default, PartialEq, Eq)]
-pub struct VolumeStack {
-    entries: SmallVec<[VolumeEntry; 4]>,
+/// The entries of a stack of two or more volumes, shared between the stacks that hold them.
+type Entries = SmallVec<[VolumeEntry; 4]>;
+
+/// A stack's storage, by depth (the variant is always the one of the stack's length).
+#[derive(Clone, Default)]
+enum Repr {
+    /// In no volume.
+    #[default]
+    Empty,
+    /// In one volume (inline: no reference count, no allocation).
+    One(VolumeEntry),
+    /// In two or more volumes: shared with the stack's copies (`Arc`, so a copy is a
+    /// reference count increment) and copied only when changed (`Arc::make_mut`).
+    Many(Arc<Entries>),
 }
 
-impl Clone for VolumeStack {
-    /// Every ray row carries a stack and every bounce copies it, so this is on the hot path:
-    /// `SmallVec`'s derived clone goes through a generic `extend`; entries are `Copy`, so
-    /// copy them as one slice (and an empty stack, the common case, as nothing).
-    #[inline]
-    fn clone(&self) -> Self {
-        if self.entries.is_empty() {
-            Self::default()
-        } else {
-            Self {
-                entries: SmallVec::from_slice(&self.entries),
-            }
-        }
+/// The volumes a ray is inside, in the order they were entered.
+///
+/// Every ray row carries a stack, every bounce copies it, and the ray tables grow and
+/// shrink every batch, so the empty stack (nearly every ray of most scenes) must be cheap to
+/// create, copy and drop: the stack is 16 bytes (an inline `SmallVec` was 64 bytes to write
+/// per row created and a capacity to load per row dropped). One volume, the common case of
+/// scenes with glass, is stored inline too; deeper stacks share their entries between
+/// copies.
+#[derive(Clone, Default)]
+pub struct VolumeStack {
+    repr: Repr,
+}
+
+impl PartialEq for VolumeStack {
+    /// Equal entries (not the same storage).
+    fn eq(&self, other: &Self) -> bool {
+        self.entries() == other.entries()
+    }
+}
+
+impl Eq for VolumeStack {}
+
+impl std::hash::Hash for VolumeStack {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.entries().hash(state);
+    }
+}
+
+impl std::fmt::Debug for VolumeStack {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VolumeStack")
+            .field("entries", &self.entries())
+            .finish()
     }
 }
 
@@ -70,22 +100,27 @@ impl VolumeStack {
     /// True when the ray is in no volume.
     #[inline]
     pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
+        matches!(self.repr, Repr::Empty)
     }
 
     /// Number of volumes the ray is inside.
     pub fn len(&self) -> usize {
-        self.entries.len()
+        self.entries().len()
     }
 
     /// The volumes, oldest first.
+    #[inline]
     pub fn entries(&self) -> &[VolumeEntry] {
-        &self.entries
+        match &self.repr {
+            Repr::Empty => &[],
+            Repr::One(e) => std::slice::from_ref(e),
+            Repr::Many(e) => e,
+        }
     }
 
     /// The innermost volume: highest priority, most recently entered among equals.
     pub fn innermost(&self) -> Option<VolumeEntry> {
-        self.innermost_index().map(|i| self.entries[i])
+        self.innermost_index().map(|i| self.entries()[i])
     }
 
     /// True when a boundary of `priority` is a false boundary for a ray with this stack: the
@@ -93,31 +128,44 @@ impl VolumeStack {
     /// shades. A boundary of a shape the ray is inside is judged against the *other* volumes,
     /// so that leaving the innermost volume is never false.
     pub fn is_false_boundary(&self, shape: u32, priority: i32) -> bool {
-        self.entries
+        self.entries()
             .iter()
             .any(|e| e.shape != shape && e.priority > priority)
     }
 
     /// True when the ray is inside the interior of `shape`.
     pub fn contains_shape(&self, shape: u32) -> bool {
-        self.entries.iter().any(|e| e.shape == shape)
+        self.entries().iter().any(|e| e.shape == shape)
     }
 
     /// Records that the ray entered `entry`'s volume.
     pub fn enter(&mut self, entry: VolumeEntry) -> StackEvent {
-        self.entries.push(entry);
+        match &mut self.repr {
+            Repr::Empty => self.repr = Repr::One(entry),
+            Repr::One(first) => {
+                self.repr = Repr::Many(Arc::new(SmallVec::from_slice(&[*first, entry])));
+            }
+            // A private copy of the entries first when they are shared.
+            Repr::Many(shared) => Arc::make_mut(shared).push(entry),
+        }
         StackEvent::Entered
     }
 
     /// Records that the ray left the interior of `shape` (the most recent entry of it).
     pub fn exit(&mut self, shape: u32) -> StackEvent {
-        match self.entries.iter().rposition(|e| e.shape == shape) {
-            Some(i) => {
-                self.entries.remove(i);
-                StackEvent::Exited
+        let Some(i) = self.entries().iter().rposition(|e| e.shape == shape) else {
+            return StackEvent::UnmatchedExit;
+        };
+        match &mut self.repr {
+            // Found, so not empty.
+            Repr::Empty => {}
+            Repr::One(_) => self.repr = Repr::Empty,
+            Repr::Many(shared) if shared.len() == 2 => self.repr = Repr::One(shared[1 - i]),
+            Repr::Many(shared) => {
+                Arc::make_mut(shared).remove(i);
             }
-            None => StackEvent::UnmatchedExit,
         }
+        StackEvent::Exited
     }
 
     /// Applies a transmit crossing of `entry.shape`'s surface: entering on a front face,
@@ -132,10 +180,11 @@ impl VolumeStack {
 
     /// Index (into [`entries`](Self::entries)) of the innermost volume.
     pub fn innermost_index(&self) -> Option<usize> {
+        let entries = self.entries();
         let mut best: Option<usize> = None;
-        for (i, e) in self.entries.iter().enumerate() {
+        for (i, e) in entries.iter().enumerate() {
             // `>=` so that a later entry of equal priority wins.
-            if best.is_none_or(|b| e.priority >= self.entries[b].priority) {
+            if best.is_none_or(|b| e.priority >= entries[b].priority) {
                 best = Some(i);
             }
         }
@@ -145,7 +194,7 @@ impl VolumeStack {
     /// The volumes other than the innermost, oldest first (RIS `GetOverlappingVolumes`).
     pub fn overlapping(&self) -> impl Iterator<Item = VolumeEntry> + '_ {
         let inner = self.innermost_index();
-        self.entries
+        self.entries()
             .iter()
             .enumerate()
             .filter(move |(i, _)| Some(*i) != inner)
@@ -163,6 +212,54 @@ mod tests {
             shape,
             priority,
         }
+    }
+
+    #[test]
+    fn copies_are_independent_values() {
+        // Copies share entries until one changes: the other must not see the change.
+        let mut a = VolumeStack::new();
+        a.enter(e(1, 1, 0));
+        let mut b = a.clone();
+        b.enter(e(2, 2, 3));
+        assert_eq!(a.entries(), &[e(1, 1, 0)]);
+        assert_eq!(b.entries(), &[e(1, 1, 0), e(2, 2, 3)]);
+        let c = b.clone();
+        assert_eq!(b.exit(1), StackEvent::Exited);
+        assert_eq!(b.entries(), &[e(2, 2, 3)]);
+        assert_eq!(c.len(), 2);
+        assert_eq!(a.len(), 1);
+    }
+
+    #[test]
+    fn emptied_stack_equals_a_new_one() {
+        // Equality is by entries, whatever the stacks' history (the partition system keys
+        // bundles by equal stacks).
+        let mut s = VolumeStack::new();
+        s.enter(e(1, 1, 0));
+        assert_ne!(s, VolumeStack::new());
+        s.exit(1);
+        assert!(s.is_empty());
+        assert_eq!(s.len(), 0);
+        assert_eq!(s, VolumeStack::new());
+        assert_eq!(s.entries(), &[] as &[VolumeEntry]);
+        assert_eq!(s.innermost(), None);
+        // Small enough that a column of empty stacks is cheap to fill.
+        assert!(std::mem::size_of::<VolumeStack>() <= 16);
+    }
+
+    #[test]
+    fn deep_nesting_is_unbounded() {
+        let mut s = VolumeStack::new();
+        for i in 0..9 {
+            s.enter(e(i, i, i as i32));
+        }
+        let copy = s.clone();
+        for i in (0..9).rev() {
+            assert_eq!(s.innermost(), Some(e(i, i, i as i32)));
+            assert_eq!(s.exit(i), StackEvent::Exited);
+        }
+        assert!(s.is_empty());
+        assert_eq!(copy.len(), 9);
     }
 
     #[test]
