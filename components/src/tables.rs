@@ -112,6 +112,25 @@ macro_rules! soa_table {
                     self.$field.retain(|_| *flags.next().unwrap_or(&false));
                 } )*
             }
+            /// Appends copies of the rows `rows` of `other`, in that order: one gather per
+            /// column, where [`push_from`](Self::push_from) per row checks the capacity and
+            /// stores the length of every column for every row.
+            ///
+            /// # Panics
+            /// When a row index is out of `other`'s range.
+            pub fn extend_gather(&mut self, other: &Self, rows: &[u32]) {
+                $( {
+                    let src = &other.$field[..];
+                    self.$field.extend(rows.iter().map(|&i| src[i as usize].clone()));
+                } )*
+            }
+            /// Appends a copy of the rows `range` of `other`, in order.
+            ///
+            /// # Panics
+            /// When `range` is out of `other`'s range.
+            pub fn extend_from_range(&mut self, other: &Self, range: std::ops::Range<usize>) {
+                $( self.$field.extend_from_slice(&other.$field[range.clone()]); )*
+            }
             /// Appends a copy of every row of `other`.
             #[inline]
             pub fn extend_from(&mut self, other: &Self) {
@@ -381,6 +400,29 @@ mod tests {
         let mut h = Hits::default();
         h.push(hit(1.0, 1));
         h.retain_rows(&[]);
+    }
+
+    #[test]
+    fn extend_gather_and_range_match_push_from() {
+        let mut src = Hits::default();
+        for i in 0..6 {
+            src.push(hit(i as f32 + 0.5, 100 + i));
+        }
+        let rows = [4u32, 0, 4, 2];
+        let (mut a, mut b) = (Hits::default(), Hits::default());
+        a.push(hit(9.0, 9));
+        b.push(hit(9.0, 9));
+        a.extend_gather(&src, &rows);
+        for &i in &rows {
+            b.push_from(&src, i as usize);
+        }
+        assert_eq!(prims(&a), vec![9, 104, 100, 104, 102]);
+        assert_eq!(prims(&a), prims(&b));
+        assert_eq!((a.t.clone(), a.b1.clone(), a.b2.clone()), (b.t, b.b1, b.b2));
+        a.extend_from_range(&src, 1..3);
+        assert_eq!(prims(&a)[5..], [101, 102]);
+        assert_eq!(a.t[5..], [1.5, 2.5]);
+        assert!(a.is_consistent());
     }
 
     #[test]

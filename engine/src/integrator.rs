@@ -448,9 +448,7 @@ impl PathTracer {
         for (key, range) in &runs {
             let stack = &stacks[(*key / 2) as usize];
             t.bundle.clear();
-            for &i in &t.order[range.clone()] {
-                t.bundle.push_from(&t.pending, i as usize);
-            }
+            t.bundle.extend_gather(&t.pending, &t.order[range.clone()]);
             for (k, s) in t.bundle.shading_ctx_index.iter_mut().enumerate() {
                 *s = k as u32;
             }
@@ -1452,15 +1450,12 @@ pub(crate) fn volume_point(
 /// `rays` (the table `src` answers) is appended.
 fn append_groups(dst: &mut ShadeGroups, incoming: &mut Rays, src: &ShadeGroups, rays: &Rays) {
     let offset = incoming.len() as u32;
-    for i in 0..rays.len() {
-        incoming.push_from(rays, i);
-    }
+    incoming.extend_from(rays);
     for g in &src.groups {
         let start = dst.points.len();
-        for i in g.range.clone() {
-            dst.points.push_from(&src.points, i);
-            let last = dst.points.len() - 1;
-            dst.points.ray_id[last] += offset;
+        dst.points.extend_from_range(&src.points, g.range.clone());
+        for id in &mut dst.points.ray_id[start..] {
+            *id += offset;
         }
         dst.groups.push(ShadeGroup {
             material: g.material,
