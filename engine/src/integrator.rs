@@ -100,6 +100,9 @@ pub struct BatchTables {
     contribution: Vec<Rgb>,
     /// Points of the group being shaded whose light sample may give a shadow ray.
     shadow_points: Vec<u32>,
+    /// Whether each point of the group being shaded may continue its path (the next
+    /// segment fits in `max_depth`): light sampling skips the others.
+    active: Vec<bool>,
     /// Which shading points stay in the groups (pass-through points leave).
     keep: Vec<bool>,
     /// Number of kept points before each point (prefix sums of `keep`).
@@ -795,6 +798,7 @@ impl PathTracer {
             u4,
             emissive_material,
             shadow_points,
+            active: active_tmp,
             ..
         } = t;
         let groups = std::mem::take(&mut shade_groups.groups);
@@ -893,18 +897,20 @@ impl PathTracer {
             // Per-point samplers at this vertex's dimensions.
             let num_paths = paths.len();
             let (seed, sample) = (&seeds[..num_paths], &paths.sample[..num_paths]);
+            // And which points may continue (the next segment must fit in max_depth), in
+            // the same pass over the incoming rays.
+            let active = scratch(active_tmp, m, false);
             samplers.clear();
-            samplers.extend(ray_id.iter().map(|&r| {
+            samplers.extend(ray_id.iter().zip(active.iter_mut()).map(|(&r, active)| {
                 let r = r as usize;
                 let path = in_path[r] as usize;
+                *active = (in_depth[r] as u32 + 2) <= settings.max_depth;
                 PathSampler {
                     seed: seed[path],
                     sample: sample[path],
                     dimension: in_dimension[r],
                 }
             }));
-            // Which points may continue: the next segment must fit in max_depth.
-            let can_continue = |r: usize| (in_depth[r] as u32 + 2) <= settings.max_depth;
 
             // The vertex's first four dimensions: light position, light selection, Russian
             // roulette (one SIMD Sobol evaluation when aligned, see DIMS_PER_VERTEX).
@@ -925,13 +931,11 @@ impl PathTracer {
                 // One column draw for the group; leaves the samplers at the vertex's
                 // dimension 4, where the Bxdf starts.
                 next_4d_column(&mut samplers[..m], u4);
-                let active =
-                    arena.alloc_slice_fill_iter(ray_id.iter().map(|&r| can_continue(r as usize)));
                 scene.lights.sample_column(
                     &scene.geometry,
                     &pts.p[range.clone()][..m],
                     &*u4,
-                    active,
+                    &*active,
                     &mut light,
                 );
                 stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
