@@ -479,56 +479,64 @@ mod avx2 {
         _mm256_add_epi64(_mm256_mul_epu32(a, c_lo), _mm256_slli_epi64::<32>(cross))
     }
 
-    /// The low 32 bits of `pixel_seed(seed, set)` on four u64 lanes holding u32 values.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn pixel_seed4(seed: __m256i, set: __m256i) -> __m256i {
-        // set < 2^32: its product with the constant needs no high-half term.
-        let k: u64 = 0xD1B5_4A32_D192_ED03;
-        let set_k = _mm256_add_epi64(
-            _mm256_mul_epu32(set, _mm256_set1_epi64x((k & 0xffff_ffff) as i64)),
-            _mm256_slli_epi64::<32>(_mm256_mul_epu32(set, _mm256_set1_epi64x((k >> 32) as i64))),
-        );
-        let mut z = _mm256_add_epi64(
-            _mm256_add_epi64(seed, _mm256_set1_epi64x(GOLDEN_GAMMA as i64)),
-            set_k,
-        );
-        // mix64 (SplitMix64's output function).
-        z = mul64(
-            _mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)),
-            0xBF58_476D_1CE4_E5B9,
-        );
-        z = mul64(
-            _mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)),
-            0x94D0_49BB_1331_11EB,
-        );
-        _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
+    /// Defines `$name(seed, set)`: `set_seed(seed, set)` on eight lanes, compiled with
+    /// `$features`, with `$mul(a, c)` the wrapping product of the u64 lanes of `a` by `c`.
+    /// One body for the AVX2 build ([`mul64`]) and the AVX-512 DQ one (one `vpmullq`, the
+    /// same bits); a macro rather than a shared function taking `mul`, so that each
+    /// product is compiled, and inlined, with its own target features.
+    macro_rules! set_seeds_fn {
+        ($name:ident, $features:literal, $mul:expr) => {
+            #[target_feature(enable = $features)]
+            #[inline]
+            fn $name(seed: __m256i, set: __m256i) -> __m256i {
+                let mul = $mul;
+                // The low 32 bits of `pixel_seed(seed, set)` on four u64 lanes holding
+                // u32 values.
+                let pixel_seed4 = |seed: __m256i, set: __m256i| {
+                    let mut z = _mm256_add_epi64(
+                        _mm256_add_epi64(seed, _mm256_set1_epi64x(GOLDEN_GAMMA as i64)),
+                        mul(set, 0xD1B5_4A32_D192_ED03),
+                    );
+                    // mix64 (SplitMix64's output function).
+                    z = mul(
+                        _mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)),
+                        0xBF58_476D_1CE4_E5B9,
+                    );
+                    z = mul(
+                        _mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)),
+                        0x94D0_49BB_1331_11EB,
+                    );
+                    _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
+                };
+                let widen = |v: __m128i| _mm256_cvtepu32_epi64(v);
+                let (s_lo, s_hi) = (
+                    _mm256_castsi256_si128(seed),
+                    _mm256_extracti128_si256::<1>(seed),
+                );
+                let (t_lo, t_hi) = (
+                    _mm256_castsi256_si128(set),
+                    _mm256_extracti128_si256::<1>(set),
+                );
+                let a = pixel_seed4(widen(s_lo), widen(t_lo));
+                let b = pixel_seed4(widen(s_hi), widen(t_hi));
+                // The low halves of a's and b's u64 lanes, back in point order.
+                let packed = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
+                    _mm256_castsi256_ps(a),
+                    _mm256_castsi256_ps(b),
+                ));
+                let mixed = _mm256_permute4x64_epi64::<0b11_01_10_00>(packed);
+                let first = _mm256_cmpeq_epi32(set, _mm256_setzero_si256());
+                _mm256_blendv_epi8(mixed, seed, first)
+            }
+        };
     }
 
-    /// `set_seed(seed, set)` on eight lanes.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn set_seeds(seed: __m256i, set: __m256i) -> __m256i {
-        let widen = |v: __m128i| _mm256_cvtepu32_epi64(v);
-        let (s_lo, s_hi) = (
-            _mm256_castsi256_si128(seed),
-            _mm256_extracti128_si256::<1>(seed),
-        );
-        let (t_lo, t_hi) = (
-            _mm256_castsi256_si128(set),
-            _mm256_extracti128_si256::<1>(set),
-        );
-        let a = pixel_seed4(widen(s_lo), widen(t_lo));
-        let b = pixel_seed4(widen(s_hi), widen(t_hi));
-        // The low halves of a's and b's u64 lanes, back in point order.
-        let packed = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
-            _mm256_castsi256_ps(a),
-            _mm256_castsi256_ps(b),
-        ));
-        let mixed = _mm256_permute4x64_epi64::<0b11_01_10_00>(packed);
-        let first = _mm256_cmpeq_epi32(set, _mm256_setzero_si256());
-        _mm256_blendv_epi8(mixed, seed, first)
-    }
+    set_seeds_fn!(set_seeds, "avx2", |a, c| mul64(a, c));
+    set_seeds_fn!(
+        set_seeds_dq,
+        "avx2,avx512f,avx512dq,avx512vl",
+        |a: __m256i, c: u64| _mm256_mullo_epi64(a, _mm256_set1_epi64x(c as i64))
+    );
 
     /// Field `K` (0 seed, 1 sample, 2 dimension) of eight `repr(C)` samplers held in three
     /// vectors: lane `i` is u32 number `3 i + K`, which lies in vector `(3 i + K) / 8` at
@@ -720,20 +728,20 @@ mod avx2 {
         }
     }
 
-    /// `next_4d_column`'s draws (without advancing the samplers).
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
+    /// `next_4d_column`'s draws (without advancing the samplers), with `seeds` the set
+    /// seeds ([`set_seeds`] or [`set_seeds_dq`]).
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn column_4d(
+    #[inline]
+    fn draws_4d(
         table: &SobolTable,
         samplers: &[PathSampler],
         out: &mut [[f32; 4]],
+        seeds: impl Fn(__m256i, __m256i) -> __m256i,
     ) {
         groups(
             samplers,
             out,
-            |seed, set| set_seeds(seed, set),
+            seeds,
             |seed, sample, o| kernel_4d(table, seed, sample, o),
             |s, o| {
                 super::for_lane_groups(s, o, table, super::kernel_4d, |&s| {
@@ -744,16 +752,20 @@ mod avx2 {
         );
     }
 
-    /// `next_2d_column`'s draws (without advancing the samplers).
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
+    /// `next_2d_column`'s draws (without advancing the samplers), with `seeds` as in
+    /// [`draws_4d`].
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn column_2d(table: &SobolTable, samplers: &[PathSampler], out: &mut [Vec2]) {
+    #[inline]
+    fn draws_2d(
+        table: &SobolTable,
+        samplers: &[PathSampler],
+        out: &mut [Vec2],
+        seeds: impl Fn(__m256i, __m256i) -> __m256i,
+    ) {
         groups(
             samplers,
             out,
-            |seed, set| set_seeds(seed, set),
+            seeds,
             |seed, sample, o| kernel_2d(table, seed, sample, o),
             |s, o| {
                 super::for_lane_groups(s, o, table, super::kernel_2d, |&s| {
@@ -762,6 +774,28 @@ mod avx2 {
                 })
             },
         );
+    }
+
+    /// `next_4d_column`'s draws (without advancing the samplers).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn column_4d(
+        table: &SobolTable,
+        samplers: &[PathSampler],
+        out: &mut [[f32; 4]],
+    ) {
+        draws_4d(table, samplers, out, |seed, set| set_seeds(seed, set));
+    }
+
+    /// `next_2d_column`'s draws (without advancing the samplers).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn column_2d(table: &SobolTable, samplers: &[PathSampler], out: &mut [Vec2]) {
+        draws_2d(table, samplers, out, |seed, set| set_seeds(seed, set));
     }
 
     /// Whether this CPU also has AVX-512 DQ and VL: 64-bit lane multiplies (`vpmullq`) on
@@ -774,53 +808,8 @@ mod avx2 {
             && is_x86_feature_detected!("avx512vl")
     }
 
-    /// [`pixel_seed4`] with native 64-bit multiplies (one `vpmullq` where [`mul64`] takes
-    /// three 32-bit products and four shifts and adds): the same wrapping products.
-    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
-    #[inline]
-    fn pixel_seed4_dq(seed: __m256i, set: __m256i) -> __m256i {
-        let mul = |a: __m256i, c: u64| _mm256_mullo_epi64(a, _mm256_set1_epi64x(c as i64));
-        let set_k = mul(set, 0xD1B5_4A32_D192_ED03);
-        let mut z = _mm256_add_epi64(
-            _mm256_add_epi64(seed, _mm256_set1_epi64x(GOLDEN_GAMMA as i64)),
-            set_k,
-        );
-        z = mul(
-            _mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)),
-            0xBF58_476D_1CE4_E5B9,
-        );
-        z = mul(
-            _mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)),
-            0x94D0_49BB_1331_11EB,
-        );
-        _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
-    }
-
-    /// [`set_seeds`] through [`pixel_seed4_dq`].
-    #[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
-    #[inline]
-    fn set_seeds_dq(seed: __m256i, set: __m256i) -> __m256i {
-        let widen = |v: __m128i| _mm256_cvtepu32_epi64(v);
-        let (s_lo, s_hi) = (
-            _mm256_castsi256_si128(seed),
-            _mm256_extracti128_si256::<1>(seed),
-        );
-        let (t_lo, t_hi) = (
-            _mm256_castsi256_si128(set),
-            _mm256_extracti128_si256::<1>(set),
-        );
-        let a = pixel_seed4_dq(widen(s_lo), widen(t_lo));
-        let b = pixel_seed4_dq(widen(s_hi), widen(t_hi));
-        let packed = _mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
-            _mm256_castsi256_ps(a),
-            _mm256_castsi256_ps(b),
-        ));
-        let mixed = _mm256_permute4x64_epi64::<0b11_01_10_00>(packed);
-        let first = _mm256_cmpeq_epi32(set, _mm256_setzero_si256());
-        _mm256_blendv_epi8(mixed, seed, first)
-    }
-
-    /// [`column_4d`] with the set seeds of [`set_seeds_dq`].
+    /// [`column_4d`] with native 64-bit multiplies in the set seeds ([`set_seeds_dq`]: one
+    /// `vpmullq` where [`mul64`] takes three 32-bit products and four shifts and adds).
     ///
     /// # Safety
     /// The CPU must have what [`detected_dq`] checks.
@@ -830,21 +819,11 @@ mod avx2 {
         samplers: &[PathSampler],
         out: &mut [[f32; 4]],
     ) {
-        groups(
-            samplers,
-            out,
-            |seed, set| set_seeds_dq(seed, set),
-            |seed, sample, o| kernel_4d(table, seed, sample, o),
-            |s, o| {
-                super::for_lane_groups(s, o, table, super::kernel_4d, |&s| {
-                    let mut s = s;
-                    s.next_4d()
-                })
-            },
-        );
+        draws_4d(table, samplers, out, |seed, set| set_seeds_dq(seed, set));
     }
 
-    /// [`column_2d`] with the set seeds of [`set_seeds_dq`].
+    /// [`column_2d`] with native 64-bit multiplies in the set seeds (see
+    /// [`column_4d_dq`]).
     ///
     /// # Safety
     /// The CPU must have what [`detected_dq`] checks.
@@ -854,18 +833,7 @@ mod avx2 {
         samplers: &[PathSampler],
         out: &mut [Vec2],
     ) {
-        groups(
-            samplers,
-            out,
-            |seed, set| set_seeds_dq(seed, set),
-            |seed, sample, o| kernel_2d(table, seed, sample, o),
-            |s, o| {
-                super::for_lane_groups(s, o, table, super::kernel_2d, |&s| {
-                    let mut s = s;
-                    s.next_2d()
-                })
-            },
-        );
+        draws_2d(table, samplers, out, |seed, set| set_seeds_dq(seed, set));
     }
 
     /// `first_2d_column` (set 0: the seeds are the set seeds).
