@@ -442,8 +442,9 @@ struct RayBlock {
     /// The triangle test's rows ([`WatertightRay`]'s constants): the origin permuted to
     /// `(kx, ky, kz)`, then the shear `(Sx, Sy, Sz)`.
     tri: [[f32; BLOCK]; 6],
-    /// The origin (rows 0 to 2), a zero row, the direction (rows 4 to 6), a zero row.
-    od: [[f32; BLOCK]; 8],
+    /// The origin (rows 0 to 2) and the direction (rows 3 to 5), for the sphere and
+    /// scalar fallback tests.
+    od: [[f32; BLOCK]; 6],
     /// The node test's exact cull of boxes behind the origin (see [`intersect_node8`]),
     /// axis `a`: row `a` the sign `±1` of `d[a]`, row `3 + a` the threshold `±o[a]` (sign
     /// times origin), so that `sign * bound <= threshold` on the box maximum (`d[a] > 0`)
@@ -470,7 +471,7 @@ impl RayBlock {
         RayBlock {
             node: [[0.0; BLOCK]; 9],
             tri: [[0.0; BLOCK]; 6],
-            od: [[0.0; BLOCK]; 8],
+            od: [[0.0; BLOCK]; 6],
             cull: [[0.0; BLOCK]; 6],
             x_dominant: 0,
             y_dominant: 0,
@@ -504,7 +505,7 @@ impl RayBlock {
         };
         for a in 0..3 {
             b.od[a] = o[a].to_array();
-            b.od[4 + a] = d[a].to_array();
+            b.od[3 + a] = d[a].to_array();
         }
         let mut tmins = [f32::NAN; BLOCK];
         for (t, &tmin) in tmins.iter_mut().zip(tmin) {
@@ -567,7 +568,7 @@ impl RayBlock {
     #[inline(always)]
     fn direction(&self, l: usize) -> Vec3 {
         let l = l % BLOCK;
-        Vec3::new(self.od[4][l], self.od[5][l], self.od[6][l])
+        Vec3::new(self.od[3][l], self.od[4][l], self.od[5][l])
     }
 }
 
