@@ -424,9 +424,7 @@ mod tests {
         for (b, rays) in batches.iter().enumerate() {
             let n = rays.len();
             let mut hits = Hits::default();
-            for _ in 0..n {
-                hits.push(Default::default());
-            }
+            hits.append_default(n);
             intersect_closest(
                 &scene.geometry,
                 &rays.origin,
