@@ -275,32 +275,18 @@ fn for_lane_groups<T: Copy>(
 /// When `out` and `samplers` differ in length.
 pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
     assert_eq!(samplers.len(), out.len(), "next_4d_column: column lengths");
-    let table = sobol_byte_table();
-    #[cfg(target_arch = "x86_64")]
-    if avx2::detected() {
-        // SAFETY: `avx2::detected_dq` found AVX2, AVX-512 F, DQ and VL; else
-        // `avx2::detected` found AVX2 on this CPU.
-        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
-        unsafe {
-            if avx2::detected_dq() {
-                avx2::column_4d_dq(table, samplers, out)
-            } else {
-                avx2::column_4d(table, samplers, out)
-            }
-        };
-        for s in samplers.iter_mut() {
-            s.dimension += 4;
-        }
-        return;
-    }
-    for_lane_groups(samplers, out, table, kernel_4d, |&s| {
-        let mut s = s;
-        s.next_4d()
-    });
-    // The kernel leaves the samplers alone (the remainder's padding is a copy).
-    for s in samplers.iter_mut() {
-        s.dimension += 4;
-    }
+    column_draws(
+        samplers,
+        out,
+        4,
+        #[cfg(target_arch = "x86_64")]
+        [avx2::column_4d_dq, avx2::column_4d],
+        kernel_4d,
+        |&s| {
+            let mut s = s;
+            s.next_4d()
+        },
+    );
 }
 
 /// [`PathSampler::next_2d`] for a column of samplers: `out[i]` gets sampler `i`'s next two
@@ -312,30 +298,57 @@ pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
 /// When `out` and `samplers` differ in length.
 pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
     assert_eq!(samplers.len(), out.len(), "next_2d_column: column lengths");
+    column_draws(
+        samplers,
+        out,
+        2,
+        #[cfg(target_arch = "x86_64")]
+        [avx2::column_2d_dq, avx2::column_2d],
+        kernel_2d,
+        |&s| {
+            let mut s = s;
+            s.next_2d()
+        },
+    );
+}
+
+/// An AVX2 column kernel of the sampler (`avx2::column_*`): the draws of a column without
+/// advancing the samplers; unsafe because its CPU features must have been detected.
+#[cfg(target_arch = "x86_64")]
+type ColumnDraws<T> = unsafe fn(&SobolTable, &[PathSampler], &mut [T]);
+
+/// The body of [`next_4d_column`] and [`next_2d_column`]: the draws of `dims` dimensions
+/// into `out` by the AVX2 kernels where the CPU has AVX2 (`avx2_draws[0]` with AVX-512 DQ,
+/// else `avx2_draws[1]`), else by the four-lane `kernel` (`single` for groups it cannot
+/// take), then every sampler advanced by `dims` (the kernels leave them alone).
+#[inline(always)]
+fn column_draws<T: Copy>(
+    samplers: &mut [PathSampler],
+    out: &mut [T],
+    dims: u32,
+    #[cfg(target_arch = "x86_64")] avx2_draws: [ColumnDraws<T>; 2],
+    kernel: impl Fn(&SobolTable, &[PathSampler; LANES], &mut [T; LANES]) -> bool,
+    single: impl Fn(&PathSampler) -> T,
+) {
     let table = sobol_byte_table();
     #[cfg(target_arch = "x86_64")]
-    if avx2::detected() {
-        // SAFETY: `avx2::detected_dq` found AVX2, AVX-512 F, DQ and VL; else
-        // `avx2::detected` found AVX2 on this CPU.
+    let done = avx2::detected() && {
+        let draws = avx2_draws[if avx2::detected_dq() { 0 } else { 1 }];
+        // SAFETY: `avx2::detected_dq` found AVX2, AVX-512 F, DQ and VL for `avx2_draws[0]`,
+        // `avx2::detected` found AVX2 for `avx2_draws[1]`.
         #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
         unsafe {
-            if avx2::detected_dq() {
-                avx2::column_2d_dq(table, samplers, out)
-            } else {
-                avx2::column_2d(table, samplers, out)
-            }
+            draws(table, samplers, out)
         };
-        for s in samplers.iter_mut() {
-            s.dimension += 2;
-        }
-        return;
+        true
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let done = false;
+    if !done {
+        for_lane_groups(samplers, out, table, kernel, single);
     }
-    for_lane_groups(samplers, out, table, kernel_2d, |&s| {
-        let mut s = s;
-        s.next_2d()
-    });
     for s in samplers.iter_mut() {
-        s.dimension += 2;
+        s.dimension += dims;
     }
 }
 
