@@ -15,6 +15,7 @@
 use bumpalo::Bump;
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use glam::{Vec2, Vec3};
+use risotto::engine::integrator::PathBatch;
 use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::scene_file::load_scene;
@@ -98,7 +99,9 @@ fn shadow_rays(scene: &CompiledScene) -> ShadowRays {
                     f32::INFINITY
                 },
                 contribution: Rgb::WHITE,
+                weight: Rgb::WHITE,
                 path: shadow.len() as u32,
+                dimension: 8,
                 volume_stack: scene.camera_stack.clone(),
             });
         }
@@ -130,6 +133,7 @@ fn bench_transmission(c: &mut Criterion) {
             });
         }
         let seeds: Vec<u32> = (0..N as u32).map(|p| pixel_seed(1, p)).collect();
+        let batch = PathBatch { paths, seeds };
         let mut contribution = vec![Rgb::WHITE; N];
         let mut stats = SystemStats::default();
         let mut arena = Bump::new();
@@ -137,8 +141,7 @@ fn bench_transmission(c: &mut Criterion) {
         trace_shadow_rays(
             &scene,
             &shadow,
-            &paths,
-            &seeds,
+            &batch,
             &mut contribution,
             &mut stats,
             &arena,
@@ -152,8 +155,7 @@ fn bench_transmission(c: &mut Criterion) {
                 trace_shadow_rays(
                     black_box(&scene),
                     black_box(&shadow),
-                    &paths,
-                    &seeds,
+                    &batch,
                     &mut contribution,
                     &mut stats,
                     &arena,

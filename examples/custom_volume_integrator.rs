@@ -52,8 +52,8 @@ use risotto::engine::context::IntegratorContext;
 use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::output::{write_exr, write_png, FilmOutput};
 use risotto::engine::plugin::{
-    Bxdf, BxdfFactory, InstanceHints, LightingDelegate, Segments, ShadeGroups, ShadingContext,
-    ShadingMode, VolumeIntegrator,
+    Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
+    VolumeIntegrator, VolumeServices,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene_file::{parse_scene, SceneError};
@@ -176,12 +176,11 @@ impl VolumeIntegrator for SmokyInterior {
         rays: &Rays,
         _samplers: &mut [PathSampler],
         _lobes_wanted: LobeSampled,
-        ictx: &mut IntegratorContext<'_>,
-        _lighting: Option<&mut dyn LightingDelegate>,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
         // Nothing scatters inside: the next hits are the ordinary nearest hits ...
-        ictx.nearest_hits(rays, out);
+        services.ictx.nearest_hits(rays, out);
         // ... attenuated by Beer's law over each point's incident segment (RIS `k_VLen`); a
         // ray escaping from inside (an open mesh) travelled its whole, unbounded, tmax.
         out.attenuate_segments(rays, |length| self.transmittance(length));

@@ -284,11 +284,10 @@ impl VolumeIntegrator for SummingInterior {
         rays: &Rays,
         _samplers: &mut [PathSampler],
         _lobes_wanted: LobeSampled,
-        ictx: &mut IntegratorContext<'_>,
-        _lighting: Option<&mut dyn LightingDelegate>,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        ictx.nearest_hits(rays, out);
+        services.ictx.nearest_hits(rays, out);
         out.attenuate_segments(rays, |length| beer(self.total, length));
     }
     fn transmission(

@@ -296,10 +296,40 @@ soa_table! {
         tmax: f32,
         /// Unoccluded contribution `throughput * f * Le * mis / pdf`.
         contribution: Rgb,
+        /// The contribution's factor without the light's radiance, `throughput * f * mis /
+        /// pdf`: what multiplies radiance emitted by volumes along the shadow ray.
+        weight: Rgb,
         /// Path the contribution is added to.
         path: u32,
+        /// First sampler dimension of the shadow ray's own sequence (the vertex's first
+        /// dimension; the sequence is decorrelated from the camera path's by its seed).
+        dimension: u32,
         /// Volumes the shadow ray starts in.
         volume_stack: VolumeStack,
+    }
+}
+
+impl ShadingPointRow {
+    /// A shading point at the start of a segment inside a volume (no surface: normals face
+    /// the viewer, transmission 1, no shape). Binds volume integrators to the rays or shadow
+    /// segments they answer.
+    pub fn in_volume(p: Vec3, direction: Vec3, ray_id: u32, material: u32) -> Self {
+        ShadingPointRow {
+            p,
+            ng: -direction,
+            nn: -direction,
+            vn: -direction,
+            vlen: 0.0,
+            u: 0.0,
+            v: 0.0,
+            w: 0.0,
+            transmission: Rgb::WHITE,
+            ray_id,
+            material,
+            shape: u32::MAX,
+            front_face: true,
+            ior_outside: 1.0,
+        }
     }
 }
 

@@ -37,6 +37,10 @@ pub enum StackEvent {
     /// The ray crossed a back face of a shape it was not inside: the boundary is not closed,
     /// or the ray started inside without the renderer knowing. Nothing was removed.
     UnmatchedExit,
+    /// The ray entered the interior of a shape it was already inside (a front face crossed
+    /// twice without a back face between): the boundary is not closed, its normals are
+    /// inconsistent, or an exit was missed. The entry was recorded again.
+    EnteredAgain,
 }
 
 /// The entries of a stack of two or more volumes, shared between the stacks that hold them.
@@ -140,6 +144,7 @@ impl VolumeStack {
 
     /// Records that the ray entered `entry`'s volume.
     pub fn enter(&mut self, entry: VolumeEntry) -> StackEvent {
+        let again = self.contains_shape(entry.shape);
         match &mut self.repr {
             Repr::Empty => self.repr = Repr::One(entry),
             Repr::One(first) => {
@@ -148,7 +153,11 @@ impl VolumeStack {
             // A private copy of the entries first when they are shared.
             Repr::Many(shared) => Arc::make_mut(shared).push(entry),
         }
-        StackEvent::Entered
+        if again {
+            StackEvent::EnteredAgain
+        } else {
+            StackEvent::Entered
+        }
     }
 
     /// Records that the ray left the interior of `shape` (the most recent entry of it).
@@ -276,6 +285,11 @@ mod tests {
         let mut s = VolumeStack::new();
         s.enter(e(1, 1, 0));
         assert_eq!(s.exit(9), StackEvent::UnmatchedExit);
+        // Entering a shape the ray is already inside is reported (and recorded again).
+        let mut twice = VolumeStack::new();
+        assert_eq!(twice.enter(e(3, 3, 0)), StackEvent::Entered);
+        assert_eq!(twice.enter(e(3, 3, 0)), StackEvent::EnteredAgain);
+        assert_eq!(twice.len(), 2);
         assert_eq!(s.len(), 1);
     }
 

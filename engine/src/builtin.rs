@@ -288,11 +288,10 @@ impl VolumeIntegrator for NullInterior {
         rays: &Rays,
         _samplers: &mut [PathSampler],
         _lobes_wanted: LobeSampled,
-        ictx: &mut IntegratorContext<'_>,
-        _lighting: Option<&mut dyn LightingDelegate>,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        ictx.nearest_hits(rays, out);
+        services.ictx.nearest_hits(rays, out);
     }
     fn transmission(
         &self,
@@ -336,11 +335,10 @@ impl VolumeIntegrator for BeerInterior {
         rays: &Rays,
         _samplers: &mut [PathSampler],
         _lobes_wanted: LobeSampled,
-        ictx: &mut IntegratorContext<'_>,
-        _lighting: Option<&mut dyn LightingDelegate>,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        ictx.nearest_hits(rays, out);
+        services.ictx.nearest_hits(rays, out);
         out.attenuate_segments(rays, |length| self.transmittance(length));
     }
     fn transmission(

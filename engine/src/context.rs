@@ -1,8 +1,8 @@
 //! The integrator context (RIS `RixIntegratorContext`): the renderer's ray-tracing services
 //! for global and volume integrators.
 
-use crate::plugin::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::scene::CompiledScene;
+use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::stats::{System, SystemStats};
 use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};

@@ -36,13 +36,17 @@
 //! ```
 
 use crate::context::IntegratorContext;
+pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
+pub use crate::shading_context::{
+    Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
+    VolumeSampling,
+};
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints, VolumeEntry};
-use risotto_systems::bxdf::{BxdfSample, Frame};
+use risotto_components::{LobeSampled, Rays, Rgb};
+pub use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::sampler::PathSampler;
 use std::any::Any;
-use std::ops::Range;
 
 /// What a factory tells the renderer without being asked to build anything (RIS
 /// `GetInstanceHints`). The scene's feature set, and so the scheduler's stage list, is derived
@@ -90,169 +94,6 @@ impl std::ops::BitOr for InstanceHints {
     }
 }
 
-/// Why a closure is being built (RIS `RixSCShadingMode`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ShadingMode {
-    /// Shading a surface hit.
-    Scatter,
-    /// Shading a point inside a volume (`k_RixSCVolumeScatterQuery`): the factory returns a
-    /// phase function.
-    VolumeScatter,
-    /// Building an interior for a ray that travels through the volume.
-    Interior,
-}
-
-/// Another volume overlapping the innermost one, with its own integrator (built by the
-/// renderer through its factory's `begin_interior`).
-pub struct OverlappingVolume<'a> {
-    /// Which volume.
-    pub entry: VolumeEntry,
-    /// Its factory.
-    pub factory: &'a dyn BxdfFactory,
-    /// Its integrator (None when its factory computes no interior).
-    pub integrator: Option<&'a (dyn VolumeIntegrator + 'a)>,
-}
-
-/// A group of shading points that share a material, with the RIS builtins as columns
-/// (`P`, `Ng`, `Nn`, `Vn`, `VLen`, `u`, `v`, `w`, `transmission`, ray id).
-pub struct ShadingContext<'a> {
-    points: &'a ShadingPoints,
-    range: Range<usize>,
-    mode: ShadingMode,
-    material: u32,
-    overlapping: &'a [OverlappingVolume<'a>],
-}
-
-impl<'a> ShadingContext<'a> {
-    /// A context over rows `range` of `points`.
-    pub fn new(
-        points: &'a ShadingPoints,
-        range: Range<usize>,
-        mode: ShadingMode,
-        material: u32,
-        overlapping: &'a [OverlappingVolume<'a>],
-    ) -> Self {
-        ShadingContext {
-            points,
-            range,
-            mode,
-            material,
-            overlapping,
-        }
-    }
-    /// Number of points (RIS `numPts`).
-    pub fn num_points(&self) -> usize {
-        self.range.len()
-    }
-    /// Why this context exists.
-    pub fn mode(&self) -> ShadingMode {
-        self.mode
-    }
-    /// Material (factory) index of every point.
-    pub fn material(&self) -> u32 {
-        self.material
-    }
-    /// Positions `P`.
-    pub fn p(&self) -> &'a [Vec3] {
-        &self.points.p[self.range.clone()]
-    }
-    /// Geometric normals `Ng`.
-    pub fn ng(&self) -> &'a [Vec3] {
-        &self.points.ng[self.range.clone()]
-    }
-    /// Shading normals `Nn`.
-    pub fn nn(&self) -> &'a [Vec3] {
-        &self.points.nn[self.range.clone()]
-    }
-    /// Directions towards the viewer `Vn`.
-    pub fn vn(&self) -> &'a [Vec3] {
-        &self.points.vn[self.range.clone()]
-    }
-    /// Incident segment lengths `VLen`.
-    pub fn vlen(&self) -> &'a [f32] {
-        &self.points.vlen[self.range.clone()]
-    }
-    /// Parameters `u`.
-    pub fn u(&self) -> &'a [f32] {
-        &self.points.u[self.range.clone()]
-    }
-    /// Parameters `v`.
-    pub fn v(&self) -> &'a [f32] {
-        &self.points.v[self.range.clone()]
-    }
-    /// Parameters `w`.
-    pub fn w(&self) -> &'a [f32] {
-        &self.points.w[self.range.clone()]
-    }
-    /// Transmission over each point's incident segment.
-    pub fn transmission(&self) -> &'a [Rgb] {
-        &self.points.transmission[self.range.clone()]
-    }
-    /// Index of the ray that produced each point.
-    pub fn ray_id(&self) -> &'a [u32] {
-        &self.points.ray_id[self.range.clone()]
-    }
-    /// Whether each ray arrived on the front face.
-    pub fn front_face(&self) -> &'a [bool] {
-        &self.points.front_face[self.range.clone()]
-    }
-    /// IOR of the medium outside each point's shape (see [`ShadingPointRow::ior_outside`]).
-    pub fn ior_outside(&self) -> &'a [f32] {
-        &self.points.ior_outside[self.range.clone()]
-    }
-    /// Shape index of each point (`u32::MAX` inside volumes).
-    pub fn shape(&self) -> &'a [u32] {
-        &self.points.shape[self.range.clone()]
-    }
-    /// The other volumes that overlap this context's volume (RIS `GetOverlappingVolumes`).
-    pub fn overlapping_volumes(&self) -> &'a [OverlappingVolume<'a>] {
-        self.overlapping
-    }
-}
-
-/// Output columns of [`Bxdf::generate_samples`], one row per point of the context.
-#[derive(Clone, Debug, Default)]
-pub struct BxdfSamples {
-    /// Sampled incident direction (world space, unit). Ignored where `pdf == 0`.
-    pub wi: Vec<Vec3>,
-    /// `f * |cos| / pdf` (for specular lobes: the lobe weight).
-    pub weight: Vec<Rgb>,
-    /// Solid-angle pdf of `wi`; for specular lobes the discrete lobe probability. 0 = no sample
-    /// (the path ends, counted as absorbed).
-    pub pdf: Vec<f32>,
-    /// Lobe bits of each sample (`TRANSMIT` marks a crossing into the opposite volume).
-    pub lobe: Vec<LobeSampled>,
-    /// Relative index of refraction crossed (1 when none).
-    pub eta: Vec<f32>,
-}
-
-impl BxdfSamples {
-    /// Writes the sample `s` drawn in the local frame `frame` as row `i` (direction turned to
-    /// world space).
-    #[inline]
-    pub fn set_local(&mut self, i: usize, frame: &Frame, s: BxdfSample) {
-        self.wi[i] = frame.to_world(s.wi);
-        self.weight[i] = s.weight;
-        self.pdf[i] = s.pdf;
-        self.lobe[i] = s.lobe;
-        self.eta[i] = s.eta;
-    }
-
-    /// Resizes every column to `n` rows of "no sample".
-    pub fn reset(&mut self, n: usize) {
-        self.wi.clear();
-        self.wi.resize(n, Vec3::Z);
-        self.weight.clear();
-        self.weight.resize(n, Rgb::BLACK);
-        self.pdf.clear();
-        self.pdf.resize(n, 0.0);
-        self.lobe.clear();
-        self.lobe.resize(n, LobeSampled::NONE);
-        self.eta.clear();
-        self.eta.resize(n, 1.0);
-    }
-}
-
 /// A scattering closure bound to one shading context (RIS `RixBxdf`): a surface Bxdf, or a
 /// phase function for [`ShadingMode::VolumeScatter`] contexts.
 pub trait Bxdf {
@@ -283,97 +124,6 @@ pub trait Bxdf {
     fn albedo(&self, ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
         let _ = ctx;
         out.fill(Rgb::BLACK);
-    }
-}
-
-/// Where a volume integrator's results go: shading points grouped by material, plus rays that
-/// escaped to the environment.
-#[derive(Default, Debug)]
-pub struct ShadeGroups {
-    /// All points of all groups; each group is a contiguous range.
-    pub points: ShadingPoints,
-    /// The groups.
-    pub groups: Vec<ShadeGroup>,
-    /// Rays (ids in the table passed to `nearest_hits`) that left the scene.
-    pub misses: Vec<u32>,
-    /// Transmission applied to each escaped ray (parallel to `misses`).
-    pub miss_transmission: Vec<Rgb>,
-}
-
-/// One group of a [`ShadeGroups`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShadeGroup {
-    /// Material (factory) index of the group's points.
-    pub material: u32,
-    /// Surface hits ([`ShadingMode::Scatter`]) or points inside a volume
-    /// ([`ShadingMode::VolumeScatter`]).
-    pub mode: ShadingMode,
-    /// Rows of [`ShadeGroups::points`].
-    pub range: Range<usize>,
-}
-
-impl ShadeGroups {
-    /// Removes everything, keeping allocations.
-    pub fn clear(&mut self) {
-        self.points.clear();
-        self.groups.clear();
-        self.misses.clear();
-        self.miss_transmission.clear();
-    }
-    /// Appends a group made of `rows` (RIS `EndVolumeSampling` with a membership mask: pass the
-    /// retained points only). Empty groups are not added.
-    pub fn push_group(
-        &mut self,
-        material: u32,
-        mode: ShadingMode,
-        rows: impl IntoIterator<Item = ShadingPointRow>,
-    ) {
-        let start = self.points.len();
-        for r in rows {
-            self.points.push(r);
-        }
-        let end = self.points.len();
-        if end > start {
-            self.groups.push(ShadeGroup {
-                material,
-                mode,
-                range: start..end,
-            });
-        }
-    }
-    /// Multiplies the transmission of every point by `transmittance(VLen)` and of every
-    /// escaped ray by `transmittance(tmax)` of its ray in `rays` (the table this was answered
-    /// for): what a homogeneous, non-scattering interior does to the hits `nearest_hits`
-    /// returns.
-    pub fn attenuate_segments(&mut self, rays: &Rays, transmittance: impl Fn(f32) -> Rgb) {
-        for (tr, &vlen) in self.points.transmission.iter_mut().zip(&self.points.vlen) {
-            *tr *= transmittance(vlen);
-        }
-        for (tr, &ray) in self.miss_transmission.iter_mut().zip(&self.misses) {
-            *tr *= transmittance(rays.tmax[ray as usize]);
-        }
-    }
-    /// Records an escaped ray.
-    pub fn push_miss(&mut self, ray_id: u32, transmission: Rgb) {
-        self.misses.push(ray_id);
-        self.miss_transmission.push(transmission);
-    }
-    /// Transmission column of group `g`, for a volume integrator to write.
-    pub fn transmission_mut(&mut self, g: usize) -> &mut [Rgb] {
-        let r = self.groups[g].range.clone();
-        &mut self.points.transmission[r]
-    }
-    /// Segment lengths `VLen` of group `g`.
-    pub fn vlen(&self, g: usize) -> &[f32] {
-        &self.points.vlen[self.groups[g].range.clone()]
-    }
-    /// Ray ids of group `g`.
-    pub fn ray_id(&self, g: usize) -> &[u32] {
-        &self.points.ray_id[self.groups[g].range.clone()]
-    }
-    /// Total number of points.
-    pub fn num_points(&self) -> usize {
-        self.points.len()
     }
 }
 
@@ -428,25 +178,37 @@ impl Segments {
     }
 }
 
+/// What the renderer lends a volume integrator's [`VolumeIntegrator::nearest_hits`] (the
+/// seed's `ictx`, `lcb` and allocator, plus the factory that built the integrator, to build
+/// phase functions with `begin_scatter(.., ShadingMode::VolumeScatter, ..)`).
+pub struct VolumeServices<'a, 's> {
+    /// The renderer's ray-tracing services.
+    pub ictx: &'a mut IntegratorContext<'s>,
+    /// Direct lighting at in-volume points, when the global integrator offers it.
+    pub lighting: Option<&'a mut dyn LightingDelegate>,
+    /// The factory whose `begin_interior` built the integrator.
+    pub factory: &'a dyn BxdfFactory,
+    /// The worker's per-batch arena (plain data only: it runs no destructors).
+    pub arena: &'a Bump,
+}
+
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).
 pub trait VolumeIntegrator {
     /// Finds the next shading points for rays travelling in this volume (called instead of
-    /// [`IntegratorContext::nearest_hits`]). Usually calls `ictx.nearest_hits` itself; may
-    /// write `transmission` onto the points it returns, splat in-scattered light through
-    /// `lighting`, or return different points altogether (points inside the volume as a
-    /// [`ShadingMode::VolumeScatter`] group; rays it returns nothing for are absorbed).
+    /// [`IntegratorContext::nearest_hits`]). Usually calls `services.ictx.nearest_hits`
+    /// itself; may write `transmission` onto the points it returns, light in-volume points
+    /// through `services.lighting` (single scattering; `None` when the global integrator
+    /// offers no delegate), or return different points altogether: points inside the volume
+    /// as a [`ShadingMode::VolumeScatter`] group (multiple scattering, through
+    /// [`ShadingContext::begin_volume_sampling`] and
+    /// [`VolumeSampling::end_volume_sampling`]). Rays it returns nothing for are absorbed.
     /// `samplers[i]` is ray `i`'s sample source.
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "mirrors the RIS GetNearestHits contract"
-    )]
     fn nearest_hits(
         &mut self,
         rays: &Rays,
         samplers: &mut [PathSampler],
         lobes_wanted: LobeSampled,
-        ictx: &mut IntegratorContext<'_>,
-        lighting: Option<&mut dyn LightingDelegate>,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     );
 
@@ -495,6 +257,13 @@ pub trait BxdfFactory: Send + Sync {
     /// [`InstanceHints::TRANSMISSION_SHADOWS`] is set. Defaults to opaque.
     fn shadow_transmittance(&self) -> Rgb {
         Rgb::BLACK
+    }
+
+    /// The value of material parameter `name` (RIS: a parameter's connection), what
+    /// [`ShadingContext::eval_param`] evaluates and caches. Defaults to none.
+    fn param(&self, name: &str) -> Option<ParamValue> {
+        let _ = name;
+        None
     }
 
     /// Index of refraction of the interior, used as the *outside* IOR of shapes nested in it.

@@ -225,6 +225,14 @@ pub struct CompiledScene {
     pub radius: f32,
     /// Centre of the scene's bounding sphere.
     pub center: Vec3,
+    /// Per shape: whether rays crossing it enter or leave a tracked volume
+    /// ([`Self::tracks_interior`]).
+    pub shape_tracked: Vec<bool>,
+    /// Per shape: its volume-stack entry ([`Self::volume_entry`]).
+    pub shape_entry: Vec<risotto_components::VolumeEntry>,
+    /// Per shape: its world-space bounding box `(min, max)`, the bounds a volume's `u, v, w`
+    /// are relative to.
+    pub shape_bounds: Vec<(Vec3, Vec3)>,
 }
 
 /// Errors found while compiling a scene.
@@ -461,7 +469,36 @@ impl Scene {
             camera_stack: VolumeStack::new(),
             radius,
             center,
+            shape_tracked: Vec::new(),
+            shape_entry: Vec::new(),
+            shape_bounds: Vec::new(),
         };
+        let mut bounds = vec![
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            compiled.shapes.len()
+        ];
+        let g = &compiled.geometry;
+        for (p, &shape) in compiled.prim_shape.iter().enumerate() {
+            let (lo, hi) = if p < g.num_triangles() {
+                let v = g.triangle(p);
+                (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+            } else {
+                let s = g.sphere(p - g.num_triangles());
+                (
+                    s.center - Vec3::splat(s.radius),
+                    s.center + Vec3::splat(s.radius),
+                )
+            };
+            let b = &mut bounds[shape as usize];
+            *b = (b.0.min(lo), b.1.max(hi));
+        }
+        compiled.shape_bounds = bounds;
+        let shapes = 0..compiled.shapes.len() as u32;
+        compiled.shape_tracked = shapes
+            .clone()
+            .map(|s| compiled.tracks_interior(s))
+            .collect();
+        compiled.shape_entry = shapes.map(|s| compiled.volume_entry(s)).collect();
         compiled.camera_stack = match camera_volume {
             Some(names) => compiled.explicit_stack(&names)?,
             None => compiled.probe_stack(camera.from),
@@ -478,6 +515,14 @@ impl CompiledScene {
             material,
             shape,
             priority: self.material_info[material as usize].priority,
+        }
+    }
+
+    /// The per-shape boundary data the ray-spawning systems read.
+    pub fn boundaries(&self) -> risotto_systems::ray::InteriorBoundaries<'_> {
+        risotto_systems::ray::InteriorBoundaries {
+            tracked: &self.shape_tracked,
+            entry: &self.shape_entry,
         }
     }
 

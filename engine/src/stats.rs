@@ -167,6 +167,34 @@ pub struct SystemStats {
     /// Per shape index: rays that crossed a back face of the shape without having entered it
     /// (a hint that its boundary is not closed). Grown on demand.
     pub unmatched_exits: Vec<u64>,
+    /// Per shape index: rays that crossed a front face of the shape while already inside it.
+    pub entered_twice: Vec<u64>,
+    /// Per shape index: rays that left the scene while their stack said they were inside the
+    /// shape (innermost volume).
+    pub escaped_inside: Vec<u64>,
+    /// Pattern-cache lookups answered from a shading context's cache.
+    pub pattern_cache_hits: u64,
+    /// Parameter evaluations (pattern-cache misses).
+    pub pattern_evals: u64,
+}
+
+/// Adds 1 to `v[i]`, growing `v`.
+fn count_at(v: &mut Vec<u64>, i: u32) {
+    let i = i as usize;
+    if v.len() <= i {
+        v.resize(i + 1, 0);
+    }
+    v[i] += 1;
+}
+
+/// Adds `b` into `a` element by element, growing `a`.
+fn add_counts(a: &mut Vec<u64>, b: &[u64]) {
+    if a.len() < b.len() {
+        a.resize(b.len(), 0);
+    }
+    for (a, b) in a.iter_mut().zip(b) {
+        *a += b;
+    }
 }
 
 impl SystemStats {
@@ -177,11 +205,17 @@ impl SystemStats {
 
     /// Records a crossing of `shape`'s back face by a ray that was not inside it.
     pub fn unmatched_exit(&mut self, shape: u32) {
-        let s = shape as usize;
-        if self.unmatched_exits.len() <= s {
-            self.unmatched_exits.resize(s + 1, 0);
-        }
-        self.unmatched_exits[s] += 1;
+        count_at(&mut self.unmatched_exits, shape);
+    }
+
+    /// Records a crossing of `shape`'s front face by a ray already inside it.
+    pub fn entered_twice(&mut self, shape: u32) {
+        count_at(&mut self.entered_twice, shape);
+    }
+
+    /// Records a ray that escaped the scene while inside `shape`'s volume.
+    pub fn escaped_inside(&mut self, shape: u32) {
+        count_at(&mut self.escaped_inside, shape);
     }
 
     /// Runs `f`, recording one call of `sys` over `items` items and the elapsed wall time.
@@ -242,12 +276,11 @@ impl SystemStats {
             *a += b;
         }
         self.nan_dropped += other.nan_dropped;
-        if self.unmatched_exits.len() < other.unmatched_exits.len() {
-            self.unmatched_exits.resize(other.unmatched_exits.len(), 0);
-        }
-        for (a, b) in self.unmatched_exits.iter_mut().zip(&other.unmatched_exits) {
-            *a += b;
-        }
+        add_counts(&mut self.unmatched_exits, &other.unmatched_exits);
+        add_counts(&mut self.entered_twice, &other.entered_twice);
+        add_counts(&mut self.escaped_inside, &other.escaped_inside);
+        self.pattern_cache_hits += other.pattern_cache_hits;
+        self.pattern_evals += other.pattern_evals;
     }
 }
 

@@ -5,27 +5,37 @@
 //! boundaries (priorities) pass it unchanged, every other surface blocks it, and each interval
 //! inside a volume is attenuated by that volume's `transmission`.
 //!
+//! What volumes emit along a shadow ray (the `emission` output of `transmission`, radiance
+//! reaching the interval's start) is added too, attenuated by everything before the interval
+//! and weighted like the light's radiance (`ShadowRays::weight`): radiance arriving along the
+//! shadow ray's direction, even from in front of a surface that then blocks the light.
+//!
 //! Work is batch-shaped: all live shadow rays advance to their next surface in one intersect
 //! call per round, and the intervals of one round are grouped by volume so that each volume
 //! integrator answers once per round.
 
-use crate::integrator::{ray_offset, volume_point};
+use crate::integrator::PathBatch;
+use crate::interior::bind_interior;
 use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{Paths, Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
+use risotto_components::{Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
 use risotto_systems::intersect::{intersect_closest, intersect_occluded};
+use risotto_systems::ray::ray_offset;
 use risotto_systems::sampler::PathSampler;
+
+/// Seed salt of shadow rays' sampler sequences: decorrelated from the camera path's sequence
+/// at the same dimensions (the shadow ray starts at its vertex's first dimension).
+const SHADOW_SEED_SALT: u32 = 0x5bd1_e995;
 
 /// Attenuates `contribution[i]` of every shadow ray by the transmittance to its light sample
 /// (0 when blocked).
 pub fn trace_shadow_rays(
     scene: &CompiledScene,
     shadow: &ShadowRays,
-    paths: &Paths,
-    seeds: &[u32],
+    batch: &PathBatch,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -64,6 +74,14 @@ pub fn trace_shadow_rays(
     let mut t0 = vec![0.0f32; n];
     let mut entered = vec![0.0f32; n];
     let mut stacks: Vec<VolumeStack> = shadow.volume_stack.clone();
+    // Per shadow ray: transmittance so far (for what volumes emit), the emitted radiance
+    // gathered, and the next sampler dimension of its own sequence.
+    let mut walk = Walk {
+        transmittance: vec![Rgb::WHITE; n],
+        emitted: vec![Rgb::BLACK; n],
+        dimension: shadow.dimension.clone(),
+        counters: PatternCounters::default(),
+    };
     let mut origin = Vec::new();
     let mut direction = Vec::new();
     let mut tmin = Vec::new();
@@ -118,8 +136,8 @@ pub fn trace_shadow_rays(
             attenuate_in_volumes(
                 scene,
                 shadow,
-                paths,
-                seeds,
+                batch,
+                &mut walk,
                 &stacks,
                 &segs,
                 contribution,
@@ -143,6 +161,7 @@ pub fn trace_shadow_rays(
                     continue;
                 }
                 contribution[iu] *= info.shadow_transmittance;
+                walk.transmittance[iu] *= info.shadow_transmittance;
             }
             if scene.tracks_interior(shape) {
                 let s =
@@ -165,6 +184,25 @@ pub fn trace_shadow_rays(
     for &i in &active {
         contribution[i as usize] = Rgb::BLACK;
     }
+    if f.emissive_media {
+        for (c, e) in contribution.iter_mut().zip(&walk.emitted) {
+            *c += *e;
+        }
+    }
+    stats.pattern_cache_hits += walk.counters.hits.take();
+    stats.pattern_evals += walk.counters.evals.take();
+}
+
+/// The state of every shadow ray's walk that volume intervals update.
+struct Walk {
+    /// Transmittance from the origin to where the ray has got.
+    transmittance: Vec<Rgb>,
+    /// Radiance emitted by volumes along the way, weighted and attenuated.
+    emitted: Vec<Rgb>,
+    /// Next sampler dimension.
+    dimension: Vec<u32>,
+    /// Parameter-cache counts of the volumes' contexts.
+    counters: PatternCounters,
 }
 
 /// Runs each volume's `transmission` on the intervals of one round that lie in it.
@@ -172,8 +210,8 @@ pub fn trace_shadow_rays(
 fn attenuate_in_volumes(
     scene: &CompiledScene,
     shadow: &ShadowRays,
-    paths: &Paths,
-    seeds: &[u32],
+    batch: &PathBatch,
+    walk: &mut Walk,
     stacks: &[VolumeStack],
     segs: &[(usize, f32, f32)],
     contribution: &mut [Rgb],
@@ -214,55 +252,27 @@ fn attenuate_in_volumes(
         for (k, &&(i, s0, len)) in members.iter().enumerate() {
             let o: Vec3 = shadow.origin[i] + shadow.direction[i] * s0;
             segments.push(o, shadow.direction[i], len);
-            pts.push(volume_point(
+            pts.push(ShadingPointRow::in_volume(
                 o,
                 shadow.direction[i],
                 k as u32,
                 entry.material,
             ));
             let path = shadow.path[i] as usize;
-            // Shadow rays get their own decorrelated dimension block (high dimensions).
+            // Each shadow ray draws from its own sequence (see `SHADOW_SEED_SALT`), from
+            // where its previous interval left it.
             samplers.push(PathSampler {
-                seed: seeds[path] ^ 0x5bd1_e995,
-                sample: paths.sample[path],
-                dimension: 1024,
+                seed: batch.seeds[path] ^ SHADOW_SEED_SALT,
+                sample: batch.paths.sample[path],
+                dimension: walk.dimension[i],
             });
         }
         let m = members.len();
-        let pts = arena.alloc(pts);
-        // The other volumes' integrators are bound to a context without overlaps, as in the
-        // trace stage.
-        let ctx_plain = arena.alloc(ShadingContext::new(
-            pts,
-            0..m,
-            ShadingMode::Interior,
-            entry.material,
-            &[],
-        ));
-        let others: Vec<risotto_components::VolumeEntry> = stack
-            .overlapping()
-            .filter(|e| computes_interior(e))
-            .collect();
-        let overlapping: &[OverlappingVolume] =
-            arena.alloc_slice_fill_iter(others.into_iter().map(|e| {
-                let factory = scene.materials[e.material as usize].factory.as_ref();
-                OverlappingVolume {
-                    entry: e,
-                    factory,
-                    integrator: factory
-                        .begin_interior(ctx_plain, ShadingMode::Interior, arena)
-                        .map(|v| &*v),
-                }
-            }));
-        let ctx = arena.alloc(ShadingContext::new(
-            pts,
-            0..m,
-            ShadingMode::Interior,
-            entry.material,
-            overlapping,
-        ));
-        let factory = scene.materials[entry.material as usize].factory.as_ref();
-        let Some(integrator) = factory.begin_interior(ctx, ShadingMode::Interior, arena) else {
+        // The points stay on this stack frame (the arena runs no destructors: a table moved
+        // there would never free its columns); the arena holds only the plain contexts.
+        let pts = &pts;
+        let cache = arena.alloc(ParamCache::new(arena, &walk.counters));
+        let Some((_, integrator)) = bind_interior(scene, stack, entry, pts, cache, arena) else {
             continue;
         };
         let mut trans = vec![Rgb::WHITE; m];
@@ -271,7 +281,10 @@ fn attenuate_in_volumes(
         let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats);
         integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
         for (k, &&(i, _, _)) in members.iter().enumerate() {
+            walk.emitted[i] += shadow.weight[i] * walk.transmittance[i] * emission[k];
             contribution[i] *= trans[k];
+            walk.transmittance[i] *= trans[k];
+            walk.dimension[i] = samplers[k].dimension;
         }
     }
     stats.record(System::Volume, segs.len(), start.elapsed().as_secs_f64());

@@ -4,12 +4,16 @@
 
 mod bvh8;
 pub mod bxdf;
+pub mod bxdf_samples;
 pub mod camera;
+pub mod direct_lighting;
 pub mod distribution;
 pub mod film;
 pub mod geometry;
 pub mod intersect;
 pub mod lights;
 pub mod partition;
+pub mod path;
+pub mod ray;
 pub mod sampler;
 mod simd8;

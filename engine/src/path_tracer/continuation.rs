@@ -1,0 +1,57 @@
+//! Continue stage: Russian roulette and depth limits for a group's paths, and their next rays
+//! (the path-continuation system of `risotto_systems::path`).
+
+use super::DIMS_PER_VERTEX;
+use crate::scene::CompiledScene;
+use crate::stats::{SystemStats, Termination};
+use risotto_components::{RayColumns, StackEvent};
+use risotto_systems::bxdf_samples::BxdfSamples;
+use risotto_systems::path::{continue_paths, PathLimits, Vertices};
+
+/// Writes the next rays of the group's continuing paths to `out` from row `start` on, counts
+/// the paths that end, and returns the number of rows written.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the columns it reads and writes, named"
+)]
+pub(super) fn continue_group(
+    scene: &CompiledScene,
+    vertices: Vertices<'_>,
+    samples: &BxdfSamples,
+    u4: &[[f32; 4]],
+    stack_errors: &mut Vec<(u32, StackEvent)>,
+    out: &mut RayColumns<'_>,
+    start: usize,
+    stats: &mut SystemStats,
+) -> usize {
+    let settings = scene.settings;
+    let f = scene.features;
+    let stacks = f.volumes || f.transmissive || !scene.camera_stack.is_empty();
+    let limits = PathLimits {
+        max_depth: settings.max_depth,
+        rr_depth: settings.rr_depth,
+        dims_per_vertex: DIMS_PER_VERTEX,
+    };
+    stack_errors.clear();
+    let done = continue_paths(
+        limits,
+        vertices,
+        samples,
+        u4,
+        stacks.then(|| scene.boundaries()),
+        stack_errors,
+        out,
+        start,
+    );
+    for &(shape, event) in stack_errors.iter() {
+        match event {
+            StackEvent::UnmatchedExit => stats.unmatched_exit(shape),
+            StackEvent::EnteredAgain => stats.entered_twice(shape),
+            _ => {}
+        }
+    }
+    stats.terminate(Termination::MaxDepth, done.max_depth);
+    stats.terminate(Termination::Absorbed, done.absorbed);
+    stats.terminate(Termination::RussianRoulette, done.roulette);
+    done.written
+}

@@ -1,0 +1,218 @@
+//! Direct-lighting stage (next-event estimation): light samples at a group's points, the
+//! Bxdf's response, and shadow rays into the [`ShadowRayQueue`](super::queues::ShadowRayQueue).
+//!
+//! One implementation serves two callers:
+//! - the shade stage, for the surface and volume points the path tracer shades: the path
+//!   continues there with a Bxdf (or phase-function) sample, so light samples are weighted by
+//!   the power heuristic against it ([`LightingTechnique::Mis`]; `NeeOnly` gives weight 1
+//!   and the emitters those samples hit count 0);
+//! - the [`LightingDelegate`] handed to volume integrators ([`DirectLighting`]): they light
+//!   in-volume points whose paths do *not* continue with a phase-function sample (single
+//!   scattering), so nothing else estimates that light path and the weight is 1 whatever the
+//!   technique. Weighting it against a phase sample nobody takes would lose about half the
+//!   light (the power heuristic's share of the phase technique).
+//!
+//! Both honour `max_depth` (a light sample at a vertex of a ray of depth `d` closes a path of
+//! `d + 2` segments) and give shadow rays the vertex's sampler dimension (a sequence of their
+//! own, fresh per bounce).
+
+use super::queues::{scratch, GroupScratch, LightBuffers};
+use crate::integrator::LightingTechnique;
+use crate::plugin::{Bxdf, LightingDelegate, ShadingContext};
+use crate::scene::CompiledScene;
+use crate::stats::{System, SystemStats};
+use glam::Vec3;
+use risotto_components::{Rays, Rgb, ShadowRayColumns, ShadowRays};
+use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
+use risotto_systems::lights::LightSampleColumns;
+use risotto_systems::path::Vertices;
+use risotto_systems::sampler::PathSampler;
+
+/// What one call of [`sample_lights`] lights.
+pub(super) struct LitGroup<'a, 'b> {
+    /// The group's points and the rays that arrived there.
+    pub vertices: Vertices<'a>,
+    /// An extra factor per point (the delegate's caller's weights), or `None`.
+    pub weight: Option<&'b [Rgb]>,
+    /// The vertex's first four sampler dimensions per point (indices 0..3 are used here).
+    pub u4: &'b [[f32; 4]],
+    /// Whether each point's light path fits in `max_depth`.
+    pub active: &'b [bool],
+    /// MIS against the Bxdf sample the path continues with, or none.
+    pub mis: LightMis,
+}
+
+/// Samples one light per point of the group, evaluates `bxdf` (the points' Bxdf, a phase
+/// function for volume points, bound to `ctx`) towards it and writes the
+/// shadow rays of the non-black samples to `out` from row `start` on; returns the number of
+/// rows written. `dimension[r]` is the first sampler dimension of the shadow rays of points
+/// that ray `r` arrived at.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the columns it reads and writes, named"
+)]
+pub(super) fn sample_lights(
+    scene: &CompiledScene,
+    group: LitGroup<'_, '_>,
+    bxdf: &mut dyn Bxdf,
+    ctx: &ShadingContext<'_>,
+    dimension: &[u32],
+    buffers: &mut LightBuffers,
+    out: &mut ShadowRayColumns<'_>,
+    start: usize,
+    stats: &mut SystemStats,
+) -> usize {
+    let LitGroup {
+        vertices,
+        weight,
+        u4,
+        active,
+        mis,
+    } = group;
+    let m = vertices.range.len();
+    let lstart = std::time::Instant::now();
+    // The light samples' directions are where the Bxdf evaluates (`Vec3::Z` where there is
+    // no sample).
+    let mut light = LightSampleColumns {
+        wi: scratch(&mut buffers.wi, m, Vec3::Z),
+        distance: scratch(&mut buffers.distance, m, 0.0),
+        radiance: scratch(&mut buffers.radiance, m, Rgb::BLACK),
+        pdf: scratch(&mut buffers.pdf, m, 0.0),
+        delta: scratch(&mut buffers.delta, m, false),
+    };
+    let range = vertices.range.clone();
+    scene.lights.sample_column(
+        &scene.geometry,
+        &vertices.points.p[range][..m],
+        u4,
+        active,
+        &mut light,
+    );
+    stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
+    let (value, pdf) = (
+        scratch(&mut buffers.value, m, Rgb::BLACK),
+        scratch(&mut buffers.eval_pdf, m, 0.0),
+    );
+    bxdf.evaluate_samples(ctx, light.wi, value, pdf);
+    let features = scene.features;
+    let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
+    let light = LightColumns {
+        samples: light,
+        value,
+        pdf,
+        points: scratch(&mut buffers.points, m, 0),
+    };
+    spawn_shadow_rays(
+        vertices,
+        weight,
+        dimension,
+        light,
+        mis,
+        stacks.then(|| scene.boundaries()),
+        out,
+        start,
+    )
+}
+
+/// The lighting delegate the path tracer hands to volume integrators
+/// (RIS `IntegratorDelegate::PerformDirectLighting`): the same light sampling as the shade
+/// stage, without MIS (see the module docs), its shadow rays traced with all others in the
+/// bounce's transmission stage.
+pub struct DirectLighting<'a> {
+    scene: &'a CompiledScene,
+    shadow: &'a mut ShadowRays,
+    group: &'a mut GroupScratch,
+    /// Rows of `shadow` written by this delegate's calls, and light-sample count.
+    lit: usize,
+    seconds: f64,
+}
+
+impl<'a> DirectLighting<'a> {
+    /// A delegate queuing its shadow rays in `shadow` (`technique` decides only whether the
+    /// path tracer offers a delegate at all: `BxdfOnly` does not).
+    pub(super) fn new(
+        scene: &'a CompiledScene,
+        technique: LightingTechnique,
+        shadow: &'a mut ShadowRays,
+        group: &'a mut GroupScratch,
+    ) -> Self {
+        debug_assert!(technique != LightingTechnique::BxdfOnly || scene.lights.is_empty());
+        let _ = technique;
+        DirectLighting {
+            scene,
+            shadow,
+            group,
+            lit: 0,
+            seconds: 0.0,
+        }
+    }
+
+    /// Records the delegate's work in `stats`.
+    pub(super) fn finish(self, stats: &mut SystemStats) {
+        if self.lit > 0 {
+            stats.record(System::Lights, self.lit, self.seconds);
+        }
+    }
+}
+
+impl LightingDelegate for DirectLighting<'_> {
+    fn perform_direct_lighting(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        bxdf: &mut dyn Bxdf,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        weight: &[Rgb],
+    ) {
+        let start = std::time::Instant::now();
+        let m = ctx.num_points();
+        let scene = self.scene;
+        let GroupScratch {
+            u4,
+            active,
+            ray_dimension,
+            light,
+            ..
+        } = &mut *self.group;
+        let ray_id = ctx.ray_id();
+        // The vertex's four light dimensions, drawn point by point from each point's ray
+        // (several points may share a ray: each takes the ray's next dimensions); the shadow
+        // ray's own sequence starts at the ray's dimension before the draw.
+        let u4 = scratch(u4, m, [0.0; 4]);
+        let active = scratch(active, m, false);
+        let dimension = scratch(ray_dimension, rays.len(), 0);
+        dimension.copy_from_slice(&rays.dimension);
+        for k in 0..m {
+            let r = ray_id[k] as usize;
+            let s = &mut samplers[r];
+            dimension[r] = s.dimension;
+            u4[k] = [s.next_1d(), s.next_1d(), s.next_1d(), s.next_1d()];
+            // A light sample at a point on a ray of depth `d` closes a path of `d + 2`
+            // segments.
+            active[k] = rays.depth[r] as u32 + 2 <= scene.settings.max_depth;
+        }
+        let (points, range) = ctx.rows();
+        let vertices = Vertices {
+            points,
+            range,
+            on_surface: false,
+            incoming: rays,
+        };
+        let start_row = self.shadow.len();
+        let mut out = self.shadow.append_default(m);
+        let mut stats = SystemStats::default();
+        let group = LitGroup {
+            vertices,
+            weight: Some(weight),
+            u4,
+            active,
+            mis: LightMis::None,
+        };
+        let written = sample_lights(
+            scene, group, bxdf, ctx, dimension, light, &mut out, 0, &mut stats,
+        );
+        self.shadow.truncate(start_row + written);
+        self.lit += m;
+        self.seconds += start.elapsed().as_secs_f64();
+    }
+}

@@ -1,0 +1,105 @@
+//! The path tracer: a loop of stages over typed queues (pbrt-v4's wavefront integrator is the
+//! model), one file per stage.
+//!
+//! | stage | file | reads | writes |
+//! |---|---|---|---|
+//! | generate | `generate.rs` | the batch's paths | [`RayQueue`] (camera rays) |
+//! | trace | `trace.rs` | [`RayQueue`] | [`HitQueue`], [`EscapedRayQueue`]; volume integrators may queue shadow rays through the lighting delegate |
+//! | escaped | `escaped.rs` | [`EscapedRayQueue`] | path radiance (environment) |
+//! | pass-through | `pass_through.rs` | [`HitQueue`] | [`RayQueue`] (rays past index-matched and false boundaries) |
+//! | shade | `shade.rs` | one group of the [`HitQueue`] | emission, AOVs, the vertex's samplers, Bxdf samples |
+//! | direct lighting | `direct_lighting.rs` | the group, its Bxdf | [`ShadowRayQueue`] |
+//! | continue | `continuation.rs` | the group, its Bxdf samples | the next bounce's [`RayQueue`] |
+//! | transmission | `transmission.rs` | [`ShadowRayQueue`] | path radiance |
+//!
+//! Splatting the finished paths is the tile loop's ([`crate::integrator::render_tile`]).
+//! Stages a scene does not need are never entered: partitioning and volume integrators only
+//! with volumes, pass-throughs only with transmissive surfaces, the walk of shadow rays
+//! through surfaces only where some surface lets them pass ([`Features`](crate::scene::Features)).
+//!
+//! Depth convention (Mitsuba's `max_depth`): a path of `k` segments has `k - 1` scattering
+//! vertices (surface or volume events); emitters seen along segment `k` count only if
+//! `k <= max_depth`. Crossings of index-matched and false boundaries are not vertices.
+
+mod continuation;
+mod direct_lighting;
+mod emitters;
+mod escaped;
+mod generate;
+mod pass_through;
+pub mod queues;
+mod shade;
+mod trace;
+mod transmission;
+
+use crate::integrator::{Integrator, LightingTechnique, PathBatch};
+use crate::scene::CompiledScene;
+use crate::stats::SystemStats;
+use bumpalo::Bump;
+pub use direct_lighting::DirectLighting;
+use queues::*;
+
+/// Sampler dimensions each scattering vertex reserves: light position (0, 1), light selection
+/// (2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4, so each group of
+/// four is one aligned set of the sampler (one SIMD Sobol evaluation), and the 2D samples
+/// (light position, the Bxdf's first two) take the set's first two dimensions, Sobol's
+/// best-stratified pair.
+pub const DIMS_PER_VERTEX: u32 = 8;
+
+/// The path tracer.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PathTracer {
+    /// Direct-lighting technique.
+    pub technique: LightingTechnique,
+}
+
+impl Integrator for PathTracer {
+    type Worker = Queues;
+
+    fn run_batch(
+        &self,
+        scene: &CompiledScene,
+        batch: &mut PathBatch,
+        q: &mut Queues,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        generate::camera_rays(scene, batch, &mut q.rays, stats);
+        q.emissive_material.clear();
+        q.emissive_material.resize(scene.materials.len(), false);
+        for shape in scene.shapes.iter().filter(|s| s.emission.is_some()) {
+            q.emissive_material[shape.material as usize] = true;
+        }
+        let mut first_bounce = true;
+        while !q.rays.rays.is_empty() {
+            // The last bounce's arrived rays are dead: their rows become the storage the
+            // continue stage overwrites with the next rays.
+            q.hits.recycle_into(&mut q.next);
+            while !q.rays.rays.is_empty() {
+                trace::nearest_hits(self, scene, batch, q, stats, arena);
+                escaped::environment(self, scene, &mut q.escaped, &q.hits, batch, stats);
+                if scene.features.transmissive {
+                    pass_through::boundaries(self, scene, &mut q.hits, &mut q.rays, batch, stats);
+                }
+            }
+            shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
+            transmission::shadow_rays(scene, &mut q.shadow, batch, stats, arena);
+            std::mem::swap(&mut q.rays, &mut q.next);
+            q.next.rays.clear();
+            stats.add_rays(q.rays.rays.len());
+            first_bounce = false;
+        }
+        stats.pattern_cache_hits += q.counters.hits.take();
+        stats.pattern_evals += q.counters.evals.take();
+    }
+}
+
+impl HitQueue {
+    /// Starts a bounce: empties the queue, handing the dead rows of the last bounce's rays to
+    /// `next` as storage (`Rays::reuse_rows` then spares writing defaults into them).
+    fn recycle_into(&mut self, next: &mut RayQueue) {
+        std::mem::swap(&mut self.incoming, &mut next.rays);
+        self.incoming.clear();
+        self.groups.clear();
+    }
+}

@@ -1,0 +1,114 @@
+//! Pass-through stage: index-matched surfaces and false boundaries (a shape inside a volume
+//! of higher priority) are never shaded. Their points leave the hit queue and their rays go
+//! on along the same line as new rays to trace, without costing a bounce.
+
+use super::queues::{HitQueue, RayQueue};
+use super::PathTracer;
+use crate::integrator::PathBatch;
+use crate::plugin::InstanceHints;
+use crate::scene::CompiledScene;
+use crate::shade_groups::{ShadeGroup, ShadingMode};
+use crate::stats::{SystemStats, Termination};
+use risotto_components::StackEvent;
+use risotto_systems::ray::ray_offset;
+
+/// Moves the points of `hits` that lie on pass-through boundaries out of their groups and
+/// queues their rays, continued past the boundary, in `rays`. Emission on such a surface still
+/// reaches the path.
+pub(super) fn boundaries(
+    tracer: &PathTracer,
+    scene: &CompiledScene,
+    hits: &mut HitQueue,
+    rays: &mut RayQueue,
+    batch: &mut PathBatch,
+    stats: &mut SystemStats,
+) {
+    // Most rounds have none; the points table is compacted (in place) only when some point
+    // leaves it. `keep[i]`: point `i` stays (points outside every group do not).
+    let groups = std::mem::take(&mut hits.groups.groups);
+    let pts = &hits.groups.points;
+    let n = pts.len();
+    let mut keep = std::mem::take(&mut hits.keep);
+    keep.clear();
+    keep.resize(n, false);
+    let mut passes = false;
+    for g in &groups {
+        if g.mode != ShadingMode::Scatter {
+            keep[g.range.clone()].fill(true);
+            continue;
+        }
+        let info = &scene.material_info[g.material as usize];
+        let index_matched = info.hints.contains(InstanceHints::INDEX_MATCHED);
+        for i in g.range.clone() {
+            let r = pts.ray_id[i] as usize;
+            let pass = index_matched
+                || hits.incoming.volume_stack[r].is_false_boundary(pts.shape[i], info.priority);
+            keep[i] = !pass;
+            passes |= pass;
+        }
+    }
+    if !passes && keep.iter().all(|&k| k) {
+        hits.groups.groups = groups;
+        hits.keep = keep;
+        return;
+    }
+    for g in groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
+        for i in g.range.clone() {
+            if keep[i] {
+                continue;
+            }
+            let r = pts.ray_id[i] as usize;
+            let (shape, p, front) = (pts.shape[i], pts.p[i], pts.front_face[i]);
+            let tr = pts.transmission[i];
+            tracer.surface_emission(scene, pts, &hits.incoming, &mut batch.paths, r, i, tr);
+            let mut row = hits.incoming.row(r);
+            if row.passes as u32 >= scene.settings.max_passes {
+                stats.terminate(Termination::PassLimit, 1);
+                continue;
+            }
+            row.passes += 1;
+            row.throughput *= tr;
+            if row.throughput.is_black() {
+                stats.terminate(Termination::Absorbed, 1);
+                continue;
+            }
+            // The ray goes on along the same line. It restarts on the boundary itself, so
+            // that the next segment's length (what volume integrators attenuate by) is the
+            // true distance, and skips the boundary with `tmin`: the spawn offset, measured
+            // along the ray (clamped for grazing rays).
+            let cos = row.direction.dot(pts.ng[i]).abs().max(1e-3);
+            row.origin = p;
+            row.tmin = ray_offset(p) / cos;
+            row.tmax = f32::INFINITY;
+            if scene.tracks_interior(shape) {
+                match row.volume_stack.cross(scene.volume_entry(shape), front) {
+                    StackEvent::UnmatchedExit => stats.unmatched_exit(shape),
+                    StackEvent::EnteredAgain => stats.entered_twice(shape),
+                    _ => {}
+                }
+            }
+            rays.rays.push(row);
+        }
+    }
+    // Compact: a group's range moves to the number of kept points before it.
+    let mut kept_before = std::mem::take(&mut hits.kept_before);
+    kept_before.clear();
+    kept_before.push(0);
+    let mut kept = 0;
+    for &k in &keep {
+        kept += k as u32;
+        kept_before.push(kept);
+    }
+    hits.groups.points.retain_rows(&keep);
+    hits.groups.groups = groups
+        .into_iter()
+        .filter_map(|g| {
+            let range = kept_before[g.range.start] as usize..kept_before[g.range.end] as usize;
+            // Surface groups left empty are dropped; volume groups stay as they were.
+            (g.mode != ShadingMode::Scatter || !range.is_empty())
+                .then_some(ShadeGroup { range, ..g })
+        })
+        .collect();
+    hits.keep = keep;
+    hits.kept_before = kept_before;
+}

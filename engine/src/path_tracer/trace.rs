@@ -1,0 +1,208 @@
+//! Trace stage: the next shading points of the queued rays. Rays in no volume go to the
+//! renderer's nearest-hit query; rays in a volume are partitioned into bundles by (volume
+//! stack, transmit bit), and each bundle goes to its innermost volume's integrator
+//! (`VolumeIntegrator::nearest_hits`), which may return surface hits with transmission,
+//! points inside the volume (a `VolumeScatter` group), escaped rays, or nothing (absorbed),
+//! and may light in-volume points through the lighting delegate.
+
+use super::direct_lighting::DirectLighting;
+use super::queues::{EscapedRayQueue, HitQueue, Queues, TraceScratch};
+use super::PathTracer;
+use crate::context::IntegratorContext;
+use crate::integrator::{LightingTechnique, PathBatch};
+use crate::interior::bind_interior;
+use crate::plugin::*;
+use crate::scene::CompiledScene;
+use crate::stats::{System, SystemStats, Termination};
+use bumpalo::Bump;
+use risotto_components::{LobeSampled, Rays, ShadingPointRow, VolumeEntry, VolumeStack};
+use risotto_systems::partition::partition_by_key;
+use risotto_systems::sampler::PathSampler;
+
+/// Traces every ray of `q.rays` (leaving it empty), appending the rays to `q.hits.incoming`,
+/// their points to `q.hits.groups` and the escaped ones to `q.escaped`.
+pub(super) fn nearest_hits(
+    tracer: &PathTracer,
+    scene: &CompiledScene,
+    batch: &PathBatch,
+    q: &mut Queues,
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    let (rays, hits, t) = (&mut q.rays.rays, &mut q.hits, &mut q.trace);
+    if scene.features.volumes {
+        partitioned(
+            tracer,
+            scene,
+            batch,
+            rays,
+            hits,
+            &mut q.shadow.rays,
+            &mut q.group,
+            t,
+            &q.counters,
+            stats,
+            arena,
+        );
+    } else if hits.incoming.is_empty() && hits.groups.points.is_empty() {
+        // First round (the only one unless there are pass-throughs): answer straight into
+        // the groups and move the rays over instead of copying them.
+        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+        ictx.nearest_hits(rays, &mut hits.groups);
+        t.hits = ictx.into_scratch();
+        std::mem::swap(&mut hits.incoming, rays);
+    } else {
+        t.answers.clear();
+        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+        ictx.nearest_hits(rays, &mut t.answers);
+        t.hits = ictx.into_scratch();
+        append(hits, &t.answers, rays);
+    }
+    rays.clear();
+    take_misses(hits, &mut q.escaped);
+}
+
+/// Moves the escaped rays out of the groups into their own queue.
+fn take_misses(hits: &mut HitQueue, escaped: &mut EscapedRayQueue) {
+    std::mem::swap(&mut escaped.ray, &mut hits.groups.misses);
+    std::mem::swap(
+        &mut escaped.transmission,
+        &mut hits.groups.miss_transmission,
+    );
+    hits.groups.misses.clear();
+    hits.groups.miss_transmission.clear();
+}
+
+/// Appends `answers` (the answer for `rays`) to the hit queue, `rays` to its incoming rays.
+fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &Rays) {
+    let offset = hits.incoming.len() as u32;
+    hits.incoming.extend_from(rays);
+    hits.groups.append_offset(answers, offset);
+}
+
+/// Partitions `rays` into bundles by the volumes the rays travel in and the transmit bit, and
+/// runs each bundle through its innermost volume's integrator (or plain nearest hits when in
+/// no volume).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the queues it reads and writes, named"
+)]
+fn partitioned(
+    tracer: &PathTracer,
+    scene: &CompiledScene,
+    batch: &PathBatch,
+    rays: &Rays,
+    hits: &mut HitQueue,
+    shadow: &mut risotto_components::ShadowRays,
+    group: &mut super::queues::GroupScratch,
+    t: &mut TraceScratch,
+    counters: &PatternCounters,
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    let n = rays.len();
+    // Distinct stacks of this round (few: rays in one scene share a handful of states).
+    let mut stacks: smallvec::SmallVec<[VolumeStack; 8]> = smallvec::SmallVec::new();
+    t.keys.clear();
+    stats.time(System::Partition, n, || {
+        for i in 0..n {
+            let s = &rays.volume_stack[i];
+            let id = match stacks.iter().position(|x| x == s) {
+                Some(id) => id,
+                None => {
+                    stacks.push(s.clone());
+                    stacks.len() - 1
+                }
+            };
+            let transmit = rays.lobe[i].is_transmit() as u32;
+            t.keys.push(id as u32 * 2 + transmit);
+        }
+        partition_by_key(&t.keys, stacks.len() * 2, &mut t.order, &mut t.runs);
+    });
+    let computes_interior = |e: &VolumeEntry| {
+        scene.material_info[e.material as usize]
+            .hints
+            .contains(InstanceHints::COMPUTES_INTERIOR)
+    };
+    let runs = std::mem::take(&mut t.runs);
+    for (key, range) in &runs {
+        let stack = &stacks[(*key / 2) as usize];
+        t.bundle.clear();
+        t.bundle.extend_gather(rays, &t.order[range.clone()]);
+        for (k, s) in t.bundle.shading_ctx_index.iter_mut().enumerate() {
+            *s = k as u32;
+        }
+        t.answers.clear();
+        match stack.innermost().filter(computes_interior) {
+            None => {
+                let mut ictx =
+                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+                ictx.nearest_hits(&t.bundle, &mut t.answers);
+                t.hits = ictx.into_scratch();
+            }
+            Some(entry) => {
+                let m = t.bundle.len();
+                // The bundle's shading context: points at the rays' origins, in the worker's
+                // reused table (never in the arena: it owns heap memory).
+                t.bundle_points.clear();
+                for i in 0..m {
+                    t.bundle_points.push(ShadingPointRow::in_volume(
+                        t.bundle.origin[i],
+                        t.bundle.direction[i],
+                        i as u32,
+                        entry.material,
+                    ));
+                }
+                let cache = arena.alloc(ParamCache::new(arena, counters));
+                let (factory, integrator) =
+                    bind_interior(scene, stack, entry, &t.bundle_points, cache, arena)
+                        .expect("hint COMPUTES_INTERIOR promised an interior");
+                t.samplers.clear();
+                t.samplers.extend((0..m).map(|i| PathSampler {
+                    seed: batch.seeds[t.bundle.path[i] as usize],
+                    sample: batch.paths.sample[t.bundle.path[i] as usize],
+                    dimension: t.bundle.dimension[i],
+                }));
+                let mut delegate = DirectLighting::new(scene, tracer.technique, shadow, group);
+                let lighting: Option<&mut dyn LightingDelegate> =
+                    if tracer.technique == LightingTechnique::BxdfOnly || scene.lights.is_empty() {
+                        None
+                    } else {
+                        Some(&mut delegate)
+                    };
+                let mut ictx =
+                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+                let start = std::time::Instant::now();
+                integrator.nearest_hits(
+                    &t.bundle,
+                    &mut t.samplers,
+                    LobeSampled(0xff),
+                    VolumeServices {
+                        ictx: &mut ictx,
+                        lighting,
+                        factory,
+                        arena,
+                    },
+                    &mut t.answers,
+                );
+                let elapsed = start.elapsed().as_secs_f64();
+                t.hits = ictx.into_scratch();
+                stats.record(System::Volume, m, elapsed);
+                delegate.finish(stats);
+                for (i, s) in t.samplers.iter().enumerate() {
+                    t.bundle.dimension[i] = s.dimension;
+                }
+                // Rays the integrator returned nothing for were absorbed in the volume.
+                t.answered.clear();
+                t.answered.resize(m, false);
+                for &r in t.answers.points.ray_id.iter().chain(&t.answers.misses) {
+                    t.answered[r as usize] = true;
+                }
+                let absorbed = t.answered.iter().filter(|a| !**a).count();
+                stats.terminate(Termination::Absorbed, absorbed);
+            }
+        }
+        append(hits, &t.answers, &t.bundle);
+    }
+    t.runs = runs;
+}

@@ -1,0 +1,44 @@
+//! Transmission stage: every queued shadow ray walks to its light sample through the
+//! surfaces that let shadows pass and the volumes it crosses (`crate::transmission`); the
+//! surviving contributions, and what volumes emit along the way, reach their paths.
+
+use super::queues::ShadowRayQueue;
+use crate::integrator::PathBatch;
+use crate::scene::CompiledScene;
+use crate::stats::{System, SystemStats};
+use bumpalo::Bump;
+
+/// Traces the shadow rays of `shadow`, adds their contributions to the paths and empties the
+/// queue (its rows become storage for the next shade stage).
+pub(super) fn shadow_rays(
+    scene: &CompiledScene,
+    shadow: &mut ShadowRayQueue,
+    batch: &mut PathBatch,
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    let n = shadow.rays.len();
+    if n == 0 {
+        return;
+    }
+    let start = std::time::Instant::now();
+    shadow.contribution.clear();
+    shadow
+        .contribution
+        .extend_from_slice(&shadow.rays.contribution);
+    crate::transmission::trace_shadow_rays(
+        scene,
+        &shadow.rays,
+        batch,
+        &mut shadow.contribution,
+        stats,
+        arena,
+    );
+    for (&path, &c) in shadow.rays.path.iter().zip(&shadow.contribution) {
+        batch.paths.radiance[path as usize] += c;
+    }
+    stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
+    // Keep the dead rows as storage for the next shade stage's shadow rays.
+    std::mem::swap(&mut shadow.rays, &mut shadow.spare);
+    shadow.rays.clear();
+}

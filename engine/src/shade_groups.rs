@@ -1,0 +1,131 @@
+//! What nearest-hit queries answer: shading points grouped by material and shading mode,
+//! plus the rays that escaped. Both the renderer's [`IntegratorContext`](crate::context::IntegratorContext)
+//! and volume integrators write it; the global integrator shades it.
+
+use risotto_components::{Rays, Rgb, ShadingPointRow, ShadingPoints};
+use std::ops::Range;
+
+/// Why a closure is being built (RIS `RixSCShadingMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShadingMode {
+    /// Shading a surface hit.
+    Scatter,
+    /// Shading a point inside a volume (`k_RixSCVolumeScatterQuery`): the factory returns a
+    /// phase function.
+    VolumeScatter,
+    /// Building an interior for a ray that travels through the volume.
+    Interior,
+}
+
+/// Shading points grouped by material, plus rays that escaped to the environment.
+#[derive(Default, Debug)]
+pub struct ShadeGroups {
+    /// All points of all groups; each group is a contiguous range.
+    pub points: ShadingPoints,
+    /// The groups.
+    pub groups: Vec<ShadeGroup>,
+    /// Rays (ids in the table passed to `nearest_hits`) that left the scene.
+    pub misses: Vec<u32>,
+    /// Transmission applied to each escaped ray (parallel to `misses`).
+    pub miss_transmission: Vec<Rgb>,
+}
+
+/// One group of a [`ShadeGroups`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadeGroup {
+    /// Material (factory) index of the group's points.
+    pub material: u32,
+    /// Surface hits ([`ShadingMode::Scatter`]) or points inside a volume
+    /// ([`ShadingMode::VolumeScatter`]).
+    pub mode: ShadingMode,
+    /// Rows of [`ShadeGroups::points`].
+    pub range: Range<usize>,
+}
+
+impl ShadeGroups {
+    /// Removes everything, keeping allocations.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.groups.clear();
+        self.misses.clear();
+        self.miss_transmission.clear();
+    }
+    /// Appends a group made of `rows` (RIS `EndVolumeSampling` with a membership mask: pass the
+    /// retained points only). Empty groups are not added.
+    pub fn push_group(
+        &mut self,
+        material: u32,
+        mode: ShadingMode,
+        rows: impl IntoIterator<Item = ShadingPointRow>,
+    ) {
+        let start = self.points.len();
+        for r in rows {
+            self.points.push(r);
+        }
+        self.close_group(material, mode, start);
+    }
+    /// Makes the points appended since row `start` a group (nothing when there are none).
+    pub fn close_group(&mut self, material: u32, mode: ShadingMode, start: usize) {
+        let end = self.points.len();
+        if end > start {
+            self.groups.push(ShadeGroup {
+                material,
+                mode,
+                range: start..end,
+            });
+        }
+    }
+    /// Multiplies the transmission of every point by `transmittance(VLen)` and of every
+    /// escaped ray by `transmittance(tmax)` of its ray in `rays` (the table this was answered
+    /// for): what a homogeneous, non-scattering interior does to the hits `nearest_hits`
+    /// returns.
+    pub fn attenuate_segments(&mut self, rays: &Rays, transmittance: impl Fn(f32) -> Rgb) {
+        for (tr, &vlen) in self.points.transmission.iter_mut().zip(&self.points.vlen) {
+            *tr *= transmittance(vlen);
+        }
+        for (tr, &ray) in self.miss_transmission.iter_mut().zip(&self.misses) {
+            *tr *= transmittance(rays.tmax[ray as usize]);
+        }
+    }
+    /// Records an escaped ray.
+    pub fn push_miss(&mut self, ray_id: u32, transmission: Rgb) {
+        self.misses.push(ray_id);
+        self.miss_transmission.push(transmission);
+    }
+    /// Transmission column of group `g`, for a volume integrator to write.
+    pub fn transmission_mut(&mut self, g: usize) -> &mut [Rgb] {
+        let r = self.groups[g].range.clone();
+        &mut self.points.transmission[r]
+    }
+    /// Segment lengths `VLen` of group `g`.
+    pub fn vlen(&self, g: usize) -> &[f32] {
+        &self.points.vlen[self.groups[g].range.clone()]
+    }
+    /// Ray ids of group `g`.
+    pub fn ray_id(&self, g: usize) -> &[u32] {
+        &self.points.ray_id[self.groups[g].range.clone()]
+    }
+    /// Total number of points.
+    pub fn num_points(&self) -> usize {
+        self.points.len()
+    }
+    /// Appends `src`'s groups and misses, adding `ray_offset` to their ray ids (`src`
+    /// answered a table whose rows were appended to this one's rays at that offset).
+    pub fn append_offset(&mut self, src: &ShadeGroups, ray_offset: u32) {
+        for g in &src.groups {
+            let start = self.points.len();
+            self.points.extend_from_range(&src.points, g.range.clone());
+            for id in &mut self.points.ray_id[start..] {
+                *id += ray_offset;
+            }
+            self.groups.push(ShadeGroup {
+                material: g.material,
+                mode: g.mode,
+                range: start..self.points.len(),
+            });
+        }
+        for (k, &r) in src.misses.iter().enumerate() {
+            self.push_miss(r + ray_offset, src.miss_transmission[k]);
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! The path-continuation system: Russian roulette and depth limits, and the next ray of every
+//! path that goes on from a group of scattering vertices.
+
+use crate::bxdf_samples::BxdfSamples;
+use crate::ray::{ray_offset, toward, InteriorBoundaries};
+use risotto_components::{RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
+use std::ops::Range;
+
+/// A group of scattering vertices: shading points and the rays that arrived there.
+#[derive(Clone)]
+pub struct Vertices<'a> {
+    /// The shading points (rows `range` are the group's).
+    pub points: &'a ShadingPoints,
+    /// The group's rows.
+    pub range: Range<usize>,
+    /// True for surface points (rays leave off the surface, to the side they go to); false
+    /// for points inside a volume (rays start at the point).
+    pub on_surface: bool,
+    /// The rays that arrived at the points (`points.ray_id` indexes it).
+    pub incoming: &'a Rays,
+}
+
+/// Path-length limits (Mitsuba's `max_depth` convention: a path of `k` segments has `k - 1`
+/// scattering vertices) and the sampler budget of a vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct PathLimits {
+    /// Maximum number of segments; `u32::MAX` = unbounded.
+    pub max_depth: u32,
+    /// Scattering vertices after which Russian roulette starts.
+    pub rr_depth: u32,
+    /// Sampler dimensions one vertex uses: the next ray starts this many further on.
+    pub dims_per_vertex: u32,
+}
+
+/// What [`continue_paths`] did with a group's points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Continuations {
+    /// Rays written.
+    pub written: usize,
+    /// Paths ended because the next segment would exceed `max_depth`.
+    pub max_depth: usize,
+    /// Paths ended because the sample had pdf 0 or a black (or non-finite) weight.
+    pub absorbed: usize,
+    /// Paths ended by Russian roulette.
+    pub roulette: usize,
+}
+
+/// Writes to `out` from row `start` on the ray each vertex continues its path with
+/// (direction, weight, pdf and lobe from `samples`, Russian roulette with `u4[k][3]`), unless
+/// the path reached `max_depth`, the sample was absorbed or the roulette ended it. `boundaries`
+/// (when volume stacks can be non-empty) copies the stacks and lets a transmitted ray cross
+/// the surface's interior boundary, appending every crossing that corrupts the stack (leaving
+/// a volume the ray was not in, entering one it was already in) to `stack_errors`; `None` means every stack is empty, and the rows'
+/// stacks are left as they are. The caller sets `tmin` and `tmax`.
+///
+/// Russian roulette (pbrt-v4 / Mitsuba): survival probability `min(max(beta) * eta^2, 0.95)`
+/// on the throughput after the vertex, so a path whose throughput cannot grow (an albedo-1
+/// medium, a white furnace) is only culled at the 5% rate.
+///
+/// A first pass decides which points continue and writes the columns that decision computes
+/// (throughput, `eta_scale`, depth, lobe, pdf, point index); a second pass, driven by the
+/// point index (increasing, so the point columns are still read in order), writes the
+/// geometry and what the path carries over: one pass doing both kept about twenty column
+/// pointers live and spilled to the stack. The stack pass, when needed, follows.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the columns it reads and writes, named"
+)]
+pub fn continue_paths(
+    limits: PathLimits,
+    from: Vertices<'_>,
+    samples: &BxdfSamples,
+    u4: &[[f32; 4]],
+    boundaries: Option<InteriorBoundaries<'_>>,
+    stack_errors: &mut Vec<(u32, StackEvent)>,
+    out: &mut RayColumns<'_>,
+    start: usize,
+) -> Continuations {
+    let Vertices {
+        points: pts,
+        range,
+        on_surface,
+        incoming,
+    } = from;
+    let ray_id = &pts.ray_id[range.clone()];
+    let (m, n) = (ray_id.len(), incoming.len());
+    let rows = start..start + m;
+    let (o_origin, o_direction, o_path, o_throughput, o_lobe, o_depth, o_passes) = (
+        &mut out.origin[rows.clone()],
+        &mut out.direction[rows.clone()],
+        &mut out.path[rows.clone()],
+        &mut out.throughput[rows.clone()],
+        &mut out.lobe[rows.clone()],
+        &mut out.depth[rows.clone()],
+        &mut out.passes[rows.clone()],
+    );
+    let (o_pdf, o_eta_scale, o_dimension, o_ctx, o_prev_p, o_stack) = (
+        &mut out.pdf[rows.clone()],
+        &mut out.eta_scale[rows.clone()],
+        &mut out.dimension[rows.clone()],
+        &mut out.shading_ctx_index[rows.clone()],
+        &mut out.prev_p[rows.clone()],
+        &mut out.volume_stack[rows],
+    );
+    // Pass 1: which points continue, with which throughput.
+    let (in_throughput, in_eta_scale, in_depth) = (
+        &incoming.throughput[..n],
+        &incoming.eta_scale[..n],
+        &incoming.depth[..n],
+    );
+    let (s_pdf, s_weight, s_lobe, s_eta, rr_u) = (
+        &samples.pdf[..m],
+        &samples.weight[..m],
+        &samples.lobe[..m],
+        &samples.eta[..m],
+        &u4[..m],
+    );
+    let mut done = Continuations::default();
+    let (p, ng, s_wi) = (
+        &pts.p[range.clone()][..m],
+        &pts.ng[range.clone()][..m],
+        &samples.wi[..m],
+    );
+    let (in_path, in_passes, in_dimension) = (
+        &incoming.path[..n],
+        &incoming.passes[..n],
+        &incoming.dimension[..n],
+    );
+    let mut count = 0;
+    for k in 0..m {
+        let r = ray_id[k] as usize;
+        // The next segment must fit in max_depth.
+        if in_depth[r] as u32 + 2 > limits.max_depth {
+            done.max_depth += 1;
+            continue;
+        }
+        let pdf = s_pdf[k];
+        let weight = s_weight[k];
+        if pdf <= 0.0 || is_black_or_not_finite(weight) {
+            done.absorbed += 1;
+            continue;
+        }
+        let mut throughput = in_throughput[r] * weight;
+        let lobe = s_lobe[k];
+        let eta = s_eta[k];
+        let eta_scale = in_eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
+        let depth = in_depth[r] + 1;
+        if depth as u32 > limits.rr_depth {
+            let q = (throughput.max_channel() * eta_scale).min(0.95);
+            if rr_u[k][3] >= q {
+                done.roulette += 1;
+                continue;
+            }
+            throughput *= 1.0 / q;
+        }
+        o_throughput[count] = throughput;
+        o_eta_scale[count] = eta_scale;
+        o_depth[count] = depth;
+        o_lobe[count] = lobe;
+        o_pdf[count] = if lobe.is_specular() { 0.0 } else { pdf };
+        o_ctx[count] = k as u32;
+        count += 1;
+    }
+    let ctx = &o_ctx[..count];
+    // Pass 2: geometry and carried-over columns of the continuing rays.
+    let (o_origin, o_direction, o_prev_p) = (
+        &mut o_origin[..count],
+        &mut o_direction[..count],
+        &mut o_prev_p[..count],
+    );
+    let (o_path, o_passes, o_dimension) = (
+        &mut o_path[..count],
+        &mut o_passes[..count],
+        &mut o_dimension[..count],
+    );
+    for (j, &k) in ctx.iter().enumerate() {
+        let k = k as usize;
+        let r = ray_id[k] as usize;
+        o_path[j] = in_path[r];
+        o_passes[j] = in_passes[r];
+        o_dimension[j] = in_dimension[r] + limits.dims_per_vertex;
+        let (p, wi) = (p[k], s_wi[k]);
+        o_origin[j] = if on_surface {
+            let ng = ng[k];
+            p + ng * toward(wi, ng, ray_offset(p))
+        } else {
+            p
+        };
+        o_direction[j] = wi;
+        o_prev_p[j] = p;
+    }
+    // Pass 3: volume stacks; a transmitted ray crosses the surface's interior boundary.
+    if let Some(b) = boundaries {
+        let in_stack = &incoming.volume_stack[..n];
+        for ((stack, &lobe), &k) in o_stack[..count].iter_mut().zip(&o_lobe[..count]).zip(ctx) {
+            let k = k as usize;
+            *stack = in_stack[ray_id[k] as usize].clone();
+            let i = range.start + k;
+            let shape = pts.shape[i];
+            if on_surface && lobe.is_transmit() {
+                if let Some(e @ (StackEvent::UnmatchedExit | StackEvent::EnteredAgain)) =
+                    b.cross(stack, shape, pts.front_face[i])
+                {
+                    stack_errors.push((shape, e))
+                }
+            }
+        }
+    }
+    done.written = count;
+    done
+}
+
+/// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
+/// (signed) zero for finite `x` and NaN for infinities and NaN, so the sum of the three
+/// products is zero exactly when every channel is finite; then the sum of the absolute
+/// values is zero exactly when every channel is (a sum of non-negative numbers is at least
+/// its largest term; overflow gives infinity, not zero).
+#[inline]
+pub fn is_black_or_not_finite(w: Rgb) -> bool {
+    let finite = w.r * 0.0 + w.g * 0.0 + w.b * 0.0 == 0.0;
+    !finite || w.r.abs() + w.g.abs() + w.b.abs() == 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn black_or_not_finite_is_exact() {
+        for (w, want) in [
+            (Rgb::BLACK, true),
+            (Rgb::new(0.0, -0.0, 0.0), true),
+            (Rgb::new(0.0, 1e-30, 0.0), false),
+            (Rgb::new(f32::NAN, 1.0, 1.0), true),
+            (Rgb::new(1.0, f32::INFINITY, 1.0), true),
+            (Rgb::new(f32::MAX, f32::MAX, f32::MAX), false),
+        ] {
+            assert_eq!(is_black_or_not_finite(w), want, "{w:?}");
+        }
+    }
+}
