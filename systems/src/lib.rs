@@ -10,6 +10,7 @@ pub mod film;
 pub mod geometry;
 pub mod intersect;
 pub mod lights;
+pub mod medium;
 pub mod partition;
 pub mod phase;
 pub mod sampler;
