@@ -84,8 +84,9 @@ fn transmittance_relative(sigma_t: Rgb, sigma_ref: f32, d: f32) -> Rgb {
     sigma_t.map(|s| (-optical_depth(s - sigma_ref, d)).exp())
 }
 
-/// The outcome of one free flight through a homogeneous segment.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The outcome of one free flight through a homogeneous segment. The default (`t = 0`, not
+/// scattered, black weight) is a placeholder for output columns.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FreeFlight {
     /// Distance of the scattering event from the segment start when `scattered`, else
     /// `tmax` (the segment's end, possibly `+inf`).

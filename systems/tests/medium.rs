@@ -484,14 +484,7 @@ fn free_flight_column_equals_per_ray_sampling() {
             }
         })
         .collect();
-    let mut out = vec![
-        FreeFlight {
-            t: 0.0,
-            scattered: false,
-            weight: Rgb::BLACK
-        };
-        n
-    ];
+    let mut out = vec![FreeFlight::default(); n];
     sample_free_flights(sigma_t, sigma_s, &throughput, &uc, &ud, &tmax, &mut out);
     for i in 0..n {
         let want = sample_free_flight(
