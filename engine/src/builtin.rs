@@ -6,6 +6,7 @@
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 
 use crate::context::IntegratorContext;
+use crate::media::{HomogeneousInterior, HomogeneousMedium, PhaseBxdf};
 use crate::plugin::*;
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
@@ -371,20 +372,29 @@ pub enum Interior {
         /// Absorption coefficient per channel.
         sigma_a: Rgb,
     },
+    /// Homogeneous scattering medium.
+    Homogeneous(HomogeneousMedium),
 }
 
 impl Interior {
     fn hints(self) -> InstanceHints {
+        let volume = InstanceHints::COMPUTES_INTERIOR | InstanceHints::INTERIOR_TRANSMISSION;
         match self {
             Interior::None => InstanceHints::NONE,
-            _ => InstanceHints::COMPUTES_INTERIOR | InstanceHints::INTERIOR_TRANSMISSION,
+            Interior::Null | Interior::Beer { .. } => volume,
+            Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
         }
     }
-    fn begin<'a>(self, arena: &'a Bump) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+    fn begin<'a>(
+        self,
+        ctx: &'a ShadingContext<'a>,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
         match self {
             Interior::None => None,
             Interior::Null => Some(arena.alloc(NullInterior)),
             Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a })),
+            Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior { medium, ctx })),
         }
     }
 }
@@ -449,9 +459,26 @@ impl BxdfFactory for BuiltinMaterial {
     fn begin_scatter<'a>(
         &'a self,
         _ctx: &'a ShadingContext<'a>,
-        _mode: ShadingMode,
+        mode: ShadingMode,
         arena: &'a Bump,
     ) -> &'a mut (dyn Bxdf + 'a) {
+        match mode {
+            // A point inside the interior: its phase function (an interior that does not
+            // scatter never returns such points; isotropic and black if asked anyway).
+            ShadingMode::VolumeScatter => {
+                return match self.interior {
+                    Interior::Homogeneous(m) => arena.alloc(PhaseBxdf {
+                        phase: m.phase,
+                        albedo: m.albedo(),
+                    }),
+                    _ => arena.alloc(NullBxdf),
+                };
+            }
+            // Interiors are built by `begin_interior`; a surface closure is never needed for
+            // them.
+            ShadingMode::Interior => return arena.alloc(NullBxdf),
+            ShadingMode::Scatter => {}
+        }
         match self.surface {
             Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
             Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
@@ -462,11 +489,11 @@ impl BxdfFactory for BuiltinMaterial {
 
     fn begin_interior<'a>(
         &'a self,
-        _ctx: &'a ShadingContext<'a>,
+        ctx: &'a ShadingContext<'a>,
         _mode: ShadingMode,
         arena: &'a Bump,
     ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
-        self.interior.begin(arena)
+        self.interior.begin(ctx, arena)
     }
 
     fn shadow_transmittance(&self) -> Rgb {

@@ -7,6 +7,7 @@ pub mod context;
 pub mod integrator;
 mod interior;
 pub mod load;
+pub mod media;
 pub mod output;
 pub mod path_tracer;
 pub mod plugin;

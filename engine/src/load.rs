@@ -21,6 +21,7 @@
 //! ```
 
 use crate::builtin::{BuiltinMaterial, Interior, Surface};
+use crate::media::{HomogeneousMedium, Scattering};
 use crate::output::{read_exr_rgb, OutputError};
 use crate::plugin::BxdfFactory;
 use crate::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
@@ -32,6 +33,7 @@ use risotto_components::Rgb;
 use risotto_systems::camera::{Camera, Projection};
 use risotto_systems::distribution::EnvironmentMap;
 use risotto_systems::geometry::Sphere;
+use risotto_systems::phase::{PhaseFunction, PhaseFunctionError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -189,9 +191,116 @@ fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
             })?;
             Ok(Interior::Beer { sigma_a })
         }
+        "homogeneous" => Ok(Interior::Homogeneous(homogeneous(&t)?)),
         other => Err(t.error(
             Some("type"),
-            format!("unknown interior type \"{other}\" (known: null, beer)"),
+            format!("unknown interior type \"{other}\" (known: null, beer, homogeneous)"),
+        )),
+    }
+}
+
+/// `interior = { type = "homogeneous", ... }`: `sigma_t` and `albedo`, or `sigma_a` and
+/// `sigma_s` (colours or numbers, per world unit); `phase`; `scattering`.
+fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
+    t.deny_unknown(&[
+        "type",
+        "sigma_t",
+        "albedo",
+        "sigma_a",
+        "sigma_s",
+        "phase",
+        "scattering",
+    ])?;
+    let non_negative = "every channel >= 0 and finite";
+    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
+    let by_extinction = t.has("sigma_t") || t.has("albedo");
+    let by_coefficients = t.has("sigma_a") || t.has("sigma_s");
+    let (sigma_t, sigma_s) = match (by_extinction, by_coefficients) {
+        (true, true) => {
+            let key = if t.has("sigma_a") {
+                "sigma_a"
+            } else {
+                "sigma_s"
+            };
+            return Err(t.error(
+                Some(key),
+                "give either sigma_t and albedo, or sigma_a and sigma_s, not both",
+            ));
+        }
+        (false, false) => {
+            return Err(t.error(
+                None,
+                "a homogeneous interior needs sigma_t (and albedo) or sigma_a and sigma_s",
+            ))
+        }
+        (true, false) => {
+            let sigma_t = t.rgb_where("sigma_t", None, non_negative, ok)?;
+            let albedo = t.rgb_where(
+                "albedo",
+                Some(Rgb::splat(1.0)),
+                "every channel in [0, 1]",
+                |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
+            )?;
+            (sigma_t, sigma_t * albedo)
+        }
+        (false, true) => {
+            let sigma_a = t.rgb_where("sigma_a", Some(Rgb::BLACK), non_negative, ok)?;
+            let sigma_s = t.rgb_where("sigma_s", Some(Rgb::BLACK), non_negative, ok)?;
+            let sigma_t = sigma_a + sigma_s;
+            if !sigma_t.is_finite() {
+                return Err(t.error(Some("sigma_a"), "sigma_a + sigma_s overflows"));
+            }
+            (sigma_t, sigma_s)
+        }
+    };
+    let phase = match t.table("phase")? {
+        None => PhaseFunction::Isotropic,
+        Some(p) => phase_function(&p)?,
+    };
+    let scattering = match t.string("scattering", Some("multiple"))?.as_str() {
+        "multiple" => Scattering::Multiple,
+        "single" => Scattering::Single,
+        other => {
+            return Err(t.error(
+                Some("scattering"),
+                format!("unknown scattering \"{other}\" (known: multiple, single)"),
+            ))
+        }
+    };
+    Ok(HomogeneousMedium {
+        sigma_t,
+        sigma_s,
+        phase,
+        scattering,
+    })
+}
+
+/// `phase = { type = "isotropic" | "hg" | "double_hg", ... }`.
+fn phase_function(p: &MaterialParams) -> Result<PhaseFunction, SceneError> {
+    let kind = p.string("type", None)?;
+    let checked = |r: Result<PhaseFunction, PhaseFunctionError>| {
+        r.map_err(|e| p.error(Some(e.parameter), e.to_string()))
+    };
+    match kind.as_str() {
+        "isotropic" => {
+            p.deny_unknown(&["type"])?;
+            Ok(PhaseFunction::Isotropic)
+        }
+        "hg" => {
+            p.deny_unknown(&["type", "g"])?;
+            checked(PhaseFunction::henyey_greenstein(p.f32("g", Some(0.0))?))
+        }
+        "double_hg" => {
+            p.deny_unknown(&["type", "g1", "g2", "blend"])?;
+            checked(PhaseFunction::double_henyey_greenstein(
+                p.f32("g1", None)?,
+                p.f32("g2", None)?,
+                p.f32("blend", Some(0.5))?,
+            ))
+        }
+        other => Err(p.error(
+            Some("type"),
+            format!("unknown phase function \"{other}\" (known: isotropic, hg, double_hg)"),
         )),
     }
 }

@@ -51,13 +51,16 @@ pub enum System {
     Partition,
     /// Volume tracking and volume integrators.
     Volume,
+    /// Phase-function sampling and evaluation at points inside scattering media (the
+    /// volume-scatter shade groups); never runs in scenes without scattering media.
+    Phase,
     /// Splatting samples into the film.
     Splat,
 }
 
 impl System {
     /// Number of systems.
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = 11;
     /// Every system, in discriminant order.
     pub const ALL: [System; System::COUNT] = [
         System::Camera,
@@ -69,6 +72,7 @@ impl System {
         System::Occlusion,
         System::Partition,
         System::Volume,
+        System::Phase,
         System::Splat,
     ];
 
@@ -84,7 +88,43 @@ impl System {
             System::Occlusion => "occlusion",
             System::Partition => "partition",
             System::Volume => "volume",
+            System::Phase => "phase",
             System::Splat => "splat",
+        }
+    }
+}
+
+/// What happened to a ray's free flight in a medium. The discriminant indexes
+/// [`SystemStats::volume_events`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum VolumeEvent {
+    /// A real scattering event (a point inside the medium was shaded or lit).
+    Scatter,
+    /// A fictitious (null) collision of a tracking estimator.
+    Null,
+    /// The path was absorbed in the medium.
+    Absorbed,
+    /// The flight passed its segment (left the medium or reached a surface inside it).
+    Pass,
+}
+
+impl VolumeEvent {
+    /// Number of kinds.
+    pub const COUNT: usize = 4;
+    /// Every kind, in discriminant order.
+    pub const ALL: [VolumeEvent; VolumeEvent::COUNT] = [
+        VolumeEvent::Scatter,
+        VolumeEvent::Null,
+        VolumeEvent::Absorbed,
+        VolumeEvent::Pass,
+    ];
+    /// The snake_case name used in JSON and in the summary.
+    pub const fn name(self) -> &'static str {
+        match self {
+            VolumeEvent::Scatter => "scatter",
+            VolumeEvent::Null => "null",
+            VolumeEvent::Absorbed => "absorbed",
+            VolumeEvent::Pass => "pass",
         }
     }
 }
@@ -172,6 +212,8 @@ pub struct SystemStats {
     /// Per shape index: rays that left the scene while their stack said they were inside the
     /// shape (innermost volume).
     pub escaped_inside: Vec<u64>,
+    /// Volume events indexed by `VolumeEvent as usize`.
+    pub volume_events: [u64; VolumeEvent::COUNT],
     /// Pattern-cache lookups answered from a shading context's cache.
     pub pattern_cache_hits: u64,
     /// Parameter evaluations (pattern-cache misses).
@@ -211,6 +253,12 @@ impl SystemStats {
     /// Records a crossing of `shape`'s front face by a ray already inside it.
     pub fn entered_twice(&mut self, shape: u32) {
         count_at(&mut self.entered_twice, shape);
+    }
+
+    /// Counts `n` volume events of kind `event`.
+    #[inline]
+    pub fn volume_event(&mut self, event: VolumeEvent, n: usize) {
+        self.volume_events[event as usize] += n as u64;
     }
 
     /// Records a ray that escaped the scene while inside `shape`'s volume.
@@ -279,6 +327,9 @@ impl SystemStats {
         add_counts(&mut self.unmatched_exits, &other.unmatched_exits);
         add_counts(&mut self.entered_twice, &other.entered_twice);
         add_counts(&mut self.escaped_inside, &other.escaped_inside);
+        for (a, b) in self.volume_events.iter_mut().zip(&other.volume_events) {
+            *a += b;
+        }
         self.pattern_cache_hits += other.pattern_cache_hits;
         self.pattern_evals += other.pattern_evals;
     }
@@ -347,6 +398,21 @@ impl Serialize for SystemsJson<'_> {
     }
 }
 
+/// Map keyed by volume-event name, zero counts omitted.
+struct VolumeEventsJson<'a>(&'a [u64; VolumeEvent::COUNT]);
+impl Serialize for VolumeEventsJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        for e in VolumeEvent::ALL {
+            let n = self.0[e as usize];
+            if n > 0 {
+                m.serialize_entry(e.name(), &n)?;
+            }
+        }
+        m.end()
+    }
+}
+
 /// Map keyed by termination name, zero counts omitted.
 struct TerminatedJson<'a>(&'a [u64; Termination::COUNT]);
 impl Serialize for TerminatedJson<'_> {
@@ -371,6 +437,13 @@ impl Serialize for RenderStats {
         m.serialize_entry("samples", &c.samples)?;
         m.serialize_entry("terminated", &TerminatedJson(&c.terminated))?;
         m.serialize_entry("nan_dropped", &c.nan_dropped)?;
+        if c.volume_events.iter().any(|&n| n > 0) {
+            m.serialize_entry("volume_events", &VolumeEventsJson(&c.volume_events))?;
+        }
+        if c.pattern_cache_hits + c.pattern_evals > 0 {
+            m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
+            m.serialize_entry("pattern_evals", &c.pattern_evals)?;
+        }
         m.serialize_entry("wall_seconds", &self.wall_seconds)?;
         m.serialize_entry("features", &self.features)?;
         if !self.warnings.is_empty() {
@@ -487,6 +560,7 @@ mod tests {
                 "occlusion",
                 "partition",
                 "volume",
+                "phase",
                 "splat"
             ]
         );

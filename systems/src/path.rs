@@ -53,9 +53,11 @@ pub struct Continuations {
 /// a volume the ray was not in, entering one it was already in) to `stack_errors`; `None` means every stack is empty, and the rows'
 /// stacks are left as they are. The caller sets `tmin` and `tmax`.
 ///
-/// Russian roulette (pbrt-v4 / Mitsuba): survival probability `min(max(beta) * eta^2, 0.95)`
-/// on the throughput after the vertex, so a path whose throughput cannot grow (an albedo-1
-/// medium, a white furnace) is only culled at the 5% rate.
+/// Russian roulette (pbrt-v4, `VolPathIntegrator`): survival probability `max(beta) * eta^2`
+/// on the throughput after the vertex when that is below 1, and no roulette otherwise. A path
+/// whose throughput cannot grow (an albedo-1 medium, a white furnace) is never culled, where
+/// Mitsuba's rule (`min(max(beta) * eta^2, 0.95)`) kills 5% per bounce and inflates the
+/// survivors' weights by 1/0.95: same expectation, much more variance.
 ///
 /// A first pass decides which points continue and writes the columns that decision computes
 /// (throughput, `eta_scale`, depth, lobe, pdf, point index); a second pass, driven by the
@@ -146,12 +148,14 @@ pub fn continue_paths(
         let eta_scale = in_eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
         let depth = in_depth[r] + 1;
         if depth as u32 > limits.rr_depth {
-            let q = (throughput.max_channel() * eta_scale).min(0.95);
-            if rr_u[k][3] >= q {
-                done.roulette += 1;
-                continue;
+            let q = throughput.max_channel() * eta_scale;
+            if q < 1.0 {
+                if rr_u[k][3] >= q {
+                    done.roulette += 1;
+                    continue;
+                }
+                throughput *= 1.0 / q;
             }
-            throughput *= 1.0 / q;
         }
         o_throughput[count] = throughput;
         o_eta_scale[count] = eta_scale;

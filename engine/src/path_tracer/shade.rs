@@ -195,7 +195,11 @@ pub(super) fn shade_groups(
         // Bxdf sampling for the next bounce.
         samples.reset(m);
         bxdf.generate_samples(&ctx, samplers, samples);
-        stats.record(System::Bxdf, m, bxdf_start.elapsed().as_secs_f64());
+        let system = match grp.mode {
+            ShadingMode::VolumeScatter => System::Phase,
+            _ => System::Bxdf,
+        };
+        stats.record(system, m, bxdf_start.elapsed().as_secs_f64());
         next_len += continue_group(
             scene,
             vertices,

@@ -1203,6 +1203,12 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                     "beer" => {
                         interior.rgb("sigma_a", None).unwrap();
                     }
+                    "homogeneous" => {
+                        assert!(
+                            interior.has("sigma_t") || interior.has("sigma_s"),
+                            "{what}: a homogeneous interior without coefficients"
+                        );
+                    }
                     other => panic!("{what}: unexpected interior type {other}"),
                 }
             }

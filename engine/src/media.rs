@@ -1,0 +1,456 @@
+//! Built-in scattering media: phase functions as Bxdfs and the homogeneous volume integrator
+//! (the seed's "Shading in a Volume", "Single Scattering" and "Multiple Scattering").
+//!
+//! # Conventions
+//! Coefficients are per world unit, per RGB channel: `sigma_t = sigma_a + sigma_s` and
+//! `albedo = sigma_s / sigma_t`. A phase function is normalised over the sphere; its Bxdf's
+//! sample weight is `p / pdf = 1` and its value `p`: the single-scattering albedo (`sigma_s`)
+//! is part of the free-flight weight the volume integrator writes into the point's
+//! transmission ([`risotto_systems::medium::FreeFlight::weight`]), never of the phase
+//! function.
+//!
+//! # Multiple scattering
+//! [`HomogeneousInterior::nearest_hits`] traces the bundle's rays to the volume's boundary
+//! (or whatever surface lies inside), samples one free flight per ray with one-sample
+//! spectral MIS over the RGB channels (Miller, Georgiev and Jarosz 2019; Mitsuba 3's
+//! `volpathmis`; channel probabilities in proportion to the ray's throughput), and returns the
+//! rays that stop inside as a [`ShadingMode::VolumeScatter`] group (the path tracer then lights
+//! and scatters them like surface points, with the phase function as Bxdf) and the others'
+//! hits with the pass-through weight.
+//!
+//! # Single scattering
+//! With a lighting delegate, each ray's in-scattered light on its segment `[0, tmax]` is
+//! estimated at two points, one per technique: a free-flight distance and, where the scene has
+//! point lights, an equiangular sample towards one of them (Kulla and Fajardo 2012), each
+//! weighted by the balance heuristic over both (Veach 1997, eq. 9.10 with one sample per
+//! technique: `f(t) / (pdf_distance(t) + pdf_equiangular(t))`). The delegate lights them; the
+//! ray goes on to its hit with the exact transmittance. Without a delegate (an integrator
+//! that offers none, like PxrVCM, or `--lighting bxdf`) the medium scatters as in multiple
+//! scattering: the seed's "the only way to perform volume scattering for integrators that do
+//! not provide a lighting delegate".
+
+use crate::plugin::*;
+use glam::Vec3;
+use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
+use risotto_systems::lights::Light;
+use risotto_systems::medium::{
+    channel_pdf, equiangular_pdf, equiangular_sample, free_flight_pdf, sample_free_flight,
+    transmittance,
+};
+use risotto_systems::phase::PhaseFunction;
+use risotto_systems::sampler::PathSampler;
+
+/// Lobe bits of a phase-function sample.
+const SCATTER: LobeSampled = LobeSampled(LobeSampled::SCATTER.0 | LobeSampled::DIFFUSE.0);
+
+/// A phase function as the Bxdf of [`ShadingMode::VolumeScatter`] contexts (RenderMan's
+/// `PxrDoubleHenyeyGreenstein` and its siblings). Weight 1 per sample (exact sampling), value
+/// and pdf `p`; `albedo` only feeds the albedo AOV.
+#[derive(Clone, Copy, Debug)]
+pub struct PhaseBxdf {
+    /// The phase function.
+    pub phase: PhaseFunction,
+    /// Single-scattering albedo, for the `albedo` AOV.
+    pub albedo: Rgb,
+}
+
+impl Bxdf for PhaseBxdf {
+    fn lobes(&self) -> LobeSampled {
+        SCATTER
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let vn = ctx.vn();
+        for (i, s) in samplers.iter_mut().enumerate() {
+            let u = s.next_2d();
+            let u_lobe = s.next_1d();
+            let (wi, pdf) = self.phase.sample(vn[i], u, u_lobe);
+            if pdf > 0.0 && pdf.is_finite() {
+                out.wi[i] = wi;
+                out.weight[i] = Rgb::WHITE;
+                out.pdf[i] = pdf;
+                out.lobe[i] = SCATTER;
+                out.eta[i] = 1.0;
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        let vn = ctx.vn();
+        for i in 0..ctx.num_points() {
+            let p = self.phase.eval(vn[i], wi[i]);
+            value[i] = Rgb::splat(p);
+            pdf[i] = p;
+        }
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(self.albedo);
+    }
+}
+
+/// How a homogeneous medium scatters (scene files: `scattering = "multiple" | "single"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Scattering {
+    /// Every order of scattering: points inside go back to the global integrator.
+    #[default]
+    Multiple,
+    /// Single scattering through the lighting delegate (multiple without one).
+    Single,
+}
+
+/// A homogeneous scattering medium's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HomogeneousMedium {
+    /// Extinction coefficient per channel (per world unit), >= 0.
+    pub sigma_t: Rgb,
+    /// Scattering coefficient per channel, `0 <= sigma_s <= sigma_t`.
+    pub sigma_s: Rgb,
+    /// Phase function.
+    pub phase: PhaseFunction,
+    /// Multiple or single scattering.
+    pub scattering: Scattering,
+}
+
+impl HomogeneousMedium {
+    /// Single-scattering albedo `sigma_s / sigma_t` per channel (0 where `sigma_t` is 0).
+    pub fn albedo(&self) -> Rgb {
+        Rgb::new(
+            ratio(self.sigma_s.r, self.sigma_t.r),
+            ratio(self.sigma_s.g, self.sigma_t.g),
+            ratio(self.sigma_s.b, self.sigma_t.b),
+        )
+    }
+}
+
+fn ratio(a: f32, b: f32) -> f32 {
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
+}
+
+/// The homogeneous medium's volume integrator, bound to the bundle's shading context (one
+/// point per ray, at its origin, as the renderer binds it).
+pub struct HomogeneousInterior<'a> {
+    /// The medium.
+    pub medium: HomogeneousMedium,
+    /// The context `begin_interior` bound.
+    pub ctx: &'a ShadingContext<'a>,
+}
+
+/// Sampler dimensions the integrator draws per ray: channel, distance, light choice and
+/// equiangular distance (four, so that the vertex after it stays aligned to the sampler's
+/// four-dimensional sets).
+const DIMS_PER_SEGMENT: usize = 4;
+
+impl HomogeneousInterior<'_> {
+    /// Draws the four dimensions of every ray's segment.
+    fn draw(samplers: &mut [PathSampler]) -> Vec<[f32; DIMS_PER_SEGMENT]> {
+        samplers
+            .iter_mut()
+            .map(|s| [s.next_1d(), s.next_1d(), s.next_1d(), s.next_1d()])
+            .collect()
+    }
+
+    /// Shading points at the rays' origins (the bound context's, when it has one per ray).
+    fn origins(&self, rays: &Rays) -> Option<ShadingPoints> {
+        if self.ctx.num_points() == rays.len() {
+            return None;
+        }
+        let mut pts = ShadingPoints::with_capacity(rays.len());
+        for i in 0..rays.len() {
+            pts.push(ShadingPointRow::in_volume(
+                rays.origin[i],
+                rays.direction[i],
+                i as u32,
+                self.ctx.material(),
+            ));
+        }
+        Some(pts)
+    }
+
+    /// Multiple scattering (see the module docs). `start` = the rows of `out` this call
+    /// answers from on; `tmax[i]` = ray `i`'s distance to its hit (infinity for misses).
+    #[allow(clippy::too_many_arguments, reason = "the bundle's columns, named")]
+    fn scatter_inside(
+        &self,
+        rays: &Rays,
+        u: &[[f32; DIMS_PER_SEGMENT]],
+        tmax: &[f32],
+        start: (usize, usize, usize),
+        stats: &mut crate::stats::SystemStats,
+        out: &mut ShadeGroups,
+    ) {
+        let m = &self.medium;
+        let n = rays.len();
+        let mut scattered = vec![false; n];
+        let mut t = vec![0.0f32; n];
+        let mut weight = vec![Rgb::BLACK; n];
+        for i in 0..n {
+            let f = sample_free_flight(
+                m.sigma_t,
+                m.sigma_s,
+                channel_pdf(rays.throughput[i]),
+                u[i][0],
+                u[i][1],
+                tmax[i],
+            );
+            scattered[i] = f.scattered;
+            t[i] = f.t;
+            weight[i] = f.weight;
+        }
+        let events = scattered.iter().filter(|&&s| s).count();
+        stats.volume_event(crate::stats::VolumeEvent::Scatter, events);
+        stats.volume_event(crate::stats::VolumeEvent::Pass, n - events);
+        // Rays that pass keep their hit (or miss), attenuated by the pass weight; the hits of
+        // rays that scatter leave.
+        let (p0, g0, m0) = start;
+        let mut keep = vec![true; out.points.len()];
+        for k in p0..out.points.len() {
+            let r = out.points.ray_id[k] as usize;
+            if scattered[r] {
+                keep[k] = false;
+            } else {
+                out.points.transmission[k] *= weight[r];
+            }
+        }
+        if keep.iter().any(|&k| !k) {
+            retain_points(out, &keep, g0);
+        }
+        let mut j = m0;
+        for k in m0..out.misses.len() {
+            let r = out.misses[k] as usize;
+            if !scattered[r] {
+                out.misses[j] = out.misses[k];
+                out.miss_transmission[j] = out.miss_transmission[k] * weight[r];
+                j += 1;
+            }
+        }
+        out.misses.truncate(j);
+        out.miss_transmission.truncate(j);
+        if events == 0 {
+            return;
+        }
+        // The scattering points: a volume-sampling context at P = o + t d.
+        let own = self.origins(rays);
+        let parent = own.as_ref().map(|pts| {
+            ShadingContext::new(pts, 0..n, ShadingMode::Interior, self.ctx.material(), &[])
+        });
+        let parent = parent.as_ref().unwrap_or(self.ctx);
+        let mut v = parent.begin_volume_sampling();
+        let p: Vec<Vec3> = (0..n)
+            .map(|i| rays.origin[i] + rays.direction[i] * t[i])
+            .collect();
+        v.set_builtin(Builtin::P, &p);
+        v.set_vlen(&t);
+        v.set_transmission(&weight);
+        v.end_volume_sampling(&scattered, out);
+    }
+
+    /// Single scattering through the delegate (see the module docs), then the hits with the
+    /// exact transmittance.
+    #[allow(clippy::too_many_arguments, reason = "the bundle's columns, named")]
+    fn single_scatter(
+        &self,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        u: &[[f32; DIMS_PER_SEGMENT]],
+        tmax: &[f32],
+        start: (usize, usize, usize),
+        services: VolumeServices<'_, '_>,
+        out: &mut ShadeGroups,
+    ) {
+        let m = &self.medium;
+        let n = rays.len();
+        let VolumeServices {
+            ictx,
+            lighting,
+            factory,
+            arena,
+        } = services;
+        let lighting = lighting.expect("called with a delegate");
+        let scene = ictx.scene;
+        // Point lights for equiangular sampling (chosen uniformly).
+        let point_lights: Vec<Vec3> = scene
+            .lights
+            .lights()
+            .iter()
+            .filter_map(|l| match l {
+                Light::Point { position, .. } => Some(*position),
+                _ => None,
+            })
+            .collect();
+        let equiangular_mix = |o: Vec3, d: Vec3, tmax: f32, t: f32| -> f32 {
+            if point_lights.is_empty() {
+                return 0.0;
+            }
+            point_lights
+                .iter()
+                .map(|&l| equiangular_pdf(o, d, l, tmax, t))
+                .sum::<f32>()
+                / point_lights.len() as f32
+        };
+        let own = self.origins(rays);
+        let parent = own.as_ref().map(|pts| {
+            ShadingContext::new(pts, 0..n, ShadingMode::Interior, self.ctx.material(), &[])
+        });
+        let parent = parent.as_ref().unwrap_or(self.ctx);
+        let techniques = if point_lights.is_empty() { 1 } else { 2 };
+        let mut lit = 0;
+        for technique in 0..techniques {
+            let mut member = vec![false; n];
+            let mut t = vec![0.0f32; n];
+            let mut weight = vec![Rgb::BLACK; n];
+            for i in 0..n {
+                let (o, d) = (rays.origin[i], rays.direction[i]);
+                let pdf_channels = channel_pdf(rays.throughput[i]);
+                let ti = if technique == 0 {
+                    let f = sample_free_flight(
+                        m.sigma_t,
+                        m.sigma_s,
+                        pdf_channels,
+                        u[i][0],
+                        u[i][1],
+                        tmax[i],
+                    );
+                    if !f.scattered {
+                        continue;
+                    }
+                    f.t
+                } else {
+                    let k = ((u[i][2] * point_lights.len() as f32) as usize)
+                        .min(point_lights.len() - 1);
+                    let (te, pdf) = equiangular_sample(o, d, point_lights[k], tmax[i], u[i][3]);
+                    if pdf <= 0.0 || te >= tmax[i] {
+                        continue;
+                    }
+                    te
+                };
+                let pdf = free_flight_pdf(m.sigma_t, pdf_channels, ti)
+                    + equiangular_mix(o, d, tmax[i], ti);
+                if !(pdf > 0.0 && pdf.is_finite()) {
+                    continue;
+                }
+                let w = m.sigma_s * transmittance(m.sigma_t, ti) * (1.0 / pdf);
+                if w.is_finite() && !w.is_black() {
+                    member[i] = true;
+                    t[i] = ti;
+                    weight[i] = w;
+                }
+            }
+            let count = member.iter().filter(|&&b| b).count();
+            if count == 0 {
+                continue;
+            }
+            lit += count;
+            let mut v = parent.begin_volume_sampling();
+            let p: Vec<Vec3> = (0..n)
+                .map(|i| rays.origin[i] + rays.direction[i] * t[i])
+                .collect();
+            v.set_builtin(Builtin::P, &p);
+            v.set_vlen(&t);
+            // Light only the members: a context of those points alone.
+            let mut pts = ShadingPoints::with_capacity(count);
+            let mut w = Vec::with_capacity(count);
+            let vctx = v.context();
+            let (rows, range) = vctx.rows();
+            for (i, &keep) in member.iter().enumerate() {
+                if keep {
+                    pts.push_from(rows, range.start + i);
+                    w.push(weight[i]);
+                }
+            }
+            let ctx = ShadingContext::new(
+                &pts,
+                0..count,
+                ShadingMode::VolumeScatter,
+                self.ctx.material(),
+                &[],
+            );
+            let bxdf = factory.begin_scatter(&ctx, ShadingMode::VolumeScatter, arena);
+            lighting.perform_direct_lighting(&ctx, bxdf, rays, samplers, &w);
+        }
+        ictx.stats
+            .volume_event(crate::stats::VolumeEvent::Scatter, lit);
+        // The rays go on to their hits, attenuated exactly.
+        for k in start.0..out.points.len() {
+            out.points.transmission[k] *= transmittance(m.sigma_t, out.points.vlen[k]);
+        }
+        for k in start.2..out.misses.len() {
+            let r = out.misses[k] as usize;
+            out.miss_transmission[k] *= transmittance(m.sigma_t, rays.tmax[r]);
+        }
+    }
+}
+
+/// Keeps the points of `out` with `keep[k]`, fixing the ranges of groups from `g0` on.
+fn retain_points(out: &mut ShadeGroups, keep: &[bool], g0: usize) {
+    let mut before = Vec::with_capacity(keep.len() + 1);
+    let mut kept = 0usize;
+    before.push(0);
+    for &k in keep {
+        kept += k as usize;
+        before.push(kept);
+    }
+    out.points.retain_rows(keep);
+    let groups: Vec<ShadeGroup> = out.groups.drain(g0..).collect();
+    for g in groups {
+        let range = before[g.range.start]..before[g.range.end];
+        if !range.is_empty() {
+            out.groups.push(ShadeGroup { range, ..g });
+        }
+    }
+}
+
+impl VolumeIntegrator for HomogeneousInterior<'_> {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        services: VolumeServices<'_, '_>,
+        out: &mut ShadeGroups,
+    ) {
+        let n = rays.len();
+        let u = Self::draw(samplers);
+        let start = (out.points.len(), out.groups.len(), out.misses.len());
+        services.ictx.nearest_hits(rays, out);
+        // Each ray's segment in the medium: to its hit, or unbounded.
+        let mut tmax = rays.tmax.clone();
+        for k in start.0..out.points.len() {
+            let r = out.points.ray_id[k] as usize;
+            tmax[r] = tmax[r].min(out.points.vlen[k]);
+        }
+        let single = self.medium.scattering == Scattering::Single && services.lighting.is_some();
+        if single {
+            self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
+        } else {
+            self.scatter_inside(rays, &u, &tmax, start, services.ictx.stats, out);
+        }
+        debug_assert_eq!(tmax.len(), n);
+    }
+
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &crate::context::IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        for i in 0..segments.len() {
+            trans[i] = transmittance(self.medium.sigma_t, segments.length[i]);
+        }
+        emission.fill(Rgb::BLACK);
+    }
+}
