@@ -374,10 +374,15 @@ impl SceneGeometry {
             let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
             sphere_uv(h)
         };
+        // The point in double precision, rounded once: its distance to the sphere is then
+        // under an ulp of its own largest coordinate, which the spawn offset (relative to
+        // that coordinate) covers. `centre + n r` in f32 erred by ulps of |centre| + r: at
+        // the top of a unit sphere centred at (0, -1, 0), where p is near zero, a 6e-8
+        // error against a 1e-9 offset put a quarter of the shadow rays inside (acne).
         let n = sphere_dir_from_uv(uv);
         SurfaceSample {
-            p: s.center + n * s.radius,
-            ng: n,
+            p: (s.center.as_dvec3() + n * s.radius as f64).as_vec3(),
+            ng: n.as_vec3(),
             uv,
         }
     }
@@ -440,15 +445,16 @@ pub(crate) fn sphere_uv(h: DVec3) -> Vec2 {
     Vec2::new(u, (theta / PI64) as f32)
 }
 
-/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]).
-fn sphere_dir_from_uv(uv: Vec2) -> Vec3 {
+/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]), in double
+/// precision.
+fn sphere_dir_from_uv(uv: Vec2) -> DVec3 {
     use std::f64::consts::PI as PI64;
     // In double precision so the only error left is the f32 rounding of uv (~1e-7 rad).
     let phi = uv.x as f64 * 2.0 * PI64;
     let theta = uv.y as f64 * PI64;
     let (st, ct) = theta.sin_cos();
     let (sp, cp) = phi.sin_cos();
-    DVec3::new(st * cp, st * sp, ct).as_vec3()
+    DVec3::new(st * cp, st * sp, ct)
 }
 
 #[cfg(test)]
