@@ -11,5 +11,6 @@ pub mod geometry;
 pub mod intersect;
 pub mod lights;
 pub mod partition;
+pub mod ray;
 pub mod sampler;
 mod simd8;
