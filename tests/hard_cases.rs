@@ -106,13 +106,7 @@ fn box_on_ground(ground: ShapeGeometry) -> RenderOutput {
         n,
     );
     let mut scene = Scene::new(cam, settings(n, n, 16, 3));
-    let m = scene.add_material(
-        "grey",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: Rgb::splat(0.5),
-        }),
-    );
+    let m = add_diffuse(&mut scene, "grey", 0.5);
     scene.add_shape("ground", ground, m, None);
     add_box(
         &mut scene,
@@ -165,13 +159,7 @@ fn huge_sphere_ground_has_no_black_horizon_band() {
     let eye = Vec3::new(0.0, 1.7, 0.0);
     let cam = perspective(eye, eye + Vec3::new(0.0, 0.0, -1.0), fov, w, h);
     let mut scene = Scene::new(cam, settings(w, h, 4, 2));
-    let m = scene.add_material(
-        "ground",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: Rgb::splat(0.5),
-        }),
-    );
+    let m = add_diffuse(&mut scene, "ground", 0.5);
     scene.add_shape(
         "ground",
         ShapeGeometry::Sphere(Sphere {
@@ -218,20 +206,8 @@ fn lamp_over_floor(offset: Vec3) -> RenderOutput {
     let n = 16;
     let cam = ortho_camera(offset + Vec3::Y * 3.0, offset, Vec3::Z, 2.0, n, n);
     let mut scene = Scene::new(cam, settings(n, n, 16, 2));
-    let grey = scene.add_material(
-        "grey",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: Rgb::splat(0.5),
-        }),
-    );
-    let black = scene.add_material(
-        "lamp",
-        0,
-        mat(Surface::Diffuse {
-            reflectance: Rgb::BLACK,
-        }),
-    );
+    let grey = add_diffuse(&mut scene, "grey", 0.5);
+    let black = add_diffuse(&mut scene, "lamp", 0.0);
     // Floor normal +y (z x x); lamp normal -y (x x z).
     scene.add_shape(
         "floor",
@@ -272,4 +248,51 @@ fn area_light_far_from_the_origin_matches_the_origin() {
             0.0,
         );
     }
+}
+
+/// A diffuse floor under a point light 2 units up and a constant sky, everything scaled by
+/// `s` (the light's intensity by `s^2`, so the irradiance stays the same), seen from above
+/// around the light's foot.
+fn point_lit_floor(s: f32) -> RenderOutput {
+    let n = 8;
+    let cam = ortho_camera(Vec3::Y * 5.0 * s, Vec3::ZERO, Vec3::Z, 0.5 * s, n, n);
+    let mut scene = Scene::new(cam, settings(n, n, 64, 2));
+    let grey = add_diffuse(&mut scene, "grey", 0.5);
+    scene.add_shape(
+        "floor",
+        quad(
+            Vec3::new(-20.0, 0.0, -20.0) * s,
+            Vec3::Z * 40.0 * s,
+            Vec3::X * 40.0 * s,
+        ),
+        grey,
+        None,
+    );
+    scene.add_light(
+        "bulb",
+        risotto::engine::scene::LightComponent::Point {
+            position: Vec3::Y * 2.0 * s,
+            intensity: Rgb::splat(4.0 * s * s),
+        },
+    );
+    environment(&mut scene, Rgb::splat(0.2));
+    render_default(&scene.compile().unwrap())
+}
+
+/// Item 8: scaled by 1e-6, the scene's light-selection radius was clamped to 1e-3, which
+/// inflated the sky's power by 1e6 against the bulb's: the bulb was almost never selected
+/// and the floor came out 11% dark. The same scene at scale 1e-6 and 1 agrees.
+#[test]
+fn tiny_scene_does_not_starve_its_point_light() {
+    let unit = image_mean(&point_lit_floor(1.0));
+    let tiny = point_lit_floor(1e-6);
+    assert_finite("tiny scene", &tiny);
+    let (m, s) = image_mean(&tiny);
+    let se = (s * s + unit.1 * unit.1).map(f32::sqrt);
+    assert_matches(
+        "scale 1e-6 - scale 1 + 1",
+        (m - unit.0 + Rgb::splat(1.0), se),
+        1.0,
+        0.0,
+    );
 }
