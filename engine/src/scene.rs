@@ -367,7 +367,11 @@ impl Scene {
 
         let (lo, hi) = geometry.bounds();
         let (center, radius) = if lo.cmple(hi).all() {
-            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
+            // No absolute floor beyond keeping radius^2 a normal f32: the lights at infinity
+            // are priced by pi radius^2 (systems::lights), and a floor of 1e-3 made the sky
+            // of a scene 1e-6 across a million times brighter than its point light, which
+            // was then almost never selected (issue 14 item 8).
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-18))
         } else {
             (Vec3::ZERO, 1.0)
         };

@@ -10,7 +10,10 @@
 //! once, or a single sphere.
 
 use glam::{Vec3, Vec3A, Vec4};
-use obvhs::{aabb::Aabb, bvh2::Bvh2};
+use obvhs::{
+    aabb::Aabb,
+    bvh2::{node::Bvh2Node, Bvh2},
+};
 
 use crate::geometry::Sphere;
 use crate::simd8::Row8;
@@ -136,6 +139,98 @@ impl Bin {
     }
 }
 
+/// The power of two that maps the largest coordinate magnitude of `root` into `[1, 2)` (1
+/// for a box at the origin): the SAH costs of the build are computed on boxes scaled by it.
+///
+/// Areas and volumes of boxes far from the origin or spanning more than about 1e13 units
+/// overflow f32 (a half area beyond 3.4e38, the volume term's product `area * volume` beyond
+/// it much earlier: a sphere of radius 1e8 suffices), and infinite costs make every choice a
+/// tie, so the collapse put spheres and more than eight triangles in one leaf. Scaling by a
+/// power of two is exact and multiplies every cost by the same power of two, so the trees of
+/// scenes that did not overflow are unchanged, bit for bit.
+fn cost_scale(root: &Aabb) -> f32 {
+    let m = root.min.abs().max(root.max.abs()).max_element();
+    if !(m.is_finite() && m >= f32::MIN_POSITIVE) {
+        return 1.0;
+    }
+    // 2^-floor(log2 m), built from the exponent bits (m is normal, so the result is a normal
+    // power of two between 2^-127 and 2^126).
+    let exponent = ((m.to_bits() >> 23) & 0xff) as i32 - 127;
+    f32::from_bits(((127 - exponent) as u32) << 23)
+}
+
+/// `b` with both corners multiplied by `s` (a power of two: exact but for underflow).
+fn scaled(b: &Aabb, s: f32) -> Aabb {
+    Aabb::new(b.min * s, b.max * s)
+}
+
+/// Deepest binary tree passed on to the collapse and to obvhs' CWBVH conversion (both
+/// recurse over it). obvhs' PLOC builder makes a chain of `n` levels from `n` primitives with
+/// equal boxes (a far-away mesh whose vertices round to a few points, thousands of copies of
+/// one shape), which overflowed the stack; built trees of real scenes are far shallower.
+pub(crate) const MAX_BVH2_DEPTH: usize = 256;
+
+/// Number of node levels of `bvh2` on its longest root-to-leaf path.
+pub(crate) fn bvh2_depth(bvh2: &Bvh2) -> usize {
+    let mut depth = 0;
+    let mut stack = vec![(0u32, 1usize)];
+    while let Some((n, level)) = stack.pop() {
+        depth = depth.max(level);
+        let node = &bvh2.nodes[n as usize];
+        if node.prim_count == 0 {
+            stack.push((node.first_index, level + 1));
+            stack.push((node.first_index + 1, level + 1));
+        }
+    }
+    depth
+}
+
+/// A binary BVH over `aabbs` (primitive `indices[i]` has box `aabbs[i]`; at least one)
+/// with one primitive per leaf, built top down by median splits: along the longest axis of
+/// the centroid bounds, or by count when the centroids coincide. Depth `ceil(log2 n) + 1`
+/// whatever the boxes: the fallback when PLOC's tree is deeper than [`MAX_BVH2_DEPTH`].
+pub(crate) fn median_bvh2(aabbs: &[Aabb], indices: &[u32]) -> Bvh2 {
+    let mut prims: Vec<(Aabb, u32)> = aabbs.iter().copied().zip(indices.iter().copied()).collect();
+    let mut nodes = vec![Bvh2Node::default()];
+    let mut primitive_indices = Vec::with_capacity(prims.len());
+    let mut stack = vec![(0usize, prims.len(), 0usize)];
+    while let Some((lo, hi, slot)) = stack.pop() {
+        let set = &mut prims[lo..hi];
+        let aabb = set.iter().fold(Aabb::INVALID, |a, p| a.union(&p.0));
+        if set.len() == 1 {
+            nodes[slot] = Bvh2Node::new(aabb, 1, primitive_indices.len() as u32);
+            primitive_indices.push(set[0].1);
+            continue;
+        }
+        let centroids = set.iter().fold(Aabb::INVALID, |a, p| {
+            let mut a = a;
+            a.extend(p.0.center());
+            a
+        });
+        // Differences of f32 extents can overflow: compare them in f64.
+        let extent = |a: usize| centroids.max[a] as f64 - centroids.min[a] as f64;
+        let axis = (0..3)
+            .max_by(|&a, &b| extent(a).total_cmp(&extent(b)))
+            .expect("three axes");
+        let mid = set.len() / 2;
+        if extent(axis) > 0.0 {
+            set.select_nth_unstable_by(mid, |a, b| {
+                a.0.center_axis(axis).total_cmp(&b.0.center_axis(axis))
+            });
+        }
+        let first = nodes.len();
+        nodes.extend([Bvh2Node::default(); 2]);
+        nodes[slot] = Bvh2Node::new(aabb, 0, first as u32);
+        stack.push((lo + mid, hi, first + 1));
+        stack.push((lo, lo + mid, first));
+    }
+    Bvh2 {
+        nodes,
+        primitive_indices,
+        ..Default::default()
+    }
+}
+
 /// Largest scene for which [`sweep_tree`] is tried (it sorts every node's primitives three
 /// times).
 const SWEEP_MAX: usize = 4096;
@@ -159,7 +254,7 @@ fn split_slot(out: &mut Vec<Bin>, slot: usize, aabb: Aabb) -> usize {
 /// A binary tree over the primitives of `bvh2` by top-down full-sweep SAH (every centroid
 /// split on every axis, cost `A(L) N(L) + A(R) N(R)`), from the primitive boxes of its
 /// leaves.
-fn sweep_tree(bvh2: &Bvh2) -> Vec<Bin> {
+fn sweep_tree(bvh2: &Bvh2, s: f32) -> Vec<Bin> {
     let mut prims: Vec<(Aabb, u32)> = Vec::new();
     for n in &bvh2.nodes {
         for k in 0..n.prim_count {
@@ -189,12 +284,12 @@ fn sweep_tree(bvh2: &Bvh2) -> Vec<Bin> {
             let mut acc = Aabb::INVALID;
             for i in 0..n {
                 acc = acc.union(&set[i].0);
-                areas[i + 1] = acc.half_area();
+                areas[i + 1] = scaled(&acc, s).half_area();
             }
             let mut acc = Aabb::INVALID;
             for i in (1..n).rev() {
                 acc = acc.union(&set[i].0);
-                let cost = areas[i] * i as f32 + acc.half_area() * (n - i) as f32;
+                let cost = areas[i] * i as f32 + scaled(&acc, s).half_area() * (n - i) as f32;
                 if cost < best.0 {
                     best = (cost, axis, i);
                 }
@@ -302,8 +397,10 @@ struct Collapse {
 }
 
 impl Collapse {
-    fn new(bins: &[Bin], is_sphere: impl Fn(u32) -> bool) -> Self {
-        let root = bins[0].aabb;
+    /// The collapse of `bins` (root first) with costs computed on boxes scaled by `s`
+    /// ([`cost_scale`]).
+    fn new(bins: &[Bin], s: f32, is_sphere: impl Fn(u32) -> bool) -> Self {
+        let root = scaled(&bins[0].aabb, s);
         let volume = |b: &Aabb| {
             let e = (b.max - b.min).max(Vec3A::ZERO);
             e.x * e.y * e.z
@@ -314,6 +411,7 @@ impl Collapse {
         // it, which test it whatever their direction). Area alone prices a leaf spanning a
         // room as cheaply as the three walls in it, though every ray in the room tests it.
         let weight = |b: &Aabb| {
+            let b = &scaled(b, s);
             let a = b.half_area().max(0.0);
             if root_volume > 0.0 {
                 a + VOLUME_WEIGHT * root_area * volume(b) / root_volume
@@ -332,7 +430,7 @@ impl Collapse {
             }
         }
         let mut c = Collapse {
-            root_weight: weight(&root),
+            root_weight: weight(&bins[0].aabb),
             cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
         };
@@ -365,12 +463,11 @@ impl Collapse {
             }
             // One slot: a leaf, or a node with all slots below it.
             let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
-            let leaf_cost = if tris[n] as usize <= WIDTH {
-                area
-            } else {
-                f32::INFINITY
-            };
-            (c.cost[n][0], c.split[n][0]) = if leaf_cost <= node_cost {
+            let fits = tris[n] as usize <= WIDTH;
+            let leaf_cost = if fits { area } else { f32::INFINITY };
+            // `fits` as well: a leaf must never be chosen for a subtree it cannot hold, even
+            // if a cost is infinite or NaN.
+            (c.cost[n][0], c.split[n][0]) = if fits && leaf_cost <= node_cost {
                 (leaf_cost, Split::Leaf)
             } else {
                 (node_cost, Split::Node)
@@ -423,12 +520,13 @@ impl Bvh8 {
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
+        let s = cost_scale(&bvh2.nodes[0].aabb);
         let bins = binary_tree(bvh2);
-        let mut collapse = Collapse::new(&bins, is_sphere);
+        let mut collapse = Collapse::new(&bins, s, is_sphere);
         let mut bins = bins;
         if bvh2.primitive_indices.len() <= SWEEP_MAX {
-            let sweep = sweep_tree(bvh2);
-            let sweep_collapse = Collapse::new(&sweep, is_sphere);
+            let sweep = sweep_tree(bvh2, s);
+            let sweep_collapse = Collapse::new(&sweep, s, is_sphere);
             if sweep_collapse.root_cost() < collapse.root_cost() {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
@@ -554,7 +652,6 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obvhs::bvh2::node::Bvh2Node;
 
     fn leaf_node(aabb: Aabb, first: u32, count: u32) -> Bvh2Node {
         Bvh2Node {

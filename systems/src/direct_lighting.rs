@@ -9,7 +9,7 @@
 
 use crate::lights::{power_heuristic, LightSampleColumns};
 use crate::path::Vertices;
-use crate::ray::{ray_offset, toward, InteriorBoundaries};
+use crate::ray::{ray_offset, shadow_ray, toward, InteriorBoundaries};
 use glam::{BVec4A, Vec4};
 use risotto_components::{Rgb, ShadowRayColumns};
 
@@ -172,12 +172,9 @@ pub fn spawn_shadow_rays(
         } else {
             p
         };
-        let distance = l_distance[k];
-        o_tmax[count] = if distance.is_finite() {
-            distance * (1.0 - 1e-4) - offset
-        } else {
-            f32::INFINITY
-        };
+        // Aimed at the light point from the origin itself, stopping short of it by its own
+        // rounding (`shadow_ray`).
+        (o_direction[count], o_tmax[count]) = shadow_ray(p, o_origin[count], wi, l_distance[k]);
         if let Some(b) = boundaries {
             let stack = &mut o_stack[count];
             *stack = incoming.volume_stack[r].clone();

@@ -16,7 +16,7 @@ use obvhs::{
     BvhBuildParams,
 };
 
-use crate::bvh8::Bvh8;
+use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, MAX_BVH2_DEPTH};
 use crate::intersect::{Backend, Kernel};
 
 /// An analytic sphere.
@@ -78,9 +78,19 @@ struct Triangle {
 impl Triangle {
     fn new(v: [Vec3; 3]) -> Self {
         let c = (v[1] - v[0]).cross(v[2] - v[0]);
+        let ng_area = if c.is_finite() && c.length().is_finite() {
+            c.normalize_or_zero().extend(0.5 * c.length())
+        } else {
+            // Edges beyond about 1e19 overflow f32's cross product: the same in f64 (the
+            // area saturates at f32::MAX).
+            let [a, b, c] = v.map(Vec3::as_dvec3);
+            let c = (b - a).cross(c - a);
+            let area = (0.5 * c.length()).min(f32::MAX as f64) as f32;
+            c.normalize_or_zero().as_vec3().extend(area)
+        };
         Triangle {
             v: v.map(Vec3A::from),
-            ng_area: c.normalize_or_zero().extend(0.5 * c.length()),
+            ng_area,
         }
     }
 
@@ -128,10 +138,17 @@ impl Triangles<'_> {
 /// contain the sphere exactly for traversal to be conservative.
 const BOX_PAD: f32 = 4.0 * f32::EPSILON;
 
+///
+/// Clamped to the finite range: a box beyond `f32::MAX` contains no representable point more
+/// than the clamped one, and infinite box coordinates would make slab tests NaN.
 fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
     let pad_lo = lo.abs() * BOX_PAD + Vec3::splat(f32::MIN_POSITIVE);
     let pad_hi = hi.abs() * BOX_PAD + Vec3::splat(f32::MIN_POSITIVE);
-    Aabb::new(Vec3A::from(lo - pad_lo), Vec3A::from(hi + pad_hi))
+    let finite = |v: Vec3| v.clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+    Aabb::new(
+        Vec3A::from(finite(lo - pad_lo)),
+        Vec3A::from(finite(hi + pad_hi)),
+    )
 }
 
 impl SceneGeometry {
@@ -196,9 +213,10 @@ impl SceneGeometry {
                     hi = hi.max(*v);
                 }
             }
+            let finite = |v: Vec3| v.clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
             for s in &spheres {
-                lo = lo.min(s.center - Vec3::splat(s.radius));
-                hi = hi.max(s.center + Vec3::splat(s.radius));
+                lo = lo.min(finite(s.center - Vec3::splat(s.radius)));
+                hi = hi.max(finite(s.center + Vec3::splat(s.radius)));
             }
             bounds = (lo, hi);
 
@@ -212,10 +230,29 @@ impl SceneGeometry {
                 params.sort_precision,
                 params.search_depth_threshold,
             );
-            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-            let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+            if bvh2_depth(&bvh2) <= MAX_BVH2_DEPTH {
+                ReinsertionOptimizer::default().run(
+                    &mut bvh2,
+                    params.reinsertion_batch_ratio,
+                    None,
+                );
+            }
+            // PLOC chains equal boxes (see `MAX_BVH2_DEPTH`); a median split bounds the depth.
+            if bvh2_depth(&bvh2) > MAX_BVH2_DEPTH {
+                bvh2 = median_bvh2(&aabbs, &(0..aabbs.len() as u32).collect::<Vec<_>>());
+            }
+            // obvhs' collapse prices nodes by f32 half areas summed over the tree: infinite
+            // costs leave its slot assignment undefined (out-of-bounds panics). It is only
+            // kept for benchmarks and diagnostics, so scenes that would overflow go without.
+            let depth = bvh2_depth(&bvh2) as f64;
+            let root = &bvh2.nodes[0].aabb;
+            let e = |a: usize| (root.max[a] as f64 - root.min[a] as f64).max(0.0);
+            let half_area = (e(0) + e(1)) * e(2) + e(0) * e(1);
+            let cwbvh_cost = half_area * (aabbs.len() as f64) * (depth + 1.0) * 2.0;
+            let bvh = (cwbvh_cost < f32::MAX as f64)
+                .then(|| bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false));
             let bvh8 = Bvh8::from_bvh2(&bvh2, &triangles, &spheres);
-            (Some(bvh), Some(bvh8))
+            (bvh, Some(bvh8))
         };
 
         Self {
@@ -259,7 +296,8 @@ impl SceneGeometry {
     }
 
     /// The scene's BVH collapsed to obvhs' compressed 8-wide CWBVH (`None` for an empty
-    /// scene). Its `primitive_indices` map leaf slots to primitive indices. Exposed for
+    /// scene, and for one so large that obvhs' f32 SAH costs would overflow: extents beyond
+    /// about 1e17 units). Its `primitive_indices` map leaf slots to primitive indices. Exposed for
     /// benchmarks and diagnostics; the intersection systems traverse an uncompressed 8-wide
     /// collapse of the same binary BVH instead.
     pub fn bvh(&self) -> Option<&CwBvh> {
@@ -336,10 +374,15 @@ impl SceneGeometry {
             let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
             sphere_uv(h)
         };
+        // The point in double precision, rounded once: its distance to the sphere is then
+        // under an ulp of its own largest coordinate, which the spawn offset (relative to
+        // that coordinate) covers. `centre + n r` in f32 erred by ulps of |centre| + r: at
+        // the top of a unit sphere centred at (0, -1, 0), where p is near zero, a 6e-8
+        // error against a 1e-9 offset put a quarter of the shadow rays inside (acne).
         let n = sphere_dir_from_uv(uv);
         SurfaceSample {
-            p: s.center + n * s.radius,
-            ng: n,
+            p: (s.center.as_dvec3() + n * s.radius as f64).as_vec3(),
+            ng: n.as_vec3(),
             uv,
         }
     }
@@ -402,15 +445,16 @@ pub(crate) fn sphere_uv(h: DVec3) -> Vec2 {
     Vec2::new(u, (theta / PI64) as f32)
 }
 
-/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]).
-fn sphere_dir_from_uv(uv: Vec2) -> Vec3 {
+/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]), in double
+/// precision.
+fn sphere_dir_from_uv(uv: Vec2) -> DVec3 {
     use std::f64::consts::PI as PI64;
     // In double precision so the only error left is the f32 rounding of uv (~1e-7 rad).
     let phi = uv.x as f64 * 2.0 * PI64;
     let theta = uv.y as f64 * PI64;
     let (st, ct) = theta.sin_cos();
     let (sp, cp) = phi.sin_cos();
-    DVec3::new(st * cp, st * sp, ct).as_vec3()
+    DVec3::new(st * cp, st * sp, ct)
 }
 
 #[cfg(test)]

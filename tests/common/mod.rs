@@ -211,3 +211,14 @@ pub fn add_floor(scene: &mut Scene, center: Vec3, albedo: Rgb) {
         None,
     );
 }
+
+/// Adds a built-in diffuse material `name` of the given grey albedo; returns its index.
+pub fn add_diffuse(scene: &mut Scene, name: &str, albedo: f32) -> u32 {
+    scene.add_material(
+        name,
+        0,
+        mat(Surface::Diffuse {
+            reflectance: Rgb::splat(albedo),
+        }),
+    )
+}
