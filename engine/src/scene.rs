@@ -211,8 +211,13 @@ pub struct CompiledScene {
     pub materials: Vec<Material>,
     /// Material data the hot loops read.
     pub material_info: Vec<MaterialInfo>,
-    /// Lights.
+    /// Lights, every one sampled (light sampling without MIS: `--lighting nee`, the lighting
+    /// delegate).
     pub lights: LightSet,
+    /// The same lights as sampled under MIS with Bxdf sampling (the path tracer's default):
+    /// a constant environment is left to Bxdf sampling
+    /// ([`LightSet::with_environment_sampling`]).
+    pub mis_lights: LightSet,
     /// Camera.
     pub camera: Camera,
     /// Settings.
@@ -427,6 +432,8 @@ impl Scene {
                 }
             });
         }
+        let mis_lights =
+            LightSet::with_environment_sampling(lights.clone(), &geometry, radius, false);
         let lights = LightSet::new(lights, &geometry, radius);
 
         let material_info: Vec<MaterialInfo> = materials
@@ -467,6 +474,7 @@ impl Scene {
             materials,
             material_info,
             lights,
+            mis_lights,
             camera,
             settings,
             features,

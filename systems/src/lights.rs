@@ -226,6 +226,24 @@ impl LightSampleColumns<'_> {
 impl LightSet {
     /// Builds the set. `scene_radius` bounds the scene (for the power of lights at infinity).
     pub fn new(lights: Vec<Light>, geometry: &SceneGeometry, scene_radius: f32) -> Self {
+        Self::with_environment_sampling(lights, geometry, scene_radius, true)
+    }
+
+    /// [`LightSet::new`], where `sample_constant_environment = false` leaves a constant
+    /// environment (one without a map) out of light selection: it is never sampled and its
+    /// [`environment_pdf`](Self::environment_pdf) is 0, while its radiance stays. For a
+    /// caller whose every non-Dirac vertex also samples its Bxdf (and counts the
+    /// environment where those rays escape, with MIS weight 1 then), that is unbiased and
+    /// better: Bxdf sampling of a constant environment is importance sampling of the whole
+    /// integrand but visibility, and the other lights get the light samples (pbrt-v4's
+    /// `allowIncompletePDF` for `UniformInfiniteLight`). A set with nothing left to sample
+    /// samples nothing ([`can_sample`](Self::can_sample)).
+    pub fn with_environment_sampling(
+        lights: Vec<Light>,
+        geometry: &SceneGeometry,
+        scene_radius: f32,
+        sample_constant_environment: bool,
+    ) -> Self {
         let mut light_of_prim = vec![u32::MAX; geometry.num_prims()];
         let mut environment = None;
         let r2 = scene_radius * scene_radius;
@@ -239,6 +257,14 @@ impl LightSet {
                 }
                 Light::Distant { irradiance, .. } => irradiance.average() * PI * r2,
                 Light::Point { intensity, .. } => 4.0 * PI * intensity.average(),
+                Light::Environment {
+                    radiance,
+                    map: None,
+                } if !sample_constant_environment => {
+                    environment = Some(i as u32);
+                    let _ = radiance;
+                    0.0
+                }
                 Light::Environment { radiance, map } => {
                     environment = Some(i as u32);
                     // Integral of the map's radiance over the sphere (4 pi for a constant 1).
@@ -248,7 +274,15 @@ impl LightSet {
             })
             .map(|p| if p.is_finite() { p.max(0.0) } else { 0.0 })
             .collect();
-        let selection = (!lights.is_empty()).then(|| Distribution1D::new(&power));
+        // Without constant-environment sampling, a set whose lights all have zero power
+        // selects nothing (rather than falling back to a uniform choice that would pick
+        // the environment).
+        let selectable = if sample_constant_environment {
+            !lights.is_empty()
+        } else {
+            power.iter().any(|&p| p > 0.0)
+        };
+        let selection = selectable.then(|| Distribution1D::new(&power));
         let pmf: Vec<f32> = (0..lights.len())
             .map(|i| selection.as_ref().map_or(0.0, |d| d.pmf(i)))
             .collect();
@@ -305,6 +339,11 @@ impl LightSet {
     /// True when there is no light at all.
     pub fn is_empty(&self) -> bool {
         self.lights.is_empty()
+    }
+
+    /// True when light sampling can produce a sample (some light is selectable).
+    pub fn can_sample(&self) -> bool {
+        self.selection.is_some()
     }
 
     /// Index of the area light on `prim`, if any.

@@ -24,7 +24,7 @@ use crate::stats::{System, SystemStats};
 use glam::Vec3;
 use risotto_components::{Rays, Rgb, ShadowRayColumns, ShadowRays};
 use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
-use risotto_systems::lights::LightSampleColumns;
+use risotto_systems::lights::{LightSampleColumns, LightSet};
 use risotto_systems::path::Vertices;
 use risotto_systems::sampler::PathSampler;
 
@@ -44,7 +44,8 @@ pub(super) struct LitGroup<'a, 'b> {
 
 /// Samples one light per point of the group, evaluates `bxdf` (the points' Bxdf, a phase
 /// function for volume points, bound to `ctx`) towards it and writes the
-/// shadow rays of the non-black samples to `out` from row `start` on; returns the number of
+/// shadow rays of the non-black samples to `out` from row `start` on (lights from `lights`:
+/// the path tracer's set for its technique, or every light for the delegate); returns the number of
 /// rows written. `dimension[r]` is the first sampler dimension of the shadow rays of points
 /// that ray `r` arrived at.
 #[allow(
@@ -53,6 +54,7 @@ pub(super) struct LitGroup<'a, 'b> {
 )]
 pub(super) fn sample_lights(
     scene: &CompiledScene,
+    lights: &LightSet,
     group: LitGroup<'_, '_>,
     bxdf: &mut dyn Bxdf,
     ctx: &ShadingContext<'_>,
@@ -81,7 +83,7 @@ pub(super) fn sample_lights(
         delta: scratch(&mut buffers.delta, m, false),
     };
     let range = vertices.range.clone();
-    scene.lights.sample_column(
+    lights.sample_column(
         &scene.geometry,
         &vertices.points.p[range][..m],
         u4,
@@ -136,7 +138,7 @@ impl<'a> DirectLighting<'a> {
         shadow: &'a mut ShadowRays,
         group: &'a mut GroupScratch,
     ) -> Self {
-        debug_assert!(technique != LightingTechnique::BxdfOnly || scene.lights.is_empty());
+        debug_assert!(technique != LightingTechnique::BxdfOnly || !scene.lights.can_sample());
         let _ = technique;
         DirectLighting {
             scene,
@@ -209,7 +211,16 @@ impl LightingDelegate for DirectLighting<'_> {
             mis: LightMis::None,
         };
         let written = sample_lights(
-            scene, group, bxdf, ctx, dimension, light, &mut out, 0, &mut stats,
+            scene,
+            &scene.lights,
+            group,
+            bxdf,
+            ctx,
+            dimension,
+            light,
+            &mut out,
+            0,
+            &mut stats,
         );
         self.shadow.truncate(start_row + written);
         self.lit += m;

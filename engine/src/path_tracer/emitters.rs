@@ -6,9 +6,18 @@ use crate::integrator::LightingTechnique;
 use crate::scene::CompiledScene;
 use glam::Vec3;
 use risotto_components::{Paths, Rays, Rgb, ShadingPoints, NO_HIT};
-use risotto_systems::lights::power_heuristic;
+use risotto_systems::lights::{power_heuristic, LightSet};
 
 impl PathTracer {
+    /// The light set the shade stage samples: under MIS a constant environment is left to
+    /// Bxdf sampling (`CompiledScene::mis_lights`); light sampling alone must sample all.
+    pub(super) fn nee_lights<'s>(&self, scene: &'s CompiledScene) -> &'s LightSet {
+        match self.technique {
+            LightingTechnique::Mis => &scene.mis_lights,
+            _ => &scene.lights,
+        }
+    }
+
     /// Whether an emitter seen along ray `r` is inside the path-length budget.
     pub(super) fn emission_counts(&self, scene: &CompiledScene, rays: &Rays, r: usize) -> bool {
         // The ray is segment depth+1 of its path.
@@ -116,5 +125,5 @@ fn light_pdf_at(
     if prim[0] == NO_HIT || scene.prim_shape[prim[0] as usize] != shape {
         return 0.0;
     }
-    scene.lights.area_pdf(prim[0], from, p, ng)
+    scene.mis_lights.area_pdf(prim[0], from, p, ng)
 }

@@ -25,7 +25,7 @@ pub(super) fn environment(
         let d = incoming.direction[r];
         let le = scene.lights.environment_radiance(d);
         if !le.is_black() && tracer.emission_counts(scene, incoming, r) {
-            let w = tracer.emitter_mis(incoming, r, || scene.lights.environment_pdf(d));
+            let w = tracer.emitter_mis(incoming, r, || scene.mis_lights.environment_pdf(d));
             paths.radiance[path] += incoming.throughput[r] * tr * le * w;
         }
         if incoming.depth[r] == 0 && paths.depth[path].is_infinite() {

@@ -66,7 +66,7 @@ pub(super) fn shade_groups(
     // empty default and the stack columns need no per-row copies.
     let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
     let light_sampling_possible =
-        tracer.technique != LightingTechnique::BxdfOnly && !scene.lights.is_empty();
+        tracer.technique != LightingTechnique::BxdfOnly && tracer.nee_lights(scene).can_sample();
     let mis = match tracer.technique {
         LightingTechnique::NeeOnly => LightMis::None,
         _ => LightMis::PowerHeuristic,
@@ -176,6 +176,7 @@ pub(super) fn shade_groups(
             };
             shadow_len += sample_lights(
                 scene,
+                tracer.nee_lights(scene),
                 group,
                 &mut *bxdf,
                 &ctx,

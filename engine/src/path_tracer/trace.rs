@@ -164,12 +164,14 @@ fn partitioned(
                     dimension: t.bundle.dimension[i],
                 }));
                 let mut delegate = DirectLighting::new(scene, tracer.technique, shadow, group);
-                let lighting: Option<&mut dyn LightingDelegate> =
-                    if tracer.technique == LightingTechnique::BxdfOnly || scene.lights.is_empty() {
-                        None
-                    } else {
-                        Some(&mut delegate)
-                    };
+                let lighting: Option<&mut dyn LightingDelegate> = if tracer.technique
+                    == LightingTechnique::BxdfOnly
+                    || !scene.lights.can_sample()
+                {
+                    None
+                } else {
+                    Some(&mut delegate)
+                };
                 let mut ictx =
                     IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
                 let start = std::time::Instant::now();
