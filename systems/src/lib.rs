@@ -8,6 +8,7 @@ pub mod camera;
 pub mod distribution;
 pub mod film;
 pub mod geometry;
+pub mod independent_sampler;
 pub mod intersect;
 pub mod lights;
 pub mod partition;
