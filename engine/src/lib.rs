@@ -4,12 +4,15 @@
 pub mod builtin;
 pub mod compare;
 pub mod context;
+pub mod converge;
 pub mod integrator;
 pub mod load;
 pub mod output;
+pub mod plot;
 pub mod plugin;
 pub mod render;
 pub mod scene;
 pub mod scene_file;
 pub mod stats;
+pub mod technique;
 pub mod transmission;
