@@ -239,27 +239,32 @@ fn render_command(args: RenderArgs) -> Result<()> {
 /// The techniques of `risotto render`: `--lighting` (an alias) and every `--technique`,
 /// which must apply to the scene and may not contradict each other.
 fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniques> {
-    let mut assignments: Vec<String> = args.techniques.clone();
+    // (the flag as given, its assignment)
+    let mut assignments: Vec<(String, String)> = args
+        .techniques
+        .iter()
+        .map(|a| (format!("--technique {a}"), a.clone()))
+        .collect();
     if let Some(l) = &args.lighting {
-        assignments.insert(0, format!("lighting={l}"));
+        assignments.insert(0, (format!("--lighting {l}"), format!("lighting={l}")));
     }
     let mut t = Techniques::default();
     let mut given: Vec<(&str, String)> = Vec::new();
-    for a in &assignments {
-        let tech = t.assign(a).with_context(|| format!("--technique {a}"))?;
+    for (flag, a) in &assignments {
+        let tech = t.assign(a).with_context(|| flag.clone())?;
         let value = t.get(tech.name)?.to_string();
         if let Some((_, v)) = given.iter().find(|(n, v)| *n == tech.name && *v != value) {
             anyhow::bail!(
-                "--technique {a}: {} was already set to {v} (by --lighting or another --technique)",
+                "{flag}: {} was already set to {v} (by --lighting or another --technique)",
                 tech.name
             );
         }
         given.push((tech.name, value));
         if !(tech.applies)(&scene.features) {
             anyhow::bail!(
-                "--technique {a}: {} does not apply to {} (it applies to {})",
-                tech.name,
+                "{flag}: technique {a} does not apply to {} ({} applies to {})",
                 args.scene.display(),
+                tech.name,
                 tech.applies_to
             );
         }

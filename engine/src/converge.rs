@@ -163,7 +163,8 @@ pub struct Curve {
     pub points: Vec<Point>,
     /// `1 / (MSE x seconds)` at the largest spp.
     pub efficiency: f64,
-    /// Least-squares slope of ln MSE against ln seconds (about -1 for Monte Carlo).
+    /// Least-squares slope of ln MSE against ln seconds (about -1 for Monte Carlo; noisy
+    /// where renders take milliseconds).
     pub mse_time_slope: f64,
     /// Least-squares slope of ln RMSE against ln spp (about -1/2 for Monte Carlo).
     pub rmse_spp_slope: f64,
@@ -576,20 +577,30 @@ fn curve(techniques: &Techniques, points: Vec<Point>) -> Curve {
     }
 }
 
-/// The line `ln MSE = a + b ln seconds` of a curve: the least-squares fit when its slope is
-/// negative, else the Monte Carlo slope -1 through the last valid point. `None` without a
-/// valid point.
+/// The line `ln MSE = a + b ln seconds` of a curve. Render times of small images are
+/// dominated by timer and scheduling noise, so the error is not fitted against them: `b` is
+/// the least-squares slope of ln MSE against ln spp (-1 when that is not negative, as for
+/// Monte Carlo), and time is taken proportional to spp at the curve's mean seconds per
+/// sample (total seconds over total spp, so its largest renders weigh most). `None` without
+/// a valid point.
 fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
-    let pts: Vec<(f64, f64)> = c
+    let valid: Vec<&Point> = c
         .points
         .iter()
         .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
-        .map(|p| (p.seconds.ln(), p.mse.ln()))
         .collect();
-    match fit_line(&pts) {
-        Some((a, b)) if b < 0.0 => Some((a, b)),
-        _ => pts.last().map(|&(x, y)| (y + x, -1.0)),
-    }
+    let pts: Vec<(f64, f64)> = valid
+        .iter()
+        .map(|p| ((p.spp as f64).ln(), p.mse.ln()))
+        .collect();
+    let (a, b) = match fit_line(&pts) {
+        Some((a, b)) if b < 0.0 => (a, b),
+        _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,
+    };
+    let per_spp = valid.iter().map(|p| p.seconds).sum::<f64>()
+        / valid.iter().map(|p| p.spp as f64).sum::<f64>();
+    // ln MSE = a + b ln spp, spp = seconds / per_spp.
+    Some((a - b * per_spp.ln(), b))
 }
 
 /// One row of [`Sweep::comparison`].
@@ -618,8 +629,8 @@ pub struct ComparisonTable {
 
 impl Sweep {
     /// Equal-time error and equal-error time of every curve relative to the best, read off
-    /// each curve's least-squares line `ln MSE = a + b ln seconds` (when its slope is
-    /// negative, else slope -1 through its last point) at the largest time all curves reach
+    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp, with time
+    /// proportional to spp; see `error_time_model`) at the largest time all curves reach
     /// and at the smallest MSE all reach.
     pub fn comparison(&self) -> ComparisonTable {
         let models: Vec<Option<(f64, f64)>> = self.curves.iter().map(error_time_model).collect();
@@ -709,12 +720,12 @@ impl Sweep {
         );
         let _ = writeln!(
             s,
-            "{:<width$}  {:>10}  {:>8}  {:>10}  {:>9}  {:>14}  {:>15}",
+            "{:<width$}  {:>8}  {:>8}  {:>10}  {:>10}  {:>14}  {:>15}",
             "technique",
             "max spp",
             "seconds",
             "1/(MSE*s)",
-            "MSE~t^b",
+            "RMSE~spp^b",
             "equal-time MSE",
             "equal-MSE time"
         );
@@ -722,12 +733,12 @@ impl Sweep {
             let last = c.points.last();
             let _ = writeln!(
                 s,
-                "{:<width$}  {:>10}  {:>8.3}  {:>10.3e}  {:>9.2}  {:>13.2}x  {:>14.2}x",
+                "{:<width$}  {:>8}  {:>8.3}  {:>10.3e}  {:>10.2}  {:>13.2}x  {:>14.2}x",
                 c.label,
                 last.map_or(0, |p| p.spp),
                 last.map_or(f64::NAN, |p| p.seconds),
                 c.efficiency,
-                c.mse_time_slope,
+                c.rmse_spp_slope,
                 row.equal_time_mse_ratio,
                 row.equal_error_time_ratio
             );
