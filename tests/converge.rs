@@ -479,3 +479,34 @@ fn bad_techniques_and_references_are_named_in_the_error() {
         &["/nonexistent.exr"],
     );
 }
+
+#[test]
+fn a_time_budget_doubles_spp_until_a_render_takes_that_long() {
+    let dir = temp_dir("budget");
+    let scene = cornell(&dir, 16);
+    let out_dir = dir.join("out");
+    let budget = 0.004;
+    let out = converge(
+        &scene,
+        &out_dir,
+        &[
+            "--budget",
+            &budget.to_string(),
+            "--techniques",
+            "lighting=mis,lighting=bxdf",
+            "--reference-spp",
+            "256",
+        ],
+    );
+    assert_ok("converge --budget", &out);
+    let (_, rows) = csv_rows(&out_dir);
+    for label in ["lighting=mis+sampler=sobol", "lighting=bxdf"] {
+        let curve: Vec<_> = rows.iter().filter(|r| r["technique"] == label).collect();
+        assert!(!curve.is_empty(), "{label}: no rows");
+        for (i, r) in curve.iter().enumerate() {
+            assert_eq!(num(r, "spp"), (1u64 << i) as f64, "{label}: {r:?}");
+            let last = i + 1 == curve.len();
+            assert_eq!(num(r, "seconds") >= budget, last, "{label} row {i}: {r:?}");
+        }
+    }
+}
