@@ -4,7 +4,8 @@
 //! One compiled scene is rendered with every variant (a [`Techniques`] choice) at every
 //! samples-per-pixel count, `repeats` times with seeds `seed, seed + 1, ...`, and each
 //! render's wall time (the [`render`] call alone: no loading, compiling or writing) and
-//! error against a reference are recorded. Before the sweep one uncounted 1-spp render warms
+//! error against a reference are recorded. A point's time is its fastest repeat's (the
+//! least disturbed by other load; the mean and the slowest are reported too). Before the sweep one uncounted 1-spp render warms
 //! the thread pool and the sampler tables up, so the first point is not charged for them.
 //!
 //! # Metrics
@@ -126,10 +127,11 @@ pub struct Point {
     pub spp: u32,
     /// Renders averaged.
     pub repeats: u32,
-    /// Mean render seconds, and the min and max.
+    /// Render seconds of the fastest repeat: the point's time (the measurement least
+    /// disturbed by other load on the machine, as benchmarks take the minimum).
     pub seconds: f64,
-    /// Fastest repeat.
-    pub seconds_min: f64,
+    /// Mean render seconds of the repeats.
+    pub seconds_mean: f64,
     /// Slowest repeat.
     pub seconds_max: f64,
     /// Mean MSE (reference noise subtracted), and the min and max over the repeats.
@@ -208,7 +210,7 @@ pub const CSV_COLUMNS: [&str; 17] = [
     "spp",
     "repeats",
     "seconds",
-    "seconds_min",
+    "seconds_mean",
     "seconds_max",
     "mse",
     "mse_min",
@@ -507,12 +509,12 @@ fn point(
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let (m, t) = (mean(&mse), mean(&seconds));
+    let (m, t) = (mean(&mse), min(&seconds));
     Ok(Point {
         spp,
         repeats: renders.len() as u32,
         seconds: t,
-        seconds_min: min(&seconds),
+        seconds_mean: mean(&seconds),
         seconds_max: max(&seconds),
         mse: m,
         mse_min: min(&mse),
@@ -754,7 +756,7 @@ impl Sweep {
             for p in &c.points {
                 let nums = [
                     p.seconds,
-                    p.seconds_min,
+                    p.seconds_mean,
                     p.seconds_max,
                     p.mse,
                     p.mse_min,
@@ -883,7 +885,7 @@ mod tests {
                     spp: t as u32,
                     repeats: 1,
                     seconds: t,
-                    seconds_min: t,
+                    seconds_mean: t,
                     seconds_max: t,
                     mse: k / t,
                     mse_min: k / t,
