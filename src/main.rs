@@ -1,13 +1,16 @@
-//! The `risotto` driver: `risotto render SCENE.toml [options]`.
+//! The `risotto` driver: `risotto render SCENE.toml [options]`, `risotto compare`,
+//! `risotto techniques SCENE.toml` and `risotto converge SCENE.toml [options]`.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::compare::compare;
-use risotto::engine::integrator::LightingTechnique;
+use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
 use risotto::engine::render::{render, RenderOptions};
+use risotto::engine::scene::CompiledScene;
+use risotto::engine::technique::{self, Techniques};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -34,6 +37,62 @@ enum Command {
         /// The reference (EXR).
         reference: PathBuf,
     },
+    /// List the techniques (estimator choices that trade time for error) that apply to a
+    /// scene, with their values; `*` marks the default.
+    Techniques {
+        /// The scene file.
+        scene: PathBuf,
+    },
+    /// Render each technique at increasing spp and measure error against a reference and
+    /// render time: writes DIR/converge.csv, .json, .png and .svg and prints a table of
+    /// equal-time error and equal-error time relative to the best technique.
+    Converge(ConvergeArgs),
+}
+
+#[derive(clap::Args)]
+struct ConvergeArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Reference image (EXR of the scene's size), taken as exact. Without it the reference
+    /// is rendered (see --reference-spp).
+    #[arg(long, conflicts_with = "reference_spp")]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of the rendered reference, as two independent halves whose
+    /// difference estimates its noise, subtracted from every MSE. Defaults to 16 times the
+    /// largest spp of the sweep (at most 65536).
+    #[arg(long)]
+    reference_spp: Option<u32>,
+    /// Techniques of the rendered reference: NAME=VALUE[+NAME=VALUE...]; defaults to every
+    /// technique's default.
+    #[arg(long)]
+    reference_technique: Option<String>,
+    /// The variants to sweep, comma-separated, each NAME=VALUE[+NAME=VALUE...] on top of the
+    /// defaults; `all`: the defaults and every other value of every technique that applies
+    /// to the scene, one at a time.
+    #[arg(long, default_value = "all")]
+    techniques: String,
+    /// Samples per pixel of the sweep, comma-separated.
+    #[arg(long, default_value = "1,2,4,8,16,32,64", conflicts_with = "budget")]
+    spp: String,
+    /// Instead of --spp: each variant renders 1, 2, 4, ... spp until one render takes at
+    /// least this many seconds.
+    #[arg(long)]
+    budget: Option<f64>,
+    /// Renders per point, with different seeds (min/max error bars).
+    #[arg(long, default_value_t = 1)]
+    repeats: u32,
+    /// Output directory.
+    #[arg(long, default_value = "converge")]
+    out: PathBuf,
+    /// Worker threads (defaults to all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Paths per batch.
+    #[arg(long, default_value_t = 4096)]
+    batch_size: usize,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(clap::Args)]
@@ -65,9 +124,13 @@ struct RenderArgs {
     /// Also write albedo, normal and depth AOVs into the EXR.
     #[arg(long)]
     aovs: bool,
-    /// Direct-lighting technique: mis, nee, bxdf.
-    #[arg(long, default_value = "mis")]
-    lighting: String,
+    /// Direct-lighting technique: mis (the default), nee, bxdf. An alias of
+    /// `--technique lighting=VALUE`.
+    #[arg(long)]
+    lighting: Option<String>,
+    /// A technique, NAME=VALUE (repeatable); `risotto techniques SCENE` lists them.
+    #[arg(long = "technique", value_name = "NAME=VALUE")]
+    techniques: Vec<String>,
     /// Paths per batch.
     #[arg(long, default_value_t = 4096)]
     batch_size: usize,
@@ -81,6 +144,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_command(args),
         Command::Compare { test, reference } => compare_command(&test, &reference),
+        Command::Techniques { scene } => techniques_command(&scene),
+        Command::Converge(args) => converge_command(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -119,13 +184,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
     );
-    let technique = match args.lighting.as_str() {
-        "mis" => LightingTechnique::Mis,
-        "nee" => LightingTechnique::NeeOnly,
-        "bxdf" => LightingTechnique::BxdfOnly,
-        other => anyhow::bail!("--lighting {other}: expected mis, nee or bxdf"),
-    };
     let compiled = compile_scene(scene, &args.scene)?;
+    let techniques = render_techniques(&args, &compiled)?;
     let out = args
         .out
         .clone()
@@ -144,12 +204,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
         );
         b
     };
-    let options = RenderOptions {
+    let options = techniques.render_options(RenderOptions {
         threads: args.threads,
         batch_size: args.batch_size,
-        technique,
         ..RenderOptions::default()
-    };
+    });
     let result = render(&compiled, &options, &|n| bar.inc(n))?;
     bar.finish_and_clear();
 
@@ -173,6 +232,188 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if !args.quiet {
         eprintln!("{}", result.stats);
         eprintln!("wrote {} and {}", out.display(), png.display());
+    }
+    Ok(())
+}
+
+/// The techniques of `risotto render`: `--lighting` (an alias) and every `--technique`,
+/// which must apply to the scene and may not contradict each other.
+fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniques> {
+    // (the flag as given, its assignment)
+    let mut assignments: Vec<(String, String)> = args
+        .techniques
+        .iter()
+        .map(|a| (format!("--technique {a}"), a.clone()))
+        .collect();
+    if let Some(l) = &args.lighting {
+        assignments.insert(0, (format!("--lighting {l}"), format!("lighting={l}")));
+    }
+    let mut t = Techniques::default();
+    let mut given: Vec<(&str, String)> = Vec::new();
+    for (flag, a) in &assignments {
+        let tech = t.assign(a).with_context(|| flag.clone())?;
+        let value = t.get(tech.name)?.to_string();
+        if let Some((_, v)) = given.iter().find(|(n, v)| *n == tech.name && *v != value) {
+            anyhow::bail!(
+                "{flag}: {} was already set to {v} (by --lighting or another --technique)",
+                tech.name
+            );
+        }
+        given.push((tech.name, value));
+        if !(tech.applies)(&scene.features) {
+            anyhow::bail!(
+                "{flag}: technique {a} does not apply to {} ({} applies to {})",
+                args.scene.display(),
+                tech.name,
+                tech.applies_to
+            );
+        }
+    }
+    Ok(t)
+}
+
+fn techniques_command(scene_path: &Path) -> Result<()> {
+    let registry = MaterialRegistry::with_builtins();
+    let scene = load_scene_file(scene_path, &registry)?;
+    let compiled = compile_scene(scene, scene_path)?;
+    print!("{}", technique::listing(&compiled.features));
+    Ok(())
+}
+
+/// Parses `--spp 1,2,4`.
+fn parse_spp_list(s: &str) -> Result<Vec<u32>> {
+    let mut v = Vec::new();
+    for item in s.split(',') {
+        let n: u32 = item
+            .trim()
+            .parse()
+            .with_context(|| format!("--spp {s}: \"{item}\" is not a whole number"))?;
+        anyhow::ensure!(
+            (1..=risotto::systems::sampler::MAX_SPP).contains(&n),
+            "--spp {s}: {n} is not between 1 and {}",
+            risotto::systems::sampler::MAX_SPP
+        );
+        v.push(n);
+    }
+    v.sort_unstable();
+    v.dedup();
+    Ok(v)
+}
+
+fn converge_command(args: ConvergeArgs) -> Result<()> {
+    let registry = MaterialRegistry::with_builtins();
+    let scene = load_scene_file(&args.scene, &registry)?;
+    let mut compiled = compile_scene(scene, &args.scene)?;
+    let variants = if args.techniques.trim() == "all" {
+        Techniques::variants(&compiled.features)
+    } else {
+        let mut v = Vec::new();
+        for spec in args.techniques.split(',') {
+            let t = Techniques::parse(spec.trim())
+                .with_context(|| format!("--techniques {}", args.techniques))?;
+            t.check_applicable(&compiled.features)
+                .with_context(|| format!("--techniques {spec} on {}", args.scene.display()))?;
+            if !v.contains(&t) {
+                v.push(t);
+            }
+        }
+        v
+    };
+    let plan = match args.budget {
+        Some(b) => SppPlan::Budget(b),
+        None => SppPlan::List(parse_spp_list(&args.spp)?),
+    };
+    let reference = match &args.reference {
+        Some(path) => {
+            let image =
+                read_exr_rgb(path).with_context(|| format!("--reference {}", path.display()))?;
+            Reference::Image {
+                image,
+                path: path.display().to_string(),
+            }
+        }
+        None => {
+            if let Some(n) = args.reference_spp {
+                anyhow::ensure!(
+                    (2..=risotto::systems::sampler::MAX_SPP).contains(&n),
+                    "--reference-spp {n}: must be between 2 and {} (two halves)",
+                    risotto::systems::sampler::MAX_SPP
+                );
+            }
+            let techniques = match &args.reference_technique {
+                Some(spec) => Techniques::parse(spec)
+                    .with_context(|| format!("--reference-technique {spec}"))?,
+                None => Techniques::default(),
+            };
+            Reference::Render {
+                spp: args.reference_spp,
+                techniques,
+            }
+        }
+    };
+    if let Some(0) = args.threads {
+        anyhow::bail!("--threads 0: need at least one thread");
+    }
+    anyhow::ensure!(
+        args.batch_size > 0,
+        "--batch-size 0: need at least one path per batch"
+    );
+    let options = ConvergeOptions {
+        variants,
+        plan,
+        repeats: args.repeats,
+        reference,
+        render: RenderOptions {
+            threads: args.threads,
+            batch_size: args.batch_size,
+            ..RenderOptions::default()
+        },
+    };
+    let pixels = compiled.camera.width as u64 * compiled.camera.height as u64;
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let (bar, template) = match converge::total_samples(&options, pixels) {
+            Some(total) => (
+                ProgressBar::new(total),
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {eta} left  {msg}",
+            ),
+            None => (
+                ProgressBar::new_spinner(),
+                "{spinner} [{elapsed_precise}] {human_pos} samples  {msg}",
+            ),
+        };
+        bar.set_style(ProgressStyle::with_template(template).expect("static template is valid"));
+        bar
+    };
+    let stage = |s: &str| bar.set_message(s.to_string());
+    let samples = |n: u64| bar.inc(n);
+    let sweep = converge::run(
+        &mut compiled,
+        &options,
+        &converge::Progress {
+            stage: &stage,
+            samples: &samples,
+        },
+    )?;
+    bar.finish_and_clear();
+    sweep.write_all(&args.out)?;
+    print!("{}", sweep.table());
+    if let (Reference::Render { techniques, .. }, Some(best)) =
+        (&options.reference, sweep.most_efficient())
+    {
+        if best.label != techniques.label() {
+            println!(
+                "note: {} was more efficient than the reference's technique ({}); \
+                 --reference-technique {} renders the reference with it",
+                best.label,
+                techniques.label(),
+                best.label
+            );
+        }
+    }
+    if !args.quiet {
+        eprintln!("wrote {}/converge.{{csv,json,png,svg}}", args.out.display());
     }
     Ok(())
 }

@@ -3,9 +3,10 @@
 //! a panic); the stats show that stages a scene does not need did not run.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-const BIN: &str = env!("CARGO_BIN_EXE_risotto");
+mod common;
+use common::cli::{assert_fails, risotto};
 
 /// A small valid scene: floor, downward-facing square lamp, sky.
 const SCENE: &str = r#"[render]
@@ -68,10 +69,6 @@ fn scene_with(edits: &[(&str, &str)]) -> String {
     s
 }
 
-fn risotto(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
-}
-
 fn render(dir: &Path, name: &str, text: &str, extra: &[&str]) -> (Output, PathBuf) {
     let scene = dir.join(name);
     std::fs::write(&scene, text).unwrap();
@@ -85,16 +82,6 @@ fn render(dir: &Path, name: &str, text: &str, extra: &[&str]) -> (Output, PathBu
     ];
     args.extend_from_slice(extra);
     (risotto(&args), out)
-}
-
-/// Asserts a clean failure: non-zero exit, no panic, and every `needle` in stderr.
-fn assert_fails(what: &str, out: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{what}: exit 0; stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
-    for n in needles {
-        assert!(stderr.contains(n), "{what}: stderr lacks {n:?}: {stderr}");
-    }
 }
 
 fn stats_json(path: &Path) -> serde_json::Value {

@@ -90,6 +90,7 @@ fn run(scene: &CompiledScene, threads: usize, batch_size: usize, tile_size: u32)
         batch_size,
         tile_size,
         technique: LightingTechnique::Mis,
+        ..RenderOptions::default()
     };
     render(scene, &options, &|_| {}).unwrap()
 }

@@ -13,6 +13,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use risotto_components::Rgb;
 use risotto_systems::film::Film;
+use risotto_systems::independent_sampler::SamplerKind;
 
 /// Options of one render that are not part of the scene.
 #[derive(Clone, Copy, Debug)]
@@ -25,6 +26,8 @@ pub struct RenderOptions {
     pub tile_size: u32,
     /// Direct-lighting technique. Defaults to MIS.
     pub technique: LightingTechnique,
+    /// Sampler (the `sampler` technique). Defaults to Sobol.
+    pub sampler: SamplerKind,
 }
 
 impl Default for RenderOptions {
@@ -34,6 +37,7 @@ impl Default for RenderOptions {
             batch_size: 4096,
             tile_size: 16,
             technique: LightingTechnique::Mis,
+            sampler: SamplerKind::Sobol,
         }
     }
 }
@@ -100,7 +104,8 @@ pub fn render_with<I: Integrator>(
             tiles.push((x0, y0, ts.min(w - x0), ts.min(h - y0)));
         }
     }
-    let spp = scene.settings.spp;
+    // The sampler travels in the sample addresses (`SamplerKind::address`).
+    let samples = options.sampler.addresses(0..scene.settings.spp);
     let work = || -> Vec<(TileFilm, SystemStats)> {
         tiles
             .par_iter()
@@ -113,7 +118,7 @@ pub fn render_with<I: Integrator>(
                         integrator,
                         scene,
                         &mut tile,
-                        0..spp,
+                        samples.clone(),
                         options.batch_size,
                         tables,
                         &mut stats,

@@ -10,6 +10,7 @@ pub mod direct_lighting;
 pub mod distribution;
 pub mod film;
 pub mod geometry;
+pub mod independent_sampler;
 pub mod intersect;
 pub mod lights;
 pub mod medium;

@@ -13,18 +13,22 @@
 //! of them (measured: the `glass_beer` reference error at 256 spp moved between 0.0096 and
 //! 0.0116 depending only on which dimensions the path started at). Any number of dimensions
 //! is available.
+//!
+//! A sample index with [`independent::INDEPENDENT_BIT`] set addresses the independent sampler
+//! instead (`crate::independent_sampler`): every draw function here dispatches on it.
 
+use crate::independent_sampler::{self as independent, SamplerKind};
 use glam::Vec2;
 
 /// Largest supported samples per pixel (the Sobol tables of `sobol_burley` hold 2^16 points).
 pub const MAX_SPP: u32 = 1 << 16;
 
 /// The SplitMix64 increment (the 64-bit golden ratio).
-const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+pub(crate) const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// The SplitMix64 output function (Steele, Lea and Flood 2014): a bijective 64-bit mix.
 #[inline]
-fn mix64(mut z: u64) -> u64 {
+pub(crate) fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -41,7 +45,7 @@ pub fn pixel_seed(render_seed: u64, pixel: u32) -> u32 {
 
 /// SplitMix64 (Steele, Lea and Flood 2014, "Fast splittable pseudorandom number
 /// generators"): a tiny deterministic generator for reproducible test inputs and bench data.
-/// Rendering uses the Sobol samples above, never this.
+/// Rendering uses the samplers above, never this.
 #[derive(Clone, Debug)]
 pub struct SplitMix64(pub u64);
 
@@ -77,6 +81,9 @@ fn set_seed(seed: u32, set: u32) -> u32 {
 /// One sample dimension in [0, 1).
 #[inline]
 pub fn sample_1d(seed: u32, sample: u32, dimension: u32) -> f32 {
+    if SamplerKind::of(sample) == SamplerKind::Independent {
+        return independent::sample_1d(seed, sample, dimension);
+    }
     sample_4d(seed, sample, dimension / 4)[(dimension % 4) as usize]
 }
 
@@ -92,6 +99,9 @@ pub fn sample_1d(seed: u32, sample: u32, dimension: u32) -> f32 {
 /// the same public `parts` functions.
 #[inline]
 pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
+    if SamplerKind::of(sample) == SamplerKind::Independent {
+        return independent::sample_4d(seed, sample, set);
+    }
     use sobol_burley::parts::{hash, hash_int4, owen_scramble_int4_rev, owen_scramble_rev, Int4};
     let seed = set_seed(seed, set);
     let index_rev = owen_scramble_rev((sample % MAX_SPP).reverse_bits(), hash(seed ^ 0x79c6_8e4a));
@@ -129,6 +139,9 @@ fn sobol_byte_table() -> &'static SobolTable {
 /// Two consecutive sample dimensions (`dimension`, `dimension + 1`) in [0, 1)^2.
 #[inline]
 pub fn sample_2d(seed: u32, sample: u32, dimension: u32) -> Vec2 {
+    if SamplerKind::of(sample) == SamplerKind::Independent {
+        return independent::sample_2d(seed, sample, dimension);
+    }
     if dimension % 4 <= 2 {
         // Both dimensions lie in one aligned set of four.
         let v = sample_4d(seed, sample, dimension / 4);
@@ -275,6 +288,9 @@ fn for_lane_groups<T: Copy>(
 /// When `out` and `samplers` differ in length.
 pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
     assert_eq!(samplers.len(), out.len(), "next_4d_column: column lengths");
+    if first_is_independent(samplers) {
+        return independent_column(samplers, out, |s| s.next_4d());
+    }
     column_draws(
         samplers,
         out,
@@ -298,6 +314,9 @@ pub fn next_4d_column(samplers: &mut [PathSampler], out: &mut [[f32; 4]]) {
 /// When `out` and `samplers` differ in length.
 pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
     assert_eq!(samplers.len(), out.len(), "next_2d_column: column lengths");
+    if first_is_independent(samplers) {
+        return independent_column(samplers, out, |s| s.next_2d());
+    }
     column_draws(
         samplers,
         out,
@@ -310,6 +329,28 @@ pub fn next_2d_column(samplers: &mut [PathSampler], out: &mut [Vec2]) {
             s.next_2d()
         },
     );
+}
+
+/// Whether a column's first sampler addresses the independent sampler: a column is one
+/// sampler kind (one render's paths), so this one branch per call picks its path.
+#[inline(always)]
+fn first_is_independent(samplers: &[PathSampler]) -> bool {
+    samplers
+        .first()
+        .is_some_and(|s| s.kind() == SamplerKind::Independent)
+}
+
+/// The independent sampler's column draws: each sampler's own draw (`single`, which
+/// dispatches per sampler, so a mixed column still gets each sampler's values), advancing it.
+#[cold]
+fn independent_column<T>(
+    samplers: &mut [PathSampler],
+    out: &mut [T],
+    single: impl Fn(&mut PathSampler) -> T,
+) {
+    for (o, s) in out.iter_mut().zip(samplers.iter_mut()) {
+        *o = single(s);
+    }
 }
 
 /// An AVX2 column kernel of the sampler (`avx2::column_*`): the draws of a column without
@@ -330,6 +371,10 @@ fn column_draws<T: Copy>(
     kernel: impl Fn(&SobolTable, &[PathSampler; LANES], &mut [T; LANES]) -> bool,
     single: impl Fn(&PathSampler) -> T,
 ) {
+    debug_assert!(
+        samplers.iter().all(|s| s.kind() == SamplerKind::Sobol),
+        "a column mixes Sobol and independent samplers"
+    );
     let table = sobol_byte_table();
     #[cfg(target_arch = "x86_64")]
     let done = avx2::detected() && {
@@ -361,6 +406,15 @@ fn column_draws<T: Copy>(
 pub fn first_2d_column(seed: &[u32], sample: &[u32], out: &mut [Vec2]) {
     assert_eq!(seed.len(), out.len(), "first_2d_column: column lengths");
     assert_eq!(sample.len(), out.len(), "first_2d_column: column lengths");
+    if sample
+        .first()
+        .is_some_and(|&s| SamplerKind::of(s) == SamplerKind::Independent)
+    {
+        for ((o, &seed), &sample) in out.iter_mut().zip(seed).zip(sample) {
+            *o = sample_2d(seed, sample, 0);
+        }
+        return;
+    }
     #[cfg(target_arch = "x86_64")]
     if avx2::detected() {
         // SAFETY: `avx2::detected` found AVX2 on this CPU.
@@ -890,7 +944,9 @@ mod avx2 {
 pub struct PathSampler {
     /// Per-pixel scrambling seed ([`pixel_seed`]).
     pub seed: u32,
-    /// Sample index within the pixel.
+    /// Sample index within the pixel, as an address of the sampler: with
+    /// [`independent::INDEPENDENT_BIT`] set the independent sampler draws the path's numbers
+    /// ([`SamplerKind::address`]), else the Sobol sampler.
     pub sample: u32,
     /// Next dimension to consume.
     pub dimension: u32,

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: small scenes built in code.
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
+pub mod cli;
+
 use glam::Vec3;
 use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto::engine::integrator::LightingTechnique;

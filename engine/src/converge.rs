@@ -1,0 +1,932 @@
+//! The convergence sweep behind `risotto converge`: what accuracy costs in time, per
+//! technique ([`crate::technique`]).
+//!
+//! One compiled scene is rendered with every variant (a [`Techniques`] choice) at every
+//! samples-per-pixel count, `repeats` times with seeds `seed, seed + 1, ...`, and each
+//! render's wall time (the [`render`] call alone: no loading, compiling or writing) and
+//! error against a reference are recorded. A point's time is its fastest repeat's (the
+//! least disturbed by other load; the mean and the slowest are reported too). Before the sweep one uncounted 1-spp render warms
+//! the thread pool and the sampler tables up, so the first point is not charged for them.
+//!
+//! # Metrics
+//! Against the reference `r`, with [`compare`] (finite entries of all channels pooled):
+//! `MSE = mean (t - r)^2`, `RMSE = sqrt(MSE)`, `relMSE = mean (t - r)^2 / (r^2 + 0.01)`, and the
+//! bias of the mean per channel, `mean(t) - mean(r)`. Each point reports the mean over the
+//! repeats and their min and max (error bars). The efficiency of a curve is
+//! `1 / (MSE x seconds)` at its largest spp (for an unbiased Monte Carlo estimator it is
+//! about constant along the curve, the usual figure of merit).
+//!
+//! # The reference's own noise
+//! A reference rendered by the tool (`--reference-spp N`) is the mean `r = (a + b) / 2` of two
+//! independent renders of `N / 2` spp each (seeds unused by the sweep). For a test image `t`
+//! independent of it, `E (t - r)^2 = E (t - mu)^2 + Var r` per pixel, and since `a` and `b` are
+//! independent with equal variance `v`, `E (a - b)^2 = 2 v` and `Var r = v / 2 =
+//! E (a - b)^2 / 4`. So `mean (a - b)^2 / 4` is subtracted from every MSE, and `mean (a - b)^2 /
+//! (4 (r^2 + 0.01))` from every relMSE (first order: it treats the denominator as exact).
+//! The corrected values can come out slightly negative when the test error is below the
+//! reference's noise; such points are left out of the plot and the fits. A reference given
+//! as an EXR (`--reference REF.exr`) has no such estimate and is taken as exact.
+
+use crate::compare::{compare, CompareError, DEFAULT_RELMSE_EPS};
+use crate::output::Image;
+use crate::render::{render, RenderError, RenderOptions};
+use crate::scene::CompiledScene;
+use crate::technique::{TechniqueError, Techniques};
+use risotto_systems::sampler::MAX_SPP;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Which samples-per-pixel counts each variant renders.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SppPlan {
+    /// These counts (ascending).
+    List(Vec<u32>),
+    /// 1, 2, 4, ... until a render (mean over the repeats) takes at least this many seconds.
+    Budget(f64),
+}
+
+/// Where the reference comes from.
+#[derive(Clone, Debug)]
+pub enum Reference {
+    /// A given image (its path for the report); taken as exact.
+    Image {
+        /// The image.
+        image: Image,
+        /// Where it was read from.
+        path: String,
+    },
+    /// Rendered by the sweep after the test renders, as two independent halves.
+    Render {
+        /// Samples per pixel (both halves together); `None`: 16 times the sweep's largest
+        /// spp, at most `MAX_SPP`.
+        spp: Option<u32>,
+        /// The techniques it is rendered with.
+        techniques: Techniques,
+    },
+}
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct ConvergeOptions {
+    /// The variants, one curve each.
+    pub variants: Vec<Techniques>,
+    /// The spp counts.
+    pub plan: SppPlan,
+    /// Renders per point (different seeds).
+    pub repeats: u32,
+    /// The reference.
+    pub reference: Reference,
+    /// Threads, batch and tile size of every render (the techniques are set per variant).
+    pub render: RenderOptions,
+}
+
+/// Progress callbacks of [`run`].
+pub struct Progress<'a> {
+    /// A render starts: its description (`lighting=nee, 16 spp, repeat 1/2`).
+    pub stage: &'a dyn Fn(&str),
+    /// Samples finished (from worker threads).
+    pub samples: &'a (dyn Fn(u64) + Sync),
+}
+
+/// Errors of the sweep.
+#[derive(Debug, thiserror::Error)]
+pub enum ConvergeError {
+    /// A bad technique.
+    #[error(transparent)]
+    Technique(#[from] TechniqueError),
+    /// A render failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// The reference cannot be compared with the renders.
+    #[error("reference {path}: {source}")]
+    Reference {
+        /// The reference.
+        path: String,
+        /// Why.
+        source: CompareError,
+    },
+    /// Bad options.
+    #[error("{0}")]
+    Options(String),
+    /// Writing an output failed.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// One point of a curve: one spp count, over the repeats.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Point {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Renders averaged.
+    pub repeats: u32,
+    /// Render seconds of the fastest repeat: the point's time (the measurement least
+    /// disturbed by other load on the machine, as benchmarks take the minimum).
+    pub seconds: f64,
+    /// Mean render seconds of the repeats.
+    pub seconds_mean: f64,
+    /// Slowest repeat.
+    pub seconds_max: f64,
+    /// Mean MSE (reference noise subtracted), and the min and max over the repeats.
+    pub mse: f64,
+    /// Smallest MSE of a repeat.
+    pub mse_min: f64,
+    /// Largest MSE of a repeat.
+    pub mse_max: f64,
+    /// `sqrt(max(mse, 0))`.
+    pub rmse: f64,
+    /// Mean relMSE (reference noise subtracted).
+    pub relmse: f64,
+    /// Smallest relMSE of a repeat.
+    pub relmse_min: f64,
+    /// Largest relMSE of a repeat.
+    pub relmse_max: f64,
+    /// Mean bias of the image mean per channel, `mean(test) - mean(reference)`.
+    pub bias: [f64; 3],
+    /// `1 / (mse x seconds)` (NaN, `null` in JSON, when `mse <= 0`).
+    pub efficiency: f64,
+}
+
+/// One variant's curve.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Curve {
+    /// The variant's label ([`Techniques::label`]).
+    pub label: String,
+    /// Every technique's value.
+    pub techniques: BTreeMap<String, String>,
+    /// Points in ascending spp.
+    pub points: Vec<Point>,
+    /// `1 / (MSE x seconds)` at the largest spp.
+    pub efficiency: f64,
+    /// Least-squares slope of ln MSE against ln seconds (about -1 for Monte Carlo; noisy
+    /// where renders take milliseconds).
+    pub mse_time_slope: f64,
+    /// Least-squares slope of ln RMSE against ln spp (about -1/2 for Monte Carlo).
+    pub rmse_spp_slope: f64,
+}
+
+/// What the reference was.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReferenceInfo {
+    /// `"file"` or `"rendered"`.
+    pub source: String,
+    /// The file, when given.
+    pub path: Option<String>,
+    /// Samples per pixel, when rendered.
+    pub spp: Option<u32>,
+    /// Its techniques, when rendered.
+    pub techniques: Option<String>,
+    /// Render seconds (both halves), when rendered.
+    pub seconds: Option<f64>,
+    /// Its estimated noise subtracted from every MSE (0 for a file).
+    pub noise_mse: f64,
+    /// Its estimated noise subtracted from every relMSE (0 for a file).
+    pub noise_relmse: f64,
+}
+
+/// The result of a sweep.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Sweep {
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// The reference.
+    pub reference: ReferenceInfo,
+    /// One curve per variant.
+    pub curves: Vec<Curve>,
+}
+
+/// The columns of `converge.csv`, in order.
+pub const CSV_COLUMNS: [&str; 17] = [
+    "technique",
+    "spp",
+    "repeats",
+    "seconds",
+    "seconds_mean",
+    "seconds_max",
+    "mse",
+    "mse_min",
+    "mse_max",
+    "rmse",
+    "relmse",
+    "relmse_min",
+    "relmse_max",
+    "bias_r",
+    "bias_g",
+    "bias_b",
+    "efficiency",
+];
+
+/// One finished render of the sweep.
+struct Sample {
+    image: Image,
+    seconds: f64,
+}
+
+/// Renders `scene` with `techniques` at `spp` and `seed`, timing the render call.
+fn timed_render(
+    scene: &mut CompiledScene,
+    base: &RenderOptions,
+    techniques: &Techniques,
+    spp: u32,
+    seed: u64,
+    progress: &Progress,
+) -> Result<Sample, RenderError> {
+    scene.settings.spp = spp;
+    scene.settings.seed = seed;
+    let options = techniques.render_options(*base);
+    let start = Instant::now();
+    let out = render(scene, &options, progress.samples)?;
+    let seconds = start.elapsed().as_secs_f64();
+    Ok(Sample {
+        image: out.beauty,
+        seconds,
+    })
+}
+
+/// The samples that [`run`] renders, for a progress bar; `None` with a time budget.
+pub fn total_samples(options: &ConvergeOptions, pixels: u64) -> Option<u64> {
+    let SppPlan::List(spps) = &options.plan else {
+        return None;
+    };
+    let sweep: u64 = spps.iter().map(|&s| s as u64).sum::<u64>()
+        * options.variants.len() as u64
+        * options.repeats as u64;
+    let reference = match &options.reference {
+        Reference::Image { .. } => 0,
+        Reference::Render { spp, .. } => {
+            reference_spp(*spp, spps.iter().copied().max().unwrap_or(1)) as u64
+        }
+    };
+    Some((sweep + 1 + reference) * pixels)
+}
+
+/// The reference's spp: `requested`, or 16 times the largest spp of the sweep; even (two
+/// halves), at least 2, at most `MAX_SPP`.
+fn reference_spp(requested: Option<u32>, largest: u32) -> u32 {
+    let n = requested.unwrap_or(largest.saturating_mul(16)).min(MAX_SPP);
+    (n.div_ceil(2) * 2).clamp(2, MAX_SPP)
+}
+
+/// Seeds of the reference halves: far from the sweep's `seed + repeat`.
+const REFERENCE_SEED_OFFSET: u64 = 0x5eed_0000_0000;
+
+/// Runs the sweep. `scene.settings.spp` and `seed` are changed (the seed it had is the first
+/// repeat's).
+pub fn run(
+    scene: &mut CompiledScene,
+    options: &ConvergeOptions,
+    progress: &Progress,
+) -> Result<Sweep, ConvergeError> {
+    if options.variants.is_empty() {
+        return Err(ConvergeError::Options("no techniques to sweep".into()));
+    }
+    if options.repeats == 0 {
+        return Err(ConvergeError::Options(
+            "--repeats 0: need at least one".into(),
+        ));
+    }
+    for v in &options.variants {
+        v.check_applicable(&scene.features)?;
+    }
+    let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+    if let Reference::Image { image, path } = &options.reference {
+        if (image.width, image.height) != (w, h) {
+            return Err(ConvergeError::Options(format!(
+                "reference {path} is {}x{} but the scene renders {w}x{h}",
+                image.width, image.height
+            )));
+        }
+    }
+    if let Reference::Render { techniques, .. } = &options.reference {
+        techniques.check_applicable(&scene.features)?;
+    }
+    match &options.plan {
+        SppPlan::List(spps) => {
+            if spps.is_empty() || spps.iter().any(|&s| s == 0 || s > MAX_SPP) {
+                return Err(ConvergeError::Options(format!(
+                    "--spp {spps:?}: need one or more counts between 1 and {MAX_SPP}"
+                )));
+            }
+        }
+        SppPlan::Budget(s) => {
+            if !(s.is_finite() && *s > 0.0) {
+                return Err(ConvergeError::Options(format!(
+                    "--budget {s}: need a positive number of seconds"
+                )));
+            }
+        }
+    }
+    let seed = scene.settings.seed;
+    let base = options.render;
+
+    // Warm-up: thread pool, sampler tables, allocator.
+    (progress.stage)("warm-up");
+    timed_render(scene, &base, &options.variants[0], 1, seed, progress)?;
+
+    // The renders: spp outermost, so that slow drifts of the machine's load spread over all
+    // variants alike.
+    let mut raw: Vec<Vec<(u32, Vec<Sample>)>> =
+        (0..options.variants.len()).map(|_| Vec::new()).collect();
+    let mut active = vec![true; options.variants.len()];
+    let mut spp = 1u32;
+    for level in 0.. {
+        let this = match &options.plan {
+            SppPlan::List(spps) => match spps.get(level) {
+                Some(&s) => s,
+                None => break,
+            },
+            SppPlan::Budget(_) => {
+                if !active.iter().any(|&a| a) || spp > MAX_SPP {
+                    break;
+                }
+                spp
+            }
+        };
+        for (v, techniques) in options.variants.iter().enumerate() {
+            if !active[v] {
+                continue;
+            }
+            let mut renders = Vec::new();
+            for r in 0..options.repeats {
+                (progress.stage)(&format!(
+                    "{}, {this} spp, repeat {}/{}",
+                    techniques.label(),
+                    r + 1,
+                    options.repeats
+                ));
+                renders.push(timed_render(
+                    scene,
+                    &base,
+                    techniques,
+                    this,
+                    seed.wrapping_add(r as u64),
+                    progress,
+                )?);
+            }
+            if let SppPlan::Budget(budget) = options.plan {
+                let mean = renders.iter().map(|s| s.seconds).sum::<f64>() / renders.len() as f64;
+                if mean >= budget {
+                    active[v] = false;
+                }
+            }
+            raw[v].push((this, renders));
+        }
+        spp = spp.saturating_mul(2);
+    }
+    let largest = raw
+        .iter()
+        .flat_map(|c| c.iter().map(|(s, _)| *s))
+        .max()
+        .unwrap_or(1);
+
+    // The reference.
+    let (reference, info) = match &options.reference {
+        Reference::Image { image, path } => (
+            image.clone(),
+            ReferenceInfo {
+                source: "file".into(),
+                path: Some(path.clone()),
+                spp: None,
+                techniques: None,
+                seconds: None,
+                noise_mse: 0.0,
+                noise_relmse: 0.0,
+            },
+        ),
+        Reference::Render { spp, techniques } => {
+            let n = reference_spp(*spp, largest);
+            let mut half = |k: u64| {
+                (progress.stage)(&format!(
+                    "reference ({}, {n} spp), half {}/2",
+                    techniques.label(),
+                    k + 1
+                ));
+                timed_render(
+                    scene,
+                    &base,
+                    techniques,
+                    n / 2,
+                    seed.wrapping_add(REFERENCE_SEED_OFFSET + k),
+                    progress,
+                )
+            };
+            let a = half(0)?;
+            let b = half(1)?;
+            let (image, noise_mse, noise_relmse) = combine_halves(&a.image, &b.image);
+            (
+                image,
+                ReferenceInfo {
+                    source: "rendered".into(),
+                    path: None,
+                    spp: Some(n),
+                    techniques: Some(techniques.label()),
+                    seconds: Some(a.seconds + b.seconds),
+                    noise_mse,
+                    noise_relmse,
+                },
+            )
+        }
+    };
+    scene.settings.seed = seed;
+
+    let mut curves = Vec::new();
+    for (techniques, points) in options.variants.iter().zip(&raw) {
+        let mut pts = Vec::new();
+        for (spp, renders) in points {
+            pts.push(point(*spp, renders, &reference, &info)?);
+        }
+        curves.push(curve(techniques, pts));
+    }
+    Ok(Sweep {
+        width: w,
+        height: h,
+        reference: info,
+        curves,
+    })
+}
+
+/// The reference `(a + b) / 2` of two independent halves, with its estimated noise: the
+/// MSE and relMSE it adds to any independent test image's (module docs).
+pub fn combine_halves(a: &Image, b: &Image) -> (Image, f64, f64) {
+    let pixels: Vec<_> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(&x, &y)| (x + y) * 0.5)
+        .collect();
+    let (mut n, mut sq, mut rel) = (0u64, 0.0f64, 0.0f64);
+    for ((x, y), r) in a.pixels.iter().zip(&b.pixels).zip(&pixels) {
+        for ((x, y), r) in x.to_array().into_iter().zip(y.to_array()).zip(r.to_array()) {
+            if !(x.is_finite() && y.is_finite()) {
+                continue;
+            }
+            let d = f64::from(x) - f64::from(y);
+            let r = f64::from(r);
+            n += 1;
+            sq += d * d / 4.0;
+            rel += d * d / 4.0 / (r * r + DEFAULT_RELMSE_EPS);
+        }
+    }
+    let n = n.max(1) as f64;
+    (
+        Image::from_pixels(a.width, a.height, pixels),
+        sq / n,
+        rel / n,
+    )
+}
+
+/// A point from its repeats.
+fn point(
+    spp: u32,
+    renders: &[Sample],
+    reference: &Image,
+    info: &ReferenceInfo,
+) -> Result<Point, ConvergeError> {
+    let mut mse = Vec::new();
+    let mut relmse = Vec::new();
+    let mut bias = [0.0f64; 3];
+    for s in renders {
+        let m = compare(&s.image, reference).map_err(|e| ConvergeError::Reference {
+            path: info.path.clone().unwrap_or_else(|| "(rendered)".into()),
+            source: e,
+        })?;
+        mse.push(m.all.rmse * m.all.rmse - info.noise_mse);
+        relmse.push(m.all.relmse - info.noise_relmse);
+        for (b, c) in bias.iter_mut().zip(&m.per_channel) {
+            *b += (c.mean_test - c.mean_ref) / renders.len() as f64;
+        }
+    }
+    let seconds: Vec<f64> = renders.iter().map(|s| s.seconds).collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (m, t) = (mean(&mse), min(&seconds));
+    Ok(Point {
+        spp,
+        repeats: renders.len() as u32,
+        seconds: t,
+        seconds_mean: mean(&seconds),
+        seconds_max: max(&seconds),
+        mse: m,
+        mse_min: min(&mse),
+        mse_max: max(&mse),
+        rmse: m.max(0.0).sqrt(),
+        relmse: mean(&relmse),
+        relmse_min: min(&relmse),
+        relmse_max: max(&relmse),
+        bias,
+        efficiency: efficiency(m, t),
+    })
+}
+
+/// `1 / (mse x seconds)`, NaN unless both are positive.
+fn efficiency(mse: f64, seconds: f64) -> f64 {
+    if mse > 0.0 && seconds > 0.0 {
+        1.0 / (mse * seconds)
+    } else {
+        f64::NAN
+    }
+}
+
+/// The least-squares line `y = a + b x` through `(x, y)`; `None` with fewer than two
+/// distinct `x`.
+pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = xy.len() as f64;
+    if xy.len() < 2 {
+        return None;
+    }
+    let (sx, sy) = xy.iter().fold((0.0, 0.0), |(a, b), &(x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = xy.iter().map(|&(x, _)| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = xy.iter().map(|&(x, y)| (x - mx) * (y - my)).sum();
+    if sxx <= 1e-12 {
+        return None;
+    }
+    let b = sxy / sxx;
+    Some((my - b * mx, b))
+}
+
+/// A curve from its points.
+fn curve(techniques: &Techniques, points: Vec<Point>) -> Curve {
+    let valid = || points.iter().filter(|p| p.mse > 0.0 && p.seconds > 0.0);
+    let mse_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.mse.ln())).collect();
+    let rmse_spp: Vec<(f64, f64)> = valid()
+        .map(|p| ((p.spp as f64).ln(), p.rmse.ln()))
+        .collect();
+    let last = points.last();
+    Curve {
+        label: techniques.label(),
+        techniques: crate::technique::REGISTRY
+            .iter()
+            .map(|t| {
+                let v = techniques.get(t.name).unwrap_or("?");
+                (t.name.to_string(), v.to_string())
+            })
+            .collect(),
+        efficiency: last.map_or(f64::NAN, |p| p.efficiency),
+        mse_time_slope: fit_line(&mse_time).map_or(f64::NAN, |(_, b)| b),
+        rmse_spp_slope: fit_line(&rmse_spp).map_or(f64::NAN, |(_, b)| b),
+        points,
+    }
+}
+
+/// The line `ln MSE = a + b ln seconds` of a curve. Render times of small images are
+/// dominated by timer and scheduling noise, so the error is not fitted against them: `b` is
+/// the least-squares slope of ln MSE against ln spp (-1 when that is not negative, as for
+/// Monte Carlo), and time is taken proportional to spp at the curve's mean seconds per
+/// sample (total seconds over total spp, so its largest renders weigh most). `None` without
+/// a valid point.
+fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
+    let valid: Vec<&Point> = c
+        .points
+        .iter()
+        .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
+        .collect();
+    let pts: Vec<(f64, f64)> = valid
+        .iter()
+        .map(|p| ((p.spp as f64).ln(), p.mse.ln()))
+        .collect();
+    let (a, b) = match fit_line(&pts) {
+        Some((a, b)) if b < 0.0 => (a, b),
+        _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,
+    };
+    let per_spp = valid.iter().map(|p| p.seconds).sum::<f64>()
+        / valid.iter().map(|p| p.spp as f64).sum::<f64>();
+    // ln MSE = a + b ln spp, spp = seconds / per_spp.
+    Some((a - b * per_spp.ln(), b))
+}
+
+/// One row of [`Sweep::comparison`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Comparison {
+    /// The variant.
+    pub label: String,
+    /// Its efficiency.
+    pub efficiency: f64,
+    /// Its MSE at the common time over the best one's.
+    pub equal_time_mse_ratio: f64,
+    /// Its time to reach the common MSE over the best one's.
+    pub equal_error_time_ratio: f64,
+}
+
+/// The common time and error of [`Sweep::comparison`] and its rows.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ComparisonTable {
+    /// The time every curve reaches (the smallest of their largest times).
+    pub equal_time_seconds: f64,
+    /// The MSE every curve reaches (the largest of their smallest MSEs).
+    pub equal_error_mse: f64,
+    /// One row per curve.
+    pub rows: Vec<Comparison>,
+}
+
+impl Sweep {
+    /// Equal-time error and equal-error time of every curve relative to the best, read off
+    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp, with time
+    /// proportional to spp; see `error_time_model`) at the largest time all curves reach
+    /// and at the smallest MSE all reach.
+    pub fn comparison(&self) -> ComparisonTable {
+        let models: Vec<Option<(f64, f64)>> = self.curves.iter().map(error_time_model).collect();
+        let t = self
+            .curves
+            .iter()
+            .filter_map(|c| c.points.iter().map(|p| p.seconds).reduce(f64::max))
+            .fold(f64::INFINITY, f64::min);
+        let e = self
+            .curves
+            .iter()
+            .filter_map(|c| {
+                c.points
+                    .iter()
+                    .map(|p| p.mse)
+                    .filter(|&m| m > 0.0)
+                    .reduce(f64::min)
+            })
+            .fold(0.0, f64::max);
+        let mse_at = |m: &Option<(f64, f64)>| m.map_or(f64::NAN, |(a, b)| (a + b * t.ln()).exp());
+        let time_at =
+            |m: &Option<(f64, f64)>| m.map_or(f64::NAN, |(a, b)| ((e.ln() - a) / b).exp());
+        let mses: Vec<f64> = models.iter().map(mse_at).collect();
+        let times: Vec<f64> = models.iter().map(time_at).collect();
+        let best = |v: &[f64]| {
+            v.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (best_mse, best_time) = (best(&mses), best(&times));
+        ComparisonTable {
+            equal_time_seconds: t,
+            equal_error_mse: e,
+            rows: self
+                .curves
+                .iter()
+                .zip(mses.iter().zip(&times))
+                .map(|(c, (m, s))| Comparison {
+                    label: c.label.clone(),
+                    efficiency: c.efficiency,
+                    equal_time_mse_ratio: m / best_mse,
+                    equal_error_time_ratio: s / best_time,
+                })
+                .collect(),
+        }
+    }
+
+    /// The curve with the highest efficiency.
+    pub fn most_efficient(&self) -> Option<&Curve> {
+        self.curves
+            .iter()
+            .filter(|c| c.efficiency.is_finite())
+            .max_by(|a, b| a.efficiency.total_cmp(&b.efficiency))
+    }
+
+    /// The printed table: one row per curve with its efficiency, slopes, equal-time MSE and
+    /// equal-error time relative to the best.
+    pub fn table(&self) -> String {
+        let cmp = self.comparison();
+        let width = self
+            .curves
+            .iter()
+            .map(|c| c.label.len())
+            .max()
+            .unwrap_or(9)
+            .max(9);
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "reference: {}",
+            match (&self.reference.path, self.reference.spp) {
+                (Some(p), _) => p.clone(),
+                (None, Some(n)) => format!(
+                    "rendered, {} at {n} spp ({:.2} s), noise MSE {:.3e} subtracted",
+                    self.reference.techniques.as_deref().unwrap_or("?"),
+                    self.reference.seconds.unwrap_or(f64::NAN),
+                    self.reference.noise_mse
+                ),
+                (None, None) => "?".into(),
+            }
+        );
+        let _ = writeln!(
+            s,
+            "equal time: {:.3} s; equal error: MSE {:.3e}",
+            cmp.equal_time_seconds, cmp.equal_error_mse
+        );
+        let _ = writeln!(
+            s,
+            "{:<width$}  {:>8}  {:>8}  {:>10}  {:>10}  {:>14}  {:>15}",
+            "technique",
+            "max spp",
+            "seconds",
+            "1/(MSE*s)",
+            "RMSE~spp^b",
+            "equal-time MSE",
+            "equal-MSE time"
+        );
+        for (c, row) in self.curves.iter().zip(&cmp.rows) {
+            let last = c.points.last();
+            let _ = writeln!(
+                s,
+                "{:<width$}  {:>8}  {:>8.3}  {:>10.3e}  {:>10.2}  {:>13.2}x  {:>14.2}x",
+                c.label,
+                last.map_or(0, |p| p.spp),
+                last.map_or(f64::NAN, |p| p.seconds),
+                c.efficiency,
+                c.rmse_spp_slope,
+                row.equal_time_mse_ratio,
+                row.equal_error_time_ratio
+            );
+        }
+        s
+    }
+
+    /// `converge.csv`: a header of [`CSV_COLUMNS`], then one row per point.
+    pub fn csv(&self) -> String {
+        let mut s = CSV_COLUMNS.join(",");
+        s.push('\n');
+        for c in &self.curves {
+            for p in &c.points {
+                let nums = [
+                    p.seconds,
+                    p.seconds_mean,
+                    p.seconds_max,
+                    p.mse,
+                    p.mse_min,
+                    p.mse_max,
+                    p.rmse,
+                    p.relmse,
+                    p.relmse_min,
+                    p.relmse_max,
+                    p.bias[0],
+                    p.bias[1],
+                    p.bias[2],
+                    p.efficiency,
+                ];
+                let _ = write!(s, "{},{},{}", c.label, p.spp, p.repeats);
+                for x in nums {
+                    let _ = write!(s, ",{x:e}");
+                }
+                s.push('\n');
+            }
+        }
+        s
+    }
+
+    /// `converge.json`: the sweep (reference, curves with their points) and the comparison.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "width": self.width,
+            "height": self.height,
+            "reference": self.reference,
+            "curves": self.curves,
+            "comparison": self.comparison(),
+        })
+    }
+
+    /// Writes `converge.csv`, `converge.json`, `converge.png` and `converge.svg` into `dir`
+    /// (created if needed).
+    pub fn write_all(&self, dir: &Path) -> Result<(), ConvergeError> {
+        let write = |name: &str, text: String| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).map_err(|e| ConvergeError::Write {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })
+        };
+        std::fs::create_dir_all(dir).map_err(|e| ConvergeError::Write {
+            path: dir.display().to_string(),
+            message: e.to_string(),
+        })?;
+        write("converge.csv", self.csv())?;
+        let json = serde_json::to_string_pretty(&self.json()).unwrap_or_default();
+        write("converge.json", json + "\n")?;
+        crate::plot::plot_sweep(self, &dir.join("converge.png"), &dir.join("converge.svg")).map_err(
+            |e| ConvergeError::Write {
+                path: dir.join("converge.png").display().to_string(),
+                message: e,
+            },
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use risotto_components::Rgb;
+
+    fn noisy(seed: u64, sigma: f32) -> Image {
+        let mut rng = risotto_systems::sampler::SplitMix64(seed);
+        let pixels = (0..4096)
+            .map(|i| {
+                let base = 0.2 + (i % 64) as f32 / 64.0;
+                let mut n = || (rng.f32() - 0.5) * sigma * 12f32.sqrt();
+                Rgb::new(base + n(), base + n(), base + n())
+            })
+            .collect();
+        Image::from_pixels(64, 64, pixels)
+    }
+
+    #[test]
+    fn the_halves_estimate_of_reference_noise_matches_its_true_mse() {
+        // a, b: truth plus independent noise of standard deviation 0.1; their mean has
+        // MSE 0.01 / 2 against the truth, which the halves must estimate.
+        let truth = noisy(0, 0.0);
+        let (r, noise, _) = combine_halves(&noisy(1, 0.1), &noisy(2, 0.1));
+        let true_mse = compare(&r, &truth).unwrap().all.rmse.powi(2);
+        assert!((true_mse - 0.005).abs() < 0.0005, "true {true_mse}");
+        assert!(
+            (noise - true_mse).abs() < 0.0005,
+            "estimate {noise} vs {true_mse}"
+        );
+    }
+
+    #[test]
+    fn a_point_against_itself_has_zero_error_and_bias() {
+        let img = noisy(3, 0.1);
+        let info = ReferenceInfo {
+            source: "file".into(),
+            path: Some("x".into()),
+            spp: None,
+            techniques: None,
+            seconds: None,
+            noise_mse: 0.0,
+            noise_relmse: 0.0,
+        };
+        let s = [Sample {
+            image: img.clone(),
+            seconds: 0.5,
+        }];
+        let p = point(4, &s, &img, &info).unwrap();
+        assert_eq!((p.mse, p.relmse, p.bias), (0.0, 0.0, [0.0; 3]));
+        assert!(p.efficiency.is_nan());
+        let other = noisy(4, 0.1);
+        let q = point(4, &s, &other, &info).unwrap();
+        assert!(q.mse > 0.0 && q.relmse > 0.0 && q.efficiency > 0.0);
+    }
+
+    #[test]
+    fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
+        // Two exact Monte Carlo curves MSE = k / t: b is 4 times less efficient, so at equal
+        // time its MSE is 4x, and reaching equal MSE takes it 4x the time.
+        let mk = |label: &str, k: f64| Curve {
+            label: label.into(),
+            techniques: BTreeMap::new(),
+            points: [1.0, 2.0, 4.0]
+                .iter()
+                .map(|&t: &f64| Point {
+                    spp: t as u32,
+                    repeats: 1,
+                    seconds: t,
+                    seconds_mean: t,
+                    seconds_max: t,
+                    mse: k / t,
+                    mse_min: k / t,
+                    mse_max: k / t,
+                    rmse: (k / t).sqrt(),
+                    relmse: k / t,
+                    relmse_min: k / t,
+                    relmse_max: k / t,
+                    bias: [0.0; 3],
+                    efficiency: 1.0 / k,
+                })
+                .collect(),
+            efficiency: 1.0 / k,
+            mse_time_slope: -1.0,
+            rmse_spp_slope: -0.5,
+        };
+        let sweep = Sweep {
+            width: 1,
+            height: 1,
+            reference: ReferenceInfo {
+                source: "file".into(),
+                path: None,
+                spp: None,
+                techniques: None,
+                seconds: None,
+                noise_mse: 0.0,
+                noise_relmse: 0.0,
+            },
+            curves: vec![mk("a", 1.0), mk("b", 4.0)],
+        };
+        let c = sweep.comparison();
+        assert!((c.rows[0].equal_time_mse_ratio - 1.0).abs() < 1e-9);
+        assert!((c.rows[1].equal_time_mse_ratio - 4.0).abs() < 1e-9);
+        assert!((c.rows[1].equal_error_time_ratio - 4.0).abs() < 1e-9);
+        assert_eq!(sweep.most_efficient().unwrap().label, "a");
+        let (a, b) = fit_line(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]).unwrap();
+        assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
+        let csv = sweep.csv();
+        assert_eq!(csv.lines().count(), 7);
+        assert!(csv
+            .lines()
+            .all(|l| l.split(',').count() == CSV_COLUMNS.len()));
+    }
+}

@@ -1,0 +1,159 @@
+//! The convergence plot of a [`Sweep`]: log-log RMSE against render seconds, one labelled
+//! curve per technique (min/max error bars over the repeats), the efficiency
+//! `1 / (MSE x seconds)` of each in the legend. Drawn with plotters once per backend: a
+//! bitmap (encoded as PNG with the `png` crate) and an SVG.
+//!
+//! Text is laid out with DejaVu Sans, embedded in the binary (the `dejavu` crate) and
+//! registered with plotters' `ab_glyph` text backend, so plots render the same on a machine
+//! without any font installed (plotters' default `ttf` backend asks the system's fontconfig).
+
+use crate::converge::Sweep;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Plot width in pixels (PNG) or user units (SVG).
+pub const PLOT_WIDTH: u32 = 1000;
+/// Plot height.
+pub const PLOT_HEIGHT: u32 = 680;
+
+/// Curve colours: distinguishable, and readable on white.
+const COLOURS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+/// Registers the embedded font as plotters' `sans-serif` (once).
+fn register_font() -> Result<(), String> {
+    static DONE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    DONE.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
+            .map_err(|_| "the embedded DejaVu Sans font does not load".to_string())
+    })
+    .clone()
+}
+
+/// One curve's drawable points: `(seconds, rmse, rmse of the best repeat, of the worst)`,
+/// leaving out points whose corrected MSE is not positive.
+fn drawable(sweep: &Sweep) -> Vec<Vec<(f64, f64, f64, f64)>> {
+    sweep
+        .curves
+        .iter()
+        .map(|c| {
+            c.points
+                .iter()
+                .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
+                .map(|p| {
+                    let lo = p.mse_min.max(p.mse * 1e-3).sqrt();
+                    (p.seconds, p.rmse, lo, p.mse_max.max(p.mse).sqrt())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Draws the plot on `root`.
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, sweep: &Sweep) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let curves = drawable(sweep);
+    let all = || curves.iter().flatten();
+    let (mut x0, mut x1, mut y0, mut y1) = all().fold(
+        (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64),
+        |(a, b, c, d), &(t, _, lo, hi)| (a.min(t), b.max(t), c.min(lo), d.max(hi)),
+    );
+    if !(x0.is_finite() && y0.is_finite() && x1 > 0.0 && y1 > 0.0) {
+        (x0, x1, y0, y1) = (0.01, 1.0, 1e-3, 1.0);
+    }
+    let mut chart = ChartBuilder::on(root)
+        .caption(
+            format!(
+                "Error vs render time ({}x{}, {} reference)",
+                sweep.width, sweep.height, sweep.reference.source
+            ),
+            ("sans-serif", 24),
+        )
+        .margin(18)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(
+            (x0 / 1.4..x1 * 1.4).log_scale(),
+            (y0 / 1.6..y1 * 1.6).log_scale(),
+        )
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("render time (s)")
+        .y_desc("RMSE vs reference")
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 17))
+        .x_label_formatter(&|x| format!("{x:.3}"))
+        .y_label_formatter(&|y| format!("{y:.1e}"))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(e)?;
+    for (i, (c, pts)) in sweep.curves.iter().zip(&curves).enumerate() {
+        let colour = COLOURS[i % COLOURS.len()];
+        let style = colour.stroke_width(2);
+        chart
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), style))
+            .map_err(e)?
+            .label(format!(
+                "{}   1/(MSE\u{b7}s) = {:.3e}",
+                c.label, c.efficiency
+            ))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+        chart
+            .draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.0, p.1), 4, colour.filled())),
+            )
+            .map_err(e)?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| p.3 > p.2)
+                    .map(|p| ErrorBar::new_vertical(p.0, p.2, p.1, p.3, colour, 8)),
+            )
+            .map_err(e)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)
+}
+
+/// Writes the plot of `sweep` as a PNG to `png` and as an SVG to `svg`.
+pub fn plot_sweep(sweep: &Sweep, png: &Path, svg: &Path) -> Result<(), String> {
+    register_font()?;
+    let (w, h) = (PLOT_WIDTH, PLOT_HEIGHT);
+    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        draw(&root, sweep)?;
+    }
+    let file = std::fs::File::create(png).map_err(|e| format!("{}: {e}", png.display()))?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()
+        .and_then(|mut wr| wr.write_image_data(&rgb))
+        .map_err(|e| format!("{}: {e}", png.display()))?;
+    let root = SVGBackend::new(svg, (w, h)).into_drawing_area();
+    draw(&root, sweep)
+}

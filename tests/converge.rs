@@ -1,0 +1,512 @@
+//! `risotto techniques`, `risotto converge` and `risotto render --technique` end to end, on
+//! small versions of the Mitsuba cornell box: the sweep's four files and their consistency,
+//! the errors that real estimator properties imply (MSE falls with spp; Sobol beats the
+//! independent sampler on a diffuse scene), zero error against the render itself, and bad
+//! input rejected with a message naming it.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+mod common;
+use common::cli::{assert_fails, risotto};
+
+/// The cornell box of the Mitsuba suite at `size` x `size` pixels.
+fn cornell(dir: &Path, size: u32) -> PathBuf {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mitsuba-suite/cornell.toml"),
+    )
+    .unwrap();
+    for key in ["width = 256", "height = 256"] {
+        assert!(text.contains(key), "test bug: {key} not in cornell.toml");
+    }
+    let text = text
+        .replacen("width = 256", &format!("width = {size}"), 1)
+        .replacen("height = 256", &format!("height = {size}"), 1);
+    let path = dir.join(format!("cornell-{size}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A fresh directory for one test.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("converge-{test}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn assert_ok(what: &str, out: &Output) {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Runs `risotto converge SCENE --out DIR --quiet ARGS`.
+fn converge(scene: &Path, dir: &Path, args: &[&str]) -> Output {
+    let mut all = vec![
+        "converge",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ];
+    all.extend_from_slice(args);
+    risotto(&all)
+}
+
+/// The rows of `converge.csv` as column name -> text maps.
+fn csv_rows(dir: &Path) -> (Vec<String>, Vec<BTreeMap<String, String>>) {
+    let text = std::fs::read_to_string(dir.join("converge.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), header.len(), "row {l}");
+            header
+                .iter()
+                .cloned()
+                .zip(cells.iter().map(|c| c.to_string()))
+                .collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn num(row: &BTreeMap<String, String>, col: &str) -> f64 {
+    row[col]
+        .parse()
+        .unwrap_or_else(|_| panic!("{col}: {}", row[col]))
+}
+
+/// The MSE of `technique` at `spp` in the sweep in `dir`.
+fn mse(rows: &[BTreeMap<String, String>], technique: &str, spp: u32) -> f64 {
+    let row = rows
+        .iter()
+        .find(|r| r["technique"] == technique && r["spp"] == spp.to_string())
+        .unwrap_or_else(|| panic!("no row {technique} {spp}"));
+    num(row, "mse")
+}
+
+#[test]
+fn sweep_writes_csv_json_png_and_svg_that_agree() {
+    let dir = temp_dir("files");
+    let scene = cornell(&dir, 16);
+    let out_dir = dir.join("out");
+    let out = converge(
+        &scene,
+        &out_dir,
+        &["--spp", "1,2,4", "--reference-spp", "64", "--repeats", "2"],
+    );
+    assert_ok("converge", &out);
+    let table = String::from_utf8_lossy(&out.stdout);
+
+    let (header, rows) = csv_rows(&out_dir);
+    assert_eq!(header, risotto::engine::converge::CSV_COLUMNS);
+    // `all` on cornell: the defaults, lighting nee and bxdf, the independent sampler; each at
+    // spp 1, 2, 4 in that order.
+    let labels = [
+        "lighting=mis+sampler=sobol",
+        "lighting=nee",
+        "lighting=bxdf",
+        "sampler=independent",
+    ];
+    assert_eq!(rows.len(), 3 * labels.len());
+    for (i, row) in rows.iter().enumerate() {
+        assert_eq!(row["technique"], labels[i / 3]);
+        assert_eq!(row["spp"], ["1", "2", "4"][i % 3]);
+        assert_eq!(row["repeats"], "2");
+        let (t, t_mean, t_max) = (
+            num(row, "seconds"),
+            num(row, "seconds_mean"),
+            num(row, "seconds_max"),
+        );
+        assert!(0.0 < t && t <= t_mean && t_mean <= t_max, "{row:?}");
+        let (m, m0, m1) = (num(row, "mse"), num(row, "mse_min"), num(row, "mse_max"));
+        assert!(0.0 < m0 && m0 <= m && m <= m1, "{row:?}");
+        // Different seeds per repeat: the two renders differ.
+        assert!(m0 < m1, "repeats gave the same error: {row:?}");
+        let r = num(row, "relmse");
+        assert!(num(row, "relmse_min") <= r && r <= num(row, "relmse_max"));
+        assert!((num(row, "rmse") - m.sqrt()).abs() <= 1e-12 * m.sqrt().max(1.0));
+        let eff = num(row, "efficiency");
+        assert!((eff * m * t - 1.0).abs() < 1e-9, "{row:?}");
+        for c in ["bias_r", "bias_g", "bias_b"] {
+            assert!(num(row, c).abs() < m1.sqrt(), "{c}: {row:?}");
+        }
+    }
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("converge.json")).unwrap())
+            .unwrap();
+    let curves = json["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), labels.len());
+    for (c, label) in curves.iter().zip(labels) {
+        assert_eq!(c["label"], label);
+        assert_eq!(c["points"].as_array().unwrap().len(), 3);
+        assert!(table.contains(label), "table lacks {label}: {table}");
+    }
+    assert_eq!(json["reference"]["source"], "rendered");
+    assert_eq!(json["reference"]["spp"], 64);
+    assert!(json["reference"]["noise_mse"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["comparison"]["rows"].as_array().unwrap().len(), 4);
+
+    // The plots: a PNG that decodes to the plot size, not blank, and an SVG of that size.
+    let decoder = png::Decoder::new(std::fs::File::open(out_dir.join("converge.png")).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    use risotto::engine::plot::{PLOT_HEIGHT, PLOT_WIDTH};
+    assert_eq!((info.width, info.height), (PLOT_WIDTH, PLOT_HEIGHT));
+    let coloured = buf[..info.buffer_size()]
+        .chunks(3)
+        .filter(|p| p[0] != p[1] || p[1] != p[2])
+        .count();
+    assert!(coloured > 1000, "the PNG has no coloured curves");
+    let svg = std::fs::read_to_string(out_dir.join("converge.svg")).unwrap();
+    assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(100)]);
+    assert!(svg.contains(&format!("width=\"{PLOT_WIDTH}\"")));
+    assert!(svg.contains(&format!("height=\"{PLOT_HEIGHT}\"")));
+    for label in labels {
+        assert!(svg.contains(label), "SVG legend lacks {label}");
+    }
+}
+
+#[test]
+fn mse_falls_with_spp_and_sobol_beats_the_independent_sampler() {
+    // MIS at 1 and 16 spp: Monte Carlo divides the MSE by about 16 (Sobol by more), so
+    // a factor 4 is a robust bound. The independent sampler's RMSE falls as spp^-1/2.
+    // At 16 spp on the diffuse cornell box, stratification must show: independent's MSE
+    // is well above Sobol's (about 5x at 256x256).
+    let dir = temp_dir("falls");
+    let scene = cornell(&dir, 24);
+    let out_dir = dir.join("out");
+    let out = converge(
+        &scene,
+        &out_dir,
+        &[
+            "--techniques",
+            "lighting=mis,sampler=independent",
+            "--spp",
+            "1,4,16",
+            "--reference-spp",
+            "4096",
+            "--repeats",
+            "2",
+        ],
+    );
+    assert_ok("converge", &out);
+    let (_, rows) = csv_rows(&out_dir);
+    let mis = "lighting=mis+sampler=sobol";
+    let (m1, m16) = (mse(&rows, mis, 1), mse(&rows, mis, 16));
+    assert!(m16 < m1 / 4.0, "MIS: MSE {m1} at 1 spp, {m16} at 16 spp");
+    let ind = "sampler=independent";
+    let (i16, s16) = (mse(&rows, ind, 16), mse(&rows, mis, 16));
+    assert!(
+        i16 > 1.5 * s16,
+        "16 spp: independent MSE {i16}, Sobol {s16}"
+    );
+}
+
+#[test]
+fn independent_sampler_rmse_falls_as_the_inverse_square_root_of_spp() {
+    // Monte Carlo: RMSE ~ spp^-1/2. The camera looks down so that the light is out of view:
+    // at low spp a visible emitter's edge pixels are hit or missed as a whole (errors of
+    // 17 in a pixel), a heavy tail that makes a few repeats' MSE erratic.
+    let dir = temp_dir("slope");
+    let scene = cornell(&dir, 24);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(
+        text.contains("to = [0, 0, 0]"),
+        "test bug: cornell's camera target"
+    );
+    std::fs::write(
+        &scene,
+        text.replacen("to = [0, 0, 0]", "to = [0, -0.6, 0]", 1),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let out = converge(
+        &scene,
+        &out_dir,
+        &[
+            "--techniques",
+            "sampler=independent",
+            "--spp",
+            "1,4,16,64",
+            "--reference-spp",
+            "4096",
+            "--repeats",
+            "2",
+        ],
+    );
+    assert_ok("converge", &out);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("converge.json")).unwrap())
+            .unwrap();
+    let slope = json["curves"][0]["rmse_spp_slope"].as_f64().unwrap();
+    assert!(
+        (-0.65..=-0.35).contains(&slope),
+        "independent sampler: RMSE ~ spp^{slope}, expected -0.5"
+    );
+}
+
+#[test]
+fn error_against_the_render_itself_is_zero() {
+    // The sweep's first repeat uses the scene's seed, as `render` does, so a reference that
+    // is `render`'s output at the same spp gives exactly zero error (and the independent
+    // sampler, a different image, does not).
+    let dir = temp_dir("itself");
+    let scene = cornell(&dir, 16);
+    let exr = dir.join("ref.exr");
+    let out = risotto(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--out",
+        exr.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_ok("render", &out);
+    let out_dir = dir.join("out");
+    let out = converge(
+        &scene,
+        &out_dir,
+        &[
+            "--reference",
+            exr.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--techniques",
+            "lighting=mis,sampler=independent",
+        ],
+    );
+    assert_ok("converge", &out);
+    let (_, rows) = csv_rows(&out_dir);
+    assert_eq!(rows.len(), 2);
+    for col in ["mse", "relmse", "bias_r", "bias_g", "bias_b"] {
+        assert_eq!(num(&rows[0], col), 0.0, "{col}: {:?}", rows[0]);
+    }
+    assert!(num(&rows[1], "relmse") > 0.0, "{:?}", rows[1]);
+}
+
+/// The technique names `risotto techniques` lists (its unindented lines).
+fn listed(scene: &Path) -> Vec<String> {
+    let out = risotto(&["techniques", scene.to_str().unwrap()]);
+    assert_ok("techniques", &out);
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| !l.starts_with(' '))
+        .map(|l| l.split(':').next().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn techniques_lists_only_what_applies() {
+    let dir = temp_dir("listing");
+    let scene = cornell(&dir, 16);
+    // Cornell has no volumes: lighting and sampler, nothing else.
+    assert_eq!(listed(&scene), ["lighting", "sampler"]);
+    let out = risotto(&["techniques", scene.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for v in [
+        "lighting=mis",
+        "lighting=nee",
+        "lighting=bxdf",
+        "sampler=sobol",
+        "sampler=independent",
+    ] {
+        assert!(text.contains(v), "listing lacks {v}: {text}");
+    }
+    // Without any light the lighting technique changes nothing and is not listed.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let name = text.find("name = \"light\"").expect("cornell's light");
+    let start = text[..name].rfind("[[shapes]]").unwrap();
+    let end = start + text[start..].find("\n\n").unwrap_or(text.len() - start);
+    let dark = dir.join("dark.toml");
+    std::fs::write(&dark, format!("{}{}", &text[..start], &text[end..])).unwrap();
+    assert_eq!(listed(&dark), ["sampler"]);
+    let out = risotto(&[
+        "render",
+        dark.to_str().unwrap(),
+        "--technique",
+        "lighting=nee",
+        "--quiet",
+        "--out",
+        dir.join("dark.exr").to_str().unwrap(),
+    ]);
+    assert_fails(
+        "lighting in the dark",
+        &out,
+        &["lighting=nee", "does not apply"],
+    );
+}
+
+#[test]
+fn technique_flag_selects_and_lighting_stays_its_alias() {
+    let dir = temp_dir("flag");
+    let scene = cornell(&dir, 16);
+    let render = |name: &str, extra: &[&str]| {
+        let exr = dir.join(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--quiet",
+            "--out",
+            exr.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        assert_ok(name, &risotto(&args));
+        std::fs::read(exr).unwrap()
+    };
+    let default = render("default.exr", &[]);
+    let alias = render("alias.exr", &["--lighting", "nee"]);
+    let flag = render("flag.exr", &["--technique", "lighting=nee"]);
+    assert_eq!(
+        alias, flag,
+        "--lighting nee differs from --technique lighting=nee"
+    );
+    assert_ne!(alias, default);
+    let independent = render("ind.exr", &["--technique", "sampler=independent"]);
+    assert_ne!(independent, default);
+    let explicit = render("sobol.exr", &["--technique", "sampler=sobol"]);
+    assert_eq!(explicit, default);
+}
+
+#[test]
+fn bad_techniques_and_references_are_named_in_the_error() {
+    let dir = temp_dir("bad");
+    let scene = cornell(&dir, 16);
+    let s = scene.to_str().unwrap();
+    let out_dir = dir.join("out");
+    let o = out_dir.to_str().unwrap();
+    let exr = dir.join("x.exr");
+    let e = exr.to_str().unwrap();
+    assert_fails(
+        "unknown technique",
+        &risotto(&["render", s, "--technique", "shading=fast", "--out", e]),
+        &["shading", "known: lighting, sampler"],
+    );
+    assert_fails(
+        "bad value",
+        &risotto(&["render", s, "--technique", "sampler=halton", "--out", e]),
+        &["halton", "sobol, independent"],
+    );
+    assert_fails(
+        "bad --lighting",
+        &risotto(&["render", s, "--lighting", "path", "--out", e]),
+        &["path", "mis, nee, bxdf"],
+    );
+    assert_fails(
+        "conflict",
+        &risotto(&[
+            "render",
+            s,
+            "--lighting",
+            "nee",
+            "--technique",
+            "lighting=mis",
+            "--out",
+            e,
+        ]),
+        &["lighting=mis", "already set to nee"],
+    );
+    assert_fails(
+        "malformed",
+        &risotto(&["converge", s, "--techniques", "lighting", "--out", o]),
+        &["\"lighting\"", "NAME=VALUE"],
+    );
+    assert_fails(
+        "converge bad value",
+        &risotto(&[
+            "converge",
+            s,
+            "--techniques",
+            "lighting=nee,sampler=grid",
+            "--out",
+            o,
+        ]),
+        &["grid", "sampler"],
+    );
+    assert_fails(
+        "bad spp",
+        &risotto(&["converge", s, "--spp", "1,x", "--out", o]),
+        &["--spp 1,x", "\"x\""],
+    );
+    // A reference of the wrong size: render one at 8x8.
+    let small = cornell(&dir, 8);
+    assert_ok(
+        "small render",
+        &risotto(&[
+            "render",
+            small.to_str().unwrap(),
+            "--spp",
+            "1",
+            "--quiet",
+            "--out",
+            e,
+        ]),
+    );
+    assert_fails(
+        "reference size",
+        &risotto(&[
+            "converge",
+            s,
+            "--reference",
+            e,
+            "--spp",
+            "1",
+            "--out",
+            o,
+            "--quiet",
+        ]),
+        &[e, "8x8", "16x16"],
+    );
+    assert_fails(
+        "missing reference",
+        &risotto(&["converge", s, "--reference", "/nonexistent.exr", "--out", o]),
+        &["/nonexistent.exr"],
+    );
+}
+
+#[test]
+fn a_time_budget_doubles_spp_until_a_render_takes_that_long() {
+    let dir = temp_dir("budget");
+    let scene = cornell(&dir, 16);
+    let out_dir = dir.join("out");
+    let budget = 0.004;
+    let out = converge(
+        &scene,
+        &out_dir,
+        &[
+            "--budget",
+            &budget.to_string(),
+            "--techniques",
+            "lighting=mis,lighting=bxdf",
+            "--reference-spp",
+            "256",
+        ],
+    );
+    assert_ok("converge --budget", &out);
+    let (_, rows) = csv_rows(&out_dir);
+    for label in ["lighting=mis+sampler=sobol", "lighting=bxdf"] {
+        let curve: Vec<_> = rows.iter().filter(|r| r["technique"] == label).collect();
+        assert!(!curve.is_empty(), "{label}: no rows");
+        for (i, r) in curve.iter().enumerate() {
+            assert_eq!(num(r, "spp"), (1u64 << i) as f64, "{label}: {r:?}");
+            let last = i + 1 == curve.len();
+            assert_eq!(num(r, "seconds") >= budget, last, "{label} row {i}: {r:?}");
+        }
+    }
+}
