@@ -2,7 +2,7 @@
 //! shares: a tile's samples are cut into batches of paths, the integrator runs each batch to
 //! completion, and the paths' radiance is splatted into the tile's film.
 //!
-//! The path tracer ([`PathTracer`](crate::path_tracer::PathTracer)) is one integrator; an
+//! The path tracer ([`PathTracer`]) is one integrator; an
 //! integrator that offers volume integrators no lighting delegate (as RenderMan's PxrVCM does
 //! not) is another, and volume integrators must work with it (`tests/integrators.rs` has one).
 
