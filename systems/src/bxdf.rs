@@ -117,24 +117,32 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
 /// share of the shading time.
 #[inline]
 pub fn sin_cos_quarter_pi(x: f32) -> (f32, f32) {
-    sin_cos_quarter_pi_with(x, |c| c)
+    sin_cos_quarter_pi_with(x, SIN_COS_POLY)
 }
 
-/// The body of [`sin_cos_quarter_pi`] on any number type (`f32`, or lanes of eight with
-/// `splat` their broadcast): the coefficients are written only here.
+/// The coefficients of [`sin_cos_quarter_pi`]: `sin` `S0..S2`, `cos` `C0..C2`, then `0.5`
+/// and `1`.
+const SIN_COS_POLY: [f32; 8] = [
+    -1.951_529_6e-4,
+    8.332_161e-3,
+    1.666_665_5e-1,
+    2.443_315_7e-5,
+    1.388_731_6e-3,
+    4.166_664_6e-2,
+    0.5,
+    1.0,
+];
+
+/// The body of [`sin_cos_quarter_pi`] on any number type (`f32`, or eight lanes), with
+/// `k` the coefficients [`SIN_COS_POLY`] in that type.
 #[inline(always)]
-fn sin_cos_quarter_pi_with<T>(x: T, splat: impl Fn(f32) -> T) -> (T, T)
+fn sin_cos_quarter_pi_with<T>(x: T, k: [T; 8]) -> (T, T)
 where
     T: Copy + Add<Output = T> + Sub<Output = T> + Mul<Output = T>,
 {
     let z = x * x;
-    let sin =
-        ((splat(-1.951_529_6e-4) * z + splat(8.332_161e-3)) * z - splat(1.666_665_5e-1)) * z * x
-            + x;
-    let cos =
-        (((splat(2.443_315_7e-5) * z - splat(1.388_731_6e-3)) * z + splat(4.166_664_6e-2)) * z * z
-            - splat(0.5) * z)
-            + splat(1.0);
+    let sin = ((k[0] * z + k[1]) * z - k[2]) * z * x + x;
+    let cos = (((k[3] * z - k[4]) * z + k[5]) * z * z - k[6] * z) + k[7];
     (sin, cos)
 }
 
@@ -349,7 +357,20 @@ fn diffuse_sample_eight<S: Simd>(
     let wedge_x = px.abs().gt(py.abs());
     let big = S::F::select(wedge_x, px, py);
     let small = S::F::select(wedge_x, py, px);
-    let (sin, cos) = sin_cos_quarter_pi_with(s.splat(FRAC_PI_4) * (small / big), |c| s.splat(c));
+    // The coefficients splatted one by one: no closure, whose body would be compiled
+    // without the kernel's target features.
+    let k = SIN_COS_POLY;
+    let k = [
+        s.splat(k[0]),
+        s.splat(k[1]),
+        s.splat(k[2]),
+        s.splat(k[3]),
+        s.splat(k[4]),
+        s.splat(k[5]),
+        s.splat(k[6]),
+        s.splat(k[7]),
+    ];
+    let (sin, cos) = sin_cos_quarter_pi_with(s.splat(FRAC_PI_4) * (small / big), k);
     let centre = px.eq(zero) & py.eq(zero);
     let dx = S::F::select(centre, zero, big * S::F::select(wedge_x, cos, sin));
     let dy = S::F::select(centre, zero, big * S::F::select(wedge_x, sin, cos));

@@ -265,10 +265,10 @@ impl Kernel8 for Perspective<'_> {
             let sy = (one - two * fy / h) * aspect;
             let (a, b) = (sx * scale, sy * scale);
             // forward + right * a + up * b, per component.
-            let comp = |f: f32, r: f32, u: f32| s.splat(f) + s.splat(r) * a + s.splat(u) * b;
-            let dx = comp(c.forward.x, c.right.x, c.up.x);
-            let dy = comp(c.forward.y, c.right.y, c.up.y);
-            let dz = comp(c.forward.z, c.right.z, c.up.z);
+            // (No closure: its body would be compiled without the kernel's target features.)
+            let dx = s.splat(c.forward.x) + s.splat(c.right.x) * a + s.splat(c.up.x) * b;
+            let dy = s.splat(c.forward.y) + s.splat(c.right.y) * a + s.splat(c.up.y) * b;
+            let dz = s.splat(c.forward.z) + s.splat(c.right.z) * a + s.splat(c.up.z) * b;
             // Vec3::normalize: d * (1 / sqrt((x x + y y) + z z)).
             let recip = one / (dx * dx + dy * dy + dz * dz).sqrt();
             let (x, y, z) = (

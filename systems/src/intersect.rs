@@ -43,7 +43,7 @@ use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE,
 use crate::geometry::{sphere_uv, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
-use crate::simd8::{Backend, Kernel8, Lanes8, Mask8, Row8, Simd};
+use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
 
 /// A ray/triangle hit: distance and the barycentrics of `v1` and `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -1230,19 +1230,61 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     }
 }
 
-impl Kernel8 for (&Bvh8, ClosestColumns<'_>) {
-    type Output = ();
-    #[inline(always)]
-    fn run<S: Simd>(self, s: S) {
-        closest_kernel(s, self.0, self.1)
+#[inline(never)]
+fn closest_portable(bvh: &Bvh8, c: ClosestColumns) {
+    closest_kernel(Portable, bvh, c)
+}
+
+#[inline(never)]
+fn occluded_portable(bvh: &Bvh8, c: OccludedColumns) {
+    occluded_kernel(Portable, bvh, c)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "enables AVX2 and FMA for the kernel instantiation"
+)]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn closest_avx2(s: Avx2, bvh: &Bvh8, c: ClosestColumns) {
+    closest_kernel(s, bvh, c)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[allow(
+    unsafe_code,
+    reason = "enables AVX2 and FMA for the kernel instantiation"
+)]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn occluded_avx2(s: Avx2, bvh: &Bvh8, c: OccludedColumns) {
+    occluded_kernel(s, bvh, c)
+}
+
+/// Runs the closest-hit kernel of `backend`.
+#[allow(
+    unsafe_code,
+    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
+)]
+fn closest_dispatch(backend: Backend, bvh: &Bvh8, c: ClosestColumns) {
+    match backend {
+        Backend::Portable => closest_portable(bvh, c),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
+        Backend::Avx2(s) => unsafe { closest_avx2(s, bvh, c) },
     }
 }
 
-impl Kernel8 for (&Bvh8, OccludedColumns<'_>) {
-    type Output = ();
-    #[inline(always)]
-    fn run<S: Simd>(self, s: S) {
-        occluded_kernel(s, self.0, self.1)
+/// Runs the occlusion kernel of `backend`.
+#[allow(
+    unsafe_code,
+    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
+)]
+fn occluded_dispatch(backend: Backend, bvh: &Bvh8, c: OccludedColumns) {
+    match backend {
+        Backend::Portable => occluded_portable(bvh, c),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
+        Backend::Avx2(s) => unsafe { occluded_avx2(s, bvh, c) },
     }
 }
 
@@ -1288,7 +1330,8 @@ pub fn intersect_closest(
         b2.fill(0.0);
         return;
     };
-    backend.run((
+    closest_dispatch(
+        backend,
         bvh,
         ClosestColumns {
             origin,
@@ -1300,7 +1343,7 @@ pub fn intersect_closest(
             b1,
             b2,
         },
-    ));
+    );
 }
 
 /// Whether each ray `origin[i] + t * direction[i]` hits anything with
@@ -1326,7 +1369,8 @@ pub fn intersect_occluded(
         occluded.fill(false);
         return;
     };
-    backend.run((
+    occluded_dispatch(
+        backend,
         bvh,
         OccludedColumns {
             origin,
@@ -1335,14 +1379,13 @@ pub fn intersect_occluded(
             tmax,
             occluded,
         },
-    ));
+    );
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::Sphere;
-    use crate::simd8::Portable;
 
     use crate::sampler::SplitMix64 as Rng;
 

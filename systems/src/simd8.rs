@@ -87,6 +87,9 @@ pub(crate) trait Simd: Copy {
     fn load(self, r: &Row8) -> Self::F;
     /// The x, y and z coordinates of eight points, as three rows (lane `l` point `l`).
     fn load_xyz(self, v: &[Vec3; 8]) -> [Self::F; 3];
+    /// Lane `l` is `table.0[index[l]]`, with every lane of `index` one of the whole
+    /// numbers `0..8`.
+    fn lookup(self, table: &Row8, index: Self::F) -> Self::F;
 }
 
 /// Portable lanes: two glam `Vec4`.
@@ -121,6 +124,10 @@ impl Simd for Portable {
             ])
         };
         [row(0), row(1), row(2)]
+    }
+    #[inline(always)]
+    fn lookup(self, table: &Row8, index: P8) -> P8 {
+        self.load(&Row8(index.to_array().map(|i| table.0[i as usize & 7])))
     }
 }
 
@@ -395,6 +402,11 @@ mod avx2 {
                     [2, 5, 0, 3, 6, 1, 4, 7],
                 )),
             ]
+        }
+        #[inline(always)]
+        fn lookup(self, table: &Row8, index: A8) -> A8 {
+            let index = avx!(_mm256_cvttps_epi32(index.0));
+            A8(avx!(_mm256_permutevar8x32_ps(self.load(table).0, index)))
         }
     }
 
