@@ -1,7 +1,9 @@
 //! Eight f32 lanes: the one SIMD style of the crate. The wide-BVH kernels of
 //! [`crate::intersect`] put one lane per child box of a node or per triangle of a leaf
 //! packet; the shading kernels ([`crate::bxdf::diffuse_sample_world`],
-//! [`crate::lights::LightSet::sample_column`]) one lane per point.
+//! [`crate::lights::LightSet::sample_column`], the camera's perspective rays) one lane per
+//! point. The sampler's column draws are plain Rust over blocks of eight that
+//! [`Backend::run`] only compiles per backend (the compiler vectorises them).
 //!
 //! The kernels are written once, generic over [`Simd`], and instantiated twice: with
 //! [`Portable`] (two glam `Vec4`, i.e. SSE on x86-64 and scalar code elsewhere) and, on
