@@ -1,5 +1,5 @@
 //! Image metrics against a reference, computed the way the Mitsuba harness's `rmse.py`
-//! (`/work/shared/refs/mitsuba/rmse.py`) computes them, so numbers from either tool can be
+//! (`../shared/refs/mitsuba/rmse.py`) computes them, so numbers from either tool can be
 //! compared directly.
 //!
 //! With `t` the test value and `r` the reference value of one channel of one pixel, and

@@ -16,9 +16,10 @@
 //! - Degenerate inputs (grazing `wo` exactly in the surface plane, samples that land on the
 //!   horizon) produce `None`, never NaN.
 
-use glam::Vec4;
+use crate::simd8::{Backend, Kernel8, Lanes8, Row8, Simd};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
+use std::ops::{Add, Mul, Sub};
 
 // The engine's volume Bxdfs and the chi-square tests reach HG through this module; one
 // definition, in `phase`, serves both paths.
@@ -116,10 +117,32 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
 /// share of the shading time.
 #[inline]
 pub fn sin_cos_quarter_pi(x: f32) -> (f32, f32) {
+    sin_cos_quarter_pi_with(x, SIN_COS_POLY)
+}
+
+/// The coefficients of [`sin_cos_quarter_pi`]: `sin` `S0..S2`, `cos` `C0..C2`, then `0.5`
+/// and `1`.
+const SIN_COS_POLY: [f32; 8] = [
+    -1.951_529_6e-4,
+    8.332_161e-3,
+    1.666_665_5e-1,
+    2.443_315_7e-5,
+    1.388_731_6e-3,
+    4.166_664_6e-2,
+    0.5,
+    1.0,
+];
+
+/// The body of [`sin_cos_quarter_pi`] on any number type (`f32`, or eight lanes), with
+/// `k` the coefficients [`SIN_COS_POLY`] in that type.
+#[inline(always)]
+fn sin_cos_quarter_pi_with<T>(x: T, k: [T; 8]) -> (T, T)
+where
+    T: Copy + Add<Output = T> + Sub<Output = T> + Mul<Output = T>,
+{
     let z = x * x;
-    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
-    let cos =
-        (((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z) + 1.0;
+    let sin = ((k[0] * z + k[1]) * z - k[2]) * z * x + x;
+    let cos = (((k[3] * z - k[4]) * z + k[5]) * z * z - k[6] * z) + k[7];
     (sin, cos)
 }
 
@@ -225,286 +248,150 @@ pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample>
 /// `None`; `wi[i]` is then `+z`). The weight of every sample is the reflectance.
 ///
 /// Bit for bit `Frame::from_normal(n).to_world(diffuse_sample(_, frame.to_local(vn), u).wi)`
-/// and its pdf (tested): the same float operations in the same order, evaluated for four
-/// points at once in SSE lanes, with the concentric map's two wedges as selects (so both
-/// share one division and one polynomial) and no branch per point.
+/// and its pdf (tested): the same float operations in the same order, evaluated for eight
+/// points at once ([`crate::simd8`] lanes), with the concentric map's two wedges as selects
+/// (so both share one division and one polynomial) and no branch per point.
 ///
 /// # Panics
 /// When the columns differ in length.
 pub fn diffuse_sample_world(n: &[Vec3], vn: &[Vec3], u: &[Vec2], wi: &mut [Vec3], pdf: &mut [f32]) {
+    diffuse_sample_world_on(Backend::best(), n, vn, u, wi, pdf);
+}
+
+/// [`diffuse_sample_world`] on the lanes of `backend`.
+fn diffuse_sample_world_on(
+    backend: Backend,
+    n: &[Vec3],
+    vn: &[Vec3],
+    u: &[Vec2],
+    wi: &mut [Vec3],
+    pdf: &mut [f32],
+) {
     let len = n.len();
     assert!(
         vn.len() == len && u.len() == len && wi.len() == len && pdf.len() == len,
         "diffuse_sample_world: column lengths"
     );
-    #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") {
-        // SAFETY: this CPU has AVX2 (checked on the line above).
-        #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
-        unsafe {
-            diffuse_sample_world_avx2(n, vn, u, wi, pdf)
-        };
-        return;
-    }
-    diffuse_sample_world_lanes(n, vn, u, wi, pdf);
+    backend.run(DiffuseWorld { n, vn, u, wi, pdf });
 }
 
-/// [`diffuse_sample_world_lanes`] compiled for AVX2: the same four-lane operations in VEX
-/// encoding (three operands, fewer register copies, broadcast loads). No FMA is enabled,
-/// so every product and sum rounds as in the SSE build: the same bits.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn diffuse_sample_world_avx2(
+/// The scalar reference of [`diffuse_sample_world`], point by point.
+#[cfg(test)]
+fn diffuse_sample_world_scalar(
     n: &[Vec3],
     vn: &[Vec3],
     u: &[Vec2],
     wi: &mut [Vec3],
     pdf: &mut [f32],
 ) {
-    let (n8, _) = n.as_chunks::<8>();
-    let (vn8, _) = vn.as_chunks::<8>();
-    let (u8, _) = u.as_chunks::<8>();
-    let (wi8, _) = wi.as_chunks_mut::<8>();
-    let (pdf8, _) = pdf.as_chunks_mut::<8>();
-    for ((((n, vn), u), wi), pdf) in n8.iter().zip(vn8).zip(u8).zip(wi8).zip(pdf8) {
-        avx2::diffuse_sample_eight(n, vn, u, wi, pdf);
-    }
-    // The rest (fewer than eight points) four lanes at a time.
-    let done = 8 * n8.len();
-    diffuse_sample_world_lanes(
-        &n[done..],
-        &vn[done..],
-        &u[done..],
-        &mut wi[done..],
-        &mut pdf[done..],
-    );
-}
-
-/// [`diffuse_sample_lanes`] on eight points in one AVX register per value: the same
-/// float operations in the same order (no FMA), so the same bits.
-#[cfg(target_arch = "x86_64")]
-#[allow(
-    unsafe_code,
-    reason = "AVX intrinsics: stores into references' memory, in `#[target_feature]` functions"
-)]
-mod avx2 {
-    use super::{FRAC_1_PI, FRAC_PI_4};
-    use risotto_components::{Vec2, Vec3};
-    use std::arch::x86_64::*;
-
-    /// Lane-wise `m ? a : b` (`m` all-ones or all-zeros per lane).
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn select(m: __m256, a: __m256, b: __m256) -> __m256 {
-        _mm256_blendv_ps(b, a, m)
-    }
-
-    /// Eight points of `diffuse_sample_world`.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    pub(super) fn diffuse_sample_eight(
-        n: &[Vec3; 8],
-        vn: &[Vec3; 8],
-        u: &[Vec2; 8],
-        wi: &mut [Vec3; 8],
-        pdf: &mut [f32; 8],
-    ) {
-        let lanes = |f: &dyn Fn(usize) -> f32| {
-            _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7))
+    for i in 0..n.len() {
+        let f = Frame::from_normal(n[i]);
+        (wi[i], pdf[i]) = match diffuse_sample(Rgb::WHITE, f.to_local(vn[i]), u[i]) {
+            Some(s) => (f.to_world(s.wi), s.pdf),
+            None => (Vec3::Z, 0.0),
         };
-        let (nx, ny, nz) = (lanes(&|j| n[j].x), lanes(&|j| n[j].y), lanes(&|j| n[j].z));
-        // Frame::to_local(vn).z, as Vec3::dot: (x x' + y y') + z z'.
-        let cos_o = lanes(&|j| vn[j].dot(n[j]));
-        let (ux, uy) = (lanes(&|j| u[j].x), lanes(&|j| u[j].y));
-        let splat = |x: f32| _mm256_set1_ps(x);
-        let (zero, one) = (_mm256_setzero_ps(), splat(1.0));
-        let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
-        let abs = |x: __m256| _mm256_and_ps(x, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
-        let gt = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GT_OQ>(a, b);
-        // sample_concentric_disk, the wedge test as a select.
-        let px = sub(mul(splat(2.0), ux), one);
-        let py = sub(mul(splat(2.0), uy), one);
-        let wedge_x = gt(abs(px), abs(py));
-        let big = select(wedge_x, px, py);
-        let small = select(wedge_x, py, px);
-        // sin_cos_quarter_pi_lanes, operation for operation.
-        let x = mul(splat(FRAC_PI_4), _mm256_div_ps(small, big));
-        let z = mul(x, x);
-        let sin = add(
-            mul(
-                mul(
-                    sub(
-                        mul(add(mul(splat(-1.951_529_6e-4), z), splat(8.332_161e-3)), z),
-                        splat(1.666_665_5e-1),
-                    ),
-                    z,
-                ),
-                x,
-            ),
-            x,
-        );
-        let cos = add(
-            sub(
-                mul(
-                    mul(
-                        add(
-                            mul(sub(mul(splat(2.443_315_7e-5), z), splat(1.388_731_6e-3)), z),
-                            splat(4.166_664_6e-2),
-                        ),
-                        z,
-                    ),
-                    z,
-                ),
-                mul(splat(0.5), z),
-            ),
-            one,
-        );
-        let centre = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(px, zero),
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(py, zero),
-        );
-        let dx = select(centre, zero, mul(big, select(wedge_x, cos, sin)));
-        let dy = select(centre, zero, mul(big, select(wedge_x, sin, cos)));
-        // sample_cosine_hemisphere.
-        let r2 = sub(one, add(mul(dx, dx), mul(dy, dy)));
-        let lz = _mm256_sqrt_ps(select(gt(r2, zero), r2, zero));
-        // Frame::from_normal and Frame::to_world, term for term.
-        let sign_bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
-        let sign = _mm256_or_ps(one, _mm256_and_ps(nz, sign_bit));
-        let neg = |x: __m256| _mm256_xor_ps(x, sign_bit);
-        let a = _mm256_div_ps(splat(-1.0), add(sign, nz));
-        let b = mul(mul(nx, ny), a);
-        let (sx, sy, sz) = (
-            add(one, mul(mul(mul(sign, nx), nx), a)),
-            mul(sign, b),
-            mul(neg(sign), nx),
-        );
-        let (tx, ty, tz) = (b, add(sign, mul(mul(ny, ny), a)), neg(ny));
-        let ok = _mm256_and_ps(gt(cos_o, zero), gt(lz, zero));
-        let world = |s: __m256, t: __m256, n: __m256| add(add(mul(s, dx), mul(t, dy)), mul(n, lz));
-        let mut out = [[0.0f32; 8]; 3];
-        // SAFETY: each row of `out` and `pdf` is 32 writable bytes.
-        unsafe {
-            _mm256_storeu_ps(out[0].as_mut_ptr(), select(ok, world(sx, tx, nx), zero));
-            _mm256_storeu_ps(out[1].as_mut_ptr(), select(ok, world(sy, ty, ny), zero));
-            _mm256_storeu_ps(out[2].as_mut_ptr(), select(ok, world(sz, tz, nz), one));
-            _mm256_storeu_ps(
-                pdf.as_mut_ptr(),
-                select(ok, mul(lz, splat(FRAC_1_PI)), zero),
-            );
+    }
+}
+
+/// The columns of [`diffuse_sample_world`] (equally long), as a [`Kernel8`].
+struct DiffuseWorld<'a> {
+    n: &'a [Vec3],
+    vn: &'a [Vec3],
+    u: &'a [Vec2],
+    wi: &'a mut [Vec3],
+    pdf: &'a mut [f32],
+}
+
+impl Kernel8 for DiffuseWorld<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<S: Simd>(self, s: S) {
+        let (n8, n_rest) = self.n.as_chunks::<8>();
+        let (vn8, vn_rest) = self.vn.as_chunks::<8>();
+        let (u8, u_rest) = self.u.as_chunks::<8>();
+        let (wi8, wi_rest) = self.wi.as_chunks_mut::<8>();
+        let (pdf8, pdf_rest) = self.pdf.as_chunks_mut::<8>();
+        for ((((n, vn), u), wi), pdf) in n8.iter().zip(vn8).zip(u8).zip(wi8).zip(pdf8) {
+            diffuse_sample_eight(s, n, vn, u, wi, pdf);
         }
-        for (j, w) in wi.iter_mut().enumerate() {
-            *w = Vec3::new(out[0][j], out[1][j], out[2][j]);
+        if !n_rest.is_empty() {
+            // The last partial block, padded with a point that has no sample (seen from
+            // below). Element loops rather than `copy_from_slice`: a `memcpy` call of a
+            // varying small length mispredicts inside.
+            let (mut n, mut vn, mut u) = ([Vec3::Z; 8], [Vec3::NEG_Z; 8], [Vec2::ZERO; 8]);
+            for (j, ((&nr, &vr), &ur)) in n_rest.iter().zip(vn_rest).zip(u_rest).enumerate() {
+                (n[j], vn[j], u[j]) = (nr, vr, ur);
+            }
+            let (mut wi, mut pdf) = ([Vec3::Z; 8], [0.0; 8]);
+            diffuse_sample_eight(s, &n, &vn, &u, &mut wi, &mut pdf);
+            for (j, (w, p)) in wi_rest.iter_mut().zip(pdf_rest).enumerate() {
+                (*w, *p) = (wi[j], pdf[j]);
+            }
         }
     }
 }
 
-/// The body of [`diffuse_sample_world`] (columns of equal length).
+/// Eight points of [`diffuse_sample_world`] on the lanes of `s`: operation for operation
+/// [`Frame::from_normal`], [`diffuse_sample`] (the wedge and centre tests as selects) and
+/// [`Frame::to_world`], no fused multiply-add, so the bits of the scalar code.
 #[inline(always)]
-fn diffuse_sample_world_lanes(
-    n: &[Vec3],
-    vn: &[Vec3],
-    u: &[Vec2],
-    wi: &mut [Vec3],
-    pdf: &mut [f32],
+fn diffuse_sample_eight<S: Simd>(
+    s: S,
+    n: &[Vec3; 8],
+    vn: &[Vec3; 8],
+    u: &[Vec2; 8],
+    wi: &mut [Vec3; 8],
+    pdf: &mut [f32; 8],
 ) {
-    let (n4, n_rest) = n.as_chunks::<4>();
-    let (vn4, vn_rest) = vn.as_chunks::<4>();
-    let (u4, u_rest) = u.as_chunks::<4>();
-    let (wi4, wi_rest) = wi.as_chunks_mut::<4>();
-    let (pdf4, pdf_rest) = pdf.as_chunks_mut::<4>();
-    for ((((n, vn), u), wi), pdf) in n4.iter().zip(vn4).zip(u4).zip(wi4).zip(pdf4) {
-        diffuse_sample_four(n, vn, u, wi, pdf);
-    }
-    if !n_rest.is_empty() {
-        // The last partial group, padded with a point that has no sample (seen from below).
-        let r = n_rest.len();
-        let (mut n, mut vn, mut u) = ([Vec3::Z; 4], [Vec3::NEG_Z; 4], [Vec2::ZERO; 4]);
-        n[..r].copy_from_slice(n_rest);
-        vn[..r].copy_from_slice(vn_rest);
-        u[..r].copy_from_slice(u_rest);
-        let (mut wi, mut pdf) = ([Vec3::Z; 4], [0.0; 4]);
-        diffuse_sample_four(&n, &vn, &u, &mut wi, &mut pdf);
-        wi_rest.copy_from_slice(&wi[..r]);
-        pdf_rest.copy_from_slice(&pdf[..r]);
-    }
-}
-
-/// Four points of [`diffuse_sample_world`], moved into and out of SSE lanes.
-#[inline(always)]
-fn diffuse_sample_four(
-    n: &[Vec3; 4],
-    vn: &[Vec3; 4],
-    u: &[Vec2; 4],
-    wi: &mut [Vec3; 4],
-    pdf: &mut [f32; 4],
-) {
-    let lanes = |f: &dyn Fn(usize) -> f32| Vec4::new(f(0), f(1), f(2), f(3));
-    let (x, y, z, p) = diffuse_sample_lanes(
-        lanes(&|j| n[j].x),
-        lanes(&|j| n[j].y),
-        lanes(&|j| n[j].z),
-        // Frame::to_local(vn).z, the only local coordinate of wo the lobe needs.
-        lanes(&|j| vn[j].dot(n[j])),
-        lanes(&|j| u[j].x),
-        lanes(&|j| u[j].y),
-    );
-    let (x, y, z) = (x.to_array(), y.to_array(), z.to_array());
-    for j in 0..4 {
-        wi[j] = Vec3::new(x[j], y[j], z[j]);
-    }
-    *pdf = p.to_array();
-}
-
-/// Four lanes of [`diffuse_sample_world`]: world direction and pdf from the normal, the
-/// cosine of `wo` and the sample.
-#[inline(always)]
-fn diffuse_sample_lanes(
-    nx: Vec4,
-    ny: Vec4,
-    nz: Vec4,
-    cos_o: Vec4,
-    ux: Vec4,
-    uy: Vec4,
-) -> (Vec4, Vec4, Vec4, Vec4) {
-    let (zero, one) = (Vec4::ZERO, Vec4::ONE);
+    let [nx, ny, nz] = s.load_xyz(n);
+    let [vx, vy, vz] = s.load_xyz(vn);
+    // Frame::to_local(vn).z, the only local coordinate of wo the lobe needs (Vec3::dot:
+    // (x x' + y y') + z z').
+    let cos_o = vx * nx + vy * ny + vz * nz;
+    let ux = s.load(&Row8(u.map(|u| u.x)));
+    let uy = s.load(&Row8(u.map(|u| u.y)));
+    let (zero, one, two) = (s.splat(0.0), s.splat(1.0), s.splat(2.0));
     // sample_concentric_disk, the wedge test as a select.
-    let px = 2.0 * ux - one;
-    let py = 2.0 * uy - one;
-    let wedge_x = px.abs().cmpgt(py.abs());
-    let big = Vec4::select(wedge_x, px, py);
-    let small = Vec4::select(wedge_x, py, px);
-    let (sin, cos) = sin_cos_quarter_pi_lanes(FRAC_PI_4 * (small / big));
-    let centre = px.cmpeq(zero) & py.cmpeq(zero);
-    let dx = Vec4::select(centre, zero, big * Vec4::select(wedge_x, cos, sin));
-    let dy = Vec4::select(centre, zero, big * Vec4::select(wedge_x, sin, cos));
+    let px = two * ux - one;
+    let py = two * uy - one;
+    let wedge_x = px.abs().gt(py.abs());
+    let big = S::F::select(wedge_x, px, py);
+    let small = S::F::select(wedge_x, py, px);
+    // The coefficients splatted one by one: no closure, whose body would be compiled
+    // without the kernel's target features.
+    let k = SIN_COS_POLY;
+    let k = [
+        s.splat(k[0]),
+        s.splat(k[1]),
+        s.splat(k[2]),
+        s.splat(k[3]),
+        s.splat(k[4]),
+        s.splat(k[5]),
+        s.splat(k[6]),
+        s.splat(k[7]),
+    ];
+    let (sin, cos) = sin_cos_quarter_pi_with(s.splat(FRAC_PI_4) * (small / big), k);
+    let centre = px.eq(zero) & py.eq(zero);
+    let dx = S::F::select(centre, zero, big * S::F::select(wedge_x, cos, sin));
+    let dy = S::F::select(centre, zero, big * S::F::select(wedge_x, sin, cos));
     // sample_cosine_hemisphere: 1 - |d|^2 is never -0 or NaN here, so a compare-select is
     // the same value as f32::max(0).
     let r2 = one - (dx * dx + dy * dy);
-    let lz = Vec4::select(r2.cmpgt(zero), r2, zero).sqrt();
+    let lz = S::F::select(r2.gt(zero), r2, zero).sqrt();
     // Frame::from_normal and Frame::to_world, term for term.
     let sign = one.copysign(nz);
-    let a = -one / (sign + nz);
+    let a = s.splat(-1.0) / (sign + nz);
     let b = nx * ny * a;
-    let (sx, sy, sz) = (one + sign * nx * nx * a, sign * b, -sign * nx);
-    let (tx, ty, tz) = (b, sign + ny * ny * a, -ny);
-    let ok = cos_o.cmpgt(zero) & lz.cmpgt(zero);
-    (
-        Vec4::select(ok, sx * dx + tx * dy + nx * lz, zero),
-        Vec4::select(ok, sy * dx + ty * dy + ny * lz, zero),
-        Vec4::select(ok, sz * dx + tz * dy + nz * lz, one),
-        Vec4::select(ok, lz * FRAC_1_PI, zero),
-    )
-}
-
-/// [`sin_cos_quarter_pi`] on four lanes (the same polynomial, operation for operation).
-#[inline(always)]
-fn sin_cos_quarter_pi_lanes(x: Vec4) -> (Vec4, Vec4) {
-    let z = x * x;
-    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
-    let cos = (((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z)
-        + Vec4::ONE;
-    (sin, cos)
+    let (sx, sy, sz) = (one + sign * nx * nx * a, sign * b, sign.neg() * nx);
+    let (tx, ty, tz) = (b, sign + ny * ny * a, ny.neg());
+    let ok = cos_o.gt(zero) & lz.gt(zero);
+    let x = S::F::select(ok, sx * dx + tx * dy + nx * lz, zero).to_array();
+    let y = S::F::select(ok, sy * dx + ty * dy + ny * lz, zero).to_array();
+    let z = S::F::select(ok, sz * dx + tz * dy + nz * lz, one).to_array();
+    *pdf = S::F::select(ok, lz * s.splat(FRAC_1_PI), zero).to_array();
+    for j in 0..8 {
+        wi[j] = Vec3::new(x[j], y[j], z[j]);
+    }
 }
 
 /// Evaluates the one-sided Lambertian lobe: `(f * |cos theta_i|, pdf)` with
@@ -1058,7 +945,8 @@ mod tests {
         // diffuse_sample_world is a rearrangement of Frame + diffuse_sample + to_world; it
         // must produce the same bits, including at the concentric map's centre and wedge
         // diagonals, the square's edges, normals at +-z (and -0 z), grazing and below-surface
-        // viewers, and for every length (full groups of four and a remainder).
+        // viewers, and for every length (full blocks of eight and a remainder), on every
+        // backend this CPU runs.
         let mut rng = Rng(21);
         let edge_u = [0.0, 0.25, 0.5, 0.75, 1.0 - f32::EPSILON / 2.0];
         let special_n = [
@@ -1092,24 +980,25 @@ mod tests {
                 vn.push(vi);
                 u.push(ui);
             }
-            let mut wi = vec![Vec3::splat(7.0); len];
-            let mut pdf = vec![7.0; len];
-            diffuse_sample_world(&n, &vn, &u, &mut wi, &mut pdf);
-            for i in 0..len {
-                let f = Frame::from_normal(n[i]);
-                let (want_wi, want_pdf) = match diffuse_sample(Rgb::WHITE, f.to_local(vn[i]), u[i])
-                {
-                    Some(s) => (f.to_world(s.wi), s.pdf),
-                    None => (Vec3::Z, 0.0),
-                };
-                assert_eq!(
-                    (wi[i].to_array().map(f32::to_bits), pdf[i].to_bits()),
-                    (want_wi.to_array().map(f32::to_bits), want_pdf.to_bits()),
-                    "len {len}, point {i}: n {:?} vn {:?} u {:?}",
-                    n[i],
-                    vn[i],
-                    u[i]
-                );
+            let (mut want_wi, mut want_pdf) = (vec![Vec3::splat(7.0); len], vec![7.0; len]);
+            diffuse_sample_world_scalar(&n, &vn, &u, &mut want_wi, &mut want_pdf);
+            for backend in Backend::all() {
+                let mut wi = vec![Vec3::splat(7.0); len];
+                let mut pdf = vec![7.0; len];
+                diffuse_sample_world_on(backend, &n, &vn, &u, &mut wi, &mut pdf);
+                for i in 0..len {
+                    assert_eq!(
+                        (wi[i].to_array().map(f32::to_bits), pdf[i].to_bits()),
+                        (
+                            want_wi[i].to_array().map(f32::to_bits),
+                            want_pdf[i].to_bits()
+                        ),
+                        "{backend:?}, len {len}, point {i}: n {:?} vn {:?} u {:?}",
+                        n[i],
+                        vn[i],
+                        u[i]
+                    );
+                }
             }
         }
     }

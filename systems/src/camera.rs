@@ -5,6 +5,7 @@
 //! angle. Samples are uniform over each pixel's square (a box pixel filter).
 
 use crate::sampler::{first_2d_column, sample_2d, PathSampler};
+use crate::simd8::{Backend, Kernel8, Lanes8, Row8, Simd};
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, VolumeStack};
 
@@ -208,21 +209,8 @@ pub fn push_camera_rays(
     match camera.projection {
         Projection::Perspective { .. } => {
             rays.origin.resize(end, camera.from);
-            #[cfg(target_arch = "x86_64")]
-            if is_x86_feature_detected!("avx2") {
-                let films: Vec<Vec2> = films.collect();
-                // SAFETY: this CPU has AVX2 (checked on the line above).
-                #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
-                unsafe {
-                    avx2::extend_perspective(&gen, &films, &mut rays.direction)
-                };
-            } else {
-                rays.direction
-                    .extend(films.map(|film| gen.perspective(film)));
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            rays.direction
-                .extend(films.map(|film| gen.perspective(film)));
+            let films: Vec<Vec2> = films.collect();
+            extend_perspective(Backend::best(), &gen, &films, &mut rays.direction);
         }
         Projection::Orthographic { .. } => {
             rays.origin.extend(films.map(|film| gen.orthographic(film)));
@@ -245,64 +233,53 @@ pub fn push_camera_rays(
     debug_assert!(rays.is_consistent(), "a ray column was not filled");
 }
 
-/// [`RayGenerator::perspective`] eight rays at a time in AVX registers: the same float
-/// operations in the same order (no FMA), so the same bits.
-#[cfg(target_arch = "x86_64")]
-#[allow(
-    unsafe_code,
-    reason = "AVX intrinsics: stores into local arrays, in `#[target_feature]` functions"
-)]
-mod avx2 {
-    use super::RayGenerator;
-    use glam::{Vec2, Vec3};
-    use std::arch::x86_64::*;
+/// Appends `gen.perspective(film)` for every film position to `out`, eight rays at a time
+/// on the lanes of `backend`.
+fn extend_perspective(backend: Backend, gen: &RayGenerator, films: &[Vec2], out: &mut Vec<Vec3>) {
+    out.reserve(films.len());
+    backend.run(Perspective { gen, films, out });
+}
 
-    /// Appends `gen.perspective(film)` for every film position to `out`.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn extend_perspective(
-        gen: &RayGenerator,
-        films: &[Vec2],
-        out: &mut Vec<Vec3>,
-    ) {
-        out.reserve(films.len());
-        let (chunks, rest) = films.as_chunks::<8>();
-        let splat = _mm256_set1_ps;
-        let (add, sub, mul, div) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps, _mm256_div_ps);
-        let c = &gen.camera;
-        let (w, h, scale) = (splat(gen.w), splat(gen.h), splat(gen.scale));
-        let aspect = splat(gen.h / gen.w);
-        let (two, one) = (splat(2.0), splat(1.0));
+/// The arguments of [`extend_perspective`], as a [`Kernel8`].
+struct Perspective<'a> {
+    gen: &'a RayGenerator,
+    films: &'a [Vec2],
+    out: &'a mut Vec<Vec3>,
+}
+
+impl Kernel8 for Perspective<'_> {
+    type Output = ();
+    /// [`RayGenerator::perspective`] operation for operation (no fused multiply-add), so
+    /// the same bits; the last partial block one ray at a time.
+    #[inline(always)]
+    fn run<S: Simd>(self, s: S) {
+        let (gen, c) = (self.gen, &self.gen.camera);
+        let (chunks, rest) = self.films.as_chunks::<8>();
+        let (w, h, scale) = (s.splat(gen.w), s.splat(gen.h), s.splat(gen.scale));
+        let aspect = s.splat(gen.h / gen.w);
+        let (two, one) = (s.splat(2.0), s.splat(1.0));
         for f in chunks {
-            let lanes = |g: &dyn Fn(usize) -> f32| {
-                _mm256_setr_ps(g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7))
-            };
-            let (fx, fy) = (lanes(&|j| f[j].x), lanes(&|j| f[j].y));
+            let (fx, fy) = (s.load(&Row8(f.map(|f| f.x))), s.load(&Row8(f.map(|f| f.y))));
             // RayGenerator::screen.
-            let sx = sub(div(mul(two, fx), w), one);
-            let sy = mul(sub(one, div(mul(two, fy), h)), aspect);
-            let (a, b) = (mul(sx, scale), mul(sy, scale));
+            let sx = two * fx / w - one;
+            let sy = (one - two * fy / h) * aspect;
+            let (a, b) = (sx * scale, sy * scale);
             // forward + right * a + up * b, per component.
-            let comp =
-                |f: f32, r: f32, u: f32| add(add(splat(f), mul(splat(r), a)), mul(splat(u), b));
-            let dx = comp(c.forward.x, c.right.x, c.up.x);
-            let dy = comp(c.forward.y, c.right.y, c.up.y);
-            let dz = comp(c.forward.z, c.right.z, c.up.z);
+            // (No closure: its body would be compiled without the kernel's target features.)
+            let dx = s.splat(c.forward.x) + s.splat(c.right.x) * a + s.splat(c.up.x) * b;
+            let dy = s.splat(c.forward.y) + s.splat(c.right.y) * a + s.splat(c.up.y) * b;
+            let dz = s.splat(c.forward.z) + s.splat(c.right.z) * a + s.splat(c.up.z) * b;
             // Vec3::normalize: d * (1 / sqrt((x x + y y) + z z)).
-            let len = _mm256_sqrt_ps(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
-            let recip = div(one, len);
-            let mut v = [[0.0f32; 8]; 3];
-            // SAFETY: every row of `v` is 32 writable bytes.
-            unsafe {
-                _mm256_storeu_ps(v[0].as_mut_ptr(), mul(dx, recip));
-                _mm256_storeu_ps(v[1].as_mut_ptr(), mul(dy, recip));
-                _mm256_storeu_ps(v[2].as_mut_ptr(), mul(dz, recip));
-            }
-            out.extend((0..8).map(|j| Vec3::new(v[0][j], v[1][j], v[2][j])));
+            let recip = one / (dx * dx + dy * dy + dz * dz).sqrt();
+            let (x, y, z) = (
+                (dx * recip).to_array(),
+                (dy * recip).to_array(),
+                (dz * recip).to_array(),
+            );
+            self.out.extend((0..8).map(|j| Vec3::new(x[j], y[j], z[j])));
         }
-        out.extend(rest.iter().map(|&film| gen.perspective(film)));
+        self.out
+            .extend(rest.iter().map(|&film| gen.perspective(film)));
     }
 }
 
@@ -368,6 +345,43 @@ mod tests {
     /// Both projections, appended after an existing row: each ray is the camera's ray
     /// through the pixel corner plus the Sobol jitter of dimensions 0 and 1, and the other
     /// columns are the camera-ray constants.
+    #[test]
+    fn perspective_kernel_matches_scalar_reference_bit_for_bit() {
+        // Every backend, every length (full blocks of eight and a remainder), film positions
+        // across and outside the image (the kernel does not clamp).
+        let mut rng = crate::sampler::SplitMix64(5);
+        for (fov_deg, w, h) in [(35.0, 7, 5), (90.0, 256, 256), (10.0, 3, 400)] {
+            let cam = Camera::look_at(
+                Projection::Perspective { fov_deg },
+                Vec3::new(0.5, 1.0, 4.0),
+                Vec3::new(0.0, 0.2, 0.0),
+                Vec3::Y,
+                w,
+                h,
+            )
+            .unwrap();
+            let gen = cam.ray_generator();
+            for len in [0usize, 1, 7, 8, 9, 16, 23, 300] {
+                let films: Vec<Vec2> = (0..len)
+                    .map(|_| (rng.vec2() * 1.2 - Vec2::splat(0.1)) * Vec2::new(w as f32, h as f32))
+                    .collect();
+                let want: Vec<[u32; 3]> = films
+                    .iter()
+                    .map(|&f| gen.perspective(f).to_array().map(f32::to_bits))
+                    .collect();
+                for backend in Backend::all() {
+                    let mut got = vec![Vec3::X];
+                    extend_perspective(backend, &gen, &films, &mut got);
+                    let got: Vec<[u32; 3]> = got[1..]
+                        .iter()
+                        .map(|d| d.to_array().map(f32::to_bits))
+                        .collect();
+                    assert_eq!(got, want, "{backend:?}, fov {fov_deg}, len {len}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn push_camera_rays_matches_camera_ray_per_sample() {
         use risotto_components::{RayRow, VolumeEntry};

@@ -17,7 +17,8 @@ use obvhs::{
 };
 
 use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, MAX_BVH2_DEPTH};
-use crate::intersect::{Backend, Kernel};
+use crate::intersect::Kernel;
+use crate::simd8::Backend;
 
 /// An analytic sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]

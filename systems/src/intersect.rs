@@ -43,7 +43,7 @@ use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE,
 use crate::geometry::{sphere_uv, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
-use crate::simd8::{Lanes8, Mask8, Portable, Row8, Simd};
+use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
 
 /// A ray/triangle hit: distance and the barycentrics of `v1` and `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -398,14 +398,6 @@ impl Kernel {
             Kernel::Avx2 => None,
         }
     }
-}
-
-/// A [`Kernel`] that this CPU was checked to run (the AVX2 variant holds the token).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Backend {
-    Portable,
-    #[cfg(target_arch = "x86_64")]
-    Avx2(Avx2),
 }
 
 impl Backend {

@@ -9,7 +9,8 @@
 
 use crate::distribution::{Distribution1D, EnvironmentMap, ONE_MINUS_EPSILON};
 use crate::geometry::SceneGeometry;
-use glam::{Vec2, Vec3, Vec4};
+use crate::simd8::{Backend, Kernel8, Lanes8, Mask8, Row8, Simd};
+use glam::{Vec2, Vec3};
 use risotto_components::Rgb;
 use std::f32::consts::PI;
 
@@ -65,68 +66,47 @@ pub struct LightSet {
     /// With at most [`SMALL_SELECTION`] lights, the selection CDF's entries `1..n`: the
     /// selected light is the number of them `<= u` (as `Distribution1D::sample_discrete`).
     selection_cdf: Option<Vec<f32>>,
-    /// With at most [`LANES8`] lights (and a `selection_cdf`), the triangle lights'
-    /// attributes as columns indexed by light, for the eight-lane AVX2 sampler.
+    /// With at most [`LANES8`] lights and a `selection_cdf`, the triangle lights indexed
+    /// by light.
     lights8: Option<Box<Lights8>>,
 }
 
-/// Largest number of lights the eight-lane sampler handles: one light per lane of a 256-bit
-/// register, so that a lane's light attribute is one `vpermps` by the lane's light index.
-const LANES8: usize = 8;
+/// Largest number of lights selected by counting CDF entries (one compare per light).
+const SMALL_SELECTION: usize = 16;
 
-/// The [`TriangleLight`]s of a set of at most [`LANES8`] lights, one row per attribute and
-/// one column per light (zero for lights that are not triangle lights).
+/// Up to eight [`TriangleLight`]s as rows of [`crate::simd8`] lanes, one row per attribute
+/// (zero where the light is not a triangle light): a lane's attribute is one
+/// [`Simd::lookup`] by the lane's light index.
 #[derive(Clone, Debug)]
 struct Lights8 {
-    /// Rows: `v[0].xyz`, `v[1].xyz`, `v[2].xyz`, `n.xyz`, `pmf_over_area`, `radiance.rgb`.
-    attr: [[f32; LANES8]; 16],
-    /// -1 (all bits) where the light is a triangle light, 0 elsewhere.
-    triangle: [i32; LANES8],
+    /// Rows: `v[0].xyz`, `v[1].xyz`, `v[2].xyz`, `n.xyz`, `pmf_over_area`, `radiance.rgb`,
+    /// and 1 where the light is a triangle light (0 elsewhere).
+    attr: [Row8; 17],
 }
 
 impl Lights8 {
-    fn new(triangle_lights: &[Option<TriangleLight>]) -> Self {
+    /// `lights[j]` in column `j`.
+    fn new(lights: [Option<&TriangleLight>; 8]) -> Self {
         let mut l8 = Lights8 {
-            attr: [[0.0; LANES8]; 16],
-            triangle: [0; LANES8],
+            attr: [Row8([0.0; 8]); 17],
         };
-        for (i, t) in triangle_lights.iter().enumerate() {
+        for (j, t) in lights.iter().enumerate() {
             let Some(t) = t else { continue };
-            let values = [
-                t.v[0].x,
-                t.v[0].y,
-                t.v[0].z,
-                t.v[1].x,
-                t.v[1].y,
-                t.v[1].z,
-                t.v[2].x,
-                t.v[2].y,
-                t.v[2].z,
-                t.n.x,
-                t.n.y,
-                t.n.z,
-                t.pmf_over_area,
-                t.radiance.r,
-                t.radiance.g,
-                t.radiance.b,
-            ];
+            let [a, b, c] = t.v;
+            let v = [a, b, c, t.n].map(|v| v.to_array());
+            let [r, g, b] = t.radiance.to_array();
+            let values = v.as_flattened().iter().copied();
+            let values = values.chain([t.pmf_over_area, r, g, b, 1.0]);
             for (row, v) in l8.attr.iter_mut().zip(values) {
-                row[i] = v;
+                row.0[j] = v;
             }
-            l8.triangle[i] = -1;
         }
         l8
     }
 }
 
-/// Number of chunks (a helper that keeps the chunk count readable where it is used).
-#[inline]
-fn len_of<T>(chunks: &[T]) -> usize {
-    chunks.len()
-}
-
-/// Largest number of lights selected by counting CDF entries (one compare per light).
-const SMALL_SELECTION: usize = 16;
+/// Largest number of lights in [`LightSet`]'s own [`Lights8`] table.
+const LANES8: usize = 8;
 
 /// An area light on a triangle, as [`LightSet::sample_column`] samples it.
 #[derive(Clone, Copy, Debug)]
@@ -316,8 +296,10 @@ impl LightSet {
             .as_ref()
             .filter(|d| d.len() <= SMALL_SELECTION)
             .map(|d| d.cdf()[1..d.len()].to_vec());
-        let lights8 = (selection_cdf.is_some() && lights.len() <= LANES8)
-            .then(|| Box::new(Lights8::new(&triangle_lights)));
+        let lights8 = (selection_cdf.is_some() && lights.len() <= LANES8).then(|| {
+            let light = |j: usize| triangle_lights.get(j).and_then(Option::as_ref);
+            Box::new(Lights8::new(std::array::from_fn(light)))
+        });
         LightSet {
             lights,
             selection,
@@ -498,18 +480,30 @@ impl LightSet {
     /// vertex's four-dimension set; `u[i][3]` is not used) where `active[i]`, no sample
     /// elsewhere. `geometry` must be the geometry the set was built with.
     ///
-    /// Bit for bit `sample`'s results (tested). Groups of points whose selected lights are
-    /// all triangle area lights (the common case) are evaluated in SIMD lanes: the point on
-    /// the triangle, direction, distance and solid-angle pdf of four (SSE) or eight (AVX2,
-    /// at most eight lights) samples share one square root and two divisions. Other points
-    /// go through `sample` one by one. The columns (rather than `Option<LightSample>`
-    /// rows) let the eight-lane path store whole vectors and the caller hand `out.wi`
-    /// straight to the Bxdf.
+    /// Bit for bit `sample`'s results (tested). Points are taken eight at a time
+    /// ([`crate::simd8`] lanes): the selection, and for lanes whose selected light is a
+    /// triangle area light (the common case) the point on the triangle, direction, distance
+    /// and solid-angle pdf, with one square root and two divisions for the eight. Lanes of
+    /// other lights go through `sample` one by one. The columns (rather than
+    /// `Option<LightSample>` rows) let the caller hand `out.wi` straight to the Bxdf.
     ///
     /// # Panics
     /// When the columns differ in length.
     pub fn sample_column(
         &self,
+        geometry: &SceneGeometry,
+        p: &[Vec3],
+        u: &[[f32; 4]],
+        active: &[bool],
+        out: &mut LightSampleColumns<'_>,
+    ) {
+        self.sample_column_on(Backend::best(), geometry, p, u, active, out);
+    }
+
+    /// [`Self::sample_column`] on the lanes of `backend`.
+    fn sample_column_on(
+        &self,
+        backend: Backend,
         geometry: &SceneGeometry,
         p: &[Vec3],
         u: &[[f32; 4]],
@@ -528,240 +522,209 @@ impl LightSet {
             }
             return;
         };
-        #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") {
-            if let (Some(l8), Some(cdf)) = (self.lights8.as_deref(), self.selection_cdf.as_deref())
-            {
-                // SAFETY: this CPU has AVX2 (checked above).
-                #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
-                unsafe {
-                    avx2::sample_column(self, l8, cdf, geometry, p, u, active, out)
-                };
-                return;
-            }
-            // SAFETY: this CPU has AVX2 (checked above).
-            #[allow(unsafe_code, reason = "AVX2 dispatch after run-time detection")]
-            unsafe {
-                self.sample_column_avx2(geometry, selection, p, u, active, out)
-            };
-            return;
-        }
-        self.sample_column_lanes(geometry, selection, p, u, active, out);
+        backend.run(LightColumns {
+            set: self,
+            selection,
+            geometry,
+            p,
+            u,
+            active,
+            out,
+        });
     }
 
-    /// [`Self::sample_column_lanes`] compiled for AVX2: the same four-lane operations in
-    /// VEX encoding (three operands, `blendv` selects). No FMA is enabled, so every product
-    /// and sum rounds as in the SSE build: the same bits.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn sample_column_avx2(
-        &self,
-        geometry: &SceneGeometry,
-        selection: &Distribution1D,
-        p: &[Vec3],
-        u: &[[f32; 4]],
-        active: &[bool],
-        out: &mut LightSampleColumns<'_>,
-    ) {
-        self.sample_column_lanes(geometry, selection, p, u, active, out);
-    }
-
-    /// The body of [`Self::sample_column`] (columns of equal length, a selection exists).
+    /// The lights `selection.sample_discrete(u)` chooses for eight lanes of `u`, as lanes
+    /// of whole numbers. With few lights, the same count of CDF entries `<= u` (after the
+    /// same clamp into `[0, 1)`), eight lanes per compare.
     #[inline(always)]
-    fn sample_column_lanes(
-        &self,
-        geometry: &SceneGeometry,
-        selection: &Distribution1D,
-        p: &[Vec3],
-        u: &[[f32; 4]],
-        active: &[bool],
-        out: &mut LightSampleColumns<'_>,
-    ) {
-        let (p4, p_rest) = p.as_chunks::<4>();
-        let (u4, u_rest) = u.as_chunks::<4>();
-        let (a4, a_rest) = active.as_chunks::<4>();
-        for (g, ((p, u), a)) in p4.iter().zip(u4).zip(a4).enumerate() {
-            let mut o = [None; 4];
-            self.sample_four(geometry, selection, p, u, a, &mut o);
-            for (j, o) in o.into_iter().enumerate() {
-                out.set(4 * g + j, o);
-            }
-        }
-        if !p_rest.is_empty() {
-            // The last partial group, padded with inactive copies of its first point.
-            let r = p_rest.len();
-            let (mut p, mut u, mut a) = ([p_rest[0]; 4], [u_rest[0]; 4], [false; 4]);
-            p[..r].copy_from_slice(p_rest);
-            u[..r].copy_from_slice(u_rest);
-            a[..r].copy_from_slice(a_rest);
-            let mut o = [None; 4];
-            self.sample_four(geometry, selection, &p, &u, &a, &mut o);
-            let start = len_of(p4) * 4;
-            for (j, o) in o.into_iter().take(r).enumerate() {
-                out.set(start + j, o);
-            }
-        }
-    }
-
-    /// Four points of [`Self::sample_column`].
-    #[inline(always)]
-    fn sample_four(
-        &self,
-        geometry: &SceneGeometry,
-        selection: &Distribution1D,
-        p: &[Vec3; 4],
-        u: &[[f32; 4]; 4],
-        active: &[bool; 4],
-        out: &mut [Option<LightSample>; 4],
-    ) {
-        let index = self.select_four(selection, Vec4::new(u[0][2], u[1][2], u[2][2], u[3][2]));
-        let pick = |j: usize| self.triangle_lights[index[j]].as_ref();
-        if let (Some(t0), Some(t1), Some(t2), Some(t3)) = (pick(0), pick(1), pick(2), pick(3)) {
-            sample_triangles_four([t0, t1, t2, t3], p, u, active, out);
-        } else {
-            for j in 0..4 {
-                out[j] = if active[j] {
-                    self.sample(geometry, p[j], u[j][2], Vec2::new(u[j][0], u[j][1]))
-                } else {
-                    None
-                };
-            }
-        }
-    }
-
-    /// The lights `selection.sample_discrete(u)` chooses for four lanes of `u`. With few
-    /// lights, the same count of CDF entries `<= u` (after the same clamp into `[0, 1)`),
-    /// four lanes per compare.
-    #[inline(always)]
-    fn select_four(&self, selection: &Distribution1D, u: Vec4) -> [usize; 4] {
+    fn select_eight<S: Simd>(&self, s: S, selection: &Distribution1D, u: S::F) -> S::F {
         match &self.selection_cdf {
             Some(cdf) => {
                 // clamp_unit: NaN and negatives to 0 (the compare is false for NaN).
-                let u = Vec4::select(
-                    u.cmpge(Vec4::ZERO),
-                    u.min(Vec4::splat(ONE_MINUS_EPSILON)),
-                    Vec4::ZERO,
-                );
-                // Per-lane counts in the bytes of one integer: multiplying the 4-bit compare
-                // mask by 0x0020_4081 moves bit j to bit 8j (the shifted copies do not
-                // overlap), and at most 16 entries keep every byte below 256.
-                let mut count = 0u32;
+                let zero = s.splat(0.0);
+                let u = S::F::select(zero.le(u), u.min(s.splat(ONE_MINUS_EPSILON)), zero);
+                let (mut count, one) = (zero, s.splat(1.0));
                 for &c in cdf {
-                    let mask = Vec4::splat(c).cmple(u).bitmask();
-                    count += mask.wrapping_mul(0x0020_4081) & 0x0101_0101;
+                    count = count + S::F::select(s.splat(c).le(u), one, zero);
                 }
-                [0, 1, 2, 3].map(|j| ((count >> (8 * j)) & 0xff) as usize)
+                count
             }
-            None => u.to_array().map(|u| selection.sample_discrete(u).0),
+            None => {
+                let index = u.to_array().map(|u| selection.sample_discrete(u).0 as f32);
+                s.load(&Row8(index))
+            }
+        }
+    }
+
+    /// Eight points of [`Self::sample_column`]: `LightSet::sample`'s `Light::Area` branch with
+    /// `SceneGeometry::sample_prim`'s triangle branch on the lanes of `s`, operation for
+    /// operation the same float arithmetic (no fused multiply-add), so the same bits; lanes
+    /// whose light is not a triangle light through `LightSet::sample`.
+    #[inline(always)]
+    fn sample_eight<S: Simd>(
+        &self,
+        s: S,
+        selection: &Distribution1D,
+        geometry: &SceneGeometry,
+        (p, u, active): (&[Vec3; 8], &[[f32; 4]; 8], &[bool; 8]),
+        out: Out8<'_>,
+    ) {
+        let [px, py, pz] = s.load_xyz(p);
+        // No closures over lane operations here: a closure's body is compiled without the
+        // kernel's target features.
+        let ux = s.load(&Row8(u.map(|u| u[0])));
+        let uy = s.load(&Row8(u.map(|u| u[1])));
+        let index = self.select_eight(s, selection, s.load(&Row8(u.map(|u| u[2]))));
+        // The attribute table and each lane's column in it: the set's own, by light, or
+        // the lanes' lights gathered, by lane.
+        let gathered;
+        let (l8, column) = match self.lights8.as_deref() {
+            Some(l8) => (l8, index),
+            None => {
+                let index = index
+                    .to_array()
+                    .map(|i| self.triangle_lights[i as usize].as_ref());
+                gathered = Lights8::new(index);
+                let lane = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+                (&gathered, s.load(&Row8(lane)))
+            }
+        };
+        let (zero, one, inf) = (s.splat(0.0), s.splat(1.0), s.splat(f32::INFINITY));
+        // Heitz 2019 (see SceneGeometry::sample_prim): fold the square onto the triangle.
+        let below = ux.lt(uy);
+        let half = s.splat(0.5);
+        let (hx, hy) = (ux * half, uy * half);
+        let b0 = S::F::select(below, hx, ux - hy);
+        let b1 = S::F::select(below, uy - hx, hy);
+        let b2 = one - b0 - b1;
+        let [x0, y0, z0, x1, y1, z1, x2, y2, z2, nx, ny, nz, pmf_over_area, r, g, b, triangle] =
+            &l8.attr;
+        let triangle = s.lookup(triangle, column).gt(zero).bits();
+        let dx =
+            (s.lookup(x0, column) * b0 + s.lookup(x1, column) * b1 + s.lookup(x2, column) * b2)
+                - px;
+        let dy =
+            (s.lookup(y0, column) * b0 + s.lookup(y1, column) * b1 + s.lookup(y2, column) * b2)
+                - py;
+        let dz =
+            (s.lookup(z0, column) * b0 + s.lookup(z1, column) * b1 + s.lookup(z2, column) * b2)
+                - pz;
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        // dist2 > 0 and finite (false for NaN), like sample's early return.
+        let ok = dist2.gt(zero) & dist2.lt(inf);
+        let dist = dist2.sqrt();
+        let inv = one / dist;
+        let (wx, wy, wz) = (dx * inv, dy * inv, dz * inv);
+        // One-sided emitter: cos_light = -n . wi > 0.
+        let cos_light =
+            (s.lookup(nx, column) * wx + s.lookup(ny, column) * wy + s.lookup(nz, column) * wz)
+                .neg();
+        let pdf = s.lookup(pmf_over_area, column) * dist2 / cos_light;
+        let act = s.load(&Row8(active.map(|a| if a { 1.0 } else { 0.0 })));
+        let ok = ok & cos_light.gt(zero) & pdf.gt(zero) & pdf.lt(inf) & act.gt(zero);
+        // Rows without a sample: pdf 0 and wi +z.
+        let wx = S::F::select(ok, wx, zero).to_array();
+        let wy = S::F::select(ok, wy, zero).to_array();
+        let wz = S::F::select(ok, wz, one).to_array();
+        let (r, g, b) = (
+            s.lookup(r, column).to_array(),
+            s.lookup(g, column).to_array(),
+            s.lookup(b, column).to_array(),
+        );
+        for j in 0..8 {
+            out.wi[j] = Vec3::new(wx[j], wy[j], wz[j]);
+            out.radiance[j] = Rgb::new(r[j], g[j], b[j]);
+        }
+        *out.distance = dist.to_array();
+        *out.pdf = S::F::select(ok, pdf, zero).to_array();
+        *out.delta = [false; 8];
+        if triangle != 0xff {
+            self.other_lanes(geometry, triangle, p, u, active, out);
+        }
+    }
+
+    /// The lanes of [`Self::sample_eight`] whose light is not a triangle light (bit clear
+    /// in `triangle`), through `LightSet::sample`.
+    #[cold]
+    #[inline(never)]
+    fn other_lanes(
+        &self,
+        geometry: &SceneGeometry,
+        triangle: u32,
+        p: &[Vec3; 8],
+        u: &[[f32; 4]; 8],
+        active: &[bool; 8],
+        out: Out8<'_>,
+    ) {
+        let mut cols = LightSampleColumns {
+            wi: out.wi,
+            distance: out.distance,
+            radiance: out.radiance,
+            pdf: out.pdf,
+            delta: out.delta,
+        };
+        for j in (0..8).filter(|&j| triangle & (1 << j) == 0) {
+            let s = active[j]
+                .then(|| self.sample(geometry, p[j], u[j][2], Vec2::new(u[j][0], u[j][1])))
+                .flatten();
+            cols.set(j, s);
         }
     }
 }
 
-/// The `Light::Area` branch of [`LightSet::sample`] with `SceneGeometry::sample_prim`'s
-/// triangle branch, for four (light, point, sample) triples in SSE lanes, operation for
-/// operation the same float arithmetic (so bit for bit the same values); `None` where
-/// `sample` returns `None` and in inactive lanes.
-#[inline(always)]
-fn sample_triangles_four(
-    t: [&TriangleLight; 4],
-    p: &[Vec3; 4],
-    u: &[[f32; 4]; 4],
-    active: &[bool; 4],
-    out: &mut [Option<LightSample>; 4],
-) {
-    let lanes = |f: &dyn Fn(usize) -> f32| Vec4::new(f(0), f(1), f(2), f(3));
-    let (ux, uy) = (lanes(&|j| u[j][0]), lanes(&|j| u[j][1]));
-    // Heitz 2019 (see SceneGeometry::sample_prim): fold the square onto the triangle.
-    let below = ux.cmplt(uy);
-    let (hx, hy) = (ux * 0.5, uy * 0.5);
-    let b0 = Vec4::select(below, hx, ux - hy);
-    let b1 = Vec4::select(below, uy - hx, hy);
-    let b2 = Vec4::ONE - b0 - b1;
-    let q = |c: usize| {
-        lanes(&|j| t[j].v[0][c]) * b0
-            + lanes(&|j| t[j].v[1][c]) * b1
-            + lanes(&|j| t[j].v[2][c]) * b2
-    };
-    let dx = q(0) - lanes(&|j| p[j].x);
-    let dy = q(1) - lanes(&|j| p[j].y);
-    let dz = q(2) - lanes(&|j| p[j].z);
-    let dist2 = dx * dx + dy * dy + dz * dz;
-    // dist2 > 0 and finite (false for NaN), like sample's early return.
-    let mut ok = dist2.cmpgt(Vec4::ZERO) & dist2.cmplt(Vec4::INFINITY);
-    let dist = dist2.sqrt();
-    let inv = Vec4::ONE / dist;
-    let (wx, wy, wz) = (dx * inv, dy * inv, dz * inv);
-    let cos_light =
-        -(lanes(&|j| t[j].n.x) * wx + lanes(&|j| t[j].n.y) * wy + lanes(&|j| t[j].n.z) * wz);
-    ok &= cos_light.cmpgt(Vec4::ZERO);
-    let pdf = lanes(&|j| t[j].pmf_over_area) * dist2 / cos_light;
-    ok &= pdf.cmpgt(Vec4::ZERO) & pdf.cmplt(Vec4::INFINITY);
-    let ok = ok.bitmask();
-    let (wx, wy, wz) = (wx.to_array(), wy.to_array(), wz.to_array());
-    let (dist, pdf) = (dist.to_array(), pdf.to_array());
-    for j in 0..4 {
-        out[j] = (active[j] && ok & (1 << j) != 0).then(|| LightSample {
-            wi: Vec3::new(wx[j], wy[j], wz[j]),
-            distance: dist[j],
-            radiance: t[j].radiance,
-            pdf: pdf[j],
-            delta: false,
-        });
-    }
+/// The scalar reference of [`LightSet::sample_column`], point by point.
+#[cfg(test)]
+fn sample_column_scalar(
+    set: &LightSet,
+    geometry: &SceneGeometry,
+    p: &[Vec3],
+    u: &[[f32; 4]],
+    active: &[bool],
+) -> Vec<Option<LightSample>> {
+    (0..p.len())
+        .map(|i| {
+            active[i]
+                .then(|| set.sample(geometry, p[i], u[i][2], Vec2::new(u[i][0], u[i][1])))
+                .flatten()
+        })
+        .collect()
 }
 
-/// [`LightSet::sample_column`] eight points at a time for sets of at most [`LANES8`] lights
-/// selected by counting CDF entries: the selected light's index, a vector of eight, picks
-/// each triangle attribute with one `vpermps` from a register holding it for every light,
-/// where the four-lane path gathers four scalars per attribute; and one square root and two
-/// divisions serve eight samples. The float operations are [`sample_triangles_four`]'s
-/// (no FMA), lane by lane, so the bits are `LightSet::sample`'s. Lanes whose light is not a
-/// triangle light go through `LightSet::sample`.
-#[cfg(target_arch = "x86_64")]
-#[allow(
-    unsafe_code,
-    reason = "AVX2 intrinsics: unaligned loads of references' memory, and the calls into \
-              `#[target_feature]` functions, reached only after run-time detection"
-)]
-mod avx2 {
-    use super::{LightSampleColumns, LightSet, Lights8, LANES8};
-    use crate::distribution::ONE_MINUS_EPSILON;
-    use crate::geometry::SceneGeometry;
-    use glam::{Vec2, Vec3};
-    use risotto_components::Rgb;
-    use std::arch::x86_64::*;
+/// Eight rows of the output columns.
+struct Out8<'a> {
+    wi: &'a mut [Vec3; 8],
+    distance: &'a mut [f32; 8],
+    radiance: &'a mut [Rgb; 8],
+    pdf: &'a mut [f32; 8],
+    delta: &'a mut [bool; 8],
+}
 
-    /// Points per kernel call.
-    const N: usize = LANES8;
+/// The arguments of [`LightSet::sample_column`] (columns of equal length, a selection
+/// exists), as a [`Kernel8`].
+struct LightColumns<'a, 'o> {
+    set: &'a LightSet,
+    selection: &'a Distribution1D,
+    geometry: &'a SceneGeometry,
+    p: &'a [Vec3],
+    u: &'a [[f32; 4]],
+    active: &'a [bool],
+    out: &'a mut LightSampleColumns<'o>,
+}
 
-    /// The body of `LightSet::sample_column` (columns of equal length checked by the
-    /// caller).
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[target_feature(enable = "avx2")]
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the set, its columns and the output"
-    )]
-    pub(super) unsafe fn sample_column(
-        set: &LightSet,
-        l8: &Lights8,
-        cdf: &[f32],
-        geometry: &SceneGeometry,
-        p: &[Vec3],
-        u: &[[f32; 4]],
-        active: &[bool],
-        out: &mut LightSampleColumns<'_>,
-    ) {
-        let (p8, p_rest) = p.as_chunks::<N>();
-        let (u8, u_rest) = u.as_chunks::<N>();
-        let (a8, a_rest) = active.as_chunks::<N>();
-        let (wi8, wi_rest) = out.wi.as_chunks_mut::<N>();
-        let (distance8, distance_rest) = out.distance.as_chunks_mut::<N>();
-        let (radiance8, radiance_rest) = out.radiance.as_chunks_mut::<N>();
-        let (pdf8, pdf_rest) = out.pdf.as_chunks_mut::<N>();
-        let (delta8, delta_rest) = out.delta.as_chunks_mut::<N>();
+impl Kernel8 for LightColumns<'_, '_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<S: Simd>(self, s: S) {
+        let (set, selection, geometry) = (self.set, self.selection, self.geometry);
+        let (p8, p_rest) = self.p.as_chunks::<8>();
+        let (u8, u_rest) = self.u.as_chunks::<8>();
+        let (a8, a_rest) = self.active.as_chunks::<8>();
+        let out = &mut *self.out;
+        let (wi8, wi_rest) = out.wi.as_chunks_mut::<8>();
+        let (distance8, distance_rest) = out.distance.as_chunks_mut::<8>();
+        let (radiance8, radiance_rest) = out.radiance.as_chunks_mut::<8>();
+        let (pdf8, pdf_rest) = out.pdf.as_chunks_mut::<8>();
+        let (delta8, delta_rest) = out.delta.as_chunks_mut::<8>();
         let outs = wi8
             .iter_mut()
             .zip(distance8)
@@ -777,18 +740,18 @@ mod avx2 {
                 pdf,
                 delta,
             };
-            eight(set, l8, cdf, geometry, p, u, a, o);
+            set.sample_eight(s, selection, geometry, (p, u, a), o);
         }
         if !p_rest.is_empty() {
-            // The last partial group, padded with inactive copies of its first point.
+            // The last partial block, padded with inactive copies of its first point.
             // Element loops rather than `copy_from_slice`: a `memcpy` call of a varying
             // small length mispredicts inside.
-            let (mut p, mut u, mut a) = ([p_rest[0]; N], [u_rest[0]; N], [false; N]);
+            let (mut p, mut u, mut a) = ([p_rest[0]; 8], [u_rest[0]; 8], [false; 8]);
             for (j, ((&pr, &ur), &ar)) in p_rest.iter().zip(u_rest).zip(a_rest).enumerate() {
                 (p[j], u[j], a[j]) = (pr, ur, ar);
             }
-            let (mut wi, mut distance, mut radiance) = ([Vec3::Z; N], [0.0; N], [Rgb::BLACK; N]);
-            let (mut pdf, mut delta) = ([0.0; N], [false; N]);
+            let (mut wi, mut distance, mut radiance) = ([Vec3::Z; 8], [0.0; 8], [Rgb::BLACK; 8]);
+            let (mut pdf, mut delta) = ([0.0; 8], [false; 8]);
             let o = Out8 {
                 wi: &mut wi,
                 distance: &mut distance,
@@ -796,7 +759,7 @@ mod avx2 {
                 pdf: &mut pdf,
                 delta: &mut delta,
             };
-            eight(set, l8, cdf, geometry, &p, &u, &a, o);
+            set.sample_eight(s, selection, geometry, (&p, &u, &a), o);
             let rest = wi_rest
                 .iter_mut()
                 .zip(distance_rest)
@@ -806,260 +769,6 @@ mod avx2 {
             for (j, ((((w, d), r), p), de)) in rest.enumerate() {
                 (*w, *d, *r, *p, *de) = (wi[j], distance[j], radiance[j], pdf[j], delta[j]);
             }
-        }
-    }
-
-    /// Eight rows of the output columns.
-    struct Out8<'a> {
-        wi: &'a mut [Vec3; N],
-        distance: &'a mut [f32; N],
-        radiance: &'a mut [Rgb; N],
-        pdf: &'a mut [f32; N],
-        delta: &'a mut [bool; N],
-    }
-
-    /// Stores the components `x`, `y`, `z` of eight vectors as eight `repr(C)` triples
-    /// (`Vec3`, `Rgb`) at `dst`: output vector `V`, lane `i` is float `8 V + i`, component
-    /// `(8 V + i) % 3` of triple `(8 V + i) / 3`.
-    ///
-    /// # Safety
-    /// `dst` must be 96 writable bytes.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn store3(x: __m256, y: __m256, z: __m256, dst: *mut f32) {
-        let part = |triple: __m256i| {
-            (
-                _mm256_permutevar8x32_ps(x, triple),
-                _mm256_permutevar8x32_ps(y, triple),
-                _mm256_permutevar8x32_ps(z, triple),
-            )
-        };
-        let (x0, y0, z0) = part(_mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2));
-        let v0 = _mm256_blend_ps::<0b0010_0100>(_mm256_blend_ps::<0b1001_0010>(x0, y0), z0);
-        let (x1, y1, z1) = part(_mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5));
-        let v1 = _mm256_blend_ps::<0b0100_1001>(_mm256_blend_ps::<0b0010_0100>(x1, y1), z1);
-        let (x2, y2, z2) = part(_mm256_setr_epi32(5, 5, 6, 6, 6, 7, 7, 7));
-        let v2 = _mm256_blend_ps::<0b1001_0010>(_mm256_blend_ps::<0b0100_1001>(x2, y2), z2);
-        // SAFETY: the caller's 96 bytes.
-        unsafe {
-            _mm256_storeu_ps(dst, v0);
-            _mm256_storeu_ps(dst.add(8), v1);
-            _mm256_storeu_ps(dst.add(16), v2);
-        }
-    }
-
-    /// All lanes `x`.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn splat(x: f32) -> __m256 {
-        _mm256_set1_ps(x)
-    }
-
-    /// Component `K` (0 x, 1 y, 2 z) of eight `Vec3` (`repr(C)`, three f32 each) held in
-    /// three vectors: lane `i` is float number `3 i + K`, in vector `(3 i + K) / 8` at
-    /// position `(3 i + K) % 8`.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn component<const K: i32>(v: [__m256; 3]) -> __m256 {
-        let idx = _mm256_setr_epi32(
-            K,
-            (3 + K) % 8,
-            (6 + K) % 8,
-            (9 + K) % 8,
-            (12 + K) % 8,
-            (15 + K) % 8,
-            (18 + K) % 8,
-            (21 + K) % 8,
-        );
-        let p = v.map(|v| _mm256_permutevar8x32_ps(v, idx));
-        match K {
-            0 => _mm256_blend_ps::<0b1100_0000>(_mm256_blend_ps::<0b0011_1000>(p[0], p[1]), p[2]),
-            1 => _mm256_blend_ps::<0b1110_0000>(_mm256_blend_ps::<0b0001_1000>(p[0], p[1]), p[2]),
-            _ => _mm256_blend_ps::<0b1110_0000>(_mm256_blend_ps::<0b0001_1100>(p[0], p[1]), p[2]),
-        }
-    }
-
-    /// Eight points of `sample_column`.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the set, its columns and the output"
-    )]
-    fn eight(
-        set: &LightSet,
-        l8: &Lights8,
-        cdf: &[f32],
-        geometry: &SceneGeometry,
-        p: &[Vec3; N],
-        u: &[[f32; 4]; N],
-        active: &[bool; N],
-        out: Out8<'_>,
-    ) {
-        // SAFETY: eight `Vec3` are 96 readable bytes, eight `[f32; 4]` 128.
-        let (pv, uv) = unsafe {
-            let pf = p.as_ptr().cast::<f32>();
-            let uf = u.as_ptr().cast::<f32>();
-            (
-                [
-                    _mm256_loadu_ps(pf),
-                    _mm256_loadu_ps(pf.add(8)),
-                    _mm256_loadu_ps(pf.add(16)),
-                ],
-                [
-                    _mm256_loadu_ps(uf),
-                    _mm256_loadu_ps(uf.add(8)),
-                    _mm256_loadu_ps(uf.add(16)),
-                    _mm256_loadu_ps(uf.add(24)),
-                ],
-            )
-        };
-        let (px, py, pz) = (component::<0>(pv), component::<1>(pv), component::<2>(pv));
-        // Transpose the rows (two per vector) into columns 0, 1, 2, whose lanes come out in
-        // point order 0 2 4 6 1 3 5 7; one permute puts them back in order.
-        let (t0, t1) = (
-            _mm256_unpacklo_ps(uv[0], uv[1]),
-            _mm256_unpackhi_ps(uv[0], uv[1]),
-        );
-        let (t2, t3) = (
-            _mm256_unpacklo_ps(uv[2], uv[3]),
-            _mm256_unpackhi_ps(uv[2], uv[3]),
-        );
-        let order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
-        let column = |v: __m256d| _mm256_permutevar8x32_ps(_mm256_castpd_ps(v), order);
-        let (t0, t1, t2, t3) = (
-            _mm256_castps_pd(t0),
-            _mm256_castps_pd(t1),
-            _mm256_castps_pd(t2),
-            _mm256_castps_pd(t3),
-        );
-        let ux = column(_mm256_unpacklo_pd(t0, t2));
-        let uy = column(_mm256_unpackhi_pd(t0, t2));
-        let us = column(_mm256_unpacklo_pd(t1, t3));
-
-        // Light selection as `LightSet::select_four`: clamp into [0, 1) (NaN and negatives
-        // to 0), then count the CDF entries <= u (a true compare is -1).
-        let zero = _mm256_setzero_ps();
-        let us = _mm256_blendv_ps(
-            zero,
-            _mm256_min_ps(us, splat(ONE_MINUS_EPSILON)),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(us, zero),
-        );
-        let mut index = _mm256_setzero_si256();
-        for &c in cdf {
-            let le = _mm256_cmp_ps::<_CMP_LE_OQ>(splat(c), us);
-            index = _mm256_sub_epi32(index, _mm256_castps_si256(le));
-        }
-        // SAFETY: every row of `l8` is 32 readable bytes.
-        let attr = |a: usize| unsafe {
-            _mm256_permutevar8x32_ps(_mm256_loadu_ps(l8.attr[a].as_ptr()), index)
-        };
-        // SAFETY: as above.
-        let triangle = unsafe {
-            _mm256_permutevar8x32_epi32(_mm256_loadu_si256(l8.triangle.as_ptr().cast()), index)
-        };
-        let triangle = _mm256_movemask_ps(_mm256_castsi256_ps(triangle)) as u32;
-
-        // `sample_triangles_four`, eight lanes.
-        let below = _mm256_cmp_ps::<_CMP_LT_OQ>(ux, uy);
-        let (hx, hy) = (_mm256_mul_ps(ux, splat(0.5)), _mm256_mul_ps(uy, splat(0.5)));
-        let b0 = _mm256_blendv_ps(_mm256_sub_ps(ux, hy), hx, below);
-        let b1 = _mm256_blendv_ps(hy, _mm256_sub_ps(uy, hx), below);
-        let b2 = _mm256_sub_ps(_mm256_sub_ps(splat(1.0), b0), b1);
-        let q = |c: usize| {
-            _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(attr(c), b0), _mm256_mul_ps(attr(3 + c), b1)),
-                _mm256_mul_ps(attr(6 + c), b2),
-            )
-        };
-        let dx = _mm256_sub_ps(q(0), px);
-        let dy = _mm256_sub_ps(q(1), py);
-        let dz = _mm256_sub_ps(q(2), pz);
-        let dist2 = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-            _mm256_mul_ps(dz, dz),
-        );
-        let mut ok = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OQ>(dist2, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(dist2, splat(f32::INFINITY)),
-        );
-        let dist = _mm256_sqrt_ps(dist2);
-        let inv = _mm256_div_ps(splat(1.0), dist);
-        let (wx, wy, wz) = (
-            _mm256_mul_ps(dx, inv),
-            _mm256_mul_ps(dy, inv),
-            _mm256_mul_ps(dz, inv),
-        );
-        let cos_light = _mm256_xor_ps(
-            _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(attr(9), wx), _mm256_mul_ps(attr(10), wy)),
-                _mm256_mul_ps(attr(11), wz),
-            ),
-            splat(-0.0),
-        );
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps::<_CMP_GT_OQ>(cos_light, zero));
-        let pdf = _mm256_div_ps(_mm256_mul_ps(attr(12), dist2), cos_light);
-        ok = _mm256_and_ps(
-            ok,
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(pdf, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(pdf, splat(f32::INFINITY)),
-            ),
-        );
-        // Active lanes: the eight bools widened to 32-bit lanes, compared with 0.
-        // SAFETY: eight bools are 8 readable bytes.
-        let act = unsafe { _mm_loadl_epi64(active.as_ptr().cast()) };
-        let act = _mm256_cmpeq_epi32(_mm256_cvtepu8_epi32(act), _mm256_setzero_si256());
-        let ok = _mm256_andnot_ps(_mm256_castsi256_ps(act), ok);
-        // Rows without a sample: pdf 0 and wi +z.
-        let wx = _mm256_and_ps(wx, ok);
-        let wy = _mm256_and_ps(wy, ok);
-        let wz = _mm256_blendv_ps(splat(1.0), wz, ok);
-        let pdf = _mm256_and_ps(pdf, ok);
-        // SAFETY: each output row block is eight `Vec3`/`Rgb` (96 bytes) or eight f32 (32);
-        // the delta block is eight bools (8 bytes), written as one u64 of zeros (false).
-        unsafe {
-            store3(wx, wy, wz, out.wi.as_mut_ptr().cast());
-            store3(
-                attr(13),
-                attr(14),
-                attr(15),
-                out.radiance.as_mut_ptr().cast(),
-            );
-            _mm256_storeu_ps(out.distance.as_mut_ptr(), dist);
-            _mm256_storeu_ps(out.pdf.as_mut_ptr(), pdf);
-        }
-        *out.delta = [false; N];
-        if triangle != 0xff {
-            other_lanes(set, geometry, triangle, p, u, active, out);
-        }
-    }
-
-    /// The lanes of [`eight`] whose light is not a triangle light (bit clear in
-    /// `triangle`), through `LightSet::sample`.
-    #[cold]
-    #[inline(never)]
-    fn other_lanes(
-        set: &LightSet,
-        geometry: &SceneGeometry,
-        triangle: u32,
-        p: &[Vec3; N],
-        u: &[[f32; 4]; N],
-        active: &[bool; N],
-        out: Out8<'_>,
-    ) {
-        let mut cols = LightSampleColumns {
-            wi: out.wi,
-            distance: out.distance,
-            radiance: out.radiance,
-            pdf: out.pdf,
-            delta: out.delta,
-        };
-        for j in (0..N).filter(|&j| triangle & (1 << j) == 0) {
-            let s = active[j]
-                .then(|| set.sample(geometry, p[j], u[j][2], Vec2::new(u[j][0], u[j][1])))
-                .flatten();
-            cols.set(j, s);
         }
     }
 }
@@ -1140,6 +849,7 @@ mod tests {
     /// `set.sample_column` into fresh columns (filled with junk first, so that rows the
     /// sampler fails to write show), read back as rows.
     fn sample_column_rows(
+        backend: Backend,
         set: &LightSet,
         geometry: &SceneGeometry,
         p: &[Vec3],
@@ -1157,7 +867,7 @@ mod tests {
             pdf: &mut pdf,
             delta: &mut delta,
         };
-        set.sample_column(geometry, p, u, active, &mut cols);
+        set.sample_column_on(backend, geometry, p, u, active, &mut cols);
         for i in 0..n {
             if cols.pdf[i] == 0.0 {
                 assert_eq!(cols.wi[i], Vec3::Z, "rows without a sample have wi = +z");
@@ -1190,11 +900,18 @@ mod tests {
                 })
                 .collect();
             let active: Vec<bool> = (0..len).map(|i| i % 6 != 3).collect();
-            let out = sample_column_rows(set, geometry, &p, &u, &active);
-            for i in 0..len {
-                let want = active[i]
-                    .then(|| set.sample(geometry, p[i], u[i][2], Vec2::new(u[i][0], u[i][1])))
-                    .flatten();
+            let want = sample_column_scalar(set, geometry, &p, &u, &active);
+            for backend in Backend::all() {
+                let out = sample_column_rows(backend, set, geometry, &p, &u, &active);
+                check_rows(&out, &want, &format!("{backend:?}, len {len}"));
+            }
+        }
+    }
+
+    /// Rows `got` and `want` hold the same bits.
+    fn check_rows(got: &[Option<LightSample>], want: &[Option<LightSample>], what: &str) {
+        for i in 0..want.len() {
+            {
                 let bits = |s: Option<LightSample>| {
                     s.map(|s| {
                         (
@@ -1206,7 +923,7 @@ mod tests {
                         )
                     })
                 };
-                assert_eq!(bits(out[i]), bits(want), "len {len}, point {i}");
+                assert_eq!(bits(got[i]), bits(want[i]), "{what}, point {i}");
             }
         }
     }
@@ -1298,7 +1015,7 @@ mod tests {
         let u: Vec<[f32; 4]> = (0..n)
             .map(|_| [rng.f32(), rng.f32(), rng.f32(), 0.0])
             .collect();
-        let out = sample_column_rows(&set, &geometry, &p, &u, &vec![true; n]);
+        let out = sample_column_rows(Backend::best(), &set, &geometry, &p, &u, &vec![true; n]);
         let mut found = 0;
         for (i, s) in out.iter().enumerate() {
             let Some(s) = s else { continue };

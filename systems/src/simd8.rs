@@ -1,5 +1,9 @@
-//! Eight f32 lanes for the wide-BVH kernels of [`crate::intersect`]: one lane per child box
-//! of a node or per triangle of a leaf packet.
+//! Eight f32 lanes: the one SIMD style of the crate. The wide-BVH kernels of
+//! [`crate::intersect`] put one lane per child box of a node or per triangle of a leaf
+//! packet; the shading kernels ([`crate::bxdf::diffuse_sample_world`],
+//! [`crate::lights::LightSet::sample_column`], the camera's perspective rays) one lane per
+//! point. The sampler's column draws are plain Rust over blocks of eight that
+//! [`Backend::run`] only compiles per backend (the compiler vectorises them).
 //!
 //! The kernels are written once, generic over [`Simd`], and instantiated twice: with
 //! [`Portable`] (two glam `Vec4`, i.e. SSE on x86-64 and scalar code elsewhere) and, on
@@ -7,8 +11,9 @@
 //! obtained from [`Avx2::detect`], which checks that the CPU has AVX2 and FMA, so every
 //! operation on [`Avx2`] lanes runs on a CPU that has those instructions. The AVX2
 //! instantiation is compiled inside a `#[target_feature(enable = "avx2,fma")]` function
-//! (see [`crate::intersect`]), into which these `#[inline(always)]` wrappers and the
-//! intrinsics they call are inlined.
+//! ([`Backend::run`], or [`crate::intersect`]'s own), into which these `#[inline(always)]`
+//! wrappers and the intrinsics they call are inlined. Every kernel has a scalar reference
+//! and a test that each backend this CPU runs computes its bits.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
 
@@ -39,6 +44,8 @@ pub(crate) trait Lanes8:
     fn max(self, o: Self) -> Self;
     /// Lane-wise magnitude.
     fn abs(self) -> Self;
+    /// Lane-wise square root (correctly rounded, as `f32::sqrt`).
+    fn sqrt(self) -> Self;
     /// The sign bit flipped (as `-x` on `f32`).
     fn neg(self) -> Self;
     /// The magnitude of `self` with the sign bit of `sign` (as `f32::copysign`).
@@ -82,6 +89,9 @@ pub(crate) trait Simd: Copy {
     fn load(self, r: &Row8) -> Self::F;
     /// The x, y and z coordinates of eight points, as three rows (lane `l` point `l`).
     fn load_xyz(self, v: &[Vec3; 8]) -> [Self::F; 3];
+    /// Lane `l` is `table.0[index[l]]`, with every lane of `index` one of the whole
+    /// numbers `0..8`.
+    fn lookup(self, table: &Row8, index: Self::F) -> Self::F;
 }
 
 /// Portable lanes: two glam `Vec4`.
@@ -116,6 +126,10 @@ impl Simd for Portable {
             ])
         };
         [row(0), row(1), row(2)]
+    }
+    #[inline(always)]
+    fn lookup(self, table: &Row8, index: P8) -> P8 {
+        self.load(&Row8(index.to_array().map(|i| table.0[i as usize & 7])))
     }
 }
 
@@ -177,6 +191,10 @@ impl Lanes8 for P8 {
         P8([self.0[0].abs(), self.0[1].abs()])
     }
     #[inline(always)]
+    fn sqrt(self) -> P8 {
+        P8([self.0[0].sqrt(), self.0[1].sqrt()])
+    }
+    #[inline(always)]
     fn neg(self) -> P8 {
         P8([-self.0[0], -self.0[1]])
     }
@@ -226,6 +244,57 @@ impl Lanes8 for P8 {
     }
 }
 
+/// A computation written once over the lanes of any [`Simd`], run by [`Backend::run`].
+pub(crate) trait Kernel8 {
+    /// What the computation returns.
+    type Output;
+    /// The computation on the lanes of `s`; `#[inline(always)]`, so that it is compiled
+    /// with the target features of [`Backend::run`]'s instantiation.
+    fn run<S: Simd>(self, s: S) -> Self::Output;
+}
+
+/// A lane implementation this CPU was checked to run (the AVX2 variant holds the token).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Backend {
+    /// [`Portable`] lanes.
+    Portable,
+    /// [`Avx2`] lanes.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+}
+
+impl Backend {
+    /// The fastest backend this CPU runs.
+    #[inline]
+    pub(crate) fn best() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(t) = Avx2::detect() {
+            return Backend::Avx2(t);
+        }
+        Backend::Portable
+    }
+
+    /// Every backend this CPU runs (for the tests that compare them with the scalar
+    /// references).
+    #[cfg(test)]
+    pub(crate) fn all() -> Vec<Self> {
+        let mut all = vec![Backend::Portable];
+        #[cfg(target_arch = "x86_64")]
+        all.extend(Avx2::detect().map(Backend::Avx2));
+        all
+    }
+
+    /// Runs `k` on this backend's lanes.
+    #[inline]
+    pub(crate) fn run<K: Kernel8>(self, k: K) -> K::Output {
+        match self {
+            Backend::Portable => k.run(Portable),
+            #[cfg(target_arch = "x86_64")]
+            Backend::Avx2(t) => avx2::run(t, k),
+        }
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx2::Avx2;
 
@@ -240,12 +309,23 @@ mod avx2 {
 
     use glam::Vec3;
 
-    use super::{Lanes8, Mask8, Row8, Simd};
+    use super::{Kernel8, Lanes8, Mask8, Row8, Simd};
 
     /// Proof that the CPU runs AVX2 and FMA: the private field keeps it from being made
     /// anywhere but [`Avx2::detect`].
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub(crate) struct Avx2(());
+
+    /// `k` on [`Avx2`] lanes, compiled with AVX2 and FMA.
+    #[inline]
+    pub(super) fn run<K: Kernel8>(t: Avx2, k: K) -> K::Output {
+        #[target_feature(enable = "avx2,fma")]
+        fn with_avx2<K: Kernel8>(t: Avx2, k: K) -> K::Output {
+            k.run(t)
+        }
+        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
+        unsafe { with_avx2(t, k) }
+    }
 
     impl Avx2 {
         /// The token, if this CPU has AVX2 and FMA.
@@ -325,6 +405,11 @@ mod avx2 {
                 )),
             ]
         }
+        #[inline(always)]
+        fn lookup(self, table: &Row8, index: A8) -> A8 {
+            let index = avx!(_mm256_cvttps_epi32(index.0));
+            A8(avx!(_mm256_permutevar8x32_ps(self.load(table).0, index)))
+        }
     }
 
     /// One coordinate of [`Avx2::load_xyz`]'s three loads: lanes set in `FROM1` taken from
@@ -400,6 +485,10 @@ mod avx2 {
         #[inline(always)]
         fn abs(self) -> A8 {
             A8(avx!(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)))
+        }
+        #[inline(always)]
+        fn sqrt(self) -> A8 {
+            A8(avx!(_mm256_sqrt_ps(self.0)))
         }
         #[inline(always)]
         fn neg(self) -> A8 {
