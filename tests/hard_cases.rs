@@ -412,3 +412,26 @@ fn camera_on_a_glass_surface_is_inside_the_glass() {
         }
     }
 }
+
+/// Item 7: emission 1e38 seen directly gave infinite beauty pixels (16 samples summed past
+/// f32's 3.4e38). A lamp of radiance 1e38 facing the camera renders as 1e38, every layer
+/// finite.
+#[test]
+fn emission_of_1e38_renders_finite() {
+    let n = 8;
+    let cam = ortho_camera(Vec3::Y * 3.0, Vec3::ZERO, Vec3::Z, 1.0, n, n);
+    let mut scene = Scene::new(cam, settings(n, n, 16, 2));
+    let black = add_diffuse(&mut scene, "lamp", 0.0);
+    // Normal +y (z x x), towards the camera.
+    scene.add_shape(
+        "lamp",
+        quad(Vec3::new(-1.0, 0.0, -1.0), Vec3::Z * 2.0, Vec3::X * 2.0),
+        black,
+        Some(Rgb::splat(1e38)),
+    );
+    let out = render_default(&scene.compile().unwrap());
+    assert_finite("lamp of 1e38", &out);
+    for p in &out.beauty.pixels {
+        assert!((p.r / 1e38 - 1.0).abs() < 1e-5, "{p:?}");
+    }
+}
