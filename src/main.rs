@@ -68,7 +68,7 @@ struct RenderArgs {
     /// Direct-lighting technique: mis, nee, bxdf.
     #[arg(long, default_value = "mis")]
     lighting: String,
-    /// Paths per batch.
+    /// Paths per batch (1 to 16777216: a batch's tables are allocated whole).
     #[arg(long, default_value_t = 4096)]
     batch_size: usize,
     /// No progress bar and no summary.
@@ -118,6 +118,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
+    );
+    const MAX_BATCH_SIZE: usize = 1 << 24;
+    anyhow::ensure!(
+        args.batch_size <= MAX_BATCH_SIZE,
+        "--batch-size {}: must be at most {MAX_BATCH_SIZE} paths",
+        args.batch_size
     );
     let technique = match args.lighting.as_str() {
         "mis" => LightingTechnique::Mis,
