@@ -131,7 +131,7 @@ struct RenderArgs {
     /// A technique, NAME=VALUE (repeatable); `risotto techniques SCENE` lists them.
     #[arg(long = "technique", value_name = "NAME=VALUE")]
     techniques: Vec<String>,
-    /// Paths per batch.
+    /// Paths per batch (1 to 16777216: a batch's tables are allocated whole).
     #[arg(long, default_value_t = 4096)]
     batch_size: usize,
     /// No progress bar and no summary.
@@ -183,6 +183,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
+    );
+    const MAX_BATCH_SIZE: usize = 1 << 24;
+    anyhow::ensure!(
+        args.batch_size <= MAX_BATCH_SIZE,
+        "--batch-size {}: must be at most {MAX_BATCH_SIZE} paths",
+        args.batch_size
     );
     let compiled = compile_scene(scene, &args.scene)?;
     let techniques = render_techniques(&args, &compiled)?;

@@ -273,7 +273,13 @@ fn nonexistent_scene_is_reported() {
 #[test]
 fn bad_options_are_rejected_before_rendering() {
     let dir = temp_dir("options");
-    for (flag, value) in [("--spp", "0"), ("--threads", "0")] {
+    // Issue 14 item 6: `--batch-size 1099511627776` panicked.
+    for (flag, value) in [
+        ("--spp", "0"),
+        ("--spp", "65537"),
+        ("--threads", "0"),
+        ("--batch-size", "1099511627776"),
+    ] {
         let (out, exr) = render(&dir, "ok.toml", SCENE, &[flag, value]);
         assert_fails(flag, &out, &[&format!("{flag} {value}")]);
         assert!(!exr.exists(), "{flag} {value}: an image was written");

@@ -294,3 +294,144 @@ fn tiny_scene_does_not_starve_its_point_light() {
         0.0,
     );
 }
+
+/// A camera `height` above a large diffuse floor (the 40 x 40 square around the origin,
+/// albedo 0.5) looking 45 degrees down, lit by a sun straight down (irradiance pi): every
+/// pixel sees the floor at radiance 0.5 exactly (nothing else is in the scene).
+fn camera_just_above_floor(height: f32) -> RenderOutput {
+    let (w, h) = (16, 16);
+    let eye = Vec3::new(0.0, height, 0.0);
+    let cam = perspective(eye, eye + Vec3::new(0.0, -1.0, -1.0), 40.0, w, h);
+    let mut scene = Scene::new(cam, settings(w, h, 2, 2));
+    let m = add_diffuse(&mut scene, "floor", 0.5);
+    scene.add_shape(
+        "floor",
+        quad(Vec3::new(-20.0, 0.0, -20.0), Vec3::Z * 40.0, Vec3::X * 40.0),
+        m,
+        None,
+    );
+    add_sun(&mut scene, 0.0, Rgb::splat(std::f32::consts::PI));
+    render_default(&scene.compile().unwrap())
+}
+
+/// Item 4: a camera 1e-6 above a plane looking 45 degrees down saw through it (the upper
+/// half of the image exactly 0): rays whose dominant axis is horizontal shear the far
+/// vertices (20 units off) into the triangle test, whose conservative t bound (about
+/// 1e-6 there) rejected the true hit at t = 1.4e-6. Every pixel must see the floor.
+#[test]
+fn camera_just_above_a_plane_sees_the_plane() {
+    for height in [1e-3f32, 1e-6, 1e-8, 1e-12] {
+        let out = camera_just_above_floor(height);
+        assert_finite("camera above floor", &out);
+        for (i, p) in out.beauty.pixels.iter().enumerate() {
+            assert!(
+                (p.r - 0.5).abs() < 1e-4,
+                "height {height}: pixel ({}, {}) is {p:?}, want 0.5",
+                i % 16,
+                i / 16
+            );
+        }
+    }
+}
+
+/// A slab `y in [-1, 0]` (40 x 40) of `surface` with a Beer interior (sigma_a 1) under a
+/// constant sky of radiance 1, seen by a camera at `eye` looking along `dir`.
+fn camera_in_slab(surface: Surface, eye: Vec3, dir: Vec3) -> RenderOutput {
+    let (w, h) = (8, 8);
+    let cam = perspective(eye, eye + dir, 30.0, w, h);
+    let mut scene = Scene::new(cam, settings(w, h, 64, 8));
+    let m = scene.add_material(
+        "glass",
+        0,
+        mat_in(
+            surface,
+            risotto::engine::builtin::Interior::Beer {
+                sigma_a: Rgb::splat(1.0),
+            },
+        ),
+    );
+    add_box(
+        &mut scene,
+        "slab",
+        Vec3::new(-20.0, -1.0, -20.0),
+        Vec3::new(20.0, 0.0, 20.0),
+        m,
+    );
+    environment(&mut scene, Rgb::splat(1.0));
+    render_default(&scene.compile().unwrap())
+}
+
+/// Item 4: a camera exactly on a glass surface showed no absorption at all. A camera on
+/// the surface of a slab, looking into it, sees what a camera 1e-4 inside sees (the
+/// absorption along the path to the slab's floor): for an index-matched interface that is
+/// about exp(-sqrt 2) = 0.24, and for glass the same image as just inside.
+#[test]
+fn camera_on_a_glass_surface_is_inside_the_glass() {
+    for surface in [
+        Surface::Interface,
+        Surface::Dielectric {
+            ior: 1.5,
+            tint: Rgb::splat(1.0),
+            cheap_shadows: false,
+        },
+    ] {
+        // On the top face looking down, on the bottom face looking up, on the side face
+        // x = 20 looking in and down (the probe for the camera's volumes used to come from
+        // one fixed direction, so only the first case worked).
+        for (on, inside, dir) in [
+            (
+                Vec3::ZERO,
+                Vec3::new(0.0, -1e-4, 0.0),
+                Vec3::new(0.0, -1.0, -1.0),
+            ),
+            (
+                Vec3::new(0.0, -1.0, 0.0),
+                Vec3::new(0.0, -1.0 + 1e-4, 0.0),
+                Vec3::new(0.0, 1.0, -1.0),
+            ),
+            (
+                Vec3::new(20.0, -0.5, 0.0),
+                Vec3::new(20.0 - 1e-4, -0.5, 0.0),
+                Vec3::new(-1.0, -1.0, 0.0),
+            ),
+        ] {
+            let what = format!("{surface:?} at {on}");
+            let on = camera_in_slab(surface, on, dir);
+            let inside = camera_in_slab(surface, inside, dir);
+            assert_finite("camera on glass", &on);
+            let (m, s) = image_mean(&on);
+            let (mi, si) = image_mean(&inside);
+            assert!(mi.r < 0.5, "{what}: just inside gives {mi:?}");
+            let se = (s * s + si * si).map(f32::sqrt);
+            assert_matches(
+                &format!("{what}: on the surface - just inside + 1"),
+                (m - mi + Rgb::splat(1.0), se),
+                1.0,
+                2e-3,
+            );
+        }
+    }
+}
+
+/// Item 7: emission 1e38 seen directly gave infinite beauty pixels (16 samples summed past
+/// f32's 3.4e38). A lamp of radiance 1e38 facing the camera renders as 1e38, every layer
+/// finite.
+#[test]
+fn emission_of_1e38_renders_finite() {
+    let n = 8;
+    let cam = ortho_camera(Vec3::Y * 3.0, Vec3::ZERO, Vec3::Z, 1.0, n, n);
+    let mut scene = Scene::new(cam, settings(n, n, 16, 2));
+    let black = add_diffuse(&mut scene, "lamp", 0.0);
+    // Normal +y (z x x), towards the camera.
+    scene.add_shape(
+        "lamp",
+        quad(Vec3::new(-1.0, 0.0, -1.0), Vec3::Z * 2.0, Vec3::X * 2.0),
+        black,
+        Some(Rgb::splat(1e38)),
+    );
+    let out = render_default(&scene.compile().unwrap());
+    assert_finite("lamp of 1e38", &out);
+    for p in &out.beauty.pixels {
+        assert!((p.r / 1e38 - 1.0).abs() < 1e-5, "{p:?}");
+    }
+}

@@ -124,10 +124,12 @@ pub fn render_tile<I: Integrator>(
     let w = tile.film.width;
     let h = tile.film.height;
     let pixels = (w * h) as usize;
-    let per_batch = (batch_size / pixels.max(1)).max(1) as u32;
+    // Saturating: a batch size of 2^40 paths must mean "all samples at once", not a
+    // truncated or wrapped sample range (which never advanced `s0`).
+    let per_batch = (batch_size / pixels.max(1)).clamp(1, u32::MAX as usize) as u32;
     let mut s0 = samples.start;
     while s0 < samples.end {
-        let s1 = (s0 + per_batch).min(samples.end);
+        let s1 = s0.saturating_add(per_batch).min(samples.end);
         let TileWorker {
             integrator: state,
             batch,

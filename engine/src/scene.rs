@@ -513,7 +513,7 @@ impl Scene {
         compiled.shape_entry = shapes.map(|s| compiled.volume_entry(s)).collect();
         compiled.camera_stack = match camera_volume {
             Some(names) => compiled.explicit_stack(&names)?,
-            None => compiled.probe_stack(camera.from),
+            None => compiled.probe_stack(camera.from, camera.forward),
         };
         Ok(compiled)
     }
@@ -560,29 +560,42 @@ impl CompiledScene {
         Ok(stack)
     }
 
-    /// Finds the volumes containing `point` by walking a ray from outside the scene to it and
-    /// applying every crossing of a tracked shape (front face: enter, back face: leave).
-    pub fn probe_stack(&self, point: Vec3) -> VolumeStack {
+    /// Finds the volumes a ray leaving `point` along `forward` (the camera's view axis)
+    /// starts in: a walk from `point` backwards, out of the scene, collects every crossing
+    /// of a tracked shape, and they are applied from the outside in (front face, as seen
+    /// along `forward`: enter; back face: leave).
+    ///
+    /// The walk starts `delta` (4 ulps of the point's coordinates) ahead of the point, so a
+    /// surface through the point itself, which camera rays cannot hit (they accept `t > 0`
+    /// only), counts as crossed: a camera on a glass surface looking into it is inside the
+    /// glass (issue 14 item 4). The probe used to come from outside along one fixed
+    /// direction and stop at the point, where its f32 `t`, tens of scene units long, could
+    /// not tell which side of such a surface the point was on: a camera on the bottom face
+    /// of a slab looking up was outside the slab and saw no absorption. Walking from the
+    /// point, the crossings are measured from it, to the triangle test's double-precision
+    /// accuracy near the origin.
+    pub fn probe_stack(&self, point: Vec3, forward: Vec3) -> VolumeStack {
         let mut stack = VolumeStack::new();
         if !self.features.volumes && !self.features.transmissive {
             return stack;
         }
-        // Start outside the bounding sphere, on a direction unlikely to graze edges.
-        let dir = Vec3::new(0.5773, 0.5774, 0.5773).normalize();
-        let start = point + dir * (self.radius * 4.0 + (point - self.center).length() + 1.0);
-        let d = -dir;
-        let total = (point - start).length();
-        let mut t0 = 0.0f32;
+        let forward = forward.normalize();
+        let delta = point.abs().max_element().max(self.radius * 1e-3) * 5e-7;
+        let origin = point + forward * delta;
+        let d = -forward;
+        let mut crossings = Vec::new();
+        // The first query starts at `origin`, no surface point.
+        let mut t0 = risotto_systems::intersect::FREE_ORIGIN;
         for _ in 0..10_000 {
             let mut t = [0.0f32];
             let mut prim = [0u32];
             let (mut b1, mut b2) = ([0.0f32], [0.0f32]);
             risotto_systems::intersect::intersect_closest(
                 &self.geometry,
-                &[start],
+                &[origin],
                 &[d],
                 &[t0],
-                &[total],
+                &[f32::INFINITY],
                 &mut t,
                 &mut prim,
                 &mut b1,
@@ -595,11 +608,16 @@ impl CompiledScene {
             if self.tracks_interior(shape) {
                 let s = self
                     .geometry
-                    .surface_at(prim[0], start, d, t[0], b1[0], b2[0]);
-                let front = d.dot(s.ng) < 0.0;
-                stack.cross(self.volume_entry(shape), front);
+                    .surface_at(prim[0], origin, d, t[0], b1[0], b2[0]);
+                // Seen along `forward`, the opposite of the walk's direction.
+                crossings.push((shape, forward.dot(s.ng) < 0.0));
             }
-            t0 = t[0] * (1.0 + 1e-5) + 1e-5;
+            // Past this hit by the spawn offset at the hit point (coincident hits, such as
+            // an edge two triangles share, count once).
+            t0 = t[0] + risotto_systems::ray::ray_offset(origin + d * t[0]);
+        }
+        for &(shape, front) in crossings.iter().rev() {
+            stack.cross(self.volume_entry(shape), front);
         }
         stack
     }

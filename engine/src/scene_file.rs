@@ -30,6 +30,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use risotto_components::Rgb;
+use risotto_systems::sampler::MAX_SPP;
 
 pub use error::{SceneError, SceneErrorKind};
 pub use params::MaterialParams;
@@ -65,7 +66,8 @@ pub struct RenderSettings {
     pub width: u32,
     /// Image height in pixels (default 512).
     pub height: u32,
-    /// Samples per pixel (default 64).
+    /// Samples per pixel (default 64), at most [`MAX_SPP`] (65536, the driver's `--spp`
+    /// limit too).
     pub spp: u32,
     /// Maximum number of path *segments*, Mitsuba's convention: 1 = only directly visible
     /// emitters, 2 = direct lighting, n = at most n - 1 scattering vertices (default 8).
@@ -80,6 +82,10 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// `max_depth` value meaning "unbounded" (`-1` in the file).
     pub const UNBOUNDED_DEPTH: u32 = u32::MAX;
+    /// Largest `width * height` a scene file may ask for: 2^26 pixels (8192 x 8192), whose
+    /// film and output layers take about 7 GB. Larger resolutions are an error naming the
+    /// key and the value rather than an allocation abort.
+    pub const MAX_PIXELS: u64 = 1 << 26;
 }
 
 impl Default for RenderSettings {
@@ -274,7 +280,8 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
     };
     let r = Reader::new(top.src, node, "render");
     r.deny_unknown(&["width", "height", "spp", "max_depth", "seed", "rr_depth"])?;
-    // Bounded so that width * height * 4 channels stays far from overflow.
+    // Each side bounded so that width * height stays far from overflow; the product is
+    // bounded below.
     let max_res = 1 << 16;
     let u32_max = i64::from(u32::MAX);
     let max_depth = match r.int_opt("max_depth")? {
@@ -290,10 +297,34 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
             ))
         }
     };
+    let width = r.int_in("width", Some(d.width.into()), 1, max_res)? as u32;
+    let height = r.int_in("height", Some(d.height.into()), 1, max_res)? as u32;
+    // The film and the output layers are allocated up front: a bound on the pixel count
+    // turns an allocation abort into an error naming the resolution.
+    if u64::from(width) * u64::from(height) > RenderSettings::MAX_PIXELS {
+        let key = if r.int_opt("height")?.is_some() {
+            "height"
+        } else {
+            "width"
+        };
+        let (_, node) = r.int_opt(key)?.expect("one of width and height is given");
+        return Err(r.invalid(
+            key,
+            node,
+            &format!(
+                "{width} x {height} = {} pixels exceeds the limit of {} (8192 x 8192; the \
+                 film and its layers take about 100 bytes a pixel)",
+                u64::from(width) * u64::from(height),
+                RenderSettings::MAX_PIXELS
+            ),
+        ));
+    }
     Ok(RenderSettings {
-        width: r.int_in("width", Some(d.width.into()), 1, max_res)? as u32,
-        height: r.int_in("height", Some(d.height.into()), 1, max_res)? as u32,
-        spp: r.int_in("spp", Some(d.spp.into()), 1, u32_max)? as u32,
+        width,
+        height,
+        // The one spp limit, shared with the driver's `--spp`: samples past it would repeat
+        // the first ones exactly.
+        spp: r.int_in("spp", Some(d.spp.into()), 1, MAX_SPP.into())? as u32,
         max_depth,
         seed: r.int_in("seed", Some(d.seed as i64), 0, i64::MAX)? as u64,
         rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,

@@ -173,7 +173,8 @@ pub fn generate_camera_rays(
 /// Appends one camera ray per `(pixel[i], sample[i], seed[i])` to `rays`: the first segment
 /// of path `i`, starting in the volumes `stack` (jitter as in [`generate_camera_rays`]).
 /// Written column by column: the projection decides which of origin and direction varies,
-/// and every other column is a constant of camera rays (`tmin` 0, `tmax` infinity,
+/// and every other column is a constant of camera rays (`tmin`
+/// [`FREE_ORIGIN`](crate::intersect::FREE_ORIGIN), `tmax` infinity,
 /// throughput 1, no lobe, depth and passes 0, pdf 0, `eta_scale` 1, dimension
 /// [`FIRST_PATH_DIMENSION`], no shading context, `prev_p` = origin).
 pub fn push_camera_rays(
@@ -218,7 +219,8 @@ pub fn push_camera_rays(
         }
     }
     rays.prev_p.extend_from_slice(&rays.origin[base..end]);
-    rays.tmin.resize(end, 0.0);
+    // The camera is no computed surface point: hits close to it are decided exactly.
+    rays.tmin.resize(end, crate::intersect::FREE_ORIGIN);
     rays.tmax.resize(end, f32::INFINITY);
     rays.path.extend(0..n as u32);
     rays.throughput.resize(end, Rgb::WHITE);
@@ -432,7 +434,8 @@ mod tests {
                 assert_eq!((o2[i], d2[i]), (o, d));
                 assert!((d.length() - 1.0).abs() < 1e-6);
                 assert_eq!(r.prev_p, o);
-                assert_eq!((r.tmin, r.tmax), (0.0, f32::INFINITY));
+                assert_eq!(r.tmin.to_bits(), crate::intersect::FREE_ORIGIN.to_bits());
+                assert_eq!(r.tmax, f32::INFINITY);
                 assert_eq!(r.path, i as u32);
                 assert_eq!(r.throughput, Rgb::WHITE);
                 assert_eq!(r.lobe, LobeSampled::NONE);

@@ -4,6 +4,13 @@
 //! count, so the mean and the variance of the mean can be reported. Non-finite samples (NaN,
 //! infinity) are never splatted: they are counted and dropped (the sample still counts as
 //! taken, with zero radiance, so the estimator stays unbiased for the finite ones).
+//!
+//! The sums are kept in f64, so no finite f32 radiance can overflow them (`2^32` samples
+//! of `f32::MAX` squared is 1.5e86, far below f64's 1.8e308); in f32, 16 samples of 1e38
+//! summed to infinity and a radiance of 1e20 squared to infinity in the sum of squares
+//! (issue 14 item 7). The reported layers are f32: the mean of finite f32 samples is
+//! finite, and the variance of the mean saturates at `f32::MAX` (reached for radiance
+//! varying by more than about 1e19), the film's documented maximum.
 
 use risotto_components::Rgb;
 
@@ -14,10 +21,10 @@ pub struct Film {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Sum of sample radiance per pixel.
-    pub sum: Vec<Rgb>,
-    /// Sum of squared sample radiance per pixel (per channel).
-    pub sum_sq: Vec<Rgb>,
+    /// Sum of sample radiance per pixel (r, g, b), in f64.
+    pub sum: Vec<[f64; 3]>,
+    /// Sum of squared sample radiance per pixel (per channel), in f64.
+    pub sum_sq: Vec<[f64; 3]>,
     /// Number of samples per pixel.
     pub count: Vec<u32>,
     /// Samples dropped because they were not finite.
@@ -31,19 +38,21 @@ impl Film {
         Film {
             width,
             height,
-            sum: vec![Rgb::BLACK; n],
-            sum_sq: vec![Rgb::BLACK; n],
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
             count: vec![0; n],
             nan_dropped: 0,
         }
     }
 
-    /// Mean radiance of pixel `i`.
+    /// Mean radiance of pixel `i` (finite: a mean of finite f32 samples).
     pub fn mean(&self, i: usize) -> Rgb {
         if self.count[i] == 0 {
             Rgb::BLACK
         } else {
-            self.sum[i] / self.count[i] as f32
+            let n = self.count[i] as f64;
+            let [r, g, b] = self.sum[i].map(|s| (s / n) as f32);
+            Rgb::new(r, g, b)
         }
     }
 
@@ -53,13 +62,13 @@ impl Film {
         if n < 2.0 {
             return Rgb::BLACK;
         }
-        let var = |s: f32, s2: f32| -> f32 {
-            let (s, s2) = (s as f64, s2 as f64);
+        let var = |c: usize| -> f32 {
+            let (s, s2) = (self.sum[i][c], self.sum_sq[i][c]);
             let v = (s2 - s * s / n) / (n - 1.0);
-            (v.max(0.0) / n) as f32
+            // Saturates at the largest f32 rather than rounding to infinity.
+            (v.max(0.0) / n).min(f32::MAX as f64) as f32
         };
-        let (s, s2) = (self.sum[i], self.sum_sq[i]);
-        Rgb::new(var(s.r, s2.r), var(s.g, s2.g), var(s.b, s2.b))
+        Rgb::new(var(0), var(1), var(2))
     }
 
     /// Adds another film of the same size (used to gather tiles).
@@ -68,8 +77,10 @@ impl Film {
             for tx in 0..tile.width {
                 let src = (ty * tile.width + tx) as usize;
                 let dst = ((y0 + ty) * self.width + (x0 + tx)) as usize;
-                self.sum[dst] += tile.sum[src];
-                self.sum_sq[dst] += tile.sum_sq[src];
+                for c in 0..3 {
+                    self.sum[dst][c] += tile.sum[src][c];
+                    self.sum_sq[dst][c] += tile.sum_sq[src][c];
+                }
                 self.count[dst] += tile.count[src];
             }
         }
@@ -107,8 +118,11 @@ pub fn splat(film: &mut Film, pixel: &[u32], radiance: &[Rgb]) -> u64 {
         #[allow(clippy::eq_op, reason = "x - x is the finiteness test")]
         let finite = (l.r - l.r) + (l.g - l.g) + (l.b - l.b) == 0.0;
         if finite {
-            s += l;
-            sq += l * l;
+            let l = [l.r as f64, l.g as f64, l.b as f64];
+            for c in 0..3 {
+                s[c] += l[c];
+                sq[c] += l[c] * l[c];
+            }
         } else {
             dropped += 1;
         }
@@ -151,10 +165,12 @@ mod tests {
             .collect();
         splat(&mut f, &pixel[..6], &rad[..6]);
         splat(&mut f, &pixel[6..], &rad[6..]);
-        let (mut sum, mut sq, mut count) = ([Rgb::BLACK; 3], [Rgb::BLACK; 3], [0u32; 3]);
+        let (mut sum, mut sq, mut count) = ([[0.0f64; 3]; 3], [[0.0f64; 3]; 3], [0u32; 3]);
         for (&p, &l) in pixel.iter().zip(&rad) {
-            sum[p as usize] += l;
-            sq[p as usize] += l * l;
+            for (c, x) in l.to_array().into_iter().enumerate() {
+                sum[p as usize][c] += x as f64;
+                sq[p as usize][c] += x as f64 * x as f64;
+            }
             count[p as usize] += 1;
         }
         assert_eq!(f.sum, sum.to_vec());
@@ -177,8 +193,30 @@ mod tests {
         );
         assert_eq!(d, 2);
         assert_eq!(f.nan_dropped, 2);
-        assert!(f.sum[0].is_finite());
-        assert_eq!(f.sum[0], Rgb::splat(1.0));
+        assert_eq!(f.sum[0], [1.0; 3]);
         assert_eq!(f.count[0], 3);
+    }
+
+    /// Issue 14 item 7: in f32 sums, 16 samples of 1e38 gave an infinite mean and samples
+    /// of 1e20 an infinite variance. The mean stays exact, the variance finite (saturating
+    /// at `f32::MAX` where the true value exceeds it).
+    #[test]
+    fn huge_finite_radiance_does_not_overflow() {
+        let mut f = Film::new(2, 1);
+        let huge: Vec<Rgb> = (0..16).map(|_| Rgb::splat(1e38)).collect();
+        splat(&mut f, &[0; 16], &huge);
+        assert_eq!(f.mean(0), Rgb::splat(1e38));
+        assert!(f.variance_of_mean(0).is_finite());
+        let bright: Vec<Rgb> = (0..16)
+            .map(|i| Rgb::new(1e20 * (i % 2) as f32, 1e20, f32::MAX * (i % 2) as f32))
+            .collect();
+        splat(&mut f, &[1; 16], &bright);
+        let (m, v) = (f.mean(1), f.variance_of_mean(1));
+        assert!((m.r / 5e19 - 1.0).abs() < 1e-6, "{m:?}");
+        // Sample variance of eight 0s and eight 1e20s: 16/15 * 0.25e40; over 16 samples.
+        assert!((v.r as f64 / (0.25e40 / 15.0) - 1.0).abs() < 1e-5, "{v:?}");
+        assert!(v.g < 1e-3 * v.r, "{v:?}");
+        assert_eq!(v.b, f32::MAX);
+        assert_eq!(f.nan_dropped, 0);
     }
 }

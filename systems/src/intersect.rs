@@ -32,7 +32,9 @@
 //! Hits are accepted for `tmin < t < tmax`; a triangle hit must also be farther beyond
 //! `tmin` than the rounding-error bound of its computed `t` (pbrt-v4's conservative t), so
 //! that rays spawned on a large triangle, or walks that restart just past a hit, do not find
-//! the same surface again.
+//! the same surface again. For rays from a free origin ([`FREE_ORIGIN`], camera rays) a hit
+//! within the f32 bound is decided again in double precision, whose bound is 2^29 times
+//! smaller: a camera 1e-6 above a 40-unit floor sees the floor.
 
 use std::marker::PhantomData;
 
@@ -221,6 +223,11 @@ impl WatertightRay {
         let inv_det = 1.0 / det;
         let t = scaled_t * inv_det;
         if !(t > tmin && t < tmax) {
+            // A ray from a free origin may still hit where f32 put `t` at or behind it.
+            if from_free_origin(tmin) && t < tmax && -t <= t_error_bound(x, y, z, u, v, w, inv_det)
+            {
+                return self.near_hit_f64(rows, tmin, tmax);
+            }
             return None;
         }
         // The computed `t` is only known to within `delta_t`; a hit that close to `tmin`
@@ -228,9 +235,9 @@ impl WatertightRay {
         // re-finding the triangle it just crossed, would hit it again). Reject it, as
         // pbrt-v4 does for `tmin = 0` ("Physically Based Rendering", 4th ed., sec. 6.8.7,
         // conservative ray-triangle t: bounds on the rounding of the transformed vertices,
-        // the edge functions and the scaled t).
+        // the edge functions and the scaled t), unless double precision decides it.
         if t - tmin <= t_error_bound(x, y, z, u, v, w, inv_det) {
-            return None;
+            return self.near_hit_f64(rows, tmin, tmax);
         }
         Some(TriangleHit {
             t,
@@ -238,6 +245,99 @@ impl WatertightRay {
             b2: w * inv_det,
         })
     }
+}
+
+impl WatertightRay {
+    /// A hit the f32 test found within its error bound of `tmin`, decided again in double
+    /// precision (the edge functions' signs as the f32 test found them, so closed meshes
+    /// stay watertight). Only for rays from a free origin (`tmin = -0.0`, see
+    /// [`FREE_ORIGIN`]): their origin is no computed surface point, so a hit the f64 `t`
+    /// and its bound put past the origin is real. The f32 bound grows with the vertices' distance from the origin, not with the
+    /// origin's distance from the triangle: it rejected the floor 1e-6 below a camera
+    /// whenever the far corners, 20 units away, were sheared into the test (issue 14 item
+    /// 4: the image's upper half saw through the floor). Walks that restart past a hit
+    /// (`tmin > 0`) keep the f32 rejection: their `tmin` is measured from the f32 `t` of
+    /// the surface they left.
+    ///
+    /// The shear constants are the f32 ones, which define a ray through the same origin
+    /// whose direction differs by about 1e-7 relative: `t`'s sign is the same for both, its
+    /// value agrees to that relative error.
+    #[cold]
+    #[inline(never)]
+    fn near_hit_f64(&self, rows: &[Vec4; 3], tmin: f32, tmax: f32) -> Option<TriangleHit> {
+        if !from_free_origin(tmin) {
+            return None;
+        }
+        let [ox, oy, oz] = [self.ox.x, self.oy.x, self.oz.x].map(f64::from);
+        let [sx, sy, sz] = [self.sx.x, self.sy.x, self.sz.x].map(f64::from);
+        let (rx, ry, rz) = (
+            rows[self.kx as usize].to_array(),
+            rows[self.ky as usize].to_array(),
+            rows[self.kz as usize].to_array(),
+        );
+        let mut x = [0.0f64; 3];
+        let mut y = [0.0f64; 3];
+        let mut z = [0.0f64; 3];
+        for i in 0..3 {
+            // The difference of two f32 values is exact in f64.
+            z[i] = rz[i] as f64 - oz;
+            x[i] = (rx[i] as f64 - ox) - sx * z[i];
+            y[i] = (ry[i] as f64 - oy) - sy * z[i];
+        }
+        let u = x[2] * y[1] - y[2] * x[1];
+        let v = x[0] * y[2] - y[0] * x[2];
+        let w = x[1] * y[0] - y[1] * x[0];
+        let det = u + v + w;
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let z = z.map(|z| z * sz);
+        let t = (u * z[0] + v * z[1] + w * z[2]) / det;
+        // pbrt-v4's bound (see `t_error_bound`) with the f64 unit roundoff, plus the
+        // relative error of `t` from the shear constants' rounding.
+        let gamma = |n: f64| {
+            let e = f64::EPSILON * 0.5;
+            n * e / (1.0 - n * e)
+        };
+        let max3 = |a: [f64; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
+        let (max_x, max_y, max_z) = (max3(x), max3(y), max3(z));
+        let delta_z = gamma(3.0) * max_z;
+        let delta_x = gamma(5.0) * (max_x + max_z);
+        let delta_y = gamma(5.0) * (max_y + max_z);
+        let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        let max_e = max3([u, v, w]);
+        let bound = 3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e)
+            / det.abs()
+            + 4.0 * f32::EPSILON as f64 * t.abs();
+        let t32 = t as f32;
+        if !(t > bound && t32 > 0.0 && t32 < tmax) {
+            return None;
+        }
+        Some(TriangleHit {
+            t: t32,
+            b1: (v / det) as f32,
+            b2: (w / det) as f32,
+        })
+    }
+}
+
+/// The `tmin` of a ray whose origin is not a computed surface point (camera rays, probes
+/// from a given point): `-0.0`, equal to `0.0` in every comparison, so such a ray is a
+/// `tmin = 0` ray everywhere, except that hits within the triangle test's f32 error bound
+/// of its origin are decided in double precision instead of rejected.
+///
+/// A ray spawned off a surface must keep `tmin = +0.0`: its origin is the surface point
+/// moved by [`crate::ray::ray_offset`], which is relative to the point's coordinates, while
+/// the point's own rounding error is relative to its triangle's vertices (pbrt-v4 sec.
+/// 6.8.6): on a large triangle near the origin the spawned ray can start on the wrong side
+/// of its own triangle, and only the f32 bound, which grows with the vertices too, rejects
+/// that re-hit.
+pub const FREE_ORIGIN: f32 = -0.0;
+
+/// Whether `tmin` marks a ray from a free origin ([`FREE_ORIGIN`]).
+#[inline(always)]
+fn from_free_origin(tmin: f32) -> bool {
+    tmin.to_bits() == FREE_ORIGIN.to_bits()
 }
 
 /// `gamma(n) = n eps / (1 - n eps)` with `eps = 2^-24` (unit roundoff): the relative error
@@ -699,7 +799,8 @@ struct PacketLanes<F> {
 
 /// The outcome of [`intersect_packet`]: lanes accepted (`hit`, with their `t` and
 /// barycentrics; the vectors are meaningless where `hit` is 0) and lanes left to the scalar
-/// test (`fallback`: an edge function is exactly zero, resolved in f64 there).
+/// test (`fallback`: an edge function is exactly zero, or, for a free origin, the hit lies
+/// within the f32 error bound of the origin; both are resolved in f64 there).
 struct PacketHits<F> {
     hit: u32,
     fallback: u32,
@@ -726,8 +827,9 @@ fn shear_vertex<S: Simd>(
 /// The watertight test of [`WatertightRay::intersect_packed`] on the eight triangles of a
 /// packet at once, with the same operations in the same order on every lane (no fused
 /// multiply-add), so a lane's `t`, barycentrics and decision are bit-identical to the
-/// scalar test's on that triangle. Lanes with an edge function exactly zero are reported in
-/// `fallback` instead.
+/// scalar test's on that triangle. Lanes with an edge function exactly zero, and lanes of a
+/// free-origin ray whose hit lies within the error bound, are reported in `fallback`
+/// instead.
 #[inline(always)]
 fn intersect_packet<S: Simd>(
     s: S,
@@ -774,8 +876,15 @@ fn intersect_packet<S: Simd>(
     let scaled_t = u * z0 + v * z1 + w * z2;
     let inv_det = s.splat(1.0) / det;
     let t = scaled_t * inv_det;
-    hit &= (t.gt(s.splat(tmin)) & t.lt(s.splat(tmax))).bits();
-    if hit == 0 {
+    let below_tmax = t.lt(s.splat(tmax)).bits();
+    // Rays from a free origin also look again at hits f32 put at or behind it (`near`).
+    let behind = if from_free_origin(tmin) {
+        hit & below_tmax & !t.gt(zero).bits()
+    } else {
+        0
+    };
+    hit &= t.gt(s.splat(tmin)).bits() & below_tmax;
+    if hit | behind == 0 {
         return PacketHits {
             hit,
             fallback,
@@ -800,7 +909,16 @@ fn intersect_packet<S: Simd>(
     let max_e = u.abs().max(v.abs()).max(w.abs());
     let bound =
         s.splat(3.0) * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-    hit &= !(t - s.splat(tmin)).le(bound).bits();
+    let near = (t - s.splat(tmin)).le(bound).bits();
+    // Rays from a free origin decide hits within the bound of it in double precision (the
+    // scalar test's `near_hit_f64`), on either side.
+    let fallback = if from_free_origin(tmin) {
+        let near_behind = behind & (zero - t).le(bound).bits();
+        fallback | (near & hit) | near_behind
+    } else {
+        fallback
+    };
+    hit &= !near;
     PacketHits {
         hit,
         fallback,

@@ -1494,3 +1494,39 @@ fn documented_complete_example_parses() {
     assert!(centre.distance(Vec3::new(-3.0, 6.0, 3.0)) < 1e-5);
     assert!(normal(&lamp[0]).dot(-centre.normalize()) > 0.9999);
 }
+
+/// Issue 14 item 6: `spp` above the driver's limit (65536) was accepted, the extra samples
+/// repeating the first ones exactly, and `spp = 4294967295` ran forever.
+#[test]
+fn spp_above_the_sampler_limit_is_rejected() {
+    assert_eq!(
+        parse(&base_with("spp = 4", "spp = 65536"))
+            .unwrap()
+            .render
+            .spp,
+        65536
+    );
+    for v in ["65537", "4294967295"] {
+        let text = base_with("spp = 4", &format!("spp = {v}"));
+        let e = parse_err(&text);
+        assert_message(&e, line_of(&text, "spp ="), &["spp", "65536"]);
+    }
+}
+
+/// Issue 14 item 6: 65536 x 65536 was accepted and aborted allocating the film (~730 GB).
+/// A resolution past `MAX_PIXELS` is an error at the key, naming the value.
+#[test]
+fn resolution_past_the_film_bound_is_rejected() {
+    let ok = base_with("width = 64\nheight = 48", "width = 8192\nheight = 8192");
+    assert_eq!(parse(&ok).unwrap().render.width, 8192);
+    let text = base_with("width = 64\nheight = 48", "width = 65536\nheight = 65536");
+    let e = parse_err(&text);
+    assert_message(
+        &e,
+        line_of(&text, "height ="),
+        &["height", "65536 x 65536", "67108864"],
+    );
+    let text = base_with("width = 64\nheight = 48", "height = 2048\nwidth = 65536");
+    let e = parse_err(&text);
+    assert_message(&e, line_of(&text, "height ="), &["height", "65536 x 2048"]);
+}
