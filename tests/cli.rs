@@ -285,3 +285,76 @@ fn bad_options_are_rejected_before_rendering() {
         assert!(!exr.exists(), "{flag} {value}: an image was written");
     }
 }
+
+/// Bad scattering-media values are located errors: the file, the interior's entity, the key
+/// and the value.
+#[test]
+fn bad_media_values_are_located_errors() {
+    let dir = temp_dir("media");
+    let with_interior = |interior: &str| {
+        scene_with(&[(
+            "[materials.emitter]",
+            &format!(
+                "[materials.smoke]\ntype = \"interface\"\ninterior = {interior}\n\n\
+                 [materials.emitter]"
+            ),
+        )])
+    };
+    let cases: [(&str, &str, &[&str]); 8] = [
+        (
+            "albedo.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, albedo = 1.5 }"#,
+            &["materials.smoke.interior", "albedo", "[0, 1]", "1.5"],
+        ),
+        (
+            "negative.toml",
+            r#"{ type = "homogeneous", sigma_t = [1, -2, 1] }"#,
+            &["materials.smoke.interior", "sigma_t", "-2"],
+        ),
+        (
+            "g.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, phase = { type = "hg", g = 1.0 } }"#,
+            &["materials.smoke.interior.phase", "g", "1"],
+        ),
+        (
+            "blend.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, phase = { type = "double_hg", g1 = 0.5, g2 = -0.5, blend = 2 } }"#,
+            &["phase", "blend", "2"],
+        ),
+        (
+            "phase.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, phase = { type = "rayleigh" } }"#,
+            &["phase", "unknown phase function", "rayleigh"],
+        ),
+        (
+            "both.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, sigma_s = 1 }"#,
+            &["materials.smoke.interior", "sigma_s", "not both"],
+        ),
+        (
+            "none.toml",
+            r#"{ type = "homogeneous", albedo = 0.5 }"#,
+            &["materials.smoke.interior", "sigma_t"],
+        ),
+        (
+            "mode.toml",
+            r#"{ type = "homogeneous", sigma_t = 2, scattering = "double" }"#,
+            &["scattering", "double", "multiple, single"],
+        ),
+    ];
+    for (name, interior, needles) in cases {
+        let (out, _) = render(&dir, name, &with_interior(interior), &[]);
+        let mut all = vec![name];
+        all.extend_from_slice(needles);
+        assert_fails(name, &out, &all);
+    }
+    // And a valid medium renders.
+    let (out, exr) = render(
+        &dir,
+        "ok.toml",
+        &with_interior(r#"{ type = "homogeneous", sigma_t = 2, albedo = 0.5 }"#),
+        &[],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(exr.exists());
+}
