@@ -355,6 +355,10 @@ fn bad_media_values_are_located_errors() {
         &with_interior(r#"{ type = "homogeneous", sigma_t = 2, albedo = 0.5 }"#),
         &[],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(exr.exists());
 }

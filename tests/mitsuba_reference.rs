@@ -51,7 +51,11 @@ fn check(scene: &str, reference: &str, spp: u32, mean_tol: f64, max_rmse: f64) {
     // mirrored or biased image is far above it.
     // A zero-variance render (the white furnace) is bounded by `max_rmse` alone: the
     // reference's own noise.
-    let iid = if expected_rmse > 0.0 { expected_rmse } else { f64::INFINITY };
+    let iid = if expected_rmse > 0.0 {
+        expected_rmse
+    } else {
+        f64::INFINITY
+    };
     assert!(
         m.all.rmse < max_rmse.min(iid),
         "{scene}: rmse {} (bound {max_rmse}, iid prediction {expected_rmse})",

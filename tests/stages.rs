@@ -191,6 +191,59 @@ fn absorbing_interior_runs_partition_and_volume() {
     assert_walked_shadows(&out);
 }
 
+/// An absorbing interior never shades points inside a volume: no `phase` system, no volume
+/// events; a scattering one does, and its stats say how many flights scattered or passed.
+#[test]
+fn only_scattering_media_run_the_volume_scatter_stage() {
+    let beer = render_room(|s| {
+        add_object(
+            s,
+            mat_in(
+                Surface::Interface,
+                Interior::Beer {
+                    sigma_a: Rgb::new(0.5, 1.0, 2.0),
+                },
+            ),
+        )
+    });
+    let (systems, features) = json(&beer);
+    assert!(
+        !features.iter().any(|f| f == "scattering_media"),
+        "{features:?}"
+    );
+    assert_eq!(calls(&beer, System::Phase), 0);
+    assert!(systems.get("phase").is_none(), "{systems}");
+    assert!(beer.stats.counters.volume_events.iter().all(|&n| n == 0));
+
+    let smoke = render_room(|s| {
+        add_object(
+            s,
+            mat_in(
+                Surface::Interface,
+                Interior::Homogeneous(risotto::engine::media::HomogeneousMedium {
+                    sigma_t: Rgb::splat(2.0),
+                    sigma_s: Rgb::splat(1.6),
+                    phase: risotto::systems::phase::PhaseFunction::Isotropic,
+                    scattering: risotto::engine::media::Scattering::Multiple,
+                }),
+            ),
+        )
+    });
+    let (systems, features) = json(&smoke);
+    assert!(
+        features.iter().any(|f| f == "scattering_media"),
+        "{features:?}"
+    );
+    assert!(calls(&smoke, System::Phase) > 0);
+    assert!(systems["phase"]["calls"].as_u64().unwrap() > 0, "{systems}");
+    let events = &smoke.stats.counters.volume_events;
+    use risotto::engine::stats::VolumeEvent;
+    assert!(events[VolumeEvent::Scatter as usize] > 0 && events[VolumeEvent::Pass as usize] > 0);
+    let v: serde_json::Value = serde_json::from_str(&smoke.stats.to_json()).unwrap();
+    assert!(v["volume_events"]["scatter"].as_u64().unwrap() > 0, "{v}");
+    assert_walked_shadows(&smoke);
+}
+
 #[test]
 fn dielectric_without_interior_runs_no_volume_stages() {
     // Transmissive (refraction, priorities) but no volume: no partitioning, no volume
