@@ -206,6 +206,7 @@ fn volume_hits(
         &mut samplers,
         LobeSampled(0xff),
         VolumeServices {
+            techniques: Default::default(),
             ictx: &mut ictx,
             lighting: None,
             factory,

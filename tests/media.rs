@@ -261,3 +261,46 @@ fn single_scattering_without_a_delegate_falls_back_to_multiple() {
         "the medium scattered"
     );
 }
+
+/// The `scattering` technique overrides what the medium says: a multiple-scattering furnace
+/// rendered with `scattering = single` loses the higher orders (darker than 1), and with
+/// `scattering = multiple` it is white again.
+#[test]
+fn the_scattering_technique_overrides_the_medium() {
+    use risotto::engine::plugin::VolumeTechniques;
+    use risotto::engine::render::{render, RenderOptions};
+    let mut scene = Scene::new(camera(40.0, 4.0, 12, 12), settings(12, 12, 16, u32::MAX));
+    let interior = medium(2.0, 1.0, PhaseFunction::Isotropic, Scattering::Multiple);
+    let m = scene.add_material("medium", 0, mat_in(Surface::Interface, interior));
+    scene.add_shape(
+        "ball",
+        ShapeGeometry::Sphere(risotto::systems::geometry::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }),
+        m,
+        None,
+    );
+    environment(&mut scene, Rgb::WHITE);
+    let compiled = scene.compile().unwrap();
+    let mean = |scattering| {
+        let options = RenderOptions {
+            volume: VolumeTechniques { scattering },
+            ..RenderOptions::default()
+        };
+        image_mean(&render(&compiled, &options, &|_| {}).unwrap())
+            .0
+            .g
+    };
+    let (scene_says, single, multiple) = (
+        mean(None),
+        mean(Some(Scattering::Single)),
+        mean(Some(Scattering::Multiple)),
+    );
+    assert!((scene_says - 1.0).abs() < 1e-4, "{scene_says}");
+    assert!((multiple - 1.0).abs() < 1e-4, "{multiple}");
+    assert!(
+        single < 0.95,
+        "single scattering alone must lose light: {single}"
+    );
+}

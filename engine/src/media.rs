@@ -277,6 +277,7 @@ impl HomogeneousInterior<'_> {
             lighting,
             factory,
             arena,
+            ..
         } = services;
         let lighting = lighting.expect("called with a delegate");
         let scene = ictx.scene;
@@ -431,7 +432,11 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             let r = out.points.ray_id[k] as usize;
             tmax[r] = tmax[r].min(out.points.vlen[k]);
         }
-        let single = self.medium.scattering == Scattering::Single && services.lighting.is_some();
+        let scattering = services
+            .techniques
+            .scattering
+            .unwrap_or(self.medium.scattering);
+        let single = scattering == Scattering::Single && services.lighting.is_some();
         if single {
             self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
         } else {

@@ -190,6 +190,17 @@ pub struct VolumeServices<'a, 's> {
     pub factory: &'a dyn BxdfFactory,
     /// The worker's per-batch arena (plain data only: it runs no destructors).
     pub arena: &'a Bump,
+    /// Technique choices of this render that override what the volume's material says
+    /// (the built-in media honour them; a plug-in may).
+    pub techniques: VolumeTechniques,
+}
+
+/// Technique choices a render makes for every volume (`risotto render --technique`,
+/// `risotto converge`), over what each material says. `None` = as the material says.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VolumeTechniques {
+    /// Single or multiple scattering for every scattering medium.
+    pub scattering: Option<crate::media::Scattering>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).

@@ -28,6 +28,9 @@ pub struct RenderOptions {
     pub technique: LightingTechnique,
     /// Sampler (the `sampler` technique). Defaults to Sobol.
     pub sampler: SamplerKind,
+    /// Scattering-media techniques over what each medium says (the `scattering` technique).
+    /// Defaults to none (as the scene says).
+    pub volume: crate::plugin::VolumeTechniques,
 }
 
 impl Default for RenderOptions {
@@ -38,6 +41,7 @@ impl Default for RenderOptions {
             tile_size: 16,
             technique: LightingTechnique::Mis,
             sampler: SamplerKind::Sobol,
+            volume: Default::default(),
         }
     }
 }
@@ -82,6 +86,7 @@ pub fn render(
 ) -> Result<RenderOutput, RenderError> {
     let tracer = PathTracer {
         technique: options.technique,
+        volume: options.volume,
     };
     render_with(&tracer, scene, options, progress)
 }

@@ -7,6 +7,7 @@
 //! of [`Techniques`]) plus that field's use in [`Techniques::render_options`].
 
 use crate::integrator::LightingTechnique;
+use crate::media::Scattering;
 use crate::render::RenderOptions;
 use crate::scene::Features;
 use risotto_systems::independent_sampler::SamplerKind;
@@ -116,6 +117,40 @@ pub static REGISTRY: &[Technique] = &[
             }
         },
     },
+    Technique {
+        name: "scattering",
+        summary: "single or multiple scattering in scattering media",
+        values: &[
+            TechniqueValue {
+                name: "scene",
+                summary: "as each medium's `scattering` says",
+            },
+            TechniqueValue {
+                name: "multiple",
+                summary: "every order: points inside go back to the path tracer",
+            },
+            TechniqueValue {
+                name: "single",
+                summary:
+                    "single scattering through the lighting delegate (biased: no higher orders)",
+            },
+        ],
+        default: "scene",
+        applies_to: "scenes with scattering media",
+        applies: |f| f.scattering_media,
+        get: |t| match t.scattering {
+            None => "scene",
+            Some(Scattering::Multiple) => "multiple",
+            Some(Scattering::Single) => "single",
+        },
+        set: |t, v| {
+            t.scattering = match v {
+                "multiple" => Some(Scattering::Multiple),
+                "single" => Some(Scattering::Single),
+                _ => None,
+            }
+        },
+    },
 ];
 
 /// A bad technique name, value or use.
@@ -183,6 +218,8 @@ pub struct Techniques {
     pub lighting: LightingTechnique,
     /// `sampler`.
     pub sampler: SamplerKind,
+    /// `scattering` (`None`: as each medium says).
+    pub scattering: Option<Scattering>,
 }
 
 impl Techniques {
@@ -256,11 +293,16 @@ impl Techniques {
     }
 
     /// A short label: the non-default assignments (`lighting=nee`), or every technique's
-    /// value joined by `+` when all are defaults.
+    /// default joined by `+` when all are defaults (leaving out defaults that defer to the
+    /// scene, such as `scattering=scene`).
     pub fn label(&self) -> String {
         let pairs = self.non_default();
         let pairs = if pairs.is_empty() {
-            REGISTRY.iter().map(|t| (t.name, t.default)).collect()
+            REGISTRY
+                .iter()
+                .filter(|t| t.default != "scene")
+                .map(|t| (t.name, t.default))
+                .collect()
         } else {
             pairs
         };
@@ -276,6 +318,9 @@ impl Techniques {
         RenderOptions {
             technique: self.lighting,
             sampler: self.sampler,
+            volume: crate::plugin::VolumeTechniques {
+                scattering: self.scattering,
+            },
             ..base
         }
     }

@@ -51,6 +51,8 @@ pub const DIMS_PER_VERTEX: u32 = 8;
 pub struct PathTracer {
     /// Direct-lighting technique.
     pub technique: LightingTechnique,
+    /// Technique choices handed to volume integrators.
+    pub volume: crate::plugin::VolumeTechniques,
 }
 
 impl Integrator for PathTracer {

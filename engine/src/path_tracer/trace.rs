@@ -184,6 +184,7 @@ fn partitioned(
                         lighting,
                         factory,
                         arena,
+                        techniques: tracer.volume,
                     },
                     &mut t.answers,
                 );
