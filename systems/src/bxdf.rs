@@ -249,7 +249,7 @@ pub fn diffuse_sample(reflectance: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample>
 ///
 /// Bit for bit `Frame::from_normal(n).to_world(diffuse_sample(_, frame.to_local(vn), u).wi)`
 /// and its pdf (tested): the same float operations in the same order, evaluated for eight
-/// points at once ([`crate::simd8`] lanes), with the concentric map's two wedges as selects
+/// points at once (`simd8` lanes), with the concentric map's two wedges as selects
 /// (so both share one division and one polynomial) and no branch per point.
 ///
 /// # Panics
