@@ -481,7 +481,7 @@ impl LightSet {
     /// elsewhere. `geometry` must be the geometry the set was built with.
     ///
     /// Bit for bit `sample`'s results (tested). Points are taken eight at a time
-    /// ([`crate::simd8`] lanes): the selection, and for lanes whose selected light is a
+    /// (`simd8` lanes): the selection, and for lanes whose selected light is a
     /// triangle area light (the common case) the point on the triangle, direction, distance
     /// and solid-angle pdf, with one square root and two divisions for the eight. Lanes of
     /// other lights go through `sample` one by one. The columns (rather than
