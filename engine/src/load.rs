@@ -22,7 +22,7 @@
 
 use crate::builtin::{BuiltinMaterial, Interior, Surface};
 use crate::media::{HomogeneousMedium, Scattering};
-use crate::output::{read_exr_rgb, OutputError};
+use crate::output::{read_exr_rgb, Image, OutputError};
 use crate::plugin::BxdfFactory;
 use crate::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use crate::scene_file::{
@@ -395,11 +395,13 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             LightDesc::Environment { radiance, map, .. } => {
                 let map = match map {
                     Some(p) => {
-                        let img = read_exr_rgb(&p).map_err(|e| LoadError::EnvironmentMap {
-                            scene: desc.path.clone(),
-                            light: name.clone(),
-                            source: e,
-                        })?;
+                        let img = read_exr_rgb(&p)
+                            .and_then(|img| check_radiance_map(&p, img))
+                            .map_err(|e| LoadError::EnvironmentMap {
+                                scene: desc.path.clone(),
+                                light: name.clone(),
+                                source: e,
+                            })?;
                         Some(Arc::new(EnvironmentMap::new(
                             img.pixels, img.width, img.height,
                         )))
@@ -412,6 +414,29 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         scene.add_light(&name, light);
     }
     Ok(scene)
+}
+
+/// An environment map's texels are radiance: every channel finite and `>= 0`. The first
+/// texel that is not is an error naming the map, the pixel `(x, y)` (from the top left), the
+/// channel and the value (a NaN texel would drop every sample that sees it; a negative one
+/// would make a negative image).
+fn check_radiance_map(path: &Path, img: Image) -> Result<Image, OutputError> {
+    for (i, p) in img.pixels.iter().enumerate() {
+        for (c, v) in ["R", "G", "B"].into_iter().zip(p.to_array()) {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(OutputError::Invalid {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "pixel ({}, {}) channel {c} is {v}; environment map texels must be \
+                         finite and >= 0",
+                        i % img.width,
+                        i / img.width
+                    ),
+                });
+            }
+        }
+    }
+    Ok(img)
 }
 
 /// Compiles a scene, attributing errors to its file.

@@ -277,13 +277,77 @@ fn exr_error(path: &Path, source: exr::error::Error) -> OutputError {
     }
 }
 
+/// The largest image [`read_exr_rgb`] accepts, in pixels per part: 2^28 (16384 x 16384, a
+/// 3 GB RGB float image). Larger headers are rejected before their pixels are allocated.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+
+/// Bytes the file needs at least per chunk: its 8-byte offset-table entry and the chunk's
+/// own header (an `i32` coordinate and an `i32` byte count for scan-line chunks; more for
+/// tiles and multi-part files).
+const MIN_BYTES_PER_CHUNK: u64 = 16;
+
+/// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`]).
+fn check_exr_header(path: &Path) -> Result<(), OutputError> {
+    let file = File::open(path).map_err(|source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let file_len = file
+        .metadata()
+        .map_err(|source| OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .len();
+    let meta = exr::meta::MetaData::read_from_unbuffered(file, false)
+        .map_err(|source| exr_error(path, source))?;
+    let mut chunks = 0u64;
+    for (i, header) in meta.headers.iter().enumerate() {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        let pixels = (w as u64).saturating_mul(h as u64);
+        if pixels > MAX_IMAGE_PIXELS {
+            return Err(invalid(
+                path,
+                format!(
+                    "part {i}: the header claims {w} x {h} pixels, more than the {MAX_IMAGE_PIXELS} \
+                     pixels an image may have"
+                ),
+            ));
+        }
+        chunks = chunks.saturating_add(header.chunk_count as u64);
+    }
+    let needed = chunks.saturating_mul(MIN_BYTES_PER_CHUNK);
+    if needed > file_len {
+        let sizes: Vec<String> = meta
+            .headers
+            .iter()
+            .map(|h| format!("{} x {}", h.layer_size.width(), h.layer_size.height()))
+            .collect();
+        return Err(invalid(
+            path,
+            format!(
+                "the header claims {} pixels in {chunks} chunks, which need at least {needed} \
+                 bytes, but the file has {file_len} bytes (truncated or corrupt)",
+                sizes.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Reads the `R`, `G`, `B` channels of an EXR (any compression the exr crate decodes,
 /// including PIZ; half, float and uint samples are converted to `f32`).
 ///
 /// The "main" image is the first layer (part) that has un-prefixed `R`, `G`, `B` channels;
 /// failing that, the first layer with a `prefix.R/G/B` triple; failing that, a luminance-only
 /// `Y` channel is replicated into all three channels.
+///
+/// Before any pixel memory is allocated, every part's size (the header's `dataWindow`) is
+/// checked against [`MAX_IMAGE_PIXELS`], and the file must be long enough to hold the chunks
+/// the headers imply (an offset-table entry and a chunk header for each), so a small file
+/// whose header claims a huge image is an error naming the file and the claimed size.
 pub fn read_exr_rgb(path: &Path) -> Result<Image, OutputError> {
+    check_exr_header(path)?;
     let image = x::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -14,6 +14,15 @@
 //! Systems that never ran (zero calls) and termination reasons with a zero count are left
 //! out; a `"warnings": [...]` array is appended only when there are warnings.
 //!
+//! NaN provenance: each stage checks the values it produced (one pass over a column it has
+//! just written) and counts the non-finite ones by [`Stage`]; values that are non-finite
+//! only because their input was (a path throughput poisoned upstream) are not counted again,
+//! so each count names where a NaN or infinity first appeared. When any is non-zero the JSON
+//! has `"non_finite": {"bxdf": 3, "volume": 1}` (zero counts left out) and the summary a
+//! `non-finite values by stage:` line. A NaN or infinite Bxdf or phase weight ends its path
+//! (counted as absorbed) and other non-finite radiance is dropped at the film
+//! (`nan_dropped`), so these counts say where a silent loss or a dropped sample came from.
+//!
 //! Which systems appear shows which stages a scene needed: without volumes there is no
 //! `partition` or `volume`; shadow rays of scenes whose surfaces are all opaque (no volumes,
 //! no transmissive surface, no surface that lets shadows pass) are answered by one any-hit
@@ -172,6 +181,68 @@ impl Termination {
     }
 }
 
+/// A stage whose output is checked for NaN and infinity. The discriminant indexes
+/// [`SystemStats::non_finite`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Stage {
+    /// A surface Bxdf's samples (weight or pdf) and its evaluations towards light samples
+    /// (value or pdf).
+    Bxdf,
+    /// The same for a phase function at in-volume points (the shade stage's and the
+    /// lighting delegate's).
+    Phase,
+    /// A volume integrator's `nearest_hits`: the transmissions of the points and escaped
+    /// rays it returned.
+    Volume,
+    /// Light samples (radiance or pdf) of direct lighting and of the lighting delegate.
+    Lighting,
+    /// Shadow-ray contributions after the transmission walk (surfaces that let shadows pass,
+    /// volume integrators' `transmission`), finite before it.
+    Transmission,
+    /// Emission of surfaces hit by path rays, as added to the path (when the path's
+    /// throughput and transmission were finite).
+    Emission,
+    /// Environment radiance seen by escaped rays, as added to the path (when the path's
+    /// throughput and transmission were finite).
+    Environment,
+}
+
+impl Stage {
+    /// Number of stages.
+    pub const COUNT: usize = 7;
+    /// Every stage, in discriminant order.
+    pub const ALL: [Stage; Stage::COUNT] = [
+        Stage::Bxdf,
+        Stage::Phase,
+        Stage::Volume,
+        Stage::Lighting,
+        Stage::Transmission,
+        Stage::Emission,
+        Stage::Environment,
+    ];
+
+    /// The snake_case name used in JSON and in the summary.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Stage::Bxdf => "bxdf",
+            Stage::Phase => "phase",
+            Stage::Volume => "volume",
+            Stage::Lighting => "lighting",
+            Stage::Transmission => "transmission",
+            Stage::Emission => "emission",
+            Stage::Environment => "environment",
+        }
+    }
+}
+
+/// How many of `values` have a NaN or infinite channel (branch-free: a sum of flags).
+#[inline]
+pub fn count_non_finite<'a>(
+    values: impl IntoIterator<Item = &'a risotto_components::Rgb>,
+) -> usize {
+    values.into_iter().map(|v| !v.is_finite() as usize).sum()
+}
+
 /// Counters of one system.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SystemCounter {
@@ -204,6 +275,8 @@ pub struct SystemStats {
     pub terminated: [u64; Termination::COUNT],
     /// Samples dropped at the film because they were NaN or infinite.
     pub nan_dropped: u64,
+    /// Non-finite values by the stage that produced them, indexed by `Stage as usize`.
+    pub non_finite: [u64; Stage::COUNT],
     /// Per shape index: rays that crossed a back face of the shape without having entered it
     /// (a hint that its boundary is not closed). Grown on demand.
     pub unmatched_exits: Vec<u64>,
@@ -308,6 +381,12 @@ impl SystemStats {
         self.nan_dropped += n as u64;
     }
 
+    /// Counts `n` non-finite values produced by `stage`.
+    #[inline]
+    pub fn non_finite(&mut self, stage: Stage, n: usize) {
+        self.non_finite[stage as usize] += n as u64;
+    }
+
     /// Counters of one system.
     pub fn system(&self, sys: System) -> &SystemCounter {
         &self.systems[sys as usize]
@@ -324,6 +403,9 @@ impl SystemStats {
             *a += b;
         }
         self.nan_dropped += other.nan_dropped;
+        for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
+            *a += b;
+        }
         add_counts(&mut self.unmatched_exits, &other.unmatched_exits);
         add_counts(&mut self.entered_twice, &other.entered_twice);
         add_counts(&mut self.escaped_inside, &other.escaped_inside);
@@ -413,6 +495,21 @@ impl Serialize for VolumeEventsJson<'_> {
     }
 }
 
+/// Map keyed by stage name, zero counts omitted.
+struct NonFiniteJson<'a>(&'a [u64; Stage::COUNT]);
+impl Serialize for NonFiniteJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        for st in Stage::ALL {
+            let n = self.0[st as usize];
+            if n > 0 {
+                m.serialize_entry(st.name(), &n)?;
+            }
+        }
+        m.end()
+    }
+}
+
 /// Map keyed by termination name, zero counts omitted.
 struct TerminatedJson<'a>(&'a [u64; Termination::COUNT]);
 impl Serialize for TerminatedJson<'_> {
@@ -437,6 +534,9 @@ impl Serialize for RenderStats {
         m.serialize_entry("samples", &c.samples)?;
         m.serialize_entry("terminated", &TerminatedJson(&c.terminated))?;
         m.serialize_entry("nan_dropped", &c.nan_dropped)?;
+        if c.non_finite.iter().any(|&n| n > 0) {
+            m.serialize_entry("non_finite", &NonFiniteJson(&c.non_finite))?;
+        }
         if c.volume_events.iter().any(|&n| n > 0) {
             m.serialize_entry("volume_events", &VolumeEventsJson(&c.volume_events))?;
         }
@@ -517,6 +617,15 @@ impl fmt::Display for RenderStats {
         }
         writeln!(f)?;
         write!(f, "nan dropped: {}", c.nan_dropped)?;
+        if c.non_finite.iter().any(|&n| n > 0) {
+            write!(f, "\nnon-finite values by stage:")?;
+            for st in Stage::ALL {
+                let n = c.non_finite[st as usize];
+                if n > 0 {
+                    write!(f, " {} {n}", st.name())?;
+                }
+            }
+        }
         if !self.features.is_empty() {
             write!(f, "\nfeatures: {}", self.features.join(", "))?;
         }
@@ -688,5 +797,35 @@ mod tests {
         assert!(shown.contains("escaped 60 (60.0%)"), "{shown}");
         assert!(shown.contains("max_depth 40 (40.0%)"), "{shown}");
         assert!(shown.contains("nan dropped: 1"), "{shown}");
+        assert!(!shown.contains("non-finite"), "{shown}");
+    }
+
+    #[test]
+    fn non_finite_counts_merge_serialise_and_show_by_stage() {
+        let mut a = sample_worker(1);
+        a.non_finite(Stage::Bxdf, 2);
+        let mut b = SystemStats::new();
+        b.non_finite(Stage::Volume, 5);
+        b.non_finite(Stage::Bxdf, 1);
+        a.merge(&b);
+        assert_eq!(a.non_finite[Stage::Bxdf as usize], 3);
+        let stats = RenderStats::new(a, 1.0);
+        let v: Value = serde_json::from_str(&stats.to_json()).unwrap();
+        assert_eq!(v["non_finite"], serde_json::json!({"bxdf": 3, "volume": 5}));
+        let shown = stats.to_string();
+        assert!(
+            shown.contains("non-finite values by stage: bxdf 3 volume 5"),
+            "{shown}"
+        );
+        let names: Vec<_> = Stage::ALL.iter().map(|s| s.name()).collect();
+        assert_eq!(names.len(), Stage::COUNT);
+        assert!(Stage::ALL.iter().enumerate().all(|(i, s)| *s as usize == i));
+        let rgb = risotto_components::Rgb::new;
+        let col = [
+            rgb(1.0, 0.0, 0.0),
+            rgb(f32::NAN, 0.0, 0.0),
+            rgb(0.0, 0.0, f32::INFINITY),
+        ];
+        assert_eq!(count_non_finite(&col), 2);
     }
 }

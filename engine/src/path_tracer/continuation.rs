@@ -3,7 +3,7 @@
 
 use super::DIMS_PER_VERTEX;
 use crate::scene::CompiledScene;
-use crate::stats::{SystemStats, Termination};
+use crate::stats::{Stage, SystemStats, Termination};
 use risotto_components::{RayColumns, StackEvent};
 use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::path::{continue_paths, PathLimits, Vertices};
@@ -33,6 +33,20 @@ pub(super) fn continue_group(
         dims_per_vertex: DIMS_PER_VERTEX,
     };
     stack_errors.clear();
+    // NaN provenance: a sample with a non-finite pdf, or a usable pdf and a non-finite weight
+    // (continue_paths ends such paths as absorbed).
+    let m = vertices.range.len();
+    let bad = samples.weight[..m]
+        .iter()
+        .zip(&samples.pdf[..m])
+        .map(|(w, &pdf)| (!pdf.is_finite() || (pdf > 0.0 && !w.is_finite())) as usize)
+        .sum();
+    let stage = if vertices.on_surface {
+        Stage::Bxdf
+    } else {
+        Stage::Phase
+    };
+    stats.non_finite(stage, bad);
     let done = continue_paths(
         limits,
         vertices,

@@ -20,7 +20,7 @@ use super::queues::{scratch, GroupScratch, LightBuffers};
 use crate::integrator::LightingTechnique;
 use crate::plugin::{Bxdf, LightingDelegate, ShadingContext};
 use crate::scene::CompiledScene;
-use crate::stats::{System, SystemStats};
+use crate::stats::{Stage, System, SystemStats};
 use glam::Vec3;
 use risotto_components::{Rays, Rgb, ShadowRayColumns, ShadowRays};
 use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
@@ -96,6 +96,20 @@ pub(super) fn sample_lights(
         scratch(&mut buffers.eval_pdf, m, 0.0),
     );
     bxdf.evaluate_samples(ctx, light.wi, value, pdf);
+    // NaN provenance: the Bxdf's evaluations and the light samples of the active points.
+    let (mut bad_bxdf, mut bad_light) = (0, 0);
+    for k in 0..m {
+        let on = active[k];
+        bad_bxdf += (on & !(value[k].is_finite() & pdf[k].is_finite())) as usize;
+        bad_light += (on & !(light.radiance[k].is_finite() & light.pdf[k].is_finite())) as usize;
+    }
+    let stage = if vertices.on_surface {
+        Stage::Bxdf
+    } else {
+        Stage::Phase
+    };
+    stats.non_finite(stage, bad_bxdf);
+    stats.non_finite(Stage::Lighting, bad_light);
     let features = scene.features;
     let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
     let light = LightColumns {

@@ -42,7 +42,7 @@ impl PathTracer {
     }
 
     /// Adds the emission of the surface at point `i` (hit by incoming ray `r`), if any, times
-    /// `transmission`.
+    /// `transmission`; returns 1 if the value added is not finite (NaN provenance), else 0.
     #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
     pub(super) fn surface_emission(
         &self,
@@ -53,20 +53,21 @@ impl PathTracer {
         r: usize,
         i: usize,
         transmission: Rgb,
-    ) {
+    ) -> usize {
         let shape = pts.shape[i];
         if shape == u32::MAX || !pts.front_face[i] {
-            return;
+            return 0;
         }
         let Some(le) = scene.shapes[shape as usize].emission else {
-            return;
+            return 0;
         };
-        self.add_emission(scene, pts, incoming, paths, r, i, le, transmission);
+        self.add_emission(scene, pts, incoming, paths, r, i, le, transmission)
     }
 
     /// Adds the emission `le` of the front face of emissive shape at point `i` (hit by
     /// incoming ray `r`) to the ray's path, if inside the depth budget, MIS-weighted. Kept
-    /// out of line: the shade loop tests the (rare) emissive front faces itself.
+    /// out of line: the shade loop tests the (rare) emissive front faces itself. Returns 1 if
+    /// the value added is not finite (NaN provenance), else 0.
     #[allow(clippy::too_many_arguments, reason = "the columns it reads, named")]
     #[inline(never)]
     pub(super) fn add_emission(
@@ -79,9 +80,9 @@ impl PathTracer {
         i: usize,
         le: Rgb,
         transmission: Rgb,
-    ) {
+    ) -> usize {
         if !self.emission_counts(scene, incoming, r) {
-            return;
+            return 0;
         }
         let shape = pts.shape[i];
         let p = pts.p[i];
@@ -91,7 +92,11 @@ impl PathTracer {
             light_pdf_at(scene, shape, prev, p, ng, incoming, r)
         });
         let path = incoming.path[r] as usize;
-        paths.radiance[path] += incoming.throughput[r] * transmission * le * w;
+        let c = incoming.throughput[r] * transmission * le * w;
+        paths.radiance[path] += c;
+        // Non-finite because of this emitter only (a non-finite throughput or transmission
+        // was counted where it was produced).
+        (!c.is_finite() & incoming.throughput[r].is_finite() & transmission.is_finite()) as usize
     }
 }
 

@@ -5,7 +5,7 @@ use super::queues::{EscapedRayQueue, HitQueue};
 use super::PathTracer;
 use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
-use crate::stats::{SystemStats, Termination};
+use crate::stats::{Stage, SystemStats, Termination};
 
 /// Adds the environment radiance seen by every escaped ray to its path, records the
 /// environment as the first-hit albedo of camera rays that saw nothing, and empties `escaped`.
@@ -19,6 +19,7 @@ pub(super) fn environment(
 ) {
     let incoming = &hits.incoming;
     let paths = &mut batch.paths;
+    let mut bad = 0;
     for (&r, &tr) in escaped.ray.iter().zip(&escaped.transmission) {
         let r = r as usize;
         let path = incoming.path[r] as usize;
@@ -26,7 +27,11 @@ pub(super) fn environment(
         let le = scene.lights.environment_radiance(d);
         if !le.is_black() && tracer.emission_counts(scene, incoming, r) {
             let w = tracer.emitter_mis(incoming, r, || scene.mis_lights.environment_pdf(d));
-            paths.radiance[path] += incoming.throughput[r] * tr * le * w;
+            let c = incoming.throughput[r] * tr * le * w;
+            // Counted here only when made here (a non-finite throughput or transmission
+            // was counted where it was produced).
+            bad += (!c.is_finite() & incoming.throughput[r].is_finite() & tr.is_finite()) as usize;
+            paths.radiance[path] += c;
         }
         if incoming.depth[r] == 0 && paths.depth[path].is_infinite() {
             paths.albedo[path] = le;
@@ -39,6 +44,7 @@ pub(super) fn environment(
             }
         }
     }
+    stats.non_finite(Stage::Environment, bad);
     stats.terminate(Termination::Escaped, escaped.ray.len());
     escaped.ray.clear();
     escaped.transmission.clear();

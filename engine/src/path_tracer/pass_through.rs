@@ -60,7 +60,9 @@ pub(super) fn boundaries(
             let r = pts.ray_id[i] as usize;
             let (shape, p, front) = (pts.shape[i], pts.p[i], pts.front_face[i]);
             let tr = pts.transmission[i];
-            tracer.surface_emission(scene, pts, &hits.incoming, &mut batch.paths, r, i, tr);
+            let bad =
+                tracer.surface_emission(scene, pts, &hits.incoming, &mut batch.paths, r, i, tr);
+            stats.non_finite(crate::stats::Stage::Emission, bad);
             let mut row = hits.incoming.row(r);
             if row.passes as u32 >= scene.settings.max_passes {
                 stats.terminate(Termination::PassLimit, 1);

@@ -11,7 +11,7 @@ use crate::integrator::{LightingTechnique, PathBatch};
 use crate::plugin::{ParamCache, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
-use crate::stats::{System, SystemStats};
+use crate::stats::{Stage, System, SystemStats};
 use bumpalo::Bump;
 use risotto_components::{LobeSampled, Rgb, VolumeStack};
 use risotto_systems::direct_lighting::LightMis;
@@ -102,7 +102,17 @@ pub(super) fn shade_groups(
                 if let Some(le) = scene.shapes[shape as usize].emission {
                     // Throughput already includes the transmission.
                     let i = range.start + k;
-                    tracer.add_emission(scene, pts, incoming, paths, r as usize, i, le, Rgb::WHITE);
+                    let bad = tracer.add_emission(
+                        scene,
+                        pts,
+                        incoming,
+                        paths,
+                        r as usize,
+                        i,
+                        le,
+                        Rgb::WHITE,
+                    );
+                    stats.non_finite(Stage::Emission, bad);
                 }
             }
         }

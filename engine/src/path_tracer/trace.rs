@@ -13,7 +13,7 @@ use crate::integrator::{LightingTechnique, PathBatch};
 use crate::interior::bind_interior;
 use crate::plugin::*;
 use crate::scene::CompiledScene;
-use crate::stats::{System, SystemStats, Termination};
+use crate::stats::{count_non_finite, Stage, System, SystemStats, Termination};
 use bumpalo::Bump;
 use risotto_components::{LobeSampled, Rays, ShadingPointRow, VolumeEntry, VolumeStack};
 use risotto_systems::partition::partition_by_key;
@@ -191,6 +191,10 @@ fn partitioned(
                 let elapsed = start.elapsed().as_secs_f64();
                 t.hits = ictx.into_scratch();
                 stats.record(System::Volume, m, elapsed);
+                let answers = &t.answers;
+                let bad = count_non_finite(&answers.points.transmission)
+                    + count_non_finite(&answers.miss_transmission);
+                stats.non_finite(Stage::Volume, bad);
                 delegate.finish(stats);
                 for (i, s) in t.samplers.iter().enumerate() {
                     t.bundle.dimension[i] = s.dimension;

@@ -5,7 +5,7 @@
 use super::queues::ShadowRayQueue;
 use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
-use crate::stats::{System, SystemStats};
+use crate::stats::{Stage, System, SystemStats};
 use bumpalo::Bump;
 
 /// Traces the shadow rays of `shadow`, adds their contributions to the paths and empties the
@@ -34,9 +34,21 @@ pub(super) fn shadow_rays(
         stats,
         arena,
     );
-    for (&path, &c) in shadow.rays.path.iter().zip(&shadow.contribution) {
+    // NaN provenance: contributions the walk made non-finite (those non-finite before it
+    // came from upstream and were counted there).
+    let mut walk = 0;
+    let before = &shadow.rays.contribution;
+    let rows = shadow
+        .rays
+        .path
+        .iter()
+        .zip(&shadow.contribution)
+        .zip(before);
+    for ((&path, &c), b) in rows {
         batch.paths.radiance[path as usize] += c;
+        walk += (b.is_finite() & !c.is_finite()) as usize;
     }
+    stats.non_finite(Stage::Transmission, walk);
     stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
     // Keep the dead rows as storage for the next shade stage's shadow rays.
     std::mem::swap(&mut shadow.rays, &mut shadow.spare);

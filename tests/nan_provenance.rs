@@ -1,0 +1,256 @@
+//! NaN provenance (issue 14): a plug-in that produces NaN is named in the render's stats by
+//! the stage whose output it poisoned, and the film stays finite.
+
+mod common;
+use bumpalo::Bump;
+use common::*;
+use glam::Vec3;
+use risotto::components::{LobeSampled, Rays, Rgb};
+use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, Surface};
+use risotto::engine::context::IntegratorContext;
+use risotto::engine::plugin::{
+    Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
+    VolumeIntegrator, VolumeServices,
+};
+use risotto::engine::render::RenderOutput;
+use risotto::engine::scene::{LightComponent, Scene, ShapeGeometry};
+use risotto::engine::stats::Stage;
+use risotto::systems::bxdf_samples::BxdfSamples;
+use risotto::systems::geometry::Sphere;
+use risotto::systems::sampler::PathSampler;
+
+/// A white diffuse surface whose sampled weights (`false`) or evaluations towards light
+/// samples (`true`) are NaN at points with `x > 0`.
+struct PoisonedDiffuse(bool);
+
+struct PoisonedDiffuseBxdf(DiffuseBxdf, bool);
+
+/// Whether point `i` of `ctx` is poisoned.
+fn poisoned(ctx: &ShadingContext<'_>, i: usize) -> bool {
+    ctx.p()[i].x > 0.0
+}
+
+impl Bxdf for PoisonedDiffuseBxdf {
+    fn lobes(&self) -> LobeSampled {
+        self.0.lobes()
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        self.0.generate_samples(ctx, samplers, out);
+        for i in (0..samplers.len()).filter(|&i| !self.1 && poisoned(ctx, i)) {
+            out.weight[i] = Rgb::splat(f32::NAN);
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        self.0.evaluate_samples(ctx, wi, value, pdf);
+        for i in (0..wi.len()).filter(|&i| self.1 && poisoned(ctx, i)) {
+            value[i] = Rgb::splat(f32::NAN);
+        }
+    }
+}
+
+impl BxdfFactory for PoisonedDiffuse {
+    fn instance_hints(&self) -> InstanceHints {
+        InstanceHints::NONE
+    }
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        let diffuse = DiffuseBxdf {
+            reflectance: Rgb::WHITE,
+        };
+        arena.alloc(PoisonedDiffuseBxdf(diffuse, self.0))
+    }
+}
+
+/// Glass (index 1, so rays go straight through) whose interior's integrator writes NaN
+/// transmissions: for the hits it returns and, on shadow rays, in `transmission`.
+struct PoisonedGlass;
+
+#[derive(Clone, Copy)]
+struct NanInterior;
+
+impl BxdfFactory for PoisonedGlass {
+    fn instance_hints(&self) -> InstanceHints {
+        InstanceHints::TRANSMITS
+            | InstanceHints::COMPUTES_INTERIOR
+            | InstanceHints::INTERIOR_TRANSMISSION
+            | InstanceHints::TRANSMISSION_SHADOWS
+    }
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        arena.alloc(DielectricBxdf {
+            ior: 1.0,
+            tint: Rgb::WHITE,
+        })
+    }
+    fn begin_interior<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        Some(arena.alloc(NanInterior))
+    }
+    fn shadow_transmittance(&self) -> Rgb {
+        Rgb::WHITE
+    }
+}
+
+impl VolumeIntegrator for NanInterior {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        _samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        services: VolumeServices<'_, '_>,
+        out: &mut ShadeGroups,
+    ) {
+        services.ictx.nearest_hits(rays, out);
+        out.attenuate_segments(rays, |_| Rgb::splat(f32::NAN));
+    }
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        trans[..segments.len()].fill(Rgb::splat(f32::NAN));
+        emission.fill(Rgb::BLACK);
+    }
+}
+
+/// A unit sphere of `factory` above a grey floor (y = -1), lit by a point light above and a
+/// dim sky, seen from the front.
+fn render_sphere(factory: Box<dyn BxdfFactory>) -> RenderOutput {
+    let (w, h) = (16, 16);
+    let cam = perspective(Vec3::new(0.0, 0.5, 5.0), Vec3::ZERO, 45.0, w, h);
+    let mut scene = Scene::new(cam, settings(w, h, 4, 6));
+    let ball = scene.add_material("ball", 1, factory);
+    let floor = scene.add_material(
+        "floor",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: Rgb::splat(0.5),
+        }),
+    );
+    scene.add_shape(
+        "ball",
+        ShapeGeometry::Sphere(Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }),
+        ball,
+        None,
+    );
+    let s = 10.0;
+    scene.add_shape(
+        "floor",
+        quad(
+            Vec3::new(-s, -1.0, s),
+            Vec3::new(2.0 * s, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, -2.0 * s),
+        ),
+        floor,
+        None,
+    );
+    scene.add_light(
+        "lamp",
+        LightComponent::Point {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            intensity: Rgb::splat(10.0),
+        },
+    );
+    environment(&mut scene, Rgb::splat(0.2));
+    render_default(&scene.compile().unwrap())
+}
+
+fn assert_film_finite(out: &RenderOutput) {
+    for (i, p) in out.beauty.pixels.iter().enumerate() {
+        assert!(p.is_finite(), "pixel {i} is {p:?}");
+    }
+}
+
+/// The stats' non-finite count of `stage`, checked against the JSON and the summary.
+fn reported(out: &RenderOutput, stage: Stage) -> u64 {
+    let n = out.stats.counters.non_finite[stage as usize];
+    let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
+    let summary = out.stats.to_string();
+    if n > 0 {
+        assert_eq!(json["non_finite"][stage.name()], n, "{json}");
+        assert!(
+            summary.contains(&format!(" {} {n}", stage.name())),
+            "{summary}"
+        );
+    } else {
+        assert!(json["non_finite"].get(stage.name()).is_none(), "{json}");
+    }
+    n
+}
+
+#[test]
+fn a_bxdf_writing_nan_weights_is_named_and_the_film_stays_finite() {
+    for evaluations in [false, true] {
+        let out = render_sphere(Box::new(PoisonedDiffuse(evaluations)));
+        assert_film_finite(&out);
+        assert!(reported(&out, Stage::Bxdf) > 0, "{}", out.stats);
+        for stage in Stage::ALL.into_iter().filter(|&s| s != Stage::Bxdf) {
+            assert_eq!(reported(&out, stage), 0, "{}: {}", stage.name(), out.stats);
+        }
+        if !evaluations {
+            // A NaN sample weight ends its path (counted as absorbed): nothing reached the
+            // film.
+            assert_eq!(out.stats.counters.nan_dropped, 0);
+        }
+    }
+}
+
+#[test]
+fn a_volume_integrator_writing_nan_transmission_is_named_and_the_film_stays_finite() {
+    let out = render_sphere(Box::new(PoisonedGlass));
+    assert_film_finite(&out);
+    // Rays inside the ball get NaN transmissions from `nearest_hits`; shadow rays from the
+    // floor to the lamp cross it and get NaN from `transmission`.
+    assert!(reported(&out, Stage::Volume) > 0, "{}", out.stats);
+    assert!(reported(&out, Stage::Transmission) > 0, "{}", out.stats);
+    // Later stages fed a poisoned throughput do not count it again.
+    for stage in Stage::ALL {
+        if ![Stage::Volume, Stage::Transmission].contains(&stage) {
+            assert_eq!(reported(&out, stage), 0, "{}: {}", stage.name(), out.stats);
+        }
+    }
+    // The poisoned samples were dropped at the film, not written.
+    assert!(out.stats.counters.nan_dropped > 0, "{}", out.stats);
+}
+
+#[test]
+fn a_clean_render_reports_no_non_finite_stage() {
+    let out = render_sphere(mat(Surface::Diffuse {
+        reflectance: Rgb::splat(0.8),
+    }));
+    assert_film_finite(&out);
+    for stage in Stage::ALL {
+        assert_eq!(reported(&out, stage), 0, "{}: {}", stage.name(), out.stats);
+    }
+    let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
+    assert!(json.get("non_finite").is_none(), "{json}");
+}
