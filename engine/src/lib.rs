@@ -6,6 +6,7 @@ pub mod compare;
 pub mod context;
 pub mod converge;
 pub mod grid_file;
+pub mod heterogeneous;
 pub mod integrator;
 mod interior;
 pub mod load;
