@@ -6,6 +6,7 @@
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 
 use crate::context::IntegratorContext;
+use crate::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium};
 use crate::media::{HomogeneousInterior, HomogeneousMedium, PhaseBxdf};
 use crate::plugin::*;
 use bumpalo::Bump;
@@ -14,6 +15,7 @@ use risotto_components::{LobeSampled, Rays, Rgb};
 use risotto_systems::bxdf;
 use risotto_systems::sampler::{next_2d_column, PathSampler};
 use std::ops::Range;
+use std::sync::Arc;
 
 /// Points per block in the column-wise Bxdf kernels: the block's sample columns live on the
 /// stack (no allocation per call) and stay in L1 between the passes.
@@ -361,7 +363,7 @@ impl VolumeIntegrator for BeerInterior {
 }
 
 /// Which built-in interior a material has.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Interior {
     /// No volume inside.
     None,
@@ -374,27 +376,38 @@ pub enum Interior {
     },
     /// Homogeneous scattering medium.
     Homogeneous(HomogeneousMedium),
+    /// Heterogeneous scattering medium (a density grid; shared, not copied).
+    Heterogeneous(Arc<HeterogeneousMedium>),
 }
 
 impl Interior {
-    fn hints(self) -> InstanceHints {
+    fn hints(&self) -> InstanceHints {
         let volume = InstanceHints::COMPUTES_INTERIOR | InstanceHints::INTERIOR_TRANSMISSION;
         match self {
             Interior::None => InstanceHints::NONE,
             Interior::Null | Interior::Beer { .. } => volume,
             Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
+            Interior::Heterogeneous(_) => {
+                volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_HETEROGENEOUS
+            }
         }
     }
     fn begin<'a>(
-        self,
+        &'a self,
         ctx: &'a ShadingContext<'a>,
         arena: &'a Bump,
     ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
         match self {
             Interior::None => None,
             Interior::Null => Some(arena.alloc(NullInterior)),
-            Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a })),
-            Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior { medium, ctx })),
+            Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a: *sigma_a })),
+            Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior {
+                medium: *medium,
+                ctx,
+            })),
+            Interior::Heterogeneous(medium) => {
+                Some(arena.alloc(HeterogeneousInterior { medium, ctx }))
+            }
         }
     }
 }
@@ -427,7 +440,7 @@ pub enum Surface {
 }
 
 /// A built-in material: a surface and an optional interior.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct BuiltinMaterial {
     /// Surface scattering.
     pub surface: Surface,
@@ -466,11 +479,12 @@ impl BxdfFactory for BuiltinMaterial {
             // A point inside the interior: its phase function (an interior that does not
             // scatter never returns such points; isotropic and black if asked anyway).
             ShadingMode::VolumeScatter => {
-                return match self.interior {
+                return match &self.interior {
                     Interior::Homogeneous(m) => arena.alloc(PhaseBxdf {
                         phase: m.phase,
                         albedo: m.albedo(),
                     }),
+                    Interior::Heterogeneous(m) => arena.alloc(m.phase_bxdf()),
                     _ => arena.alloc(NullBxdf),
                 };
             }

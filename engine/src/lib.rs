@@ -5,6 +5,8 @@ pub mod builtin;
 pub mod compare;
 pub mod context;
 pub mod converge;
+pub mod grid_file;
+pub mod heterogeneous;
 pub mod integrator;
 mod interior;
 pub mod load;

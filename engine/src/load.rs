@@ -192,9 +192,14 @@ fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
             Ok(Interior::Beer { sigma_a })
         }
         "homogeneous" => Ok(Interior::Homogeneous(homogeneous(&t)?)),
+        "heterogeneous" => Ok(Interior::Heterogeneous(std::sync::Arc::new(
+            crate::heterogeneous::parse(&t)?,
+        ))),
         other => Err(t.error(
             Some("type"),
-            format!("unknown interior type \"{other}\" (known: null, beer, homogeneous)"),
+            format!(
+                "unknown interior type \"{other}\" (known: null, beer, homogeneous, heterogeneous)"
+            ),
         )),
     }
 }
@@ -276,7 +281,7 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
 }
 
 /// `phase = { type = "isotropic" | "hg" | "double_hg", ... }`.
-fn phase_function(p: &MaterialParams) -> Result<PhaseFunction, SceneError> {
+pub(crate) fn phase_function(p: &MaterialParams) -> Result<PhaseFunction, SceneError> {
     let kind = p.string("type", None)?;
     let checked = |r: Result<PhaseFunction, PhaseFunctionError>| {
         r.map_err(|e| p.error(Some(e.parameter), e.to_string()))

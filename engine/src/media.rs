@@ -395,7 +395,7 @@ impl HomogeneousInterior<'_> {
 }
 
 /// Keeps the points of `out` with `keep[k]`, fixing the ranges of groups from `g0` on.
-fn retain_points(out: &mut ShadeGroups, keep: &[bool], g0: usize) {
+pub(crate) fn retain_points(out: &mut ShadeGroups, keep: &[bool], g0: usize) {
     let mut before = Vec::with_capacity(keep.len() + 1);
     let mut kept = 0usize;
     before.push(0);

@@ -214,6 +214,11 @@ impl<'a> ShadingContext<'a> {
     pub fn num_points(&self) -> usize {
         self.range.len()
     }
+    /// The bounds `u, v, w` are measured in ([`with_volume_bounds`](Self::with_volume_bounds)),
+    /// if set.
+    pub fn volume_bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.volume_bounds
+    }
     /// Why this context exists.
     pub fn mode(&self) -> ShadingMode {
         self.mode

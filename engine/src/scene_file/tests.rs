@@ -1209,6 +1209,14 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                             "{what}: a homogeneous interior without coefficients"
                         );
                     }
+                    "heterogeneous" => {
+                        let density = interior.table("density").unwrap();
+                        let grid = density.and_then(|d| d.path("grid").unwrap());
+                        assert!(
+                            grid.as_ref().is_some_and(|g| g.exists()),
+                            "{what}: a heterogeneous interior's grid file is shipped: {grid:?}"
+                        );
+                    }
                     other => panic!("{what}: unexpected interior type {other}"),
                 }
             }

@@ -1,0 +1,401 @@
+//! Null-collision estimators for heterogeneous media along one ray: delta (Woodcock)
+//! tracking of free-flight distances, and delta, ratio and residual ratio tracking of
+//! transmittance (Novák, Selle and Jarosz 2014, "Residual ratio tracking for estimating
+//! attenuation in participating media").
+//!
+//! # Conventions
+//! - A ray is given by its **majorant segments** in order ([`MajorantSegment`]: `[t0, t1)`,
+//!   a bound `majorant >= sigma_t(t)` and a `minorant <= sigma_t(t)` on it, extinction units,
+//!   per world unit), e.g. from [`crate::grid::MajorantGrid::traverse`] scaled by the
+//!   medium's density scale. Parts of the ray not covered by a segment have `sigma_t = 0`.
+//! - `sigma_t(t)` is the extinction at ray parameter `t` (grey: one channel).
+//! - `rand()` draws the next uniform number in `[0, 1)`; each estimator draws as many as it
+//!   needs (two per tentative collision for delta tracking, one for ratio tracking).
+//! - A sampled `sigma_t` above its segment's majorant is a **majorant violation**: counted
+//!   (the result's `violations`), never clamped silently; the estimators stay finite (the
+//!   null-collision probability is then taken as 0, the ratio-tracking factor can become
+//!   negative, which is what the unbiased estimator with a wrong bound computes).
+
+use crate::grid::MajorantSegment;
+
+/// The largest `f32` below 1, so that `ln(1 - u)` is finite.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// `x > 0` (false for NaN).
+#[inline]
+fn positive(x: f32) -> bool {
+    x > 0.0
+}
+
+/// The next tentative collision after `t` for majorant `majorant > 0`: an exponential step,
+/// at least one ulp (so that tracking ends even where steps underflow against `t`).
+#[inline]
+fn step(t: f32, majorant: f32, u: f32) -> f32 {
+    let s = -(-u.clamp(0.0, ONE_MINUS_EPSILON)).ln_1p() / majorant;
+    let next = t + s;
+    if next > t {
+        next
+    } else {
+        f32::from_bits(t.max(0.0).to_bits() + 1)
+    }
+}
+
+/// The outcome of [`delta_tracking`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FreeFlight {
+    /// The real collision's distance when `collided`, else the end of the last segment.
+    pub t: f32,
+    /// A real collision happened before the segments ended.
+    pub collided: bool,
+    /// Null (fictitious) collisions on the way.
+    pub nulls: u32,
+    /// Sampled `sigma_t` above the segment's majorant.
+    pub violations: u32,
+}
+
+/// Visits the tentative collisions of a segment sampled from `bound` (> 0) on
+/// `[seg.t0, seg.t1)`: `visit(t, s, rand)` gets the distance, `sigma_t` there and the random
+/// source; it returns `false` to stop the walk (and `tentative` returns `Some(t)`). Counts
+/// majorant violations (`sigma_t > seg.majorant`) into `violations`.
+fn tentative<R: FnMut() -> f32>(
+    seg: &MajorantSegment,
+    bound: f32,
+    sigma_t: &mut impl FnMut(f32) -> f32,
+    rand: &mut R,
+    violations: &mut u32,
+    mut visit: impl FnMut(f32, f32, &mut R) -> bool,
+) -> Option<f32> {
+    if !positive(bound) {
+        return None;
+    }
+    let mut t = seg.t0;
+    loop {
+        t = step(t, bound, rand());
+        if t >= seg.t1 {
+            return None;
+        }
+        let s = sigma_t(t);
+        if s > seg.majorant {
+            *violations += 1;
+        }
+        if !visit(t, s, rand) {
+            return Some(t);
+        }
+    }
+}
+
+/// Delta tracking (Woodcock et al. 1965; Novák et al. 2018, sec. 4.1): samples the distance
+/// to the next real collision with density `sigma_t(t) exp(-int_0^t sigma_t)`, or passes the
+/// segments with probability `exp(-int sigma_t)` (the transmittance). Tentative collisions
+/// are sampled from each segment's majorant (restarted at segment boundaries, which the
+/// exponential's memorylessness allows) and accepted with probability
+/// `sigma_t(t) / majorant`.
+pub fn delta_tracking(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    mut sigma_t: impl FnMut(f32) -> f32,
+    mut rand: impl FnMut() -> f32,
+) -> FreeFlight {
+    let mut out = FreeFlight::default();
+    for seg in segments {
+        out.t = seg.t1;
+        let mut nulls = 0;
+        let hit = tentative(
+            &seg,
+            seg.majorant,
+            &mut sigma_t,
+            &mut rand,
+            &mut out.violations,
+            |_, s, rand| {
+                let null = rand() * seg.majorant >= s;
+                nulls += null as u32;
+                null
+            },
+        );
+        out.nulls += nulls;
+        if let Some(t) = hit {
+            out.t = t;
+            out.collided = true;
+            return out;
+        }
+    }
+    out
+}
+
+/// A transmittance estimate.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Transmittance {
+    /// The estimate (its expectation is `exp(-int sigma_t)`).
+    pub value: f32,
+    /// Tentative collisions evaluated.
+    pub nulls: u32,
+    /// Sampled `sigma_t` above the segment's majorant.
+    pub violations: u32,
+}
+
+/// Delta-tracking transmittance: 1 if a free flight passes the segments, else 0 (the
+/// cheapest estimator: it stops at the first real collision, with the most variance).
+pub fn delta_tracking_transmittance(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma_t: impl FnMut(f32) -> f32,
+    rand: impl FnMut() -> f32,
+) -> Transmittance {
+    let f = delta_tracking(segments, sigma_t, rand);
+    Transmittance {
+        value: if f.collided { 0.0 } else { 1.0 },
+        nulls: f.nulls + f.collided as u32,
+        violations: f.violations,
+    }
+}
+
+/// Ratio tracking (Cramer 1978; Novák et al. 2014, sec. 3.2): tentative collisions from the
+/// majorant, each multiplying the estimate by the null-collision probability
+/// `1 - sigma_t(t) / majorant`. One random number per tentative collision.
+pub fn ratio_tracking(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma_t: impl FnMut(f32) -> f32,
+    rand: impl FnMut() -> f32,
+) -> Transmittance {
+    ratio_tracking_with_control(segments, sigma_t, rand, false)
+}
+
+/// Residual ratio tracking (Novák et al. 2014, sec. 4): with each segment's `minorant` as
+/// the control extinction `sigma_c`, `T = exp(-int sigma_c) * T_residual`, where the
+/// residual `sigma_t - sigma_c` is ratio-tracked against the residual majorant
+/// `majorant - minorant`. Segments whose bounds coincide (constant there) cost no tentative
+/// collision at all.
+pub fn residual_ratio_tracking(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma_t: impl FnMut(f32) -> f32,
+    rand: impl FnMut() -> f32,
+) -> Transmittance {
+    ratio_tracking_with_control(segments, sigma_t, rand, true)
+}
+
+/// Ratio tracking of `sigma_t - control` against `majorant - control`, times
+/// `exp(-int control)`; the control is the segment's minorant, or 0 without `residual`.
+fn ratio_tracking_with_control(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    mut sigma_t: impl FnMut(f32) -> f32,
+    mut rand: impl FnMut() -> f32,
+    residual: bool,
+) -> Transmittance {
+    let mut out = Transmittance {
+        value: 1.0,
+        ..Transmittance::default()
+    };
+    let mut control_depth = 0.0f32;
+    for seg in segments {
+        let control = if residual {
+            seg.minorant.clamp(0.0, seg.majorant.max(0.0))
+        } else {
+            0.0
+        };
+        if control > 0.0 {
+            control_depth += control * (seg.t1 - seg.t0);
+        }
+        let bound = seg.majorant - control;
+        let (mut value, mut nulls) = (out.value, 0);
+        tentative(
+            &seg,
+            bound,
+            &mut sigma_t,
+            &mut rand,
+            &mut out.violations,
+            |_, s, _| {
+                value *= 1.0 - (s - control) / bound;
+                nulls += 1;
+                true
+            },
+        );
+        out.value = value;
+        out.nulls += nulls;
+    }
+    out.value *= (-control_depth).exp();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{DensityGrid, MajorantGrid};
+    use crate::sampler::SplitMix64;
+    use glam::Vec3;
+
+    fn one(t0: f32, t1: f32, majorant: f32) -> [MajorantSegment; 1] {
+        [MajorantSegment {
+            t0,
+            t1,
+            majorant,
+            minorant: 0.0,
+        }]
+    }
+
+    #[test]
+    fn delta_tracking_samples_the_exponential_in_a_constant_medium() {
+        // sigma_t = 2 under majorant 5 (60 % null collisions), segment [0, 1.5]: the
+        // distance CDF is 1 - exp(-2 t) below 1.5, and P(pass) = exp(-3).
+        let (sigma, tmax, n) = (2.0f32, 1.5f32, 200_000);
+        let mut rng = SplitMix64(1);
+        let bins = 15;
+        let mut hist = vec![0u32; bins + 1];
+        let mut nulls = 0u64;
+        for _ in 0..n {
+            let f = delta_tracking(one(0.0, tmax, 5.0), |_| sigma, || rng.f32());
+            nulls += f.nulls as u64;
+            assert_eq!(f.violations, 0);
+            let b = if f.collided {
+                assert!(f.t < tmax);
+                ((f.t / tmax * bins as f32) as usize).min(bins - 1)
+            } else {
+                assert_eq!(f.t, tmax);
+                bins
+            };
+            hist[b] += 1;
+        }
+        for (b, &count) in hist.iter().enumerate() {
+            let p = if b == bins {
+                (-sigma * tmax).exp()
+            } else {
+                let (a, c) = (
+                    b as f32 * tmax / bins as f32,
+                    (b + 1) as f32 * tmax / bins as f32,
+                );
+                (-sigma * a).exp() - (-sigma * c).exp()
+            } as f64;
+            let expected = p * n as f64;
+            let sd = (n as f64 * p * (1.0 - p)).sqrt();
+            assert!(
+                (count as f64 - expected).abs() < 4.0 * sd,
+                "bin {b}: {count} vs {expected:.0} +- {sd:.0}"
+            );
+        }
+        // Expected null collisions: (majorant - sigma) * E[distance travelled].
+        let mean_distance = (1.0 - (-sigma * tmax).exp()) / sigma;
+        let expected_nulls = 3.0 * mean_distance * n as f32;
+        assert!((nulls as f32 / expected_nulls - 1.0).abs() < 0.02);
+    }
+
+    #[test]
+    fn a_majorant_below_the_density_is_counted() {
+        let mut rng = SplitMix64(3);
+        let f = delta_tracking(one(0.0, 10.0, 1.0), |_| 2.0, || rng.f32());
+        assert!(f.collided && f.violations == 1);
+        let t = ratio_tracking(one(0.0, 10.0, 1.0), |_| 2.0, || rng.f32());
+        assert!(t.violations > 0 && t.value.is_finite());
+    }
+
+    /// A grid ramped along x: voxel value `c0 + c1 (ix + 0.5) / n`; the clamped trilinear
+    /// field is `c0 + c1 clamp(u, 1/2n, 1 - 1/2n)`, whose mean over u in [0, 1] is
+    /// `c0 + c1 / 2` exactly (the clamped ends cancel).
+    fn ramp(n: usize, c0: f32, c1: f32) -> DensityGrid {
+        let mut data = Vec::new();
+        for _z in 0..n {
+            for _y in 0..n {
+                for x in 0..n {
+                    data.push(c0 + c1 * (x as f32 + 0.5) / n as f32);
+                }
+            }
+        }
+        DensityGrid::new([n, n, n], data).unwrap()
+    }
+
+    /// Mean and standard error of `n` estimates.
+    fn mean_se(n: usize, mut f: impl FnMut() -> f32) -> (f64, f64) {
+        let (mut s, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let v = f() as f64;
+            s += v;
+            s2 += v * v;
+        }
+        let m = s / n as f64;
+        (m, ((s2 / n as f64 - m * m) / n as f64).sqrt())
+    }
+
+    #[test]
+    fn transmittance_estimators_are_unbiased_on_a_linear_ramp() {
+        // sigma_t = scale * density, density a ramp 0.2 + 1.6 u through a majorant grid: for
+        // a ray from the face u = 0 to the face u = 1 of world length L the optical depth is
+        // scale L (0.2 + 0.8) in closed form.
+        let (scale, grid) = (1.5f32, ramp(16, 0.2, 1.6));
+        for res in [[1, 1, 1], [4, 4, 4], [16, 16, 16]] {
+            let m = MajorantGrid::new(&grid, res);
+            for (y0, z0, y1, z1) in [(0.5, 0.5, 0.5, 0.5), (0.1, 0.9, 0.8, 0.3)] {
+                let (a, b) = (Vec3::new(0.0, y0, z0), Vec3::new(1.0, y1, z1));
+                let length = (b - a).length();
+                let d = (b - a) / length;
+                let exact = (-(scale * length * 1.0) as f64).exp();
+                let sigma = |t: f32| scale * grid.lookup(a + d * t);
+                let segs = || m.traverse(a, d, 0.0, length).map(|s| s.scaled(scale));
+                let mut rng = SplitMix64(7 + res[0] as u64);
+                let n = 40_000;
+                for name in ["ratio", "residual", "delta"] {
+                    let (mean, se) = mean_se(n, || {
+                        let mut r = || rng.f32();
+                        let t = match name {
+                            "ratio" => ratio_tracking(segs(), sigma, &mut r),
+                            "residual" => residual_ratio_tracking(segs(), sigma, &mut r),
+                            _ => delta_tracking_transmittance(segs(), sigma, &mut r),
+                        };
+                        assert_eq!(t.violations, 0);
+                        t.value
+                    });
+                    assert!(
+                        (mean - exact).abs() < 4.0 * se.max(1e-7),
+                        "{name} {res:?}: {mean} +- {se} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn ratio_tracking_matches_exp_of_a_step_and_an_exponential() {
+        // sigma_t(t) = 3 for t < 0.4 else 0.5 on [0, 1]; and sigma_t = 4 exp(-2 t).
+        /// A density along the ray, its majorant and its exact optical depth on [0, 1].
+        type Case = (fn(f32) -> f32, f32, f64);
+        let cases: [Case; 2] = [
+            (
+                |t| if t < 0.4 { 3.0 } else { 0.5 },
+                3.0,
+                3.0 * 0.4 + 0.5 * 0.6,
+            ),
+            (
+                |t| 4.0 * (-2.0 * t).exp(),
+                4.0,
+                2.0 * (1.0 - (-2.0f64).exp()),
+            ),
+        ];
+        for (f, majorant, depth) in cases {
+            let mut rng = SplitMix64(17);
+            let (mean, se) = mean_se(50_000, || {
+                ratio_tracking(one(0.0, 1.0, majorant), f, || rng.f32()).value
+            });
+            let exact = (-depth).exp();
+            assert!((mean - exact).abs() < 4.0 * se, "{mean} +- {se} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn residual_tracking_of_a_constant_cell_is_exact_and_free() {
+        let segs = [MajorantSegment {
+            t0: 0.0,
+            t1: 2.0,
+            majorant: 1.5,
+            minorant: 1.5,
+        }];
+        let t = residual_ratio_tracking(segs, |_| 1.5, || panic!("no random number needed"));
+        assert_eq!((t.value, t.nulls), ((-3.0f32).exp(), 0));
+    }
+
+    #[test]
+    fn tiny_steps_terminate() {
+        // A majorant so large that steps underflow against t: still ends (one ulp a step).
+        let t0 = 1.0e6f32;
+        let f = delta_tracking(
+            one(t0, f32::from_bits(t0.to_bits() + 50), 1.0e30),
+            |_| 0.0,
+            || 0.5,
+        );
+        assert!(!f.collided && f.nulls <= 50);
+    }
+}

@@ -1,0 +1,260 @@
+//! The heterogeneous medium (issue 11) against results that are not itself: a constant grid
+//! must render the homogeneous medium's image, an albedo-1 medium is a white furnace, bad
+//! grids and parameters are located errors, and features and stats show what ran.
+
+use risotto::engine::load::{scene_from_desc, LoadError, MaterialRegistry};
+use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::scene::CompiledScene;
+use risotto::engine::scene_file::parse_scene;
+use risotto::engine::stats::VolumeEvent;
+use std::path::{Path, PathBuf};
+
+/// A scratch directory of this test binary.
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("risotto-hetero-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The repository's scenes directory (absolute).
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// A unit sphere of medium (index-matched boundary) at the origin seen whole by a 16 x 16
+/// camera, lit by a sun (shadow rays cross the medium) and an environment; `interior` is
+/// the interior table's text.
+fn sphere_scene(interior: &str, spp: u32, seed: u64, sun: f32) -> String {
+    format!(
+        r#"
+[render]
+width = 16
+height = 16
+spp = {spp}
+max_depth = -1
+seed = {seed}
+
+[camera]
+fov = 40
+from = [0, 0, 4]
+to = [0, 0, 0]
+
+[materials.medium]
+type = "interface"
+interior = {interior}
+
+[[shapes]]
+name = "ball"
+type = "sphere"
+material = "medium"
+center = [0, 0, 0]
+radius = 1
+
+[[lights]]
+type = "environment"
+radiance = 0.5
+
+[[lights]]
+type = "distant"
+direction = [1, -1, -0.5]
+irradiance = {sun}
+"#
+    )
+}
+
+fn load(dir: &Path, text: &str) -> Result<CompiledScene, LoadError> {
+    let desc = parse_scene(text, &dir.join("scene.toml"))?;
+    Ok(scene_from_desc(desc, &MaterialRegistry::with_builtins())?
+        .compile()
+        .unwrap())
+}
+
+fn render_text(dir: &Path, text: &str) -> RenderOutput {
+    let scene = load(dir, text).unwrap();
+    render(&scene, &RenderOptions::default(), &|_| {}).unwrap()
+}
+
+/// Mean and standard error of the image mean (green channel), from the film's variances.
+fn mean_se(out: &RenderOutput) -> (f64, f64) {
+    let n = out.beauty.pixels.len() as f64;
+    let m = out.beauty.pixels.iter().map(|p| p.g as f64).sum::<f64>() / n;
+    let v = out.variance.pixels.iter().map(|p| p.g as f64).sum::<f64>() / (n * n);
+    (m, v.sqrt())
+}
+
+/// Writes a Mitsuba `.vol` of `dims` voxels, all `value`.
+fn constant_vol(path: &Path, dims: [i32; 3], value: f32) {
+    let mut b = b"VOL\x03".to_vec();
+    for v in [1, dims[0], dims[1], dims[2], 1] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for _ in 0..dims.iter().product::<i32>() {
+        b.extend_from_slice(&value.to_le_bytes());
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn a_constant_grid_renders_the_homogeneous_medium() {
+    // sigma_t = 2, albedo 0.8, HG 0.3: the homogeneous interior against the heterogeneous
+    // one with a constant density (one voxel, and an 8^3 file through a 4^3 majorant grid,
+    // so the DDA crosses cells), with each transmittance estimator. Image means within
+    // 3 combined standard errors (different seeds: independent estimates).
+    let d = dir("constant");
+    constant_vol(&d.join("half.vol"), [8, 8, 8], 0.5);
+    let phase = r#"phase = { type = "hg", g = 0.3 }"#;
+    let homogeneous = render_text(
+        &d,
+        &sphere_scene(
+            &format!(r#"{{ type = "homogeneous", sigma_t = 2, albedo = 0.8, {phase} }}"#),
+            64,
+            1,
+            3.0,
+        ),
+    );
+    let (m0, s0) = mean_se(&homogeneous);
+    assert!(s0 < 0.01 * m0, "converged enough to test: {m0} +- {s0}");
+    let cases = [
+        r#"density = { constant = 1 }, scale = 2, tracking = "ratio""#,
+        r#"density = { grid = "half.vol" }, scale = 4, majorant_grid = 4, tracking = "ratio""#,
+        r#"density = { grid = "half.vol" }, scale = 4, majorant_grid = 4, tracking = "residual""#,
+        r#"density = { grid = "half.vol" }, scale = 4, majorant_grid = 1, tracking = "delta""#,
+    ];
+    for (k, case) in cases.iter().enumerate() {
+        let interior = format!(r#"{{ type = "heterogeneous", {case}, albedo = 0.8, {phase} }}"#);
+        let out = render_text(&d, &sphere_scene(&interior, 64, 2 + k as u64, 3.0));
+        let (m, s) = mean_se(&out);
+        let z = (m - m0) / (s * s + s0 * s0).sqrt();
+        eprintln!("{case}: {m:.5} +- {s:.5} vs {m0:.5} +- {s0:.5}, z {z:.2}");
+        assert!(
+            z.abs() < 3.0,
+            "{case}: {m} +- {s} vs homogeneous {m0} +- {s0} (z {z:.2})"
+        );
+        assert_eq!(out.stats.counters.nan_dropped, 0, "{case}");
+        let ev = out.stats.counters.volume_events;
+        assert!(ev[VolumeEvent::Scatter as usize] > 0, "{case}");
+        // The majorant (2 = sigma_t) is tight for a constant grid: no null collision.
+        assert_eq!(ev[VolumeEvent::Null as usize], 0, "{case}");
+    }
+}
+
+#[test]
+fn an_albedo_one_heterogeneous_medium_is_a_white_furnace() {
+    // The harness's 64^3 grid (committed copy), scale 10, albedo 1, under an environment of
+    // 1 and no other light: every path carries exactly 1 whatever the tracking.
+    let d = dir("furnace");
+    let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");
+    let interior = format!(
+        r#"{{ type = "heterogeneous", density = {{ grid = "{}" }}, scale = 10, albedo = 1 }}"#,
+        grid.display()
+    );
+    let text = sphere_scene(&interior, 16, 0, 0.0).replace("radiance = 0.5", "radiance = 1");
+    let out = render_text(&d, &text);
+    for p in &out.beauty.pixels {
+        for c in [p.r, p.g, p.b] {
+            assert!((c - 1.0).abs() <= 1e-4, "pixel {c}");
+        }
+    }
+    let ev = out.stats.counters.volume_events;
+    assert!(ev[VolumeEvent::Scatter as usize] > 0 && ev[VolumeEvent::Null as usize] > 0);
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+}
+
+#[test]
+fn features_say_heterogeneous_only_for_heterogeneous_media() {
+    let d = dir("features");
+    let het = load(
+        &d,
+        &sphere_scene(
+            r#"{ type = "heterogeneous", density = { constant = 1 } }"#,
+            1,
+            0,
+            1.0,
+        ),
+    )
+    .unwrap();
+    assert!(het.features.heterogeneous && het.features.scattering_media);
+    let hom = load(
+        &d,
+        &sphere_scene(r#"{ type = "homogeneous", sigma_t = 1 }"#, 1, 0, 1.0),
+    )
+    .unwrap();
+    assert!(!hom.features.heterogeneous && hom.features.scattering_media);
+}
+
+#[test]
+fn bad_grids_and_parameters_are_located_errors() {
+    let d = dir("errors");
+    let mut bad = std::fs::read(scenes().join("mitsuba-suite/hetero_grid_density.vol")).unwrap();
+    // Voxel (1, 0, 0) negative: byte 48 + 4.
+    bad[52..56].copy_from_slice(&(-0.5f32).to_le_bytes());
+    std::fs::write(d.join("neg.vol"), &bad).unwrap();
+    std::fs::write(d.join("cut.vol"), &bad[..1000]).unwrap();
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            r#"density = { grid = "neg.vol" }"#,
+            &[
+                "scene.toml",
+                "materials.medium.interior.density",
+                "neg.vol",
+                "byte 52",
+                "voxel (1, 0, 0)",
+                "-0.5",
+            ],
+        ),
+        (
+            r#"density = { grid = "cut.vol" }"#,
+            &["cut.vol", "1048624 bytes", "has 1000"],
+        ),
+        (
+            r#"density = { grid = "none.vol" }"#,
+            &["none.vol", "cannot read"],
+        ),
+        (
+            r#"density = { constant = 1 }, tracking = "fast""#,
+            &["tracking", "fast", "ratio, residual, delta"],
+        ),
+        (
+            r#"density = { constant = 1 }, scale = -1"#,
+            &["scale", "-1"],
+        ),
+        (r#"scale = 1"#, &["density"]),
+    ];
+    for (params, needles) in cases {
+        let interior = format!(r#"{{ type = "heterogeneous", {params} }}"#);
+        let e = match load(&d, &sphere_scene(&interior, 1, 0, 1.0)) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("{params}: accepted"),
+        };
+        for n in needles {
+            assert!(e.contains(n), "{params}: {e:?} lacks {n:?}");
+        }
+    }
+}
+
+#[test]
+fn the_colour_of_the_albedo_carries_no_colour_noise() {
+    // A chromatic albedo with a grey extinction: the free flight is shared by the channels,
+    // so each path's R/G/B stay in the albedos' ratios (every sample of a pixel is
+    // (0.9^k, 0.6^k, 0.3^k) times a grey, so R >= G >= B in every pixel, and no NaN).
+    let d = dir("colour");
+    let out = render_text(
+        &d,
+        &sphere_scene(
+            r#"{ type = "heterogeneous", density = { constant = 1 }, scale = 3, albedo = [0.9, 0.6, 0.3] }"#,
+            16,
+            0,
+            2.0,
+        ),
+    );
+    let mut coloured = 0;
+    for p in &out.beauty.pixels {
+        assert!(p.r >= p.g - 1e-6 && p.g >= p.b - 1e-6, "{p:?}");
+        coloured += (p.r > p.b) as usize;
+    }
+    assert!(coloured > 0);
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+}
