@@ -14,7 +14,7 @@ use risotto::engine::merge::{
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
-    RenderOutput, Window,
+    RenderOutput, SampleRange, Window,
 };
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::{self, Techniques};
@@ -169,8 +169,22 @@ struct RenderArgs {
     /// Render only this pixel window of the full image, X0,Y0,X1,Y1 (columns X0..X1, rows
     /// Y0..Y1, half-open; same camera and per-pixel seeds as the whole render). Writes a
     /// partial EXR for `risotto merge`.
-    #[arg(long, value_name = "X0,Y0,X1,Y1")]
+    #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with = "grid")]
     crop: Option<String>,
+    /// Cut the image into COLSxROWS tiles (column c of C spans c*W/C..(c+1)*W/C) and render
+    /// the tile --tile COL,ROW: --crop for farm task indices.
+    #[arg(long, value_name = "COLSxROWS", requires = "tile")]
+    grid: Option<String>,
+    /// The tile of --grid to render, COL,ROW counted from 0 at the top left.
+    #[arg(long, value_name = "COL,ROW", requires = "grid")]
+    tile: Option<String>,
+    /// Cut each pixel's spp into N sample chunks (chunk j spans j*spp/N..(j+1)*spp/N) and
+    /// render chunk --chunk J: --samples for farm task indices.
+    #[arg(long, value_name = "N", requires = "chunk", conflicts_with = "samples")]
+    chunks: Option<u32>,
+    /// The chunk of --chunks to render, from 0.
+    #[arg(long, value_name = "J", requires = "chunks")]
+    chunk: Option<u32>,
     /// Render only the sample indices START..END (half-open) of each pixel. Writes a partial
     /// EXR for `risotto merge`.
     #[arg(long, value_name = "START..END")]
@@ -246,10 +260,18 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    let crop = args.crop.as_deref().map(parse_crop).transpose()?;
-    let samples = match &args.samples {
-        Some(s) => Some(parse_sample_range(s).map_err(|e| anyhow::anyhow!("--samples {e}"))?),
-        None => None,
+    let (width, height) = (compiled.camera.width, compiled.camera.height);
+    let crop = match (&args.crop, &args.grid, &args.tile) {
+        (Some(c), _, _) => Some(parse_crop(c)?),
+        (None, Some(grid), Some(tile)) => Some(grid_tile(grid, tile, width, height)?),
+        _ => None,
+    };
+    let samples = match (&args.samples, args.chunks, args.chunk) {
+        (Some(s), _, _) => {
+            Some(parse_sample_range(s).map_err(|e| anyhow::anyhow!("--samples {e}"))?)
+        }
+        (None, Some(n), Some(j)) => Some(sample_chunk(n, j, compiled.settings.spp)?),
+        _ => None,
     };
     let checkpoint = match args.checkpoint {
         Some(t) if t.is_finite() && t > 0.0 => Some(std::time::Duration::from_secs_f64(t)),
@@ -353,6 +375,54 @@ fn render_command(args: RenderArgs) -> Result<()> {
         eprintln!("wrote {} and {}", out.display(), png.display());
     }
     Ok(())
+}
+
+/// Two whole numbers `A{sep}B` of option `flag`.
+fn number_pair(flag: &str, s: &str, sep: char) -> Result<(u32, u32)> {
+    let (a, b) = s
+        .split_once(sep)
+        .with_context(|| format!("{flag} {s}: expected two whole numbers A{sep}B"))?;
+    let num = |t: &str| -> Result<u32> {
+        t.trim()
+            .parse()
+            .with_context(|| format!("{flag} {s}: \"{t}\" is not a whole number"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+/// The window of `--grid COLSxROWS --tile COL,ROW` in a `w` x `h` image.
+fn grid_tile(grid: &str, tile: &str, w: u32, h: u32) -> Result<Window> {
+    let (cols, rows) = number_pair("--grid", grid, 'x')?;
+    anyhow::ensure!(
+        (1..=w).contains(&cols) && (1..=h).contains(&rows),
+        "--grid {grid}: need 1 to {w} columns and 1 to {h} rows for the {w}x{h} image"
+    );
+    let (c, r) = number_pair("--tile", tile, ',')?;
+    anyhow::ensure!(
+        c < cols && r < rows,
+        "--tile {tile}: outside the {cols}x{rows} grid (COL below {cols}, ROW below {rows})"
+    );
+    let cut = |i: u32, n: u32, len: u32| (i as u64 * len as u64 / n as u64) as u32;
+    Ok(Window {
+        x0: cut(c, cols, w),
+        y0: cut(r, rows, h),
+        x1: cut(c + 1, cols, w),
+        y1: cut(r + 1, rows, h),
+    })
+}
+
+/// The sample range of `--chunks n --chunk j` of `spp` samples.
+fn sample_chunk(n: u32, j: u32, spp: u32) -> Result<SampleRange> {
+    anyhow::ensure!(
+        (1..=spp).contains(&n),
+        "--chunks {n}: need 1 to {spp} chunks (the scene's spp)"
+    );
+    anyhow::ensure!(j < n, "--chunk {j}: must be below --chunks {n}");
+    let cut = |i: u32| (i as u64 * spp as u64 / n as u64) as u32;
+    Ok(SampleRange {
+        start: cut(j),
+        end: cut(j + 1),
+    })
 }
 
 /// Parses `--crop X0,Y0,X1,Y1`.

@@ -417,3 +417,65 @@ fn a_checkpointed_render_is_the_same_bits() {
     assert_eq!(cp.film.sum_sq, plain.film.sum_sq);
     assert_eq!(cp.header.samples, plain.header.samples);
 }
+
+/// `--grid COLSxROWS --tile COL,ROW` and `--chunks N --chunk J` (the farm templates' task
+/// indices) cut the image and the spp with no gap and no overlap, and merge.
+#[test]
+fn grid_tiles_and_sample_chunks_cover_the_render() {
+    let (dir, scene) = setup("grid");
+    let mut parts = Vec::new();
+    // 3 columns of a 16-pixel row: 0..5, 5..10, 10..16; 3 chunks of 8: 0..2, 2..5, 5..8.
+    for col in 0..3 {
+        for chunk in 0..3 {
+            let name = format!("c{col}-{chunk}.exr");
+            let tile = format!("{col},0");
+            let chunk = chunk.to_string();
+            let args = [
+                "--grid", "3x1", "--tile", &tile, "--chunks", "3", "--chunk", &chunk,
+            ];
+            parts.push(render(&dir, &scene, &name, &args));
+        }
+    }
+    let header = |i: usize| read_partial(&parts[i]).unwrap().header;
+    assert_eq!(header(0).window.to_string(), "0,0,5,12");
+    assert_eq!(header(4).window.to_string(), "5,0,10,12");
+    assert_eq!(header(8).window.to_string(), "10,0,16,12");
+    assert_eq!(header(0).samples.to_string(), "0..2");
+    assert_eq!(header(1).samples.to_string(), "2..5");
+    assert_eq!(header(2).samples.to_string(), "5..8");
+    let refs: Vec<&PathBuf> = parts.iter().collect();
+    let (out, merged) = merge(&dir, &refs, "merged.exr");
+    ok("merge grid", out);
+    let merged = read_partial(&merged).unwrap();
+    assert!(merged.film.count.iter().all(|&c| c == 8));
+    let s = scene.to_str().unwrap();
+    let o = dir.join("x.exr");
+    let o = o.to_str().unwrap();
+    for (args, needles) in [
+        (
+            vec!["--grid", "3x1", "--tile", "3,0"],
+            vec!["--tile 3,0", "3x1"],
+        ),
+        (
+            vec!["--grid", "17x1", "--tile", "0,0"],
+            vec!["--grid 17x1", "16x12"],
+        ),
+        (vec!["--grid", "0x1", "--tile", "0,0"], vec!["--grid 0x1"]),
+        (
+            vec!["--grid", "2", "--tile", "0,0"],
+            vec!["--grid 2", "AxB"],
+        ),
+        (
+            vec!["--chunks", "9", "--chunk", "0"],
+            vec!["--chunks 9", "8"],
+        ),
+        (
+            vec!["--chunks", "2", "--chunk", "2"],
+            vec!["--chunk 2", "below"],
+        ),
+    ] {
+        let mut a = vec!["render", s, "--out", o, "--quiet"];
+        a.extend_from_slice(&args);
+        assert_fails(&format!("{args:?}"), &risotto(&a), &needles);
+    }
+}
