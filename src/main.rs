@@ -1,5 +1,6 @@
 //! The `risotto` driver: `risotto render SCENE.toml [options]`, `risotto compare`,
-//! `risotto techniques SCENE.toml` and `risotto converge SCENE.toml [options]`.
+//! `risotto techniques SCENE.toml`, `risotto converge SCENE.toml [options]`,
+//! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -7,8 +8,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::compare::compare;
 use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::engine::merge::{
+    merge, parse_sample_range, read_partial, scene_hash, write_partial, Partial,
+};
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
-use risotto::engine::render::{render, RenderOptions};
+use risotto::engine::render::{
+    checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
+    RenderOutput, SampleRange, Window,
+};
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::{self, Techniques};
 use std::path::{Path, PathBuf};
@@ -47,6 +54,31 @@ enum Command {
     /// render time: writes DIR/converge.csv, .json, .png and .svg and prints a table of
     /// equal-time error and equal-error time relative to the best technique.
     Converge(ConvergeArgs),
+    /// Merge partial renders (tiles from --crop, sample passes from --samples, checkpoints)
+    /// into the whole render: writes the EXR, its PNG preview and merged stats JSON.
+    Merge(MergeArgs),
+    /// Print a partial render's header as JSON: resolution, window, sample range, spp,
+    /// seed, scene hash.
+    Info {
+        /// The partial EXR.
+        part: PathBuf,
+    },
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The partial EXRs.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// The merged EXR; the PNG preview is written beside it.
+    #[arg(long)]
+    out: PathBuf,
+    /// The merged stats JSON. Defaults to OUT with the extension .stats.json.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Exposure of the PNG preview in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
 }
 
 #[derive(clap::Args)]
@@ -134,6 +166,36 @@ struct RenderArgs {
     /// Paths per batch (1 to 16777216: a batch's tables are allocated whole).
     #[arg(long, default_value_t = 4096)]
     batch_size: usize,
+    /// Render only this pixel window of the full image, X0,Y0,X1,Y1 (columns X0..X1, rows
+    /// Y0..Y1, half-open; same camera and per-pixel seeds as the whole render). Writes a
+    /// partial EXR for `risotto merge`.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with = "grid")]
+    crop: Option<String>,
+    /// Cut the image into COLSxROWS tiles (column c of C spans c*W/C..(c+1)*W/C) and render
+    /// the tile --tile COL,ROW: --crop for farm task indices.
+    #[arg(long, value_name = "COLSxROWS", requires = "tile")]
+    grid: Option<String>,
+    /// The tile of --grid to render, COL,ROW counted from 0 at the top left.
+    #[arg(long, value_name = "COL,ROW", requires = "grid")]
+    tile: Option<String>,
+    /// Cut each pixel's spp into N sample chunks (chunk j spans j*spp/N..(j+1)*spp/N) and
+    /// render chunk --chunk J: --samples for farm task indices.
+    #[arg(long, value_name = "N", requires = "chunk", conflicts_with = "samples")]
+    chunks: Option<u32>,
+    /// The chunk of --chunks to render, from 0.
+    #[arg(long, value_name = "J", requires = "chunks")]
+    chunk: Option<u32>,
+    /// Render only the sample indices START..END (half-open) of each pixel. Writes a partial
+    /// EXR for `risotto merge`.
+    #[arg(long, value_name = "START..END")]
+    samples: Option<String>,
+    /// Write the partial EXR to --out about every SECONDS while rendering (atomically), so
+    /// a killed render loses at most about that much work; see README "Resume".
+    #[arg(long, value_name = "SECONDS")]
+    checkpoint: Option<f64>,
+    /// Write the merge data (a partial EXR) even for a whole render.
+    #[arg(long)]
+    partial: bool,
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
@@ -146,6 +208,8 @@ fn main() -> ExitCode {
         Command::Compare { test, reference } => compare_command(&test, &reference),
         Command::Techniques { scene } => techniques_command(&scene),
         Command::Converge(args) => converge_command(args),
+        Command::Merge(args) => merge_command(args),
+        Command::Info { part } => info_command(&part),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -196,8 +260,45 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    let total =
-        compiled.settings.spp as u64 * compiled.camera.width as u64 * compiled.camera.height as u64;
+    let (width, height) = (compiled.camera.width, compiled.camera.height);
+    let crop = match (&args.crop, &args.grid, &args.tile) {
+        (Some(c), _, _) => Some(parse_crop(c)?),
+        (None, Some(grid), Some(tile)) => Some(grid_tile(grid, tile, width, height)?),
+        _ => None,
+    };
+    let samples = match (&args.samples, args.chunks, args.chunk) {
+        (Some(s), _, _) => {
+            Some(parse_sample_range(s).map_err(|e| anyhow::anyhow!("--samples {e}"))?)
+        }
+        (None, Some(n), Some(j)) => Some(sample_chunk(n, j, compiled.settings.spp)?),
+        _ => None,
+    };
+    let checkpoint = match args.checkpoint {
+        Some(t) if t.is_finite() && t > 0.0 => Some(std::time::Duration::from_secs_f64(t)),
+        Some(t) => anyhow::bail!("--checkpoint {t}: must be a positive number of seconds"),
+        None => None,
+    };
+    let partial = args.partial || crop.is_some() || samples.is_some() || checkpoint.is_some();
+    anyhow::ensure!(
+        !(partial && args.aovs),
+        "--aovs: partial renders (--crop, --samples, --checkpoint, --partial) carry beauty \
+         sums only; render AOVs in a whole render"
+    );
+    let options = techniques.render_options(RenderOptions {
+        threads: args.threads,
+        batch_size: args.batch_size,
+        crop,
+        samples,
+        ..RenderOptions::default()
+    });
+    let (window, range) = checked_extent(&compiled, &options).map_err(|e| match e {
+        RenderError::Crop { window, reason } => anyhow::anyhow!("--crop {window}: {reason}"),
+        RenderError::Samples { samples, reason } => {
+            anyhow::anyhow!("--samples {samples}: {reason}")
+        }
+        e => e.into(),
+    })?;
+    let total = range.len() as u64 * window.pixels() as u64;
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
@@ -210,23 +311,57 @@ fn render_command(args: RenderArgs) -> Result<()> {
         );
         b
     };
-    let options = techniques.render_options(RenderOptions {
-        threads: args.threads,
-        batch_size: args.batch_size,
-        ..RenderOptions::default()
-    });
-    let result = render(&compiled, &options, &|n| bar.inc(n))?;
+    let settings = &compiled.settings;
+    let resolution = (compiled.camera.width, compiled.camera.height);
+    let hash = if partial {
+        let text = std::fs::read(&args.scene)
+            .with_context(|| format!("cannot read {}", args.scene.display()))?;
+        let effective = format!(
+            "{}x{} max_depth={} rr_depth={} max_passes={} techniques={}",
+            resolution.0,
+            resolution.1,
+            settings.max_depth,
+            settings.rr_depth,
+            settings.max_passes,
+            techniques.label()
+        );
+        scene_hash(&[&text, effective.as_bytes()])
+    } else {
+        String::new()
+    };
+    let (spp, seed) = (settings.spp, settings.seed);
+    let to_partial = |r: &RenderOutput| Partial::of_render(r, resolution, spp, seed, hash.clone());
+    let result = match checkpoint {
+        Some(every) => {
+            let mut write =
+                |r: &RenderOutput| write_partial(&out, &to_partial(r)).map_err(|e| e.to_string());
+            render_checkpointed(
+                &compiled,
+                &options,
+                &|n| bar.inc(n),
+                Checkpoints {
+                    every,
+                    write: &mut write,
+                },
+            )?
+        }
+        None => render(&compiled, &options, &|n| bar.inc(n))?,
+    };
     bar.finish_and_clear();
 
-    let film = FilmOutput {
-        beauty: &result.beauty,
-        variance: &result.variance,
-        sample_count: &result.sample_count,
-        albedo: args.aovs.then_some(&result.albedo),
-        normal: args.aovs.then_some(&result.normal),
-        depth: args.aovs.then_some(result.depth.as_slice()),
-    };
-    write_exr(&out, &film)?;
+    if partial {
+        write_partial(&out, &to_partial(&result))?;
+    } else {
+        let film = FilmOutput {
+            beauty: &result.beauty,
+            variance: &result.variance,
+            sample_count: &result.sample_count,
+            albedo: args.aovs.then_some(&result.albedo),
+            normal: args.aovs.then_some(&result.normal),
+            depth: args.aovs.then_some(result.depth.as_slice()),
+        };
+        write_exr(&out, &film)?;
+    }
     let png = out.with_extension("png");
     write_png(&png, &result.beauty, args.exposure)?;
     if let Some(path) = &args.stats {
@@ -239,6 +374,121 @@ fn render_command(args: RenderArgs) -> Result<()> {
         eprintln!("{}", result.stats);
         eprintln!("wrote {} and {}", out.display(), png.display());
     }
+    Ok(())
+}
+
+/// Two whole numbers `A{sep}B` of option `flag`.
+fn number_pair(flag: &str, s: &str, sep: char) -> Result<(u32, u32)> {
+    let (a, b) = s
+        .split_once(sep)
+        .with_context(|| format!("{flag} {s}: expected two whole numbers A{sep}B"))?;
+    let num = |t: &str| -> Result<u32> {
+        t.trim()
+            .parse()
+            .with_context(|| format!("{flag} {s}: \"{t}\" is not a whole number"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+/// The window of `--grid COLSxROWS --tile COL,ROW` in a `w` x `h` image.
+fn grid_tile(grid: &str, tile: &str, w: u32, h: u32) -> Result<Window> {
+    let (cols, rows) = number_pair("--grid", grid, 'x')?;
+    anyhow::ensure!(
+        (1..=w).contains(&cols) && (1..=h).contains(&rows),
+        "--grid {grid}: need 1 to {w} columns and 1 to {h} rows for the {w}x{h} image"
+    );
+    let (c, r) = number_pair("--tile", tile, ',')?;
+    anyhow::ensure!(
+        c < cols && r < rows,
+        "--tile {tile}: outside the {cols}x{rows} grid (COL below {cols}, ROW below {rows})"
+    );
+    let cut = |i: u32, n: u32, len: u32| (i as u64 * len as u64 / n as u64) as u32;
+    Ok(Window {
+        x0: cut(c, cols, w),
+        y0: cut(r, rows, h),
+        x1: cut(c + 1, cols, w),
+        y1: cut(r + 1, rows, h),
+    })
+}
+
+/// The sample range of `--chunks n --chunk j` of `spp` samples.
+fn sample_chunk(n: u32, j: u32, spp: u32) -> Result<SampleRange> {
+    anyhow::ensure!(
+        (1..=spp).contains(&n),
+        "--chunks {n}: need 1 to {spp} chunks (the scene's spp)"
+    );
+    anyhow::ensure!(j < n, "--chunk {j}: must be below --chunks {n}");
+    let cut = |i: u32| (i as u64 * spp as u64 / n as u64) as u32;
+    Ok(SampleRange {
+        start: cut(j),
+        end: cut(j + 1),
+    })
+}
+
+/// Parses `--crop X0,Y0,X1,Y1`.
+fn parse_crop(s: &str) -> Result<Window> {
+    let v: Vec<&str> = s.split(',').collect();
+    anyhow::ensure!(
+        v.len() == 4,
+        "--crop {s}: expected four whole numbers X0,Y0,X1,Y1"
+    );
+    let mut n = [0u32; 4];
+    for (i, t) in v.iter().enumerate() {
+        n[i] = t
+            .trim()
+            .parse()
+            .with_context(|| format!("--crop {s}: \"{t}\" is not a whole number"))?;
+    }
+    Ok(Window {
+        x0: n[0],
+        y0: n[1],
+        x1: n[2],
+        y1: n[3],
+    })
+}
+
+fn merge_command(args: MergeArgs) -> Result<()> {
+    let mut parts = Vec::with_capacity(args.parts.len());
+    for path in &args.parts {
+        parts.push((path.clone(), read_partial(path)?));
+    }
+    let merged = merge(&parts)?;
+    write_partial(&args.out, &merged)?;
+    let png = args.out.with_extension("png");
+    write_png(&png, &merged.beauty(), args.exposure)?;
+    let stats = args
+        .stats
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("stats.json"));
+    let mut text = serde_json::to_string_pretty(&merged.header.stats)?;
+    text.push('\n');
+    std::fs::write(&stats, text)
+        .with_context(|| format!("cannot write stats to {}", stats.display()))?;
+    eprintln!(
+        "merged {} parts into {}, {} and {}",
+        parts.len(),
+        args.out.display(),
+        png.display(),
+        stats.display()
+    );
+    Ok(())
+}
+
+fn info_command(path: &Path) -> Result<()> {
+    let p = read_partial(path)?;
+    let h = &p.header;
+    let w = h.window;
+    println!(
+        "{}",
+        serde_json::json!({
+            "resolution": [h.resolution.0, h.resolution.1],
+            "window": [w.x0, w.y0, w.x1, w.y1],
+            "samples": [h.samples.start, h.samples.end],
+            "spp": h.spp,
+            "seed": h.seed,
+            "scene_hash": h.scene_hash,
+        })
+    );
     Ok(())
 }
 

@@ -11,6 +11,7 @@ pub mod integrator;
 mod interior;
 pub mod load;
 pub mod media;
+pub mod merge;
 pub mod output;
 pub mod path_tracer;
 pub mod plot;

@@ -169,6 +169,37 @@ fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
 /// Writes a render as one float32, ZIP-compressed, two-part EXR (layout in the module
 /// docs). Every plane must match the beauty's size.
 pub fn write_exr(path: &Path, out: &FilmOutput) -> Result<(), OutputError> {
+    write_exr_placed(path, out, None, None)
+}
+
+/// Where the pixels of a [`FilmOutput`] sit in the full image: the EXR display window is
+/// `(0, 0)` to `full`, the data window starts at `origin` (a crop of the full image).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Placement {
+    /// Full image size (the display window).
+    pub full: (usize, usize),
+    /// Top-left pixel of the data window in the full image.
+    pub origin: (usize, usize),
+}
+
+/// A third EXR part after `beauty` and `aovs`: its name, channels and text attributes.
+pub(crate) struct ExtraPart {
+    /// The part's name.
+    pub name: &'static str,
+    /// Its channels (each the data window's size).
+    pub channels: Vec<x::AnyChannel<x::FlatSamples>>,
+    /// Text attributes of its header.
+    pub attributes: Vec<(&'static str, String)>,
+}
+
+/// [`write_exr`] with the data window placed in a larger display window and an optional
+/// extra part.
+pub(crate) fn write_exr_placed(
+    path: &Path,
+    out: &FilmOutput,
+    placement: Option<Placement>,
+    extra: Option<ExtraPart>,
+) -> Result<(), OutputError> {
     let (w, h) = (out.beauty.width, out.beauty.height);
     if w == 0 || h == 0 {
         return Err(invalid(
@@ -231,16 +262,40 @@ pub fn write_exr(path: &Path, out: &FilmOutput) -> Result<(), OutputError> {
     push_rgb(&mut beauty, "", ["R", "G", "B"], out.beauty);
 
     // ZIP16 scan lines: lossless for float32 and supported by every OpenEXR reader.
+    let placement = placement.unwrap_or(Placement {
+        full: (w, h),
+        origin: (0, 0),
+    });
+    let (Ok(ox), Ok(oy)) = (
+        i32::try_from(placement.origin.0),
+        i32::try_from(placement.origin.1),
+    ) else {
+        return Err(invalid(path, "data window origin beyond EXR's range"));
+    };
     let part = |name: &str, channels| {
+        let mut attributes = x::LayerAttributes::named(name);
+        attributes.layer_position = x::Vec2(ox, oy);
         x::Layer::new(
             (w, h),
-            x::LayerAttributes::named(name),
+            attributes,
             x::Encoding::SMALL_LOSSLESS,
             x::AnyChannels::sort(channels),
         )
     };
-    let layers = vec![part(BEAUTY_PART, beauty), part(AOV_PART, aovs)];
-    let attributes = x::ImageAttributes::new(x::IntegerBounds::from_dimensions((w, h)));
+    let mut layers = vec![part(BEAUTY_PART, beauty), part(AOV_PART, aovs)];
+    if let Some(extra) = extra {
+        let mut layer = part(extra.name, extra.channels.into_iter().collect());
+        for (key, value) in extra.attributes {
+            let text = x::Text::new_or_none(&value)
+                .ok_or_else(|| invalid(path, format!("attribute {key}: not Latin-1 text")))?;
+            layer
+                .attributes
+                .other
+                .insert(x::Text::from(key), x::AttributeValue::Text(text));
+        }
+        layers.push(layer);
+    }
+    let attributes = x::ImageAttributes::new(x::IntegerBounds::from_dimensions(placement.full));
     x::Image::from_layers(attributes, layers)
         .write()
         .to_file(path)
@@ -261,6 +316,22 @@ fn push_rgb(
             x::FlatSamples::F32(values),
         ));
     }
+}
+
+/// Every part and channel of a flat EXR, with all attributes (largest resolution level).
+pub(crate) fn read_exr_all(
+    path: &Path,
+) -> Result<x::Image<x::Layers<x::AnyChannels<x::FlatSamples>>>, OutputError> {
+    // The header's claimed size is checked before the reader allocates for it.
+    check_exr_header(path)?;
+    x::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|source| exr_error(path, source))
 }
 
 /// Maps the exr crate's error, keeping OS errors as [`OutputError::Io`].
@@ -347,15 +418,7 @@ fn check_exr_header(path: &Path) -> Result<(), OutputError> {
 /// the headers imply (an offset-table entry and a chunk header for each), so a small file
 /// whose header claims a huge image is an error naming the file and the claimed size.
 pub fn read_exr_rgb(path: &Path) -> Result<Image, OutputError> {
-    check_exr_header(path)?;
-    let image = x::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|source| exr_error(path, source))?;
+    let image = read_exr_all(path)?;
 
     type Layer = x::Layer<x::AnyChannels<x::FlatSamples>>;
     let find = |layer: &Layer, name: &str| -> Option<usize> {

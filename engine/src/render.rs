@@ -1,6 +1,11 @@
 //! Rendering a compiled scene: the image is cut into tiles (work items); each rayon worker
 //! renders whole tiles, batch by batch, with its own tables and arena. A tile's samples are
 //! splatted in a fixed order, so the image does not depend on the number of threads.
+//!
+//! A render may cover only a window of the image ([`RenderOptions::crop`]) and a range of
+//! each pixel's sample indices ([`RenderOptions::samples`]): pixel seeds and sample indices
+//! are those of the whole render, so such pieces are independent farm tasks that
+//! [`merge`](crate::merge) puts back together.
 
 use crate::integrator::{
     render_tile, Integrator, LightingTechnique, PathTracer, TileFilm, TileWorker,
@@ -14,6 +19,92 @@ use rayon::prelude::*;
 use risotto_components::Rgb;
 use risotto_systems::film::Film;
 use risotto_systems::independent_sampler::SamplerKind;
+
+/// A pixel window of the full image: columns `x0..x1`, rows `y0..y1` (half-open; row 0 is
+/// the top).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Window {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl Window {
+    /// The whole `width` x `height` image.
+    pub fn full(width: u32, height: u32) -> Self {
+        Window {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+    /// Pixels in the window.
+    pub fn pixels(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+    /// The pixels both windows contain, if any.
+    pub fn intersection(&self, o: &Window) -> Option<Window> {
+        let w = Window {
+            x0: self.x0.max(o.x0),
+            y0: self.y0.max(o.y0),
+            x1: self.x1.min(o.x1),
+            y1: self.y1.min(o.y1),
+        };
+        (w.x0 < w.x1 && w.y0 < w.y1).then_some(w)
+    }
+}
+
+/// `X0,Y0,X1,Y1`, the `--crop` syntax.
+impl std::fmt::Display for Window {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+/// A range of each pixel's sample indices, `start..end` (half-open).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SampleRange {
+    /// First sample index.
+    pub start: u32,
+    /// One past the last sample index.
+    pub end: u32,
+}
+
+impl SampleRange {
+    /// Samples in the range.
+    pub fn len(&self) -> u32 {
+        self.end.saturating_sub(self.start)
+    }
+    /// True when the range holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// True when the ranges share a sample index.
+    pub fn overlaps(&self, o: &SampleRange) -> bool {
+        self.start.max(o.start) < self.end.min(o.end)
+    }
+}
+
+/// `START..END`, the `--samples` syntax.
+impl std::fmt::Display for SampleRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)
+    }
+}
 
 /// Options of one render that are not part of the scene.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +122,13 @@ pub struct RenderOptions {
     /// Scattering-media techniques over what each medium says (the `scattering` technique).
     /// Defaults to none (as the scene says).
     pub volume: crate::plugin::VolumeTechniques,
+    /// Only this window of the image is rendered (same camera, same per-pixel seeds: its
+    /// pixels are the bits of the same pixels of the whole render). Defaults to `None`: the
+    /// whole image.
+    pub crop: Option<Window>,
+    /// Only these sample indices of each pixel are rendered. Defaults to `None`: all of
+    /// `0..spp`.
+    pub samples: Option<SampleRange>,
 }
 
 impl Default for RenderOptions {
@@ -42,11 +140,14 @@ impl Default for RenderOptions {
             technique: LightingTechnique::Mis,
             sampler: SamplerKind::Sobol,
             volume: Default::default(),
+            crop: None,
+            samples: None,
         }
     }
 }
 
-/// What a render produces.
+/// What a render produces. The images cover [`window`](Self::window) (the whole image
+/// unless the render was cropped), row-major from its top-left pixel.
 pub struct RenderOutput {
     /// Mean radiance per pixel.
     pub beauty: Image,
@@ -60,6 +161,13 @@ pub struct RenderOutput {
     pub normal: Image,
     /// Mean first-hit distance (0 where the camera saw nothing).
     pub depth: Vec<f32>,
+    /// The per-pixel sums (f64) and counts the means come from, over the window: what
+    /// merging partial renders adds up.
+    pub film: Film,
+    /// The window of the full image these pixels are.
+    pub window: Window,
+    /// The sample indices rendered (of every pixel of the window).
+    pub samples: SampleRange,
     /// Statistics.
     pub stats: RenderStats,
 }
@@ -75,6 +183,35 @@ pub enum RenderError {
         /// Cause.
         message: String,
     },
+    /// The crop window is empty or not inside the image.
+    #[error("crop window {window}: {reason}")]
+    Crop {
+        /// The window asked for.
+        window: Window,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The sample range is empty or beyond the scene's samples per pixel.
+    #[error("sample range {samples}: {reason}")]
+    Samples {
+        /// The range asked for.
+        samples: SampleRange,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A checkpoint could not be written.
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+}
+
+/// Periodic checkpoints of a render ([`render_checkpointed`]).
+pub struct Checkpoints<'a> {
+    /// Wanted time between checkpoints. The render runs in passes over every pixel of the
+    /// window, each sized from the previous one's speed to take about this long, and
+    /// `write` is called after each pass but the last.
+    pub every: std::time::Duration,
+    /// Receives the render so far (its `samples` say which indices are done).
+    pub write: &'a mut dyn FnMut(&RenderOutput) -> Result<(), String>,
 }
 
 /// Renders `scene` with the path tracer (`options.technique` for direct lighting).
@@ -88,7 +225,24 @@ pub fn render(
         technique: options.technique,
         volume: options.volume,
     };
-    render_with(&tracer, scene, options, progress)
+    render_passes(&tracer, scene, options, progress, None)
+}
+
+/// [`render`] with checkpoints: the partial render so far is handed to
+/// `checkpoints.write` about every `checkpoints.every`. Tiles keep their films across
+/// passes, so every pixel's sums are added in sample order and the result is the same bits
+/// as [`render`]'s.
+pub fn render_checkpointed(
+    scene: &CompiledScene,
+    options: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+    checkpoints: Checkpoints,
+) -> Result<RenderOutput, RenderError> {
+    let tracer = PathTracer {
+        technique: options.technique,
+        volume: options.volume,
+    };
+    render_passes(&tracer, scene, options, progress, Some(checkpoints))
 }
 
 /// Renders `scene` with any global integrator (`options.technique` is the path tracer's and
@@ -100,65 +254,151 @@ pub fn render_with<I: Integrator>(
     options: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderOutput, RenderError> {
-    let start = std::time::Instant::now();
+    render_passes(integrator, scene, options, progress, None)
+}
+
+/// The window and sample range `options` ask for, checked against `scene`.
+pub fn checked_extent(
+    scene: &CompiledScene,
+    options: &RenderOptions,
+) -> Result<(Window, SampleRange), RenderError> {
     let (w, h) = (scene.camera.width, scene.camera.height);
+    let window = options.crop.unwrap_or(Window::full(w, h));
+    let crop_err = |reason: String| RenderError::Crop { window, reason };
+    if window.x0 >= window.x1 || window.y0 >= window.y1 {
+        return Err(crop_err("empty window (need X0 < X1 and Y0 < Y1)".into()));
+    }
+    if window.x1 > w || window.y1 > h {
+        return Err(crop_err(format!("outside the {w}x{h} image")));
+    }
+    let spp = scene.settings.spp;
+    let samples = options
+        .samples
+        .unwrap_or(SampleRange { start: 0, end: spp });
+    if samples.start >= samples.end {
+        return Err(RenderError::Samples {
+            samples,
+            reason: "empty range (need START < END)".into(),
+        });
+    }
+    if samples.end > spp {
+        return Err(RenderError::Samples {
+            samples,
+            reason: format!("beyond the scene's {spp} samples per pixel"),
+        });
+    }
+    Ok((window, samples))
+}
+
+/// One tile of a render: its film (kept across passes) and its workers' counters.
+type Tile = (TileFilm, SystemStats);
+
+fn render_passes<I: Integrator>(
+    integrator: &I,
+    scene: &CompiledScene,
+    options: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+    mut checkpoints: Option<Checkpoints>,
+) -> Result<RenderOutput, RenderError> {
+    let start = std::time::Instant::now();
+    let (window, samples) = checked_extent(scene, options)?;
     let ts = options.tile_size.max(1);
-    let mut tiles = Vec::new();
-    for y0 in (0..h).step_by(ts as usize) {
-        for x0 in (0..w).step_by(ts as usize) {
-            tiles.push((x0, y0, ts.min(w - x0), ts.min(h - y0)));
+    let mut tiles: Vec<Tile> = Vec::new();
+    for y0 in (window.y0..window.y1).step_by(ts as usize) {
+        for x0 in (window.x0..window.x1).step_by(ts as usize) {
+            let tile = TileFilm::new(x0, y0, ts.min(window.x1 - x0), ts.min(window.y1 - y0));
+            tiles.push((tile, SystemStats::default()));
         }
     }
-    // The sampler travels in the sample addresses (`SamplerKind::address`).
-    let samples = options.sampler.addresses(0..scene.settings.spp);
-    let work = || -> Vec<(TileFilm, SystemStats)> {
-        tiles
-            .par_iter()
-            .map_init(
+    let pool = match options.threads {
+        Some(threads) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| RenderError::ThreadPool {
+                    threads,
+                    message: e.to_string(),
+                })?,
+        ),
+        None => None,
+    };
+    // One pass renders the sample indices `range` of every tile, continuing its film.
+    let pass = |tiles: &mut Vec<Tile>, range: std::ops::Range<u32>| {
+        // The sampler travels in the sample addresses (`SamplerKind::address`).
+        let addresses = options.sampler.addresses(range);
+        let mut work = move || {
+            tiles.par_iter_mut().for_each_init(
                 || (TileWorker::<I::Worker>::default(), Bump::new()),
-                |(tables, arena), &(x0, y0, tw, th)| {
-                    let mut tile = TileFilm::new(x0, y0, tw, th);
-                    let mut stats = SystemStats::default();
+                |(tables, arena), (tile, stats)| {
                     render_tile(
                         integrator,
                         scene,
-                        &mut tile,
-                        samples.clone(),
+                        tile,
+                        addresses.clone(),
                         options.batch_size,
                         tables,
-                        &mut stats,
+                        stats,
                         arena,
                         progress,
-                    );
-                    (tile, stats)
+                    )
                 },
             )
-            .collect()
+        };
+        match &pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
     };
-    let results = match options.threads {
-        Some(threads) => rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| RenderError::ThreadPool {
-                threads,
-                message: e.to_string(),
-            })?
-            .install(work),
-        None => work(),
-    };
+    let mut done = samples.start;
+    match &mut checkpoints {
+        None => {
+            pass(&mut tiles, samples.start..samples.end);
+            done = samples.end;
+        }
+        Some(cp) => {
+            // The first pass takes one sample per pixel and measures the speed; each later
+            // pass is sized to take about `every` at the speed of the one before.
+            let mut chunk = 1u32;
+            while done < samples.end {
+                let next = done.saturating_add(chunk).min(samples.end);
+                let t = std::time::Instant::now();
+                pass(&mut tiles, done..next);
+                let per_sample = t.elapsed().as_secs_f64() / (next - done) as f64;
+                done = next;
+                if done < samples.end {
+                    let so_far = gather(scene, window, samples.start..done, &tiles, start);
+                    (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
+                }
+                let want = cp.every.as_secs_f64() / per_sample.max(1e-9);
+                chunk = want.clamp(1.0, u32::MAX as f64) as u32;
+            }
+        }
+    }
+    Ok(gather(scene, window, samples.start..done, &tiles, start))
+}
 
+/// The render output of `tiles` (which cover `window` and hold the samples `samples`).
+fn gather(
+    scene: &CompiledScene,
+    window: Window,
+    samples: std::ops::Range<u32>,
+    tiles: &[Tile],
+    start: std::time::Instant,
+) -> RenderOutput {
+    let (w, h) = (window.width(), window.height());
     let mut film = Film::new(w, h);
     let n = (w * h) as usize;
     let mut albedo = vec![Rgb::BLACK; n];
     let mut normal = vec![Vec3::ZERO; n];
     let mut depth = vec![0.0f32; n];
     let mut counters = SystemStats::default();
-    for (tile, stats) in &results {
-        film.add_tile(&tile.film, tile.x0, tile.y0);
+    for (tile, stats) in tiles {
+        let (x0, y0) = (tile.x0 - window.x0, tile.y0 - window.y0);
+        film.add_tile(&tile.film, x0, y0);
         for ty in 0..tile.film.height {
             for tx in 0..tile.film.width {
                 let src = (ty * tile.film.width + tx) as usize;
-                let dst = ((tile.y0 + ty) * w + tile.x0 + tx) as usize;
+                let dst = ((y0 + ty) * w + x0 + tx) as usize;
                 albedo[dst] = tile.albedo[src];
                 normal[dst] = tile.normal[src];
                 depth[dst] = tile.depth[src];
@@ -189,15 +429,21 @@ pub fn render_with<I: Integrator>(
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();
     validate_boundaries(scene, &mut stats);
-    Ok(RenderOutput {
+    RenderOutput {
         beauty,
         variance,
         sample_count,
         albedo: albedo_img,
         normal: normal_img,
         depth,
+        film,
+        window,
+        samples: SampleRange {
+            start: samples.start,
+            end: samples.end,
+        },
         stats,
-    })
+    }
 }
 
 /// The boundary validator: one warning per shape whose crossings corrupted volume stacks

@@ -1,0 +1,481 @@
+//! Splitting a render into farm tasks and merging it back (issue 15): `--crop` pixels are the
+//! bits of the whole render's, a 2x2 tile x 2 sample-range split merges to the one-process
+//! render (tiles exactly; sample passes to the stated f64 summation order), every misfit is
+//! refused with a message naming the files, bad `--crop` / `--samples` values are named, and
+//! a checkpointed render that is killed resumes to the uninterrupted image.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+mod common;
+use common::cli::{assert_fails, risotto, SCENE};
+use risotto::engine::merge::{read_partial, Partial};
+use risotto::engine::output::read_exr_rgb;
+
+/// A fresh directory for one test, with `SCENE` in it as `scene.toml`.
+fn setup(test: &str) -> (PathBuf, PathBuf) {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("farm-{test}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    // The shared CLI scene at 8 spp.
+    std::fs::write(&scene, SCENE.replace("spp = 4", "spp = 8")).unwrap();
+    (dir, scene)
+}
+
+fn ok(what: &str, out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// `risotto render SCENE --out DIR/NAME --quiet EXTRA...`; returns the output path.
+fn render(dir: &Path, scene: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    ok(&format!("render {name} {extra:?}"), risotto(&args));
+    out
+}
+
+fn merge(dir: &Path, parts: &[&PathBuf], out: &str) -> (Output, PathBuf) {
+    let out = dir.join(out);
+    let mut args = vec!["merge".to_string()];
+    args.extend(parts.iter().map(|p| p.to_str().unwrap().to_string()));
+    args.extend(["--out".into(), out.to_str().unwrap().into()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    (risotto(&args), out)
+}
+
+/// Bits of the beauty, variance and count of a partial, recomputed from its film.
+fn layers(p: &Partial) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+    let f = &p.film;
+    let n = f.count.len();
+    (
+        (0..n).map(|i| f.mean(i).to_array()).collect(),
+        (0..n).map(|i| f.variance_of_mean(i).to_array()).collect(),
+        f.count.clone(),
+    )
+}
+
+const TILES: [&str; 4] = ["0,0,8,6", "8,0,16,6", "0,6,8,12", "8,6,16,12"];
+
+#[test]
+fn crop_pixels_are_the_bits_of_the_whole_render() {
+    let (dir, scene) = setup("crop");
+    let full = read_exr_rgb(&render(&dir, &scene, "full.exr", &[])).unwrap();
+    // An odd window that no tile grid lines up with.
+    let crop = read_exr_rgb(&render(&dir, &scene, "crop.exr", &["--crop", "3,2,14,7"])).unwrap();
+    assert_eq!((crop.width, crop.height), (11, 5));
+    for y in 0..5 {
+        for x in 0..11 {
+            assert_eq!(
+                crop.get(x, y).to_array().map(f32::to_bits),
+                full.get(x + 3, y + 2).to_array().map(f32::to_bits),
+                "pixel ({}, {})",
+                x + 3,
+                y + 2
+            );
+        }
+    }
+    // And the partial knows where it sits.
+    let p = read_partial(&dir.join("crop.exr")).unwrap();
+    assert_eq!(p.header.resolution, (16, 12));
+    assert_eq!(p.header.window.to_string(), "3,2,14,7");
+    assert_eq!(p.header.samples.to_string(), "0..8");
+}
+
+#[test]
+fn tiles_times_sample_ranges_merge_to_the_one_process_render() {
+    let (dir, scene) = setup("split");
+    let whole = render(&dir, &scene, "whole.exr", &["--partial"]);
+    let whole = read_partial(&whole).unwrap();
+    let mut parts = Vec::new();
+    for (t, tile) in TILES.iter().enumerate() {
+        for range in ["0..3", "3..8"] {
+            let name = format!("tile{t}-{range}.exr");
+            parts.push(render(
+                &dir,
+                &scene,
+                &name,
+                &["--crop", tile, "--samples", range],
+            ));
+        }
+    }
+    let refs: Vec<&PathBuf> = parts.iter().collect();
+    let (out, merged_path) = merge(&dir, &refs, "merged.exr");
+    ok("merge", out);
+    assert!(dir.join("merged.png").is_file());
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("merged.stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(stats["parts"], 8);
+    assert_eq!(stats["samples"], 16 * 12 * 8, "{stats}");
+    let merged = read_partial(&merged_path).unwrap();
+    assert_eq!(merged.film.count, whole.film.count);
+    // Sums: the merged sum is (0 + S(0..3)) + S(3..8), the whole render's the sequential
+    // S(0..8): equal to a few f64 ulps.
+    for (i, (m, w)) in merged.film.sum.iter().zip(&whole.film.sum).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (m[c] - w[c]).abs() <= 1e-14 * w[c].abs(),
+                "pixel {i}: sum {} vs {}",
+                m[c],
+                w[c]
+            );
+        }
+    }
+    // Beauty and variance: equal or one f32 ulp apart.
+    let ((mb, mv, mc), (wb, wv, wc)) = (layers(&merged), layers(&whole));
+    assert_eq!(mc, wc);
+    for (what, a, b) in [("beauty", &mb, &wb), ("variance", &mv, &wv)] {
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            for c in 0..3 {
+                let d = (x[c].to_bits() as i64 - y[c].to_bits() as i64).abs();
+                assert!(d <= 1, "{what} pixel {i}: {} vs {}", x[c], y[c]);
+            }
+        }
+    }
+    // The file's own beauty part is what its sums say.
+    let rgb = read_exr_rgb(&merged_path).unwrap();
+    assert_eq!(
+        rgb.pixels.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+        mb
+    );
+    // The sample split is a real test: sample passes do not add to the same bits everywhere
+    // by construction, but the tiles alone merge exactly.
+    let tiles: Vec<PathBuf> = TILES
+        .iter()
+        .enumerate()
+        .map(|(t, tile)| render(&dir, &scene, &format!("t{t}.exr"), &["--crop", tile]))
+        .collect();
+    let refs: Vec<&PathBuf> = tiles.iter().collect();
+    let (out, tiled) = merge(&dir, &refs, "tiled.exr");
+    ok("merge tiles", out);
+    let tiled = read_partial(&tiled).unwrap();
+    assert_eq!(tiled.film.sum, whole.film.sum, "tile merge must be exact");
+    assert_eq!(tiled.film.sum_sq, whole.film.sum_sq);
+}
+
+#[test]
+fn a_two_way_sample_split_merges_to_the_one_process_render() {
+    let (dir, scene) = setup("samples");
+    let whole = read_partial(&render(&dir, &scene, "whole.exr", &["--partial"])).unwrap();
+    let a = render(&dir, &scene, "a.exr", &["--samples", "0..5"]);
+    let b = render(&dir, &scene, "b.exr", &["--samples", "5..8"]);
+    // Argument order does not matter: the sums are added by first sample index.
+    let (out, ab) = merge(&dir, &[&a, &b], "ab.exr");
+    ok("merge a b", out);
+    let (out, ba) = merge(&dir, &[&b, &a], "ba.exr");
+    ok("merge b a", out);
+    let (ab, ba) = (read_partial(&ab).unwrap(), read_partial(&ba).unwrap());
+    assert_eq!(ab.film.sum, ba.film.sum);
+    let pa = read_partial(&a).unwrap();
+    let pb = read_partial(&b).unwrap();
+    for i in 0..ab.film.sum.len() {
+        for c in 0..3 {
+            assert_eq!(
+                ab.film.sum[i][c],
+                (0.0 + pa.film.sum[i][c]) + pb.film.sum[i][c]
+            );
+            let w = whole.film.sum[i][c];
+            assert!((ab.film.sum[i][c] - w).abs() <= 1e-14 * w.abs());
+        }
+    }
+    assert_eq!(ab.film.count, whole.film.count);
+}
+
+#[test]
+fn merge_refuses_parts_that_do_not_fit() {
+    let (dir, scene) = setup("refuse");
+    let tl = render(&dir, &scene, "tl.exr", &["--crop", "0,0,8,6"]);
+    let tr = render(&dir, &scene, "tr.exr", &["--crop", "8,0,16,6"]);
+    let bottom = render(&dir, &scene, "bottom.exr", &["--crop", "0,6,16,12"]);
+    let (out, _) = merge(&dir, &[&tl, &tr, &bottom], "good.exr");
+    ok("the fitting parts", out);
+    // The top tiles and a bottom half rendered with one option changed.
+    let fit_but_bottom = |name: &str, flag: &str, value: &str| {
+        let bottom = render(&dir, &scene, name, &["--crop", "0,6,16,12", flag, value]);
+        vec![tl.clone(), tr.clone(), bottom]
+    };
+    let cases: Vec<(&str, Vec<PathBuf>, Vec<&str>)> = vec![
+        (
+            "missing tile",
+            vec![tl.clone(), bottom.clone()],
+            vec!["missing coverage", "8,0,16,6"],
+        ),
+        (
+            "overlapping tiles",
+            vec![
+                tl.clone(),
+                tr.clone(),
+                bottom.clone(),
+                render(&dir, &scene, "mid.exr", &["--crop", "4,4,12,8"]),
+            ],
+            vec!["overlapping tiles", "mid.exr", "tl.exr", "4,4,8,6"],
+        ),
+        (
+            "overlapping sample ranges",
+            vec![
+                render(&dir, &scene, "s05.exr", &["--samples", "0..5"]),
+                render(&dir, &scene, "s38.exr", &["--samples", "3..8"]),
+            ],
+            vec!["overlapping sample ranges", "s05.exr", "s38.exr", "0..5"],
+        ),
+        (
+            "missing sample range",
+            vec![render(&dir, &scene, "s03.exr", &["--samples", "0..3"])],
+            vec!["missing coverage", "0..3 from", "s03.exr"],
+        ),
+        (
+            "different seed",
+            fit_but_bottom("seed.exr", "--seed", "9"),
+            vec!["seed.exr", "seed 9", "tl.exr", "seed 0"],
+        ),
+        (
+            "different scene",
+            fit_but_bottom("depth.exr", "--max-depth", "2"),
+            vec!["depth.exr", "scene hash", "tl.exr"],
+        ),
+        (
+            "different spp",
+            fit_but_bottom("spp.exr", "--spp", "4"),
+            vec!["spp.exr", "4 spp", "8 spp"],
+        ),
+    ];
+    for (what, parts, needles) in cases {
+        let refs: Vec<&PathBuf> = parts.iter().collect();
+        let (out, path) = merge(&dir, &refs, &format!("{}.exr", what.replace(' ', "-")));
+        assert_fails(what, &out, &needles);
+        assert!(!path.exists(), "{what}: wrote {}", path.display());
+    }
+    // A different resolution: the same scene at another size.
+    let small = dir.join("small.toml");
+    std::fs::write(
+        &small,
+        SCENE
+            .replace("spp = 4", "spp = 8")
+            .replace("width = 16", "width = 8"),
+    )
+    .unwrap();
+    let other = render(&dir, &small, "small.exr", &["--crop", "0,6,8,12"]);
+    let (out, _) = merge(&dir, &[&tl, &tr, &other], "res.exr");
+    assert_fails(
+        "resolution",
+        &out,
+        &["small.exr", "8x12", "16x12", "tl.exr"],
+    );
+    // Not a partial at all, and a missing file.
+    let plain = render(&dir, &scene, "plain.exr", &[]);
+    let (out, _) = merge(&dir, &[&plain], "plain-merged.exr");
+    assert_fails(
+        "plain render",
+        &out,
+        &["plain.exr", "not a risotto partial"],
+    );
+    let (out, _) = merge(&dir, &[&dir.join("nothing.exr")], "none.exr");
+    assert_fails("missing file", &out, &["nothing.exr"]);
+}
+
+#[test]
+fn bad_crop_and_sample_ranges_are_named() {
+    let (dir, scene) = setup("bad-args");
+    let s = scene.to_str().unwrap();
+    let out = dir.join("x.exr");
+    let o = out.to_str().unwrap();
+    for (flag, value, needles) in [
+        (
+            "--crop",
+            "0,0,17,5",
+            vec!["--crop 0,0,17,5", "outside the 16x12"],
+        ),
+        ("--crop", "0,12,4,13", vec!["--crop 0,12,4,13", "outside"]),
+        ("--crop", "5,5,5,6", vec!["--crop 5,5,5,6", "empty"]),
+        ("--crop", "6,5,4,6", vec!["--crop 6,5,4,6", "empty"]),
+        ("--crop", "1,2,3", vec!["--crop 1,2,3", "four"]),
+        ("--crop", "1,2,x,4", vec!["--crop 1,2,x,4", "\"x\""]),
+        ("--samples", "3..3", vec!["--samples 3..3", "empty"]),
+        ("--samples", "5..2", vec!["--samples 5..2", "empty"]),
+        (
+            "--samples",
+            "0..9",
+            vec!["--samples 0..9", "8 samples per pixel"],
+        ),
+        ("--samples", "4", vec!["--samples", "START..END"]),
+        ("--samples", "a..4", vec!["--samples", "\"a\""]),
+        ("--checkpoint", "0", vec!["--checkpoint 0", "positive"]),
+    ] {
+        let r = risotto(&["render", s, "--out", o, "--quiet", flag, value]);
+        assert_fails(&format!("{flag} {value}"), &r, &needles);
+        assert!(!out.exists(), "{flag} {value} wrote a file");
+    }
+    let r = risotto(&["render", s, "--out", o, "--quiet", "--partial", "--aovs"]);
+    assert_fails("--aovs with a partial", &r, &["--aovs", "partial"]);
+}
+
+/// A render killed after its first checkpoint leaves a valid partial at --out; rendering
+/// the missing samples and merging gives the uninterrupted render.
+#[test]
+fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
+    let (dir, scene) = setup("resume");
+    // Enough samples that the render outlives its first checkpoints by far.
+    let spp = "4096";
+    let out = dir.join("job.exr");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_risotto"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--spp",
+            spp,
+            "--threads",
+            "1",
+            "--checkpoint",
+            "0.2",
+        ])
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.exists() {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "no checkpoint after a minute"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "render ended early");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(
+        !status.success(),
+        "the render finished before it was killed"
+    );
+    let checkpoint = read_partial(&out).expect("the checkpoint is a valid partial");
+    let done = checkpoint.header.samples;
+    assert_eq!(done.start, 0);
+    assert!(done.end > 0 && done.end < 4096, "{done}");
+    assert!(checkpoint.film.count.iter().all(|&c| c == done.end));
+    // `risotto info` says what is done.
+    let info = ok("info", risotto(&["info", out.to_str().unwrap()]));
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["samples"], serde_json::json!([0, done.end]));
+    // Resume: the missing range, then merge.
+    let rest = render(
+        &dir,
+        &scene,
+        "rest.exr",
+        &["--spp", spp, "--samples", &format!("{}..{spp}", done.end)],
+    );
+    let (o, merged) = merge(&dir, &[&out, &rest], "resumed.exr");
+    ok("merge resumed", o);
+    let merged = read_partial(&merged).unwrap();
+    let whole = read_partial(&render(
+        &dir,
+        &scene,
+        "whole.exr",
+        &["--spp", spp, "--partial"],
+    ))
+    .unwrap();
+    assert_eq!(merged.film.count, whole.film.count);
+    for (m, w) in merged.film.sum.iter().zip(&whole.film.sum) {
+        for c in 0..3 {
+            assert!(
+                (m[c] - w[c]).abs() <= 1e-13 * w[c].abs(),
+                "{} vs {}",
+                m[c],
+                w[c]
+            );
+        }
+    }
+}
+
+/// Checkpoints do not change the image: tiles keep their films across passes, so the sums
+/// are added in the same order as without them.
+#[test]
+fn a_checkpointed_render_is_the_same_bits() {
+    let (dir, scene) = setup("checkpoint-bits");
+    let plain = read_partial(&render(&dir, &scene, "plain.exr", &["--partial"])).unwrap();
+    let cp = read_partial(&render(
+        &dir,
+        &scene,
+        "cp.exr",
+        &["--checkpoint", "0.000001"],
+    ))
+    .unwrap();
+    assert_eq!(cp.film.sum, plain.film.sum);
+    assert_eq!(cp.film.sum_sq, plain.film.sum_sq);
+    assert_eq!(cp.header.samples, plain.header.samples);
+}
+
+/// `--grid COLSxROWS --tile COL,ROW` and `--chunks N --chunk J` (the farm templates' task
+/// indices) cut the image and the spp with no gap and no overlap, and merge.
+#[test]
+fn grid_tiles_and_sample_chunks_cover_the_render() {
+    let (dir, scene) = setup("grid");
+    let mut parts = Vec::new();
+    // 3 columns of a 16-pixel row: 0..5, 5..10, 10..16; 3 chunks of 8: 0..2, 2..5, 5..8.
+    for col in 0..3 {
+        for chunk in 0..3 {
+            let name = format!("c{col}-{chunk}.exr");
+            let tile = format!("{col},0");
+            let chunk = chunk.to_string();
+            let args = [
+                "--grid", "3x1", "--tile", &tile, "--chunks", "3", "--chunk", &chunk,
+            ];
+            parts.push(render(&dir, &scene, &name, &args));
+        }
+    }
+    let header = |i: usize| read_partial(&parts[i]).unwrap().header;
+    assert_eq!(header(0).window.to_string(), "0,0,5,12");
+    assert_eq!(header(4).window.to_string(), "5,0,10,12");
+    assert_eq!(header(8).window.to_string(), "10,0,16,12");
+    assert_eq!(header(0).samples.to_string(), "0..2");
+    assert_eq!(header(1).samples.to_string(), "2..5");
+    assert_eq!(header(2).samples.to_string(), "5..8");
+    let refs: Vec<&PathBuf> = parts.iter().collect();
+    let (out, merged) = merge(&dir, &refs, "merged.exr");
+    ok("merge grid", out);
+    let merged = read_partial(&merged).unwrap();
+    assert!(merged.film.count.iter().all(|&c| c == 8));
+    let s = scene.to_str().unwrap();
+    let o = dir.join("x.exr");
+    let o = o.to_str().unwrap();
+    for (args, needles) in [
+        (
+            vec!["--grid", "3x1", "--tile", "3,0"],
+            vec!["--tile 3,0", "3x1"],
+        ),
+        (
+            vec!["--grid", "17x1", "--tile", "0,0"],
+            vec!["--grid 17x1", "16x12"],
+        ),
+        (vec!["--grid", "0x1", "--tile", "0,0"], vec!["--grid 0x1"]),
+        (
+            vec!["--grid", "2", "--tile", "0,0"],
+            vec!["--grid 2", "AxB"],
+        ),
+        (
+            vec!["--chunks", "9", "--chunk", "0"],
+            vec!["--chunks 9", "8"],
+        ),
+        (
+            vec!["--chunks", "2", "--chunk", "2"],
+            vec!["--chunk 2", "below"],
+        ),
+    ] {
+        let mut a = vec!["render", s, "--out", o, "--quiet"];
+        a.extend_from_slice(&args);
+        assert_fails(&format!("{args:?}"), &risotto(&a), &needles);
+    }
+}
