@@ -538,6 +538,20 @@ impl CompiledScene {
         }
     }
 
+    /// True when a hit on `shape` by a ray whose volume stack is `stack` is a false boundary
+    /// (Schmidt and Budge 2002): `shape` bounds a tracked volume whose priority is below that
+    /// of a volume the ray is inside, so it is crossed without shading. A shape that bounds
+    /// no volume (an opaque floor a glass stands on) is never false: priorities order
+    /// volumes, and a surface without one is always real. (Treating such a floor as false
+    /// let rays inside the glass of `scenes/liquid-in-glass.toml` pass through the floor
+    /// under it, skip the coincident bottom of the glass and leave the scene still inside
+    /// the glass.)
+    #[inline]
+    pub fn is_false_boundary(&self, stack: &VolumeStack, shape: u32) -> bool {
+        let s = shape as usize;
+        self.shape_tracked[s] && stack.is_false_boundary(shape, self.shape_entry[s].priority)
+    }
+
     /// True when rays crossing `shape` enter a volume the renderer must track (its material
     /// computes an interior or takes part in priorities / IOR nesting).
     pub fn tracks_interior(&self, shape: u32) -> bool {

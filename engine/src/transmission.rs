@@ -154,7 +154,7 @@ pub fn trace_shadow_rays(
             let shape = scene.prim_shape[prim[k] as usize];
             let material = scene.shapes[shape as usize].material;
             let info = &scene.material_info[material as usize];
-            let false_boundary = stacks[iu].is_false_boundary(shape, info.priority);
+            let false_boundary = scene.is_false_boundary(&stacks[iu], shape);
             if !false_boundary {
                 if !info.hints.contains(InstanceHints::TRANSMISSION_SHADOWS) {
                     contribution[iu] = Rgb::BLACK;

@@ -30,7 +30,8 @@
 //!   tiny spheres far away and huge spheres seen from close by stay accurate.
 //!
 //! Hits are accepted for `tmin < t < tmax`; a triangle hit must also be farther beyond
-//! `tmin` than the rounding-error bound of its computed `t` (pbrt-v4's conservative t), so
+//! `tmin` than the rounding-error bound of its computed `t` (pbrt-v4's conservative t, with
+//! the terms that grow with the distance to the origin tightened, see `t_error_bound`), so
 //! that rays spawned on a large triangle, or walks that restart just past a hit, do not find
 //! the same surface again. For rays from a free origin ([`FREE_ORIGIN`], camera rays) a hit
 //! within the f32 bound is decided again in double precision, whose bound is 2^29 times
@@ -134,6 +135,10 @@ pub struct WatertightRay {
     sx: Vec4,
     sy: Vec4,
     sz: Vec4,
+    /// `|d[kx]|` and `|d[ky]|`, for the error bound of the sheared coordinates (see
+    /// [`t_error_bound`]).
+    adx: f32,
+    ady: f32,
     /// The paper's axis permutation: `kz` is the dominant direction axis,
     /// `kx = (kz + 1) % 3`, `ky = (kx + 1) % 3`.
     kx: Axis,
@@ -154,6 +159,8 @@ impl WatertightRay {
             sx: Vec4::splat(s.x),
             sy: Vec4::splat(s.y),
             sz: Vec4::splat(s.z),
+            adx: direction[kx as usize].abs(),
+            ady: direction[ky as usize].abs(),
             kx,
             ky,
             kz,
@@ -236,7 +243,7 @@ impl WatertightRay {
         // pbrt-v4 does for `tmin = 0` ("Physically Based Rendering", 4th ed., sec. 6.8.7,
         // conservative ray-triangle t: bounds on the rounding of the transformed vertices,
         // the edge functions and the scaled t), unless double precision decides it.
-        if t - tmin <= t_error_bound(x, y, z, u, v, w, inv_det) {
+        if t - tmin <= t_error_bound(x, y, z, t, inv_det, self.adx, self.ady) {
             return self.near_hit_f64(rows, tmin, tmax);
         }
         Some(TriangleHit {
@@ -356,20 +363,45 @@ fn max_abs3(v: Vec4) -> f32 {
 }
 
 /// Absolute error bound of the `t` computed by [`WatertightRay::intersect_triangle`] from
-/// the transformed vertices (coordinates `x, y, z`, one vertex per lane) and the edge
-/// functions `u, v, w` (pbrt-v4 sec. 6.8.7:
-/// delta_t = 3 (gamma(3) max|e| max|z| + delta_e max|z| + delta_z max|e|) / |det|).
+/// the transformed vertices (coordinates `x, y, z`, one vertex per lane, `z` scaled by
+/// `Sz`), the computed `t` and `1 / det`; `adx`, `ady` are `|d[kx]|`, `|d[ky]|`.
+///
+/// pbrt-v4's bound (sec. 6.8.7) with two of its worst cases replaced by the actual values,
+/// because it grows with the distance from the origin to the triangle (`max|z|`) where the
+/// error does not: a walk that keeps its origin and advances `tmin` past each hit (shadow
+/// rays through boundaries, `engine/src/transmission.rs`) had exit hits 0.03 beyond `tmin`
+/// rejected 19 units from its origin on a grazing tumbler wall (bound 0.09).
+/// - The sheared `x' = x - Sx z` is rounded by `gamma(5) (|x'| + |Sx z|)`; pbrt takes
+///   `|Sx| <= 1`, but `Sx z = d[kx] z'` with the scaled `z' = z / d[kz]`, so
+///   `delta_x = gamma(7) (max|x'| + |d[kx]| max|z'|)` (two more roundings for `z'`), and
+///   likewise `delta_y`. Edge functions are then within pbrt's
+///   `delta_e = 2 (gamma(2) max|x'| max|y'| + delta_y max|x'| + delta_x max|y'|)`.
+/// - `t = sum e_i z'_i / sum e_i` is a weighted mean of the `z'_i` (all `e_i` share a
+///   sign), so errors `eps_i` in the edge functions move it by
+///   `sum eps_i (z'_i - t) / det`: at most `k (max|z'_i - t| + delta_z + delta_t)` with
+///   `k = 3 delta_e / |det|`, i.e. `k (max|z'_i - t| + delta_z) / (1 - k)`, below
+///   `k (1 + 2k) (max|z'_i - t| + delta_z)` while `k <= 1/2`, where pbrt has `k max|z'|`;
+///   the smaller of the two is used (pbrt's alone when `k > 1/2`).
+/// - The rounding of the weighted mean itself (numerator `gamma(3)`, `det` `gamma(2)`,
+///   `1 / det` and the product one each) and the error `delta_z = gamma(3) max|z'|` of the
+///   `z'_i` add at most `gamma(10) max|z'|`.
 #[inline(always)]
-fn t_error_bound(x: Vec4, y: Vec4, z: Vec4, u: f32, v: f32, w: f32, inv_det: f32) -> f32 {
+fn t_error_bound(x: Vec4, y: Vec4, z: Vec4, t: f32, inv_det: f32, adx: f32, ady: f32) -> f32 {
     let max_x = max_abs3(x);
     let max_y = max_abs3(y);
     let max_z = max_abs3(z);
+    let spread = max_abs3(z - Vec4::splat(t));
     let delta_z = gamma(3.0) * max_z;
-    let delta_x = gamma(5.0) * (max_x + max_z);
-    let delta_y = gamma(5.0) * (max_y + max_z);
+    let delta_x = gamma(7.0) * (max_x + adx * max_z);
+    let delta_y = gamma(7.0) * (max_y + ady * max_z);
     let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = u.abs().max(v.abs()).max(w.abs());
-    3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
+    let k = 3.0 * delta_e * inv_det.abs();
+    let lever = if k <= 0.5 {
+        (1.0 + 2.0 * k) * (spread + delta_z)
+    } else {
+        max_z
+    };
+    gamma(10.0) * max_z + k * lever.min(max_z)
 }
 
 /// The paper's fallback (sec. 3, "if any edge function is exactly zero"): recompute in
@@ -532,8 +564,8 @@ struct RayBlock {
     /// moves both planes outwards.
     node: [[f32; BLOCK]; 9],
     /// The triangle test's rows ([`WatertightRay`]'s constants): the origin permuted to
-    /// `(kx, ky, kz)`, then the shear `(Sx, Sy, Sz)`.
-    tri: [[f32; BLOCK]; 6],
+    /// `(kx, ky, kz)`, then the shear `(Sx, Sy, Sz)`, then `|d[kx]|` and `|d[ky]|`.
+    tri: [[f32; BLOCK]; 8],
     /// The origin (rows 0 to 2) and the direction (rows 3 to 5), for the sphere and
     /// scalar fallback tests.
     od: [[f32; BLOCK]; 6],
@@ -562,7 +594,7 @@ impl RayBlock {
     fn zero() -> Self {
         RayBlock {
             node: [[0.0; BLOCK]; 9],
-            tri: [[0.0; BLOCK]; 6],
+            tri: [[0.0; BLOCK]; 8],
             od: [[0.0; BLOCK]; 6],
             cull: [[0.0; BLOCK]; 6],
             x_dominant: 0,
@@ -638,6 +670,8 @@ impl RayBlock {
         b.tri[3] = (dkx / dkz).to_array();
         b.tri[4] = (dky / dkz).to_array();
         b.tri[5] = (s.splat(1.0) / dkz).to_array();
+        b.tri[6] = dkx.abs().to_array();
+        b.tri[7] = dky.abs().to_array();
         b.x_dominant = x_dominant.bits();
         b.y_dominant = y_dominant.bits();
     }
@@ -893,32 +927,49 @@ fn intersect_packet<S: Simd>(
             b2: w,
         };
     }
-    // `t_error_bound` per lane (max is exact, so the order of the maxima is free).
+    // `t_error_bound` per lane, the same operations (max is exact, so the order of the
+    // maxima is free).
     let max_x = x0.abs().max(x1.abs()).max(x2.abs());
     let max_y = y0.abs().max(y1.abs()).max(y2.abs());
     let max_z = z0.abs().max(z1.abs()).max(z2.abs());
-    let (g2, g3, g5) = (
+    let (g2, g3, g7) = (
         s.splat(gamma(2.0)),
         s.splat(gamma(3.0)),
-        s.splat(gamma(5.0)),
+        s.splat(gamma(7.0)),
     );
+    let (adx, ady) = (s.splat(k[6][lane]), s.splat(k[7][lane]));
     let delta_z = g3 * max_z;
-    let delta_x = g5 * (max_x + max_z);
-    let delta_y = g5 * (max_y + max_z);
+    let delta_x = g7 * (max_x + adx * max_z);
+    let delta_y = g7 * (max_y + ady * max_z);
     let delta_e = s.splat(2.0) * (g2 * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = u.abs().max(v.abs()).max(w.abs());
-    let bound =
-        s.splat(3.0) * (g3 * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-    let near = (t - s.splat(tmin)).le(bound).bits();
+    let kk = s.splat(3.0) * delta_e * inv_det.abs();
+    let base = s.splat(gamma(10.0)) * max_z;
+    let gap = t - s.splat(tmin);
+    // The bound with `min(lever, max_z)` taken as `max_z` is at least the bound (rounding
+    // is monotone), so hits beyond it are accepted without the lever: nearly every hit,
+    // so the weighted-mean term is only computed for hits close to `tmin`.
+    let bound_max = base + kk * max_z;
+    let sure = hit & !gap.le(bound_max).bits();
+    let mut keep = sure;
+    if sure != hit {
+        let spread = (z0 - t).abs().max((z1 - t).abs()).max((z2 - t).abs());
+        let lever = S::F::select(
+            kk.le(s.splat(0.5)),
+            (s.splat(1.0) + s.splat(2.0) * kk) * (spread + delta_z),
+            max_z,
+        );
+        keep = hit & !gap.le(base + kk * lever.min(max_z)).bits();
+    }
     // Rays from a free origin decide hits within the bound of it in double precision (the
-    // scalar test's `near_hit_f64`), on either side.
+    // scalar test's `near_hit_f64`), on either side (the larger bound: the f64 test
+    // decides exactly).
     let fallback = if from_free_origin(tmin) {
-        let near_behind = behind & (zero - t).le(bound).bits();
-        fallback | (near & hit) | near_behind
+        let near_behind = behind & (zero - t).le(bound_max).bits();
+        fallback | (hit & !keep) | near_behind
     } else {
         fallback
     };
-    hit &= !near;
+    hit = keep;
     PacketHits {
         hit,
         fallback,

@@ -42,7 +42,7 @@ pub(super) fn boundaries(
         for i in g.range.clone() {
             let r = pts.ray_id[i] as usize;
             let pass = index_matched
-                || hits.incoming.volume_stack[r].is_false_boundary(pts.shape[i], info.priority);
+                || scene.is_false_boundary(&hits.incoming.volume_stack[r], pts.shape[i]);
             keep[i] = !pass;
             passes |= pass;
         }
