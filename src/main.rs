@@ -221,6 +221,11 @@ fn main() -> ExitCode {
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_output(&args.scene));
+    check_outputs(&args.scene, &out, args.stats.as_deref())?;
     let registry = MaterialRegistry::with_builtins();
     let mut scene = load_scene_file(&args.scene, &registry)?;
     if let Some(spp) = args.spp {
@@ -679,6 +684,95 @@ fn compare_command(test: &Path, reference: &Path) -> Result<()> {
     let r = read_exr_rgb(reference)?;
     let m = compare(&t, &r)?;
     println!("{m}");
+    Ok(())
+}
+
+/// Checks the outputs of `risotto render` before anything is rendered: `out` is an EXR, the
+/// PNG preview beside it and the stats file are distinct from it, from each other and from
+/// the scene, and each can be written (its directory exists, it is not a directory, and it can
+/// be opened for writing). Nothing is created or truncated here.
+fn check_outputs(scene: &Path, out: &Path, stats: Option<&Path>) -> Result<()> {
+    let is_exr = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    anyhow::ensure!(
+        is_exr,
+        "--out {}: the output must be an EXR file (extension .exr); the PNG preview is \
+         written beside it",
+        out.display()
+    );
+    let png = out.with_extension("png");
+    let mut named = vec![
+        ("the scene", scene.to_path_buf()),
+        ("--out", out.to_path_buf()),
+        ("the PNG preview", png.clone()),
+    ];
+    if let Some(stats) = stats {
+        named.push(("--stats", stats.to_path_buf()));
+    }
+    for (i, (a, pa)) in named.iter().enumerate() {
+        for (b, pb) in &named[..i] {
+            anyhow::ensure!(
+                !same_file(pa, pb),
+                "{a} {} is the same file as {b} {}: one would overwrite the other",
+                pa.display(),
+                pb.display()
+            );
+        }
+    }
+    for (what, path) in named.iter().skip(1) {
+        check_writable(path).with_context(|| format!("{what} {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name the same file: equal after making them absolute and resolving
+/// `.`, `..` and symbolic links of the parts that exist.
+fn same_file(a: &Path, b: &Path) -> bool {
+    fn resolved(p: &Path) -> PathBuf {
+        if let Ok(c) = std::fs::canonicalize(p) {
+            return c;
+        }
+        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        match (abs.parent(), abs.file_name()) {
+            (Some(dir), Some(name)) => std::fs::canonicalize(dir)
+                .map(|d| d.join(name))
+                .unwrap_or(abs.clone()),
+            _ => abs,
+        }
+    }
+    resolved(a) == resolved(b)
+}
+
+/// Whether `path` can be written, without creating or truncating it: an existing file is
+/// opened for writing; otherwise its directory must exist, and a probe file is created there
+/// and removed.
+fn check_writable(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        anyhow::bail!("is a directory");
+    }
+    if path.exists() {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .context("cannot be written")?;
+        return Ok(());
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    anyhow::ensure!(
+        dir.is_dir(),
+        "cannot be written: directory {} does not exist",
+        dir.display()
+    );
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .context("cannot be written")?;
+    std::fs::remove_file(path).context("cannot be written")?;
     Ok(())
 }
 

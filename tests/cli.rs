@@ -6,7 +6,50 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::cli::{assert_fails, risotto, SCENE};
+use common::cli::{assert_fails, risotto};
+
+/// A small valid scene: floor, downward-facing square lamp, sky.
+const SCENE: &str = r#"[render]
+width = 16
+height = 12
+spp = 4
+max_depth = 4
+
+[camera]
+fov = 40
+from = [0, 1, 4]
+to = [0, 0.5, 0]
+
+[materials.floor]
+type = "diffuse"
+reflectance = 0.5
+
+[materials.emitter]
+type = "diffuse"
+reflectance = 0
+
+[[shapes]]
+name = "floor"
+type = "quad"
+material = "floor"
+corner = [-5, 0, -5]
+edge1 = [0, 0, 10]
+edge2 = [10, 0, 0]
+
+[[shapes]]
+name = "lamp"
+type = "quad"
+material = "emitter"
+emission = 5
+corner = [-0.5, 2, -0.5]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, 1]
+
+[[lights]]
+name = "sky"
+type = "environment"
+radiance = 0.1
+"#;
 
 /// A fresh directory for one test.
 fn temp_dir(test: &str) -> PathBuf {
@@ -240,6 +283,104 @@ fn bad_options_are_rejected_before_rendering() {
         let (out, exr) = render(&dir, "ok.toml", SCENE, &[flag, value]);
         assert_fails(flag, &out, &[&format!("{flag} {value}")]);
         assert!(!exr.exists(), "{flag} {value}: an image was written");
+    }
+}
+
+/// Outputs are checked before the render (issue 14 item 9): `--out` must be an EXR, the
+/// stats file must differ from the EXR, its PNG preview and the scene, and a location that
+/// cannot be written is an error before any sample is taken. Nothing the user named is
+/// overwritten by another output.
+#[test]
+fn outputs_that_would_clobber_each_other_are_rejected_before_rendering() {
+    let dir = temp_dir("outputs");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let s = scene.to_str().unwrap();
+    let exr = dir.join("x.exr");
+    let (e, png) = (exr.to_str().unwrap(), dir.join("x.png"));
+    let p = png.to_str().unwrap();
+
+    // --out x.png: the EXR would be written there and then overwritten by the preview.
+    let out = risotto(&["render", s, "--out", p, "--quiet"]);
+    assert_fails("--out x.png", &out, &[p, ".exr"]);
+    assert!(!png.exists(), "{p} was written");
+
+    for (what, stats) in [("the EXR", e), ("the PNG preview", p), ("the scene", s)] {
+        let out = risotto(&["render", s, "--out", e, "--stats", stats, "--quiet"]);
+        assert_fails(&format!("--stats = {what}"), &out, &["--stats", stats]);
+        assert!(!exr.exists() && !png.exists(), "--stats = {what}: rendered");
+        assert_eq!(std::fs::read_to_string(&scene).unwrap(), SCENE, "{what}");
+    }
+    // The same file spelled differently is still the same file.
+    let dotted = dir.join(".").join("x.exr");
+    let out = risotto(&[
+        "render",
+        s,
+        "--out",
+        e,
+        "--stats",
+        dotted.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_fails("--stats = ./x.exr", &out, &["--stats"]);
+}
+
+/// Spawns `risotto ARGS` and waits at most `secs` seconds for it (killing it then).
+fn run_with_timeout(args: &[&str], secs: u64) -> Option<Output> {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_risotto"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while start.elapsed().as_secs() < secs {
+        if child.try_wait().unwrap().is_some() {
+            return Some(child.wait_with_output().unwrap());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+#[test]
+fn an_unwritable_output_is_an_error_before_the_render() {
+    let dir = temp_dir("unwritable");
+    // A render that would take hours: only a check before it can answer in time.
+    let slow = scene_with(&[
+        ("width = 16", "width = 2048"),
+        ("height = 12", "height = 2048"),
+        ("spp = 4", "spp = 65536"),
+    ]);
+    let scene = dir.join("slow.toml");
+    std::fs::write(&scene, slow).unwrap();
+    let s = scene.to_str().unwrap();
+    let missing = dir.join("no/such/dir/x.exr");
+    let m = missing.to_str().unwrap();
+    let fine = dir.join("fine.exr");
+    let sub = dir.join("a_directory");
+    std::fs::create_dir_all(&sub).unwrap();
+    let cases: [(&str, Vec<&str>, &str); 3] = [
+        ("missing --out directory", vec!["--out", m], m),
+        (
+            "missing --stats directory",
+            vec!["--out", fine.to_str().unwrap(), "--stats", m],
+            m,
+        ),
+        (
+            "--out is a directory",
+            vec!["--out", sub.to_str().unwrap()],
+            sub.to_str().unwrap(),
+        ),
+    ];
+    for (what, extra, needle) in cases {
+        let mut args = vec!["render", s, "--quiet"];
+        args.extend(extra);
+        let out = run_with_timeout(&args, 30)
+            .unwrap_or_else(|| panic!("{what}: still rendering after 30 s"));
+        assert_fails(what, &out, &[needle]);
     }
 }
 

@@ -23,25 +23,6 @@ fn assert_matches(what: &str, got: (Rgb, Rgb), want: f64, rel: f64) {
     }
 }
 
-/// Asserts that no beauty or variance pixel is non-finite.
-fn assert_finite(what: &str, out: &RenderOutput) {
-    for (i, (p, v)) in out
-        .beauty
-        .pixels
-        .iter()
-        .zip(&out.variance.pixels)
-        .enumerate()
-    {
-        assert!(
-            p.to_array()
-                .iter()
-                .chain(&v.to_array())
-                .all(|x| x.is_finite()),
-            "{what}: pixel {i} is {p:?} (variance {v:?})"
-        );
-    }
-}
-
 /// A diffuse sphere of albedo `rho` and radius `r` whose top touches the origin, lit by a
 /// sun of irradiance pi straight down, seen by an orthographic camera from above across
 /// `view` units: each visible point has radiance `rho cos(theta)` (direct lighting only).

@@ -224,3 +224,22 @@ pub fn add_diffuse(scene: &mut Scene, name: &str, albedo: f32) -> u32 {
         }),
     )
 }
+
+/// Asserts that no beauty or variance pixel is non-finite.
+pub fn assert_finite(what: &str, out: &RenderOutput) {
+    for (i, (p, v)) in out
+        .beauty
+        .pixels
+        .iter()
+        .zip(&out.variance.pixels)
+        .enumerate()
+    {
+        assert!(
+            p.to_array()
+                .iter()
+                .chain(&v.to_array())
+                .all(|x| x.is_finite()),
+            "{what}: pixel {i} is {p:?} (variance {v:?})"
+        );
+    }
+}

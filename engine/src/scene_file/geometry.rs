@@ -32,13 +32,26 @@ pub(crate) fn read_transform(r: &Reader<'_>) -> Result<DAffine3, SceneError> {
         let s = Reader::new(r.src, step, &entity);
         m = read_step(&s, step)? * m;
     }
+    // Singular is a matter of shape, not size: the determinant relative to the cube of the
+    // longest axis (1 for any uniform scale, whatever its size; ~0 when some axis collapses
+    // or lies in the plane of the others).
     let det = m.matrix3.determinant();
-    if !det.is_finite() || det.abs() < 1e-12 {
+    let a = &m.matrix3;
+    let longest = a
+        .x_axis
+        .length()
+        .max(a.y_axis.length())
+        .max(a.z_axis.length());
+    let relative = det.abs() / (longest * longest * longest);
+    if !det.is_finite() || det == 0.0 || relative.is_nan() || relative < 1e-12 {
         return Err(r.error(
             SceneErrorKind::InvalidValue,
             &node.span(),
             Some("transform"),
-            format!("the transform is singular (determinant {det:.3e}); it must be invertible"),
+            format!(
+                "the transform is singular (determinant {det:.3e}, {relative:.3e} relative to \
+                 its longest axis cubed); it must be invertible"
+            ),
         ));
     }
     Ok(m)

@@ -687,6 +687,31 @@ fn unknown_shape_and_light_types() {
     assert!(e.to_string().contains("at most one environment"), "{e}");
 }
 
+/// Singularity is a property of shape, not of size (issue 14 item 10): a uniform scale of
+/// 1e-4 (determinant 1e-12) or 1e-9 is a valid transform; a matrix that flattens space, at
+/// any size, is not.
+#[test]
+fn tiny_uniform_scales_are_not_singular() {
+    for scale in ["1e-4", "1e-9", "[1e-4, 2e-4, 1e-4]"] {
+        let text = base_with("{ scale = 0.5 }", &format!("{{ scale = {scale} }}"));
+        if let Err(e) = parse(&text) {
+            panic!("scale {scale}: {e}");
+        }
+    }
+    for scale in ["[1, 1e-13, 1]", "[1e-4, 1e-4, 1e-17]"] {
+        let text = base_with("{ scale = 0.5 }", &format!("{{ scale = {scale} }}"));
+        let e = parse_err(&text);
+        assert_message(&e, line_of(&text, "transform"), &["\"crate\"", "singular"]);
+    }
+    // Rows (1e-3, 0, 0), (0, 1e-3, 0), (1e-3, 1e-3, 1e-17): the third axis nearly in the
+    // plane of the first two, at a small size.
+    let flat =
+        "{ matrix = [[1e-3, 0, 0, 0], [0, 1e-3, 0, 0], [1e-3, 1e-3, 1e-17, 0], [0, 0, 0, 1]] }";
+    let text = base_with("{ scale = 0.5 }", flat);
+    let e = parse_err(&text);
+    assert_message(&e, line_of(&text, "transform"), &["\"crate\"", "singular"]);
+}
+
 #[test]
 fn degenerate_quad_and_singular_transform_are_rejected() {
     let text = base_with("edge2 = [10, 0, 0]", "edge2 = [0, 0, -3]");
