@@ -134,7 +134,15 @@ impl<'s> IntegratorContext<'s> {
         // Vacuum unless the ray travels inside volumes (`write_ray_columns`).
         pts.ior_outside.resize(end, 1.0);
         let sorted = &s.sorted[..count];
-        write_surfaces(geometry, sorted, hits, rays, pts, base);
+        write_surfaces(
+            geometry,
+            scene.features.surface_uv,
+            sorted,
+            hits,
+            rays,
+            pts,
+            base,
+        );
         write_ray_columns(scene, sorted, hits, rays, pts, base);
         pts.nn.extend_from_slice(&pts.ng[base..end]);
         pts.w.resize(end, 0.0);
@@ -188,10 +196,12 @@ fn group_by_material(
     }
 }
 
-/// Pass 1: `p`, `ng`, `u`, `v`.
+/// Pass 1: `p`, `ng`, `u`, `v` (on spheres `u = v = 0` unless `sphere_uv`: some material
+/// reads them, [`crate::plugin::InstanceHints::READS_SURFACE_UV`]).
 #[inline(never)]
 fn write_surfaces(
     geometry: &SceneGeometry,
+    sphere_uv: bool,
     sorted: &[u32],
     hits: &Hits,
     rays: &Rays,
@@ -229,8 +239,13 @@ fn write_surfaces(
                 );
                 p[k] = surf.p;
                 ng[k] = surf.ng;
-                u[k] = surf.uv.x;
-                v[k] = surf.uv.y;
+                let uv = if sphere_uv {
+                    geometry.surface_uv(prims[i], b1[i], b2[i])
+                } else {
+                    surf.uv
+                };
+                u[k] = uv.x;
+                v[k] = uv.y;
             }
         }
     }

@@ -38,6 +38,7 @@ use risotto_systems::medium::{
     transmittance,
 };
 use risotto_systems::phase::PhaseFunction;
+use risotto_systems::ray::ray_offset;
 use risotto_systems::sampler::PathSampler;
 
 /// Lobe bits of a phase-function sample.
@@ -180,13 +181,15 @@ impl HomogeneousInterior<'_> {
     }
 
     /// Multiple scattering (see the module docs). `start` = the rows of `out` this call
-    /// answers from on; `tmax[i]` = ray `i`'s distance to its hit (infinity for misses).
+    /// answers from on; `tmax[i]` = ray `i`'s distance to its hit (infinity for misses),
+    /// `scatter_max[i]` the farthest scattering point, a spawn offset before the hit.
     #[allow(clippy::too_many_arguments, reason = "the bundle's columns, named")]
     fn scatter_inside(
         &self,
         rays: &Rays,
         u: &[[f32; DIMS_PER_SEGMENT]],
         tmax: &[f32],
+        scatter_max: &[f32],
         start: (usize, usize, usize),
         stats: &mut crate::stats::SystemStats,
         out: &mut ShadeGroups,
@@ -206,7 +209,18 @@ impl HomogeneousInterior<'_> {
                 tmax[i],
             );
             scattered[i] = f.scattered;
-            t[i] = f.t;
+            // A scattering point within the spawn offset of a boundary could round to its
+            // far side: of the segment's start (a ray past a pass-through starts on the
+            // boundary and skips it with `tmin`) or of its end. The next ray from it
+            // (spawned without an offset) would then cross that boundary again, and the
+            // volume stack would never see the ray leave (an albedo-1 furnace then walks
+            // forever outside). Such points move to `[tmin, scatter_max]`, a shift of
+            // ~1e-6 relative, far below any noise.
+            t[i] = if f.scattered {
+                f.t.min(scatter_max[i]).max(rays.tmin[i].min(0.5 * tmax[i]))
+            } else {
+                f.t
+            };
             weight[i] = f.weight;
         }
         let events = scattered.iter().filter(|&&s| s).count();
@@ -428,9 +442,16 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         services.ictx.nearest_hits(rays, out);
         // Each ray's segment in the medium: to its hit, or unbounded.
         let mut tmax = rays.tmax.clone();
+        let mut scatter_max = rays.tmax.clone();
         for k in start.0..out.points.len() {
             let r = out.points.ray_id[k] as usize;
             tmax[r] = tmax[r].min(out.points.vlen[k]);
+            // The spawn offset at the hit, along the ray (as pass-throughs measure it).
+            let cos = rays.direction[r].dot(out.points.ng[k]).abs().max(1e-3);
+            scatter_max[r] = tmax[r] - ray_offset(out.points.p[k]) / cos;
+            if scatter_max[r] < rays.tmin[r] {
+                scatter_max[r] = 0.5 * (rays.tmin[r] + tmax[r]);
+            }
         }
         let scattering = services
             .techniques
@@ -440,7 +461,15 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         if single {
             self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
         } else {
-            self.scatter_inside(rays, &u, &tmax, start, services.ictx.stats, out);
+            self.scatter_inside(
+                rays,
+                &u,
+                &tmax,
+                &scatter_max,
+                start,
+                services.ictx.stats,
+                out,
+            );
         }
         debug_assert_eq!(tmax.len(), n);
     }

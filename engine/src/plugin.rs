@@ -80,6 +80,11 @@ impl InstanceHints {
     pub const INTERIOR_SUBSURFACE: InstanceHints = InstanceHints(256);
     /// The interior emits light.
     pub const INTERIOR_EMITS: InstanceHints = InstanceHints(512);
+    /// The material reads the surface parameters `u`, `v` of its shading points
+    /// ([`ShadingContext::u`], [`ShadingContext::v`]). Sphere hits get theirs (`phi / 2pi`,
+    /// `theta / pi`: two `atan2` per hit) only in scenes with such a material; elsewhere
+    /// their `u = v = 0`. Triangle hits always carry their barycentrics.
+    pub const READS_SURFACE_UV: InstanceHints = InstanceHints(1024);
 
     /// True when every bit of `other` is set.
     pub const fn contains(self, other: InstanceHints) -> bool {

@@ -125,6 +125,9 @@ pub struct Features {
     pub emissive_media: bool,
     /// Some surface passes shadow rays (transmission system must walk through surfaces).
     pub transmission_shadows: bool,
+    /// Some material reads surface `u`, `v` (sphere hits compute theirs,
+    /// [`InstanceHints::READS_SURFACE_UV`]).
+    pub surface_uv: bool,
     /// Emissive shapes.
     pub area_lights: bool,
     /// Distant lights.
@@ -146,6 +149,7 @@ impl Features {
             (self.subsurface, "subsurface"),
             (self.emissive_media, "emissive_media"),
             (self.transmission_shadows, "transmission_shadows"),
+            (self.surface_uv, "surface_uv"),
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),
@@ -460,6 +464,7 @@ impl Scene {
             features.subsurface |= h.contains(InstanceHints::INTERIOR_SUBSURFACE);
             features.emissive_media |= h.contains(InstanceHints::INTERIOR_EMITS);
             features.transmission_shadows |= h.contains(InstanceHints::TRANSMISSION_SHADOWS);
+            features.surface_uv |= h.contains(InstanceHints::READS_SURFACE_UV);
         }
 
         let prim_material = prim_shape

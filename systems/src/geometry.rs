@@ -37,8 +37,8 @@ pub struct SurfaceSample {
     /// Unit geometric normal. Triangles: `normalize((v1 - v0) x (v2 - v0))`; spheres: outward.
     pub ng: Vec3,
     /// Surface parameters. Triangles: barycentrics `(b1, b2)` of `v1` and `v2`; spheres:
-    /// `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi` the
-    /// azimuth from `+x` towards `+y`, in `[0, 2pi)`.
+    /// always `(0, 0)` from [`SceneGeometry::surface_at`] (their parameters cost two `atan2`
+    /// that hardly any material wants: [`SceneGeometry::surface_uv`] computes them).
     pub uv: Vec2,
 }
 
@@ -330,11 +330,13 @@ impl SceneGeometry {
     /// hit's `b1`, `b2` as written by [`crate::intersect::intersect_closest`].
     ///
     /// Triangles: `p` is interpolated from the vertices with the barycentrics (more accurate
-    /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `(b1, b2)` are the surface
-    /// parameters `(phi / 2pi, theta / pi)` computed in double precision at intersection
-    /// time, so the normal stays accurate even where `t` has lost precision (tiny spheres far
-    /// away); `p` is the corresponding point on the sphere. `origin`, `direction` and `t` are
-    /// only used for spheres when `(b1, b2)` are not finite.
+    /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `(b1, b2)` are the unit
+    /// direction from the centre to the hit, computed in double precision from the
+    /// double-precision root at intersection time and stored octahedrally encoded
+    /// ([`encode_sphere_dir`]), so the normal stays accurate even where `t` has lost
+    /// precision (tiny spheres far away); `p` is the corresponding point on the sphere, and
+    /// `uv = (0, 0)` (see [`Self::surface_uv`]). `origin`, `direction` and `t` are only used
+    /// for spheres when `(b1, b2)` are not finite.
     #[inline(always)]
     pub fn surface_at(
         &self,
@@ -348,6 +350,19 @@ impl SceneGeometry {
         match self.triangles().surface_at(prim, b1, b2) {
             Some(s) => s,
             None => self.sphere_surface_at(prim as usize, origin, direction, t, b1, b2),
+        }
+    }
+
+    /// Surface parameters of a hit (`b1`, `b2` as for [`Self::surface_at`]). Triangles: the
+    /// barycentrics `(b1, b2)` of `v1` and `v2`; spheres: `(phi / 2pi, theta / pi)` with
+    /// `theta` the polar angle from `+z` and `phi` the azimuth from `+x` towards `+y`, in
+    /// `[0, 2pi)`. Shading points get these only in scenes with a material that asks for
+    /// them (the engine's `InstanceHints::READS_SURFACE_UV`).
+    pub fn surface_uv(&self, prim: u32, b1: f32, b2: f32) -> Vec2 {
+        if (prim as usize) < self.triangles.len() {
+            Vec2::new(b1, b2)
+        } else {
+            sphere_uv(decode_sphere_dir(b1, b2))
         }
     }
 
@@ -369,22 +384,21 @@ impl SceneGeometry {
         b2: f32,
     ) -> SurfaceSample {
         let s = self.spheres[prim - self.triangles.len()];
-        let uv = if b1.is_finite() && b2.is_finite() {
-            Vec2::new(b1, b2)
+        let n = if b1.is_finite() && b2.is_finite() {
+            decode_sphere_dir(b1, b2)
         } else {
             let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
-            sphere_uv(h)
+            h.try_normalize().unwrap_or(DVec3::Z)
         };
         // The point in double precision, rounded once: its distance to the sphere is then
         // under an ulp of its own largest coordinate, which the spawn offset (relative to
         // that coordinate) covers. `centre + n r` in f32 erred by ulps of |centre| + r: at
         // the top of a unit sphere centred at (0, -1, 0), where p is near zero, a 6e-8
         // error against a 1e-9 offset put a quarter of the shadow rays inside (acne).
-        let n = sphere_dir_from_uv(uv);
         SurfaceSample {
             p: (s.center.as_dvec3() + n * s.radius as f64).as_vec3(),
             ng: n.as_vec3(),
-            uv,
+            uv: Vec2::ZERO,
         }
     }
 
@@ -446,16 +460,40 @@ pub(crate) fn sphere_uv(h: DVec3) -> Vec2 {
     Vec2::new(u, (theta / PI64) as f32)
 }
 
-/// Unit direction for sphere surface parameters (inverse of [`sphere_uv`]), in double
-/// precision.
-fn sphere_dir_from_uv(uv: Vec2) -> DVec3 {
-    use std::f64::consts::PI as PI64;
-    // In double precision so the only error left is the f32 rounding of uv (~1e-7 rad).
-    let phi = uv.x as f64 * 2.0 * PI64;
-    let theta = uv.y as f64 * PI64;
-    let (st, ct) = theta.sin_cos();
-    let (sp, cp) = phi.sin_cos();
-    DVec3::new(st * cp, st * sp, ct)
+/// Octahedral encoding (Cigolle et al. 2014, "A Survey of Efficient Representations for
+/// Independent Unit Vectors") of the direction `h` (centre to hit, any length), as a sphere
+/// hit's `(b1, b2)`: computed in double precision and rounded once to f32, which keeps the
+/// direction to about 1e-7 rad (the f32 `(phi, theta)` it replaces kept about 2e-7) without
+/// a trigonometric function either way.
+pub(crate) fn encode_sphere_dir(h: DVec3) -> (f32, f32) {
+    let l1 = h.x.abs() + h.y.abs() + h.z.abs();
+    if !(l1 > 0.0 && l1.is_finite()) {
+        return (0.0, 0.0); // +z, as the old parameters' fallback
+    }
+    let n = h / l1;
+    let (x, y) = if n.z >= 0.0 {
+        (n.x, n.y)
+    } else {
+        (
+            (1.0 - n.y.abs()).copysign(n.x),
+            (1.0 - n.x.abs()).copysign(n.y),
+        )
+    };
+    (x as f32, y as f32)
+}
+
+/// The unit direction (in double precision) of a sphere hit's `(b1, b2)` (inverse of
+/// [`encode_sphere_dir`]).
+#[inline]
+fn decode_sphere_dir(b1: f32, b2: f32) -> DVec3 {
+    let (x, y) = (b1 as f64, b2 as f64);
+    let z = 1.0 - x.abs() - y.abs();
+    let (x, y) = if z >= 0.0 {
+        (x, y)
+    } else {
+        ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
+    };
+    DVec3::new(x, y, z).normalize()
 }
 
 #[cfg(test)]
@@ -498,5 +536,45 @@ mod tests {
         }
         assert!(view.surface_at(tris.len() as u32, 0.25, 0.5).is_none());
         assert_eq!(geom.num_prims(), tris.len() + 1);
+    }
+
+    #[test]
+    fn sphere_directions_survive_the_octahedral_encoding() {
+        // Axes, octant diagonals, the fold's seam (z = 0) and a spiral over the sphere.
+        let mut dirs = vec![
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ];
+        for &(x, y, z) in &[
+            (1.0, 1.0, 1.0),
+            (-1.0, 2.0, -3.0),
+            (0.3, -0.7, 0.0),
+            (-1e-9, 0.0, -1.0),
+        ] {
+            dirs.push(DVec3::new(x, y, z));
+        }
+        let n = 20_000;
+        for k in 0..n {
+            let z = 1.0 - 2.0 * (k as f64 + 0.5) / n as f64;
+            let (s, c) = (k as f64 * 2.399963).sin_cos();
+            let r = (1.0 - z * z).sqrt();
+            dirs.push(DVec3::new(r * c, r * s, z) * (0.5 + k as f64 * 1e-4));
+        }
+        let mut worst = 0.0f64;
+        for h in dirs {
+            let (b1, b2) = encode_sphere_dir(h);
+            let d = decode_sphere_dir(b1, b2);
+            assert!((d.length() - 1.0).abs() < 1e-15);
+            worst = worst.max(d.angle_between(h.normalize()));
+        }
+        assert!(worst < 2e-7, "worst angle {worst}");
+        assert_eq!(encode_sphere_dir(DVec3::ZERO), (0.0, 0.0));
+        // The parameters from the encoded direction.
+        let uv = sphere_uv(decode_sphere_dir(0.0, 0.0));
+        assert_eq!(uv.y, 0.0, "+z is the pole theta = 0");
     }
 }

@@ -39,11 +39,11 @@
 
 use std::marker::PhantomData;
 
-use glam::{DVec3, Vec3, Vec3A, Vec4, Vec4Swizzles};
+use glam::{Vec3, Vec3A, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
 use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE, WIDTH};
-use crate::geometry::{sphere_uv, SceneGeometry};
+use crate::geometry::{encode_sphere_dir, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
 use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
@@ -1174,14 +1174,20 @@ fn sphere_leaf_t(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f
     intersect_sphere(o, d, cr.truncate(), cr.w, tmin, tmax)
 }
 
-/// Surface parameters of the closest hit on a sphere leaf, from the double-precision root.
+/// The double-precision root of [`sphere_leaf_t`] (closest-hit traversal keeps it for the
+/// hit's direction).
 #[inline(never)]
-fn sphere_leaf_uv(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> (f32, f32) {
-    let (c, r) = (leaf.center_radius.truncate(), leaf.center_radius.w);
-    let uv = sphere_t64(o, d, c, r, tmin, tmax)
-        .map(|t64| sphere_uv((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64))
-        .unwrap_or_else(|| sphere_uv(DVec3::Z));
-    (uv.x, uv.y)
+fn sphere_leaf_t64(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<f64> {
+    let cr = leaf.center_radius;
+    sphere_t64(o, d, cr.truncate(), cr.w, tmin, tmax)
+}
+
+/// `(b1, b2)` of the closest hit on a sphere leaf: the octahedral encoding of the direction
+/// from the centre to the hit, from the double-precision root `t64`.
+#[inline(never)]
+fn sphere_leaf_dir(leaf: &SphereLeaf, o: Vec3, d: Vec3, t64: f64) -> (f32, f32) {
+    let c = leaf.center_radius.truncate();
+    encode_sphere_dir((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64)
 }
 
 #[inline(always)]
@@ -1215,6 +1221,8 @@ struct ClosestRay<'a, S: Simd> {
     prim: u32,
     /// Sphere leaf of the closest hit, or [`NO_SPHERE`].
     sphere: u32,
+    /// The double-precision root of the closest sphere hit (when `sphere` is one).
+    sphere_t: f64,
     b1: f32,
     b2: f32,
 }
@@ -1227,11 +1235,14 @@ impl<S: Simd> ClosestRay<'_, S> {
         if child & SPHERE != 0 {
             let leaf = &bvh.spheres[index];
             let (o, d) = (self.tri.origin(), self.tri.direction());
-            let ts = sphere_leaf_t(leaf, o, d, self.tmin, *tmax);
-            if ts < *tmax {
-                *tmax = ts;
-                self.prim = leaf.prim;
-                self.sphere = index as u32;
+            if let Some(t64) = sphere_leaf_t64(leaf, o, d, self.tmin, *tmax) {
+                let ts = t64 as f32;
+                if ts < *tmax {
+                    *tmax = ts;
+                    self.prim = leaf.prim;
+                    self.sphere = index as u32;
+                    self.sphere_t = t64;
+                }
             }
             return;
         }
@@ -1300,6 +1311,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
                 tmin: ray_tmin,
                 prim: NO_HIT,
                 sphere: NO_SPHERE,
+                sphere_t: 0.0,
                 b1: 0.0,
                 b2: 0.0,
             };
@@ -1313,8 +1325,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
             } else {
                 if ray.sphere != NO_SPHERE {
                     let leaf = &bvh.spheres[ray.sphere as usize];
-                    let (o, d) = (origin[i], direction[i]);
-                    (ray.b1, ray.b2) = sphere_leaf_uv(leaf, o, d, ray_tmin, tmax[i]);
+                    (ray.b1, ray.b2) = sphere_leaf_dir(leaf, origin[i], direction[i], ray.sphere_t);
                 }
                 t[i] = best_t;
                 prim[i] = ray.prim;
