@@ -333,7 +333,7 @@ impl SceneGeometry {
     /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `(b1, b2)` are the unit
     /// direction from the centre to the hit, computed in double precision from the
     /// double-precision root at intersection time and stored octahedrally encoded
-    /// ([`encode_sphere_dir`]), so the normal stays accurate even where `t` has lost
+    /// (`encode_sphere_dir`), so the normal stays accurate even where `t` has lost
     /// precision (tiny spheres far away); `p` is the corresponding point on the sphere, and
     /// `uv = (0, 0)` (see [`Self::surface_uv`]). `origin`, `direction` and `t` are only used
     /// for spheres when `(b1, b2)` are not finite.
@@ -483,7 +483,7 @@ pub(crate) fn encode_sphere_dir(h: DVec3) -> (f32, f32) {
 }
 
 /// The unit direction (in double precision) of a sphere hit's `(b1, b2)` (inverse of
-/// [`encode_sphere_dir`]).
+/// `encode_sphere_dir`).
 #[inline]
 fn decode_sphere_dir(b1: f32, b2: f32) -> DVec3 {
     let (x, y) = (b1 as f64, b2 as f64);
