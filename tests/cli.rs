@@ -6,50 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::cli::{assert_fails, risotto};
-
-/// A small valid scene: floor, downward-facing square lamp, sky.
-const SCENE: &str = r#"[render]
-width = 16
-height = 12
-spp = 4
-max_depth = 4
-
-[camera]
-fov = 40
-from = [0, 1, 4]
-to = [0, 0.5, 0]
-
-[materials.floor]
-type = "diffuse"
-reflectance = 0.5
-
-[materials.emitter]
-type = "diffuse"
-reflectance = 0
-
-[[shapes]]
-name = "floor"
-type = "quad"
-material = "floor"
-corner = [-5, 0, -5]
-edge1 = [0, 0, 10]
-edge2 = [10, 0, 0]
-
-[[shapes]]
-name = "lamp"
-type = "quad"
-material = "emitter"
-emission = 5
-corner = [-0.5, 2, -0.5]
-edge1 = [1, 0, 0]
-edge2 = [0, 0, 1]
-
-[[lights]]
-name = "sky"
-type = "environment"
-radiance = 0.1
-"#;
+use common::cli::{assert_fails, risotto, SCENE};
 
 /// A fresh directory for one test.
 fn temp_dir(test: &str) -> PathBuf {
