@@ -432,27 +432,28 @@ fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32)
     let r = radius as f64;
     // |o + t d - c|^2 = r^2  <=>  a t^2 + 2 b t + cc = 0.
     let a = d.length_squared();
+    let inv_a = 1.0 / a;
     let b = f.dot(d);
     // Ray Tracing Gems ch. 7 eq. (12): b^2 - a cc = a (r^2 - |l|^2) with l = f - (b/a) d the
-    // perpendicular from the centre to the ray line; (r - |l|)(r + |l|) avoids the
-    // catastrophic cancellation of b^2 - a cc for distant spheres.
-    let l = f - d * (b / a);
-    let ll = l.length();
-    let disc = a * ((r - ll) * (r + ll));
+    // perpendicular from the centre to the ray line, which avoids the catastrophic
+    // cancellation of b^2 - a cc for distant spheres. The inputs are f32, so in f64 every
+    // square is exact and r^2 - |l|^2 (like cc below) is off by a few f64 ulps of r^2: the
+    // factored forms (r - |l|)(r + |l|) that f32 needs buy nothing here but two square roots.
+    let l = f - d * (b * inv_a);
+    let disc = a * (r * r - l.length_squared());
     // Also rejects NaN (zero direction).
     if disc.is_nan() || disc < 0.0 {
         return None;
     }
     // Numerically stable root pair (eq. (13)-(14)): q has no cancellation; the small root
-    // is cc / q, with cc = (|f| - r)(|f| + r) accurate for origins near the surface.
+    // is cc / q, accurate for origins near the surface.
     let q = -(b + disc.sqrt().copysign(b));
-    let fl = f.length();
-    let cc = (fl - r) * (fl + r);
+    let cc = f.length_squared() - r * r;
     let (t0, t1) = if q == 0.0 {
         // b = 0 and disc = 0: the origin is on the sphere, moving tangentially.
         (0.0, 0.0)
     } else {
-        let (x, y) = (cc / q, q / a);
+        let (x, y) = (cc / q, q * inv_a);
         (x.min(y), x.max(y))
     };
     for t in [t0, t1] {
