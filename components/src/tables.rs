@@ -105,11 +105,30 @@ macro_rules! soa_table {
             /// # Panics
             /// When `keep` is not as long as the table.
             pub fn retain_rows(&mut self, keep: &[bool]) {
-                assert_eq!(keep.len(), self.len(), "one flag per row");
-                // `Vec::retain` visits the elements in order, exactly once each.
+                self.retain_rows_from(0, keep);
+            }
+            /// Keeps the rows `start + i` with `keep[i]` (in order) and removes the others
+            /// of that tail, in place; rows before `start` are not touched, so a caller that
+            /// filters only the rows it appended pays for those alone.
+            ///
+            /// # Panics
+            /// When `keep` is not as long as the tail from `start`.
+            pub fn retain_rows_from(&mut self, start: usize, keep: &[bool]) {
+                assert_eq!(
+                    keep.len(),
+                    self.len().saturating_sub(start),
+                    "one flag per row"
+                );
                 $( {
-                    let mut flags = keep.iter();
-                    self.$field.retain(|_| *flags.next().unwrap_or(&false));
+                    let column = &mut self.$field[..];
+                    let mut kept = start;
+                    for (k, &flag) in keep.iter().enumerate() {
+                        if flag {
+                            column.swap(kept, start + k);
+                            kept += 1;
+                        }
+                    }
+                    self.$field.truncate(kept);
                 } )*
             }
             /// Appends copies of the rows `rows` of `other`, in that order: one gather per
@@ -422,6 +441,20 @@ mod tests {
         assert_eq!(h.t, vec![0.0, 3.0, 4.0]);
         assert_eq!(h.row(1).b1, 1.5, "rows move whole");
         assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn retain_rows_from_filters_only_the_tail() {
+        let mut h = Hits::default();
+        for i in 0..6 {
+            h.push(hit(i as f32, i));
+        }
+        h.retain_rows_from(2, &[false, true, false, true]);
+        assert_eq!(prims(&h), vec![0, 1, 3, 5]);
+        assert_eq!(h.t, vec![0.0, 1.0, 3.0, 5.0]);
+        assert!(h.is_consistent());
+        h.retain_rows_from(4, &[]);
+        assert_eq!(prims(&h), vec![0, 1, 3, 5]);
     }
 
     #[test]

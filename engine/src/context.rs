@@ -71,7 +71,83 @@ impl<'s> IntegratorContext<'s> {
     /// are appended to `out.misses`. Points carry `ray_id` = index into `rays` and
     /// transmission 1.
     pub fn nearest_hits(&mut self, rays: &Rays, out: &mut ShadeGroups) {
+        self.trace(rays);
+        self.shade_traced(rays, None, out);
+    }
+
+    /// The first half of [`nearest_hits`](Self::nearest_hits): traces `rays` to their
+    /// nearest surface hits and returns each ray's hit distance (`f32::INFINITY` for a
+    /// miss), without building shading points. A volume integrator that decides from the
+    /// distances which rays stop inside (free-flight sampling) then shades only the others
+    /// with [`shade_traced`](Self::shade_traced), instead of building every point and
+    /// dropping most of them.
+    pub fn trace(&mut self, rays: &Rays) -> &[f32] {
         let n = rays.len();
+        let geometry = &self.scene.geometry;
+        let hits = &mut self.scratch.hits;
+        hits.t.resize(n, 0.0);
+        hits.prim.resize(n, NO_HIT);
+        hits.b1.resize(n, 0.0);
+        hits.b2.resize(n, 0.0);
+        if n > 0 {
+            self.stats.time(System::Intersect, n, || {
+                intersect_closest(
+                    geometry,
+                    &rays.origin,
+                    &rays.direction,
+                    &rays.tmin,
+                    &rays.tmax,
+                    &mut hits.t,
+                    &mut hits.prim,
+                    &mut hits.b1,
+                    &mut hits.b2,
+                )
+            });
+        }
+        let hits = &mut self.scratch.hits;
+        for (t, &prim) in hits.t[..n].iter_mut().zip(&hits.prim[..n]) {
+            if prim == NO_HIT {
+                *t = f32::INFINITY;
+            }
+        }
+        &hits.t[..n]
+    }
+
+    /// Where ray `i` of the last [`trace`](Self::trace) (of `rays`) hits, and the surface's
+    /// geometric normal there; `None` for a miss.
+    pub fn traced_surface(&self, rays: &Rays, i: usize) -> Option<(Vec3, Vec3)> {
+        let h = &self.scratch.hits;
+        if h.prim[i] == NO_HIT {
+            return None;
+        }
+        let s = self.scene.geometry.surface_at(
+            h.prim[i],
+            rays.origin[i],
+            rays.direction[i],
+            h.t[i],
+            h.b1[i],
+            h.b2[i],
+        );
+        Some((s.p, s.ng))
+    }
+
+    /// The second half of [`nearest_hits`](Self::nearest_hits), for the rays of the last
+    /// [`trace`](Self::trace) (which must have been of `rays`): appends the hits and misses
+    /// of the rays `i` with `keep[i]` (every ray for `None`) to `out`, exactly as
+    /// `nearest_hits` would have appended them, in the same order, less the others.
+    ///
+    /// # Panics
+    /// When `keep` or the last trace is not as long as `rays`.
+    pub fn shade_traced(&mut self, rays: &Rays, keep: Option<&[bool]>, out: &mut ShadeGroups) {
+        let n = rays.len();
+        assert_eq!(
+            self.scratch.hits.len(),
+            n,
+            "shade_traced after trace of these rays"
+        );
+        if let Some(keep) = keep {
+            assert_eq!(keep.len(), n, "one flag per ray");
+        }
         if n == 0 {
             return;
         }
@@ -79,30 +155,13 @@ impl<'s> IntegratorContext<'s> {
         let geometry = &scene.geometry;
         let s = &mut self.scratch;
         let hits = &mut s.hits;
-        hits.t.resize(n, 0.0);
-        hits.prim.resize(n, NO_HIT);
-        hits.b1.resize(n, 0.0);
-        hits.b2.resize(n, 0.0);
-        self.stats.time(System::Intersect, n, || {
-            intersect_closest(
-                geometry,
-                &rays.origin,
-                &rays.direction,
-                &rays.tmin,
-                &rays.tmax,
-                &mut hits.t,
-                &mut hits.prim,
-                &mut hits.b1,
-                &mut hits.b2,
-            )
-        });
         // Hit rays are grouped by material (a bucket per material, concatenated in material
         // order: groups come out contiguous, so each factory runs once per call), escaped
         // rays go to their own list. Every array is taken as a slice before its loop: stores
         // into the scratch could otherwise alias the `Vec` headers, and the compiler would
         // reload pointers and lengths on every iteration.
         s.buckets.resize_with(scene.materials.len(), Vec::new);
-        group_by_material(scene, &hits.prim[..n], &mut s.buckets, &mut s.escaped);
+        group_by_material(scene, &hits.prim[..n], keep, &mut s.buckets, &mut s.escaped);
         s.sorted.clear();
         for b in &s.buckets {
             s.sorted.extend_from_slice(b);
@@ -179,6 +238,7 @@ impl<'s> IntegratorContext<'s> {
 fn group_by_material(
     scene: &CompiledScene,
     prims: &[u32],
+    keep: Option<&[bool]>,
     buckets: &mut [Vec<u32>],
     escaped: &mut Vec<u32>,
 ) {
@@ -187,11 +247,21 @@ fn group_by_material(
     }
     escaped.clear();
     let prim_material = &scene.prim_material[..];
-    for (i, &prim) in prims.iter().enumerate() {
+    let mut add = |i: usize, prim: u32| {
         if prim == NO_HIT {
             escaped.push(i as u32);
         } else {
             buckets[prim_material[prim as usize] as usize].push(i as u32);
+        }
+    };
+    match keep {
+        None => prims.iter().enumerate().for_each(|(i, &prim)| add(i, prim)),
+        Some(keep) => {
+            for (i, (&prim, &k)) in prims.iter().zip(keep).enumerate() {
+                if k {
+                    add(i, prim);
+                }
+            }
         }
     }
 }

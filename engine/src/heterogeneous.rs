@@ -312,10 +312,10 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         // Passing rays keep their hits (weight 1); the hits and misses of rays that scatter
         // leave.
-        let keep: Vec<bool> = (0..out.points.len())
-            .map(|k| k < p0 || !scattered[out.points.ray_id[k] as usize])
+        let keep: Vec<bool> = (p0..out.points.len())
+            .map(|k| !scattered[out.points.ray_id[k] as usize])
             .collect();
-        retain_points(out, &keep, g0);
+        retain_points(out, p0, &keep, g0);
         let mut j = m0;
         for k in m0..out.misses.len() {
             if !scattered[out.misses[k] as usize] {

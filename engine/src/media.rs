@@ -180,23 +180,25 @@ impl HomogeneousInterior<'_> {
         Some(pts)
     }
 
-    /// Multiple scattering (see the module docs). `start` = the rows of `out` this call
-    /// answers from on; `tmax[i]` = ray `i`'s distance to its hit (infinity for misses),
-    /// `scatter_max[i]` the farthest scattering point, a spawn offset before the hit.
-    #[allow(clippy::too_many_arguments, reason = "the bundle's columns, named")]
+    /// Multiple scattering (see the module docs): traces the rays, samples a free flight on
+    /// each ray's segment to its hit (or unbounded), and shades only the hits of the rays that
+    /// pass; the others become the scattering points.
     fn scatter_inside(
         &self,
         rays: &Rays,
         u: &[[f32; DIMS_PER_SEGMENT]],
-        tmax: &[f32],
-        scatter_max: &[f32],
-        start: (usize, usize, usize),
-        stats: &mut crate::stats::SystemStats,
+        ictx: &mut crate::context::IntegratorContext<'_>,
         out: &mut ShadeGroups,
     ) {
         let m = &self.medium;
         let n = rays.len();
+        let (p0, m0) = (out.points.len(), out.misses.len());
+        let mut tmax = rays.tmax.clone();
+        for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
+            *tmax = tmax.min(hit);
+        }
         let mut scattered = vec![false; n];
+        let mut passes = vec![true; n];
         let mut t = vec![0.0f32; n];
         let mut weight = vec![Rgb::BLACK; n];
         for i in 0..n {
@@ -209,49 +211,51 @@ impl HomogeneousInterior<'_> {
                 tmax[i],
             );
             scattered[i] = f.scattered;
+            passes[i] = !f.scattered;
+            weight[i] = f.weight;
+            t[i] = f.t;
+            if !f.scattered {
+                continue;
+            }
             // A scattering point within the spawn offset of a boundary could round to its
             // far side: of the segment's start (a ray past a pass-through starts on the
             // boundary and skips it with `tmin`) or of its end. The next ray from it
             // (spawned without an offset) would then cross that boundary again, and the
             // volume stack would never see the ray leave (an albedo-1 furnace then walks
             // forever outside). Such points move to `[tmin, scatter_max]`, a shift of
-            // ~1e-6 relative, far below any noise.
-            t[i] = if f.scattered {
-                f.t.min(scatter_max[i]).max(rays.tmin[i].min(0.5 * tmax[i]))
-            } else {
-                f.t
+            // ~1e-6 relative, far below any noise; `scatter_max` is the hit less its
+            // spawn offset along the ray (as pass-throughs measure it, the cosine clamped
+            // at 1e-3), needed (and the hit's normal computed) only for points within
+            // 1000 offsets of the hit.
+            let near_hit = tmax[i] < rays.tmax[i]
+                && f.t
+                    > tmax[i] - 2000.0 * ray_offset(rays.origin[i] + rays.direction[i] * tmax[i]);
+            let scatter_max = match near_hit.then(|| ictx.traced_surface(rays, i)).flatten() {
+                Some((p, ng)) => {
+                    let cos = rays.direction[i].dot(ng).abs().max(1e-3);
+                    let s = tmax[i] - ray_offset(p) / cos;
+                    if s < rays.tmin[i] {
+                        0.5 * (rays.tmin[i] + tmax[i])
+                    } else {
+                        s
+                    }
+                }
+                None => tmax[i],
             };
-            weight[i] = f.weight;
+            t[i] = f.t.min(scatter_max).max(rays.tmin[i].min(0.5 * tmax[i]));
         }
+        // Rays that pass keep their hit (or miss), attenuated by the pass weight.
+        ictx.shade_traced(rays, Some(&passes), out);
+        for k in p0..out.points.len() {
+            out.points.transmission[k] *= weight[out.points.ray_id[k] as usize];
+        }
+        for k in m0..out.misses.len() {
+            out.miss_transmission[k] *= weight[out.misses[k] as usize];
+        }
+        let stats = &mut *ictx.stats;
         let events = scattered.iter().filter(|&&s| s).count();
         stats.volume_event(crate::stats::VolumeEvent::Scatter, events);
         stats.volume_event(crate::stats::VolumeEvent::Pass, n - events);
-        // Rays that pass keep their hit (or miss), attenuated by the pass weight; the hits of
-        // rays that scatter leave.
-        let (p0, g0, m0) = start;
-        let mut keep = vec![true; out.points.len()];
-        for k in p0..out.points.len() {
-            let r = out.points.ray_id[k] as usize;
-            if scattered[r] {
-                keep[k] = false;
-            } else {
-                out.points.transmission[k] *= weight[r];
-            }
-        }
-        if keep.iter().any(|&k| !k) {
-            retain_points(out, &keep, g0);
-        }
-        let mut j = m0;
-        for k in m0..out.misses.len() {
-            let r = out.misses[k] as usize;
-            if !scattered[r] {
-                out.misses[j] = out.misses[k];
-                out.miss_transmission[j] = out.miss_transmission[k] * weight[r];
-                j += 1;
-            }
-        }
-        out.misses.truncate(j);
-        out.miss_transmission.truncate(j);
         if events == 0 {
             return;
         }
@@ -408,8 +412,10 @@ impl HomogeneousInterior<'_> {
     }
 }
 
-/// Keeps the points of `out` with `keep[k]`, fixing the ranges of groups from `g0` on.
-pub(crate) fn retain_points(out: &mut ShadeGroups, keep: &[bool], g0: usize) {
+/// Keeps the points `p0 + i` of `out` with `keep[i]` (the rows this bundle appended),
+/// fixing the ranges of the groups from `g0` on (which all lie in those rows).
+pub(crate) fn retain_points(out: &mut ShadeGroups, p0: usize, keep: &[bool], g0: usize) {
+    // before[i] = the rows kept among the tail's first i.
     let mut before = Vec::with_capacity(keep.len() + 1);
     let mut kept = 0usize;
     before.push(0);
@@ -417,14 +423,17 @@ pub(crate) fn retain_points(out: &mut ShadeGroups, keep: &[bool], g0: usize) {
         kept += k as usize;
         before.push(kept);
     }
-    out.points.retain_rows(keep);
-    let groups: Vec<ShadeGroup> = out.groups.drain(g0..).collect();
-    for g in groups {
-        let range = before[g.range.start]..before[g.range.end];
+    out.points.retain_rows_from(p0, keep);
+    let mut j = g0;
+    for k in g0..out.groups.len() {
+        let g = out.groups[k].clone();
+        let range = p0 + before[g.range.start - p0]..p0 + before[g.range.end - p0];
         if !range.is_empty() {
-            out.groups.push(ShadeGroup { range, ..g });
+            out.groups[j] = ShadeGroup { range, ..g };
+            j += 1;
         }
     }
+    out.groups.truncate(j);
 }
 
 impl VolumeIntegrator for HomogeneousInterior<'_> {
@@ -436,42 +445,24 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        let n = rays.len();
         let u = Self::draw(samplers);
-        let start = (out.points.len(), out.groups.len(), out.misses.len());
-        services.ictx.nearest_hits(rays, out);
-        // Each ray's segment in the medium: to its hit, or unbounded.
-        let mut tmax = rays.tmax.clone();
-        let mut scatter_max = rays.tmax.clone();
-        for k in start.0..out.points.len() {
-            let r = out.points.ray_id[k] as usize;
-            tmax[r] = tmax[r].min(out.points.vlen[k]);
-            // The spawn offset at the hit, along the ray (as pass-throughs measure it).
-            let cos = rays.direction[r].dot(out.points.ng[k]).abs().max(1e-3);
-            scatter_max[r] = tmax[r] - ray_offset(out.points.p[k]) / cos;
-            if scatter_max[r] < rays.tmin[r] {
-                scatter_max[r] = 0.5 * (rays.tmin[r] + tmax[r]);
-            }
-        }
         let scattering = services
             .techniques
             .scattering
             .unwrap_or(self.medium.scattering);
-        let single = scattering == Scattering::Single && services.lighting.is_some();
-        if single {
+        if scattering == Scattering::Single && services.lighting.is_some() {
+            let start = (out.points.len(), out.groups.len(), out.misses.len());
+            services.ictx.nearest_hits(rays, out);
+            // Each ray's segment in the medium: to its hit, or unbounded.
+            let mut tmax = rays.tmax.clone();
+            for k in start.0..out.points.len() {
+                let r = out.points.ray_id[k] as usize;
+                tmax[r] = tmax[r].min(out.points.vlen[k]);
+            }
             self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
         } else {
-            self.scatter_inside(
-                rays,
-                &u,
-                &tmax,
-                &scatter_max,
-                start,
-                services.ictx.stats,
-                out,
-            );
+            self.scatter_inside(rays, &u, services.ictx, out);
         }
-        debug_assert_eq!(tmax.len(), n);
     }
 
     fn transmission(
