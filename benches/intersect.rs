@@ -339,5 +339,42 @@ fn bench_intersect(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_intersect);
+/// The analytic sphere (the f64 root of `sphere_t64`) as a medium's boundary sees it: rays
+/// from random points inside a unit sphere (they all hit its far side), and shadow rays past
+/// the boundary (origin inside, `tmin` beyond the exit: they all miss), the two kinds of
+/// query a scattering medium in a sphere makes.
+fn bench_sphere(c: &mut Criterion) {
+    use risotto::systems::geometry::Sphere;
+    let geom = SceneGeometry::build(
+        vec![],
+        vec![Sphere {
+            center: Vec3::new(0.1, -0.2, 0.3),
+            radius: 1.0,
+        }],
+    );
+    let mut rng = Rng(11);
+    let (mut inside, mut past) = (Rays::default(), Rays::default());
+    for _ in 0..BATCH {
+        let o = Vec3::new(0.1, -0.2, 0.3) + rng.unit() * rng.f32().cbrt() * 0.999;
+        let d = rng.unit();
+        inside.push(o, d, 0.0, f32::INFINITY);
+    }
+    let n = inside.o.len();
+    let mut hits = (vec![0.0; n], vec![0; n], vec![0.0; n], vec![0.0; n]);
+    ours_closest(&geom, &inside, &mut hits);
+    for i in 0..n {
+        past.push(inside.o[i], inside.d[i], hits.0[i] * 1.0001, 1e3);
+    }
+    let mut group = c.benchmark_group("intersect_sphere");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    group.bench_function("inside/closest", |b| {
+        b.iter(|| ours_closest(&geom, &inside, &mut hits))
+    });
+    group.bench_function("past_boundary/closest", |b| {
+        b.iter(|| ours_closest(&geom, &past, &mut hits))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_intersect, bench_sphere);
 criterion_main!(benches);

@@ -310,7 +310,14 @@ fn write_surfaces(
                 p[k] = surf.p;
                 ng[k] = surf.ng;
                 let uv = if sphere_uv {
-                    geometry.surface_uv(prims[i], b1[i], b2[i])
+                    geometry.surface_uv(
+                        prims[i],
+                        rays.origin[i],
+                        rays.direction[i],
+                        hits.t[i],
+                        b1[i],
+                        b2[i],
+                    )
                 } else {
                     surf.uv
                 };

@@ -327,16 +327,15 @@ impl SceneGeometry {
     }
 
     /// Geometry at a hit of the ray `origin + t * direction` on primitive `prim`, with the
-    /// hit's `b1`, `b2` as written by [`crate::intersect::intersect_closest`].
+    /// hit's `t`, `b1`, `b2` as written by [`crate::intersect::intersect_closest`] for that
+    /// same ray.
     ///
     /// Triangles: `p` is interpolated from the vertices with the barycentrics (more accurate
-    /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `(b1, b2)` are the unit
-    /// direction from the centre to the hit, computed in double precision from the
-    /// double-precision root at intersection time and stored octahedrally encoded
-    /// (`encode_sphere_dir`), so the normal stays accurate even where `t` has lost
-    /// precision (tiny spheres far away); `p` is the corresponding point on the sphere, and
-    /// `uv = (0, 0)` (see [`Self::surface_uv`]). `origin`, `direction` and `t` are only used
-    /// for spheres when `(b1, b2)` are not finite.
+    /// than `origin + t * direction`), `uv = (b1, b2)`. Spheres: `t + b1` is the
+    /// double-precision root (`b1` its residual against `t`), from which the direction from
+    /// the centre to the hit is computed in double precision, so the normal stays accurate
+    /// even where `t` alone has lost precision (tiny spheres far away); `p` is the
+    /// corresponding point on the sphere, and `uv = (0, 0)` (see [`Self::surface_uv`]).
     #[inline(always)]
     pub fn surface_at(
         &self,
@@ -349,20 +348,30 @@ impl SceneGeometry {
     ) -> SurfaceSample {
         match self.triangles().surface_at(prim, b1, b2) {
             Some(s) => s,
-            None => self.sphere_surface_at(prim as usize, origin, direction, t, b1, b2),
+            None => self.sphere_surface_at(prim as usize, origin, direction, t, b1),
         }
     }
 
-    /// Surface parameters of a hit (`b1`, `b2` as for [`Self::surface_at`]). Triangles: the
-    /// barycentrics `(b1, b2)` of `v1` and `v2`; spheres: `(phi / 2pi, theta / pi)` with
-    /// `theta` the polar angle from `+z` and `phi` the azimuth from `+x` towards `+y`, in
-    /// `[0, 2pi)`. Shading points get these only in scenes with a material that asks for
-    /// them (the engine's `InstanceHints::READS_SURFACE_UV`).
-    pub fn surface_uv(&self, prim: u32, b1: f32, b2: f32) -> Vec2 {
+    /// Surface parameters of a hit (the ray and `t`, `b1`, `b2` as for
+    /// [`Self::surface_at`]). Triangles: the barycentrics `(b1, b2)` of `v1` and `v2`;
+    /// spheres: `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi`
+    /// the azimuth from `+x` towards `+y`, in `[0, 2pi)`. Shading points get these only in
+    /// scenes with a material that asks for them (the engine's
+    /// `InstanceHints::READS_SURFACE_UV`).
+    pub fn surface_uv(
+        &self,
+        prim: u32,
+        origin: Vec3,
+        direction: Vec3,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> Vec2 {
         if (prim as usize) < self.triangles.len() {
             Vec2::new(b1, b2)
         } else {
-            sphere_uv(decode_sphere_dir(b1, b2))
+            let s = self.spheres[prim as usize - self.triangles.len()];
+            sphere_uv(sphere_hit_dir(s, origin, direction, t, b1))
         }
     }
 
@@ -381,15 +390,9 @@ impl SceneGeometry {
         direction: Vec3,
         t: f32,
         b1: f32,
-        b2: f32,
     ) -> SurfaceSample {
         let s = self.spheres[prim - self.triangles.len()];
-        let n = if b1.is_finite() && b2.is_finite() {
-            decode_sphere_dir(b1, b2)
-        } else {
-            let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t as f64;
-            h.try_normalize().unwrap_or(DVec3::Z)
-        };
+        let n = sphere_hit_dir(s, origin, direction, t, b1);
         // The point in double precision, rounded once: its distance to the sphere is then
         // under an ulp of its own largest coordinate, which the spawn offset (relative to
         // that coordinate) covers. `centre + n r` in f32 erred by ulps of |centre| + r: at
@@ -460,40 +463,14 @@ pub(crate) fn sphere_uv(h: DVec3) -> Vec2 {
     Vec2::new(u, (theta / PI64) as f32)
 }
 
-/// Octahedral encoding (Cigolle et al. 2014, "A Survey of Efficient Representations for
-/// Independent Unit Vectors") of the direction `h` (centre to hit, any length), as a sphere
-/// hit's `(b1, b2)`: computed in double precision and rounded once to f32, which keeps the
-/// direction to about 1e-7 rad (the f32 `(phi, theta)` it replaces kept about 2e-7) without
-/// a trigonometric function either way.
-pub(crate) fn encode_sphere_dir(h: DVec3) -> (f32, f32) {
-    let l1 = h.x.abs() + h.y.abs() + h.z.abs();
-    if !(l1 > 0.0 && l1.is_finite()) {
-        return (0.0, 0.0); // +z, as the old parameters' fallback
-    }
-    let n = h / l1;
-    let (x, y) = if n.z >= 0.0 {
-        (n.x, n.y)
-    } else {
-        (
-            (1.0 - n.y.abs()).copysign(n.x),
-            (1.0 - n.x.abs()).copysign(n.y),
-        )
-    };
-    (x as f32, y as f32)
-}
-
-/// The unit direction (in double precision) of a sphere hit's `(b1, b2)` (inverse of
-/// `encode_sphere_dir`).
+/// The unit direction (in double precision) from the centre of `s` to the hit at
+/// `t + b1` (the double-precision root, see [`SceneGeometry::surface_at`]) on the ray
+/// `origin + t direction`; `+z` for a degenerate input.
 #[inline]
-fn decode_sphere_dir(b1: f32, b2: f32) -> DVec3 {
-    let (x, y) = (b1 as f64, b2 as f64);
-    let z = 1.0 - x.abs() - y.abs();
-    let (x, y) = if z >= 0.0 {
-        (x, y)
-    } else {
-        ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
-    };
-    DVec3::new(x, y, z).normalize()
+fn sphere_hit_dir(s: Sphere, origin: Vec3, direction: Vec3, t: f32, b1: f32) -> DVec3 {
+    let t64 = t as f64 + if b1.is_finite() { b1 as f64 } else { 0.0 };
+    let h = (origin.as_dvec3() - s.center.as_dvec3()) + direction.as_dvec3() * t64;
+    h.try_normalize().unwrap_or(DVec3::Z)
 }
 
 #[cfg(test)]
@@ -539,42 +516,57 @@ mod tests {
     }
 
     #[test]
-    fn sphere_directions_survive_the_octahedral_encoding() {
-        // Axes, octant diagonals, the fold's seam (z = 0) and a spiral over the sphere.
-        let mut dirs = vec![
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
-        for &(x, y, z) in &[
-            (1.0, 1.0, 1.0),
-            (-1.0, 2.0, -3.0),
-            (0.3, -0.7, 0.0),
-            (-1e-9, 0.0, -1.0),
-        ] {
-            dirs.push(DVec3::new(x, y, z));
-        }
-        let n = 20_000;
+    fn sphere_normals_come_from_the_double_precision_root() {
+        // A tiny sphere far away: the f32 `t` alone is off by ~1e-3 of the radius, so a
+        // normal from `origin + t direction` would tilt by ~1e-3 rad; `t + b1` keeps it to
+        // f32 rounding of the normal.
+        let sphere = Sphere {
+            center: Vec3::new(1.0e4, 3.0, -2.0),
+            radius: 1.0e-3,
+        };
+        let geom = SceneGeometry::build(vec![], vec![sphere]);
+        let n = 2000;
+        let (mut origin, mut direction) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
         for k in 0..n {
-            let z = 1.0 - 2.0 * (k as f64 + 0.5) / n as f64;
-            let (s, c) = (k as f64 * 2.399963).sin_cos();
+            // Aim at points of a spiral on the sphere's visible side.
+            let z = 1.0 - (k as f64 + 0.5) / n as f64;
+            let (sn, cs) = (k as f64 * 2.399963).sin_cos();
             let r = (1.0 - z * z).sqrt();
-            dirs.push(DVec3::new(r * c, r * s, z) * (0.5 + k as f64 * 1e-4));
+            let target = sphere.center.as_dvec3()
+                + DVec3::new(-z, r * cs, r * sn) * (0.9 * sphere.radius as f64);
+            direction[k] = target.normalize().as_vec3();
         }
+        let (tmin, tmax) = (vec![0.0; n], vec![f32::INFINITY; n]);
+        let (mut t, mut prim) = (vec![0.0; n], vec![0; n]);
+        let (mut b1, mut b2) = (vec![0.0; n], vec![0.0; n]);
+        crate::intersect::intersect_closest(
+            &geom, &origin, &direction, &tmin, &tmax, &mut t, &mut prim, &mut b1, &mut b2,
+        );
         let mut worst = 0.0f64;
-        for h in dirs {
-            let (b1, b2) = encode_sphere_dir(h);
-            let d = decode_sphere_dir(b1, b2);
-            assert!((d.length() - 1.0).abs() < 1e-15);
-            worst = worst.max(d.angle_between(h.normalize()));
+        for k in 0..n {
+            assert_eq!(prim[k], 0, "ray {k} aims inside the sphere");
+            // Reference: the near root in f64 from the same f32 inputs.
+            let (f, d) = (-sphere.center.as_dvec3(), direction[k].as_dvec3());
+            let (a, b) = (d.length_squared(), f.dot(d));
+            let l = f - d * (b / a);
+            let rr = (sphere.radius as f64).powi(2);
+            let q = -(b + (a * (rr - l.length_squared())).sqrt().copysign(b));
+            let t_ref = (f.length_squared() - rr) / q;
+            let n_ref = (f + d * t_ref).normalize();
+            let s = geom.surface_at(0, origin[k], direction[k], t[k], b1[k], b2[k]);
+            worst = worst.max(s.ng.as_dvec3().angle_between(n_ref));
         }
-        assert!(worst < 2e-7, "worst angle {worst}");
-        assert_eq!(encode_sphere_dir(DVec3::ZERO), (0.0, 0.0));
-        // The parameters from the encoded direction.
-        let uv = sphere_uv(decode_sphere_dir(0.0, 0.0));
+        assert!(worst < 1e-6, "worst normal error {worst} rad");
+        origin.clear();
+        // The parameters of a hit at the pole.
+        let up = SceneGeometry::build(
+            vec![],
+            vec![Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            }],
+        );
+        let uv = up.surface_uv(0, Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, 2.0, 0.0, 0.0);
         assert_eq!(uv.y, 0.0, "+z is the pole theta = 0");
     }
 }

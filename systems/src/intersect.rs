@@ -43,7 +43,7 @@ use glam::{Vec3, Vec3A, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
 use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE, WIDTH};
-use crate::geometry::{encode_sphere_dir, SceneGeometry};
+use crate::geometry::SceneGeometry;
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
 use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
@@ -1183,12 +1183,13 @@ fn sphere_leaf_t64(leaf: &SphereLeaf, o: Vec3, d: Vec3, tmin: f32, tmax: f32) ->
     sphere_t64(o, d, cr.truncate(), cr.w, tmin, tmax)
 }
 
-/// `(b1, b2)` of the closest hit on a sphere leaf: the octahedral encoding of the direction
-/// from the centre to the hit, from the double-precision root `t64`.
-#[inline(never)]
-fn sphere_leaf_dir(leaf: &SphereLeaf, o: Vec3, d: Vec3, t64: f64) -> (f32, f32) {
-    let c = leaf.center_radius.truncate();
-    encode_sphere_dir((o.as_dvec3() - c.as_dvec3()) + d.as_dvec3() * t64)
+/// `(b1, b2)` of the closest hit on a sphere: the f64 root's residual against its f32
+/// rounding `t64 as f32` (so that `t + b1` is the root to ~48 bits) and 0. No division or
+/// square root: the hit's direction, which needs both, is computed only for the hits that
+/// get shaded ([`SceneGeometry::surface_at`]); most of a medium's hits do not.
+#[inline(always)]
+fn sphere_hit_params(t64: f64) -> (f32, f32) {
+    ((t64 - (t64 as f32) as f64) as f32, 0.0)
 }
 
 #[inline(always)]
@@ -1325,8 +1326,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
                 b2[i] = 0.0;
             } else {
                 if ray.sphere != NO_SPHERE {
-                    let leaf = &bvh.spheres[ray.sphere as usize];
-                    (ray.b1, ray.b2) = sphere_leaf_dir(leaf, origin[i], direction[i], ray.sphere_t);
+                    (ray.b1, ray.b2) = sphere_hit_params(ray.sphere_t);
                 }
                 t[i] = best_t;
                 prim[i] = ray.prim;

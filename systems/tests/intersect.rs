@@ -740,7 +740,8 @@ fn sphere_outside_inside_and_tangent() {
                 let theta = n.x.hypot(n.y).atan2(n.z) / PI64;
                 let phi = n.y.atan2(n.x).rem_euclid(2.0 * PI64) / (2.0 * PI64);
                 assert_eq!(s.uv, Vec2::ZERO, "spheres leave uv to surface_uv");
-                let uv = geom.surface_uv(r.prim[i], r.b1[i], r.b2[i]);
+                let uv =
+                    geom.surface_uv(r.prim[i], batch.o[i], batch.d[i], r.t[i], r.b1[i], r.b2[i]);
                 let du = (uv.x as f64 - phi).abs();
                 assert!(du.min(1.0 - du) < 1e-5 && (uv.y as f64 - theta).abs() < 1e-5);
             }
@@ -1130,7 +1131,7 @@ fn sphere_uv_and_surface_at_agree_with_sample_prim() {
         assert!(((s.p - sphere.center).length() - sphere.radius).abs() < 1e-6);
         assert!((s.ng - (s.p - sphere.center) / sphere.radius).length() < 1e-5);
         assert!(s.ng.dot(batch.d[i]) < 0.0, "front face from outside");
-        let uv = geom.surface_uv(0, r.b1[i], r.b2[i]);
+        let uv = geom.surface_uv(0, batch.o[i], batch.d[i], r.t[i], r.b1[i], r.b2[i]);
         assert!((0.0..1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y));
     }
 }
