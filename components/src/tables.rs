@@ -352,6 +352,39 @@ impl ShadingPointRow {
     }
 }
 
+impl ShadingPoints {
+    /// Appends one [`ShadingPointRow::in_volume`] row per `(p[i], direction[i])`, with
+    /// `ray_id = i`, column by column (a per-row [`push`](Self::push) checks the capacity of
+    /// all fourteen columns for every row).
+    ///
+    /// # Panics
+    /// When `p` and `direction` differ in length.
+    pub fn extend_in_volume(&mut self, p: &[Vec3], direction: &[Vec3], material: u32) {
+        assert_eq!(p.len(), direction.len(), "one direction per point");
+        let (start, m) = (self.len(), p.len());
+        let row = ShadingPointRow::in_volume(Vec3::ZERO, Vec3::Z, 0, material);
+        let facing = || direction.iter().map(|&d| -d);
+        self.p.extend_from_slice(p);
+        self.ng.extend(facing());
+        self.nn.extend(facing());
+        self.vn.extend(facing());
+        self.vlen.resize(start + m, row.vlen);
+        self.u.resize(start + m, row.u);
+        self.v.resize(start + m, row.v);
+        self.w.resize(start + m, row.w);
+        self.transmission.resize(start + m, row.transmission);
+        self.ray_id.extend(0..m as u32);
+        self.material.resize(start + m, row.material);
+        self.shape.resize(start + m, row.shape);
+        self.front_face.resize(start + m, row.front_face);
+        self.ior_outside.resize(start + m, row.ior_outside);
+        assert!(
+            self.is_consistent(),
+            "a shading-point column was not filled"
+        );
+    }
+}
+
 impl Rays {
     /// Asserts the table invariants in debug builds.
     pub fn debug_check(&self) {
@@ -441,6 +474,24 @@ mod tests {
         assert_eq!(h.t, vec![0.0, 3.0, 4.0]);
         assert_eq!(h.row(1).b1, 1.5, "rows move whole");
         assert!(h.is_consistent());
+    }
+
+    #[test]
+    fn extend_in_volume_equals_rows_pushed_one_by_one() {
+        let p = [Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.0, 0.5, 0.0)];
+        let d = [Vec3::X, Vec3::new(0.0, -0.6, 0.8)];
+        let mut bulk = ShadingPoints::default();
+        bulk.push(ShadingPointRow::in_volume(Vec3::ONE, Vec3::Y, 9, 1));
+        bulk.extend_in_volume(&p, &d, 7);
+        let mut rows = ShadingPoints::default();
+        rows.push(ShadingPointRow::in_volume(Vec3::ONE, Vec3::Y, 9, 1));
+        for i in 0..2 {
+            rows.push(ShadingPointRow::in_volume(p[i], d[i], i as u32, 7));
+        }
+        assert_eq!(bulk.len(), 3);
+        for k in 0..3 {
+            assert_eq!(format!("{:?}", bulk.row(k)), format!("{:?}", rows.row(k)));
+        }
     }
 
     #[test]

@@ -31,7 +31,7 @@
 
 use crate::plugin::*;
 use glam::Vec3;
-use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
+use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
 use risotto_systems::medium::{
     channel_pdf, equiangular_pdf, equiangular_sample, free_flight_pdf, sample_free_flight,
@@ -39,7 +39,7 @@ use risotto_systems::medium::{
 };
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::ray_offset;
-use risotto_systems::sampler::PathSampler;
+use risotto_systems::sampler::{next_4d_column, PathSampler};
 
 /// Lobe bits of a phase-function sample.
 const SCATTER: LobeSampled = LobeSampled(LobeSampled::SCATTER.0 | LobeSampled::DIFFUSE.0);
@@ -157,10 +157,9 @@ const DIMS_PER_SEGMENT: usize = 4;
 impl HomogeneousInterior<'_> {
     /// Draws the four dimensions of every ray's segment.
     fn draw(samplers: &mut [PathSampler]) -> Vec<[f32; DIMS_PER_SEGMENT]> {
-        samplers
-            .iter_mut()
-            .map(|s| [s.next_1d(), s.next_1d(), s.next_1d(), s.next_1d()])
-            .collect()
+        let mut u = vec![[0.0; DIMS_PER_SEGMENT]; samplers.len()];
+        next_4d_column(samplers, &mut u);
+        u
     }
 
     /// Shading points at the rays' origins (the bound context's, when it has one per ray).
@@ -169,14 +168,7 @@ impl HomogeneousInterior<'_> {
             return None;
         }
         let mut pts = ShadingPoints::with_capacity(rays.len());
-        for i in 0..rays.len() {
-            pts.push(ShadingPointRow::in_volume(
-                rays.origin[i],
-                rays.direction[i],
-                i as u32,
-                self.ctx.material(),
-            ));
-        }
+        pts.extend_in_volume(&rays.origin, &rays.direction, self.ctx.material());
         Some(pts)
     }
 

@@ -21,7 +21,7 @@ use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{Rgb, ShadingPointRow, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
+use risotto_components::{Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
 use risotto_systems::intersect::{intersect_closest, intersect_occluded};
 use risotto_systems::ray::ray_offset;
 use risotto_systems::sampler::PathSampler;
@@ -82,11 +82,14 @@ pub fn trace_shadow_rays(
         dimension: shadow.dimension.clone(),
         counters: PatternCounters::default(),
     };
-    let mut origin = Vec::new();
-    let mut direction = Vec::new();
-    let mut tmin = Vec::new();
-    let mut tmax = Vec::new();
-    let (mut t, mut prim, mut b1, mut b2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut origin = Vec::with_capacity(n);
+    let mut direction = Vec::with_capacity(n);
+    let mut tmin = Vec::with_capacity(n);
+    let mut tmax = Vec::with_capacity(n);
+    let (mut t, mut prim) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut b1, mut b2) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut segs: Vec<(usize, f32, f32)> = Vec::with_capacity(n);
+    let mut next = Vec::with_capacity(n);
     let mut rounds = 0;
     while !active.is_empty() && rounds < scene.settings.max_passes {
         rounds += 1;
@@ -121,7 +124,7 @@ pub fn trace_shadow_rays(
         });
         // Intervals inside volumes for this round: (ray, start, length).
         if f.volumes {
-            let mut segs: Vec<(usize, f32, f32)> = Vec::new();
+            segs.clear();
             for (k, &i) in active.iter().enumerate() {
                 let i = i as usize;
                 let end = if prim[k] == NO_HIT {
@@ -145,7 +148,7 @@ pub fn trace_shadow_rays(
                 arena,
             );
         }
-        let mut next = Vec::with_capacity(m);
+        next.clear();
         for (k, &i) in active.iter().enumerate() {
             let iu = i as usize;
             if prim[k] == NO_HIT || contribution[iu].is_black() {
@@ -164,11 +167,10 @@ pub fn trace_shadow_rays(
                 walk.transmittance[iu] *= info.shadow_transmittance;
             }
             if scene.tracks_interior(shape) {
-                let s =
+                let front =
                     scene
                         .geometry
-                        .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
-                let front = direction[k].dot(s.ng) < 0.0;
+                        .hit_is_front(prim[k], origin[k], direction[k], t[k], b1[k]);
                 stacks[iu].cross(scene.volume_entry(shape), front);
             }
             let p = origin[k] + direction[k] * t[k];
@@ -178,7 +180,7 @@ pub fn trace_shadow_rays(
                 next.push(i);
             }
         }
-        active = next;
+        std::mem::swap(&mut active, &mut next);
     }
     // Rays still walking after the pass budget are treated as blocked (never silently lit).
     for &i in &active {
@@ -226,12 +228,13 @@ fn attenuate_in_volumes(
     // answers, and it sees the other volumes of the same stack as overlapping ones (the seed:
     // "that single integrator is allowed to query properties of all other overlapping
     // volumes", for GetTransmission as for GetNearestHits).
-    let mut keys: Vec<&VolumeStack> = Vec::new();
+    let mut keys: Vec<&VolumeStack> = vec![&stacks[segs[0].0]];
     for &(i, _, _) in segs {
         if !keys.contains(&&stacks[i]) {
             keys.push(&stacks[i]);
         }
     }
+    let single_stack = keys.len() == 1;
     let computes_interior = |e: &risotto_components::VolumeEntry| {
         scene.material_info[e.material as usize]
             .hints
@@ -242,22 +245,19 @@ fn attenuate_in_volumes(
         if !computes_interior(&entry) {
             continue;
         }
-        let members: Vec<&(usize, f32, f32)> = segs
-            .iter()
-            .filter(|(i, _, _)| &stacks[*i] == stack)
-            .collect();
+        let members: Vec<&(usize, f32, f32)> = if single_stack {
+            segs.iter().collect()
+        } else {
+            segs.iter()
+                .filter(|(i, _, _)| &stacks[*i] == stack)
+                .collect()
+        };
+        let m = members.len();
         let mut segments = Segments::default();
-        let mut pts = ShadingPoints::with_capacity(members.len());
-        let mut samplers = Vec::with_capacity(members.len());
-        for (k, &&(i, s0, len)) in members.iter().enumerate() {
+        let mut samplers = Vec::with_capacity(m);
+        for &&(i, s0, len) in &members {
             let o: Vec3 = shadow.origin[i] + shadow.direction[i] * s0;
             segments.push(o, shadow.direction[i], len);
-            pts.push(ShadingPointRow::in_volume(
-                o,
-                shadow.direction[i],
-                k as u32,
-                entry.material,
-            ));
             let path = shadow.path[i] as usize;
             // Each shadow ray draws from its own sequence (see `SHADOW_SEED_SALT`), from
             // where its previous interval left it.
@@ -267,7 +267,8 @@ fn attenuate_in_volumes(
                 dimension: walk.dimension[i],
             });
         }
-        let m = members.len();
+        let mut pts = ShadingPoints::with_capacity(m);
+        pts.extend_in_volume(&segments.origin, &segments.direction, entry.material);
         // The points stay on this stack frame (the arena runs no destructors: a table moved
         // there would never free its columns); the arena holds only the plain contexts.
         let pts = &pts;

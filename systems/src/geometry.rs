@@ -352,6 +352,24 @@ impl SceneGeometry {
         }
     }
 
+    /// Whether the ray hits primitive `prim` from the front, against its geometric normal
+    /// (`direction . ng < 0` with `ng` of [`Self::surface_at`], the ray and hit as there),
+    /// without the hit point or the normalised normal: what a walk that only tracks which
+    /// side it crosses needs. Spheres test the unnormalised f64 direction from the centre,
+    /// so the answer can differ from the f32 `ng` only for rays within rounding of tangent.
+    #[inline]
+    pub fn hit_is_front(&self, prim: u32, origin: Vec3, direction: Vec3, t: f32, b1: f32) -> bool {
+        if (prim as usize) < self.triangles.len() {
+            direction.dot(self.triangles[prim as usize].ng()) < 0.0
+        } else {
+            let s = self.spheres[prim as usize - self.triangles.len()];
+            let t64 = t as f64 + if b1.is_finite() { b1 as f64 } else { 0.0 };
+            let d = direction.as_dvec3();
+            let h = (origin.as_dvec3() - s.center.as_dvec3()) + d * t64;
+            h.dot(d) < 0.0
+        }
+    }
+
     /// Surface parameters of a hit (the ray and `t`, `b1`, `b2` as for
     /// [`Self::surface_at`]). Triangles: the barycentrics `(b1, b2)` of `v1` and `v2`;
     /// spheres: `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi`
@@ -513,6 +531,68 @@ mod tests {
         }
         assert!(view.surface_at(tris.len() as u32, 0.25, 0.5).is_none());
         assert_eq!(geom.num_prims(), tris.len() + 1);
+    }
+
+    #[test]
+    fn hit_is_front_agrees_with_the_surface_normal() {
+        let tri = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        let ball = Sphere {
+            center: Vec3::new(0.0, 0.0, 5.0),
+            radius: 1.0,
+        };
+        let geom = SceneGeometry::build(vec![tri], vec![ball]);
+        let cases = [
+            (Vec3::new(0.0, 0.0, 2.0), -Vec3::Z), // triangle, from its front
+            (Vec3::new(0.0, 0.0, -2.0), Vec3::Z), // triangle, from behind
+            (Vec3::new(0.2, 0.1, 10.0), -Vec3::Z), // sphere from outside
+            (Vec3::new(0.2, 0.1, 5.0), Vec3::new(0.6, 0.0, 0.8)), // sphere from inside
+        ];
+        for (o, d) in cases {
+            let n = 1;
+            let (mut t, mut prim) = (vec![0.0; n], vec![0; n]);
+            let (mut b1, mut b2) = (vec![0.0; n], vec![0.0; n]);
+            crate::intersect::intersect_closest(
+                &geom,
+                &[o],
+                &[d],
+                &[0.0],
+                &[f32::INFINITY],
+                &mut t,
+                &mut prim,
+                &mut b1,
+                &mut b2,
+            );
+            let s = geom.surface_at(prim[0], o, d, t[0], b1[0], b2[0]);
+            assert_eq!(
+                geom.hit_is_front(prim[0], o, d, t[0], b1[0]),
+                d.dot(s.ng) < 0.0,
+                "ray from {o:?} along {d:?}"
+            );
+        }
+        let front = |o: Vec3, d: Vec3| {
+            let (mut t, mut prim) = (vec![0.0], vec![0]);
+            let (mut b1, mut b2) = (vec![0.0], vec![0.0]);
+            crate::intersect::intersect_closest(
+                &geom,
+                &[o],
+                &[d],
+                &[0.0],
+                &[f32::INFINITY],
+                &mut t,
+                &mut prim,
+                &mut b1,
+                &mut b2,
+            );
+            geom.hit_is_front(prim[0], o, d, t[0], b1[0])
+        };
+        assert!(front(Vec3::new(0.0, 0.0, 2.0), -Vec3::Z));
+        assert!(!front(Vec3::new(0.0, 0.0, -2.0), Vec3::Z));
+        assert!(front(Vec3::new(0.2, 0.1, 10.0), -Vec3::Z));
+        assert!(!front(Vec3::new(0.2, 0.1, 5.0), Vec3::Z));
     }
 
     #[test]

@@ -439,6 +439,21 @@ fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32)
     // cancellation of b^2 - a cc for distant spheres. The inputs are f32, so in f64 every
     // square is exact and r^2 - |l|^2 (like cc below) is off by a few f64 ulps of r^2: the
     // factored forms (r - |l|)(r + |l|) that f32 needs buy nothing here but two square roots.
+    let cc = f.length_squared() - r * r;
+    // Two rejections without the square root and division below (shadow rays walking out
+    // of a medium and rays leaving a sphere make most sphere queries that miss). Both only
+    // decide what the roots would: with `tmin >= 0`, an origin outside (or on) the sphere
+    // moving away has both roots <= 0; an origin inside has one root on each side of 0, and
+    // the polynomial at `tmin` is >= 0 exactly when `tmin` is at or past the far one (were
+    // rounding to flip that sign, the root would lie within an f64 ulp of `tmin` and round
+    // to it, which `t32 > tmin` rejects as well).
+    if tmin >= 0.0 {
+        let tm = tmin as f64;
+        let past_exit = cc < 0.0 && (a * tm + 2.0 * b) * tm + cc >= 0.0;
+        if (cc >= 0.0 && b >= 0.0) || past_exit {
+            return None;
+        }
+    }
     let l = f - d * (b * inv_a);
     let disc = a * (r * r - l.length_squared());
     // Also rejects NaN (zero direction).
@@ -448,7 +463,6 @@ fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32)
     // Numerically stable root pair (eq. (13)-(14)): q has no cancellation; the small root
     // is cc / q, accurate for origins near the surface.
     let q = -(b + disc.sqrt().copysign(b));
-    let cc = f.length_squared() - r * r;
     let (t0, t1) = if q == 0.0 {
         // b = 0 and disc = 0: the origin is on the sphere, moving tangentially.
         (0.0, 0.0)
@@ -456,13 +470,14 @@ fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32)
         let (x, y) = (cc / q, q * inv_a);
         (x.min(y), x.max(y))
     };
-    for t in [t0, t1] {
+    // The nearer root in range, without branches (a mispredicted branch here stalls the
+    // traversal behind the square root and division).
+    let in_range = |t: f64| {
         let t32 = t as f32;
-        if t32 > tmin && t32 < tmax {
-            return Some(t);
-        }
-    }
-    None
+        t32 > tmin && t32 < tmax
+    };
+    let t = if in_range(t0) { t0 } else { t1 };
+    in_range(t).then_some(t)
 }
 
 /// Ray/sphere intersection: the nearest `t` with `tmin < t < tmax`, or `f32::INFINITY`.

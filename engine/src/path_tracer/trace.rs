@@ -15,7 +15,7 @@ use crate::plugin::*;
 use crate::scene::CompiledScene;
 use crate::stats::{count_non_finite, Stage, System, SystemStats, Termination};
 use bumpalo::Bump;
-use risotto_components::{LobeSampled, Rays, ShadingPointRow, VolumeEntry, VolumeStack};
+use risotto_components::{LobeSampled, Rays, VolumeEntry, VolumeStack};
 use risotto_systems::partition::partition_by_key;
 use risotto_systems::sampler::PathSampler;
 
@@ -145,14 +145,11 @@ fn partitioned(
                 // The bundle's shading context: points at the rays' origins, in the worker's
                 // reused table (never in the arena: it owns heap memory).
                 t.bundle_points.clear();
-                for i in 0..m {
-                    t.bundle_points.push(ShadingPointRow::in_volume(
-                        t.bundle.origin[i],
-                        t.bundle.direction[i],
-                        i as u32,
-                        entry.material,
-                    ));
-                }
+                t.bundle_points.extend_in_volume(
+                    &t.bundle.origin,
+                    &t.bundle.direction,
+                    entry.material,
+                );
                 let cache = arena.alloc(ParamCache::new(arena, counters));
                 let (factory, integrator) =
                     bind_interior(scene, stack, entry, &t.bundle_points, cache, arena)
