@@ -103,5 +103,6 @@ impl HitQueue {
         std::mem::swap(&mut self.incoming, &mut next.rays);
         self.incoming.clear();
         self.groups.clear();
+        self.examined_groups = 0;
     }
 }

@@ -23,18 +23,24 @@ pub(super) fn boundaries(
     batch: &mut PathBatch,
     stats: &mut SystemStats,
 ) {
-    // Most rounds have none; the points table is compacted (in place) only when some point
-    // leaves it. `keep[i]`: point `i` stays (points outside every group do not).
-    let groups = std::mem::take(&mut hits.groups.groups);
+    // Only this round's groups (the last ones) can hold pass-through points: earlier rounds'
+    // groups were examined by earlier calls. Most rounds have none; the new rows are
+    // compacted (in place) only when some point leaves them. `keep[i]`: point `p0 + i`
+    // stays (points outside every group do not).
+    let mut groups = std::mem::take(&mut hits.groups.groups);
+    let g0 = hits.examined_groups.min(groups.len());
+    let new_groups = groups.split_off(g0);
+    hits.examined_groups = g0;
     let pts = &hits.groups.points;
-    let n = pts.len();
+    let p0 = new_groups.first().map_or(pts.len(), |g| g.range.start);
+    let n = pts.len() - p0;
     let mut keep = std::mem::take(&mut hits.keep);
     keep.clear();
     keep.resize(n, false);
     let mut passes = false;
-    for g in &groups {
+    for g in &new_groups {
         if g.mode != ShadingMode::Scatter {
-            keep[g.range.clone()].fill(true);
+            keep[g.range.start - p0..g.range.end - p0].fill(true);
             continue;
         }
         let info = &scene.material_info[g.material as usize];
@@ -43,18 +49,20 @@ pub(super) fn boundaries(
             let r = pts.ray_id[i] as usize;
             let pass = index_matched
                 || scene.is_false_boundary(&hits.incoming.volume_stack[r], pts.shape[i]);
-            keep[i] = !pass;
+            keep[i - p0] = !pass;
             passes |= pass;
         }
     }
     if !passes && keep.iter().all(|&k| k) {
+        groups.extend(new_groups);
+        hits.examined_groups = groups.len();
         hits.groups.groups = groups;
         hits.keep = keep;
         return;
     }
-    for g in groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
+    for g in new_groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
         for i in g.range.clone() {
-            if keep[i] {
+            if keep[i - p0] {
                 continue;
             }
             let r = pts.ray_id[i] as usize;
@@ -101,16 +109,15 @@ pub(super) fn boundaries(
         kept += k as u32;
         kept_before.push(kept);
     }
-    hits.groups.points.retain_rows(&keep);
-    hits.groups.groups = groups
-        .into_iter()
-        .filter_map(|g| {
-            let range = kept_before[g.range.start] as usize..kept_before[g.range.end] as usize;
-            // Surface groups left empty are dropped; volume groups stay as they were.
-            (g.mode != ShadingMode::Scatter || !range.is_empty())
-                .then_some(ShadeGroup { range, ..g })
-        })
-        .collect();
+    hits.groups.points.retain_rows_from(p0, &keep);
+    let moved = |i: usize| p0 + kept_before[i - p0] as usize;
+    groups.extend(new_groups.into_iter().filter_map(|g| {
+        let range = moved(g.range.start)..moved(g.range.end);
+        // Surface groups left empty are dropped; volume groups stay as they were.
+        (g.mode != ShadingMode::Scatter || !range.is_empty()).then_some(ShadeGroup { range, ..g })
+    }));
+    hits.examined_groups = groups.len();
+    hits.groups.groups = groups;
     hits.keep = keep;
     hits.kept_before = kept_before;
 }

@@ -31,6 +31,9 @@ pub struct HitQueue {
     pub(super) keep: Vec<bool>,
     /// Pass-through compaction: number of kept points before each point.
     pub(super) kept_before: Vec<u32>,
+    /// Groups the pass-through stage has already examined this bounce (the earlier trace
+    /// rounds' groups, which it left holding no pass-through points).
+    pub(super) examined_groups: usize,
 }
 
 /// Rays that left the scene in the last trace round (ids into [`HitQueue::incoming`]) with
