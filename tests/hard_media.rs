@@ -392,3 +392,29 @@ fn a_medium_ball_nested_in_glass_and_a_coincident_medium_are_white_furnaces() {
         assert_every_pixel(what, &out, 1.0, 1e-3);
     }
 }
+
+#[test]
+fn free_flights_shorter_than_the_spawn_offset_stay_inside_the_boundary() {
+    // A mean free path of 1e-7 in a unit ball, below the spawn offset (~5e-7 at unit
+    // coordinates): nearly every scattering point of a ray that has just crossed the
+    // boundary lies within rounding of it. Points on the wrong side send the next ray across
+    // the boundary a second time (the stack counts an entry into a ball it is already in,
+    // or an exit from one it never entered), and an albedo-1 path so trapped outside never
+    // ends: the furnace run of 8c744e1 grew its arena until it ran out of memory. Paths end
+    // at max_depth here (deep inside, nothing is lit); the counters must stay at zero.
+    let interior = medium(Rgb::splat(1e7), 1.0, PhaseFunction::Isotropic);
+    let mut scene = ball(ortho(2.4, 12), 12, 4, 1.0, Surface::Interface, interior);
+    scene.settings.max_depth = 24;
+    let out = render_mis(scene);
+    assert_clean("spawn-offset flights", &out);
+    let c = &out.stats.counters;
+    let crossings = |v: &[u64]| v.iter().sum::<u64>();
+    assert_eq!(crossings(&c.entered_twice), 0, "{}", out.stats);
+    assert_eq!(crossings(&c.unmatched_exits), 0, "{}", out.stats);
+    assert_eq!(crossings(&c.escaped_inside), 0, "{}", out.stats);
+    assert!(
+        c.volume_events[risotto::engine::stats::VolumeEvent::Scatter as usize] > 1000,
+        "the flights scatter: {}",
+        out.stats
+    );
+}
