@@ -94,8 +94,9 @@ struct ConvergeArgs {
     /// largest spp of the sweep (at most 65536).
     #[arg(long)]
     reference_spp: Option<u32>,
-    /// Techniques of the rendered reference: NAME=VALUE[+NAME=VALUE...]; defaults to every
-    /// technique's default.
+    /// Techniques of the rendered reference: NAME=VALUE[+NAME=VALUE...]; by default the
+    /// sweep's most efficient technique that converges to the exact image, judged from two
+    /// seeds of its largest spp.
     #[arg(long)]
     reference_technique: Option<String>,
     /// The variants to sweep, comma-separated, each NAME=VALUE[+NAME=VALUE...] on top of the
@@ -602,9 +603,11 @@ fn converge_command(args: ConvergeArgs) -> Result<()> {
                 );
             }
             let techniques = match &args.reference_technique {
-                Some(spec) => Techniques::parse(spec)
-                    .with_context(|| format!("--reference-technique {spec}"))?,
-                None => Techniques::default(),
+                Some(spec) => Some(
+                    Techniques::parse(spec)
+                        .with_context(|| format!("--reference-technique {spec}"))?,
+                ),
+                None => None,
             };
             Reference::Render {
                 spp: args.reference_spp,
@@ -660,8 +663,13 @@ fn converge_command(args: ConvergeArgs) -> Result<()> {
     bar.finish_and_clear();
     sweep.write_all(&args.out)?;
     print!("{}", sweep.table());
-    if let (Reference::Render { techniques, .. }, Some(best)) =
-        (&options.reference, sweep.most_efficient())
+    if let (
+        Reference::Render {
+            techniques: Some(techniques),
+            ..
+        },
+        Some(best),
+    ) = (&options.reference, sweep.most_efficient())
     {
         if best.label != techniques.label() {
             println!(

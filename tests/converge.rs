@@ -510,3 +510,55 @@ fn a_time_budget_doubles_spp_until_a_render_takes_that_long() {
         }
     }
 }
+
+#[test]
+fn a_rendered_reference_uses_the_most_efficient_converging_technique() {
+    // Neither swept variant is the default (mis + sobol), and Bxdf sampling alone is an
+    // order of magnitude less efficient than light sampling on the cornell box's small
+    // light: judged from two seeds, without a reference, the reference must be rendered
+    // with `lighting=nee`. One repeat, so the second image is the extra render.
+    let dir = temp_dir("reference-choice");
+    let scene = cornell(&dir, 24);
+    let out = converge(
+        &scene,
+        &dir,
+        &[
+            "--reference-spp",
+            "64",
+            "--spp",
+            "4,16",
+            "--techniques",
+            "lighting=bxdf,lighting=nee",
+        ],
+    );
+    assert_ok("converge", &out);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("converge.json")).unwrap()).unwrap();
+    assert_eq!(json["reference"]["techniques"], "lighting=nee", "{json:#}");
+    // An approximation is never chosen, however fast: single scattering only.
+    let smoke = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mitsuba-suite/smoke_homog.toml");
+    let text = std::fs::read_to_string(&smoke)
+        .unwrap()
+        .replacen("width = 256", "width = 12", 1)
+        .replacen("height = 256", "height = 12", 1);
+    let small = dir.join("smoke-12.toml");
+    std::fs::write(&small, text).unwrap();
+    let out_dir = dir.join("smoke");
+    let out = converge(
+        &small,
+        &out_dir,
+        &[
+            "--reference-spp",
+            "16",
+            "--spp",
+            "2,8",
+            "--techniques",
+            "scattering=single,lighting=bxdf",
+        ],
+    );
+    assert_ok("converge smoke", &out);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("converge.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["reference"]["techniques"], "lighting=bxdf", "{json:#}");
+}

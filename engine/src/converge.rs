@@ -26,6 +26,14 @@
 //! The corrected values can come out slightly negative when the test error is below the
 //! reference's noise; such points are left out of the plot and the fits. A reference given
 //! as an EXR (`--reference REF.exr`) has no such estimate and is taken as exact.
+//!
+//! # The reference's technique
+//! Unless one is given, a rendered reference uses the sweep's most efficient variant, judged
+//! before any reference exists: among the variants whose every value converges to the exact
+//! image (not, e.g., `scattering=single`), the largest `1 / (MSE x seconds)` at each
+//! variant's largest spp, with the MSE of an unbiased estimator taken as its variance,
+//! `mean (a - b)^2 / 2` over two renders with different seeds (the first two repeats, or one
+//! extra render when the sweep has a single repeat).
 
 use crate::compare::{compare, CompareError, DEFAULT_RELMSE_EPS};
 use crate::output::Image;
@@ -62,8 +70,10 @@ pub enum Reference {
         /// Samples per pixel (both halves together); `None`: 16 times the sweep's largest
         /// spp, at most `MAX_SPP`.
         spp: Option<u32>,
-        /// The techniques it is rendered with.
-        techniques: Techniques,
+        /// The techniques it is rendered with; `None`: the sweep's most efficient variant
+        /// among those that converge to the exact image, judged without a reference (see
+        /// the module docs).
+        techniques: Option<Techniques>,
     },
 }
 
@@ -306,7 +316,11 @@ pub fn run(
             )));
         }
     }
-    if let Reference::Render { techniques, .. } = &options.reference {
+    if let Reference::Render {
+        techniques: Some(techniques),
+        ..
+    } = &options.reference
+    {
         techniques.check_applicable(&scene.features)?;
     }
     match &options.plan {
@@ -404,6 +418,21 @@ pub fn run(
         ),
         Reference::Render { spp, techniques } => {
             let n = reference_spp(*spp, largest);
+            let chosen;
+            let techniques = match techniques {
+                Some(t) => t,
+                None => {
+                    chosen = most_efficient_converging(
+                        scene,
+                        &base,
+                        &options.variants,
+                        &raw,
+                        seed.wrapping_add(options.repeats as u64),
+                        progress,
+                    )?;
+                    &chosen
+                }
+            };
             let mut half = |k: u64| {
                 (progress.stage)(&format!(
                     "reference ({}, {n} spp), half {}/2",
@@ -451,6 +480,59 @@ pub fn run(
         height: h,
         reference: info,
         curves,
+    })
+}
+
+/// The variant that renders a reference best: among those that converge to the exact image
+/// ([`Techniques::converges`]), the one with the largest `1 / (MSE x seconds)` at its
+/// largest spp, its MSE estimated without a reference from two independent renders `a`, `b`
+/// (seeds) of that point as `mean (a - b)^2 / 2` (for an unbiased estimator
+/// `E (a - b)^2 = 2 Var`, and its MSE is its variance). A sweep with one repeat renders the
+/// second image of each candidate with `extra_seed`.
+fn most_efficient_converging(
+    scene: &mut CompiledScene,
+    base: &RenderOptions,
+    variants: &[Techniques],
+    raw: &[Vec<(u32, Vec<Sample>)>],
+    extra_seed: u64,
+    progress: &Progress,
+) -> Result<Techniques, ConvergeError> {
+    let mut best: Option<(f64, &Techniques)> = None;
+    for (techniques, points) in variants.iter().zip(raw) {
+        if !techniques.converges(&scene.features) {
+            continue;
+        }
+        let Some((spp, renders)) = points.last() else {
+            continue;
+        };
+        let extra;
+        let (a, b) = match renders.as_slice() {
+            [a, b, ..] => (a, b),
+            [a] => {
+                (progress.stage)(&format!(
+                    "{}, {spp} spp, second seed (choosing the reference's technique)",
+                    techniques.label()
+                ));
+                extra = timed_render(scene, base, techniques, *spp, extra_seed, progress)?;
+                (a, &extra)
+            }
+            [] => continue,
+        };
+        let (_, noise_mse, _) = combine_halves(&a.image, &b.image);
+        // combine_halves gives mean (a - b)^2 / 4.
+        let mse = 2.0 * noise_mse;
+        let seconds = a.seconds.min(b.seconds);
+        let efficiency = 1.0 / (mse * seconds).max(f64::MIN_POSITIVE);
+        if best.is_none_or(|(e, _)| efficiency > e) {
+            best = Some((efficiency, techniques));
+        }
+    }
+    best.map(|(_, t)| *t).ok_or_else(|| {
+        ConvergeError::Options(
+            "no swept technique converges to the exact image to render the reference with; \
+             give one with --reference-technique"
+                .into(),
+        )
     })
 }
 

@@ -194,6 +194,16 @@ impl HomogeneousInterior<'_> {
         let mut t = vec![0.0f32; n];
         let mut weight = vec![Rgb::BLACK; n];
         for i in 0..n {
+            if tmax[i] == f32::INFINITY {
+                // Nothing ahead: the ray has already left the medium's closed boundary, which
+                // it crossed within its `tmin` (a grazing entry, whose chord is shorter than
+                // the spawn offset measured along the ray). A free flight on the unbounded
+                // segment would scatter it in empty space forever (an albedo-1 path never
+                // ends); it escapes instead, as it physically does after a chord of at most a
+                // few offsets, and the escaped stage counts it as `escaped_inside`.
+                weight[i] = Rgb::WHITE;
+                continue;
+            }
             let f = sample_free_flight(
                 m.sigma_t,
                 m.sigma_s,
@@ -323,6 +333,9 @@ impl HomogeneousInterior<'_> {
             let mut t = vec![0.0f32; n];
             let mut weight = vec![Rgb::BLACK; n];
             for i in 0..n {
+                if tmax[i] == f32::INFINITY {
+                    continue; // already outside (see `scatter_inside`)
+                }
                 let (o, d) = (rays.origin[i], rays.direction[i]);
                 let pdf_channels = channel_pdf(rays.throughput[i]);
                 let ti = if technique == 0 {

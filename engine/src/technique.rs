@@ -20,6 +20,15 @@ pub struct TechniqueValue {
     pub name: &'static str,
     /// What it does.
     pub summary: &'static str,
+    /// Whether it converges to the scene's exact image in a scene with these features
+    /// (false for an approximation, such as single scattering only): only such values may
+    /// render a reference.
+    pub converges: fn(&Features) -> bool,
+}
+
+/// [`TechniqueValue::converges`] of an unbiased estimator.
+fn always(_: &Features) -> bool {
+    true
 }
 
 /// A registered technique.
@@ -64,14 +73,17 @@ pub static REGISTRY: &[Technique] = &[
             TechniqueValue {
                 name: "mis",
                 summary: "light and Bxdf sampling, power-heuristic MIS (Veach 1997)",
+                converges: always,
             },
             TechniqueValue {
                 name: "nee",
                 summary: "light sampling only (next-event estimation)",
+                converges: always,
             },
             TechniqueValue {
                 name: "bxdf",
                 summary: "Bxdf sampling only (no shadow rays; Dirac lights are invisible)",
+                converges: |f| !(f.point_lights || f.distant_lights),
             },
         ],
         default: "mis",
@@ -97,10 +109,12 @@ pub static REGISTRY: &[Technique] = &[
             TechniqueValue {
                 name: "sobol",
                 summary: "padded Owen-scrambled Sobol (Burley 2020), stratified",
+                converges: always,
             },
             TechniqueValue {
                 name: "independent",
                 summary: "independent uniform random numbers (the baseline)",
+                converges: always,
             },
         ],
         default: "sobol",
@@ -124,15 +138,18 @@ pub static REGISTRY: &[Technique] = &[
             TechniqueValue {
                 name: "scene",
                 summary: "as each medium's `scattering` says",
+                converges: always,
             },
             TechniqueValue {
                 name: "multiple",
                 summary: "every order: points inside go back to the path tracer",
+                converges: always,
             },
             TechniqueValue {
                 name: "single",
                 summary:
                     "single scattering through the lighting delegate (biased: no higher orders)",
+                converges: |_| false,
             },
         ],
         default: "scene",
@@ -290,6 +307,18 @@ impl Techniques {
             }
         }
         Ok(())
+    }
+
+    /// Whether every chosen value converges to the scene's exact image in a scene with
+    /// `features` ([`TechniqueValue::converges`]).
+    pub fn converges(&self, features: &Features) -> bool {
+        REGISTRY.iter().all(|t| {
+            let v = (t.get)(self);
+            t.values
+                .iter()
+                .find(|x| x.name == v)
+                .is_some_and(|x| (x.converges)(features))
+        })
     }
 
     /// A short label: the non-default assignments (`lighting=nee`), or every technique's
