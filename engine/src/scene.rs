@@ -173,7 +173,12 @@ pub struct Scene {
     /// Render settings.
     pub settings: RenderSettings,
     /// Volume stack at the camera, by shape name (outermost first); `None` = found by probing.
+    /// When given, it must agree with what probing finds: compiling checks it (a stated
+    /// stack that is wrong would render every camera ray with the wrong media, silently).
     pub camera_volume: Option<Vec<String>>,
+    /// Where [`Self::camera_volume`] was written (`camera.inside` in a scene file), so its
+    /// errors name the file and line; `None` for scenes built in code.
+    pub camera_volume_at: Option<crate::scene_file::Location>,
 }
 
 /// Per-shape data of a compiled scene.
@@ -255,9 +260,14 @@ pub enum CompileError {
         /// Index.
         index: u32,
     },
-    /// The camera volume names an unknown shape or a shape without interior.
-    #[error("camera_volume: shape \"{0}\" does not exist or has no interior")]
+    /// The camera volume (`camera.inside`) names an unknown shape or a shape without
+    /// interior, or differs from the volumes the camera is in; for a scene built in code
+    /// (no file to name).
+    #[error("camera_volume: {0}")]
     CameraVolume(String),
+    /// An error located in the scene file (`camera.inside`).
+    #[error(transparent)]
+    Scene(#[from] crate::scene_file::SceneError),
     /// A value is invalid.
     #[error("{entity}: {message}")]
     Invalid {
@@ -277,6 +287,7 @@ impl Scene {
             camera,
             settings,
             camera_volume: None,
+            camera_volume_at: None,
         }
     }
 
@@ -327,6 +338,7 @@ impl Scene {
             camera,
             settings,
             camera_volume,
+            camera_volume_at,
         } = self;
         // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
         // primitive numbering is stable).
@@ -516,9 +528,42 @@ impl Scene {
             .map(|s| compiled.tracks_interior(s))
             .collect();
         compiled.shape_entry = shapes.map(|s| compiled.volume_entry(s)).collect();
+        let probed = compiled.probe_stack(camera.from, camera.forward);
         compiled.camera_stack = match camera_volume {
-            Some(names) => compiled.explicit_stack(&names)?,
-            None => compiled.probe_stack(camera.from, camera.forward),
+            Some(names) => {
+                let fail = |message: String| match &camera_volume_at {
+                    Some(at) => CompileError::Scene(
+                        at.error(crate::scene_file::SceneErrorKind::InvalidValue, message),
+                    ),
+                    None => CompileError::CameraVolume(message),
+                };
+                let given = compiled.explicit_stack(&names).map_err(fail)?;
+                // A stated stack only states what probing finds (issue 14: a wrong one, say
+                // `inside = []` for a camera in fog, rendered every camera ray without the
+                // fog and said nothing). The probe is exact for closed shapes; a shape that
+                // is not closed cannot be listed meaningfully anyway.
+                if given != probed {
+                    let list = |s: &VolumeStack| {
+                        let names: Vec<String> = s
+                            .entries()
+                            .iter()
+                            .map(|e| format!("\"{}\"", compiled.shapes[e.shape as usize].name))
+                            .collect();
+                        format!("[{}]", names.join(", "))
+                    };
+                    return Err(fail(format!(
+                        "the camera is stated to be inside {} (outermost first), but the camera \
+                         at {} looking along {} is inside {}; remove `inside` to let the \
+                         engine find it, or correct it",
+                        list(&given),
+                        fmt_point(camera.from),
+                        fmt_point(camera.forward),
+                        list(&probed)
+                    )));
+                }
+                given
+            }
+            None => probed,
         };
         Ok(compiled)
     }
@@ -565,15 +610,20 @@ impl CompiledScene {
             || info.hints.contains(InstanceHints::TRANSMITS)
     }
 
-    fn explicit_stack(&self, names: &[String]) -> Result<VolumeStack, CompileError> {
+    fn explicit_stack(&self, names: &[String]) -> Result<VolumeStack, String> {
         let mut stack = VolumeStack::new();
         for n in names {
             let s = self
                 .shapes
                 .iter()
                 .position(|s| &s.name == n)
-                .filter(|&s| self.tracks_interior(s as u32))
-                .ok_or_else(|| CompileError::CameraVolume(n.clone()))?;
+                .ok_or_else(|| format!("shape \"{n}\" does not exist"))?;
+            if !self.tracks_interior(s as u32) {
+                return Err(format!(
+                    "shape \"{n}\" has no interior (its material neither transmits nor \
+                     computes a volume), so no camera is inside it"
+                ));
+            }
             stack.enter(self.volume_entry(s as u32));
         }
         Ok(stack)
@@ -640,4 +690,9 @@ impl CompiledScene {
         }
         stack
     }
+}
+
+/// A point or direction for messages: `(x, y, z)` with the shortest exact digits.
+fn fmt_point(p: Vec3) -> String {
+    format!("({}, {}, {})", p.x, p.y, p.z)
 }
