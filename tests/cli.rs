@@ -431,8 +431,9 @@ fn late_errors_are_located_and_printed_once() {
                       center = [0, 0.5, 0]\nradius = 0.5\n\n[[lights]]";
     // (file name, edits of SCENE, the edited value whose line:col must be named, the
     // message that must appear exactly once)
+    let opaque_ball = glass_ball.replace("\"glass\"", "\"floor\"");
     type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a str, &'a str);
-    let cases: [Case; 5] = [
+    let cases: [Case; 6] = [
         (
             "material_type.toml",
             vec![("type = \"diffuse\"\nreflectance = 0.5", "type = \"difuse\"")],
@@ -472,6 +473,15 @@ fn late_errors_are_located_and_printed_once() {
             ],
             "[\"ball\"]",
             "is inside []",
+        ),
+        (
+            "camera_inside_opaque.toml",
+            vec![
+                ("to = [0, 0.5, 0]", "to = [0, 0.5, 0]\ninside = [\"ball\"]"),
+                ("[[lights]]", &opaque_ball),
+            ],
+            "[\"ball\"]",
+            "shape \"ball\" has no interior",
         ),
     ];
     for (name, edits, value, message) in cases {
