@@ -524,6 +524,24 @@ fn coincident_glass_balls_render_as_one() {
             assert!(w.contains("left out"), "{what}: {w}");
         }
     }
+    // Triangles: a glass crate listed twice (the same 12 triangles) renders as one.
+    let crates = |n: usize| {
+        let mut scene = balls_scene(&[("glass", 0, glass(), ink.clone())], &[]);
+        for i in 0..n {
+            let (lo, hi) = (Vec3::new(-0.7, 0.0, -0.7), Vec3::new(0.7, 1.4, 0.7));
+            // Material 0 is the floor's; 1 is the glass.
+            add_box(&mut scene, &format!("crate{i}"), lo, hi, 1);
+        }
+        render_of(scene)
+    };
+    let (two, one) = (crates(2), crates(1));
+    assert!(
+        two.beauty.pixels == one.beauty.pixels,
+        "two crates: mean {:?} against one crate's {:?}",
+        two.beauty.mean(),
+        one.beauty.mean()
+    );
+    assert_eq!(two.stats.warnings.len(), 1, "{:?}", two.stats.warnings);
     // Water and glass of the same priority: which fills the ball is undefined.
     let e = balls_scene(
         &[
