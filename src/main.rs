@@ -587,8 +587,7 @@ fn converge_command(args: ConvergeArgs) -> Result<()> {
     };
     let reference = match &args.reference {
         Some(path) => {
-            let image =
-                read_exr_rgb(path).with_context(|| format!("--reference {}", path.display()))?;
+            let image = read_exr_rgb(path).context("--reference")?;
             Reference::Image {
                 image,
                 path: path.display().to_string(),

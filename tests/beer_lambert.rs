@@ -21,7 +21,7 @@ use risotto::engine::builtin::{beer, Interior, NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::Image;
 use risotto::engine::plugin::*;
-use risotto::engine::scene::{RenderSettings, Scene, ShapeGeometry};
+use risotto::engine::scene::{CompileError, RenderSettings, Scene, ShapeGeometry};
 use risotto::systems::camera::{Camera, Projection};
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{LobeSampled, Rays, Rgb};
@@ -439,9 +439,34 @@ fn camera_inside_a_volume_is_attenuated() {
     render_and_check(camera_inside(false, Some(vec!["fog".into()])), |_, _| {
         Some(one)
     });
-    // Explicitly empty overrides probing: the ray leaves the box through a back face it was
-    // never recorded inside (an unmatched exit), so nothing absorbs it.
-    render_and_check(camera_inside(false, Some(vec![])), |_, _| Some(L));
+    // A stated stack that is wrong is an error naming what the camera is really in (it used
+    // to override probing: every camera ray left the fog through a back face it was never
+    // recorded inside, nothing absorbed it, and the image was silently unattenuated).
+    for wrong in [vec![], vec!["fog".to_string(), "fog2".to_string()]] {
+        let mut scene = camera_inside(false, Some(wrong.clone()));
+        if wrong.len() == 2 {
+            let m = beer_boundary(&mut scene, "fog2", Rgb::splat(1.0));
+            add_box(&mut scene, "fog2", Vec3::splat(5.0), Vec3::splat(6.0), m);
+        }
+        let e = scene
+            .compile()
+            .err()
+            .unwrap_or_else(|| panic!("{wrong:?} accepted"));
+        let msg = e.to_string();
+        assert!(
+            matches!(e, CompileError::CameraVolume(_)) && msg.contains("is inside [\"fog\"]"),
+            "{wrong:?}: {msg}"
+        );
+    }
+    // Listing both volumes innermost first is wrong too (the stack's order is its meaning).
+    let e = camera_inside(true, Some(vec!["mist".into(), "fog".into()]))
+        .compile()
+        .err()
+        .expect("innermost-first order accepted");
+    assert!(
+        e.to_string().contains("is inside [\"fog\", \"mist\"]"),
+        "{e}"
+    );
 
     // Two nested volumes around the camera: mist (innermost) for 0.6, then fog for 0.4.
     let two = L * beer(mist, 0.6) * beer(fog, 0.4);

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::cli::{assert_fails, risotto, SCENE};
+use common::cli::{assert_fails, assert_fails_once, line_of, risotto, SCENE};
 
 /// A fresh directory for one test.
 fn temp_dir(test: &str) -> PathBuf {
@@ -196,7 +196,7 @@ fn invalid_values_are_reported_with_file_entity_and_field() {
         (
             "unknown_type.toml",
             vec![("type = \"diffuse\"\nreflectance = 0.5", "type = \"velvet\"")],
-            &["materials.floor", "unknown type", "velvet"],
+            &["materials.floor", "unknown material type", "velvet"],
         ),
     ];
     for (name, edits, needles) in cases {
@@ -416,4 +416,99 @@ fn bad_media_values_are_located_errors() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(exr.exists());
+}
+
+/// Errors found after parsing (the material registry, an environment map's contents, the
+/// camera's volumes) are located like the parser's own, `file:line:col`, and each message
+/// is printed once: errors whose message already holds their cause used to expose it as
+/// `source()` too, so the driver's cause-chain printing repeated it (an unreadable
+/// environment map printed its EXR error three times).
+#[test]
+fn late_errors_are_located_and_printed_once() {
+    let dir = temp_dir("late_errors");
+    std::fs::write(dir.join("garbage.exr"), b"not an EXR file").unwrap();
+    let glass_ball = "[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nmaterial = \"glass\"\n\
+                      center = [0, 0.5, 0]\nradius = 0.5\n\n[[lights]]";
+    // (file name, edits of SCENE, the edited value whose line:col must be named, the
+    // message that must appear exactly once)
+    let opaque_ball = glass_ball.replace("\"glass\"", "\"floor\"");
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a str, &'a str);
+    let cases: [Case; 6] = [
+        (
+            "material_type.toml",
+            vec![("type = \"diffuse\"\nreflectance = 0.5", "type = \"difuse\"")],
+            "\"difuse\"",
+            "unknown material type \"difuse\"",
+        ),
+        (
+            "interior_type.toml",
+            vec![(
+                "reflectance = 0.5",
+                "reflectance = 0.5\ninterior = { type = \"bear\", sigma_a = 1 }",
+            )],
+            "\"bear\"",
+            "unknown interior type \"bear\"",
+        ),
+        (
+            "env_map.toml",
+            vec![("radiance = 0.1", "map = \"garbage.exr\"")],
+            "\"garbage.exr\"",
+            "file identifier missing",
+        ),
+        (
+            "missing_env_map.toml",
+            vec![("radiance = 0.1", "map = \"nowhere.exr\"")],
+            "\"nowhere.exr\"",
+            "does not exist",
+        ),
+        (
+            "camera_inside.toml",
+            vec![
+                ("to = [0, 0.5, 0]", "to = [0, 0.5, 0]\ninside = [\"ball\"]"),
+                (
+                    "[materials.emitter]",
+                    "[materials.glass]\ntype = \"dielectric\"\n\n[materials.emitter]",
+                ),
+                ("[[lights]]", glass_ball),
+            ],
+            "[\"ball\"]",
+            "is inside []",
+        ),
+        (
+            "camera_inside_opaque.toml",
+            vec![
+                ("to = [0, 0.5, 0]", "to = [0, 0.5, 0]\ninside = [\"ball\"]"),
+                ("[[lights]]", &opaque_ball),
+            ],
+            "[\"ball\"]",
+            "shape \"ball\" has no interior",
+        ),
+    ];
+    for (name, edits, value, message) in cases {
+        let text = scene_with(&edits);
+        let (out, _) = render(&dir, name, &text, &[]);
+        let line = line_of(&text, value);
+        let line_start = text[..text.find(value).unwrap()]
+            .rfind('\n')
+            .map_or(0, |i| i + 1);
+        let col = text[line_start..text.find(value).unwrap()].chars().count() + 1;
+        assert_fails(name, &out, &[&format!("{name}:{line}:{col}:")]);
+        assert_fails_once(name, &out, message);
+    }
+    // The reference of `converge` is read by the driver: its EXR error names the file once.
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let garbage = dir.join("garbage.exr");
+    let out = risotto(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--reference",
+        garbage.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--out",
+        dir.join("converge").to_str().unwrap(),
+    ]);
+    assert_fails_once("converge --reference", &out, garbage.to_str().unwrap());
+    assert_fails_once("converge --reference", &out, "file identifier missing");
 }

@@ -110,12 +110,12 @@ pub enum ConvergeError {
     #[error(transparent)]
     Render(#[from] RenderError),
     /// The reference cannot be compared with the renders.
-    #[error("reference {path}: {source}")]
+    #[error("reference {path}: {cause}")]
     Reference {
         /// The reference.
         path: String,
-        /// Why.
-        source: CompareError,
+        /// Why (part of the message, so not also `source()`, which would repeat it).
+        cause: CompareError,
     },
     /// Bad options.
     #[error("{0}")]
@@ -579,7 +579,7 @@ fn point(
     for s in renders {
         let m = compare(&s.image, reference).map_err(|e| ConvergeError::Reference {
             path: info.path.clone().unwrap_or_else(|| "(rendered)".into()),
-            source: e,
+            cause: e,
         })?;
         mse.push(m.all.rmse * m.all.rmse - info.noise_mse);
         relmse.push(m.all.relmse - info.noise_relmse);

@@ -31,12 +31,12 @@ const VOL_HEADER: u64 = 48;
 #[derive(Debug, thiserror::Error)]
 pub enum GridFileError {
     /// The file (or its header) cannot be read.
-    #[error("{}: cannot read: {source}", path.display())]
+    #[error("{}: cannot read: {cause}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
+        /// Cause (part of the message, so not also `source()`, which would repeat it).
+        cause: std::io::Error,
     },
     /// The file's format is not what it should be (magic, version, encoding, header keys).
     #[error("{}: {message}", path.display())]
@@ -73,9 +73,9 @@ pub enum GridFileError {
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> GridFileError + '_ {
-    move |source| GridFileError::Io {
+    move |cause| GridFileError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     }
 }
 

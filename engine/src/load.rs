@@ -27,7 +27,7 @@ use crate::plugin::BxdfFactory;
 use crate::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use crate::scene_file::{
     load_scene, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc, SceneError,
-    ShapeGeometry as DescGeometry,
+    SceneErrorKind, ShapeGeometry as DescGeometry,
 };
 use risotto_components::Rgb;
 use risotto_systems::camera::{Camera, Projection};
@@ -53,28 +53,6 @@ pub enum LoadError {
     /// The file itself (syntax, values, missing meshes, material parameters).
     #[error(transparent)]
     Scene(#[from] SceneError),
-    /// An environment map could not be read.
-    #[error("{scene}: light \"{light}\": cannot read environment map: {source}")]
-    EnvironmentMap {
-        /// Scene file.
-        scene: PathBuf,
-        /// Light name.
-        light: String,
-        /// Cause.
-        source: OutputError,
-    },
-    /// A material type nobody registered.
-    #[error("{scene}: materials.{material}: unknown type \"{type_name}\" (known: {known})")]
-    UnknownType {
-        /// Scene file.
-        scene: PathBuf,
-        /// Material name.
-        material: String,
-        /// The type.
-        type_name: String,
-        /// Registered types.
-        known: String,
-    },
     /// The camera is degenerate.
     #[error("{scene}: camera: `from` and `to` coincide or `up` is parallel to the view direction")]
     Camera {
@@ -82,12 +60,12 @@ pub enum LoadError {
         scene: PathBuf,
     },
     /// Compilation failed.
-    #[error("{scene}: {source}")]
+    #[error("{scene}: {cause}")]
     Compile {
         /// Scene file.
         scene: PathBuf,
-        /// Cause.
-        source: CompileError,
+        /// Cause (part of the message, so not also `source()`, which would repeat it).
+        cause: CompileError,
     },
 }
 
@@ -355,17 +333,19 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         })?;
     let mut scene = Scene::new(camera, settings);
     scene.camera_volume = desc.camera_volume.clone();
+    scene.camera_volume_at = desc.camera_volume_at.clone();
     for m in &desc.materials {
-        let ctor =
-            registry
-                .constructors
-                .get(&m.type_name)
-                .ok_or_else(|| LoadError::UnknownType {
-                    scene: desc.path.clone(),
-                    material: m.name.clone(),
-                    type_name: m.type_name.clone(),
-                    known: registry.types().collect::<Vec<_>>().join(", "),
-                })?;
+        // Located at the `type` value: the registry is only known here, after parsing.
+        let ctor = registry.constructors.get(&m.type_name).ok_or_else(|| {
+            m.params.location(Some("type")).error(
+                SceneErrorKind::UnknownReference,
+                format!(
+                    "unknown material type \"{}\" (known: {})",
+                    m.type_name,
+                    registry.types().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
         let factory = ctor(&m.params)?;
         scene.add_material(&m.name, m.priority, factory);
     }
@@ -397,15 +377,27 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 position,
                 intensity,
             },
-            LightDesc::Environment { radiance, map, .. } => {
+            LightDesc::Environment {
+                radiance,
+                map,
+                map_at,
+                ..
+            } => {
                 let map = match map {
                     Some(p) => {
                         let img = read_exr_rgb(&p)
                             .and_then(|img| check_radiance_map(&p, img))
-                            .map_err(|e| LoadError::EnvironmentMap {
-                                scene: desc.path.clone(),
-                                light: name.clone(),
-                                source: e,
+                            .map_err(|e| {
+                                let message = format!("cannot read environment map: {e}");
+                                match &map_at {
+                                    Some(at) => at.error(SceneErrorKind::ExternalFile, message),
+                                    // A description built in code, not parsed: no line to name.
+                                    None => SceneError::unlocated(
+                                        &desc.path,
+                                        SceneErrorKind::ExternalFile,
+                                        &format!("light \"{name}\": {message}"),
+                                    ),
+                                }
                             })?;
                         Some(Arc::new(EnvironmentMap::new(
                             img.pixels, img.width, img.height,
@@ -446,8 +438,12 @@ fn check_radiance_map(path: &Path, img: Image) -> Result<Image, OutputError> {
 
 /// Compiles a scene, attributing errors to its file.
 pub fn compile_scene(scene: Scene, path: &Path) -> Result<crate::scene::CompiledScene, LoadError> {
-    scene.compile().map_err(|source| LoadError::Compile {
-        scene: path.to_path_buf(),
-        source,
+    scene.compile().map_err(|source| match source {
+        // Already names the file (and line).
+        CompileError::Scene(e) => LoadError::Scene(e),
+        cause => LoadError::Compile {
+            scene: path.to_path_buf(),
+            cause,
+        },
     })
 }

@@ -231,11 +231,11 @@ pub fn write_partial(path: &Path, partial: &Partial) -> Result<(), MergeError> {
     );
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
     write_exr_placed(&tmp, &film, Some(placement), Some(extra))?;
-    std::fs::rename(&tmp, path).map_err(|source| {
+    std::fs::rename(&tmp, path).map_err(|cause| {
         let _ = std::fs::remove_file(&tmp);
         OutputError::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         }
     })?;
     Ok(())

@@ -126,28 +126,31 @@ pub struct FilmOutput<'a> {
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// Creating or writing the file failed at the OS level.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error (part of this error's message, so not also its
+        /// `source()`: a printer of the cause chain would repeat it).
+        cause: std::io::Error,
     },
     /// The EXR library rejected the file or the data.
-    #[error("{path}: EXR error: {source}")]
+    #[error("{path}: EXR error: {cause}")]
     Exr {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        source: exr::error::Error,
+        /// The underlying error (part of this error's message, so not also its
+        /// `source()`: a printer of the cause chain would repeat it).
+        cause: exr::error::Error,
     },
     /// The PNG library failed to encode.
-    #[error("{path}: PNG error: {source}")]
+    #[error("{path}: PNG error: {cause}")]
     Png {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        source: png::EncodingError,
+        /// The underlying error (part of this error's message, so not also its
+        /// `source()`: a printer of the cause chain would repeat it).
+        cause: png::EncodingError,
     },
     /// The data handed in (or found in the file) is not a usable image.
     #[error("{path}: {reason}")]
@@ -339,11 +342,11 @@ fn exr_error(path: &Path, source: exr::error::Error) -> OutputError {
     match source {
         exr::error::Error::Io(e) => OutputError::Io {
             path: path.to_path_buf(),
-            source: e,
+            cause: e,
         },
         other => OutputError::Exr {
             path: path.to_path_buf(),
-            source: other,
+            cause: other,
         },
     }
 }
@@ -359,15 +362,15 @@ const MIN_BYTES_PER_CHUNK: u64 = 16;
 
 /// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`]).
 fn check_exr_header(path: &Path) -> Result<(), OutputError> {
-    let file = File::open(path).map_err(|source| OutputError::Io {
+    let file = File::open(path).map_err(|cause| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     let file_len = file
         .metadata()
-        .map_err(|source| OutputError::Io {
+        .map_err(|cause| OutputError::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?
         .len();
     let meta = exr::meta::MetaData::read_from_unbuffered(file, false)
@@ -533,13 +536,13 @@ pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), Ou
             bytes.push(srgb_encode_u8(c * scale));
         }
     }
-    let file = File::create(path).map_err(|source| OutputError::Io {
+    let file = File::create(path).map_err(|cause| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
-    let png_err = |source| OutputError::Png {
+    let png_err = |cause| OutputError::Png {
         path: path.to_path_buf(),
-        source,
+        cause,
     };
     let mut encoder = png::Encoder::new(BufWriter::new(file), w, h);
     encoder.set_color(png::ColorType::Rgb);

@@ -428,6 +428,7 @@ fn gather(
     let sample_count = film.count.iter().map(|&c| c as f32).collect();
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();
+    stats.warnings.extend(scene.warnings.iter().cloned());
     validate_boundaries(scene, &mut stats);
     RenderOutput {
         beauty,

@@ -173,7 +173,12 @@ pub struct Scene {
     /// Render settings.
     pub settings: RenderSettings,
     /// Volume stack at the camera, by shape name (outermost first); `None` = found by probing.
+    /// When given, it must agree with what probing finds: compiling checks it (a stated
+    /// stack that is wrong would render every camera ray with the wrong media, silently).
     pub camera_volume: Option<Vec<String>>,
+    /// Where [`Self::camera_volume`] was written (`camera.inside` in a scene file), so its
+    /// errors name the file and line; `None` for scenes built in code.
+    pub camera_volume_at: Option<crate::scene_file::Location>,
 }
 
 /// Per-shape data of a compiled scene.
@@ -242,6 +247,9 @@ pub struct CompiledScene {
     /// Per shape: its world-space bounding box `(min, max)`, the bounds a volume's `u, v, w`
     /// are relative to.
     pub shape_bounds: Vec<(Vec3, Vec3)>,
+    /// What compiling changed about the scene as written that a user should know (shapes
+    /// hidden by a coincident shape); every render's stats repeat them.
+    pub warnings: Vec<String>,
 }
 
 /// Errors found while compiling a scene.
@@ -255,9 +263,14 @@ pub enum CompileError {
         /// Index.
         index: u32,
     },
-    /// The camera volume names an unknown shape or a shape without interior.
-    #[error("camera_volume: shape \"{0}\" does not exist or has no interior")]
+    /// The camera volume (`camera.inside`) names an unknown shape or a shape without
+    /// interior, or differs from the volumes the camera is in; for a scene built in code
+    /// (no file to name).
+    #[error("camera_volume: {0}")]
     CameraVolume(String),
+    /// An error located in the scene file (`camera.inside`).
+    #[error(transparent)]
+    Scene(#[from] crate::scene_file::SceneError),
     /// A value is invalid.
     #[error("{entity}: {message}")]
     Invalid {
@@ -277,6 +290,7 @@ impl Scene {
             camera,
             settings,
             camera_volume: None,
+            camera_volume_at: None,
         }
     }
 
@@ -327,6 +341,7 @@ impl Scene {
             camera,
             settings,
             camera_volume,
+            camera_volume_at,
         } = self;
         // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
         // primitive numbering is stable).
@@ -340,6 +355,8 @@ impl Scene {
             shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
         }
         shape_entities.sort_by_key(|s| s.0.id());
+        let mut warnings = Vec::new();
+        let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
 
         let mut triangles = Vec::new();
         let mut tri_shape = Vec::new();
@@ -354,6 +371,8 @@ impl Scene {
                 });
             }
             match geom {
+                // A hidden shape keeps its index and name, but has no primitive to hit.
+                _ if hidden[i] => {}
                 ShapeGeometry::Sphere(s) => {
                     spheres.push(s);
                     sphere_shape.push(i as u32);
@@ -489,6 +508,7 @@ impl Scene {
             shape_tracked: Vec::new(),
             shape_entry: Vec::new(),
             shape_bounds: Vec::new(),
+            warnings,
         };
         let mut bounds = vec![
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
@@ -516,9 +536,42 @@ impl Scene {
             .map(|s| compiled.tracks_interior(s))
             .collect();
         compiled.shape_entry = shapes.map(|s| compiled.volume_entry(s)).collect();
+        let probed = compiled.probe_stack(camera.from, camera.forward);
         compiled.camera_stack = match camera_volume {
-            Some(names) => compiled.explicit_stack(&names)?,
-            None => compiled.probe_stack(camera.from, camera.forward),
+            Some(names) => {
+                let fail = |message: String| match &camera_volume_at {
+                    Some(at) => CompileError::Scene(
+                        at.error(crate::scene_file::SceneErrorKind::InvalidValue, message),
+                    ),
+                    None => CompileError::CameraVolume(message),
+                };
+                let given = compiled.explicit_stack(&names).map_err(fail)?;
+                // A stated stack only states what probing finds (issue 14: a wrong one, say
+                // `inside = []` for a camera in fog, rendered every camera ray without the
+                // fog and said nothing). The probe is exact for closed shapes; a shape that
+                // is not closed cannot be listed meaningfully anyway.
+                if given != probed {
+                    let list = |s: &VolumeStack| {
+                        let names: Vec<String> = s
+                            .entries()
+                            .iter()
+                            .map(|e| format!("\"{}\"", compiled.shapes[e.shape as usize].name))
+                            .collect();
+                        format!("[{}]", names.join(", "))
+                    };
+                    return Err(fail(format!(
+                        "the camera is stated to be inside {} (outermost first), but the camera \
+                         at {} looking along {} is inside {}; remove `inside` to let the \
+                         engine find it, or correct it",
+                        list(&given),
+                        fmt_point(camera.from),
+                        fmt_point(camera.forward),
+                        list(&probed)
+                    )));
+                }
+                given
+            }
+            None => probed,
         };
         Ok(compiled)
     }
@@ -565,15 +618,20 @@ impl CompiledScene {
             || info.hints.contains(InstanceHints::TRANSMITS)
     }
 
-    fn explicit_stack(&self, names: &[String]) -> Result<VolumeStack, CompileError> {
+    fn explicit_stack(&self, names: &[String]) -> Result<VolumeStack, String> {
         let mut stack = VolumeStack::new();
         for n in names {
             let s = self
                 .shapes
                 .iter()
                 .position(|s| &s.name == n)
-                .filter(|&s| self.tracks_interior(s as u32))
-                .ok_or_else(|| CompileError::CameraVolume(n.clone()))?;
+                .ok_or_else(|| format!("shape \"{n}\" does not exist"))?;
+            if !self.tracks_interior(s as u32) {
+                return Err(format!(
+                    "shape \"{n}\" has no interior (its material neither transmits nor \
+                     computes a volume), so no camera is inside it"
+                ));
+            }
             stack.enter(self.volume_entry(s as u32));
         }
         Ok(stack)
@@ -640,4 +698,122 @@ impl CompiledScene {
         }
         stack
     }
+}
+
+/// A point or direction for messages: `(x, y, z)` with the shortest exact digits.
+fn fmt_point(p: Vec3) -> String {
+    format!("({}, {}, {})", p.x, p.y, p.z)
+}
+
+/// The shapes compiling leaves out because an identical one takes their place: among shapes
+/// with exactly the same geometry (same sphere, or the same triangles in the same order)
+/// whose materials track an interior (glass, media), without emission, only the one of
+/// highest priority is built; ties go to the first in file order when the tied shapes share
+/// a material, and are an error otherwise.
+///
+/// Why: crossing one of two coincident surfaces moves the new ray's origin past both (the
+/// spawn offset), so the other's crossing is never seen and the volume stacks go wrong. Two
+/// identical glass balls rendered visibly unlike one (issue 14 item 10), with warnings of
+/// rays leaving shapes they never entered. By the priority rule (Schmidt and Budge 2002) a
+/// volume inside one of higher priority never shows, so leaving it out is exact; for equal
+/// priorities and one material the shapes are the same solid. Equal priorities with
+/// different materials leave undefined which one fills the shape: an error naming both.
+/// Emissive shapes are kept (their emission would be lost), as are shapes that track no
+/// interior (an opaque surface hides what coincides with it either way).
+fn hidden_coincident_shapes(
+    shapes: &[(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)],
+    materials: &[Material],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<bool>, CompileError> {
+    use std::collections::HashMap;
+    use std::hash::{Hash, Hasher};
+    let mut hidden = vec![false; shapes.len()];
+    let candidate = |(_, _, _, mat, emission): &(_, _, _, u32, Option<Rgb>)| {
+        let Some(m) = materials.get(*mat as usize) else {
+            // Reported as a missing material by the caller.
+            return false;
+        };
+        let h = m.factory.instance_hints();
+        emission.is_none_or(|e| e.is_black())
+            && (h.contains(InstanceHints::COMPUTES_INTERIOR)
+                || h.contains(InstanceHints::TRANSMITS))
+    };
+    // Group by a hash of the geometry's bits, then compare exactly within a group.
+    let bits = |g: &ShapeGeometry, h: &mut std::collections::hash_map::DefaultHasher| match g {
+        ShapeGeometry::Sphere(s) => {
+            0u8.hash(h);
+            s.center.to_array().map(f32::to_bits).hash(h);
+            s.radius.to_bits().hash(h);
+        }
+        ShapeGeometry::Triangles(t) => {
+            1u8.hash(h);
+            t.len().hash(h);
+            for v in t.iter().flatten() {
+                v.to_array().map(f32::to_bits).hash(h);
+            }
+        }
+    };
+    let same = |a: &ShapeGeometry, b: &ShapeGeometry| match (a, b) {
+        (ShapeGeometry::Sphere(a), ShapeGeometry::Sphere(b)) => a == b,
+        (ShapeGeometry::Triangles(a), ShapeGeometry::Triangles(b)) => a == b,
+        _ => false,
+    };
+    let mut groups: HashMap<u64, Vec<usize>> = HashMap::new();
+    for (i, s) in shapes.iter().enumerate().filter(|(_, s)| candidate(s)) {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        bits(&s.2, &mut h);
+        groups.entry(h.finish()).or_default().push(i);
+    }
+    let mut groups: Vec<Vec<usize>> = groups.into_values().filter(|g| g.len() > 1).collect();
+    groups.sort();
+    for group in groups {
+        // Split a (improbable) hash collision into classes of equal geometry.
+        let mut rest = group;
+        while let Some(&first) = rest.first() {
+            let (class, others): (Vec<usize>, Vec<usize>) = rest
+                .iter()
+                .partition(|&&j| same(&shapes[j].2, &shapes[first].2));
+            rest = others;
+            if class.len() < 2 {
+                continue;
+            }
+            let priority = |j: usize| materials[shapes[j].3 as usize].priority;
+            let top = class.iter().map(|&j| priority(j)).max().unwrap_or(0);
+            let tied: Vec<usize> = class
+                .iter()
+                .copied()
+                .filter(|&j| priority(j) == top)
+                .collect();
+            let winner = tied[0];
+            if let Some(&other) = tied.iter().find(|&&j| shapes[j].3 != shapes[winner].3) {
+                return Err(CompileError::Invalid {
+                    entity: format!("shape \"{}\"", shapes[other].1),
+                    message: format!(
+                        "has the same geometry as shape \"{}\" and the same priority ({top}) \
+                         but another material (\"{}\" against \"{}\"): which one fills the \
+                         shape is undefined; give one material a higher `priority`",
+                        shapes[winner].1,
+                        materials[shapes[other].3 as usize].name,
+                        materials[shapes[winner].3 as usize].name,
+                    ),
+                });
+            }
+            for &j in class.iter().filter(|&&j| j != winner) {
+                hidden[j] = true;
+                warnings.push(format!(
+                    "shape \"{}\" has the same geometry as shape \"{}\" and {}: it is left \
+                     out (its surface is \"{}\"'s)",
+                    shapes[j].1,
+                    shapes[winner].1,
+                    if priority(j) < top {
+                        "a lower priority"
+                    } else {
+                        "the same material and priority"
+                    },
+                    shapes[winner].1,
+                ));
+            }
+        }
+    }
+    Ok(hidden)
 }

@@ -32,7 +32,7 @@ use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::sampler::MAX_SPP;
 
-pub use error::{SceneError, SceneErrorKind};
+pub use error::{Location, SceneError, SceneErrorKind};
 pub use params::MaterialParams;
 
 use error::Source;
@@ -57,6 +57,9 @@ pub struct SceneDesc {
     /// The volume stack at the camera given explicitly (`camera.inside`): names of the
     /// closed shapes containing the camera, outermost first. `None`: the engine finds it.
     pub camera_volume: Option<Vec<String>>,
+    /// Where `camera.inside` is written, for the compiler's check of it against the volumes
+    /// the camera is really in (`None` when the key is absent).
+    pub camera_volume_at: Option<Location>,
 }
 
 /// The `[render]` section.
@@ -212,6 +215,8 @@ pub enum LightDesc {
         /// An equirectangular EXR map, resolved against the scene file (absolute); the
         /// engine loads it. The file exists at load time.
         map: Option<PathBuf>,
+        /// Where `map` is written, for the errors of reading the map (`None` without one).
+        map_at: Option<Location>,
     },
 }
 
@@ -255,8 +260,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let render = read_render(&top)?;
     let materials = read_materials(&top, &src)?;
     let shapes = read_shapes(&top, &materials)?;
-    let lights = read_lights(&top)?;
-    let (camera, camera_volume) = read_camera(&top, &shapes)?;
+    let lights = read_lights(&top, &src)?;
+    let (camera, camera_volume, camera_volume_at) = read_camera(&top, &shapes, &src)?;
     Ok(SceneDesc {
         path: path.to_path_buf(),
         render,
@@ -265,6 +270,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         shapes,
         lights,
         camera_volume,
+        camera_volume_at,
     })
 }
 
@@ -523,7 +529,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
 
 const LIGHT_TYPES: &[&str] = &["distant", "point", "environment"];
 
-fn read_lights(top: &Reader<'_>) -> Result<Vec<LightDesc>, SceneError> {
+fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, SceneError> {
     let Some(items) = top.array_opt("lights")? else {
         return Ok(Vec::new());
     };
@@ -580,6 +586,7 @@ fn read_lights(top: &Reader<'_>) -> Result<Vec<LightDesc>, SceneError> {
                     ));
                 }
                 environment_seen = Some(i);
+                let mut map_at = None;
                 let map = match r.path_opt("map")? {
                     None => None,
                     Some((path, map_node)) => {
@@ -591,6 +598,7 @@ fn read_lights(top: &Reader<'_>) -> Result<Vec<LightDesc>, SceneError> {
                                 format!("environment map `{}` does not exist", path.display()),
                             ));
                         }
+                        map_at = Some(Location::new(src, map_node.span(), r.entity, Some("map")));
                         Some(path)
                     }
                 };
@@ -603,6 +611,7 @@ fn read_lights(top: &Reader<'_>) -> Result<Vec<LightDesc>, SceneError> {
                     name,
                     radiance,
                     map,
+                    map_at,
                 }
             }
             other => {
@@ -623,9 +632,13 @@ fn read_lights(top: &Reader<'_>) -> Result<Vec<LightDesc>, SceneError> {
     Ok(out)
 }
 
-type CameraParts = (CameraDesc, Option<Vec<String>>);
+type CameraParts = (CameraDesc, Option<Vec<String>>, Option<Location>);
 
-fn read_camera(top: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<CameraParts, SceneError> {
+fn read_camera(
+    top: &Reader<'_>,
+    shapes: &[ShapeDesc],
+    src: &Arc<Source>,
+) -> Result<CameraParts, SceneError> {
     let Some(node) = section(top, "camera")? else {
         return Err(top.error(
             SceneErrorKind::MissingField,
@@ -689,6 +702,9 @@ fn read_camera(top: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<CameraParts, Sc
         None => None,
         Some(items) => Some(read_inside(&r, items, shapes)?),
     };
+    let inside_at = r
+        .get("inside")
+        .map(|node| Location::new(src, node.span(), "camera", Some("inside")));
     Ok((
         CameraDesc {
             projection,
@@ -697,6 +713,7 @@ fn read_camera(top: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<CameraParts, Sc
             up,
         },
         inside,
+        inside_at,
     ))
 }
 

@@ -62,3 +62,20 @@ name = "sky"
 type = "environment"
 radiance = 0.1
 "#;
+
+/// Asserts a clean failure whose stderr holds `needle` exactly once: a message printed with
+/// its cause chain (`{:#}`) must not repeat a cause that is already part of it.
+pub fn assert_fails_once(what: &str, out: &Output, needle: &str) {
+    assert_fails(what, out, &[needle]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let n = stderr.matches(needle).count();
+    assert_eq!(n, 1, "{what}: {needle:?} printed {n} times: {stderr}");
+}
+
+/// The 1-based line of the first occurrence of `needle` in `text`.
+pub fn line_of(text: &str, needle: &str) -> usize {
+    let at = text
+        .find(needle)
+        .unwrap_or_else(|| panic!("test bug: {needle:?} not in the text"));
+    text[..at].matches('\n').count() + 1
+}

@@ -77,6 +77,20 @@ impl SceneError {
         &self.0.message
     }
 
+    /// An error about `file` with no line to name (a scene description built in code rather
+    /// than parsed).
+    pub fn unlocated(file: &Path, kind: SceneErrorKind, message: &str) -> SceneError {
+        SceneError(Box::new(ErrorData {
+            kind,
+            file: file.to_path_buf(),
+            line_col: None,
+            entity: None,
+            field: None,
+            rendered: format!("{}: {message}", file.display()),
+            message: message.to_owned(),
+        }))
+    }
+
     /// An error reading the scene file itself.
     pub(crate) fn io(file: &Path, err: &std::io::Error) -> SceneError {
         let message = format!("cannot read scene file: {err}");
@@ -211,5 +225,56 @@ impl Source {
             message,
             rendered,
         }))
+    }
+}
+
+/// Where a value sits in its scene file, kept for the checks that can only run after
+/// parsing (reading an environment map, comparing `camera.inside` with the volumes the
+/// camera is really in, resolving a material type against the registry), so that their
+/// errors name the file, line and column like the parser's own.
+#[derive(Clone, Debug)]
+pub struct Location {
+    src: std::sync::Arc<Source>,
+    span: Range<usize>,
+    entity: String,
+    field: Option<String>,
+}
+
+impl Location {
+    pub(crate) fn new(
+        src: &std::sync::Arc<Source>,
+        span: Range<usize>,
+        entity: &str,
+        field: Option<&str>,
+    ) -> Location {
+        Location {
+            src: std::sync::Arc::clone(src),
+            span,
+            entity: entity.to_owned(),
+            field: field.map(str::to_owned),
+        }
+    }
+
+    /// A located error at this value: `file:line:col: entity, field `f`: message` and the
+    /// source excerpt.
+    pub fn error(&self, kind: SceneErrorKind, message: impl Into<String>) -> SceneError {
+        self.src.error(
+            kind,
+            &self.span,
+            Some(&self.entity),
+            self.field.as_deref(),
+            message,
+        )
+    }
+}
+
+/// Two locations are equal when they name the same place: the same file, span, entity and
+/// field (the text itself is not compared).
+impl PartialEq for Location {
+    fn eq(&self, other: &Location) -> bool {
+        self.src.path == other.src.path
+            && self.span == other.span
+            && self.entity == other.entity
+            && self.field == other.field
     }
 }

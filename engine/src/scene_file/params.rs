@@ -529,10 +529,17 @@ impl MaterialParams {
     /// With `Some(key)` the error points at that key's value (or at the material if the key
     /// is absent); with `None`, at the material.
     pub fn error(&self, key: Option<&str>, message: impl Into<String>) -> SceneError {
+        self.location(key)
+            .error(SceneErrorKind::InvalidValue, message)
+    }
+
+    /// Where `key`'s value is written (or the material, if `key` is `None` or absent), for
+    /// errors of other kinds than [`Self::error`]'s or made later.
+    pub fn location(&self, key: Option<&str>) -> super::Location {
         let r = self.reader();
         let span = key
             .and_then(|k| r.get(k))
             .map_or_else(|| self.node.span(), Node::span);
-        r.error(SceneErrorKind::InvalidValue, &span, key, message)
+        super::Location::new(&self.src, span, &self.entity, key)
     }
 }

@@ -766,14 +766,28 @@ fn environment_map_is_resolved_and_must_exist() {
     let scene_path = dir.join("scene.toml");
     let ok = base_with("radiance = [0.1, 0.2, 0.3]", "map = \"maps/sky.exr\"");
     let s = parse_scene(&ok, &scene_path).unwrap();
+    let LightDesc::Environment {
+        name,
+        radiance,
+        map,
+        map_at,
+    } = &s.lights[2]
+    else {
+        panic!("{:?}", s.lights[2]);
+    };
+    assert_eq!(name, "lights[2]");
+    assert_eq!(*radiance, Rgb::WHITE);
     assert_eq!(
-        s.lights[2],
-        LightDesc::Environment {
-            name: "lights[2]".into(),
-            radiance: Rgb::WHITE,
-            map: Some(std::path::absolute(dir.join("maps/sky.exr")).unwrap()),
-        }
+        map,
+        &Some(std::path::absolute(dir.join("maps/sky.exr")).unwrap())
     );
+    // The map's location is kept for the errors of reading it, at the `map` value.
+    let e = map_at
+        .as_ref()
+        .unwrap()
+        .error(SceneErrorKind::ExternalFile, "x");
+    assert_eq!(e.line(), Some(line_of(&ok, "map =")));
+    assert_eq!(e.field(), Some("map"));
     let bad = base_with("radiance = [0.1, 0.2, 0.3]", "map = \"maps/cloudy.exr\"");
     let e = parse_scene(&bad, &scene_path).unwrap_err();
     let msg = e.to_string();
