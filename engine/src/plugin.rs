@@ -36,7 +36,7 @@
 //! ```
 
 use crate::context::IntegratorContext;
-pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
+pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
 pub use crate::shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling,

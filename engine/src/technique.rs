@@ -127,7 +127,15 @@ pub static REGISTRY: &[Technique] = &[
             },
             TechniqueValue {
                 name: "multiple",
-                summary: "every order: points inside go back to the path tracer",
+                summary: "every order: walk where light sampling cannot help, else bounce",
+            },
+            TechniqueValue {
+                name: "walk",
+                summary: "every order, walked inside the volume integrator (exits only)",
+            },
+            TechniqueValue {
+                name: "bounce",
+                summary: "every order: each scattering point goes back to the path tracer",
             },
             TechniqueValue {
                 name: "single",
@@ -141,11 +149,15 @@ pub static REGISTRY: &[Technique] = &[
         get: |t| match t.scattering {
             None => "scene",
             Some(Scattering::Multiple) => "multiple",
+            Some(Scattering::Walk) => "walk",
+            Some(Scattering::Bounce) => "bounce",
             Some(Scattering::Single) => "single",
         },
         set: |t, v| {
             t.scattering = match v {
                 "multiple" => Some(Scattering::Multiple),
+                "walk" => Some(Scattering::Walk),
+                "bounce" => Some(Scattering::Bounce),
                 "single" => Some(Scattering::Single),
                 _ => None,
             }
