@@ -15,6 +15,16 @@
 //! reflects the walker back in or refracts it out -- as for any hit). The global
 //! integrator sees one bounce per boundary interaction, never one per scattering event.
 //!
+//! # Steps without rays
+//! After every traced event the walker learns its **clearance**, the distance to the
+//! nearest surface ([`risotto_systems::clearance`], a BVH distance query), and keeps the
+//! ball of that radius (less a rounding margin) around the event: a segment between two
+//! points of a ball that contains no surface crosses none, so every later step that ends
+//! inside the ball is taken without tracing (the same random numbers, the same event as a
+//! traced step would give). Deep inside a dense medium a walker takes dozens of steps per
+//! ray; near the boundary the balls shrink and every step is traced. Traced steps ask only
+//! for surfaces up to the sampled distance (plus a margin), which the BVH culls early.
+//!
 //! No light is sampled at the walk's events. That is exact (the walk is an unbiased
 //! estimator of every order of scattering on its own: every event's outgoing direction
 //! comes from the phase function, and emitters found by a walk segment count with full
@@ -63,8 +73,10 @@ use crate::shade_groups::ShadeGroups;
 use crate::stats::{System, VolumeEvent};
 use glam::{Vec2, Vec3};
 use risotto_components::{Rays, Rgb, NO_HIT};
+use risotto_systems::clearance::clearance;
 use risotto_systems::intersect::intersect_closest;
-use risotto_systems::medium::{channel_pdf, sample_free_flight};
+use risotto_systems::medium::{channel_pdf, sample_free_flight, FreeFlight};
+use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::ray_offset;
 use risotto_systems::sampler::{PathSampler, SplitMix64};
 
@@ -91,6 +103,10 @@ struct Walkers {
     /// The first flight's channel and distance numbers and the first phase sample, from the
     /// path's sampler (used while `events == 0`).
     first: Vec<[f32; 4]>,
+    /// Centre and radius of a ball known to hold no surface (radius 0: none known): steps
+    /// that end in it need no ray.
+    anchor: Vec<Vec3>,
+    radius: Vec<f32>,
 }
 
 impl Walkers {
@@ -108,6 +124,8 @@ impl Walkers {
         self.events[to] = self.events[from];
         self.rng[to] = self.rng[from].clone();
         self.first[to] = self.first[from];
+        self.anchor[to] = self.anchor[from];
+        self.radius[to] = self.radius[from];
     }
     fn truncate(&mut self, n: usize) {
         self.ray.truncate(n);
@@ -119,6 +137,8 @@ impl Walkers {
         self.events.truncate(n);
         self.rng.truncate(n);
         self.first.truncate(n);
+        self.anchor.truncate(n);
+        self.radius.truncate(n);
     }
 }
 
@@ -140,6 +160,13 @@ fn walk_seed(s: &PathSampler) -> SplitMix64 {
     let key = ((s.seed as u64) << 32 | s.sample as u64)
         ^ (s.dimension as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
     SplitMix64(key)
+}
+
+/// A uniform number in `[0, 1)` from the top 24 of 32 random bits (every multiple of
+/// 2^-24 reachable, as the samplers give).
+#[inline]
+fn unit(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
 /// `sum_c b_c w_c / sum_c b_c`: the walk's albedo-corrected throughput `A` (module docs).
@@ -171,8 +198,14 @@ pub fn walk_bundle(
         return;
     }
     let scene = ictx.scene;
-    let max_depth = scene.settings.max_depth;
-    let (sigma_t, sigma_s, phase) = (medium.sigma_t, medium.sigma_s, medium.phase);
+    let (st, ss) = (medium.sigma_t, medium.sigma_s);
+    let walk = Walk {
+        sigma_t: st,
+        sigma_s: ss,
+        phase: medium.phase,
+        max_depth: scene.settings.max_depth,
+        grey: st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b,
+    };
     let mut w = Walkers::default();
     for (i, s) in samplers.iter_mut().enumerate() {
         let first = s.next_4d();
@@ -185,12 +218,75 @@ pub fn walk_bundle(
         w.events.push(0);
         w.rng.push(walk_seed(s));
         w.first.push(first);
+        w.anchor.push(rays.origin[i]);
+        w.radius.push(0.0);
     }
     let mut exits = Exits::default();
     let (mut t_hit, mut prim, mut b1, mut b2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut scatters, mut passes) = (0usize, 0usize);
+    let (mut flights, mut query) = (Vec::new(), Vec::new());
+    let (mut traced, mut free, mut passes) = (0usize, 0usize, 0usize);
     while w.len() > 0 {
+        // Each walker takes the steps that end inside its empty ball without a ray (the
+        // segment from a point of the ball to another cannot cross a surface), until one
+        // would leave the ball: that flight is traced below.
+        //
+        // The flight's distance does not depend on where the segment ends (only whether it
+        // scatters does), so the trace needs the surfaces only up to the sampled distance,
+        // plus a margin to see a boundary just beyond it for the clamp below.
+        flights.clear();
+        query.clear();
+        let mut live = 0;
+        for j in 0..w.len() {
+            let r = w.ray[j] as usize;
+            let mut alive = true;
+            loop {
+                let (u_channel, u_distance) = if w.events[j] == 0 {
+                    (w.first[j][0], w.first[j][1])
+                } else {
+                    let u = w.rng[j].next_u64();
+                    (unit(u as u32), unit((u >> 32) as u32))
+                };
+                let pdf = if walk.grey {
+                    [1.0 / 3.0; 3]
+                } else {
+                    channel_pdf(rays.throughput[r] * w.weight[j])
+                };
+                let f = walk.flight(pdf, u_channel, u_distance, w.tmax[j]);
+                if f.scattered && w.radius[j] > 0.0 {
+                    let p = w.origin[j] + w.direction[j] * f.t;
+                    if (p - w.anchor[j]).length_squared() < w.radius[j] * w.radius[j] {
+                        free += 1;
+                        match walk.event(&mut w, j, rays, r, f.weight, p) {
+                            true => continue,
+                            false => {
+                                alive = false;
+                                break;
+                            }
+                        }
+                    }
+                }
+                let end = if f.scattered {
+                    let margin = 4000.0 * ray_offset(w.origin[j] + w.direction[j] * f.t);
+                    (f.t + margin).min(w.tmax[j])
+                } else {
+                    w.tmax[j]
+                };
+                flights.push((f, pdf, u_channel, u_distance));
+                query.push(end);
+                break;
+            }
+            if alive {
+                if live != j {
+                    w.keep(j, live);
+                }
+                live += 1;
+            }
+        }
+        w.truncate(live);
         let m = w.len();
+        if m == 0 {
+            break;
+        }
         t_hit.resize(m, 0.0);
         prim.resize(m, NO_HIT);
         b1.resize(m, 0.0);
@@ -201,7 +297,7 @@ pub fn walk_bundle(
                 &w.origin,
                 &w.direction,
                 &w.tmin,
-                &w.tmax,
+                &query,
                 &mut t_hit,
                 &mut prim,
                 &mut b1,
@@ -213,27 +309,13 @@ pub fn walk_bundle(
             let r = w.ray[j] as usize;
             let (o, d) = (w.origin[j], w.direction[j]);
             let hit = prim[j] != NO_HIT;
-            let seg = if hit {
-                t_hit[j].min(w.tmax[j])
-            } else {
-                w.tmax[j]
-            };
-            let b = rays.throughput[r];
-            let first = w.events[j] == 0;
-            let (u_channel, u_distance) = if first {
-                (w.first[j][0], w.first[j][1])
-            } else {
-                (w.rng[j].f32(), w.rng[j].f32())
-            };
-            let f = sample_free_flight(
-                sigma_t,
-                sigma_s,
-                channel_pdf(b * w.weight[j]),
-                u_channel,
-                u_distance,
-                seg,
-            );
-            let weight = w.weight[j] * f.weight;
+            let (mut f, pdf, u_channel, u_distance) = flights[j];
+            if hit && (!f.scattered || t_hit[j] <= f.t) {
+                // A surface before the sampled distance: the flight passes to it, with the
+                // pass weight of that segment (the same numbers, so the same channel and
+                // distance, now beyond the segment's end).
+                f = walk.flight(pdf, u_channel, u_distance, t_hit[j]);
+            }
             if !f.scattered {
                 passes += 1;
                 exits.ray.push(r as u32);
@@ -241,35 +323,19 @@ pub fn walk_bundle(
                 exits.direction.push(d);
                 exits.tmin.push(w.tmin[j]);
                 exits.tmax.push(w.tmax[j]);
-                exits.weight.push(weight);
+                exits.weight.push(w.weight[j] * f.weight);
                 exits.events.push(w.events[j]);
                 continue;
             }
-            scatters += 1;
-            let events = w.events[j] + 1;
-            // The next segment from this event is segment depth + events + 1 of the path:
-            // beyond max_depth nothing it finds counts, so the walk ends here.
-            if rays.depth[r] as u32 + events + 1 > max_depth || events > MAX_WALK_EVENTS {
-                continue;
-            }
-            // Russian roulette on the albedo-corrected throughput (module docs).
-            let q = carried(b, weight).clamp(Q_FLOOR, 1.0);
-            let mut weight = weight;
-            if q < 1.0 {
-                if w.rng[j].f32() >= q {
-                    continue;
-                }
-                weight *= 1.0 / q;
-            }
-            // Keep the event strictly inside: a point within the spawn offset of the
-            // segment's end (or of its start, for a segment leaving the boundary) could
-            // round to the far side of the boundary, and the walk's next segment would not
+            traced += 1;
+            // Keep the event strictly inside: a point within the spawn offset of a boundary
+            // just beyond it (or of the segment's start, for a segment leaving the
+            // boundary) could round to the far side, and the walk's next segment would not
             // see the boundary again (the same clamp as the homogeneous interior's).
             let mut t = f.t;
-            if hit && t > seg - 2000.0 * ray_offset(o + d * seg) {
-                let s = scene
-                    .geometry
-                    .surface_at(prim[j], o, d, t_hit[j], b1[j], b2[j]);
+            if hit {
+                let seg = t_hit[j];
+                let s = scene.geometry.surface_at(prim[j], o, d, seg, b1[j], b2[j]);
                 let cos = d.dot(s.ng).abs().max(1e-3);
                 let end = seg - ray_offset(s.p) / cos;
                 t = t.min(if end < w.tmin[j] {
@@ -277,31 +343,98 @@ pub fn walk_bundle(
                 } else {
                     end
                 });
-            }
-            t = t.max(w.tmin[j].min(0.5 * seg));
-            let (u_phase, u_lobe) = if first {
-                (Vec2::new(w.first[j][2], w.first[j][3]), w.rng[j].f32())
+                t = t.max(w.tmin[j].min(0.5 * seg));
             } else {
-                (w.rng[j].vec2(), w.rng[j].f32())
-            };
-            let (wi, pdf) = phase.sample(-d, u_phase, u_lobe);
-            if !(pdf > 0.0 && pdf.is_finite()) {
+                t = t.max(w.tmin[j]);
+            }
+            let p = o + d * t;
+            if !walk.event(&mut w, j, rays, r, f.weight, p) {
                 continue;
             }
-            w.keep(j, live);
-            w.origin[live] = o + d * t;
-            w.direction[live] = wi;
-            w.tmin[live] = 0.0;
-            w.tmax[live] = f32::INFINITY;
-            w.weight[live] = weight;
-            w.events[live] = events;
+            // A new empty ball around the event: the distance to the nearest surface, less
+            // a relative margin for its rounding and the spawn offset (so that no free
+            // step ends within rounding of a surface).
+            let c = clearance(&scene.geometry, p, f32::INFINITY);
+            w.anchor[j] = p;
+            w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * ray_offset(p)).max(0.0);
+            if live != j {
+                w.keep(j, live);
+            }
             live += 1;
         }
         w.truncate(live);
     }
-    ictx.stats.volume_event(VolumeEvent::Scatter, scatters);
+    ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
     ictx.stats.volume_event(VolumeEvent::Pass, passes);
     answer_exits(rays, &exits, ictx, out);
+}
+
+/// The medium and limits of one bundle's walks.
+struct Walk {
+    sigma_t: Rgb,
+    sigma_s: Rgb,
+    phase: PhaseFunction,
+    max_depth: u32,
+    /// Every channel alike: the channel probabilities do not matter.
+    grey: bool,
+}
+
+impl Walk {
+    /// A free flight on a segment of length `tmax` ([`sample_free_flight`]).
+    #[inline]
+    fn flight(&self, pdf: [f32; 3], u_channel: f32, u_distance: f32, tmax: f32) -> FreeFlight {
+        sample_free_flight(self.sigma_t, self.sigma_s, pdf, u_channel, u_distance, tmax)
+    }
+
+    /// Walker `j` (of ray `r`) scatters at `p` with the flight weight `flight_weight`: the
+    /// depth limit, the roulette and the phase sample. Writes the next segment into the
+    /// walker's row and returns true, or false when the walk ends here.
+    #[inline]
+    fn event(
+        &self,
+        w: &mut Walkers,
+        j: usize,
+        rays: &Rays,
+        r: usize,
+        flight_weight: Rgb,
+        p: Vec3,
+    ) -> bool {
+        let first = w.events[j] == 0;
+        let events = w.events[j] + 1;
+        // The next segment from this event is segment depth + events + 1 of the path:
+        // beyond max_depth nothing it finds counts, so the walk ends here.
+        if rays.depth[r] as u32 + events + 1 > self.max_depth || events > MAX_WALK_EVENTS {
+            return false;
+        }
+        // Russian roulette on the albedo-corrected throughput (module docs).
+        let mut weight = w.weight[j] * flight_weight;
+        let q = carried(rays.throughput[r], weight).clamp(Q_FLOOR, 1.0);
+        let u = w.rng[j].next_u64();
+        if q < 1.0 {
+            if unit(u as u32) >= q {
+                return false;
+            }
+            weight *= 1.0 / q;
+        }
+        let u_lobe = unit((u >> 32) as u32);
+        let u_phase = if first {
+            Vec2::new(w.first[j][2], w.first[j][3])
+        } else {
+            let v = w.rng[j].next_u64();
+            Vec2::new(unit(v as u32), unit((v >> 32) as u32))
+        };
+        let (wi, pdf) = self.phase.sample(-w.direction[j], u_phase, u_lobe);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return false;
+        }
+        w.origin[j] = p;
+        w.direction[j] = wi;
+        w.tmin[j] = 0.0;
+        w.tmax[j] = f32::INFINITY;
+        w.weight[j] = weight;
+        w.events[j] = events;
+        true
+    }
 }
 
 /// Traces the exits' last segments again (one ray per walk, against hundreds traced by the

@@ -6,6 +6,7 @@ mod bvh8;
 pub mod bxdf;
 pub mod bxdf_samples;
 pub mod camera;
+pub mod clearance;
 pub mod direct_lighting;
 pub mod distribution;
 pub mod film;
