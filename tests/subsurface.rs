@@ -335,3 +335,105 @@ fn albedo_inversion_is_accurate() {
         );
     }
 }
+
+/// Hard cases of the walk, each finite and at a known limit: albedo 0 (every event
+/// absorbs: the ball is a Beer absorber, pixel by pixel the exact chord transmittance
+/// averaged over the pixel), a chromatic extinction with an empty and a dense channel
+/// (albedo 1: a furnace per channel), and a very dense, nearly white medium (300 per unit,
+/// albedo 0.999: finite, in [0, 1], not black).
+#[test]
+fn walk_hard_cases() {
+    let n = 12u32;
+    let width = 2.4f32;
+    let sigma = 3.0f32;
+    let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, width, n, n);
+    let mut scene = Scene::new(cam, settings(n, n, 256, u32::MAX));
+    let m = scene.add_material(
+        "ball",
+        0,
+        mat_in(
+            Surface::Interface,
+            walked(Rgb::splat(sigma), Rgb::BLACK, PhaseFunction::Isotropic),
+        ),
+    );
+    scene.add_shape(
+        "ball",
+        ShapeGeometry::Sphere(Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }),
+        m,
+        None,
+    );
+    environment(&mut scene, Rgb::WHITE);
+    let out = render_with(&scene.compile().unwrap(), LightingTechnique::Mis, None);
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+    // The exact pixel values: exp(-sigma * chord) averaged over 32 x 32 points per pixel.
+    let mut worst = 0.0f32;
+    for y in 0..n {
+        for x in 0..n {
+            let mut sum = 0.0f64;
+            for sy in 0..32 {
+                for sx in 0..32 {
+                    let px = ((x as f32 + (sx as f32 + 0.5) / 32.0) / n as f32 - 0.5) * width;
+                    let py = ((y as f32 + (sy as f32 + 0.5) / 32.0) / n as f32 - 0.5) * width;
+                    let b2 = px * px + py * py;
+                    sum += if b2 < 1.0 {
+                        (-(sigma * 2.0 * (1.0 - b2).sqrt()) as f64).exp()
+                    } else {
+                        1.0
+                    };
+                }
+            }
+            let want = (sum / 1024.0) as f32;
+            let k = (y * n + x) as usize;
+            // Each path passes (value 1) or is absorbed (0): a Bernoulli estimate of the
+            // pixel mean, of variance want (1 - want) / spp.
+            let got = out.beauty.pixels[k].g;
+            let sd = (want * (1.0 - want) / 256.0).sqrt();
+            let z = (got - want).abs() / sd.max(1e-6);
+            worst = worst.max(z);
+            assert!(z < 5.0, "pixel ({x}, {y}): {got} vs exact {want} (sd {sd})");
+        }
+    }
+    eprintln!("albedo 0: worst pixel z {worst:.2}");
+
+    let out = furnace(
+        Surface::Interface,
+        walked(Rgb::new(0.0, 5.0, 50.0), Rgb::WHITE, hg(0.3)),
+        64,
+    );
+    assert_clean_walk("empty and dense channels", &out);
+    let (mean, se) = image_mean(&out);
+    for (m, s) in [(mean.r, se.r), (mean.g, se.g), (mean.b, se.b)] {
+        assert!((m - 1.0).abs() <= 3.0 * s + 1e-4, "{mean:?} +- {se:?}");
+    }
+
+    let out = furnace(
+        Surface::Interface,
+        walked(
+            Rgb::splat(300.0),
+            Rgb::splat(0.999),
+            PhaseFunction::Isotropic,
+        ),
+        8,
+    );
+    assert_clean_walk("dense", &out);
+    let (mean, _) = image_mean(&out);
+    assert!(mean.g > 0.05 && mean.g < 1.0, "dense: {mean:?}");
+    assert!(
+        scatter_events(&out) > 10_000,
+        "dense: {}",
+        scatter_events(&out)
+    );
+}
+
+fn assert_clean_walk(what: &str, out: &RenderOutput) {
+    assert_eq!(out.stats.counters.nan_dropped, 0, "{what}");
+    assert!(
+        out.stats.counters.non_finite.iter().all(|&n| n == 0),
+        "{what}: {}",
+        out.stats
+    );
+    assert_finite(what, out);
+}

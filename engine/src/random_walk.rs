@@ -406,8 +406,12 @@ impl Walk {
         if rays.depth[r] as u32 + events + 1 > self.max_depth || events > MAX_WALK_EVENTS {
             return false;
         }
-        // Russian roulette on the albedo-corrected throughput (module docs).
+        // Russian roulette on the albedo-corrected throughput (module docs). A walk that
+        // carries nothing (albedo 0) ends here rather than walking on with weight 0.
         let mut weight = w.weight[j] * flight_weight;
+        if weight.is_black() {
+            return false;
+        }
         let q = carried(rays.throughput[r], weight).clamp(Q_FLOOR, 1.0);
         let u = w.rng[j].next_u64();
         if q < 1.0 {
