@@ -381,6 +381,9 @@ pub enum Interior {
     /// The `subsurface` material's interior: a homogeneous medium made from artist
     /// parameters ([`crate::subsurface`]), walked by default.
     Subsurface(HomogeneousMedium),
+    /// The `subsurface` material's interior in `mode = "diffusion"`
+    /// ([`crate::diffusion`]).
+    SubsurfaceDiffusion(crate::diffusion::DiffusionMedium),
 }
 
 impl Interior {
@@ -390,7 +393,7 @@ impl Interior {
             Interior::None => InstanceHints::NONE,
             Interior::Null | Interior::Beer { .. } => volume,
             Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
-            Interior::Subsurface(_) => {
+            Interior::Subsurface(_) | Interior::SubsurfaceDiffusion(_) => {
                 volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_SUBSURFACE
             }
             Interior::Heterogeneous(_) => {
@@ -418,6 +421,9 @@ impl Interior {
             }
             Interior::Heterogeneous(medium) => {
                 Some(arena.alloc(HeterogeneousInterior { medium, ctx }))
+            }
+            Interior::SubsurfaceDiffusion(medium) => {
+                Some(arena.alloc(crate::diffusion::DiffusionInterior { medium: *medium }))
             }
         }
     }

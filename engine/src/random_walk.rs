@@ -142,16 +142,17 @@ impl Walkers {
     }
 }
 
-/// A walker that reached a surface (or left the scene): its last segment and weight.
+/// Walkers that reached a surface (or left the scene): each one's ray id in the bundle,
+/// last segment, weight and scattering events (0: the ray passed unscattered).
 #[derive(Default)]
-struct Exits {
-    ray: Vec<u32>,
-    origin: Vec<Vec3>,
-    direction: Vec<Vec3>,
-    tmin: Vec<f32>,
-    tmax: Vec<f32>,
-    weight: Vec<Rgb>,
-    events: Vec<u32>,
+pub(crate) struct Exits {
+    pub(crate) ray: Vec<u32>,
+    pub(crate) origin: Vec<Vec3>,
+    pub(crate) direction: Vec<Vec3>,
+    pub(crate) tmin: Vec<f32>,
+    pub(crate) tmax: Vec<f32>,
+    pub(crate) weight: Vec<Rgb>,
+    pub(crate) events: Vec<u32>,
 }
 
 /// The seed of a walk's random stream: the path's sampler state, mixed (SplitMix64 mixes
@@ -443,7 +444,7 @@ impl Walk {
 
 /// Traces the exits' last segments again (one ray per walk, against hundreds traced by the
 /// walk itself) and appends their hits and misses to `out` as the rays' answers.
-fn answer_exits(
+pub(crate) fn answer_exits(
     rays: &Rays,
     exits: &Exits,
     ictx: &mut IntegratorContext<'_>,

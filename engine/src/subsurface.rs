@@ -2,7 +2,8 @@
 //! interior given the way artists give it -- the surface colour (`albedo`, the
 //! multiple-scattering albedo) and how far light travels (`mean_free_path`, per
 //! `unit_length` world units) -- turned into the coefficients of a homogeneous medium that
-//! the random walk ([`crate::random_walk`]) runs in.
+//! the random walk ([`crate::random_walk`]) runs in (`mode = "random_walk"`), or into the
+//! normalized diffusion profile of [`crate::diffusion`] (`mode = "diffusion"`).
 //!
 //! # From albedo to single-scattering albedo
 //! The artist's `albedo` `A` is the fraction of uniform diffuse light that a thick slab of
@@ -45,6 +46,8 @@ pub enum SubsurfaceMode {
     /// A path-traced walk inside the boundary ([`crate::random_walk`]).
     #[default]
     RandomWalk,
+    /// Christensen-Burley normalized diffusion with probe rays ([`crate::diffusion`]).
+    Diffusion,
 }
 
 /// The `subsurface` material's parameters, as the scene file gives them.
@@ -106,6 +109,21 @@ impl SubsurfaceParams {
         }
     }
 
+    /// The diffusion mode's medium: the albedo as given and Burley's shape
+    /// `d = mean_free_path * unit_length / s(A)` ([`risotto_systems::bssrdf::scaling`]).
+    pub fn diffusion(&self) -> crate::diffusion::DiffusionMedium {
+        let l = self.mean_free_path * self.unit_length;
+        crate::diffusion::DiffusionMedium {
+            albedo: self.albedo,
+            d: Rgb::new(
+                l.r / risotto_systems::bssrdf::scaling(self.albedo.r),
+                l.g / risotto_systems::bssrdf::scaling(self.albedo.g),
+                l.b / risotto_systems::bssrdf::scaling(self.albedo.b),
+            ),
+            sigma_t: l.map(|l| 1.0 / l),
+        }
+    }
+
     /// The material: a smooth dielectric (shadow rays blocked, as a real boundary does)
     /// over the walked medium.
     pub fn material(&self) -> BuiltinMaterial {
@@ -115,7 +133,10 @@ impl SubsurfaceParams {
                 tint: Rgb::WHITE,
                 cheap_shadows: false,
             },
-            interior: Interior::Subsurface(self.medium()),
+            interior: match self.mode {
+                SubsurfaceMode::RandomWalk => Interior::Subsurface(self.medium()),
+                SubsurfaceMode::Diffusion => Interior::SubsurfaceDiffusion(self.diffusion()),
+            },
         }
     }
 }
@@ -163,10 +184,11 @@ pub fn parse(p: &MaterialParams) -> Result<SubsurfaceParams, SceneError> {
     }
     let mode = match p.string("mode", Some("random_walk"))?.as_str() {
         "random_walk" => SubsurfaceMode::RandomWalk,
+        "diffusion" => SubsurfaceMode::Diffusion,
         other => {
             return Err(p.error(
                 Some("mode"),
-                format!("unknown mode \"{other}\" (known: random_walk)"),
+                format!("unknown mode \"{other}\" (known: random_walk, diffusion)"),
             ))
         }
     };
