@@ -237,7 +237,10 @@ fn the_scattering_technique_overrides_the_medium() {
     let compiled = scene.compile().unwrap();
     let mean = |scattering| {
         let options = RenderOptions {
-            volume: VolumeTechniques { scattering },
+            volume: VolumeTechniques {
+                scattering,
+                ..VolumeTechniques::default()
+            },
             ..RenderOptions::default()
         };
         image_mean(&render(&compiled, &options, &|_| {}).unwrap())

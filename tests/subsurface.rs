@@ -108,12 +108,13 @@ fn subsurface_material_furnace_is_white() {
         mode: Default::default(),
     };
     let material = params.material();
-    let Interior::Subsurface(medium) = material.interior else {
+    let Interior::Subsurface(interior) = &material.interior else {
         panic!(
             "the subsurface material's interior: {:?}",
             material.interior
         );
     };
+    let medium = interior.walk;
     assert_eq!(medium.sigma_t, Rgb::new(20.0, 10.0, 5.0));
     assert_eq!(medium.sigma_s, medium.sigma_t, "albedo 1 inverts to 1");
     let out = furnace(material.surface, material.interior, 128);
@@ -247,6 +248,7 @@ fn walk_and_bounces_render_the_same_image() {
             let options = RenderOptions {
                 volume: VolumeTechniques {
                     scattering: Some(scattering),
+                    ..VolumeTechniques::default()
                 },
                 ..RenderOptions::default()
             };
@@ -450,33 +452,11 @@ fn assert_clean_walk(what: &str, out: &RenderOutput) {
 /// profile reflects A in every direction, unlike the walk's angle-dependent plane albedo.
 #[test]
 fn diffusion_matches_the_walk_on_a_thick_ball() {
-    use risotto::engine::subsurface::{SubsurfaceMode, SubsurfaceParams};
+    use risotto::engine::subsurface::SubsurfaceMode;
     let n = 16u32;
     let mut means = Vec::new();
     for mode in [SubsurfaceMode::RandomWalk, SubsurfaceMode::Diffusion] {
-        let params = SubsurfaceParams {
-            ior: 1.0,
-            albedo: Rgb::new(0.8, 0.6, 0.9),
-            mean_free_path: Rgb::splat(0.01),
-            unit_length: 1.0,
-            g: 0.0,
-            mode,
-        };
-        let material = params.material();
-        let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 2.0, n, n);
-        let mut scene = Scene::new(cam, settings(n, n, 256, u32::MAX));
-        let m = scene.add_material("ball", 0, mat_in(material.surface, material.interior));
-        scene.add_shape(
-            "ball",
-            ShapeGeometry::Sphere(Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            }),
-            m,
-            None,
-        );
-        environment(&mut scene, Rgb::WHITE);
-        let out = render_with(&scene.compile().unwrap(), LightingTechnique::Mis, None);
+        let out = render_with(&thick_ball(mode, n), LightingTechnique::Mis, None);
         assert_clean_walk(&format!("{mode:?}"), &out);
         // The disk covers pi/4 of the image; the corners see the sky (1).
         let (mean, se) = image_mean(&out);
@@ -508,4 +488,60 @@ fn diffusion_matches_the_walk_on_a_thick_ball() {
     for (a, b) in [(w.r, d.r), (w.g, d.g), (w.b, d.b)] {
         assert!((a - b).abs() < 0.03 * a, "walk {w:?} vs diffusion {d:?}");
     }
+}
+
+/// The ball of [`diffusion_matches_the_walk_on_a_thick_ball`]: radius 1, 100 mean free
+/// paths, albedo (0.8, 0.6, 0.9), index-matched, under a uniform sky, `n x n` pixels.
+fn thick_ball(mode: risotto::engine::subsurface::SubsurfaceMode, n: u32) -> CompiledScene {
+    let params = risotto::engine::subsurface::SubsurfaceParams {
+        ior: 1.0,
+        albedo: Rgb::new(0.8, 0.6, 0.9),
+        mean_free_path: Rgb::splat(0.01),
+        unit_length: 1.0,
+        g: 0.0,
+        mode,
+    };
+    let material = params.material();
+    let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 2.0, n, n);
+    let mut scene = Scene::new(cam, settings(n, n, 256, u32::MAX));
+    let m = scene.add_material("ball", 0, mat_in(material.surface, material.interior));
+    scene.add_shape(
+        "ball",
+        ShapeGeometry::Sphere(Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        }),
+        m,
+        None,
+    );
+    environment(&mut scene, Rgb::WHITE);
+    scene.compile().unwrap()
+}
+
+/// The render's `subsurface` technique overrides the material's mode: a random-walk
+/// material rendered with `subsurface = diffusion` is the diffusion material's image, bit
+/// for bit (the same sampler dimensions), and the other way round.
+#[test]
+fn the_subsurface_technique_overrides_the_mode() {
+    use risotto::engine::subsurface::SubsurfaceMode;
+    let n = 8;
+    let with = |mode, technique| {
+        let options = RenderOptions {
+            volume: VolumeTechniques {
+                subsurface: technique,
+                ..VolumeTechniques::default()
+            },
+            ..RenderOptions::default()
+        };
+        render(&thick_ball(mode, n), &options, &|_| {})
+            .unwrap()
+            .beauty
+            .pixels
+    };
+    let (walk, diffusion) = (SubsurfaceMode::RandomWalk, SubsurfaceMode::Diffusion);
+    let d = with(diffusion, None);
+    let w = with(walk, None);
+    assert_ne!(d, w, "the modes differ");
+    assert_eq!(with(walk, Some(diffusion)), d);
+    assert_eq!(with(diffusion, Some(walk)), w);
 }

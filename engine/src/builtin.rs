@@ -378,12 +378,9 @@ pub enum Interior {
     Homogeneous(HomogeneousMedium),
     /// Heterogeneous scattering medium (a density grid; shared, not copied).
     Heterogeneous(Arc<HeterogeneousMedium>),
-    /// The `subsurface` material's interior: a homogeneous medium made from artist
-    /// parameters ([`crate::subsurface`]), walked by default.
-    Subsurface(HomogeneousMedium),
-    /// The `subsurface` material's interior in `mode = "diffusion"`
-    /// ([`crate::diffusion`]).
-    SubsurfaceDiffusion(crate::diffusion::DiffusionMedium),
+    /// The `subsurface` material's interior ([`crate::subsurface`]): the walked medium and
+    /// the diffusion profile made from the artist's parameters, and the mode to use.
+    Subsurface(crate::subsurface::SubsurfaceInteriorParams),
 }
 
 impl Interior {
@@ -393,7 +390,7 @@ impl Interior {
             Interior::None => InstanceHints::NONE,
             Interior::Null | Interior::Beer { .. } => volume,
             Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
-            Interior::Subsurface(_) | Interior::SubsurfaceDiffusion(_) => {
+            Interior::Subsurface(_) => {
                 volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_SUBSURFACE
             }
             Interior::Heterogeneous(_) => {
@@ -412,18 +409,26 @@ impl Interior {
             Interior::None => None,
             Interior::Null => Some(arena.alloc(NullInterior)),
             Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a: *sigma_a })),
-            Interior::Homogeneous(medium) | Interior::Subsurface(medium) => {
-                Some(arena.alloc(HomogeneousInterior {
-                    medium: *medium,
-                    ctx,
-                    boundary_blocks_shadows,
+            Interior::Subsurface(params) => {
+                Some(arena.alloc(crate::subsurface::SubsurfaceInterior {
+                    walk: HomogeneousInterior {
+                        medium: params.walk,
+                        ctx,
+                        boundary_blocks_shadows,
+                    },
+                    diffusion: crate::diffusion::DiffusionInterior {
+                        medium: params.diffusion,
+                    },
+                    mode: params.mode,
                 }))
             }
+            Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior {
+                medium: *medium,
+                ctx,
+                boundary_blocks_shadows,
+            })),
             Interior::Heterogeneous(medium) => {
                 Some(arena.alloc(HeterogeneousInterior { medium, ctx }))
-            }
-            Interior::SubsurfaceDiffusion(medium) => {
-                Some(arena.alloc(crate::diffusion::DiffusionInterior { medium: *medium }))
             }
         }
     }
@@ -497,7 +502,11 @@ impl BxdfFactory for BuiltinMaterial {
             // scatter never returns such points; isotropic and black if asked anyway).
             ShadingMode::VolumeScatter => {
                 return match &self.interior {
-                    Interior::Homogeneous(m) | Interior::Subsurface(m) => arena.alloc(PhaseBxdf {
+                    Interior::Subsurface(params) => arena.alloc(PhaseBxdf {
+                        phase: params.walk.phase,
+                        albedo: params.walk.albedo(),
+                    }),
+                    Interior::Homogeneous(m) => arena.alloc(PhaseBxdf {
                         phase: m.phase,
                         albedo: m.albedo(),
                     }),

@@ -206,6 +206,8 @@ pub struct VolumeServices<'a, 's> {
 pub struct VolumeTechniques {
     /// Single or multiple scattering for every scattering medium.
     pub scattering: Option<crate::media::Scattering>,
+    /// Random walk or diffusion for every `subsurface` material.
+    pub subsurface: Option<crate::subsurface::SubsurfaceMode>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).

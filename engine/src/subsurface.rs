@@ -133,11 +133,69 @@ impl SubsurfaceParams {
                 tint: Rgb::WHITE,
                 cheap_shadows: false,
             },
-            interior: match self.mode {
-                SubsurfaceMode::RandomWalk => Interior::Subsurface(self.medium()),
-                SubsurfaceMode::Diffusion => Interior::SubsurfaceDiffusion(self.diffusion()),
-            },
+            interior: Interior::Subsurface(SubsurfaceInteriorParams {
+                walk: self.medium(),
+                diffusion: self.diffusion(),
+                mode: self.mode,
+            }),
         }
+    }
+}
+
+/// What a `subsurface` material's interior is built from: both modes' media (the render's
+/// `subsurface` technique may pick either) and the material's mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SubsurfaceInteriorParams {
+    /// The walked medium (`mode = "random_walk"`).
+    pub walk: HomogeneousMedium,
+    /// The diffusion profile (`mode = "diffusion"`).
+    pub diffusion: crate::diffusion::DiffusionMedium,
+    /// The material's mode.
+    pub mode: SubsurfaceMode,
+}
+
+/// The `subsurface` material's volume integrator: the walk or diffusion, as the render's
+/// `subsurface` technique or else the material says.
+pub struct SubsurfaceInterior<'a> {
+    /// The walk (a homogeneous interior that walks).
+    pub walk: crate::media::HomogeneousInterior<'a>,
+    /// Diffusion.
+    pub diffusion: crate::diffusion::DiffusionInterior,
+    /// The material's mode.
+    pub mode: SubsurfaceMode,
+}
+
+impl crate::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
+    fn nearest_hits(
+        &mut self,
+        rays: &risotto_components::Rays,
+        samplers: &mut [risotto_systems::sampler::PathSampler],
+        lobes_wanted: risotto_components::LobeSampled,
+        services: crate::plugin::VolumeServices<'_, '_>,
+        out: &mut crate::plugin::ShadeGroups,
+    ) {
+        match services.techniques.subsurface.unwrap_or(self.mode) {
+            SubsurfaceMode::RandomWalk => {
+                self.walk
+                    .nearest_hits(rays, samplers, lobes_wanted, services, out)
+            }
+            SubsurfaceMode::Diffusion => {
+                self.diffusion
+                    .nearest_hits(rays, samplers, lobes_wanted, services, out)
+            }
+        }
+    }
+
+    fn transmission(
+        &self,
+        segments: &crate::plugin::Segments,
+        samplers: &mut [risotto_systems::sampler::PathSampler],
+        ictx: &crate::context::IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        self.walk
+            .transmission(segments, samplers, ictx, trans, emission)
     }
 }
 

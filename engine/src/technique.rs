@@ -10,6 +10,7 @@ use crate::integrator::LightingTechnique;
 use crate::media::Scattering;
 use crate::render::RenderOptions;
 use crate::scene::Features;
+use crate::subsurface::SubsurfaceMode;
 use risotto_systems::independent_sampler::SamplerKind;
 use std::fmt;
 
@@ -163,6 +164,39 @@ pub static REGISTRY: &[Technique] = &[
             }
         },
     },
+    Technique {
+        name: "subsurface",
+        summary: "random walk or diffusion in subsurface materials",
+        values: &[
+            TechniqueValue {
+                name: "scene",
+                summary: "as each subsurface material's `mode` says",
+            },
+            TechniqueValue {
+                name: "random_walk",
+                summary: "walk every path inside the boundary (exact)",
+            },
+            TechniqueValue {
+                name: "diffusion",
+                summary: "normalized diffusion with probe rays (fast, approximate)",
+            },
+        ],
+        default: "scene",
+        applies_to: "scenes with subsurface materials",
+        applies: |f| f.subsurface,
+        get: |t| match t.subsurface {
+            None => "scene",
+            Some(SubsurfaceMode::RandomWalk) => "random_walk",
+            Some(SubsurfaceMode::Diffusion) => "diffusion",
+        },
+        set: |t, v| {
+            t.subsurface = match v {
+                "random_walk" => Some(SubsurfaceMode::RandomWalk),
+                "diffusion" => Some(SubsurfaceMode::Diffusion),
+                _ => None,
+            }
+        },
+    },
 ];
 
 /// A bad technique name, value or use.
@@ -232,6 +266,8 @@ pub struct Techniques {
     pub sampler: SamplerKind,
     /// `scattering` (`None`: as each medium says).
     pub scattering: Option<Scattering>,
+    /// `subsurface` (`None`: as each material says).
+    pub subsurface: Option<SubsurfaceMode>,
 }
 
 impl Techniques {
@@ -332,6 +368,7 @@ impl Techniques {
             sampler: self.sampler,
             volume: crate::plugin::VolumeTechniques {
                 scattering: self.scattering,
+                subsurface: self.subsurface,
             },
             ..base
         }
