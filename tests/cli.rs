@@ -394,7 +394,7 @@ fn bad_media_values_are_located_errors() {
         (
             "mode.toml",
             r#"{ type = "homogeneous", sigma_t = 2, scattering = "double" }"#,
-            &["scattering", "double", "multiple, single"],
+            &["scattering", "double", "multiple, walk, bounce, single"],
         ),
     ];
     for (name, interior, needles) in cases {
@@ -511,4 +511,68 @@ fn late_errors_are_located_and_printed_once() {
     ]);
     assert_fails_once("converge --reference", &out, garbage.to_str().unwrap());
     assert_fails_once("converge --reference", &out, "file identifier missing");
+}
+
+/// Bad `subsurface` material values are located errors: the file, the material, the key and
+/// the value; a valid one (all defaults but the colour) renders.
+#[test]
+fn bad_subsurface_values_are_located_errors() {
+    let dir = temp_dir("subsurface");
+    let with_material = |body: &str| {
+        scene_with(&[(
+            "[materials.emitter]",
+            &format!("[materials.skin]\ntype = \"subsurface\"\n{body}\n\n[materials.emitter]"),
+        )])
+    };
+    let cases: [(&str, &str, &[&str]); 7] = [
+        (
+            "albedo.toml",
+            "albedo = [0.5, 1.2, 0.5]",
+            &["materials.skin", "albedo", "[0, 1]", "1.2"],
+        ),
+        (
+            "mfp.toml",
+            "mean_free_path = [1, 0, 1]",
+            &["materials.skin", "mean_free_path", "> 0"],
+        ),
+        (
+            "unit.toml",
+            "unit_length = -0.01",
+            &["materials.skin", "unit_length", "-0.01"],
+        ),
+        (
+            "tiny.toml",
+            "mean_free_path = 1e-30\nunit_length = 1e-20",
+            &["materials.skin", "mean_free_path", "overflows"],
+        ),
+        ("g.toml", "g = 1.0", &["materials.skin", "g", "(-1, 1)"]),
+        (
+            "mode.toml",
+            "mode = \"photon\"",
+            &["materials.skin", "mode", "photon", "random_walk"],
+        ),
+        (
+            "key.toml",
+            "interior = { type = \"null\" }",
+            &["materials.skin", "interior"],
+        ),
+    ];
+    for (name, body, needles) in cases {
+        let (out, _) = render(&dir, name, &with_material(body), &[]);
+        let mut all = vec![name];
+        all.extend_from_slice(needles);
+        assert_fails(name, &out, &all);
+    }
+    let (out, exr) = render(
+        &dir,
+        "ok.toml",
+        &with_material("albedo = [0.8, 0.5, 0.4]\nmean_free_path = 0.05"),
+        &[],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(exr.exists());
 }

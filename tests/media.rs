@@ -160,54 +160,6 @@ fn single_scattering_in_a_slab_matches_chandrasekhar() {
     }
 }
 
-/// Chandrasekhar's H-function for isotropic scattering with albedo `w`, the solution of
-/// `1 / H(mu) = 1 - (w / 2) mu int_0^1 H(mu') / (mu + mu') dmu'`
-/// (Chandrasekhar 1960, ch. V eq. (6)), by fixed-point iteration on 48 Gauss-Legendre
-/// nodes, evaluated at `mu` by the same equation.
-fn chandrasekhar_h(w: f64, mu: f64) -> f64 {
-    // 48-point Gauss-Legendre on [0, 1]: Newton iteration on the Legendre polynomial P_n.
-    let n = 48;
-    let legendre = |x: f64| {
-        let (mut p0, mut p1) = (1.0, x);
-        for k in 2..=n {
-            let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-            p0 = p1;
-            p1 = p2;
-        }
-        // P_n(x) and its derivative.
-        (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
-    };
-    let nodes: Vec<(f64, f64)> = (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            for _ in 0..100 {
-                let (p, dp) = legendre(x);
-                x -= p / dp;
-            }
-            let (_, dp) = legendre(x);
-            ((x + 1.0) / 2.0, 1.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect();
-    let weight_sum: f64 = nodes.iter().map(|n| n.1).sum();
-    assert!(
-        (weight_sum - 1.0).abs() < 1e-12,
-        "quadrature weights sum to {weight_sum}"
-    );
-    let eval = |h: &[f64], mu: f64| {
-        let integral: f64 = nodes
-            .iter()
-            .zip(h)
-            .map(|(&(x, wx), &hx)| wx * hx / (mu + x))
-            .sum();
-        1.0 / (1.0 - w / 2.0 * mu * integral)
-    };
-    let mut h = vec![1.0f64; n];
-    for _ in 0..3000 {
-        h = nodes.iter().map(|&(x, _)| eval(&h, x)).collect();
-    }
-    eval(&h, mu)
-}
-
 /// Multiple scattering in a semi-infinite isotropic half-space (a slab 200 mean free paths
 /// deep) under a collimated beam, against Chandrasekhar's exact diffuse reflection
 /// (1960, ch. IV sec. 27, eq. (46) with the H-function of ch. V): the radiance reflected
@@ -285,7 +237,10 @@ fn the_scattering_technique_overrides_the_medium() {
     let compiled = scene.compile().unwrap();
     let mean = |scattering| {
         let options = RenderOptions {
-            volume: VolumeTechniques { scattering },
+            volume: VolumeTechniques {
+                scattering,
+                ..VolumeTechniques::default()
+            },
             ..RenderOptions::default()
         };
         image_mean(&render(&compiled, &options, &|_| {}).unwrap())

@@ -13,6 +13,21 @@ use std::path::Path;
 /// Renders `scene` at 64x64 and checks it against `reference`: per-channel means within
 /// `mean_tol` (relative) and an RMSE consistent with the render's own noise.
 fn check(scene: &str, reference: &str, spp: u32, mean_tol: f64, max_rmse: f64) {
+    check_noisy(scene, reference, spp, mean_tol, max_rmse, None);
+}
+
+/// [`check`] for a scene where the sampler does no better than independent samples (long
+/// random walks use up the sampler's dimensions): the RMSE against the reference is then the
+/// render's iid prediction and the reference's own noise `ref_noise` (per 64x64 pixel) in
+/// quadrature, allowed 15 % for the fluctuation of the variance estimate itself.
+fn check_noisy(
+    scene: &str,
+    reference: &str,
+    spp: u32,
+    mean_tol: f64,
+    max_rmse: f64,
+    ref_noise: Option<f64>,
+) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut desc = load_scene(&root.join(scene)).unwrap();
     desc.render.width = 64;
@@ -51,7 +66,9 @@ fn check(scene: &str, reference: &str, spp: u32, mean_tol: f64, max_rmse: f64) {
     // mirrored or biased image is far above it.
     // A zero-variance render (the white furnace) is bounded by `max_rmse` alone: the
     // reference's own noise.
-    let iid = if expected_rmse > 0.0 {
+    let iid = if let Some(noise) = ref_noise {
+        1.15 * (expected_rmse * expected_rmse + noise * noise).sqrt()
+    } else if expected_rmse > 0.0 {
         expected_rmse
     } else {
         f64::INFINITY
@@ -143,5 +160,24 @@ fn hetero_grid_matches_mitsuba() {
         64,
         0.005,
         0.05,
+    );
+}
+
+#[test]
+fn subsurface_like_matches_mitsuba() {
+    // A dense scattering medium (sigma_t 20, albedo 0.99, isotropic) inside a dielectric
+    // sphere (ior 1.33), no Russian roulette: hundreds of scattering events per path, every
+    // exit through the Fresnel boundary. The reference is the noisiest of the suite (896
+    // spp, noise 0.0214 per 256x256 pixel, so 0.0054 per 4x4 block). The interior walks
+    // inside its volume integrator (engine/src/random_walk.rs). Measured (64x64, 64 spp):
+    // means within 0.11 %, rmse 0.081 against an iid prediction of 0.083 (per-event
+    // bounces, before the walk: 0.075 and 0.076 at 7x the time).
+    check_noisy(
+        "scenes/mitsuba-suite/subsurface_like.toml",
+        "tests/data/subsurface_like-mitsuba-64.exr",
+        64,
+        0.01,
+        0.15,
+        Some(0.0054),
     );
 }

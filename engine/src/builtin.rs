@@ -378,6 +378,9 @@ pub enum Interior {
     Homogeneous(HomogeneousMedium),
     /// Heterogeneous scattering medium (a density grid; shared, not copied).
     Heterogeneous(Arc<HeterogeneousMedium>),
+    /// The `subsurface` material's interior ([`crate::subsurface`]): the walked medium and
+    /// the diffusion profile made from the artist's parameters, and the mode to use.
+    Subsurface(crate::subsurface::SubsurfaceInteriorParams),
 }
 
 impl Interior {
@@ -387,23 +390,42 @@ impl Interior {
             Interior::None => InstanceHints::NONE,
             Interior::Null | Interior::Beer { .. } => volume,
             Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
+            Interior::Subsurface(_) => {
+                volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_SUBSURFACE
+            }
             Interior::Heterogeneous(_) => {
                 volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_HETEROGENEOUS
             }
         }
     }
+    /// `boundary_blocks_shadows`: the surface around it lets no shadow ray through.
     fn begin<'a>(
         &'a self,
         ctx: &'a ShadingContext<'a>,
         arena: &'a Bump,
+        boundary_blocks_shadows: bool,
     ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
         match self {
             Interior::None => None,
             Interior::Null => Some(arena.alloc(NullInterior)),
             Interior::Beer { sigma_a } => Some(arena.alloc(BeerInterior { sigma_a: *sigma_a })),
+            Interior::Subsurface(params) => {
+                Some(arena.alloc(crate::subsurface::SubsurfaceInterior {
+                    walk: HomogeneousInterior {
+                        medium: params.walk,
+                        ctx,
+                        boundary_blocks_shadows,
+                    },
+                    diffusion: crate::diffusion::DiffusionInterior {
+                        medium: params.diffusion,
+                    },
+                    mode: params.mode,
+                }))
+            }
             Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior {
                 medium: *medium,
                 ctx,
+                boundary_blocks_shadows,
             })),
             Interior::Heterogeneous(medium) => {
                 Some(arena.alloc(HeterogeneousInterior { medium, ctx }))
@@ -480,6 +502,10 @@ impl BxdfFactory for BuiltinMaterial {
             // scatter never returns such points; isotropic and black if asked anyway).
             ShadingMode::VolumeScatter => {
                 return match &self.interior {
+                    Interior::Subsurface(params) => arena.alloc(PhaseBxdf {
+                        phase: params.walk.phase,
+                        albedo: params.walk.albedo(),
+                    }),
                     Interior::Homogeneous(m) => arena.alloc(PhaseBxdf {
                         phase: m.phase,
                         albedo: m.albedo(),
@@ -507,7 +533,8 @@ impl BxdfFactory for BuiltinMaterial {
         _mode: ShadingMode,
         arena: &'a Bump,
     ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
-        self.interior.begin(ctx, arena)
+        let blocks = self.surface != Surface::Interface && self.shadow_transmittance().is_black();
+        self.interior.begin(ctx, arena, blocks)
     }
 
     fn shadow_transmittance(&self) -> Rgb {

@@ -78,7 +78,7 @@ impl MaterialRegistry {
     }
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
-    /// `interface`.
+    /// `interface`, `subsurface`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -118,6 +118,7 @@ impl MaterialRegistry {
             });
         }
         r.register("interface", |p| builtin(p, Surface::Interface, &[]));
+        r.register("subsurface", crate::subsurface::construct);
         r
     }
 
@@ -242,11 +243,13 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
     };
     let scattering = match t.string("scattering", Some("multiple"))?.as_str() {
         "multiple" => Scattering::Multiple,
+        "walk" => Scattering::Walk,
+        "bounce" => Scattering::Bounce,
         "single" => Scattering::Single,
         other => {
             return Err(t.error(
                 Some("scattering"),
-                format!("unknown scattering \"{other}\" (known: multiple, single)"),
+                format!("unknown scattering \"{other}\" (known: multiple, walk, bounce, single)"),
             ))
         }
     };

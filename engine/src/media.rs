@@ -98,12 +98,22 @@ impl Bxdf for PhaseBxdf {
     }
 }
 
-/// How a homogeneous medium scatters (scene files: `scattering = "multiple" | "single"`).
+/// How a homogeneous medium scatters (scene files:
+/// `scattering = "multiple" | "walk" | "bounce" | "single"`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Scattering {
-    /// Every order of scattering: points inside go back to the global integrator.
+    /// Every order of scattering, by whichever of [`Walk`](Self::Walk) and
+    /// [`Bounce`](Self::Bounce) suits the volume: the walk where light sampling at the
+    /// medium's events cannot succeed (the boundary blocks shadow rays and no point light
+    /// lies inside the volume's bounds), else bounces.
     #[default]
     Multiple,
+    /// Every order, walked inside the volume integrator ([`crate::random_walk`]): only the
+    /// walks' exits go back to the global integrator; no light sampling at the events.
+    Walk,
+    /// Every order: each scattering point goes back to the global integrator, which lights
+    /// and scatters it like a surface point (one global bounce per event).
+    Bounce,
     /// Single scattering through the lighting delegate (multiple without one).
     Single,
 }
@@ -147,6 +157,10 @@ pub struct HomogeneousInterior<'a> {
     pub medium: HomogeneousMedium,
     /// The context `begin_interior` bound.
     pub ctx: &'a ShadingContext<'a>,
+    /// The volume's boundary blocks shadow rays (neither index-matched nor letting shadows
+    /// through): light sampling from inside can then reach only lights inside it, which
+    /// decides [`Scattering::Multiple`] for the walk.
+    pub boundary_blocks_shadows: bool,
 }
 
 /// Sampler dimensions the integrator draws per ray: channel, distance, light choice and
@@ -155,6 +169,28 @@ pub struct HomogeneousInterior<'a> {
 const DIMS_PER_SEGMENT: usize = 4;
 
 impl HomogeneousInterior<'_> {
+    /// [`Scattering::Multiple`]'s choice: walk when light sampling at the medium's events
+    /// cannot find a light (the boundary blocks shadow rays and no point light lies in the
+    /// volume's bounds; area lights inside are found by the walk's own rays).
+    fn walks(&self, ictx: &crate::context::IntegratorContext<'_>) -> bool {
+        if !self.boundary_blocks_shadows {
+            return false;
+        }
+        let bounds = self.ctx.volume_bounds();
+        !ictx
+            .scene
+            .lights
+            .lights()
+            .iter()
+            .any(|l| match (l, bounds) {
+                (Light::Point { position, .. }, Some((lo, hi))) => {
+                    position.cmpge(lo).all() && position.cmple(hi).all()
+                }
+                (Light::Point { .. }, None) => true,
+                _ => false,
+            })
+    }
+
     /// Draws the four dimensions of every ray's segment.
     fn draw(samplers: &mut [PathSampler]) -> Vec<[f32; DIMS_PER_SEGMENT]> {
         let mut u = vec![[0.0; DIMS_PER_SEGMENT]; samplers.len()];
@@ -450,11 +486,22 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        let u = Self::draw(samplers);
         let scattering = services
             .techniques
             .scattering
             .unwrap_or(self.medium.scattering);
+        let walk = match scattering {
+            Scattering::Walk => true,
+            Scattering::Multiple => self.walks(services.ictx),
+            Scattering::Bounce => false,
+            // Single scattering needs the delegate; without one it scatters as Multiple.
+            Scattering::Single => services.lighting.is_none() && self.walks(services.ictx),
+        };
+        if walk {
+            crate::random_walk::walk_bundle(&self.medium, rays, samplers, services.ictx, out);
+            return;
+        }
+        let u = Self::draw(samplers);
         if scattering == Scattering::Single && services.lighting.is_some() {
             let start = (out.points.len(), out.groups.len(), out.misses.len());
             services.ictx.nearest_hits(rays, out);

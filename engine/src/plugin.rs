@@ -36,7 +36,7 @@
 //! ```
 
 use crate::context::IntegratorContext;
-pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
+pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
 pub use crate::shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling,
@@ -206,6 +206,8 @@ pub struct VolumeServices<'a, 's> {
 pub struct VolumeTechniques {
     /// Single or multiple scattering for every scattering medium.
     pub scattering: Option<crate::media::Scattering>,
+    /// Random walk or diffusion for every `subsurface` material.
+    pub subsurface: Option<crate::subsurface::SubsurfaceMode>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).

@@ -2,6 +2,7 @@
 //! plus the rays that escaped. Both the renderer's [`IntegratorContext`](crate::context::IntegratorContext)
 //! and volume integrators write it; the global integrator shades it.
 
+use glam::Vec3;
 use risotto_components::{Rays, Rgb, ShadingPointRow, ShadingPoints};
 use std::ops::Range;
 
@@ -28,6 +29,75 @@ pub struct ShadeGroups {
     pub misses: Vec<u32>,
     /// Transmission applied to each escaped ray (parallel to `misses`).
     pub miss_transmission: Vec<Rgb>,
+    /// Rays that a volume integrator walked inside its volume before they reached the point
+    /// (or miss) it returns for them: the global integrator takes each one's last segment
+    /// as the ray that arrived there.
+    pub walked: WalkedRays,
+}
+
+/// The rays of a [`ShadeGroups`] that a volume integrator scattered inside its volume (a
+/// random walk run within the integrator, [`crate::random_walk`]) before they arrived where
+/// their point lies. Row `k` says that ray `ray[k]` of the answered table arrived along the
+/// segment `origin[k] + t direction[k]`, `t` in `[tmin[k], tmax[k]]`, after `vertices[k]`
+/// scattering events in the volume. The global integrator replaces the ray's geometry by
+/// that segment, counts the events as bounces and, since the walk sampled no lights at its
+/// events, gives emitters found by the last segment their full weight (no MIS).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WalkedRays {
+    /// Ray id in the answered table.
+    pub ray: Vec<u32>,
+    /// Start of the last segment: the last scattering event.
+    pub origin: Vec<Vec3>,
+    /// Unit direction of the last segment.
+    pub direction: Vec<Vec3>,
+    /// Smallest hit distance of the last segment.
+    pub tmin: Vec<f32>,
+    /// Largest hit distance of the last segment.
+    pub tmax: Vec<f32>,
+    /// Scattering events of the walk (at least 1).
+    pub vertices: Vec<u32>,
+}
+
+impl WalkedRays {
+    /// Number of walked rays.
+    pub fn len(&self) -> usize {
+        self.ray.len()
+    }
+    /// True when no ray was walked.
+    pub fn is_empty(&self) -> bool {
+        self.ray.is_empty()
+    }
+    /// Removes every row.
+    pub fn clear(&mut self) {
+        self.ray.clear();
+        self.origin.clear();
+        self.direction.clear();
+        self.tmin.clear();
+        self.tmax.clear();
+        self.vertices.clear();
+    }
+    /// Writes each walked ray's last segment into its row of `rays` (the table answered):
+    /// origin, direction, `tmin`, `tmax`, the last vertex `prev_p`, `depth` grown by the
+    /// events (saturating), the lobe of a phase-function sample, and `pdf = 0` (the walk did
+    /// no light sampling at its events, so an emitter hit by the last segment is not
+    /// MIS-weighted against it).
+    pub fn apply(&self, rays: &mut Rays) {
+        let scatter = risotto_components::LobeSampled(
+            risotto_components::LobeSampled::SCATTER.0 | risotto_components::LobeSampled::DIFFUSE.0,
+        );
+        for k in 0..self.len() {
+            let r = self.ray[k] as usize;
+            rays.origin[r] = self.origin[k];
+            rays.direction[r] = self.direction[k];
+            rays.tmin[r] = self.tmin[k];
+            rays.tmax[r] = self.tmax[k];
+            rays.prev_p[r] = self.origin[k];
+            let events = self.vertices[k].min(u16::MAX as u32) as u16;
+            rays.depth[r] = rays.depth[r].saturating_add(events);
+            rays.lobe[r] = scatter;
+            rays.pdf[r] = 0.0;
+        }
+    }
 }
 
 /// One group of a [`ShadeGroups`].
@@ -49,6 +119,7 @@ impl ShadeGroups {
         self.groups.clear();
         self.misses.clear();
         self.miss_transmission.clear();
+        self.walked.clear();
     }
     /// Appends a group made of `rows` (RIS `EndVolumeSampling` with a membership mask: pass the
     /// retained points only). Empty groups are not added.
@@ -110,7 +181,9 @@ impl ShadeGroups {
         self.points.len()
     }
     /// Appends `src`'s groups and misses, adding `ray_offset` to their ray ids (`src`
-    /// answered a table whose rows were appended to this one's rays at that offset).
+    /// answered a table whose rows were appended to this one's rays at that offset). Its
+    /// [`walked`](Self::walked) rows are not copied: [`WalkedRays::apply`] them to the
+    /// answered table before appending it.
     pub fn append_offset(&mut self, src: &ShadeGroups, ray_offset: u32) {
         for g in &src.groups {
             let start = self.points.len();

@@ -10,6 +10,7 @@ use crate::integrator::LightingTechnique;
 use crate::media::Scattering;
 use crate::render::RenderOptions;
 use crate::scene::Features;
+use crate::subsurface::SubsurfaceMode;
 use risotto_systems::independent_sampler::SamplerKind;
 use std::fmt;
 
@@ -142,7 +143,17 @@ pub static REGISTRY: &[Technique] = &[
             },
             TechniqueValue {
                 name: "multiple",
-                summary: "every order: points inside go back to the path tracer",
+                summary: "every order: walk where light sampling cannot help, else bounce",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "walk",
+                summary: "every order, walked inside the volume integrator (exits only)",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "bounce",
+                summary: "every order: each scattering point goes back to the path tracer",
                 converges: always,
             },
             TechniqueValue {
@@ -158,12 +169,52 @@ pub static REGISTRY: &[Technique] = &[
         get: |t| match t.scattering {
             None => "scene",
             Some(Scattering::Multiple) => "multiple",
+            Some(Scattering::Walk) => "walk",
+            Some(Scattering::Bounce) => "bounce",
             Some(Scattering::Single) => "single",
         },
         set: |t, v| {
             t.scattering = match v {
                 "multiple" => Some(Scattering::Multiple),
+                "walk" => Some(Scattering::Walk),
+                "bounce" => Some(Scattering::Bounce),
                 "single" => Some(Scattering::Single),
+                _ => None,
+            }
+        },
+    },
+    Technique {
+        name: "subsurface",
+        summary: "random walk or diffusion in subsurface materials",
+        values: &[
+            TechniqueValue {
+                name: "scene",
+                summary: "as each subsurface material's `mode` says",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "random_walk",
+                summary: "walk every path inside the boundary (exact)",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "diffusion",
+                summary: "normalized diffusion with probe rays (fast, approximate)",
+                converges: |_| false,
+            },
+        ],
+        default: "scene",
+        applies_to: "scenes with subsurface materials",
+        applies: |f| f.subsurface,
+        get: |t| match t.subsurface {
+            None => "scene",
+            Some(SubsurfaceMode::RandomWalk) => "random_walk",
+            Some(SubsurfaceMode::Diffusion) => "diffusion",
+        },
+        set: |t, v| {
+            t.subsurface = match v {
+                "random_walk" => Some(SubsurfaceMode::RandomWalk),
+                "diffusion" => Some(SubsurfaceMode::Diffusion),
                 _ => None,
             }
         },
@@ -237,6 +288,8 @@ pub struct Techniques {
     pub sampler: SamplerKind,
     /// `scattering` (`None`: as each medium says).
     pub scattering: Option<Scattering>,
+    /// `subsurface` (`None`: as each material says).
+    pub subsurface: Option<SubsurfaceMode>,
 }
 
 impl Techniques {
@@ -349,6 +402,7 @@ impl Techniques {
             sampler: self.sampler,
             volume: crate::plugin::VolumeTechniques {
                 scattering: self.scattering,
+                subsurface: self.subsurface,
             },
             ..base
         }

@@ -2,10 +2,12 @@
 //! the slices it writes, knows nothing of the scene world, the scheduler or the global
 //! integrator, and can be benchmarked alone.
 
+pub mod bssrdf;
 mod bvh8;
 pub mod bxdf;
 pub mod bxdf_samples;
 pub mod camera;
+pub mod clearance;
 pub mod direct_lighting;
 pub mod distribution;
 pub mod film;

@@ -128,6 +128,13 @@ pub fn sample_free_flight(
     u_distance: f32,
     tmax: f32,
 ) -> FreeFlight {
+    if sigma_t.r == sigma_t.g
+        && sigma_t.g == sigma_t.b
+        && sigma_s.r == sigma_s.g
+        && sigma_s.g == sigma_s.b
+    {
+        return grey_free_flight(sigma_t.r, sigma_s.r, u_distance, tmax);
+    }
     let p = normalized(channel_pdf);
     // NaN -> 0: a malformed segment is empty rather than poisoning the throughput.
     let tmax = tmax.max(0.0);
@@ -168,6 +175,34 @@ pub fn sample_free_flight(
         t: tmax,
         scattered: false,
         weight: finite_ratio(r, expect(p, r)),
+    }
+}
+
+/// [`sample_free_flight`] when every channel has the same `sigma_t` and `sigma_s` (a grey
+/// medium: the subsurface and smoke scenes, where the walk's events are the hot loop): the
+/// channel choice does not matter, every ratio `T_c / T_ref` is exactly 1, so the weights
+/// are the albedo `sigma_s / sigma_t` at an event and exactly 1 on passing, with no
+/// exponentials.
+#[inline]
+fn grey_free_flight(sigma_t: f32, sigma_s: f32, u_distance: f32, tmax: f32) -> FreeFlight {
+    let tmax = tmax.max(0.0);
+    if sigma_t > 0.0 {
+        // -ln(1 - u): `1 - u` is exact for the samplers' multiples of 2^-24 and at least
+        // 2^-24 after the clamp, and `ln` is cheaper than `ln_1p` in this hot loop.
+        let s = -(1.0 - u_distance.clamp(0.0, ONE_MINUS_EPSILON)).ln();
+        let t = s / sigma_t;
+        if t < tmax {
+            return FreeFlight {
+                t,
+                scattered: true,
+                weight: Rgb::splat(sigma_s / sigma_t),
+            };
+        }
+    }
+    FreeFlight {
+        t: tmax,
+        scattered: false,
+        weight: Rgb::WHITE,
     }
 }
 

@@ -46,7 +46,8 @@ pub fn pixel_seed(render_seed: u64, pixel: u32) -> u32 {
 
 /// SplitMix64 (Steele, Lea and Flood 2014, "Fast splittable pseudorandom number
 /// generators"): a tiny deterministic generator for reproducible test inputs and bench data.
-/// Rendering uses the samplers above, never this.
+/// Rendering uses the samplers above, except for the tails of random walks inside dense
+/// media (`risotto_engine::random_walk`), where no sampler keeps its stratification.
 #[derive(Clone, Debug)]
 pub struct SplitMix64(pub u64);
 

@@ -10,6 +10,7 @@ use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto::systems::camera::{Camera, Projection};
 use risotto_components::Rgb;
+use std::f64::consts::PI;
 
 /// A camera looking down -z from `z = dist` with a horizontal fov.
 pub fn camera(fov: f32, dist: f32, w: u32, h: u32) -> Camera {
@@ -242,4 +243,68 @@ pub fn assert_finite(what: &str, out: &RenderOutput) {
             "{what}: pixel {i} is {p:?} (variance {v:?})"
         );
     }
+}
+
+/// Chandrasekhar's H-function for isotropic scattering with albedo `w`, the solution of
+/// `1 / H(mu) = 1 - (w / 2) mu int_0^1 H(mu') / (mu + mu') dmu'`
+/// (Chandrasekhar 1960, ch. V eq. (6)), by fixed-point iteration on 48 Gauss-Legendre
+/// nodes, evaluated at `mu` by the same equation.
+pub fn chandrasekhar_h(w: f64, mu: f64) -> f64 {
+    let table = chandrasekhar_h_table(w);
+    h_from_table(&table, w, mu)
+}
+
+/// `H` at the 48 Gauss-Legendre nodes on [0, 1], as (node, weight, H(node)), the converged
+/// fixed point of [`chandrasekhar_h`]'s iteration (for moments of `H`).
+pub fn chandrasekhar_h_table(w: f64) -> Vec<(f64, f64, f64)> {
+    let nodes = gauss_legendre_01(48);
+    let mut table: Vec<(f64, f64, f64)> = nodes.iter().map(|&(x, wx)| (x, wx, 1.0)).collect();
+    for _ in 0..3000 {
+        let h: Vec<f64> = nodes
+            .iter()
+            .map(|&(x, _)| h_from_table(&table, w, x))
+            .collect();
+        for (row, h) in table.iter_mut().zip(h) {
+            row.2 = h;
+        }
+    }
+    table
+}
+
+/// The right-hand side of the H-equation at `mu` with `H` given on the quadrature nodes.
+fn h_from_table(table: &[(f64, f64, f64)], w: f64, mu: f64) -> f64 {
+    let integral: f64 = table.iter().map(|&(x, wx, hx)| wx * hx / (mu + x)).sum();
+    1.0 / (1.0 - w / 2.0 * mu * integral)
+}
+
+/// The `n`-point Gauss-Legendre rule on [0, 1] as (node, weight) pairs: Newton iteration on
+/// the Legendre polynomial P_n.
+pub fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
+    let legendre = |x: f64| {
+        let (mut p0, mut p1) = (1.0, x);
+        for k in 2..=n {
+            let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
+            p0 = p1;
+            p1 = p2;
+        }
+        // P_n(x) and its derivative.
+        (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
+    };
+    let nodes: Vec<(f64, f64)> = (0..n)
+        .map(|i| {
+            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            for _ in 0..100 {
+                let (p, dp) = legendre(x);
+                x -= p / dp;
+            }
+            let (_, dp) = legendre(x);
+            ((x + 1.0) / 2.0, 1.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect();
+    let weight_sum: f64 = nodes.iter().map(|n| n.1).sum();
+    assert!(
+        (weight_sum - 1.0).abs() < 1e-12,
+        "quadrature weights sum to {weight_sum}"
+    );
+    nodes
 }

@@ -204,6 +204,8 @@ fn partitioned(
                 }
                 let absorbed = t.answered.iter().filter(|a| !**a).count();
                 stats.terminate(Termination::Absorbed, absorbed);
+                // Rays walked inside the volume arrive along their walk's last segment.
+                t.answers.walked.apply(&mut t.bundle);
             }
         }
         append(hits, &t.answers, &t.bundle);

@@ -1234,6 +1234,9 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                 }
                 // Index-matched boundaries take no surface parameters.
                 "interface" => {}
+                "subsurface" => {
+                    crate::subsurface::parse(p).unwrap();
+                }
                 other => panic!("{what}: unexpected material type {other}"),
             }
             if let Some(interior) = p.table("interior").unwrap() {

@@ -1,0 +1,486 @@
+//! The random walk inside a homogeneous medium, run by the volume integrator itself: the
+//! seed's SSDiffusion shape (the integrator traces its own rays and returns only hits) with
+//! path-traced transport inside instead of a diffusion profile.
+//!
+//! # What it does
+//! [`walk_bundle`] takes a bundle of rays travelling in the medium and walks every one of
+//! them, in a tight loop over the bundle: trace the live walkers to the nearest surface
+//! (the boundary, or anything inside it), sample a free flight on each segment (one-sample
+//! spectral MIS over the RGB channels, [`sample_free_flight`], with the medium's exact
+//! homogeneous transmittance), and for the walkers that scatter, sample the phase function
+//! and go again. A walker whose flight passes its segment has reached a surface: that hit
+//! (or miss) is its **exit**, returned to the global integrator as an ordinary surface
+//! point, with the walk's weight in its transmission and the walk's last segment in
+//! [`ShadeGroups::walked`] (the global integrator then shades the boundary -- a dielectric
+//! reflects the walker back in or refracts it out -- as for any hit). The global
+//! integrator sees one bounce per boundary interaction, never one per scattering event.
+//!
+//! # Steps without rays
+//! After every traced event the walker learns its **clearance**, the distance to the
+//! nearest surface ([`risotto_systems::clearance`], a BVH distance query), and keeps the
+//! ball of that radius (less a rounding margin) around the event: a segment between two
+//! points of a ball that contains no surface crosses none, so every later step that ends
+//! inside the ball is taken without tracing (the same random numbers, the same event as a
+//! traced step would give). Deep inside a dense medium a walker takes dozens of steps per
+//! ray; near the boundary the balls shrink and every step is traced. Traced steps ask only
+//! for surfaces up to the sampled distance (plus a margin), which the BVH culls early.
+//!
+//! No light is sampled at the walk's events. That is exact (the walk is an unbiased
+//! estimator of every order of scattering on its own: every event's outgoing direction
+//! comes from the phase function, and emitters found by a walk segment count with full
+//! weight) and it is the efficient choice where a shadow ray from inside the medium cannot
+//! reach a light: behind a boundary that blocks shadow rays (a dielectric without cheap
+//! shadows, an opaque surface), with no point light inside. That is the rule by which a
+//! `homogeneous` interior walks on its own ([`crate::media::Scattering::Multiple`]); a
+//! `subsurface` material and `scattering = "walk"` always walk.
+//!
+//! # Weights and Russian roulette
+//! Let `w` be the walk's weight (per channel, starting at 1) and `b` the throughput the ray
+//! carried into the volume. The channel probabilities of every flight are `p_c ∝ b_c w_c`.
+//! With those, the scalar `A = sum_c b_c w_c / sum_c b_c` **never increases**: at a
+//! scattering event (`w'_c = w_c sigma_s,c T_c / sum_k p_k sigma_t,k T_k`)
+//! `A' = A sum_c b_c w_c sigma_s,c T_c / sum_k b_k w_k sigma_t,k T_k <= A` because
+//! `sigma_s <= sigma_t`, and on a pass (`w'_c = w_c T_c / sum_k p_k T_k`) `A' = A`. `A` is
+//! the albedo-corrected throughput of the walk: the fraction of the incoming path's weight
+//! the walk still carries.
+//!
+//! After each scattering event the walk survives with probability
+//! `q = clamp(A, Q_FLOOR, 1)` and divides `w` by `q`. **Unbiased**: `q` depends only on the
+//! walk so far, and `E[w'] = q (w / q) + (1 - q) 0 = w` (Arvo and Kirk 1990, "Particle
+//! transport and image synthesis", sec. 3.3). **Bounded**: survivors have `A' = A / q`,
+//! which is exactly 1 while `A >= Q_FLOOR` and below 1 otherwise, so `A <= 1` for the
+//! whole walk however long it is, and each channel `w_c <= A sum_k b_k / b_c`. In a grey
+//! medium `A` is the walk weight itself and the rule is analog absorption: the walker dies
+//! with probability `1 - albedo` per event and carries weight exactly 1.
+//!
+//! Mitsuba's rule, `q = min(max_c(throughput) eta^2, 0.95)` applied to the whole path
+//! throughput, caps `q` at 0.95 while the walk's throughput stays near 1 (albedo 0.99): the
+//! survivors' weights then grow by `0.99 / 0.95` per event and long walks reach weights of
+//! 100+ (the harness's `subsurface_like` notes). Here `q` is not capped below 1, so weights
+//! cannot grow. The floor keeps a medium of very low albedo from killing nearly every
+//! walker at its first event (survivors then weigh `A / Q_FLOOR < 1`).
+//!
+//! # Sampler dimensions
+//! A walk draws one aligned set of four dimensions from the path's sampler (the first
+//! flight's channel and distance, the first phase sample), so thin media stay stratified
+//! where it matters; the rest of the walk (hundreds of events in a dense medium, where no
+//! sampler keeps its stratification) comes from a SplitMix64 stream seeded by the path's
+//! sampler state, deterministic per pixel sample.
+
+use crate::context::IntegratorContext;
+use crate::media::HomogeneousMedium;
+use crate::shade_groups::ShadeGroups;
+use crate::stats::{System, VolumeEvent};
+use glam::{Vec2, Vec3};
+use risotto_components::{Rays, Rgb, NO_HIT};
+use risotto_systems::clearance::clearance;
+use risotto_systems::intersect::intersect_closest;
+use risotto_systems::medium::{channel_pdf, sample_free_flight, FreeFlight};
+use risotto_systems::phase::PhaseFunction;
+use risotto_systems::ray::ray_offset;
+use risotto_systems::sampler::{PathSampler, SplitMix64};
+
+/// The smallest survival probability of the walk's Russian roulette (see the module docs).
+pub const Q_FLOOR: f32 = 0.05;
+
+/// Scattering events after which a walk is abandoned: a guard against a walker trapped by a
+/// boundary that leaks numerically, far beyond any real walk (a sphere of radius 1000 mean
+/// free paths with albedo 1 takes about a million).
+pub const MAX_WALK_EVENTS: u32 = 1 << 22;
+
+/// The state of the live walkers, one row per walker (structure of arrays).
+#[derive(Default)]
+struct Walkers {
+    /// Index of the walker's ray in the bundle.
+    ray: Vec<u32>,
+    origin: Vec<Vec3>,
+    direction: Vec<Vec3>,
+    tmin: Vec<f32>,
+    tmax: Vec<f32>,
+    weight: Vec<Rgb>,
+    events: Vec<u32>,
+    rng: Vec<SplitMix64>,
+    /// The first flight's channel and distance numbers and the first phase sample, from the
+    /// path's sampler (used while `events == 0`).
+    first: Vec<[f32; 4]>,
+    /// Centre and radius of a ball known to hold no surface (radius 0: none known): steps
+    /// that end in it need no ray.
+    anchor: Vec<Vec3>,
+    radius: Vec<f32>,
+}
+
+impl Walkers {
+    fn len(&self) -> usize {
+        self.ray.len()
+    }
+    /// Keeps row `from` as row `to` (`to <= from`).
+    fn keep(&mut self, from: usize, to: usize) {
+        self.ray[to] = self.ray[from];
+        self.origin[to] = self.origin[from];
+        self.direction[to] = self.direction[from];
+        self.tmin[to] = self.tmin[from];
+        self.tmax[to] = self.tmax[from];
+        self.weight[to] = self.weight[from];
+        self.events[to] = self.events[from];
+        self.rng[to] = self.rng[from].clone();
+        self.first[to] = self.first[from];
+        self.anchor[to] = self.anchor[from];
+        self.radius[to] = self.radius[from];
+    }
+    fn truncate(&mut self, n: usize) {
+        self.ray.truncate(n);
+        self.origin.truncate(n);
+        self.direction.truncate(n);
+        self.tmin.truncate(n);
+        self.tmax.truncate(n);
+        self.weight.truncate(n);
+        self.events.truncate(n);
+        self.rng.truncate(n);
+        self.first.truncate(n);
+        self.anchor.truncate(n);
+        self.radius.truncate(n);
+    }
+}
+
+/// Walkers that reached a surface (or left the scene): each one's ray id in the bundle,
+/// last segment, weight and scattering events (0: the ray passed unscattered).
+#[derive(Default)]
+pub(crate) struct Exits {
+    pub(crate) ray: Vec<u32>,
+    pub(crate) origin: Vec<Vec3>,
+    pub(crate) direction: Vec<Vec3>,
+    pub(crate) tmin: Vec<f32>,
+    pub(crate) tmax: Vec<f32>,
+    pub(crate) weight: Vec<Rgb>,
+    pub(crate) events: Vec<u32>,
+}
+
+/// The seed of a walk's random stream: the path's sampler state, mixed (SplitMix64 mixes
+/// its state on every draw, so neighbouring seeds give unrelated streams).
+fn walk_seed(s: &PathSampler) -> SplitMix64 {
+    let key = ((s.seed as u64) << 32 | s.sample as u64)
+        ^ (s.dimension as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+    SplitMix64(key)
+}
+
+/// A uniform number in `[0, 1)` from the top 24 of 32 random bits (every multiple of
+/// 2^-24 reachable, as the samplers give).
+#[inline]
+fn unit(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// `sum_c b_c w_c / sum_c b_c`: the walk's albedo-corrected throughput `A` (module docs).
+#[inline]
+fn carried(b: Rgb, w: Rgb) -> f32 {
+    let sum = b.r.max(0.0) + b.g.max(0.0) + b.b.max(0.0);
+    if sum > 0.0 && sum.is_finite() {
+        (b.r.max(0.0) * w.r + b.g.max(0.0) * w.g + b.b.max(0.0) * w.b) / sum
+    } else {
+        (w.r + w.g + w.b) / 3.0
+    }
+}
+
+/// Walks every ray of `rays` (a bundle travelling in `medium`) to its exit and appends the
+/// exits to `out`: the surface points (and misses) the walks' last segments reach, with the
+/// walk's weight multiplied into their transmission, and the walked rays' last segments in
+/// `out.walked` (see the module docs). Walkers killed by the roulette, the depth limit or the
+/// event guard return nothing (the caller counts them absorbed). `samplers[i]` is ray `i`'s
+/// sample source; each advances by four dimensions.
+pub fn walk_bundle(
+    medium: &HomogeneousMedium,
+    rays: &Rays,
+    samplers: &mut [PathSampler],
+    ictx: &mut IntegratorContext<'_>,
+    out: &mut ShadeGroups,
+) {
+    let n = rays.len();
+    if n == 0 {
+        return;
+    }
+    let scene = ictx.scene;
+    let (st, ss) = (medium.sigma_t, medium.sigma_s);
+    let walk = Walk {
+        sigma_t: st,
+        sigma_s: ss,
+        phase: medium.phase,
+        max_depth: scene.settings.max_depth,
+        grey: st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b,
+    };
+    let mut w = Walkers::default();
+    for (i, s) in samplers.iter_mut().enumerate() {
+        let first = s.next_4d();
+        w.ray.push(i as u32);
+        w.origin.push(rays.origin[i]);
+        w.direction.push(rays.direction[i]);
+        w.tmin.push(rays.tmin[i]);
+        w.tmax.push(rays.tmax[i]);
+        w.weight.push(Rgb::WHITE);
+        w.events.push(0);
+        w.rng.push(walk_seed(s));
+        w.first.push(first);
+        w.anchor.push(rays.origin[i]);
+        w.radius.push(0.0);
+    }
+    let mut exits = Exits::default();
+    let (mut t_hit, mut prim, mut b1, mut b2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut flights, mut query) = (Vec::new(), Vec::new());
+    let (mut traced, mut free, mut passes) = (0usize, 0usize, 0usize);
+    while w.len() > 0 {
+        // Each walker takes the steps that end inside its empty ball without a ray (the
+        // segment from a point of the ball to another cannot cross a surface), until one
+        // would leave the ball: that flight is traced below.
+        //
+        // The flight's distance does not depend on where the segment ends (only whether it
+        // scatters does), so the trace needs the surfaces only up to the sampled distance,
+        // plus a margin to see a boundary just beyond it for the clamp below.
+        flights.clear();
+        query.clear();
+        let mut live = 0;
+        for j in 0..w.len() {
+            let r = w.ray[j] as usize;
+            let mut alive = true;
+            loop {
+                let (u_channel, u_distance) = if w.events[j] == 0 {
+                    (w.first[j][0], w.first[j][1])
+                } else {
+                    let u = w.rng[j].next_u64();
+                    (unit(u as u32), unit((u >> 32) as u32))
+                };
+                let pdf = if walk.grey {
+                    [1.0 / 3.0; 3]
+                } else {
+                    channel_pdf(rays.throughput[r] * w.weight[j])
+                };
+                let f = walk.flight(pdf, u_channel, u_distance, w.tmax[j]);
+                if f.scattered && w.radius[j] > 0.0 {
+                    let p = w.origin[j] + w.direction[j] * f.t;
+                    if (p - w.anchor[j]).length_squared() < w.radius[j] * w.radius[j] {
+                        free += 1;
+                        match walk.event(&mut w, j, rays, r, f.weight, p) {
+                            true => continue,
+                            false => {
+                                alive = false;
+                                break;
+                            }
+                        }
+                    }
+                }
+                let end = if f.scattered {
+                    let margin = 4000.0 * ray_offset(w.origin[j] + w.direction[j] * f.t);
+                    (f.t + margin).min(w.tmax[j])
+                } else {
+                    w.tmax[j]
+                };
+                flights.push((f, pdf, u_channel, u_distance));
+                query.push(end);
+                break;
+            }
+            if alive {
+                if live != j {
+                    w.keep(j, live);
+                }
+                live += 1;
+            }
+        }
+        w.truncate(live);
+        let m = w.len();
+        if m == 0 {
+            break;
+        }
+        t_hit.resize(m, 0.0);
+        prim.resize(m, NO_HIT);
+        b1.resize(m, 0.0);
+        b2.resize(m, 0.0);
+        ictx.stats.time(System::Intersect, m, || {
+            intersect_closest(
+                &scene.geometry,
+                &w.origin,
+                &w.direction,
+                &w.tmin,
+                &query,
+                &mut t_hit,
+                &mut prim,
+                &mut b1,
+                &mut b2,
+            )
+        });
+        let mut live = 0;
+        for j in 0..m {
+            let r = w.ray[j] as usize;
+            let (o, d) = (w.origin[j], w.direction[j]);
+            let hit = prim[j] != NO_HIT;
+            let (mut f, pdf, u_channel, u_distance) = flights[j];
+            if hit && (!f.scattered || t_hit[j] <= f.t) {
+                // A surface before the sampled distance: the flight passes to it, with the
+                // pass weight of that segment (the same numbers, so the same channel and
+                // distance, now beyond the segment's end).
+                f = walk.flight(pdf, u_channel, u_distance, t_hit[j]);
+            }
+            if !f.scattered {
+                passes += 1;
+                exits.ray.push(r as u32);
+                exits.origin.push(o);
+                exits.direction.push(d);
+                exits.tmin.push(w.tmin[j]);
+                exits.tmax.push(w.tmax[j]);
+                exits.weight.push(w.weight[j] * f.weight);
+                exits.events.push(w.events[j]);
+                continue;
+            }
+            traced += 1;
+            // Keep the event strictly inside: a point within the spawn offset of a boundary
+            // just beyond it (or of the segment's start, for a segment leaving the
+            // boundary) could round to the far side, and the walk's next segment would not
+            // see the boundary again (the same clamp as the homogeneous interior's).
+            let mut t = f.t;
+            if hit {
+                let seg = t_hit[j];
+                let s = scene.geometry.surface_at(prim[j], o, d, seg, b1[j], b2[j]);
+                let cos = d.dot(s.ng).abs().max(1e-3);
+                let end = seg - ray_offset(s.p) / cos;
+                t = t.min(if end < w.tmin[j] {
+                    0.5 * (w.tmin[j] + seg)
+                } else {
+                    end
+                });
+                t = t.max(w.tmin[j].min(0.5 * seg));
+            } else {
+                t = t.max(w.tmin[j]);
+            }
+            let p = o + d * t;
+            if !walk.event(&mut w, j, rays, r, f.weight, p) {
+                continue;
+            }
+            // A new empty ball around the event: the distance to the nearest surface, less
+            // a relative margin for its rounding and the spawn offset (so that no free
+            // step ends within rounding of a surface).
+            let c = clearance(&scene.geometry, p, f32::INFINITY);
+            w.anchor[j] = p;
+            w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * ray_offset(p)).max(0.0);
+            if live != j {
+                w.keep(j, live);
+            }
+            live += 1;
+        }
+        w.truncate(live);
+    }
+    ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
+    ictx.stats.volume_event(VolumeEvent::Pass, passes);
+    answer_exits(rays, &exits, ictx, out);
+}
+
+/// The medium and limits of one bundle's walks.
+struct Walk {
+    sigma_t: Rgb,
+    sigma_s: Rgb,
+    phase: PhaseFunction,
+    max_depth: u32,
+    /// Every channel alike: the channel probabilities do not matter.
+    grey: bool,
+}
+
+impl Walk {
+    /// A free flight on a segment of length `tmax` ([`sample_free_flight`]).
+    #[inline]
+    fn flight(&self, pdf: [f32; 3], u_channel: f32, u_distance: f32, tmax: f32) -> FreeFlight {
+        sample_free_flight(self.sigma_t, self.sigma_s, pdf, u_channel, u_distance, tmax)
+    }
+
+    /// Walker `j` (of ray `r`) scatters at `p` with the flight weight `flight_weight`: the
+    /// depth limit, the roulette and the phase sample. Writes the next segment into the
+    /// walker's row and returns true, or false when the walk ends here.
+    #[inline]
+    fn event(
+        &self,
+        w: &mut Walkers,
+        j: usize,
+        rays: &Rays,
+        r: usize,
+        flight_weight: Rgb,
+        p: Vec3,
+    ) -> bool {
+        let first = w.events[j] == 0;
+        let events = w.events[j] + 1;
+        // The next segment from this event is segment depth + events + 1 of the path:
+        // beyond max_depth nothing it finds counts, so the walk ends here.
+        if rays.depth[r] as u32 + events + 1 > self.max_depth || events > MAX_WALK_EVENTS {
+            return false;
+        }
+        // Russian roulette on the albedo-corrected throughput (module docs). A walk that
+        // carries nothing (albedo 0) ends here rather than walking on with weight 0.
+        let mut weight = w.weight[j] * flight_weight;
+        if weight.is_black() {
+            return false;
+        }
+        let q = carried(rays.throughput[r], weight).clamp(Q_FLOOR, 1.0);
+        let u = w.rng[j].next_u64();
+        if q < 1.0 {
+            if unit(u as u32) >= q {
+                return false;
+            }
+            weight *= 1.0 / q;
+        }
+        let u_lobe = unit((u >> 32) as u32);
+        let u_phase = if first {
+            Vec2::new(w.first[j][2], w.first[j][3])
+        } else {
+            let v = w.rng[j].next_u64();
+            Vec2::new(unit(v as u32), unit((v >> 32) as u32))
+        };
+        let (wi, pdf) = self.phase.sample(-w.direction[j], u_phase, u_lobe);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return false;
+        }
+        w.origin[j] = p;
+        w.direction[j] = wi;
+        w.tmin[j] = 0.0;
+        w.tmax[j] = f32::INFINITY;
+        w.weight[j] = weight;
+        w.events[j] = events;
+        true
+    }
+}
+
+/// Traces the exits' last segments again (one ray per walk, against hundreds traced by the
+/// walk itself) and appends their hits and misses to `out` as the rays' answers.
+pub(crate) fn answer_exits(
+    rays: &Rays,
+    exits: &Exits,
+    ictx: &mut IntegratorContext<'_>,
+    out: &mut ShadeGroups,
+) {
+    if exits.ray.is_empty() {
+        return;
+    }
+    let mut last = Rays::with_capacity(exits.ray.len());
+    last.extend_gather(rays, &exits.ray);
+    last.origin.copy_from_slice(&exits.origin);
+    last.direction.copy_from_slice(&exits.direction);
+    last.tmin.copy_from_slice(&exits.tmin);
+    last.tmax.copy_from_slice(&exits.tmax);
+    let (p0, m0) = (out.points.len(), out.misses.len());
+    ictx.trace(&last);
+    ictx.shade_traced(&last, None, out);
+    for k in p0..out.points.len() {
+        let e = out.points.ray_id[k] as usize;
+        out.points.ray_id[k] = exits.ray[e];
+        out.points.transmission[k] *= exits.weight[e];
+    }
+    for k in m0..out.misses.len() {
+        let e = out.misses[k] as usize;
+        out.misses[k] = exits.ray[e];
+        out.miss_transmission[k] *= exits.weight[e];
+    }
+    for (e, &events) in exits.events.iter().enumerate() {
+        if events > 0 {
+            let wk = &mut out.walked;
+            wk.ray.push(exits.ray[e]);
+            wk.origin.push(exits.origin[e]);
+            wk.direction.push(exits.direction[e]);
+            wk.tmin.push(exits.tmin[e]);
+            wk.tmax.push(exits.tmax[e]);
+            wk.vertices.push(events);
+        }
+    }
+}
