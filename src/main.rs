@@ -2,6 +2,8 @@
 //! `risotto techniques SCENE.toml`, `risotto converge SCENE.toml [options]`,
 //! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
+mod progress;
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -200,6 +202,18 @@ struct RenderArgs {
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
+    /// How progress is shown: `bar` (on stderr), `json` (one JSON object per line on stdout,
+    /// at most one a second, for farm managers; see README "Farm"), or `none`.
+    #[arg(long, value_enum, default_value_t = ProgressMode::Bar)]
+    progress: ProgressMode,
+}
+
+/// `risotto render --progress`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ProgressMode {
+    Bar,
+    Json,
+    None,
 }
 
 fn main() -> ExitCode {
@@ -305,7 +319,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         e => e.into(),
     })?;
     let total = range.len() as u64 * window.pixels() as u64;
-    let bar = if args.quiet {
+    let json = (args.progress == ProgressMode::Json)
+        .then(|| progress::JsonProgress::new(total, std::time::Duration::from_secs(1)));
+    let bar = if args.quiet || args.progress != ProgressMode::Bar {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(total);
@@ -337,6 +353,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
     };
     let (spp, seed) = (settings.spp, settings.seed);
     let to_partial = |r: &RenderOutput| Partial::of_render(r, resolution, spp, seed, hash.clone());
+    let tick = |n: u64| {
+        bar.inc(n);
+        if let Some(j) = &json {
+            j.inc(n);
+        }
+    };
     let result = match checkpoint {
         Some(every) => {
             let mut write =
@@ -344,16 +366,19 @@ fn render_command(args: RenderArgs) -> Result<()> {
             render_checkpointed(
                 &compiled,
                 &options,
-                &|n| bar.inc(n),
+                &tick,
                 Checkpoints {
                     every,
                     write: &mut write,
                 },
             )?
         }
-        None => render(&compiled, &options, &|n| bar.inc(n))?,
+        None => render(&compiled, &options, &tick)?,
     };
     bar.finish_and_clear();
+    if let Some(j) = &json {
+        j.finish();
+    }
 
     if partial {
         write_partial(&out, &to_partial(&result))?;

@@ -479,3 +479,52 @@ fn grid_tiles_and_sample_chunks_cover_the_render() {
         assert_fails(&format!("{args:?}"), &risotto(&a), &needles);
     }
 }
+
+#[test]
+fn progress_json_prints_one_parseable_line_per_update_and_a_last_done_line() {
+    // What a farm manager parses: every stdout line is a JSON object, the counts never
+    // decrease, and the last line says done with every sample of the window counted.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("farm-progress-json");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let out_exr = dir.join("out.exr");
+    let out = risotto(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "8",
+        "--crop",
+        "2,3,10,9",
+        "--progress",
+        "json",
+        "--out",
+        out_exr.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l:?}: {e}")))
+        .collect();
+    let last = lines.last().expect("at least the done line");
+    assert_eq!(last["event"], "done", "{stdout}");
+    let total = 8 * 6 * 8; // the crop's 8 x 6 pixels at 8 spp
+    assert_eq!(last["samples_total"], total);
+    assert_eq!(last["samples_done"], total);
+    assert_eq!(last["fraction"].as_f64(), Some(1.0));
+    let done: Vec<u64> = lines
+        .iter()
+        .map(|v| v["samples_done"].as_u64().unwrap())
+        .collect();
+    assert!(done.windows(2).all(|w| w[0] <= w[1]), "{done:?}");
+    // A mode that does not exist is a usage error naming it.
+    let bad = risotto(&["render", scene.to_str().unwrap(), "--progress", "jsn"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("jsn"));
+}
