@@ -147,6 +147,7 @@ impl Integrator for DirectOnly {
             scene,
             &worker.shadow,
             batch,
+            Default::default(),
             &mut worker.contribution,
             stats,
             arena,

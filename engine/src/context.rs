@@ -34,6 +34,7 @@ pub struct IntegratorContext<'s> {
     /// The worker's statistics.
     pub stats: &'s mut SystemStats,
     scratch: HitScratch,
+    volume: crate::plugin::VolumeTechniques,
 }
 
 impl<'s> IntegratorContext<'s> {
@@ -52,7 +53,21 @@ impl<'s> IntegratorContext<'s> {
             scene,
             stats,
             scratch,
+            volume: crate::plugin::VolumeTechniques::default(),
         }
+    }
+
+    /// The context with the render's technique choices for volumes (what
+    /// [`VolumeTechniques`](crate::plugin::VolumeTechniques) says over each material), which a
+    /// volume integrator's `transmission` reads through [`Self::volume_techniques`].
+    pub fn with_volume_techniques(mut self, volume: crate::plugin::VolumeTechniques) -> Self {
+        self.volume = volume;
+        self
+    }
+
+    /// The render's technique choices for volumes (defaults: as each material says).
+    pub fn volume_techniques(&self) -> crate::plugin::VolumeTechniques {
+        self.volume
     }
 
     /// Gives the buffers back for the next context.

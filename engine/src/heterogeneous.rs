@@ -15,7 +15,9 @@
 //!   [`VolumeEvent::Null`].
 //! - **Transmittance** ([`HeterogeneousInterior::transmission`]): `tracking` chooses ratio
 //!   tracking (default), residual ratio tracking (the majorant grid's per-cell minimum as the
-//!   control) or delta tracking (0 or 1).
+//!   control), delta tracking (0 or 1), fixed-step ray marching or the unbiased ray-marching
+//!   estimator ([`risotto_systems::ray_marching`]); `ray_marching` also marches the free
+//!   flights. The render's [`VolumeTechniques::tracking`] overrides the medium's choice.
 //!
 //! Both draw their random numbers from the samplers they are given, a variable number per
 //! ray (two per tentative collision for delta tracking, one for ratio tracking), rounded up
@@ -38,6 +40,9 @@ use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
 use risotto_systems::grid::{DensityGrid, MajorantGrid};
 use risotto_systems::phase::PhaseFunction;
+use risotto_systems::ray_marching::{
+    ray_marching_free_flight, ray_marching_transmittance, unbiased_ray_marching,
+};
 use risotto_systems::sampler::PathSampler;
 use risotto_systems::tracking::{
     delta_tracking, delta_tracking_transmittance, ratio_tracking, residual_ratio_tracking,
@@ -45,8 +50,9 @@ use risotto_systems::tracking::{
 };
 use std::sync::Arc;
 
-/// How [`HeterogeneousInterior::transmission`] estimates transmittance (scene files:
-/// `tracking = "ratio" | "residual" | "delta"`).
+/// How [`HeterogeneousInterior::transmission`] estimates transmittance, and whether free
+/// flights are ray-marched (scene files: `tracking = "ratio" | "residual" | "delta" |
+/// "ray_marching" | "unbiased_ray_marching"`; `risotto render --technique tracking=..`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Tracking {
     /// Ratio tracking: the product of null-collision probabilities.
@@ -56,7 +62,22 @@ pub enum Tracking {
     Residual,
     /// Delta tracking: 1 if a free flight passes, else 0.
     Delta,
+    /// Fixed-step ray marching of the optical depth, for shadow rays and free flights
+    /// (biased, consistent as the step shrinks; [`risotto_systems::ray_marching`]).
+    RayMarching,
+    /// The unbiased ray-marching transmittance estimator (a power series around a marched
+    /// pivot) for shadow rays; free flights by delta tracking.
+    UnbiasedRayMarching,
 }
+
+/// Every [`Tracking`], in the order the docs list them.
+pub const TRACKINGS: [Tracking; 5] = [
+    Tracking::Ratio,
+    Tracking::Residual,
+    Tracking::Delta,
+    Tracking::RayMarching,
+    Tracking::UnbiasedRayMarching,
+];
 
 impl Tracking {
     /// The scene-file name.
@@ -65,13 +86,13 @@ impl Tracking {
             Tracking::Ratio => "ratio",
             Tracking::Residual => "residual",
             Tracking::Delta => "delta",
+            Tracking::RayMarching => "ray_marching",
+            Tracking::UnbiasedRayMarching => "unbiased_ray_marching",
         }
     }
     /// The tracking of a scene-file name.
     pub fn from_name(name: &str) -> Option<Tracking> {
-        [Tracking::Ratio, Tracking::Residual, Tracking::Delta]
-            .into_iter()
-            .find(|t| t.name() == name)
+        TRACKINGS.into_iter().find(|t| t.name() == name)
     }
 }
 
@@ -93,6 +114,9 @@ pub struct HeterogeneousMedium {
     pub phase: PhaseFunction,
     /// Transmittance estimator.
     pub tracking: Tracking,
+    /// Ray-marching step in world units (`None`: the smallest voxel extent of the grid in
+    /// the shape's bounds).
+    pub march_step: Option<f32>,
 }
 
 impl HeterogeneousMedium {
@@ -115,6 +139,7 @@ impl HeterogeneousMedium {
             albedo,
             phase,
             tracking,
+            march_step: None,
         }
     }
 
@@ -136,6 +161,7 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
         "albedo",
         "phase",
         "tracking",
+        "march_step",
         "majorant_grid",
     ])?;
     let d = t
@@ -189,9 +215,17 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     let tracking = Tracking::from_name(&name).ok_or_else(|| {
         t.error(
             Some("tracking"),
-            format!("unknown tracking \"{name}\" (known: ratio, residual, delta)"),
+            format!(
+                "unknown tracking \"{name}\" (known: {})",
+                TRACKINGS.map(Tracking::name).join(", ")
+            ),
         )
     })?;
+    let march_step = if t.has("march_step") {
+        Some(t.f32_where("march_step", None, "must be > 0 (world units)", |v| v > 0.0)?)
+    } else {
+        None
+    };
     let cells = t.u32("majorant_grid", Some(DEFAULT_MAJORANT_CELLS as u32))?;
     if cells == 0 || cells > 256 {
         return Err(t.error(
@@ -199,14 +233,10 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             format!("must be in [1, 256] cells per axis, got {cells}"),
         ));
     }
-    Ok(HeterogeneousMedium::new(
-        density,
-        cells as usize,
-        scale,
-        albedo,
-        phase,
-        tracking,
-    ))
+    Ok(HeterogeneousMedium {
+        march_step,
+        ..HeterogeneousMedium::new(density, cells as usize, scale, albedo, phase, tracking)
+    })
 }
 
 /// The heterogeneous medium's volume integrator, bound to the bundle's shading context (which
@@ -235,27 +265,52 @@ impl HeterogeneousInterior<'_> {
         ((o - lo) * inv, d * inv)
     }
 
-    /// Transmittance of one world-space segment with the medium's `tracking`.
+    /// The ray-marching step in world units: the medium's `march_step`, or the smallest
+    /// voxel extent in the shape's bounds.
+    fn march_step(&self) -> f32 {
+        self.medium.march_step.unwrap_or_else(|| {
+            let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+            let dims = self.medium.density.dims();
+            let voxel = (hi - lo) / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+            let v = voxel.min_element();
+            // A flat box (zero extent on an axis) marches by its other voxels.
+            if v > 0.0 {
+                v
+            } else {
+                voxel.max_element().max(f32::MIN_POSITIVE)
+            }
+        })
+    }
+
+    /// Transmittance of one world-space segment with `tracking`.
     fn segment_transmittance(
         &self,
         o: Vec3,
         d: Vec3,
         length: f32,
+        tracking: Tracking,
         s: &mut PathSampler,
     ) -> Transmittance {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
-        let segs = m
-            .majorants
-            .traverse(o, d, 0.0, length)
-            .map(|g| g.scaled(m.scale));
+        let segs = || {
+            m.majorants
+                .traverse(o, d, 0.0, length)
+                .map(|g| g.scaled(m.scale))
+        };
         let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
         let start = s.dimension;
         let rand = || s.next_1d();
-        let r = match m.tracking {
-            Tracking::Ratio => ratio_tracking(segs, sigma, rand),
-            Tracking::Residual => residual_ratio_tracking(segs, sigma, rand),
-            Tracking::Delta => delta_tracking_transmittance(segs, sigma, rand),
+        let r = match tracking {
+            Tracking::Ratio => ratio_tracking(segs(), sigma, rand),
+            Tracking::Residual => residual_ratio_tracking(segs(), sigma, rand),
+            Tracking::Delta => delta_tracking_transmittance(segs(), sigma, rand),
+            Tracking::RayMarching => {
+                ray_marching_transmittance(segs(), sigma, rand, self.march_step())
+            }
+            Tracking::UnbiasedRayMarching => {
+                unbiased_ray_marching(segs, sigma, rand, self.march_step())
+            }
         };
         align(s, start);
         r
@@ -284,6 +339,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
         let mut nulls = 0u64;
+        let tracking = services.techniques.tracking.unwrap_or(m.tracking);
+        let step = self.march_step();
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let segs = m
@@ -292,11 +349,12 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 .map(|g| g.scaled(m.scale));
             let s = &mut samplers[i];
             let start = s.dimension;
-            let f = delta_tracking(
-                segs,
-                |t| m.scale * m.density.lookup(o + d * t),
-                || s.next_1d(),
-            );
+            let sigma = |t| m.scale * m.density.lookup(o + d * t);
+            let f = if tracking == Tracking::RayMarching {
+                ray_marching_free_flight(segs, sigma, || s.next_1d(), step)
+            } else {
+                delta_tracking(segs, sigma, || s.next_1d())
+            };
             align(s, start);
             nulls += f.nulls as u64;
             scattered[i] = f.collided;
@@ -362,15 +420,20 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         &self,
         segments: &Segments,
         samplers: &mut [PathSampler],
-        _ictx: &crate::context::IntegratorContext<'_>,
+        ictx: &crate::context::IntegratorContext<'_>,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
+        let tracking = ictx
+            .volume_techniques()
+            .tracking
+            .unwrap_or(self.medium.tracking);
         for i in 0..segments.len() {
             let r = self.segment_transmittance(
                 segments.origin[i],
                 segments.direction[i],
                 segments.length[i],
+                tracking,
                 &mut samplers[i],
             );
             trans[i] = Rgb::splat(r.value);

@@ -208,6 +208,8 @@ pub struct VolumeTechniques {
     pub scattering: Option<crate::media::Scattering>,
     /// Random walk or diffusion for every `subsurface` material.
     pub subsurface: Option<crate::subsurface::SubsurfaceMode>,
+    /// The free-flight and transmittance estimators of every heterogeneous medium.
+    pub tracking: Option<crate::heterogeneous::Tracking>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).

@@ -6,6 +6,7 @@
 //! A new technique is one entry of [`REGISTRY`] (its `get` and `set` read and write a field
 //! of [`Techniques`]) plus that field's use in [`Techniques::render_options`].
 
+use crate::heterogeneous::Tracking;
 use crate::integrator::LightingTechnique;
 use crate::media::Scattering;
 use crate::render::RenderOptions;
@@ -219,6 +220,49 @@ pub static REGISTRY: &[Technique] = &[
             }
         },
     },
+    Technique {
+        name: "tracking",
+        summary: "free-flight and transmittance estimators in heterogeneous media",
+        values: &[
+            TechniqueValue {
+                name: "scene",
+                summary: "as each heterogeneous medium's `tracking` says",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "ratio",
+                summary:
+                    "ratio tracking for shadow rays (Novak et al. 2014); delta-tracked flights",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "residual",
+                summary: "residual ratio tracking, each majorant cell's minimum as control",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "delta",
+                summary: "delta tracking for shadow rays too (0 or 1)",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "ray_marching",
+                summary: "fixed-step ray marching of flights and shadow rays (biased)",
+                converges: |_| false,
+            },
+            TechniqueValue {
+                name: "unbiased_ray_marching",
+                summary:
+                    "power series around a marched pivot for shadow rays (Kettunen et al. 2021)",
+                converges: always,
+            },
+        ],
+        default: "scene",
+        applies_to: "scenes with heterogeneous media",
+        applies: |f| f.heterogeneous,
+        get: |t| t.tracking.map_or("scene", Tracking::name),
+        set: |t, v| t.tracking = Tracking::from_name(v),
+    },
 ];
 
 /// A bad technique name, value or use.
@@ -290,6 +334,8 @@ pub struct Techniques {
     pub scattering: Option<Scattering>,
     /// `subsurface` (`None`: as each material says).
     pub subsurface: Option<SubsurfaceMode>,
+    /// `tracking` (`None`: as each heterogeneous medium says).
+    pub tracking: Option<Tracking>,
 }
 
 impl Techniques {
@@ -403,6 +449,7 @@ impl Techniques {
             volume: crate::plugin::VolumeTechniques {
                 scattering: self.scattering,
                 subsurface: self.subsurface,
+                tracking: self.tracking,
             },
             ..base
         }
@@ -430,9 +477,16 @@ pub fn listing(features: &Features) -> String {
     let mut s = String::new();
     for t in applicable(features) {
         s += &format!("{}: {} (applies to {})\n", t.name, t.summary, t.applies_to);
+        let width = t
+            .values
+            .iter()
+            .map(|v| v.name.len())
+            .max()
+            .unwrap_or(0)
+            .max(12);
         for v in t.values {
             let mark = if v.name == t.default { "*" } else { " " };
-            s += &format!("  {mark} {}={:<12} {}\n", t.name, v.name, v.summary);
+            s += &format!("  {mark} {}={:<width$} {}\n", t.name, v.name, v.summary);
         }
     }
     s

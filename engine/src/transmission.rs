@@ -31,11 +31,13 @@ use risotto_systems::sampler::PathSampler;
 const SHADOW_SEED_SALT: u32 = 0x5bd1_e995;
 
 /// Attenuates `contribution[i]` of every shadow ray by the transmittance to its light sample
-/// (0 when blocked).
+/// (0 when blocked). `volume` is handed to the volumes' `transmission` (through
+/// [`IntegratorContext::volume_techniques`](crate::context::IntegratorContext::volume_techniques)).
 pub fn trace_shadow_rays(
     scene: &CompiledScene,
     shadow: &ShadowRays,
     batch: &PathBatch,
+    volume: crate::plugin::VolumeTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -143,6 +145,7 @@ pub fn trace_shadow_rays(
                 &mut walk,
                 &stacks,
                 &segs,
+                volume,
                 contribution,
                 stats,
                 arena,
@@ -216,6 +219,7 @@ fn attenuate_in_volumes(
     walk: &mut Walk,
     stacks: &[VolumeStack],
     segs: &[(usize, f32, f32)],
+    volume: crate::plugin::VolumeTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -279,7 +283,8 @@ fn attenuate_in_volumes(
         let mut trans = vec![Rgb::WHITE; m];
         let mut emission = vec![Rgb::BLACK; m];
         let mut scratch_stats = SystemStats::default();
-        let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats);
+        let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
+            .with_volume_techniques(volume);
         integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
         for (k, &&(i, _, _)) in members.iter().enumerate() {
             walk.emitted[i] += shadow.weight[i] * walk.transmittance[i] * emission[k];

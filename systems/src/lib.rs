@@ -21,6 +21,20 @@ pub mod partition;
 pub mod path;
 pub mod phase;
 pub mod ray;
+pub mod ray_marching;
 pub mod sampler;
 mod simd8;
 pub mod tracking;
+
+/// Mean and standard error of `n` estimates `f()` (unit tests of the estimators).
+#[cfg(test)]
+pub(crate) fn mean_se(n: usize, mut f: impl FnMut() -> f32) -> (f64, f64) {
+    let (mut s, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let v = f() as f64;
+        s += v;
+        s2 += v * v;
+    }
+    let m = s / n as f64;
+    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+}

@@ -218,6 +218,7 @@ fn ratio_tracking_with_control(
 mod tests {
     use super::*;
     use crate::grid::{DensityGrid, MajorantGrid};
+    use crate::mean_se;
     use crate::sampler::SplitMix64;
     use glam::Vec3;
 
@@ -299,17 +300,6 @@ mod tests {
         DensityGrid::new([n, n, n], data).unwrap()
     }
 
-    /// Mean and standard error of `n` estimates.
-    fn mean_se(n: usize, mut f: impl FnMut() -> f32) -> (f64, f64) {
-        let (mut s, mut s2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let v = f() as f64;
-            s += v;
-            s2 += v * v;
-        }
-        let m = s / n as f64;
-        (m, ((s2 / n as f64 - m * m) / n as f64).sqrt())
-    }
 
     #[test]
     fn transmittance_estimators_are_unbiased_on_a_linear_ramp() {

@@ -85,7 +85,7 @@ impl Integrator for PathTracer {
                 }
             }
             shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
-            transmission::shadow_rays(scene, &mut q.shadow, batch, stats, arena);
+            transmission::shadow_rays(scene, self.volume, &mut q.shadow, batch, stats, arena);
             std::mem::swap(&mut q.rays, &mut q.next);
             q.next.rays.clear();
             stats.add_rays(q.rays.rays.len());

@@ -47,13 +47,15 @@ pub(super) fn nearest_hits(
     } else if hits.incoming.is_empty() && hits.groups.points.is_empty() {
         // First round (the only one unless there are pass-throughs): answer straight into
         // the groups and move the rays over instead of copying them.
-        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+            .with_volume_techniques(tracer.volume);
         ictx.nearest_hits(rays, &mut hits.groups);
         t.hits = ictx.into_scratch();
         std::mem::swap(&mut hits.incoming, rays);
     } else {
         t.answers.clear();
-        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+            .with_volume_techniques(tracer.volume);
         ictx.nearest_hits(rays, &mut t.answers);
         t.hits = ictx.into_scratch();
         append(hits, &t.answers, rays);
@@ -136,7 +138,8 @@ fn partitioned(
         match stack.innermost().filter(computes_interior) {
             None => {
                 let mut ictx =
-                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+                        .with_volume_techniques(tracer.volume);
                 ictx.nearest_hits(&t.bundle, &mut t.answers);
                 t.hits = ictx.into_scratch();
             }
@@ -170,7 +173,8 @@ fn partitioned(
                     Some(&mut delegate)
                 };
                 let mut ictx =
-                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits));
+                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+                        .with_volume_techniques(tracer.volume);
                 let start = std::time::Instant::now();
                 integrator.nearest_hits(
                     &t.bundle,

@@ -12,6 +12,7 @@ use bumpalo::Bump;
 /// queue (its rows become storage for the next shade stage).
 pub(super) fn shadow_rays(
     scene: &CompiledScene,
+    volume: crate::plugin::VolumeTechniques,
     shadow: &mut ShadowRayQueue,
     batch: &mut PathBatch,
     stats: &mut SystemStats,
@@ -30,6 +31,7 @@ pub(super) fn shadow_rays(
         scene,
         &shadow.rays,
         batch,
+        volume,
         &mut shadow.contribution,
         stats,
         arena,
