@@ -334,3 +334,47 @@ fn a_march_step_must_be_positive() {
         }
     }
 }
+
+#[test]
+fn openvdb_grids_load_through_the_scene_file() {
+    // tests/data/tile.vdb: one active 8^3 tile of 0.25, read into a 10^3 grid with a zero
+    // border (engine/src/vdb_file.rs); an absorbing-free, albedo-1 medium of it under a white
+    // environment is a furnace, so the grid was read and tracked (null collisions against the
+    // tile's bounds) and every pixel is 1.
+    let d = dir("vdb");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let tile = data.join("tile.vdb");
+    let interior = format!(
+        r#"{{ type = "heterogeneous", density = {{ grid = "{}" }}, scale = 20, albedo = 1 }}"#,
+        tile.display()
+    );
+    let text = sphere_scene(&interior, 8, 0, 0.0).replace("radiance = 0.5", "radiance = 1");
+    let out = render_text(&d, &text);
+    assert!(out.beauty.pixels.iter().all(|p| (p.g - 1.0).abs() <= 1e-4));
+    let ev = out.stats.counters.volume_events;
+    assert!(ev[VolumeEvent::Scatter as usize] > 0);
+    // Located errors: a grid name the file lacks, `name` on a non-VDB grid, `header` on one.
+    let small = data.join("small.vdb");
+    let vol = scenes().join("mitsuba-suite/hetero_grid_density.vol");
+    for (density, want) in [
+        (
+            format!(r#"{{ grid = "{}", name = "smoke" }}"#, small.display()),
+            "density, temperature, velocity",
+        ),
+        (
+            format!(r#"{{ grid = "{}", name = "density" }}"#, vol.display()),
+            "`name` picks a grid of a .vdb file",
+        ),
+        (
+            format!(r#"{{ grid = "{}", header = "x.json" }}"#, small.display()),
+            "not a .vdb",
+        ),
+    ] {
+        let interior = format!(r#"{{ type = "heterogeneous", density = {density} }}"#);
+        let msg = match load(&d, &sphere_scene(&interior, 1, 0, 1.0)) {
+            Ok(_) => panic!("{density} accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(msg.contains(want) && msg.contains("scene.toml"), "{msg}");
+    }
+}

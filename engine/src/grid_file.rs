@@ -1,6 +1,6 @@
 //! Reading density grids: the reference harness's raw float32 + JSON header, and Mitsuba's
-//! `.vol`. Both give a [`DensityGrid`] (x fastest, cell-centred; see
-//! [`risotto_systems::grid`]).
+//! `.vol` (and, through [`read_grid_named`], OpenVDB: [`crate::vdb_file`]). Each gives a
+//! [`DensityGrid`] (x fastest, cell-centred; see [`risotto_systems::grid`]).
 //!
 //! # Formats
 //! - **raw + JSON** (`*.raw`): little-endian float32 values, x fastest
@@ -89,7 +89,25 @@ fn format(path: &Path, message: impl Into<String>) -> GridFileError {
 /// Reads a grid by extension: `.vol` as Mitsuba's format, anything else as raw float32 with
 /// `header` (default: the same path with extension `.json`).
 pub fn read_grid(path: &Path, header: Option<&Path>) -> Result<DensityGrid, GridFileError> {
-    if path
+    read_grid_named(path, header, None)
+}
+
+/// Whether `path` names an OpenVDB file (extension `.vdb`).
+pub fn is_vdb(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
+}
+
+/// [`read_grid`], and `.vdb` files as OpenVDB, reading float grid `name`
+/// ([`crate::vdb_file::read_vdb`]).
+pub fn read_grid_named(
+    path: &Path,
+    header: Option<&Path>,
+    name: Option<&str>,
+) -> Result<DensityGrid, GridFileError> {
+    if is_vdb(path) {
+        crate::vdb_file::read_vdb(path, name)
+    } else if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("vol"))
     {

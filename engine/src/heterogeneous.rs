@@ -30,7 +30,7 @@
 //! estimator's weights are `albedo` at a collision and 1 on passing: bounded, and no colour
 //! noise. A chromatic scale (spectral tracking) is not implemented yet.
 
-use crate::grid_file::read_grid;
+use crate::grid_file::{is_vdb, read_grid_named};
 use crate::load::phase_function;
 use crate::media::{retain_points, PhaseBxdf};
 use crate::plugin::*;
@@ -167,11 +167,26 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     let d = t
         .table("density")?
         .ok_or_else(|| t.error(None, "a heterogeneous interior needs `density = { grid = \"file.vol\" }` (or `{ constant = .. }`)"))?;
-    d.deny_unknown(&["grid", "header", "constant"])?;
+    d.deny_unknown(&["grid", "header", "name", "constant"])?;
     let density = match (d.path("grid")?, d.has("constant")) {
         (Some(path), false) => {
             let header = d.path("header")?;
-            read_grid(&path, header.as_deref()).map_err(|e| d.error(Some("grid"), e.to_string()))?
+            let name = if d.has("name") {
+                Some(d.string("name", None)?)
+            } else {
+                None
+            };
+            if is_vdb(&path) && header.is_some() {
+                return Err(d.error(
+                    Some("header"),
+                    "`header` belongs to a raw `grid` file, not a .vdb",
+                ));
+            }
+            if !is_vdb(&path) && name.is_some() {
+                return Err(d.error(Some("name"), "`name` picks a grid of a .vdb file"));
+            }
+            read_grid_named(&path, header.as_deref(), name.as_deref())
+                .map_err(|e| d.error(Some("grid"), e.to_string()))?
         }
         (None, true) => {
             if d.has("header") {

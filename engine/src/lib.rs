@@ -27,3 +27,4 @@ pub mod stats;
 pub mod subsurface;
 pub mod technique;
 pub mod transmission;
+pub mod vdb_file;

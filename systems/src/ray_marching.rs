@@ -268,7 +268,6 @@ mod tests {
         }]
     }
 
-
     #[test]
     fn the_march_estimates_the_optical_depth_without_bias() {
         for (name, f, majorant, depth) in fields() {

@@ -300,7 +300,6 @@ mod tests {
         DensityGrid::new([n, n, n], data).unwrap()
     }
 
-
     #[test]
     fn transmittance_estimators_are_unbiased_on_a_linear_ramp() {
         // sigma_t = scale * density, density a ramp 0.2 + 1.6 u through a majorant grid: for
