@@ -347,7 +347,25 @@ fn render_command(args: RenderArgs) -> Result<()> {
             settings.max_passes,
             techniques.label()
         );
-        scene_hash(&[&text, effective.as_bytes()])
+        // Every file the scene reads (meshes, grids, environment maps), path and contents:
+        // a task that saw a different mesh is refused at merge time.
+        let mut files = Vec::with_capacity(compiled.files.len());
+        for path in &compiled.files {
+            let bytes = std::fs::read(path).with_context(|| {
+                format!(
+                    "{}: cannot read {} (a file the scene reads) to hash it",
+                    args.scene.display(),
+                    path.display()
+                )
+            })?;
+            files.push((path.to_string_lossy().into_owned(), bytes));
+        }
+        let mut pieces: Vec<&[u8]> = vec![&text, effective.as_bytes()];
+        for (name, bytes) in &files {
+            pieces.push(name.as_bytes());
+            pieces.push(bytes);
+        }
+        scene_hash(&pieces)
     } else {
         String::new()
     };

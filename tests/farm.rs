@@ -528,3 +528,54 @@ fn progress_json_prints_one_parseable_line_per_update_and_a_last_done_line() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("jsn"));
 }
+
+#[test]
+fn merge_refuses_parts_rendered_from_a_different_mesh_file() {
+    // The scene text is the same; only the OBJ it reads changed between the tasks (a vertex
+    // moved): the scene hash covers the files a scene reads, so merging is refused.
+    let (dir, _) = setup("mesh-hash");
+    let obj =
+        |z: f32| format!("v -1 -1 {z}\nv 1 -1 {z}\nv 1 1 {z}\nv -1 1 {z}\nf 1 2 3\nf 1 3 4\n");
+    let scene = dir.join("mesh.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[render]
+width = 8
+height = 8
+spp = 2
+
+[camera]
+fov = 40
+from = [0, 0, 4]
+to = [0, 0, 0]
+
+[materials.white]
+type = "diffuse"
+
+[[shapes]]
+type = "mesh"
+path = "quad.obj"
+material = "white"
+
+[[lights]]
+type = "environment"
+radiance = 1
+"#,
+    )
+    .unwrap();
+    std::fs::write(dir.join("quad.obj"), obj(0.0)).unwrap();
+    let top = render(&dir, &scene, "top.exr", &["--crop", "0,0,8,4"]);
+    let bottom_same = render(&dir, &scene, "bottom-same.exr", &["--crop", "0,4,8,8"]);
+    let (out, _) = merge(&dir, &[&top, &bottom_same], "same.exr");
+    ok("the same mesh", out);
+    std::fs::write(dir.join("quad.obj"), obj(0.5)).unwrap();
+    let bottom = render(&dir, &scene, "bottom.exr", &["--crop", "0,4,8,8"]);
+    let (out, path) = merge(&dir, &[&top, &bottom], "changed.exr");
+    assert_fails(
+        "a changed mesh",
+        &out,
+        &["bottom.exr", "scene hash", "top.exr"],
+    );
+    assert!(!path.exists());
+}

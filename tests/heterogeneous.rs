@@ -349,6 +349,21 @@ fn openvdb_grids_load_through_the_scene_file() {
         tile.display()
     );
     let text = sphere_scene(&interior, 8, 0, 0.0).replace("radiance = 0.5", "radiance = 1");
+    // The file joins the scene's referenced files (what split renders hash); a raw grid's
+    // header beside it too.
+    assert_eq!(load(&d, &text).unwrap().files, vec![tile.clone()]);
+    std::fs::write(d.join("g.raw"), 0.5f32.to_le_bytes()).unwrap();
+    std::fs::write(d.join("g.json"), r#"{ "dims": [1, 1, 1] }"#).unwrap();
+    let raw = sphere_scene(
+        r#"{ type = "heterogeneous", density = { grid = "g.raw" } }"#,
+        1,
+        0,
+        1.0,
+    );
+    assert_eq!(
+        load(&d, &raw).unwrap().files,
+        vec![d.join("g.json"), d.join("g.raw")]
+    );
     let out = render_text(&d, &text);
     assert!(out.beauty.pixels.iter().all(|p| (p.g - 1.0).abs() <= 1e-4));
     let ev = out.stats.counters.volume_events;

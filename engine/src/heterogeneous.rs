@@ -185,6 +185,13 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             if !is_vdb(&path) && name.is_some() {
                 return Err(d.error(Some("name"), "`name` picks a grid of a .vdb file"));
             }
+            let vol = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("vol"));
+            if header.is_none() && !vol && !is_vdb(&path) {
+                // A raw grid's header beside it is read too.
+                d.note_file(&path.with_extension("json"));
+            }
             read_grid_named(&path, header.as_deref(), name.as_deref())
                 .map_err(|e| d.error(Some("grid"), e.to_string()))?
         }

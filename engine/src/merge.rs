@@ -106,8 +106,10 @@ pub enum MergeError {
 
 /// The scene hash of partial renders: 64-bit FNV-1a over `pieces` (each followed by a
 /// 0xff separator byte, which UTF-8 text never contains), as 16 hex digits. The driver
-/// hashes the scene file's bytes and the effective settings and techniques that change
-/// the image (the seed and spp are checked on their own).
+/// hashes the scene file's bytes, the effective settings and techniques that change
+/// the image (the seed and spp are checked on their own), and the path and bytes of every
+/// file the scene reads ([`CompiledScene::files`](crate::scene::CompiledScene::files):
+/// meshes, grids, environment maps).
 pub fn scene_hash(pieces: &[&[u8]]) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for piece in pieces {

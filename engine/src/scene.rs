@@ -164,6 +164,8 @@ impl Features {
 
 /// A scene being assembled: the world, the materials, the camera and the settings.
 pub struct Scene {
+    /// The files a scene file made it from reads (empty for a scene built in code).
+    pub files: crate::scene_file::ReferencedFiles,
     /// The entities.
     pub world: hecs::World,
     /// Materials by index.
@@ -207,6 +209,9 @@ pub struct MaterialInfo {
 
 /// The flat, read-only data the renderer works from.
 pub struct CompiledScene {
+    /// The files the scene reads besides its own text, sorted
+    /// ([`ReferencedFiles`](crate::scene_file::ReferencedFiles)).
+    pub files: Vec<std::path::PathBuf>,
     /// All primitives and the BVH.
     pub geometry: SceneGeometry,
     /// Shape index of every primitive.
@@ -285,6 +290,7 @@ impl Scene {
     /// An empty scene with the given camera and settings.
     pub fn new(camera: Camera, settings: RenderSettings) -> Self {
         Scene {
+            files: Default::default(),
             world: hecs::World::new(),
             materials: Vec::new(),
             camera,
@@ -336,6 +342,7 @@ impl Scene {
     /// Flattens the world into a [`CompiledScene`].
     pub fn compile(self) -> Result<CompiledScene, CompileError> {
         let Scene {
+            files,
             world,
             materials,
             camera,
@@ -491,6 +498,7 @@ impl Scene {
             .map(|&s| shapes[s as usize].material)
             .collect();
         let mut compiled = CompiledScene {
+            files: files.paths(),
             geometry,
             prim_shape,
             prim_material,

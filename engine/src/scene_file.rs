@@ -39,11 +39,39 @@ use error::Source;
 use params::Reader;
 use raw::{Node, Value};
 
+/// The files a scene reads besides its own text: every path resolved from the scene file
+/// (meshes, grids, environment maps, any path a material factory reads with
+/// [`MaterialParams::path`]) and those factories note with [`MaterialParams::note_file`]. A
+/// shared handle: the description, the [`Scene`](crate::scene::Scene) built from it and the
+/// compiled scene see the same list, which grows while factories parse their parameters.
+/// Split renders hash the files' contents into their scene hash.
+#[derive(Clone, Debug, Default)]
+pub struct ReferencedFiles(Arc<std::sync::Mutex<Vec<PathBuf>>>);
+
+impl ReferencedFiles {
+    /// Adds a path.
+    pub fn add(&self, path: &Path) {
+        let mut files = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !files.iter().any(|p| p == path) {
+            files.push(path.to_path_buf());
+        }
+    }
+
+    /// The paths, sorted.
+    pub fn paths(&self) -> Vec<PathBuf> {
+        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        v.sort();
+        v
+    }
+}
+
 /// A loaded scene file: everything the engine needs to build the render world.
 #[derive(Clone, Debug)]
 pub struct SceneDesc {
     /// The scene file's path as given to the loader.
     pub path: PathBuf,
+    /// The files the scene reads (see [`ReferencedFiles`]).
+    pub files: ReferencedFiles,
     /// Image size, sample count, path depth, seed.
     pub render: RenderSettings,
     /// The camera.
@@ -264,6 +292,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let (camera, camera_volume, camera_volume_at) = read_camera(&top, &shapes, &src)?;
     Ok(SceneDesc {
         path: path.to_path_buf(),
+        files: src.files.clone(),
         render,
         camera,
         materials,

@@ -114,6 +114,8 @@ pub(crate) struct Source {
     /// The directory relative paths in the scene are resolved against.
     pub(crate) dir: PathBuf,
     pub(crate) text: String,
+    /// Every file path resolved from the text (and noted by factories).
+    pub(crate) files: super::ReferencedFiles,
 }
 
 /// Longest excerpt of a value quoted in a message.
@@ -129,6 +131,7 @@ impl Source {
             path: path.to_path_buf(),
             dir,
             text: text.to_owned(),
+            files: super::ReferencedFiles::default(),
         }
     }
 

@@ -322,6 +322,7 @@ impl<'a> Reader<'a> {
         }
         let joined = self.src.dir.join(rel);
         let full = std::path::absolute(&joined).unwrap_or(joined);
+        self.src.files.add(&full);
         Ok(Some((full, node)))
     }
 }
@@ -502,9 +503,16 @@ impl MaterialParams {
     }
 
     /// A file path, resolved relative to the scene file's directory and made absolute;
-    /// `None` if absent. Existence is not checked.
+    /// `None` if absent. Existence is not checked. The path joins the scene's
+    /// [`ReferencedFiles`](super::ReferencedFiles).
     pub fn path(&self, key: &str) -> Result<Option<PathBuf>, SceneError> {
         Ok(self.reader().path_opt(key)?.map(|(p, _)| p))
+    }
+
+    /// Notes a file the material reads that no key names (e.g. a header found next to a
+    /// data file), so that split renders hash it ([`ReferencedFiles`](super::ReferencedFiles)).
+    pub fn note_file(&self, path: &std::path::Path) {
+        self.src.files.add(path);
     }
 
     /// A nested table, e.g. `interior = { type = "beer", sigma_a = [1, 2, 3] }`, as
