@@ -36,12 +36,12 @@ use crate::scene_file::{MaterialParams, SceneError};
 use crate::stats::VolumeEvent;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
-use risotto_systems::grid::{DensityGrid, MajorantGrid};
+use risotto_systems::grid::{Dda, DensityGrid, MajorantGrid, MajorantSegment};
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::sampler::PathSampler;
 use risotto_systems::tracking::{
-    delta_tracking, delta_tracking_transmittance, ratio_tracking, residual_ratio_tracking,
-    Transmittance,
+    delta_tracking, delta_tracking_emitting, delta_tracking_transmittance, ratio_tracking,
+    ratio_tracking_emitting, residual_ratio_tracking, Transmittance,
 };
 use std::sync::Arc;
 
@@ -93,7 +93,34 @@ pub struct HeterogeneousMedium {
     pub phase: PhaseFunction,
     /// Transmittance estimator.
     pub tracking: Tracking,
+    /// What the medium emits; `None` (the default): nothing.
+    pub emission: Option<HeterogeneousEmission>,
 }
+
+/// What a heterogeneous medium emits: its **emission coefficient** `j(p)`, radiance per
+/// unit length (the source term of `dL/ds = -sigma_t L + j + ...`), per channel (scene
+/// files: `emission = colour` or `emission = { grid = "file.vol", scale = colour }`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum HeterogeneousEmission {
+    /// `j(p) = colour * density(p)` (the density grid's own values, before the density
+    /// `scale`): the emission follows the density, as in a flame made of one grid.
+    FollowsDensity(Rgb),
+    /// `j(p) = scale * grid(p)`: an independent grid (a temperature field), placed in the
+    /// shape's bounds like the density grid.
+    Grid {
+        /// The emission grid (placed like the density).
+        grid: Arc<DensityGrid>,
+        /// `j = scale * grid` per channel, >= 0.
+        scale: Rgb,
+        /// Bounds of `grid` over the density's majorant cells (same resolution), which
+        /// say where the medium emits.
+        majorants: Arc<MajorantGrid>,
+    },
+}
+
+/// Tentative collisions per majorant-cell width that a ray gets at least in a cell where
+/// the medium emits (see [`HeterogeneousInterior`]'s emission estimators).
+pub const EMISSION_COLLISIONS_PER_CELL: f32 = 2.0;
 
 impl HeterogeneousMedium {
     /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
@@ -115,7 +142,34 @@ impl HeterogeneousMedium {
             albedo,
             phase,
             tracking,
+            emission: None,
         }
+    }
+
+    /// The medium emitting `j(p) = colour * density(p)` (black: no emission).
+    pub fn with_emission_following_density(mut self, colour: Rgb) -> Self {
+        self.emission =
+            (!colour.is_black()).then_some(HeterogeneousEmission::FollowsDensity(colour));
+        self
+    }
+
+    /// The medium emitting `j(p) = scale * grid(p)`, `grid` placed like the density (a
+    /// black `scale` or an all-zero grid: no emission).
+    pub fn with_emission_grid(mut self, grid: DensityGrid, scale: Rgb) -> Self {
+        self.emission = (!scale.is_black() && grid.max() > 0.0).then(|| {
+            let majorants = MajorantGrid::new(&grid, self.majorants.res());
+            HeterogeneousEmission::Grid {
+                grid: Arc::new(grid),
+                scale,
+                majorants: Arc::new(majorants),
+            }
+        });
+        self
+    }
+
+    /// Whether the medium emits.
+    pub fn emits(&self) -> bool {
+        self.emission.is_some()
     }
 
     /// The phase function as the Bxdf of the medium's scattering points.
@@ -137,6 +191,7 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
         "phase",
         "tracking",
         "majorant_grid",
+        "emission",
     ])?;
     let d = t
         .table("density")?
@@ -199,14 +254,71 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             format!("must be in [1, 256] cells per axis, got {cells}"),
         ));
     }
-    Ok(HeterogeneousMedium::new(
-        density,
-        cells as usize,
-        scale,
-        albedo,
-        phase,
-        tracking,
-    ))
+    let medium = HeterogeneousMedium::new(density, cells as usize, scale, albedo, phase, tracking);
+    Ok(match parse_emission(t)? {
+        None => medium,
+        Some(EmissionKey::Colour(c)) => {
+            let max = medium.density.max();
+            if !(c * max).is_finite() {
+                return Err(t.error(
+                    Some("emission"),
+                    format!("emission {c:?} times the density grid's max {max} overflows"),
+                ));
+            }
+            medium.with_emission_following_density(c)
+        }
+        Some(EmissionKey::Grid(grid, scale)) => medium.with_emission_grid(grid, scale),
+    })
+}
+
+/// The two forms of a heterogeneous interior's `emission` key.
+enum EmissionKey {
+    /// `emission = colour`.
+    Colour(Rgb),
+    /// `emission = { grid = "file", scale = colour }`.
+    Grid(DensityGrid, Rgb),
+}
+
+/// Reads `emission` (absent: none): a colour (`j = colour * density`) or a table
+/// `{ grid = "file.vol" | "file.raw", header = "file.json", scale = colour }`
+/// (`j = scale * grid`).
+fn parse_emission(t: &MaterialParams) -> Result<Option<EmissionKey>, SceneError> {
+    let coefficient = "every channel >= 0 and finite (radiance per unit length)";
+    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
+    if !t.has("emission") {
+        return Ok(None);
+    }
+    if !t.is_table("emission") {
+        return Ok(Some(EmissionKey::Colour(t.rgb_where(
+            "emission",
+            None,
+            coefficient,
+            ok,
+        )?)));
+    }
+    let e = t.table("emission")?.expect("checked: a table");
+    e.deny_unknown(&["grid", "header", "scale"])?;
+    let Some(path) = e.path("grid")? else {
+        return Err(e.error(
+            None,
+            "an emission table needs `grid = \"file.vol\"` (or give `emission` as a colour: \
+             j = colour * density)",
+        ));
+    };
+    let header = e.path("header")?;
+    let grid = read_grid(&path, header.as_deref())
+        .map_err(|err| e.error(Some("grid"), err.to_string()))?;
+    let scale = e.rgb_where("scale", Some(Rgb::WHITE), coefficient, ok)?;
+    if !(scale * grid.max()).is_finite() {
+        return Err(e.error(
+            Some("scale"),
+            format!(
+                "scale {scale:?} times the emission grid's max {} overflows",
+                grid.max()
+            ),
+        ));
+    }
+    Ok(Some(EmissionKey::Grid(grid, scale)))
 }
 
 /// The heterogeneous medium's volume integrator, bound to the bundle's shading context (which
@@ -227,7 +339,118 @@ fn align(s: &mut PathSampler, start: u32) {
     s.dimension = start.wrapping_add(used.next_multiple_of(DIMENSION_SET));
 }
 
+/// The majorant segments a ray crosses in an emissive medium: the density's, scaled to
+/// extinction, with the bound of every cell where the medium emits raised to at least
+/// `minorant + floor` (see [`HeterogeneousInterior`]'s emission docs). The emission grid's
+/// cells are traversed in lockstep with the density's (same resolution, same ray: the same
+/// segments).
+struct EmissiveSegments<'g> {
+    density: Dda<'g>,
+    emission: Option<Dda<'g>>,
+    scale: f32,
+    floor: f32,
+}
+
+impl Iterator for EmissiveSegments<'_> {
+    type Item = MajorantSegment;
+    #[inline]
+    fn next(&mut self) -> Option<MajorantSegment> {
+        let g = self.density.next()?;
+        let emits = match &mut self.emission {
+            Some(e) => e.next().is_some_and(|e| e.majorant > 0.0),
+            None => g.majorant > 0.0,
+        };
+        let mut s = g.scaled(self.scale);
+        if emits {
+            s.majorant = s.majorant.max(s.minorant + self.floor);
+        }
+        Some(s)
+    }
+}
+
 impl HeterogeneousInterior<'_> {
+    /// The majorant segments of the grid-space ray `(o, d)` on `[0, tmax]`, for an emissive
+    /// medium ([`EmissiveSegments`]).
+    fn emissive_segments(&self, o: Vec3, d: Vec3, tmax: f32) -> EmissiveSegments<'_> {
+        let m = self.medium;
+        let res = m.majorants.res();
+        let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+        let extent = (hi - lo).to_array();
+        // The smallest cell width in world units; the floor is so many collisions per width.
+        let width = (0..3)
+            .map(|a| extent[a] / res[a] as f32)
+            .filter(|w| *w > 0.0 && w.is_finite())
+            .fold(f32::INFINITY, f32::min);
+        let floor = if width.is_finite() {
+            (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
+        } else {
+            0.0
+        };
+        let emission = match &m.emission {
+            Some(HeterogeneousEmission::Grid { majorants, .. }) => {
+                Some(majorants.traverse(o, d, 0.0, tmax))
+            }
+            _ => None,
+        };
+        EmissiveSegments {
+            density: m.majorants.traverse(o, d, 0.0, tmax),
+            emission,
+            scale: m.scale,
+            floor,
+        }
+    }
+
+    /// The emission coefficient at grid point `uvw`, where the extinction is `sigma_t`.
+    #[inline]
+    fn emission_at(&self, uvw: Vec3, sigma_t: f32) -> Rgb {
+        let m = self.medium;
+        match &m.emission {
+            None => Rgb::BLACK,
+            Some(HeterogeneousEmission::FollowsDensity(c)) => {
+                let density = if m.scale > 0.0 {
+                    sigma_t / m.scale
+                } else {
+                    m.density.lookup(uvw)
+                };
+                *c * density
+            }
+            Some(HeterogeneousEmission::Grid { grid, scale, .. }) => *scale * grid.lookup(uvw),
+        }
+    }
+
+    /// Transmittance of one world-space segment with the medium's `tracking`, and the
+    /// emission reaching its start, for an emissive medium.
+    fn segment_emission(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        length: f32,
+        s: &mut PathSampler,
+    ) -> (Transmittance, Rgb) {
+        let m = self.medium;
+        let (o, d) = self.to_grid(o, d);
+        let segs = self.emissive_segments(o, d, length);
+        let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
+        let emission = |t: f32, sigma_t: f32| self.emission_at(o + d * t, sigma_t);
+        let start = s.dimension;
+        let rand = || s.next_1d();
+        let r = match m.tracking {
+            Tracking::Ratio => ratio_tracking_emitting(segs, sigma, emission, rand, false),
+            Tracking::Residual => ratio_tracking_emitting(segs, sigma, emission, rand, true),
+            Tracking::Delta => {
+                let (f, e) = delta_tracking_emitting(segs, sigma, emission, rand);
+                let t = Transmittance {
+                    value: if f.collided { 0.0 } else { 1.0 },
+                    nulls: f.nulls + f.collided as u32,
+                    violations: f.violations,
+                };
+                (t, e)
+            }
+        };
+        align(s, start);
+        r
+    }
+
     /// `(origin, direction)` of a world-space ray in the grid's unit cube (the same `t`).
     fn to_grid(&self, o: Vec3, d: Vec3) -> (Vec3, Vec3) {
         let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
@@ -284,25 +507,39 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
         let mut nulls = 0u64;
+        let emits = m.emits();
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
-            let segs = m
-                .majorants
-                .traverse(o, d, 0.0, tmax[i])
-                .map(|g| g.scaled(m.scale));
             let s = &mut samplers[i];
             let start = s.dimension;
-            let f = delta_tracking(
-                segs,
-                |t| m.scale * m.density.lookup(o + d * t),
-                || s.next_1d(),
-            );
+            let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
+            let f = if emits {
+                // pbrt-v4's estimator: j / majorant at every tentative collision (module
+                // docs), at the path's weight, which delta tracking keeps at 1.
+                let (f, e) = delta_tracking_emitting(
+                    self.emissive_segments(o, d, tmax[i]),
+                    sigma,
+                    |t, sigma_t| self.emission_at(o + d * t, sigma_t),
+                    || s.next_1d(),
+                );
+                out.emitted.push(i as u32, e);
+                f
+            } else {
+                let segs = m
+                    .majorants
+                    .traverse(o, d, 0.0, tmax[i])
+                    .map(|g| g.scaled(m.scale));
+                delta_tracking(segs, sigma, || s.next_1d())
+            };
             align(s, start);
             nulls += f.nulls as u64;
             scattered[i] = f.collided;
             t[i] = f.t;
         }
         let stats = &mut *services.ictx.stats;
+        if emits {
+            stats.volume_event(VolumeEvent::Emission, n);
+        }
         let events = scattered.iter().filter(|&&s| s).count();
         stats.volume_event(VolumeEvent::Scatter, events);
         stats.volume_event(VolumeEvent::Pass, n - events);
@@ -366,6 +603,19 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
+        if self.medium.emits() {
+            for i in 0..segments.len() {
+                let (r, e) = self.segment_emission(
+                    segments.origin[i],
+                    segments.direction[i],
+                    segments.length[i],
+                    &mut samplers[i],
+                );
+                trans[i] = Rgb::splat(r.value);
+                emission[i] = e;
+            }
+            return;
+        }
         for i in 0..segments.len() {
             let r = self.segment_transmittance(
                 segments.origin[i],
