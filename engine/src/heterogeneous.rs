@@ -22,6 +22,29 @@
 //! to a multiple of four dimensions so that the vertices after them stay aligned to the
 //! sampler's four-dimensional sets.
 //!
+//! # Emission
+//! `emission` gives the **emission coefficient** `j(p)` (radiance per unit length,
+//! [`HeterogeneousEmission`]): a colour times the density (`emission = colour`) or a
+//! colour times a grid of its own (`emission = { grid, scale }`). The estimator is
+//! pbrt-v4's (`VolPathIntegrator`, where the emission term is `sigma_a Le`): at **every**
+//! tentative collision of delta tracking, null or real, the free flight adds `j(p) /
+//! majorant` at the path's weight (1 along a delta-tracking flight), including the collision
+//! that turns out real ([`delta_tracking_emitting`]); its expectation is
+//! `int_0^t T(s) j(s) ds` over the ray's segment. Shadow segments
+//! ([`HeterogeneousInterior::transmission`]) add `T_k j / bound` at each tentative
+//! collision of ratio or residual tracking, `T_k` the running transmittance estimate
+//! ([`ratio_tracking_emitting`]), or pbrt's sum under delta tracking.
+//!
+//! Both need a positive tentative-collision rate wherever `j > 0`, which a density bound of
+//! 0 (emission where the density vanishes, or `scale = 0`) or a residual control equal to
+//! the bound (a constant cell) would not give. So in every majorant cell where the medium
+//! emits (the density's bound is positive, for the colour form; the emission grid's, for
+//! the grid form) the tracking bound is raised to at least `minorant + f`, with
+//! `f =` [`EMISSION_COLLISIONS_PER_CELL`] per width of the narrowest cell side: any bound
+//! above the extinction keeps delta and ratio tracking unbiased, and this one gives emitting
+//! cells a couple of collisions per crossing. Media that do not emit track exactly as
+//! before (the same bounds, the same random numbers).
+//!
 //! # Spectral handling
 //! The density scale is grey (one `sigma_t` for R, G and B); the albedo may be a colour.
 //! With a grey extinction every channel shares the free-flight distribution, so the

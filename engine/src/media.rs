@@ -28,6 +28,21 @@
 //! that offers none, like PxrVCM, or `--lighting bxdf`) the medium scatters as in multiple
 //! scattering: the seed's "the only way to perform volume scattering for integrators that do
 //! not provide a lighting delegate".
+//!
+//! # Emission
+//! A medium with an `emission` coefficient `j` (radiance per unit length, the source term of
+//! `dL/ds = -sigma_t L + j + sigma_s (phase x L_in)`) reports, for every ray it answers,
+//! the exact integral of its emission over the ray's segment to the surface ahead,
+//! `j (1 - exp(-sigma_t t)) / sigma_t` per channel
+//! ([`emitted_radiance`]), in
+//! [`ShadeGroups::emitted`]; the random walk adds the same integral for each of its steps
+//! ([`crate::random_walk`]). The segment's radiance is that emission plus what the free flight
+//! estimates (the in-scattered light at the event, or the radiance beyond the segment),
+//! so adding the exact part is unbiased, costs no variance and needs no change to the
+//! spectral-MIS weights of the flight. Shadow segments get the same integral from
+//! [`HomogeneousInterior::transmission`]. In single scattering the emission along the ray
+//! is exact too; the light the medium emits is not scattered again there (single
+//! scattering is of the scene's lights).
 
 use crate::plugin::*;
 use glam::Vec3;
