@@ -40,9 +40,10 @@
 //! the bound (a constant cell) would not give. So in every majorant cell where the medium
 //! emits (the density's bound is positive, for the colour form; the emission grid's, for
 //! the grid form) the tracking bound is raised to at least `minorant + f`, with
-//! `f =` [`EMISSION_COLLISIONS_PER_CELL`] per width of the narrowest cell side: any bound
+//! `f =` [`EMISSION_COLLISIONS_PER_CELL`] per width of the widest cell side: any bound
 //! above the extinction keeps delta and ratio tracking unbiased, and this one gives emitting
-//! cells a couple of collisions per crossing. Media that do not emit track exactly as
+//! cells about one collision per cell crossed (at most one per widest side, so a flat box
+//! costs no more collisions than a cube of its largest side). Media that do not emit track exactly as
 //! before (the same bounds, the same random numbers).
 //!
 //! # Spectral handling
@@ -143,7 +144,7 @@ pub enum HeterogeneousEmission {
 
 /// Tentative collisions per majorant-cell width that a ray gets at least in a cell where
 /// the medium emits (see [`HeterogeneousInterior`]'s emission estimators).
-pub const EMISSION_COLLISIONS_PER_CELL: f32 = 2.0;
+pub const EMISSION_COLLISIONS_PER_CELL: f32 = 1.0;
 
 impl HeterogeneousMedium {
     /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
@@ -399,12 +400,14 @@ impl HeterogeneousInterior<'_> {
         let res = m.majorants.res();
         let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
         let extent = (hi - lo).to_array();
-        // The smallest cell width in world units; the floor is so many collisions per width.
+        // The widest side of a cell in world units; the floor is so many collisions per
+        // width. (The widest, not the narrowest: a flat box would otherwise get a rate that
+        // a ray travelling along it could not get through.)
         let width = (0..3)
             .map(|a| extent[a] / res[a] as f32)
             .filter(|w| *w > 0.0 && w.is_finite())
-            .fold(f32::INFINITY, f32::min);
-        let floor = if width.is_finite() {
+            .fold(0.0f32, f32::max);
+        let floor = if width > 0.0 {
             (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
         } else {
             0.0
