@@ -448,12 +448,22 @@ fn an_emissive_slab_lights_the_floor_below_it_and_counts_once() {
     let floor = rho / std::f64::consts::PI * (t * 4.0 / 4.0 + seen_from_floor);
     let want = slab_radiance(j, sigma_a, 1.0) + t * floor;
     let dir = dir("floor");
-    let interiors = [
-        format!(r#"{{ type = "homogeneous", sigma_a = {sigma_a}, emission = {j} }}"#),
+    // Homogeneous under every scattering technique (`single` runs the lighting delegate on
+    // the camera ray's segment: with sigma_s = 0 it adds nothing, and the emission along
+    // the segment must still be there, exactly once), and heterogeneous.
+    let mut interiors: Vec<String> = ["multiple", "bounce", "walk", "single"]
+        .iter()
+        .map(|s| {
+            format!(
+                r#"{{ type = "homogeneous", sigma_a = {sigma_a}, emission = {j}, scattering = "{s}" }}"#
+            )
+        })
+        .collect();
+    interiors.push(
         format!(
             r#"{{ type = "heterogeneous", density = {{ constant = 1 }}, scale = {sigma_a}, albedo = 0, emission = {j} }}"#
         ),
-    ];
+    );
     for interior in &interiors {
         // The point light needs light sampling: MIS and light sampling alone. Neither may
         // add the slab's emission along the shadow ray too (that direction is one the Bxdf
