@@ -27,6 +27,7 @@ fn medium(sigma_t: Rgb, albedo: f32, phase: PhaseFunction) -> Interior {
         sigma_s: sigma_t * albedo,
         phase,
         scattering: Scattering::Multiple,
+        emission: Rgb::BLACK,
     })
 }
 

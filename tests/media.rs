@@ -21,6 +21,7 @@ fn medium(sigma_t: f32, albedo: f32, phase: PhaseFunction, scattering: Scatterin
         sigma_s: Rgb::splat(sigma_t * albedo),
         phase,
         scattering,
+        emission: Rgb::BLACK,
     })
 }
 

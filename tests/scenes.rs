@@ -36,6 +36,7 @@ fn every_scene_renders_finite_and_not_black() {
         "liquid-in-glass.toml",
         "overlapping-absorbers.toml",
         "camera-in-volume.toml",
+        "fire.toml",
     ] {
         assert!(
             files.contains(&scenes_dir().join(required)),

@@ -225,6 +225,7 @@ fn only_scattering_media_run_the_volume_scatter_stage() {
                     sigma_s: Rgb::splat(1.6),
                     phase: risotto::systems::phase::PhaseFunction::Isotropic,
                     scattering: risotto::engine::media::Scattering::Multiple,
+                    emission: Rgb::BLACK,
                 }),
             ),
         )

@@ -25,6 +25,7 @@ fn walked(sigma_t: Rgb, albedo: Rgb, phase: PhaseFunction) -> Interior {
         sigma_s: sigma_t * albedo,
         phase,
         scattering: Scattering::Walk,
+        emission: Rgb::BLACK,
     })
 }
 
@@ -222,6 +223,7 @@ fn walk_and_bounces_render_the_same_image() {
             sigma_s: Rgb::new(4.0, 8.0, 16.0) * Rgb::new(0.95, 0.9, 0.8),
             phase: hg(0.4),
             scattering: Scattering::Multiple,
+            emission: Rgb::BLACK,
         });
         let cam = perspective(
             Vec3::new(0.0, 1.0, 3.0),

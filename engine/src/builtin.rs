@@ -386,9 +386,21 @@ pub enum Interior {
 impl Interior {
     fn hints(&self) -> InstanceHints {
         let volume = InstanceHints::COMPUTES_INTERIOR | InstanceHints::INTERIOR_TRANSMISSION;
+        // The built-in emissive media report their emission along path rays (and fill
+        // `transmission`'s emission output too).
+        let emits = InstanceHints::INTERIOR_EMITS | InstanceHints::INTERIOR_EMITS_ALONG_PATHS;
         match self {
             Interior::None => InstanceHints::NONE,
             Interior::Null | Interior::Beer { .. } => volume,
+            Interior::Homogeneous(m) if m.emits() => {
+                volume | InstanceHints::INTERIOR_SCATTERS | emits
+            }
+            Interior::Heterogeneous(m) if m.emits() => {
+                volume
+                    | InstanceHints::INTERIOR_SCATTERS
+                    | InstanceHints::INTERIOR_HETEROGENEOUS
+                    | emits
+            }
             Interior::Homogeneous(_) => volume | InstanceHints::INTERIOR_SCATTERS,
             Interior::Subsurface(_) => {
                 volume | InstanceHints::INTERIOR_SCATTERS | InstanceHints::INTERIOR_SUBSURFACE

@@ -184,7 +184,8 @@ fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
 }
 
 /// `interior = { type = "homogeneous", ... }`: `sigma_t` and `albedo`, or `sigma_a` and
-/// `sigma_s` (colours or numbers, per world unit); `phase`; `scattering`.
+/// `sigma_s` (colours or numbers, per world unit); `phase`; `scattering`; `emission` (the
+/// emission coefficient, radiance per unit length).
 fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
     t.deny_unknown(&[
         "type",
@@ -194,6 +195,7 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
         "sigma_s",
         "phase",
         "scattering",
+        "emission",
     ])?;
     let non_negative = "every channel >= 0 and finite";
     let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
@@ -253,11 +255,18 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
             ))
         }
     };
+    let emission = t.rgb_where(
+        "emission",
+        Some(Rgb::BLACK),
+        "every channel >= 0 and finite (radiance per unit length)",
+        ok,
+    )?;
     Ok(HomogeneousMedium {
         sigma_t,
         sigma_s,
         phase,
         scattering,
+        emission,
     })
 }
 

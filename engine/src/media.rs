@@ -28,14 +28,29 @@
 //! that offers none, like PxrVCM, or `--lighting bxdf`) the medium scatters as in multiple
 //! scattering: the seed's "the only way to perform volume scattering for integrators that do
 //! not provide a lighting delegate".
+//!
+//! # Emission
+//! A medium with an `emission` coefficient `j` (radiance per unit length, the source term of
+//! `dL/ds = -sigma_t L + j + sigma_s (phase x L_in)`) reports, for every ray it answers,
+//! the exact integral of its emission over the ray's segment to the surface ahead,
+//! `j (1 - exp(-sigma_t t)) / sigma_t` per channel
+//! ([`emitted_radiance`]), in
+//! [`ShadeGroups::emitted`]; the random walk adds the same integral for each of its steps
+//! ([`crate::random_walk`]). The segment's radiance is that emission plus what the free flight
+//! estimates (the in-scattered light at the event, or the radiance beyond the segment),
+//! so adding the exact part is unbiased, costs no variance and needs no change to the
+//! spectral-MIS weights of the flight. Shadow segments get the same integral from
+//! [`HomogeneousInterior::transmission`]. In single scattering the emission along the ray
+//! is exact too; the light the medium emits is not scattered again there (single
+//! scattering is of the scene's lights).
 
 use crate::plugin::*;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
 use risotto_systems::medium::{
-    channel_pdf, equiangular_pdf, equiangular_sample, free_flight_pdf, sample_free_flight,
-    transmittance,
+    channel_pdf, emitted_radiance, equiangular_pdf, equiangular_sample, free_flight_pdf,
+    sample_free_flight, transmittance,
 };
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::ray_offset;
@@ -129,9 +144,19 @@ pub struct HomogeneousMedium {
     pub phase: PhaseFunction,
     /// Multiple or single scattering.
     pub scattering: Scattering,
+    /// Emission coefficient `j` per channel: radiance emitted per unit length (the source
+    /// term of `dL/ds = -sigma_t L + j + sigma_s (phase x L_in)`), >= 0. Black: the medium
+    /// does not emit. A medium with `j = sigma_a L0` inside an environment of radiance `L0`
+    /// is in equilibrium: it looks like `L0` from everywhere.
+    pub emission: Rgb,
 }
 
 impl HomogeneousMedium {
+    /// Whether the medium emits (some channel of `emission` is positive).
+    pub fn emits(&self) -> bool {
+        !self.emission.is_black()
+    }
+
     /// Single-scattering albedo `sigma_s / sigma_t` per channel (0 where `sigma_t` is 0).
     pub fn albedo(&self) -> Rgb {
         Rgb::new(
@@ -225,6 +250,7 @@ impl HomogeneousInterior<'_> {
         for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
             *tmax = tmax.min(hit);
         }
+        self.emit_along(&tmax, ictx.stats, out);
         let mut scattered = vec![false; n];
         let mut passes = vec![true; n];
         let mut t = vec![0.0f32; n];
@@ -311,6 +337,29 @@ impl HomogeneousInterior<'_> {
         v.set_vlen(&t);
         v.set_transmission(&weight);
         v.end_volume_sampling(&scattered, out);
+    }
+
+    /// Reports the medium's emission along each ray's segment `[0, tmax[i]]` in
+    /// `out.emitted`: the exact integral [`emitted_radiance`] (deterministic: no variance,
+    /// and independent of the free flight sampled on the segment, which estimates the
+    /// other terms of the segment's radiance). Segments with nothing ahead (`tmax = inf`,
+    /// a ray that has already left the medium) emit nothing. No-op for a medium that does
+    /// not emit.
+    fn emit_along(
+        &self,
+        tmax: &[f32],
+        stats: &mut crate::stats::SystemStats,
+        out: &mut ShadeGroups,
+    ) {
+        let m = &self.medium;
+        if !m.emits() {
+            return;
+        }
+        for (i, &t) in tmax.iter().enumerate() {
+            out.emitted
+                .push(i as u32, emitted_radiance(m.sigma_t, m.emission, t));
+        }
+        stats.volume_event(crate::stats::VolumeEvent::Emission, tmax.len());
     }
 
     /// Single scattering through the delegate (see the module docs), then the hits with the
@@ -511,6 +560,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
                 let r = out.points.ray_id[k] as usize;
                 tmax[r] = tmax[r].min(out.points.vlen[k]);
             }
+            self.emit_along(&tmax, services.ictx.stats, out);
             self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
         } else {
             self.scatter_inside(rays, &u, services.ictx, out);
@@ -525,9 +575,10 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
+        let m = &self.medium;
         for i in 0..segments.len() {
-            trans[i] = transmittance(self.medium.sigma_t, segments.length[i]);
+            trans[i] = transmittance(m.sigma_t, segments.length[i]);
+            emission[i] = emitted_radiance(m.sigma_t, m.emission, segments.length[i]);
         }
-        emission.fill(Rgb::BLACK);
     }
 }

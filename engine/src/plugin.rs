@@ -36,7 +36,7 @@
 //! ```
 
 use crate::context::IntegratorContext;
-pub use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
+pub use crate::shade_groups::{EmittedRadiance, ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
 pub use crate::shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling,
@@ -78,13 +78,25 @@ impl InstanceHints {
     pub const INTERIOR_HETEROGENEOUS: InstanceHints = InstanceHints(128);
     /// The interior is a subsurface integrator.
     pub const INTERIOR_SUBSURFACE: InstanceHints = InstanceHints(256);
-    /// The interior emits light.
+    /// The interior emits light: the scene gets the `emissive_media` feature, without which
+    /// no emission is gathered anywhere. The emission its integrator's
+    /// [`VolumeIntegrator::transmission`] returns is added to shadow rays through it
+    /// (weighted like the light sample's radiance), unless the material also says
+    /// [`INTERIOR_EMITS_ALONG_PATHS`](Self::INTERIOR_EMITS_ALONG_PATHS).
     pub const INTERIOR_EMITS: InstanceHints = InstanceHints(512);
     /// The material reads the surface parameters `u`, `v` of its shading points
     /// ([`ShadingContext::u`], [`ShadingContext::v`]). Sphere hits get theirs (`phi / 2pi`,
     /// `theta / pi`: two `atan2` per hit) only in scenes with such a material; elsewhere
     /// their `u = v = 0`. Triangle hits always carry their barycentrics.
     pub const READS_SURFACE_UV: InstanceHints = InstanceHints(1024);
+    /// With [`INTERIOR_EMITS`](Self::INTERIOR_EMITS): the interior's `nearest_hits` reports
+    /// what it emits along the path rays it answers ([`ShadeGroups::emitted`]), every
+    /// direction from every vertex. The path tracer then counts the interior's emission
+    /// there only, and not also along shadow rays (the `emission` output of `transmission`,
+    /// which such an interior still fills for integrators that want it): a shadow ray's
+    /// direction is one a path ray can take too, so adding both would count the emission
+    /// seen towards light samples twice. The built-in emissive media set both hints.
+    pub const INTERIOR_EMITS_ALONG_PATHS: InstanceHints = InstanceHints(2048);
 
     /// True when every bit of `other` is set.
     pub const fn contains(self, other: InstanceHints) -> bool {
@@ -222,6 +234,11 @@ pub trait VolumeIntegrator {
     /// as a [`ShadingMode::VolumeScatter`] group (multiple scattering, through
     /// [`ShadingContext::begin_volume_sampling`] and
     /// [`VolumeSampling::end_volume_sampling`]). Rays it returns nothing for are absorbed.
+    /// An emissive medium also reports the radiance it emitted along each ray's travel
+    /// before the point it returns (or before the ray was absorbed) in
+    /// [`ShadeGroups::emitted`], weighted by everything that happened inside the volume
+    /// but not by the ray's throughput, which the global integrator applies (and says so
+    /// with [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`]).
     /// `samplers[i]` is ray `i`'s sample source.
     fn nearest_hits(
         &mut self,
@@ -233,7 +250,10 @@ pub trait VolumeIntegrator {
     );
 
     /// Transmission (and emission reaching the segment start) along each segment, which lies
-    /// entirely inside this volume (RIS `GetTransmission`).
+    /// entirely inside this volume (RIS `GetTransmission`). `emission[i]` is the radiance
+    /// the volume emits along segment `i` that arrives at its start, attenuated within the
+    /// segment (`int_0^L T(s) j(s) ds` for an emission coefficient `j`); black for a volume
+    /// that does not emit.
     fn transmission(
         &self,
         segments: &Segments,

@@ -60,6 +60,18 @@
 //! cannot grow. The floor keeps a medium of very low albedo from killing nearly every
 //! walker at its first event (survivors then weigh `A / Q_FLOOR < 1`).
 //!
+//! # Emission
+//! In an emissive medium (`emission` = `j`, radiance per unit length) every step adds the
+//! exact integral of what the medium emits along its segment, from the step's start to the
+//! surface ahead, `j (1 - exp(-sigma_t d)) / sigma_t` per channel
+//! ([`emitted_radiance`]), times the walk's weight at the step's start, to the ray's
+//! [`ShadeGroups::emitted`] row: the step's radiance is that emission plus what the flight
+//! estimates (in-scattered light at the event, or the radiance at the surface), so adding
+//! the exact part is unbiased and costs no variance. It needs `d` for every step, so in an
+//! emissive medium every step is traced to the surface ahead and no empty balls are kept
+//! (no steps without rays): the walk costs one ray per event there. Walks that end inside
+//! (roulette, depth limit) keep what they gathered before.
+//!
 //! # Sampler dimensions
 //! A walk draws one aligned set of four dimensions from the path's sampler (the first
 //! flight's channel and distance, the first phase sample), so thin media stay stratified
@@ -75,7 +87,7 @@ use glam::{Vec2, Vec3};
 use risotto_components::{Rays, Rgb, NO_HIT};
 use risotto_systems::clearance::clearance;
 use risotto_systems::intersect::intersect_closest;
-use risotto_systems::medium::{channel_pdf, sample_free_flight, FreeFlight};
+use risotto_systems::medium::{channel_pdf, emitted_radiance, sample_free_flight, FreeFlight};
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::ray_offset;
 use risotto_systems::sampler::{PathSampler, SplitMix64};
@@ -207,6 +219,10 @@ pub fn walk_bundle(
         max_depth: scene.settings.max_depth,
         grey: st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b,
     };
+    // An emissive medium's exact segment integrals need every step's full segment: each
+    // step is traced to the surface ahead, without empty balls (module docs, "Emission").
+    let emits = medium.emits();
+    let mut emitted = vec![Rgb::BLACK; if emits { n } else { 0 }];
     let mut w = Walkers::default();
     for (i, s) in samplers.iter_mut().enumerate() {
         let first = s.next_4d();
@@ -266,7 +282,7 @@ pub fn walk_bundle(
                         }
                     }
                 }
-                let end = if f.scattered {
+                let end = if f.scattered && !emits {
                     let margin = 4000.0 * ray_offset(w.origin[j] + w.direction[j] * f.t);
                     (f.t + margin).min(w.tmax[j])
                 } else {
@@ -305,6 +321,21 @@ pub fn walk_bundle(
                 &mut b2,
             )
         });
+        if emits {
+            // The emission of every step's segment, to the surface ahead (nothing for a
+            // segment with nothing ahead: it has left the medium), at the walk's weight
+            // before the step.
+            for j in 0..m {
+                let seg = if prim[j] != NO_HIT {
+                    t_hit[j]
+                } else {
+                    f32::INFINITY
+                };
+                let e = emitted_radiance(st, medium.emission, seg);
+                emitted[w.ray[j] as usize] += w.weight[j] * e;
+            }
+            ictx.stats.volume_event(VolumeEvent::Emission, m);
+        }
         let mut live = 0;
         for j in 0..m {
             let r = w.ray[j] as usize;
@@ -355,9 +386,11 @@ pub fn walk_bundle(
             // A new empty ball around the event: the distance to the nearest surface, less
             // a relative margin for its rounding and the spawn offset (so that no free
             // step ends within rounding of a surface).
-            let c = clearance(&scene.geometry, p, f32::INFINITY);
-            w.anchor[j] = p;
-            w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * ray_offset(p)).max(0.0);
+            if !emits {
+                let c = clearance(&scene.geometry, p, f32::INFINITY);
+                w.anchor[j] = p;
+                w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * ray_offset(p)).max(0.0);
+            }
             if live != j {
                 w.keep(j, live);
             }
@@ -367,6 +400,9 @@ pub fn walk_bundle(
     }
     ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
     ictx.stats.volume_event(VolumeEvent::Pass, passes);
+    for (i, &e) in emitted.iter().enumerate() {
+        out.emitted.push(i as u32, e);
+    }
     answer_exits(rays, &exits, ictx, out);
 }
 

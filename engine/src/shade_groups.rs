@@ -1,5 +1,6 @@
 //! What nearest-hit queries answer: shading points grouped by material and shading mode,
-//! plus the rays that escaped. Both the renderer's [`IntegratorContext`](crate::context::IntegratorContext)
+//! plus the rays that escaped (and, from volume integrators, the rays they walked and what
+//! an emissive medium emitted along the rays). Both the renderer's [`IntegratorContext`](crate::context::IntegratorContext)
 //! and volume integrators write it; the global integrator shades it.
 
 use glam::Vec3;
@@ -33,6 +34,55 @@ pub struct ShadeGroups {
     /// (or miss) it returns for them: the global integrator takes each one's last segment
     /// as the ray that arrived there.
     pub walked: WalkedRays,
+    /// Radiance emitted by the volume along the rays' travel before the points (or misses)
+    /// returned for them: what an emissive medium sends back towards each ray's origin.
+    pub emitted: EmittedRadiance,
+}
+
+/// Radiance a volume integrator's medium emitted along the rays it answered, before the
+/// point (or miss, or absorption) it returns for each (the contract of emissive media:
+/// [`VolumeIntegrator::nearest_hits`](crate::plugin::VolumeIntegrator::nearest_hits)).
+///
+/// Row `k` says that ray `ray[k]` of the answered table receives `radiance[k]` at its
+/// origin, **before** its own throughput: the global integrator adds
+/// `throughput[ray[k]] * radiance[k]` to the ray's path. The integrator has already
+/// applied everything that happened inside the volume -- the transmittance to the emitting
+/// points, the weights of its own estimators (a random walk's throughput at each of its
+/// steps, a tracking estimator's null-collision weights) -- and any MIS weight against a
+/// light-sampling technique of its own (the built-in media have none: their emission is
+/// counted along path rays only, with weight 1). A ray may have several rows (their sum
+/// counts) or none; rows for rays that the integrator absorbs still count (the light was
+/// emitted before the ray ended). The path tracer counts them only for rays whose segment
+/// is inside the path-length budget (every ray it traces is).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EmittedRadiance {
+    /// Ray id in the answered table.
+    pub ray: Vec<u32>,
+    /// Radiance arriving at the ray's origin, per channel (finite, >= 0).
+    pub radiance: Vec<Rgb>,
+}
+
+impl EmittedRadiance {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.ray.len()
+    }
+    /// True when there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.ray.is_empty()
+    }
+    /// Removes every row.
+    pub fn clear(&mut self) {
+        self.ray.clear();
+        self.radiance.clear();
+    }
+    /// Appends `radiance` for ray `ray` (nothing when it is black).
+    pub fn push(&mut self, ray: u32, radiance: Rgb) {
+        if !radiance.is_black() {
+            self.ray.push(ray);
+            self.radiance.push(radiance);
+        }
+    }
 }
 
 /// The rays of a [`ShadeGroups`] that a volume integrator scattered inside its volume (a
@@ -120,6 +170,7 @@ impl ShadeGroups {
         self.misses.clear();
         self.miss_transmission.clear();
         self.walked.clear();
+        self.emitted.clear();
     }
     /// Appends a group made of `rows` (RIS `EndVolumeSampling` with a membership mask: pass the
     /// retained points only). Empty groups are not added.
@@ -183,7 +234,8 @@ impl ShadeGroups {
     /// Appends `src`'s groups and misses, adding `ray_offset` to their ray ids (`src`
     /// answered a table whose rows were appended to this one's rays at that offset). Its
     /// [`walked`](Self::walked) rows are not copied: [`WalkedRays::apply`] them to the
-    /// answered table before appending it.
+    /// answered table before appending it. Nor are its [`emitted`](Self::emitted) rows:
+    /// they belong to the answered table's rays, whose throughputs weigh them.
     pub fn append_offset(&mut self, src: &ShadeGroups, ray_offset: u32) {
         for g in &src.groups {
             let start = self.points.len();

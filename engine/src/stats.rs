@@ -115,17 +115,22 @@ pub enum VolumeEvent {
     Absorbed,
     /// The flight passed its segment (left the medium or reached a surface inside it).
     Pass,
+    /// A medium's emission was gathered along a segment: a path ray's (or a random-walk
+    /// step's) in an emissive medium, or a shadow-ray interval whose emission is added.
+    /// Zero in scenes without emissive media, where that code never runs.
+    Emission,
 }
 
 impl VolumeEvent {
     /// Number of kinds.
-    pub const COUNT: usize = 4;
+    pub const COUNT: usize = 5;
     /// Every kind, in discriminant order.
     pub const ALL: [VolumeEvent; VolumeEvent::COUNT] = [
         VolumeEvent::Scatter,
         VolumeEvent::Null,
         VolumeEvent::Absorbed,
         VolumeEvent::Pass,
+        VolumeEvent::Emission,
     ];
     /// The snake_case name used in JSON and in the summary.
     pub const fn name(self) -> &'static str {
@@ -134,6 +139,7 @@ impl VolumeEvent {
             VolumeEvent::Null => "null",
             VolumeEvent::Absorbed => "absorbed",
             VolumeEvent::Pass => "pass",
+            VolumeEvent::Emission => "emission",
         }
     }
 }
@@ -199,8 +205,9 @@ pub enum Stage {
     /// Shadow-ray contributions after the transmission walk (surfaces that let shadows pass,
     /// volume integrators' `transmission`), finite before it.
     Transmission,
-    /// Emission of surfaces hit by path rays, as added to the path (when the path's
-    /// throughput and transmission were finite).
+    /// Emission of surfaces hit by path rays, and emission of media along path rays
+    /// ([`ShadeGroups::emitted`](crate::shade_groups::ShadeGroups::emitted)), as added to
+    /// the path (when the path's throughput and transmission were finite).
     Emission,
     /// Environment radiance seen by escaped rays, as added to the path (when the path's
     /// throughput and transmission were finite).

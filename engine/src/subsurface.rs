@@ -106,6 +106,7 @@ impl SubsurfaceParams {
             sigma_s: sigma_t * alpha,
             phase,
             scattering: Scattering::Walk,
+            emission: Rgb::BLACK,
         }
     }
 

@@ -8,7 +8,11 @@
 //! What volumes emit along a shadow ray (the `emission` output of `transmission`, radiance
 //! reaching the interval's start) is added too, attenuated by everything before the interval
 //! and weighted like the light's radiance (`ShadowRays::weight`): radiance arriving along the
-//! shadow ray's direction, even from in front of a surface that then blocks the light.
+//! shadow ray's direction, even from in front of a surface that then blocks the light; only
+//! in scenes with emissive media (`InstanceHints::INTERIOR_EMITS`). The path tracer leaves
+//! out the volumes that report their emission along path rays instead
+//! (`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`, the built-in media:
+//! [`ShadowEmission::NotAlongPaths`]), which would otherwise count twice.
 //!
 //! Work is batch-shaped: all live shadow rays advance to their next surface in one intersect
 //! call per round, and the intervals of one round are grouped by volume so that each volume
@@ -18,7 +22,7 @@ use crate::integrator::PathBatch;
 use crate::interior::bind_interior;
 use crate::plugin::*;
 use crate::scene::CompiledScene;
-use crate::stats::{System, SystemStats};
+use crate::stats::{System, SystemStats, VolumeEvent};
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
@@ -30,8 +34,22 @@ use risotto_systems::sampler::PathSampler;
 /// at the same dimensions (the shadow ray starts at its vertex's first dimension).
 const SHADOW_SEED_SALT: u32 = 0x5bd1_e995;
 
+/// Which volumes' emission a shadow-ray walk adds to the contributions (in scenes with
+/// emissive media).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowEmission {
+    /// Every volume's (what [`trace_shadow_rays`] does): for integrators that gather no
+    /// emission along path rays.
+    #[default]
+    All,
+    /// Only volumes whose material lacks [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`]:
+    /// the path tracer, which adds the others' emission along its path rays.
+    NotAlongPaths,
+}
+
 /// Attenuates `contribution[i]` of every shadow ray by the transmittance to its light sample
-/// (0 when blocked). `volume` is handed to the volumes' `transmission` (through
+/// (0 when blocked), and adds what emissive volumes send along it
+/// ([`ShadowEmission::All`]). `volume` is handed to the volumes' `transmission` (through
 /// [`IntegratorContext::volume_techniques`](crate::context::IntegratorContext::volume_techniques)).
 pub fn trace_shadow_rays(
     scene: &CompiledScene,
@@ -41,6 +59,30 @@ pub fn trace_shadow_rays(
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
+) {
+    trace_shadow_rays_with(
+        scene,
+        shadow,
+        batch,
+        volume,
+        contribution,
+        stats,
+        arena,
+        ShadowEmission::All,
+    );
+}
+
+/// [`trace_shadow_rays`], adding the emission of the volumes `gather` names.
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+pub fn trace_shadow_rays_with(
+    scene: &CompiledScene,
+    shadow: &ShadowRays,
+    batch: &PathBatch,
+    volume: crate::plugin::VolumeTechniques,
+    contribution: &mut [Rgb],
+    stats: &mut SystemStats,
+    arena: &Bump,
+    gather: ShadowEmission,
 ) {
     let n = shadow.len();
     let f = scene.features;
@@ -83,6 +125,7 @@ pub fn trace_shadow_rays(
         emitted: vec![Rgb::BLACK; n],
         dimension: shadow.dimension.clone(),
         counters: PatternCounters::default(),
+        gather,
     };
     let mut origin = Vec::with_capacity(n);
     let mut direction = Vec::with_capacity(n);
@@ -208,6 +251,8 @@ struct Walk {
     dimension: Vec<u32>,
     /// Parameter-cache counts of the volumes' contexts.
     counters: PatternCounters,
+    /// Which volumes' emission is gathered.
+    gather: ShadowEmission,
 }
 
 /// Runs each volume's `transmission` on the intervals of one round that lie in it.
@@ -280,14 +325,24 @@ fn attenuate_in_volumes(
         let Some((_, integrator)) = bind_interior(scene, stack, entry, pts, cache, arena) else {
             continue;
         };
+        let hints = scene.material_info[entry.material as usize].hints;
+        let gathers = scene.features.emissive_media
+            && hints.contains(InstanceHints::INTERIOR_EMITS)
+            && !(walk.gather == ShadowEmission::NotAlongPaths
+                && hints.contains(InstanceHints::INTERIOR_EMITS_ALONG_PATHS));
         let mut trans = vec![Rgb::WHITE; m];
         let mut emission = vec![Rgb::BLACK; m];
         let mut scratch_stats = SystemStats::default();
         let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
             .with_volume_techniques(volume);
         integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
+        if gathers {
+            stats.volume_event(VolumeEvent::Emission, m);
+        }
         for (k, &&(i, _, _)) in members.iter().enumerate() {
-            walk.emitted[i] += shadow.weight[i] * walk.transmittance[i] * emission[k];
+            if gathers {
+                walk.emitted[i] += shadow.weight[i] * walk.transmittance[i] * emission[k];
+            }
             contribution[i] *= trans[k];
             walk.transmittance[i] *= trans[k];
             walk.dimension[i] = samplers[k].dimension;

@@ -382,3 +382,62 @@ pub fn equiangular_pdf(origin: Vec3, dir: Vec3, light_pos: Vec3, tmax: f32, t: f
     EquiangularSegment::new(origin, dir, light_pos, tmax)
         .map_or(0.0, |seg| seg.pdf(t as f64) as f32)
 }
+
+// ---------------------------------------------------------------------------------------
+// Emission
+// ---------------------------------------------------------------------------------------
+
+/// Radiance a homogeneous emissive medium sends to the start of a segment of length
+/// `distance` along it: the exact integral `int_0^d T(s) j ds = j (1 - exp(-sigma_t d)) /
+/// sigma_t` per channel (`j d` where `sigma_t = 0`), with `j` the **emission coefficient**
+/// (radiance per unit length, the source term of `dL/ds = -sigma_t L + j + ...`).
+///
+/// Computed as `j d * (-expm1(-x) / x)` with `x = sigma_t d`, which keeps full precision for
+/// optically thin segments. A segment that is not finite (`+inf`: nothing ahead, the ray
+/// has left the medium) or not positive emits nothing; no NaN for finite non-negative
+/// inputs, and an infinite product only when `j d` itself overflows.
+#[inline]
+pub fn emitted_radiance(sigma_t: Rgb, emission: Rgb, distance: f32) -> Rgb {
+    if !(distance.is_finite() && distance > 0.0) {
+        return Rgb::BLACK;
+    }
+    let s = sigma_t.to_array();
+    let j = emission.to_array();
+    Rgb::from_array(std::array::from_fn(|c| {
+        if j[c] == 0.0 {
+            return 0.0;
+        }
+        let x = s[c] * distance;
+        if x > 0.0 {
+            // (1 - e^-x) / x, in (0, 1]; for x = inf it is 0 and j / sigma_t is the answer.
+            if x.is_finite() {
+                j[c] * distance * (-(-x).exp_m1() / x)
+            } else {
+                j[c] / s[c]
+            }
+        } else {
+            j[c] * distance
+        }
+    }))
+}
+
+#[cfg(test)]
+mod emission_tests {
+    use super::*;
+
+    #[test]
+    fn emitted_radiance_is_the_segment_integral() {
+        let (st, j) = (Rgb::new(0.0, 1e-7, 2.0), Rgb::new(3.0, 3.0, 3.0));
+        let e = emitted_radiance(st, j, 1.5);
+        assert!((e.r - 4.5).abs() < 1e-6);
+        // Thin: j d (1 - x / 2 + ...).
+        assert!((e.g - 4.5 * (1.0 - 0.75e-7)).abs() < 1e-6);
+        assert!((e.b - 1.5 * (1.0 - (-3.0f32).exp())).abs() < 1e-6);
+        assert_eq!(emitted_radiance(st, j, f32::INFINITY), Rgb::BLACK);
+        assert_eq!(emitted_radiance(st, j, 0.0), Rgb::BLACK);
+        // Extreme coefficients stay finite.
+        let e = emitted_radiance(Rgb::new(1e-6, 1e6, f32::MAX), Rgb::splat(1e30), 1.0);
+        assert!(e.is_finite(), "{e:?}");
+        assert!((e.g - 1e24).abs() < 1e18);
+    }
+}

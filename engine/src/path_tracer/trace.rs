@@ -24,7 +24,7 @@ use risotto_systems::sampler::PathSampler;
 pub(super) fn nearest_hits(
     tracer: &PathTracer,
     scene: &CompiledScene,
-    batch: &PathBatch,
+    batch: &mut PathBatch,
     q: &mut Queues,
     stats: &mut SystemStats,
     arena: &Bump,
@@ -82,6 +82,34 @@ fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &Rays) {
     hits.groups.append_offset(answers, offset);
 }
 
+/// Adds what a volume emitted along the bundle's rays ([`ShadeGroups::emitted`]) to their
+/// paths, times each ray's throughput (with weight 1: the path tracer samples no light
+/// towards media), for rays whose segment is inside the path-length budget. NaN provenance:
+/// a non-finite radiance is the volume integrator's (`Stage::Volume`), a product that is not
+/// finite although its factors are, the emission stage's.
+fn add_emitted(
+    scene: &CompiledScene,
+    bundle: &Rays,
+    emitted: &EmittedRadiance,
+    batch: &mut PathBatch,
+    stats: &mut SystemStats,
+) {
+    let (mut bad_volume, mut bad_product) = (0, 0);
+    for (&r, &e) in emitted.ray.iter().zip(&emitted.radiance) {
+        let r = r as usize;
+        // The ray is segment depth + 1 of its path.
+        if bundle.depth[r] as u32 + 1 > scene.settings.max_depth {
+            continue;
+        }
+        let c = bundle.throughput[r] * e;
+        bad_volume += !e.is_finite() as usize;
+        bad_product += (!c.is_finite() & e.is_finite() & bundle.throughput[r].is_finite()) as usize;
+        batch.paths.radiance[bundle.path[r] as usize] += c;
+    }
+    stats.non_finite(Stage::Volume, bad_volume);
+    stats.non_finite(Stage::Emission, bad_product);
+}
+
 /// Partitions `rays` into bundles by the volumes the rays travel in and the transmit bit, and
 /// runs each bundle through its innermost volume's integrator (or plain nearest hits when in
 /// no volume).
@@ -92,7 +120,7 @@ fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &Rays) {
 fn partitioned(
     tracer: &PathTracer,
     scene: &CompiledScene,
-    batch: &PathBatch,
+    batch: &mut PathBatch,
     rays: &Rays,
     hits: &mut HitQueue,
     shadow: &mut risotto_components::ShadowRays,
@@ -208,6 +236,9 @@ fn partitioned(
                 }
                 let absorbed = t.answered.iter().filter(|a| !**a).count();
                 stats.terminate(Termination::Absorbed, absorbed);
+                if !t.answers.emitted.is_empty() {
+                    add_emitted(scene, &t.bundle, &t.answers.emitted, batch, stats);
+                }
                 // Rays walked inside the volume arrive along their walk's last segment.
                 t.answers.walked.apply(&mut t.bundle);
             }

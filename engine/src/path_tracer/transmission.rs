@@ -27,7 +27,8 @@ pub(super) fn shadow_rays(
     shadow
         .contribution
         .extend_from_slice(&shadow.rays.contribution);
-    crate::transmission::trace_shadow_rays(
+    // Built-in media add their emission along path rays (`trace.rs`), not here.
+    crate::transmission::trace_shadow_rays_with(
         scene,
         &shadow.rays,
         batch,
@@ -35,6 +36,7 @@ pub(super) fn shadow_rays(
         &mut shadow.contribution,
         stats,
         arena,
+        crate::transmission::ShadowEmission::NotAlongPaths,
     );
     // NaN provenance: contributions the walk made non-finite (those non-finite before it
     // came from upstream and were counted there).

@@ -408,6 +408,16 @@ impl MaterialParams {
         !self.hidden.contains(&key) && self.reader().has(key)
     }
 
+    /// Whether the key is present and holds a table (for keys that take either a value or
+    /// a table, like a heterogeneous interior's `emission`).
+    pub fn is_table(&self, key: &str) -> bool {
+        self.has(key)
+            && self
+                .reader()
+                .get(key)
+                .is_some_and(|n| n.as_table().is_some())
+    }
+
     /// The keys in file order (without the hidden `type` / `priority` of a material).
     pub fn keys(&self) -> Vec<&str> {
         self.node
