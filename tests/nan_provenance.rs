@@ -6,7 +6,7 @@ use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, Surface};
+use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
@@ -139,6 +139,114 @@ impl VolumeIntegrator for NanInterior {
     }
 }
 
+/// Glass (index 1) around a volume whose integrator lights the rays' origins through the
+/// path tracer's lighting delegate with a phase function that evaluates to NaN (and then
+/// lets the rays through unattenuated).
+struct DelegateNanGlass;
+
+struct DelegateNanInterior<'a> {
+    ctx: &'a ShadingContext<'a>,
+}
+
+/// An isotropic phase function whose evaluations towards light samples are NaN.
+struct NanPhase(HenyeyGreensteinPhase);
+
+impl Bxdf for NanPhase {
+    fn lobes(&self) -> LobeSampled {
+        self.0.lobes()
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        self.0.generate_samples(ctx, samplers, out);
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        self.0.evaluate_samples(ctx, wi, value, pdf);
+        value.fill(Rgb::splat(f32::NAN));
+    }
+}
+
+impl BxdfFactory for DelegateNanGlass {
+    fn instance_hints(&self) -> InstanceHints {
+        InstanceHints::TRANSMITS
+            | InstanceHints::COMPUTES_INTERIOR
+            | InstanceHints::INTERIOR_TRANSMISSION
+            | InstanceHints::TRANSMISSION_SHADOWS
+    }
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        let phase = HenyeyGreensteinPhase {
+            g: 0.0,
+            albedo: Rgb::WHITE,
+        };
+        match mode {
+            ShadingMode::VolumeScatter => arena.alloc(NanPhase(phase)),
+            _ => arena.alloc(DielectricBxdf {
+                ior: 1.0,
+                tint: Rgb::WHITE,
+            }),
+        }
+    }
+    fn begin_interior<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        Some(arena.alloc(DelegateNanInterior { ctx }))
+    }
+    fn shadow_transmittance(&self) -> Rgb {
+        Rgb::WHITE
+    }
+}
+
+impl VolumeIntegrator for DelegateNanInterior<'_> {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        services: VolumeServices<'_, '_>,
+        out: &mut ShadeGroups,
+    ) {
+        if let Some(lighting) = services.lighting {
+            let vs = self.ctx.begin_volume_sampling();
+            let vctx = vs.context();
+            let phase =
+                services
+                    .factory
+                    .begin_scatter(&vctx, ShadingMode::VolumeScatter, services.arena);
+            let weight = vec![Rgb::WHITE; rays.len()];
+            lighting.perform_direct_lighting(&vctx, phase, rays, samplers, &weight);
+        }
+        services.ictx.nearest_hits(rays, out);
+    }
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        trans[..segments.len()].fill(Rgb::WHITE);
+        emission.fill(Rgb::BLACK);
+    }
+}
+
 /// A unit sphere of `factory` above a grey floor (y = -1), lit by a point light above and a
 /// dim sky, seen from the front.
 fn render_sphere(factory: Box<dyn BxdfFactory>) -> RenderOutput {
@@ -239,6 +347,18 @@ fn a_volume_integrator_writing_nan_transmission_is_named_and_the_film_stays_fini
         }
     }
     // The poisoned samples were dropped at the film, not written.
+    assert!(out.stats.counters.nan_dropped > 0, "{}", out.stats);
+}
+
+#[test]
+fn the_lighting_delegates_non_finite_values_are_counted() {
+    // The delegate's light sampling used to count into a throw-away accumulator.
+    let out = render_sphere(Box::new(DelegateNanGlass));
+    assert_film_finite(&out);
+    assert!(reported(&out, Stage::Phase) > 0, "{}", out.stats);
+    for stage in Stage::ALL.into_iter().filter(|&s| s != Stage::Phase) {
+        assert_eq!(reported(&out, stage), 0, "{}: {}", stage.name(), out.stats);
+    }
     assert!(out.stats.counters.nan_dropped > 0, "{}", out.stats);
 }
 

@@ -141,6 +141,9 @@ pub struct DirectLighting<'a> {
     /// Rows of `shadow` written by this delegate's calls, and light-sample count.
     lit: usize,
     seconds: f64,
+    /// What the calls' light sampling counted (its non-finite values are the render's; its
+    /// `lights` time is recorded once, as `lit` and `seconds`).
+    stats: SystemStats,
 }
 
 impl<'a> DirectLighting<'a> {
@@ -160,13 +163,19 @@ impl<'a> DirectLighting<'a> {
             group,
             lit: 0,
             seconds: 0.0,
+            stats: SystemStats::default(),
         }
     }
 
-    /// Records the delegate's work in `stats`.
+    /// Records the delegate's work in `stats`: its light samples and their time, and the
+    /// non-finite values its calls found (NaN provenance of the delegate's light samples and
+    /// phase evaluations).
     pub(super) fn finish(self, stats: &mut SystemStats) {
         if self.lit > 0 {
             stats.record(System::Lights, self.lit, self.seconds);
+        }
+        for (a, b) in stats.non_finite.iter_mut().zip(&self.stats.non_finite) {
+            *a += b;
         }
     }
 }
@@ -216,7 +225,6 @@ impl LightingDelegate for DirectLighting<'_> {
         };
         let start_row = self.shadow.len();
         let mut out = self.shadow.append_default(m);
-        let mut stats = SystemStats::default();
         let group = LitGroup {
             vertices,
             weight: Some(weight),
@@ -234,7 +242,7 @@ impl LightingDelegate for DirectLighting<'_> {
             light,
             &mut out,
             0,
-            &mut stats,
+            &mut self.stats,
         );
         self.shadow.truncate(start_row + written);
         self.lit += m;
