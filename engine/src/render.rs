@@ -430,6 +430,7 @@ fn gather(
     stats.features = scene.features.names();
     stats.warnings.extend(scene.warnings.iter().cloned());
     validate_boundaries(scene, &mut stats);
+    stats.non_finite_cases = name_non_finite_cases(scene, &stats.counters);
     RenderOutput {
         beauty,
         variance,
@@ -445,6 +446,20 @@ fn gather(
         },
         stats,
     }
+}
+
+/// The kept non-finite cases of `counters`, with pixel coordinates, material names and the
+/// scene's seed.
+pub(crate) fn name_non_finite_cases(
+    scene: &CompiledScene,
+    counters: &SystemStats,
+) -> Vec<crate::stats::NonFiniteCase> {
+    let name = |m: u32| scene.materials.get(m as usize).map(|m| m.name.clone());
+    counters
+        .non_finite_events
+        .iter()
+        .map(|e| crate::stats::NonFiniteCase::of(e, scene.camera.width, scene.settings.seed, name))
+        .collect()
 }
 
 /// The boundary validator: one warning per shape whose crossings corrupted volume stacks

@@ -34,10 +34,12 @@ mod transmission;
 
 use crate::integrator::{Integrator, LightingTechnique, PathBatch};
 use crate::scene::CompiledScene;
-use crate::stats::SystemStats;
+use crate::stats::{NonFiniteEvent, Stage, SystemStats};
 use bumpalo::Bump;
 pub use direct_lighting::DirectLighting;
 use queues::*;
+use risotto_components::Paths;
+use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 
 /// Sampler dimensions each scattering vertex reserves: light position (0, 1), light selection
 /// (2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4, so each group of
@@ -85,7 +87,7 @@ impl Integrator for PathTracer {
                 }
             }
             shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
-            transmission::shadow_rays(scene, &mut q.shadow, batch, stats, arena);
+            transmission::shadow_rays(scene, &mut q.shadow, &q.hits.incoming, batch, stats, arena);
             std::mem::swap(&mut q.rays, &mut q.next);
             q.next.rays.clear();
             stats.add_rays(q.rays.rays.len());
@@ -93,6 +95,32 @@ impl Integrator for PathTracer {
         }
         stats.pattern_cache_hits += q.counters.hits.take();
         stats.pattern_evals += q.counters.evals.take();
+    }
+}
+
+/// NaN provenance: records that `stage` made a value of path `path` (a row of the batch's
+/// `paths`) non-finite at a vertex of depth `depth`, with the material involved where there is
+/// one ([`SystemStats::non_finite_event`]). Out of line: it runs only for non-finite values.
+#[cold]
+#[inline(never)]
+pub(crate) fn non_finite_case(
+    stats: &mut SystemStats,
+    paths: &Paths,
+    path: u32,
+    depth: u16,
+    stage: Stage,
+    material: Option<u32>,
+) {
+    let p = path as usize;
+    let (pixel, sample) = (paths.pixel[p], paths.sample[p] & !INDEPENDENT_BIT);
+    if stats.wants_non_finite_case((pixel, sample)) {
+        stats.non_finite_event(NonFiniteEvent {
+            pixel,
+            sample,
+            depth: depth as u32,
+            stage,
+            material,
+        });
     }
 }
 
