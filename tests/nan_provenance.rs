@@ -8,11 +8,13 @@ use glam::Vec3;
 use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
 use risotto::engine::context::IntegratorContext;
+use risotto::engine::path_tracer::VertexEvent;
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::replay::replay;
 use risotto::engine::scene::{CompiledScene, LightComponent, Scene, ShapeGeometry};
 use risotto::engine::stats::{NonFiniteCase, Stage, MAX_NON_FINITE_CASES};
 use risotto::systems::bxdf_samples::BxdfSamples;
@@ -425,6 +427,62 @@ fn non_finite_cases_name_pixel_sample_depth_stage_and_material() {
     // The kept cases are the smallest keys: no pixel-sample before the first kept one, in
     // the rows above it, can have met the ball's right half directly (they see the sky).
     assert!(cases[0].y >= 2, "{cases:?}");
+}
+
+/// Replays every case of a render of `factory`'s ball and checks that the path meets a
+/// non-finite value from `stage` at the recorded depth, first there, on the ball's poisoned
+/// half (world x > 0), and that the replay's own stats name the same case.
+fn replay_reproduces_the_cases(factory: Box<dyn BxdfFactory>, stage: Stage) {
+    let scene = sphere_scene(factory);
+    let out = render_default(&scene);
+    let cases = cases(&out);
+    assert_eq!(cases.len(), MAX_NON_FINITE_CASES, "{}", out.stats);
+    for c in &cases {
+        let r = replay(&scene, &RenderOptions::default(), c.x, c.y, c.sample).unwrap();
+        let v = r
+            .first_non_finite()
+            .unwrap_or_else(|| panic!("{c:?}: the replay met no non-finite value\n{r}"));
+        assert_eq!(v.depth, c.depth, "{c:?}\n{r}");
+        assert!(v.non_finite.contains(&stage), "{c:?}\n{r}");
+        match &v.event {
+            VertexEvent::Surface {
+                material, position, ..
+            } => {
+                assert_eq!(material, "ball", "{c:?}\n{r}");
+                assert!(position.x > 0.0, "{c:?}: unpoisoned point {position}\n{r}");
+            }
+            e => panic!("{c:?}: non-finite at {e:?}\n{r}"),
+        }
+        // Every vertex before it was clean.
+        let before = r.trace.vertices.iter().take_while(|w| w.depth < c.depth);
+        assert!(before.clone().all(|w| w.non_finite.is_empty()), "{r}");
+        assert_eq!(r.stats.non_finite_cases.len(), 1, "{}", r.stats);
+        assert_eq!(r.stats.non_finite_cases[0], *c);
+        let shown = r.to_string();
+        assert!(shown.contains("<-- became non-finite here"), "{shown}");
+        assert!(
+            shown.contains(&format!("depth {}: surface of material \"ball\"", c.depth)),
+            "{shown}"
+        );
+    }
+}
+
+#[test]
+fn replaying_a_case_meets_the_nan_of_a_bxdf_sample_at_the_recorded_depth() {
+    replay_reproduces_the_cases(Box::new(PoisonedDiffuse(false)), Stage::Bxdf);
+}
+
+#[test]
+fn replaying_a_case_meets_the_nan_of_a_bxdf_evaluation_at_the_recorded_depth() {
+    // Here the NaN reaches the path's radiance through the shadow ray: the film drops it.
+    let scene = sphere_scene(Box::new(PoisonedDiffuse(true)));
+    let out = render_default(&scene);
+    let c = &cases(&out)[0];
+    let r = replay(&scene, &RenderOptions::default(), c.x, c.y, c.sample).unwrap();
+    assert!(!r.radiance().is_finite(), "{r}");
+    assert!(r.to_string().ends_with("(dropped at the film)"), "{r}");
+    assert_eq!(r.stats.counters.nan_dropped, 1);
+    replay_reproduces_the_cases(Box::new(PoisonedDiffuse(true)), Stage::Bxdf);
 }
 
 #[test]

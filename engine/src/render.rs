@@ -202,6 +202,18 @@ pub enum RenderError {
     /// A checkpoint could not be written.
     #[error("checkpoint: {0}")]
     Checkpoint(String),
+    /// The pixel or sample to replay ([`crate::replay::replay`]) is not part of the render.
+    #[error("replay of pixel ({x}, {y}) sample {sample}: {reason}")]
+    Replay {
+        /// Pixel column asked for.
+        x: u32,
+        /// Pixel row asked for.
+        y: u32,
+        /// Sample index asked for.
+        sample: u32,
+        /// What is wrong with it.
+        reason: String,
+    },
 }
 
 /// Periodic checkpoints of a render ([`render_checkpointed`]).

@@ -28,6 +28,7 @@ mod escaped;
 mod generate;
 mod pass_through;
 pub mod queues;
+mod recorder;
 mod shade;
 mod trace;
 mod transmission;
@@ -38,6 +39,11 @@ use crate::stats::{NonFiniteEvent, Stage, SystemStats};
 use bumpalo::Bump;
 pub use direct_lighting::DirectLighting;
 use queues::*;
+use recorder::Recorder;
+pub use recorder::{
+    BxdfSampleRecord, LightSampleRecord, PathTrace, ShadowRayRecord, TraceSegment, TraceVertex,
+    VertexEvent,
+};
 use risotto_components::Paths;
 use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 
@@ -68,6 +74,9 @@ impl Integrator for PathTracer {
         stats: &mut SystemStats,
         arena: &Bump,
     ) {
+        // The path-trace recorder, when the batch asks for one (`PathBatch::trace`): it reads
+        // the queues between the stages; the stages do not know it.
+        let mut rec = batch.trace.take().map(Recorder::new);
         generate::camera_rays(scene, batch, &mut q.rays, stats);
         q.emissive_material.clear();
         q.emissive_material.resize(scene.materials.len(), false);
@@ -79,15 +88,34 @@ impl Integrator for PathTracer {
             // The last bounce's arrived rays are dead: their rows become the storage the
             // continue stage overwrites with the next rays.
             q.hits.recycle_into(&mut q.next);
+            if let Some(r) = &mut rec {
+                r.begin_bounce(batch, stats);
+            }
             while !q.rays.rays.is_empty() {
                 trace::nearest_hits(self, scene, batch, q, stats, arena);
+                if let Some(r) = &mut rec {
+                    r.traced(scene, q);
+                }
                 escaped::environment(self, scene, &mut q.escaped, &q.hits, batch, stats);
                 if scene.features.transmissive {
                     pass_through::boundaries(self, scene, &mut q.hits, &mut q.rays, batch, stats);
+                    if let Some(r) = &mut rec {
+                        r.passed(q);
+                    }
                 }
             }
+            if let Some(r) = &mut rec {
+                r.before_shade(q);
+            }
             shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
+            if let Some(r) = &mut rec {
+                r.shaded(q);
+            }
+            let shadow_rays = q.shadow.rays.len();
             transmission::shadow_rays(scene, &mut q.shadow, &q.hits.incoming, batch, stats, arena);
+            if let Some(r) = &mut rec {
+                r.end_bounce(q, shadow_rays, batch, stats);
+            }
             std::mem::swap(&mut q.rays, &mut q.next);
             q.next.rays.clear();
             stats.add_rays(q.rays.rays.len());
@@ -95,6 +123,7 @@ impl Integrator for PathTracer {
         }
         stats.pattern_cache_hits += q.counters.hits.take();
         stats.pattern_evals += q.counters.evals.take();
+        batch.trace = rec.map(|r| r.trace);
     }
 }
 
