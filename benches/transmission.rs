@@ -133,7 +133,11 @@ fn bench_transmission(c: &mut Criterion) {
             });
         }
         let seeds: Vec<u32> = (0..N as u32).map(|p| pixel_seed(1, p)).collect();
-        let batch = PathBatch { paths, seeds };
+        let batch = PathBatch {
+            paths,
+            seeds,
+            trace: None,
+        };
         let mut contribution = vec![Rgb::WHITE; N];
         let mut stats = SystemStats::default();
         let mut arena = Bump::new();

@@ -18,6 +18,7 @@ use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
     RenderOutput, SampleRange, Window,
 };
+use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::{self, Techniques};
 use std::path::{Path, PathBuf};
@@ -206,6 +207,19 @@ struct RenderArgs {
     /// at most one a second, for farm managers; see README "Farm"), or `none`.
     #[arg(long, value_enum, default_value_t = ProgressMode::Bar)]
     progress: ProgressMode,
+    /// Re-run only sample SAMPLE of pixel X,Y (column, row from the top left), alone and
+    /// single-threaded, and print each vertex of its path (position, material or volume,
+    /// throughput, Bxdf and light pdfs, radiance added, where it became non-finite) on
+    /// stdout. Writes no image. The stats' non-finite cases print this command.
+    #[arg(
+        long,
+        value_name = "X,Y,SAMPLE",
+        conflicts_with_all = [
+            "out", "stats", "crop", "grid", "tile", "chunks", "chunk", "samples",
+            "checkpoint", "partial", "aovs",
+        ]
+    )]
+    replay: Option<String>,
 }
 
 /// `risotto render --progress`.
@@ -240,7 +254,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    check_outputs(&args.scene, &out, args.stats.as_deref())?;
+    if args.replay.is_none() {
+        check_outputs(&args.scene, &out, args.stats.as_deref())?;
+    }
     let registry = MaterialRegistry::with_builtins();
     let mut scene = load_scene_file(&args.scene, &registry)?;
     if let Some(spp) = args.spp {
@@ -276,6 +292,22 @@ fn render_command(args: RenderArgs) -> Result<()> {
     );
     let compiled = compile_scene(scene, &args.scene)?;
     let techniques = render_techniques(&args, &compiled)?;
+    if let Some(spec) = &args.replay {
+        let (x, y, sample) = parse_replay(spec)?;
+        let options = techniques.render_options(RenderOptions::default());
+        let r = replay(&compiled, &options, x, y, sample).map_err(|e| match e {
+            RenderError::Replay { reason, .. } => anyhow::anyhow!("--replay {spec}: {reason}"),
+            e => e.into(),
+        })?;
+        // A reader that stops early (`| head`) is not an error.
+        use std::io::Write;
+        return match writeln!(std::io::stdout().lock(), "{r}") {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                Err(e).context("cannot write the replay to stdout")
+            }
+            _ => Ok(()),
+        };
+    }
     let out = args
         .out
         .clone()
@@ -377,7 +409,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             j.inc(n);
         }
     };
-    let result = match checkpoint {
+    let mut result = match checkpoint {
         Some(every) => {
             let mut write =
                 |r: &RenderOutput| write_partial(&out, &to_partial(r)).map_err(|e| e.to_string());
@@ -397,6 +429,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(j) = &json {
         j.finish();
     }
+    result.stats.render_command = Some(replay_base_command(&args));
 
     if partial {
         write_partial(&out, &to_partial(&result))?;
@@ -424,6 +457,54 @@ fn render_command(args: RenderArgs) -> Result<()> {
         eprintln!("wrote {} and {}", out.display(), png.display());
     }
     Ok(())
+}
+
+/// Parses `--replay X,Y,SAMPLE`.
+fn parse_replay(s: &str) -> Result<(u32, u32, u32)> {
+    let v: Vec<&str> = s.split(',').collect();
+    anyhow::ensure!(
+        v.len() == 3,
+        "--replay {s}: expected three whole numbers X,Y,SAMPLE (pixel column, row, sample index)"
+    );
+    let mut n = [0u32; 3];
+    for (i, t) in v.iter().enumerate() {
+        n[i] = t
+            .trim()
+            .parse()
+            .with_context(|| format!("--replay {s}: \"{t}\" is not a whole number"))?;
+    }
+    Ok((n[0], n[1], n[2]))
+}
+
+/// The `risotto render` command with the options of `args` that decide a path (scene, spp,
+/// seed, depth, techniques), to which a non-finite case's `--replay X,Y,SAMPLE` is appended.
+fn replay_base_command(args: &RenderArgs) -> String {
+    /// `s`, single-quoted for a POSIX shell when it holds anything but plain characters.
+    fn quoted(s: &str) -> String {
+        let plain = |c: char| c.is_ascii_alphanumeric() || "-_./=+,:@%".contains(c);
+        if !s.is_empty() && s.chars().all(plain) {
+            s.to_string()
+        } else {
+            format!("'{}'", s.replace('\'', "'\\''"))
+        }
+    }
+    let mut cmd = format!("risotto render {}", quoted(&args.scene.to_string_lossy()));
+    if let Some(spp) = args.spp {
+        cmd += &format!(" --spp {spp}");
+    }
+    if let Some(seed) = args.seed {
+        cmd += &format!(" --seed {seed}");
+    }
+    if let Some(d) = args.max_depth {
+        cmd += &format!(" --max-depth {d}");
+    }
+    if let Some(l) = &args.lighting {
+        cmd += &format!(" --lighting {}", quoted(l));
+    }
+    for t in &args.techniques {
+        cmd += &format!(" --technique {}", quoted(t));
+    }
+    cmd
 }
 
 /// Two whole numbers `A{sep}B` of option `flag`.
@@ -831,4 +912,55 @@ fn default_output(scene: &Path) -> PathBuf {
         .file_stem()
         .map_or_else(|| "render".into(), |s| s.to_os_string());
     PathBuf::from(stem).with_extension("exr")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn render_args(args: &[&str]) -> RenderArgs {
+        let argv = ["risotto", "render"].iter().chain(args);
+        match Cli::try_parse_from(argv).unwrap().command {
+            Command::Render(a) => a,
+            _ => unreachable!("a render command"),
+        }
+    }
+
+    #[test]
+    fn the_replay_command_keeps_what_decides_a_path_and_quotes_the_scene() {
+        let a = render_args(&[
+            "my scene.toml",
+            "--spp",
+            "16",
+            "--seed",
+            "3",
+            "--threads",
+            "2",
+            "--out",
+            "x.exr",
+            "--technique",
+            "sampler=independent",
+            "--max-depth",
+            "-1",
+        ]);
+        assert_eq!(
+            replay_base_command(&a),
+            "risotto render 'my scene.toml' --spp 16 --seed 3 --max-depth -1 \
+             --technique sampler=independent"
+        );
+        let a = render_args(&["scenes/it's.toml", "--lighting", "nee"]);
+        assert_eq!(
+            replay_base_command(&a),
+            "risotto render 'scenes/it'\\''s.toml' --lighting nee"
+        );
+    }
+
+    #[test]
+    fn replay_values_parse_or_name_the_flag() {
+        assert_eq!(parse_replay("3, 4,5").unwrap(), (3, 4, 5));
+        for bad in ["3,4", "3,4,5,6", "a,1,2", "1,2,-3", ""] {
+            let e = format!("{:#}", parse_replay(bad).unwrap_err());
+            assert!(e.starts_with(&format!("--replay {bad}:")), "{e}");
+        }
+    }
 }

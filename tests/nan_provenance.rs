@@ -6,15 +6,17 @@ use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, Surface};
+use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
 use risotto::engine::context::IntegratorContext;
+use risotto::engine::path_tracer::VertexEvent;
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
 };
-use risotto::engine::render::RenderOutput;
-use risotto::engine::scene::{LightComponent, Scene, ShapeGeometry};
-use risotto::engine::stats::Stage;
+use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::replay::replay;
+use risotto::engine::scene::{CompiledScene, LightComponent, Scene, ShapeGeometry};
+use risotto::engine::stats::{NonFiniteCase, Stage, MAX_NON_FINITE_CASES};
 use risotto::systems::bxdf_samples::BxdfSamples;
 use risotto::systems::geometry::Sphere;
 use risotto::systems::sampler::PathSampler;
@@ -139,9 +141,123 @@ impl VolumeIntegrator for NanInterior {
     }
 }
 
-/// A unit sphere of `factory` above a grey floor (y = -1), lit by a point light above and a
-/// dim sky, seen from the front.
+/// Glass (index 1) around a volume whose integrator lights the rays' origins through the
+/// path tracer's lighting delegate with a phase function that evaluates to NaN (and then
+/// lets the rays through unattenuated).
+struct DelegateNanGlass;
+
+struct DelegateNanInterior<'a> {
+    ctx: &'a ShadingContext<'a>,
+}
+
+/// An isotropic phase function whose evaluations towards light samples are NaN.
+struct NanPhase(HenyeyGreensteinPhase);
+
+impl Bxdf for NanPhase {
+    fn lobes(&self) -> LobeSampled {
+        self.0.lobes()
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        self.0.generate_samples(ctx, samplers, out);
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        self.0.evaluate_samples(ctx, wi, value, pdf);
+        value.fill(Rgb::splat(f32::NAN));
+    }
+}
+
+impl BxdfFactory for DelegateNanGlass {
+    fn instance_hints(&self) -> InstanceHints {
+        InstanceHints::TRANSMITS
+            | InstanceHints::COMPUTES_INTERIOR
+            | InstanceHints::INTERIOR_TRANSMISSION
+            | InstanceHints::TRANSMISSION_SHADOWS
+    }
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a ShadingContext<'a>,
+        mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        let phase = HenyeyGreensteinPhase {
+            g: 0.0,
+            albedo: Rgb::WHITE,
+        };
+        match mode {
+            ShadingMode::VolumeScatter => arena.alloc(NanPhase(phase)),
+            _ => arena.alloc(DielectricBxdf {
+                ior: 1.0,
+                tint: Rgb::WHITE,
+            }),
+        }
+    }
+    fn begin_interior<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        Some(arena.alloc(DelegateNanInterior { ctx }))
+    }
+    fn shadow_transmittance(&self) -> Rgb {
+        Rgb::WHITE
+    }
+}
+
+impl VolumeIntegrator for DelegateNanInterior<'_> {
+    fn nearest_hits(
+        &mut self,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        _lobes_wanted: LobeSampled,
+        services: VolumeServices<'_, '_>,
+        out: &mut ShadeGroups,
+    ) {
+        if let Some(lighting) = services.lighting {
+            let vs = self.ctx.begin_volume_sampling();
+            let vctx = vs.context();
+            let phase =
+                services
+                    .factory
+                    .begin_scatter(&vctx, ShadingMode::VolumeScatter, services.arena);
+            let weight = vec![Rgb::WHITE; rays.len()];
+            lighting.perform_direct_lighting(&vctx, phase, rays, samplers, &weight);
+        }
+        services.ictx.nearest_hits(rays, out);
+    }
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        trans[..segments.len()].fill(Rgb::WHITE);
+        emission.fill(Rgb::BLACK);
+    }
+}
+
+/// Renders [`sphere_scene`] with default options.
 fn render_sphere(factory: Box<dyn BxdfFactory>) -> RenderOutput {
+    render_default(&sphere_scene(factory))
+}
+
+/// A unit sphere of `factory` (material "ball") above a grey floor (y = -1), lit by a point
+/// light above and a dim sky, seen from the front by a 16x16 camera at x = 0, so world
+/// `x > 0` is the right half of the image.
+fn sphere_scene(factory: Box<dyn BxdfFactory>) -> CompiledScene {
     let (w, h) = (16, 16);
     let cam = perspective(Vec3::new(0.0, 0.5, 5.0), Vec3::ZERO, 45.0, w, h);
     let mut scene = Scene::new(cam, settings(w, h, 4, 6));
@@ -181,7 +297,7 @@ fn render_sphere(factory: Box<dyn BxdfFactory>) -> RenderOutput {
         },
     );
     environment(&mut scene, Rgb::splat(0.2));
-    render_default(&scene.compile().unwrap())
+    scene.compile().unwrap()
 }
 
 fn assert_film_finite(out: &RenderOutput) {
@@ -242,6 +358,195 @@ fn a_volume_integrator_writing_nan_transmission_is_named_and_the_film_stays_fini
     assert!(out.stats.counters.nan_dropped > 0, "{}", out.stats);
 }
 
+/// The render's non-finite cases, checked against the JSON and the summary.
+fn cases(out: &RenderOutput) -> Vec<NonFiniteCase> {
+    let cases = out.stats.non_finite_cases.clone();
+    let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
+    let summary = out.stats.to_string();
+    if cases.is_empty() {
+        assert!(json.get("non_finite_cases").is_none(), "{json}");
+        assert!(!summary.contains("non-finite sample"), "{summary}");
+        return cases;
+    }
+    let listed = json["non_finite_cases"].as_array().unwrap();
+    assert_eq!(listed.len(), cases.len(), "{json}");
+    for (c, j) in cases.iter().zip(listed) {
+        assert_eq!(j["x"], c.x, "{j}");
+        assert_eq!(j["y"], c.y, "{j}");
+        assert_eq!(j["sample"], c.sample, "{j}");
+        assert_eq!(j["depth"], c.depth, "{j}");
+        assert_eq!(j["stage"], c.stage.name(), "{j}");
+        assert_eq!(j["material"].as_str(), c.material.as_deref(), "{j}");
+        let replay = format!("--replay {},{},{}", c.x, c.y, c.sample);
+        assert!(j["replay"].as_str().unwrap().ends_with(&replay), "{j}");
+        let line = format!(
+            "non-finite sample: pixel ({}, {}) sample {} depth {} stage {}",
+            c.x,
+            c.y,
+            c.sample,
+            c.depth,
+            c.stage.name()
+        );
+        let line = summary
+            .lines()
+            .find(|l| l.starts_with(&line))
+            .unwrap_or_else(|| panic!("no {line:?} in {summary}"));
+        assert!(
+            line.ends_with(&format!("risotto render SCENE {replay}")),
+            "{line}"
+        );
+    }
+    cases
+}
+
+#[test]
+fn non_finite_cases_name_pixel_sample_depth_stage_and_material() {
+    let scene = sphere_scene(Box::new(PoisonedDiffuse(false)));
+    let seed = scene.settings.seed;
+    let out = render_default(&scene);
+    let cases = cases(&out);
+    assert_eq!(cases.len(), MAX_NON_FINITE_CASES, "{}", out.stats);
+    // Sorted by (pixel index, sample), one per camera sample.
+    let key = |c: &NonFiniteCase| (c.y * 16 + c.x, c.sample);
+    assert!(
+        cases.windows(2).all(|w| key(&w[0]) < key(&w[1])),
+        "{cases:?}"
+    );
+    for c in &cases {
+        assert_eq!(c.stage, Stage::Bxdf, "{c:?}");
+        assert_eq!(c.material.as_deref(), Some("ball"), "{c:?}");
+        assert_eq!(c.seed, seed);
+        assert!(c.x < 16 && c.y < 16 && c.sample < 4, "{c:?}");
+        // Seen directly, a poisoned point (world x > 0) is in the image's right half: the
+        // camera sits at x = 0 and pixel columns 0..8 lie wholly left of the centre line.
+        if c.depth == 0 {
+            assert!(c.x >= 8, "{c:?}");
+        }
+    }
+    assert!(cases.iter().any(|c| c.depth == 0), "{cases:?}");
+    // The kept cases are the smallest keys: no pixel-sample before the first kept one, in
+    // the rows above it, can have met the ball's right half directly (they see the sky).
+    assert!(cases[0].y >= 2, "{cases:?}");
+}
+
+/// Replays every case of a render of `factory`'s ball and checks that the path meets a
+/// non-finite value from `stage` at the recorded depth, first there, on the ball's poisoned
+/// half (world x > 0), and that the replay's own stats name the same case.
+fn replay_reproduces_the_cases(factory: Box<dyn BxdfFactory>, stage: Stage) {
+    let scene = sphere_scene(factory);
+    let out = render_default(&scene);
+    let cases = cases(&out);
+    assert_eq!(cases.len(), MAX_NON_FINITE_CASES, "{}", out.stats);
+    for c in &cases {
+        let r = replay(&scene, &RenderOptions::default(), c.x, c.y, c.sample).unwrap();
+        let v = r
+            .first_non_finite()
+            .unwrap_or_else(|| panic!("{c:?}: the replay met no non-finite value\n{r}"));
+        assert_eq!(v.depth, c.depth, "{c:?}\n{r}");
+        assert!(v.non_finite.contains(&stage), "{c:?}\n{r}");
+        match &v.event {
+            VertexEvent::Surface {
+                material, position, ..
+            } => {
+                assert_eq!(material, "ball", "{c:?}\n{r}");
+                assert!(position.x > 0.0, "{c:?}: unpoisoned point {position}\n{r}");
+            }
+            e => panic!("{c:?}: non-finite at {e:?}\n{r}"),
+        }
+        // Every vertex before it was clean.
+        let before = r.trace.vertices.iter().take_while(|w| w.depth < c.depth);
+        assert!(before.clone().all(|w| w.non_finite.is_empty()), "{r}");
+        assert_eq!(r.stats.non_finite_cases.len(), 1, "{}", r.stats);
+        assert_eq!(r.stats.non_finite_cases[0], *c);
+        let shown = r.to_string();
+        assert!(shown.contains("<-- became non-finite here"), "{shown}");
+        assert!(
+            shown.contains(&format!("depth {}: surface of material \"ball\"", c.depth)),
+            "{shown}"
+        );
+    }
+}
+
+#[test]
+fn replaying_a_case_meets_the_nan_of_a_bxdf_sample_at_the_recorded_depth() {
+    replay_reproduces_the_cases(Box::new(PoisonedDiffuse(false)), Stage::Bxdf);
+}
+
+#[test]
+fn replaying_a_case_meets_the_nan_of_a_bxdf_evaluation_at_the_recorded_depth() {
+    // Here the NaN reaches the path's radiance through the shadow ray: the film drops it.
+    let scene = sphere_scene(Box::new(PoisonedDiffuse(true)));
+    let out = render_default(&scene);
+    let c = &cases(&out)[0];
+    let r = replay(&scene, &RenderOptions::default(), c.x, c.y, c.sample).unwrap();
+    assert!(!r.radiance().is_finite(), "{r}");
+    assert!(r.to_string().ends_with("(dropped at the film)"), "{r}");
+    assert_eq!(r.stats.counters.nan_dropped, 1);
+    replay_reproduces_the_cases(Box::new(PoisonedDiffuse(true)), Stage::Bxdf);
+}
+
+#[test]
+fn non_finite_cases_do_not_depend_on_threads_batches_or_tiles() {
+    let scene = sphere_scene(Box::new(PoisonedDiffuse(true)));
+    let run = |threads: usize, batch_size: usize, tile_size: u32| {
+        let options = RenderOptions {
+            threads: Some(threads),
+            batch_size,
+            tile_size,
+            ..RenderOptions::default()
+        };
+        let out = render(&scene, &options, &|_| {}).unwrap();
+        cases(&out)
+    };
+    let one = run(1, 4096, 16);
+    assert_eq!(one.len(), MAX_NON_FINITE_CASES);
+    assert_eq!(run(2, 4096, 16), one);
+    assert_eq!(run(2, 7, 4), one);
+}
+
+#[test]
+fn a_volume_integrators_cases_name_its_material() {
+    let out = render_sphere(Box::new(PoisonedGlass));
+    let cases = cases(&out);
+    assert!(!cases.is_empty(), "{}", out.stats);
+    for c in &cases {
+        match c.stage {
+            Stage::Volume => assert_eq!(c.material.as_deref(), Some("ball"), "{c:?}"),
+            Stage::Transmission => assert_eq!(c.material, None, "{c:?}"),
+            s => panic!("stage {} in {c:?}", s.name()),
+        }
+    }
+    // Camera rays refract into the ball at its surface (the depth-0 vertex, a Bxdf of its
+    // own); the interior answers the refracted rays, of depth 1, with NaN.
+    assert!(
+        cases
+            .iter()
+            .any(|c| c.stage == Stage::Volume && c.depth == 1),
+        "{cases:?}"
+    );
+    assert!(cases.iter().all(|c| c.depth >= 1), "{cases:?}");
+}
+
+#[test]
+fn the_lighting_delegates_non_finite_values_are_counted() {
+    // The delegate's light sampling used to count into a throw-away accumulator.
+    let out = render_sphere(Box::new(DelegateNanGlass));
+    assert_film_finite(&out);
+    assert!(reported(&out, Stage::Phase) > 0, "{}", out.stats);
+    for stage in Stage::ALL.into_iter().filter(|&s| s != Stage::Phase) {
+        assert_eq!(reported(&out, stage), 0, "{}: {}", stage.name(), out.stats);
+    }
+    assert!(out.stats.counters.nan_dropped > 0, "{}", out.stats);
+    let cases = cases(&out);
+    assert!(!cases.is_empty());
+    for c in &cases {
+        assert_eq!(c.stage, Stage::Phase, "{c:?}");
+        assert_eq!(c.material.as_deref(), Some("ball"), "{c:?}");
+        // Lit at the origins of the rays inside the ball (refracted at depth 0).
+        assert!(c.depth >= 1, "{c:?}");
+    }
+}
+
 #[test]
 fn a_clean_render_reports_no_non_finite_stage() {
     let out = render_sphere(mat(Surface::Diffuse {
@@ -253,4 +558,5 @@ fn a_clean_render_reports_no_non_finite_stage() {
     }
     let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
     assert!(json.get("non_finite").is_none(), "{json}");
+    assert!(cases(&out).is_empty());
 }

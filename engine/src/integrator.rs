@@ -37,6 +37,12 @@ pub struct PathBatch {
     pub paths: Paths,
     /// The sampler seed of each path's pixel ([`pixel_seed`]).
     pub seeds: Vec<u32>,
+    /// A path-trace recorder: when `Some`, the path tracer records what path 0 did at each
+    /// vertex into it (exact for a batch of one path; see
+    /// [`PathTrace`](crate::path_tracer::PathTrace) and [`crate::replay`]). Defaults to
+    /// `None`: nothing is recorded, and the stage loop pays one test per stage and bounce.
+    /// Other integrators may ignore it.
+    pub trace: Option<crate::path_tracer::PathTrace>,
 }
 
 /// A global integrator (RIS `RixIntegrator`): owns light transport for whole batches of

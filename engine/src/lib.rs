@@ -19,6 +19,7 @@ pub mod plot;
 pub mod plugin;
 pub mod random_walk;
 pub mod render;
+pub mod replay;
 pub mod scene;
 pub mod scene_file;
 pub mod shade_groups;

@@ -404,6 +404,26 @@ fn add_stats(a: &mut Value, b: &Value) {
     }
 }
 
+/// The parts' non-finite cases (their arrays concatenated) cut to what one render keeps: one
+/// per camera sample (the shallowest, then the earliest stage), the
+/// [`MAX_NON_FINITE_CASES`](crate::stats::MAX_NON_FINITE_CASES) smallest (pixel, sample)
+/// first.
+fn keep_first_cases(cases: &mut Vec<Value>) {
+    let num = |c: &Value, k: &str| c.get(k).and_then(Value::as_u64).unwrap_or(u64::MAX);
+    let stage = |c: &Value| {
+        let name = c.get("stage").and_then(Value::as_str).unwrap_or("");
+        crate::stats::Stage::ALL
+            .iter()
+            .position(|s| s.name() == name)
+            .unwrap_or(usize::MAX)
+    };
+    let key = |c: &Value| (num(c, "y"), num(c, "x"), num(c, "sample"));
+    let rank = |c: &Value| (num(c, "depth"), stage(c));
+    cases.sort_by(|a, b| key(a).cmp(&key(b)).then(rank(a).cmp(&rank(b))));
+    cases.dedup_by(|later, first| key(later) == key(first));
+    cases.truncate(crate::stats::MAX_NON_FINITE_CASES);
+}
+
 /// Merges partial renders (each with the file it came from, for messages) into the whole
 /// render: checks that they fit (module docs), places tiles and adds sample passes in the
 /// stated order. The result is a partial covering the whole image and `0..spp`; its stats
@@ -540,6 +560,9 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
     }
     if let Value::Object(m) = &mut stats {
         m.insert("parts".into(), Value::from(parts.len()));
+        if let Some(Value::Array(cases)) = m.get_mut("non_finite_cases") {
+            keep_first_cases(cases);
+        }
     }
     Ok(Partial {
         header: PartialHeader {
@@ -622,6 +645,21 @@ mod tests {
             a,
             serde_json::json!({"n": 3, "t": 0.75, "f": ["x", "y"], "o": {"k": 5, "j": 1}})
         );
+    }
+
+    #[test]
+    fn merged_non_finite_cases_are_those_one_render_keeps() {
+        let case = |x: u32, y: u32, sample: u32, depth: u32, stage: &str| serde_json::json!({"x": x, "y": y, "sample": sample, "depth": depth, "stage": stage});
+        let mut cases = vec![case(3, 1, 0, 2, "transmission"), case(3, 1, 0, 2, "bxdf")];
+        cases.extend((0..10).map(|i| case(9 - i, 0, 1, 0, "volume")));
+        keep_first_cases(&mut cases);
+        assert_eq!(cases.len(), crate::stats::MAX_NON_FINITE_CASES);
+        assert_eq!(cases[0], case(0, 0, 1, 0, "volume"));
+        // Row 1 comes after every pixel of row 0 kept; one case per camera sample.
+        assert!(cases.iter().all(|c| c["y"] == 0));
+        let mut two = vec![case(3, 1, 0, 2, "transmission"), case(3, 1, 0, 2, "bxdf")];
+        keep_first_cases(&mut two);
+        assert_eq!(two, vec![case(3, 1, 0, 2, "bxdf")]);
     }
 
     #[test]

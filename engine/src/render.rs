@@ -202,6 +202,18 @@ pub enum RenderError {
     /// A checkpoint could not be written.
     #[error("checkpoint: {0}")]
     Checkpoint(String),
+    /// The pixel or sample to replay ([`crate::replay::replay`]) is not part of the render.
+    #[error("replay of pixel ({x}, {y}) sample {sample}: {reason}")]
+    Replay {
+        /// Pixel column asked for.
+        x: u32,
+        /// Pixel row asked for.
+        y: u32,
+        /// Sample index asked for.
+        sample: u32,
+        /// What is wrong with it.
+        reason: String,
+    },
 }
 
 /// Periodic checkpoints of a render ([`render_checkpointed`]).
@@ -430,6 +442,7 @@ fn gather(
     stats.features = scene.features.names();
     stats.warnings.extend(scene.warnings.iter().cloned());
     validate_boundaries(scene, &mut stats);
+    stats.non_finite_cases = name_non_finite_cases(scene, &stats.counters);
     RenderOutput {
         beauty,
         variance,
@@ -445,6 +458,20 @@ fn gather(
         },
         stats,
     }
+}
+
+/// The kept non-finite cases of `counters`, with pixel coordinates, material names and the
+/// scene's seed.
+pub(crate) fn name_non_finite_cases(
+    scene: &CompiledScene,
+    counters: &SystemStats,
+) -> Vec<crate::stats::NonFiniteCase> {
+    let name = |m: u32| scene.materials.get(m as usize).map(|m| m.name.clone());
+    counters
+        .non_finite_events
+        .iter()
+        .map(|e| crate::stats::NonFiniteCase::of(e, scene.camera.width, scene.settings.seed, name))
+        .collect()
 }
 
 /// The boundary validator: one warning per shape whose crossings corrupted volume stacks

@@ -23,6 +23,20 @@
 //! (counted as absorbed) and other non-finite radiance is dropped at the film
 //! (`nan_dropped`), so these counts say where a silent loss or a dropped sample came from.
 //!
+//! Besides the counts, the first few cases are kept ([`MAX_NON_FINITE_CASES`], the camera
+//! samples with the smallest `(pixel index, sample index)`, each at its shallowest event):
+//! pixel, sample, path depth, stage, material (where the stage has one) and seed, in the
+//! JSON as
+//!
+//! ```json
+//! "non_finite_cases": [{"x": 9, "y": 7, "sample": 2, "depth": 0, "stage": "bxdf",
+//!                       "material": "ball", "seed": 0,
+//!                       "replay": "risotto render scene.toml --replay 9,7,2"}]
+//! ```
+//!
+//! and as one `non-finite sample:` line each in the summary, ending in the command that
+//! re-runs that one path and prints its vertices ([`crate::replay`]).
+//!
 //! Which systems appear shows which stages a scene needed: without volumes there is no
 //! `partition` or `volume`; shadow rays of scenes whose surfaces are all opaque (no volumes,
 //! no transmissive surface, no surface that lets shadows pass) are answered by one any-hit
@@ -250,6 +264,93 @@ pub fn count_non_finite<'a>(
     values.into_iter().map(|v| !v.is_finite() as usize).sum()
 }
 
+/// How many non-finite cases (pixel, sample, depth, stage) the stats keep: those of the
+/// [`MAX_NON_FINITE_CASES`] smallest `(pixel index, sample index)` keys among all camera
+/// samples that had a non-finite value, so which ones are kept depends neither on the
+/// number of threads nor on the batch size or tiling.
+pub const MAX_NON_FINITE_CASES: usize = 8;
+
+/// One camera sample in which a stage produced a non-finite value, as a worker records it:
+/// plain ids, named by [`NonFiniteCase`] when the render's stats are gathered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NonFiniteEvent {
+    /// Pixel index `y * width + x` in the full image.
+    pub pixel: u32,
+    /// Sample index within the pixel (without the sampler's address bits).
+    pub sample: u32,
+    /// Path depth at the vertex where the value appeared: the scattering vertices before it
+    /// (the depth of the ray that arrived there; 0 = the first surface or volume event seen
+    /// from the camera). Shadow rays count at the vertex that cast them.
+    pub depth: u32,
+    /// The stage that produced it.
+    pub stage: Stage,
+    /// The material involved, by index in the compiled scene, where there is one: the
+    /// surface's (Bxdf, emission) or the volume's (phase function, volume integrator); for
+    /// light samples the material of the lit point. `None` for transmission (shadow-ray walk)
+    /// and the environment.
+    pub material: Option<u32>,
+}
+
+impl NonFiniteEvent {
+    /// The camera sample: what the kept cases are chosen (smallest first) and deduplicated by.
+    #[inline]
+    pub fn key(&self) -> (u32, u32) {
+        (self.pixel, self.sample)
+    }
+    /// Of two events of one camera sample, the one kept has the smaller rank: the shallower,
+    /// then the earlier stage in [`Stage::ALL`] order.
+    #[inline]
+    fn rank(&self) -> (u32, Stage) {
+        (self.depth, self.stage)
+    }
+}
+
+/// A kept [`NonFiniteEvent`] with its pixel's coordinates, the material's name and the seed:
+/// what `risotto render --replay X,Y,SAMPLE` re-runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NonFiniteCase {
+    /// Pixel column (0 = left).
+    pub x: u32,
+    /// Pixel row (0 = top).
+    pub y: u32,
+    /// Sample index within the pixel.
+    pub sample: u32,
+    /// Path depth ([`NonFiniteEvent::depth`]).
+    pub depth: u32,
+    /// The stage that produced the value.
+    pub stage: Stage,
+    /// The material's name ([`NonFiniteEvent::material`]).
+    pub material: Option<String>,
+    /// The render seed.
+    pub seed: u64,
+}
+
+impl NonFiniteCase {
+    /// Names `event` of a render of an image `width` pixels wide with seed `seed`;
+    /// `material_name` names a material index.
+    pub fn of(
+        event: &NonFiniteEvent,
+        width: u32,
+        seed: u64,
+        material_name: impl Fn(u32) -> Option<String>,
+    ) -> Self {
+        let width = width.max(1);
+        NonFiniteCase {
+            x: event.pixel % width,
+            y: event.pixel / width,
+            sample: event.sample,
+            depth: event.depth,
+            stage: event.stage,
+            material: event.material.and_then(material_name),
+            seed,
+        }
+    }
+    /// The `--replay X,Y,SAMPLE` argument that re-runs this sample.
+    pub fn replay_arg(&self) -> String {
+        format!("--replay {},{},{}", self.x, self.y, self.sample)
+    }
+}
+
 /// Counters of one system.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SystemCounter {
@@ -284,6 +385,10 @@ pub struct SystemStats {
     pub nan_dropped: u64,
     /// Non-finite values by the stage that produced them, indexed by `Stage as usize`.
     pub non_finite: [u64; Stage::COUNT],
+    /// The first non-finite cases: at most [`MAX_NON_FINITE_CASES`], one per camera sample
+    /// (its shallowest event), those of the smallest [`NonFiniteEvent::key`]s seen, sorted by
+    /// key. Filled by [`non_finite_event`](Self::non_finite_event).
+    pub non_finite_events: Vec<NonFiniteEvent>,
     /// Per shape index: rays that crossed a back face of the shape without having entered it
     /// (a hint that its boundary is not closed). Grown on demand.
     pub unmatched_exits: Vec<u64>,
@@ -394,6 +499,38 @@ impl SystemStats {
         self.non_finite[stage as usize] += n as u64;
     }
 
+    /// Whether an event of camera sample `key` (pixel, sample) would be kept by
+    /// [`non_finite_event`](Self::non_finite_event): a cheap test before gathering what
+    /// the event needs.
+    #[inline]
+    pub fn wants_non_finite_case(&self, key: (u32, u32)) -> bool {
+        self.non_finite_events.len() < MAX_NON_FINITE_CASES
+            || self
+                .non_finite_events
+                .last()
+                .is_some_and(|e| key <= e.key())
+    }
+
+    /// Records a non-finite case: kept when its camera sample is among the
+    /// [`MAX_NON_FINITE_CASES`] smallest keys seen; a camera sample keeps its shallowest event
+    /// (then the earliest stage). The result depends only on the set of events recorded, not
+    /// on their order, so merging workers' stats keeps the same cases whatever the threads.
+    pub fn non_finite_event(&mut self, event: NonFiniteEvent) {
+        let v = &mut self.non_finite_events;
+        match v.binary_search_by_key(&event.key(), NonFiniteEvent::key) {
+            Ok(i) => {
+                if event.rank() < v[i].rank() {
+                    v[i] = event;
+                }
+            }
+            Err(i) if i < MAX_NON_FINITE_CASES => {
+                v.insert(i, event);
+                v.truncate(MAX_NON_FINITE_CASES);
+            }
+            Err(_) => {}
+        }
+    }
+
     /// Counters of one system.
     pub fn system(&self, sys: System) -> &SystemCounter {
         &self.systems[sys as usize]
@@ -412,6 +549,9 @@ impl SystemStats {
         self.nan_dropped += other.nan_dropped;
         for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
             *a += b;
+        }
+        for &e in &other.non_finite_events {
+            self.non_finite_event(e);
         }
         add_counts(&mut self.unmatched_exits, &other.unmatched_exits);
         add_counts(&mut self.entered_twice, &other.entered_twice);
@@ -435,6 +575,14 @@ pub struct RenderStats {
     pub features: Vec<String>,
     /// Problems worth telling the user about (serialised only when non-empty).
     pub warnings: Vec<String>,
+    /// The kept non-finite cases ([`SystemStats::non_finite_events`], named; serialised
+    /// only when non-empty).
+    pub non_finite_cases: Vec<NonFiniteCase>,
+    /// The command that renders this scene with the options that decide its paths
+    /// (`risotto render scene.toml --seed 3`), to which each case's
+    /// [`replay_arg`](NonFiniteCase::replay_arg) is appended in the JSON and the summary.
+    /// Defaults to `None`: `risotto render SCENE`.
+    pub render_command: Option<String>,
 }
 
 impl RenderStats {
@@ -445,6 +593,16 @@ impl RenderStats {
             wall_seconds,
             ..Default::default()
         }
+    }
+
+    /// The command that re-runs `case` alone (`risotto render SCENE --replay X,Y,SAMPLE`,
+    /// with [`render_command`](Self::render_command) when set).
+    pub fn replay_command(&self, case: &NonFiniteCase) -> String {
+        let render = self
+            .render_command
+            .as_deref()
+            .unwrap_or("risotto render SCENE");
+        format!("{render} {}", case.replay_arg())
     }
 
     /// Pretty-printed JSON (schema in the module docs).
@@ -517,6 +675,31 @@ impl Serialize for NonFiniteJson<'_> {
     }
 }
 
+/// The kept non-finite cases, each with its replay command.
+struct CasesJson<'a>(&'a RenderStats);
+impl Serialize for CasesJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let stats = self.0;
+        let mut seq = s.serialize_seq(Some(stats.non_finite_cases.len()))?;
+        for c in &stats.non_finite_cases {
+            let mut m = serde_json::Map::new();
+            m.insert("x".into(), c.x.into());
+            m.insert("y".into(), c.y.into());
+            m.insert("sample".into(), c.sample.into());
+            m.insert("depth".into(), c.depth.into());
+            m.insert("stage".into(), c.stage.name().into());
+            if let Some(name) = &c.material {
+                m.insert("material".into(), name.as_str().into());
+            }
+            m.insert("seed".into(), c.seed.into());
+            m.insert("replay".into(), stats.replay_command(c).into());
+            seq.serialize_element(&m)?;
+        }
+        seq.end()
+    }
+}
+
 /// Map keyed by termination name, zero counts omitted.
 struct TerminatedJson<'a>(&'a [u64; Termination::COUNT]);
 impl Serialize for TerminatedJson<'_> {
@@ -543,6 +726,9 @@ impl Serialize for RenderStats {
         m.serialize_entry("nan_dropped", &c.nan_dropped)?;
         if c.non_finite.iter().any(|&n| n > 0) {
             m.serialize_entry("non_finite", &NonFiniteJson(&c.non_finite))?;
+        }
+        if !self.non_finite_cases.is_empty() {
+            m.serialize_entry("non_finite_cases", &CasesJson(self))?;
         }
         if c.volume_events.iter().any(|&n| n > 0) {
             m.serialize_entry("volume_events", &VolumeEventsJson(&c.volume_events))?;
@@ -632,6 +818,21 @@ impl fmt::Display for RenderStats {
                     write!(f, " {} {n}", st.name())?;
                 }
             }
+        }
+        for case in &self.non_finite_cases {
+            write!(
+                f,
+                "\nnon-finite sample: pixel ({}, {}) sample {} depth {} stage {}",
+                case.x,
+                case.y,
+                case.sample,
+                case.depth,
+                case.stage.name()
+            )?;
+            if let Some(name) = &case.material {
+                write!(f, " material \"{name}\"")?;
+            }
+            write!(f, " seed {}: {}", case.seed, self.replay_command(case))?;
         }
         if !self.features.is_empty() {
             write!(f, "\nfeatures: {}", self.features.join(", "))?;
@@ -834,5 +1035,100 @@ mod tests {
             rgb(0.0, 0.0, f32::INFINITY),
         ];
         assert_eq!(count_non_finite(&col), 2);
+    }
+
+    fn event(pixel: u32, sample: u32, depth: u32, stage: Stage) -> NonFiniteEvent {
+        NonFiniteEvent {
+            pixel,
+            sample,
+            depth,
+            stage,
+            material: Some(1),
+        }
+    }
+
+    #[test]
+    fn non_finite_cases_keep_the_smallest_keys_whatever_the_order_and_the_split() {
+        // Twenty camera samples, some with two events (the shallower one must win).
+        let mut events = Vec::new();
+        for k in 0..20u32 {
+            let (pixel, sample) = (k * 7 % 23, k % 3);
+            events.push(event(pixel, sample, 3, Stage::Transmission));
+            if k % 2 == 0 {
+                events.push(event(pixel, sample, 1, Stage::Lighting));
+                events.push(event(pixel, sample, 1, Stage::Bxdf));
+            }
+        }
+        let mut want: Vec<NonFiniteEvent> = Vec::new();
+        for e in &events {
+            match want.iter_mut().find(|w| w.key() == e.key()) {
+                Some(w) if e.rank() < w.rank() => *w = *e,
+                Some(_) => {}
+                None => want.push(*e),
+            }
+        }
+        want.sort_by_key(NonFiniteEvent::key);
+        want.truncate(MAX_NON_FINITE_CASES);
+        assert_eq!(want.len(), MAX_NON_FINITE_CASES);
+        assert!(want.iter().any(|e| e.stage == Stage::Bxdf && e.depth == 1));
+
+        let mut forward = SystemStats::new();
+        events.iter().for_each(|&e| forward.non_finite_event(e));
+        let mut backward = SystemStats::new();
+        events
+            .iter()
+            .rev()
+            .for_each(|&e| backward.non_finite_event(e));
+        assert_eq!(forward.non_finite_events, want);
+        assert_eq!(backward.non_finite_events, want);
+        // Split over three workers and merged in either order.
+        let mut workers = [SystemStats::new(), SystemStats::new(), SystemStats::new()];
+        for (i, &e) in events.iter().enumerate() {
+            workers[i % 3].non_finite_event(e);
+        }
+        for order in [[0, 1, 2], [2, 0, 1]] {
+            let mut merged = SystemStats::new();
+            for w in order {
+                merged.merge(&workers[w]);
+            }
+            assert_eq!(merged.non_finite_events, want);
+        }
+        // The cheap pre-test agrees with what is kept.
+        let last = want.last().unwrap().key();
+        assert!(forward.wants_non_finite_case(last));
+        assert!(forward.wants_non_finite_case((0, 0)));
+        assert!(!forward.wants_non_finite_case((last.0 + 1, 0)));
+    }
+
+    #[test]
+    fn non_finite_cases_serialise_and_show_with_their_replay_command() {
+        let mut c = SystemStats::new();
+        c.non_finite(Stage::Bxdf, 1);
+        c.non_finite_event(event(2 * 16 + 9, 3, 1, Stage::Bxdf));
+        let mut stats = RenderStats::new(c, 1.0);
+        let names = ["floor".to_string(), "ball".to_string()];
+        stats.non_finite_cases = stats
+            .counters
+            .non_finite_events
+            .iter()
+            .map(|e| NonFiniteCase::of(e, 16, 42, |m| names.get(m as usize).cloned()))
+            .collect();
+        let v: Value = serde_json::from_str(&stats.to_json()).unwrap();
+        let want = serde_json::json!([{"x": 9, "y": 2, "sample": 3, "depth": 1,
+            "stage": "bxdf", "material": "ball", "seed": 42,
+            "replay": "risotto render SCENE --replay 9,2,3"}]);
+        assert_eq!(v["non_finite_cases"], want);
+        stats.render_command = Some("risotto render s.toml --seed 42".into());
+        let shown = stats.to_string();
+        assert!(
+            shown.contains(
+                "non-finite sample: pixel (9, 2) sample 3 depth 1 stage bxdf material \"ball\" \
+                 seed 42: risotto render s.toml --seed 42 --replay 9,2,3"
+            ),
+            "{shown}"
+        );
+        // No cases, no key.
+        let v: Value = serde_json::from_str(&RenderStats::default().to_json()).unwrap();
+        assert!(v.get("non_finite_cases").is_none());
     }
 }

@@ -16,13 +16,14 @@
 //! `d + 2` segments) and give shadow rays the vertex's sampler dimension (a sequence of their
 //! own, fresh per bounce).
 
+use super::non_finite_case;
 use super::queues::{scratch, GroupScratch, LightBuffers};
 use crate::integrator::LightingTechnique;
 use crate::plugin::{Bxdf, LightingDelegate, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::stats::{Stage, System, SystemStats};
 use glam::Vec3;
-use risotto_components::{Rays, Rgb, ShadowRayColumns, ShadowRays};
+use risotto_components::{Paths, Rays, Rgb, ShadowRayColumns, ShadowRays};
 use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
 use risotto_systems::lights::{LightSampleColumns, LightSet};
 use risotto_systems::path::Vertices;
@@ -47,7 +48,8 @@ pub(super) struct LitGroup<'a, 'b> {
 /// shadow rays of the non-black samples to `out` from row `start` on (lights from `lights`:
 /// the path tracer's set for its technique, or every light for the delegate); returns the number of
 /// rows written. `dimension[r]` is the first sampler dimension of the shadow rays of points
-/// that ray `r` arrived at.
+/// that ray `r` arrived at; `paths` (the batch's) names the camera samples of non-finite
+/// cases.
 #[allow(
     clippy::too_many_arguments,
     reason = "the columns it reads and writes, named"
@@ -58,6 +60,7 @@ pub(super) fn sample_lights(
     group: LitGroup<'_, '_>,
     bxdf: &mut dyn Bxdf,
     ctx: &ShadingContext<'_>,
+    paths: &Paths,
     dimension: &[u32],
     buffers: &mut LightBuffers,
     out: &mut ShadowRayColumns<'_>,
@@ -97,11 +100,13 @@ pub(super) fn sample_lights(
     );
     bxdf.evaluate_samples(ctx, light.wi, value, pdf);
     // NaN provenance: the Bxdf's evaluations and the light samples of the active points.
+    let bxdf_bad = |k: usize| active[k] & !(value[k].is_finite() & pdf[k].is_finite());
+    let light_bad =
+        |k: usize| active[k] & !(light.radiance[k].is_finite() & light.pdf[k].is_finite());
     let (mut bad_bxdf, mut bad_light) = (0, 0);
     for k in 0..m {
-        let on = active[k];
-        bad_bxdf += (on & !(value[k].is_finite() & pdf[k].is_finite())) as usize;
-        bad_light += (on & !(light.radiance[k].is_finite() & light.pdf[k].is_finite())) as usize;
+        bad_bxdf += bxdf_bad(k) as usize;
+        bad_light += light_bad(k) as usize;
     }
     let stage = if vertices.on_surface {
         Stage::Bxdf
@@ -110,6 +115,20 @@ pub(super) fn sample_lights(
     };
     stats.non_finite(stage, bad_bxdf);
     stats.non_finite(Stage::Lighting, bad_light);
+    if bad_bxdf + bad_light > 0 {
+        let (pts, start) = (vertices.points, vertices.range.start);
+        for k in 0..m {
+            let r = pts.ray_id[start + k] as usize;
+            let (path, depth) = (vertices.incoming.path[r], vertices.incoming.depth[r]);
+            let material = Some(pts.material[start + k]);
+            if bxdf_bad(k) {
+                non_finite_case(stats, paths, path, depth, stage, material);
+            }
+            if light_bad(k) {
+                non_finite_case(stats, paths, path, depth, Stage::Lighting, material);
+            }
+        }
+    }
     let features = scene.features;
     let stacks = features.volumes || features.transmissive || !scene.camera_stack.is_empty();
     let light = LightColumns {
@@ -136,19 +155,24 @@ pub(super) fn sample_lights(
 /// bounce's transmission stage.
 pub struct DirectLighting<'a> {
     scene: &'a CompiledScene,
+    paths: &'a Paths,
     shadow: &'a mut ShadowRays,
     group: &'a mut GroupScratch,
     /// Rows of `shadow` written by this delegate's calls, and light-sample count.
     lit: usize,
     seconds: f64,
+    /// What the calls' light sampling counted (its non-finite values are the render's; its
+    /// `lights` time is recorded once, as `lit` and `seconds`).
+    stats: SystemStats,
 }
 
 impl<'a> DirectLighting<'a> {
     /// A delegate queuing its shadow rays in `shadow` (`technique` decides only whether the
-    /// path tracer offers a delegate at all: `BxdfOnly` does not).
+    /// path tracer offers a delegate at all: `BxdfOnly` does not); `paths` are the batch's.
     pub(super) fn new(
         scene: &'a CompiledScene,
         technique: LightingTechnique,
+        paths: &'a Paths,
         shadow: &'a mut ShadowRays,
         group: &'a mut GroupScratch,
     ) -> Self {
@@ -156,17 +180,27 @@ impl<'a> DirectLighting<'a> {
         let _ = technique;
         DirectLighting {
             scene,
+            paths,
             shadow,
             group,
             lit: 0,
             seconds: 0.0,
+            stats: SystemStats::default(),
         }
     }
 
-    /// Records the delegate's work in `stats`.
+    /// Records the delegate's work in `stats`: its light samples and their time, and the
+    /// non-finite values its calls found (NaN provenance of the delegate's light samples and
+    /// phase evaluations).
     pub(super) fn finish(self, stats: &mut SystemStats) {
         if self.lit > 0 {
             stats.record(System::Lights, self.lit, self.seconds);
+        }
+        for (a, b) in stats.non_finite.iter_mut().zip(&self.stats.non_finite) {
+            *a += b;
+        }
+        for &e in &self.stats.non_finite_events {
+            stats.non_finite_event(e);
         }
     }
 }
@@ -216,7 +250,6 @@ impl LightingDelegate for DirectLighting<'_> {
         };
         let start_row = self.shadow.len();
         let mut out = self.shadow.append_default(m);
-        let mut stats = SystemStats::default();
         let group = LitGroup {
             vertices,
             weight: Some(weight),
@@ -230,11 +263,12 @@ impl LightingDelegate for DirectLighting<'_> {
             group,
             bxdf,
             ctx,
+            self.paths,
             dimension,
             light,
             &mut out,
             0,
-            &mut stats,
+            &mut self.stats,
         );
         self.shadow.truncate(start_row + written);
         self.lit += m;

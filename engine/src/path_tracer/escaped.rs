@@ -2,7 +2,7 @@
 //! against light sampling of the environment).
 
 use super::queues::{EscapedRayQueue, HitQueue};
-use super::PathTracer;
+use super::{non_finite_case, PathTracer};
 use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
 use crate::stats::{Stage, SystemStats, Termination};
@@ -30,7 +30,12 @@ pub(super) fn environment(
             let c = incoming.throughput[r] * tr * le * w;
             // Counted here only when made here (a non-finite throughput or transmission
             // was counted where it was produced).
-            bad += (!c.is_finite() & incoming.throughput[r].is_finite() & tr.is_finite()) as usize;
+            let made_here = !c.is_finite() & incoming.throughput[r].is_finite() & tr.is_finite();
+            if made_here {
+                bad += 1;
+                let (p, depth) = (incoming.path[r], incoming.depth[r]);
+                non_finite_case(stats, paths, p, depth, Stage::Environment, None);
+            }
             paths.radiance[path] += c;
         }
         if incoming.depth[r] == 0 && paths.depth[path].is_infinite() {

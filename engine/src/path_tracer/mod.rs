@@ -28,16 +28,24 @@ mod escaped;
 mod generate;
 mod pass_through;
 pub mod queues;
+mod recorder;
 mod shade;
 mod trace;
 mod transmission;
 
 use crate::integrator::{Integrator, LightingTechnique, PathBatch};
 use crate::scene::CompiledScene;
-use crate::stats::SystemStats;
+use crate::stats::{NonFiniteEvent, Stage, SystemStats};
 use bumpalo::Bump;
 pub use direct_lighting::DirectLighting;
 use queues::*;
+use recorder::Recorder;
+pub use recorder::{
+    BxdfSampleRecord, LightSampleRecord, PathTrace, ShadowRayRecord, TraceSegment, TraceVertex,
+    VertexEvent,
+};
+use risotto_components::Paths;
+use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 
 /// Sampler dimensions each scattering vertex reserves: light position (0, 1), light selection
 /// (2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4, so each group of
@@ -66,6 +74,9 @@ impl Integrator for PathTracer {
         stats: &mut SystemStats,
         arena: &Bump,
     ) {
+        // The path-trace recorder, when the batch asks for one (`PathBatch::trace`): it reads
+        // the queues between the stages; the stages do not know it.
+        let mut rec = batch.trace.take().map(Recorder::new);
         generate::camera_rays(scene, batch, &mut q.rays, stats);
         q.emissive_material.clear();
         q.emissive_material.resize(scene.materials.len(), false);
@@ -77,15 +88,42 @@ impl Integrator for PathTracer {
             // The last bounce's arrived rays are dead: their rows become the storage the
             // continue stage overwrites with the next rays.
             q.hits.recycle_into(&mut q.next);
+            if let Some(r) = &mut rec {
+                r.begin_bounce(batch, stats);
+            }
             while !q.rays.rays.is_empty() {
                 trace::nearest_hits(self, scene, batch, q, stats, arena);
+                if let Some(r) = &mut rec {
+                    r.traced(scene, q);
+                }
                 escaped::environment(self, scene, &mut q.escaped, &q.hits, batch, stats);
                 if scene.features.transmissive {
                     pass_through::boundaries(self, scene, &mut q.hits, &mut q.rays, batch, stats);
+                    if let Some(r) = &mut rec {
+                        r.passed(q);
+                    }
                 }
             }
+            if let Some(r) = &mut rec {
+                r.before_shade(q);
+            }
             shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
-            transmission::shadow_rays(scene, self.volume, &mut q.shadow, batch, stats, arena);
+            if let Some(r) = &mut rec {
+                r.shaded(q);
+            }
+            let shadow_rays = q.shadow.rays.len();
+            transmission::shadow_rays(
+                scene,
+                self.volume,
+                &mut q.shadow,
+                &q.hits.incoming,
+                batch,
+                stats,
+                arena,
+            );
+            if let Some(r) = &mut rec {
+                r.end_bounce(q, shadow_rays, batch, stats);
+            }
             std::mem::swap(&mut q.rays, &mut q.next);
             q.next.rays.clear();
             stats.add_rays(q.rays.rays.len());
@@ -93,6 +131,33 @@ impl Integrator for PathTracer {
         }
         stats.pattern_cache_hits += q.counters.hits.take();
         stats.pattern_evals += q.counters.evals.take();
+        batch.trace = rec.map(|r| r.trace);
+    }
+}
+
+/// NaN provenance: records that `stage` made a value of path `path` (a row of the batch's
+/// `paths`) non-finite at a vertex of depth `depth`, with the material involved where there is
+/// one ([`SystemStats::non_finite_event`]). Out of line: it runs only for non-finite values.
+#[cold]
+#[inline(never)]
+pub(crate) fn non_finite_case(
+    stats: &mut SystemStats,
+    paths: &Paths,
+    path: u32,
+    depth: u16,
+    stage: Stage,
+    material: Option<u32>,
+) {
+    let p = path as usize;
+    let (pixel, sample) = (paths.pixel[p], paths.sample[p] & !INDEPENDENT_BIT);
+    if stats.wants_non_finite_case((pixel, sample)) {
+        stats.non_finite_event(NonFiniteEvent {
+            pixel,
+            sample,
+            depth: depth as u32,
+            stage,
+            material,
+        });
     }
 }
 

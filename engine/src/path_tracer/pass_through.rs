@@ -3,12 +3,12 @@
 //! on along the same line as new rays to trace, without costing a bounce.
 
 use super::queues::{HitQueue, RayQueue};
-use super::PathTracer;
+use super::{non_finite_case, PathTracer};
 use crate::integrator::PathBatch;
 use crate::plugin::InstanceHints;
 use crate::scene::CompiledScene;
 use crate::shade_groups::{ShadeGroup, ShadingMode};
-use crate::stats::{SystemStats, Termination};
+use crate::stats::{Stage, SystemStats, Termination};
 use risotto_components::StackEvent;
 use risotto_systems::ray::ray_offset;
 
@@ -70,7 +70,12 @@ pub(super) fn boundaries(
             let tr = pts.transmission[i];
             let bad =
                 tracer.surface_emission(scene, pts, &hits.incoming, &mut batch.paths, r, i, tr);
-            stats.non_finite(crate::stats::Stage::Emission, bad);
+            stats.non_finite(Stage::Emission, bad);
+            if bad > 0 {
+                let (path, depth) = (hits.incoming.path[r], hits.incoming.depth[r]);
+                let material = Some(g.material);
+                non_finite_case(stats, &batch.paths, path, depth, Stage::Emission, material);
+            }
             let mut row = hits.incoming.row(r);
             if row.passes as u32 >= scene.settings.max_passes {
                 stats.terminate(Termination::PassLimit, 1);

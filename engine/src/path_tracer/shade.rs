@@ -6,7 +6,7 @@
 use super::continuation::continue_group;
 use super::direct_lighting::{sample_lights, LitGroup};
 use super::queues::{scratch, GroupScratch, Queues};
-use super::PathTracer;
+use super::{non_finite_case, PathTracer};
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::plugin::{ParamCache, ShadingContext};
 use crate::scene::CompiledScene;
@@ -113,6 +113,11 @@ pub(super) fn shade_groups(
                         Rgb::WHITE,
                     );
                     stats.non_finite(Stage::Emission, bad);
+                    if bad > 0 {
+                        let (path, depth) = (incoming.path[r as usize], incoming.depth[r as usize]);
+                        let material = Some(grp.material);
+                        non_finite_case(stats, paths, path, depth, Stage::Emission, material);
+                    }
                 }
             }
         }
@@ -190,6 +195,7 @@ pub(super) fn shade_groups(
                 group,
                 &mut *bxdf,
                 &ctx,
+                paths,
                 in_dimension,
                 light,
                 &mut shadow_out,
@@ -213,6 +219,7 @@ pub(super) fn shade_groups(
         stats.record(system, m, bxdf_start.elapsed().as_secs_f64());
         next_len += continue_group(
             scene,
+            paths,
             vertices,
             samples,
             u4,

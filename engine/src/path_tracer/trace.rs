@@ -7,7 +7,7 @@
 
 use super::direct_lighting::DirectLighting;
 use super::queues::{EscapedRayQueue, HitQueue, Queues, TraceScratch};
-use super::PathTracer;
+use super::{non_finite_case, PathTracer};
 use crate::context::IntegratorContext;
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::interior::bind_interior;
@@ -191,7 +191,8 @@ fn partitioned(
                     sample: batch.paths.sample[t.bundle.path[i] as usize],
                     dimension: t.bundle.dimension[i],
                 }));
-                let mut delegate = DirectLighting::new(scene, tracer.technique, shadow, group);
+                let mut delegate =
+                    DirectLighting::new(scene, tracer.technique, &batch.paths, shadow, group);
                 let lighting: Option<&mut dyn LightingDelegate> = if tracer.technique
                     == LightingTechnique::BxdfOnly
                     || !scene.lights.can_sample()
@@ -241,6 +242,27 @@ fn partitioned(
                 }
                 // Rays walked inside the volume arrive along their walk's last segment.
                 t.answers.walked.apply(&mut t.bundle);
+                if bad > 0 {
+                    // At the depth of the rays as they arrive (after the walk's events).
+                    let answers = &t.answers;
+                    let points = answers
+                        .points
+                        .ray_id
+                        .iter()
+                        .zip(&answers.points.transmission);
+                    let misses = answers.misses.iter().zip(&answers.miss_transmission);
+                    for (&r, _) in points.chain(misses).filter(|(_, tr)| !tr.is_finite()) {
+                        let r = r as usize;
+                        non_finite_case(
+                            stats,
+                            &batch.paths,
+                            t.bundle.path[r],
+                            t.bundle.depth[r],
+                            Stage::Volume,
+                            Some(entry.material),
+                        );
+                    }
+                }
             }
         }
         append(hits, &t.answers, &t.bundle);

@@ -2,18 +2,22 @@
 //! surfaces that let shadows pass and the volumes it crosses (`crate::transmission`); the
 //! surviving contributions, and what volumes emit along the way, reach their paths.
 
+use super::non_finite_case;
 use super::queues::ShadowRayQueue;
 use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
 use crate::stats::{Stage, System, SystemStats};
 use bumpalo::Bump;
+use risotto_components::Rays;
 
 /// Traces the shadow rays of `shadow`, adds their contributions to the paths and empties the
-/// queue (its rows become storage for the next shade stage).
+/// queue (its rows become storage for the next shade stage). `incoming` are the bounce's
+/// rays (the hit queue's): non-finite cases take their path's depth from them.
 pub(super) fn shadow_rays(
     scene: &CompiledScene,
     volume: crate::plugin::VolumeTechniques,
     shadow: &mut ShadowRayQueue,
+    incoming: &Rays,
     batch: &mut PathBatch,
     stats: &mut SystemStats,
     arena: &Bump,
@@ -53,6 +57,26 @@ pub(super) fn shadow_rays(
         walk += (b.is_finite() & !c.is_finite()) as usize;
     }
     stats.non_finite(Stage::Transmission, walk);
+    if walk > 0 {
+        // The depth of each path's vertex this bounce: that of the last ray of the path that
+        // arrived (the one shaded, after any pass-throughs).
+        let mut depth = vec![0u16; batch.paths.len()];
+        for (&path, &d) in incoming.path.iter().zip(&incoming.depth) {
+            depth[path as usize] = d;
+        }
+        let rows = shadow
+            .rays
+            .path
+            .iter()
+            .zip(&shadow.contribution)
+            .zip(before);
+        for ((&path, c), b) in rows {
+            if b.is_finite() & !c.is_finite() {
+                let d = depth[path as usize];
+                non_finite_case(stats, &batch.paths, path, d, Stage::Transmission, None);
+            }
+        }
+    }
     stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
     // Keep the dead rows as storage for the next shade stage's shadow rays.
     std::mem::swap(&mut shadow.rays, &mut shadow.spare);
