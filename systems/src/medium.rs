@@ -24,10 +24,17 @@
 //! `p_c sigma_t,c exp(-sigma_t,c t)` for *every* channel: each channel's weight is then bounded
 //! by `albedo_c / p_c`.
 
+use crate::distribution::ONE_MINUS_EPSILON;
 use risotto_components::{Rgb, Vec3};
 
-/// The largest `f32` below 1: sample values are clamped to it so that `ln(1 - u)` is finite.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+/// An optical depth sampled from the unit exponential, `-ln(1 - u)` for a uniform
+/// `u in [0, 1)` (the inverse CDF of `exp(-tau)`). `1 - u` is exact for the samplers'
+/// multiples of 2^-24 and at least 2^-24 after the clamp (finite), and `ln` costs about half
+/// of `ln_1p`: every free flight and tentative collision of every medium draws one.
+#[inline]
+pub fn sample_optical_depth(u: f32) -> f32 {
+    -(1.0 - u.clamp(0.0, ONE_MINUS_EPSILON)).ln()
+}
 
 /// Optical depth `sigma_t * distance`, with `0 * inf = 0`: an empty medium over an infinite
 /// distance, or any medium over a zero distance, attenuates nothing (IEEE would give NaN).
@@ -148,8 +155,8 @@ pub fn sample_free_flight(
     };
     let sigma_c = sigma_t.to_array()[c];
     if sigma_c > 0.0 {
-        // Inverse CDF of sigma e^(-sigma t); ln_1p keeps small u exact.
-        let s = -(-u_distance.clamp(0.0, ONE_MINUS_EPSILON)).ln_1p();
+        // Inverse CDF of sigma e^(-sigma t).
+        let s = sample_optical_depth(u_distance);
         let t = s / sigma_c;
         if t < tmax {
             // sigma_s T(t) / sum_k p_k sigma_k T_k(t), numerator and denominator divided by
@@ -187,9 +194,7 @@ pub fn sample_free_flight(
 fn grey_free_flight(sigma_t: f32, sigma_s: f32, u_distance: f32, tmax: f32) -> FreeFlight {
     let tmax = tmax.max(0.0);
     if sigma_t > 0.0 {
-        // -ln(1 - u): `1 - u` is exact for the samplers' multiples of 2^-24 and at least
-        // 2^-24 after the clamp, and `ln` is cheaper than `ln_1p` in this hot loop.
-        let s = -(1.0 - u_distance.clamp(0.0, ONE_MINUS_EPSILON)).ln();
+        let s = sample_optical_depth(u_distance);
         let t = s / sigma_t;
         if t < tmax {
             return FreeFlight {

@@ -39,6 +39,7 @@
 //!   crossed). Biased like the transmittance; consistent as the step shrinks.
 
 use crate::grid::MajorantSegment;
+use crate::medium::sample_optical_depth;
 use crate::tracking::{FreeFlight, Transmittance};
 
 /// The most steps one majorant segment is cut into (a tiny `step` on a long segment marches
@@ -56,9 +57,6 @@ pub const RHO_MAX: f32 = 8.0;
 /// The highest series order evaluated: the probability of reaching it is at most
 /// `RHO_MAX^64 / 64!` (below 1e-31), the truncation bias below that times the term.
 pub const MAX_ORDER: u32 = 64;
-
-/// The largest `f32` below 1, so that `ln(1 - u)` is finite.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// `x > 0` (false for NaN).
 #[inline]
@@ -195,7 +193,7 @@ pub fn ray_marching_free_flight<I: IntoIterator<Item = MajorantSegment>>(
     mut rand: impl FnMut() -> f32,
     step: f32,
 ) -> FreeFlight {
-    let target = -(-rand().clamp(0.0, ONE_MINUS_EPSILON)).ln_1p();
+    let target = sample_optical_depth(rand());
     let u = rand();
     let mut out = FreeFlight::default();
     let mut depth = 0.0f32;

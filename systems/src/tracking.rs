@@ -21,10 +21,8 @@
 //!   emitted along the segments that reaches their start, `int T(t) j(t) dt`.
 
 use crate::grid::MajorantSegment;
+use crate::medium::sample_optical_depth;
 use risotto_components::Rgb;
-
-/// The largest `f32` below 1, so that `ln(1 - u)` is finite.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// `x > 0` (false for NaN).
 #[inline]
@@ -36,7 +34,7 @@ fn positive(x: f32) -> bool {
 /// at least one ulp (so that tracking ends even where steps underflow against `t`).
 #[inline]
 fn step(t: f32, majorant: f32, u: f32) -> f32 {
-    let s = -(-u.clamp(0.0, ONE_MINUS_EPSILON)).ln_1p() / majorant;
+    let s = sample_optical_depth(u) / majorant;
     let next = t + s;
     if next > t {
         next
