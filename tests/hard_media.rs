@@ -453,3 +453,49 @@ fn a_grazing_entry_whose_chord_is_shorter_than_the_offset_escapes() {
     );
     assert_every_pixel("grazing entry", &out, 1.0, 1e-3);
 }
+
+#[test]
+fn a_majorant_below_the_density_is_reported_not_hidden() {
+    // A heterogeneous ball whose majorant grid bounds half its real density: every estimator
+    // samples extinctions above the bound. The stats count them and the summary warns; with
+    // the right bounds (what the loader always builds) the count is 0 and shown as 0.
+    use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
+    use risotto::systems::grid::{DensityGrid, MajorantGrid};
+    use std::sync::Arc;
+    let grid = |v: f32| DensityGrid::constant([4, 4, 4], v).unwrap();
+    let right = HeterogeneousMedium::new(
+        grid(1.0),
+        4,
+        2.0,
+        Rgb::splat(0.8),
+        PhaseFunction::Isotropic,
+        Tracking::Ratio,
+    );
+    let wrong = HeterogeneousMedium {
+        majorants: Arc::new(MajorantGrid::new(&grid(0.5), [4, 4, 4])),
+        ..right.clone()
+    };
+    let render = |m: HeterogeneousMedium| {
+        let scene = ball(
+            ortho(2.5, 8),
+            8,
+            4,
+            1.0,
+            Surface::Interface,
+            Interior::Heterogeneous(Arc::new(m)),
+        );
+        render_default(&scene.compile().unwrap())
+    };
+    let ok = render(right);
+    assert_eq!(ok.stats.counters.majorant_violations, 0);
+    let json = serde_json::to_value(&ok.stats).unwrap();
+    assert_eq!(json["majorant_violations"], 0, "{json}");
+    let bad = render(wrong);
+    let v = bad.stats.counters.majorant_violations;
+    assert!(v > 100, "{v}");
+    let json = serde_json::to_value(&bad.stats).unwrap();
+    assert_eq!(json["majorant_violations"], v, "{json}");
+    let summary = bad.stats.to_string();
+    assert!(summary.contains("above their majorant"), "{summary}");
+    assert_eq!(bad.stats.counters.nan_dropped, 0);
+}

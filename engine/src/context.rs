@@ -35,6 +35,8 @@ pub struct IntegratorContext<'s> {
     pub stats: &'s mut SystemStats,
     scratch: HitScratch,
     volume: crate::plugin::VolumeTechniques,
+    /// Majorant violations a volume's `transmission` reported (it sees the context shared).
+    violations: std::cell::Cell<u64>,
 }
 
 impl<'s> IntegratorContext<'s> {
@@ -54,7 +56,20 @@ impl<'s> IntegratorContext<'s> {
             stats,
             scratch,
             volume: crate::plugin::VolumeTechniques::default(),
+            violations: std::cell::Cell::new(0),
         }
+    }
+
+    /// Records `n` sampled extinctions above their majorant's bound
+    /// ([`SystemStats::majorant_violations`]); callable from a volume's `transmission`,
+    /// which sees the context shared. The renderer adds them to the render's stats.
+    pub fn count_majorant_violations(&self, n: u64) {
+        self.violations.set(self.violations.get() + n);
+    }
+
+    /// The violations [`Self::count_majorant_violations`] recorded so far, reset to 0.
+    pub fn take_majorant_violations(&self) -> u64 {
+        self.violations.replace(0)
     }
 
     /// The context with the render's technique choices for volumes (what

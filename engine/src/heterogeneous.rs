@@ -635,7 +635,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
-        let mut nulls = 0u64;
+        let (mut nulls, mut violations) = (0u64, 0u64);
         let tracking = services.techniques.tracking.unwrap_or(m.tracking);
         let step = self.march_step();
         let emits = m.emits();
@@ -668,10 +668,12 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             };
             align(s, start);
             nulls += f.nulls as u64;
+            violations += f.violations as u64;
             scattered[i] = f.collided;
             t[i] = f.t;
         }
         let stats = &mut *services.ictx.stats;
+        stats.majorant_violations += violations;
         if emits {
             stats.volume_event(VolumeEvent::Emission, n);
         }
@@ -752,6 +754,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     &mut samplers[i],
                 );
                 trans[i] = Rgb::splat(r.value);
+                ictx.count_majorant_violations(r.violations as u64);
                 emission[i] = e;
             }
             return;
@@ -765,6 +768,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 &mut samplers[i],
             );
             trans[i] = Rgb::splat(r.value);
+            ictx.count_majorant_violations(r.violations as u64);
         }
         emission.fill(Rgb::BLACK);
     }

@@ -403,6 +403,10 @@ pub struct SystemStats {
     pub pattern_cache_hits: u64,
     /// Parameter evaluations (pattern-cache misses).
     pub pattern_evals: u64,
+    /// Sampled extinctions above their majorant's bound (heterogeneous media): 0 when the
+    /// bounds are right. The estimators stay finite but lose their guarantees: reported,
+    /// never clamped silently.
+    pub majorant_violations: u64,
 }
 
 /// Adds 1 to `v[i]`, growing `v`.
@@ -547,6 +551,7 @@ impl SystemStats {
             *a += b;
         }
         self.nan_dropped += other.nan_dropped;
+        self.majorant_violations += other.majorant_violations;
         for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
             *a += b;
         }
@@ -733,6 +738,10 @@ impl Serialize for RenderStats {
         if c.volume_events.iter().any(|&n| n > 0) {
             m.serialize_entry("volume_events", &VolumeEventsJson(&c.volume_events))?;
         }
+        let heterogeneous = self.features.iter().any(|f| f == "heterogeneous_media");
+        if heterogeneous || c.majorant_violations > 0 {
+            m.serialize_entry("majorant_violations", &c.majorant_violations)?;
+        }
         if c.pattern_cache_hits + c.pattern_evals > 0 {
             m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
             m.serialize_entry("pattern_evals", &c.pattern_evals)?;
@@ -810,6 +819,14 @@ impl fmt::Display for RenderStats {
         }
         writeln!(f)?;
         write!(f, "nan dropped: {}", c.nan_dropped)?;
+        if c.majorant_violations > 0 {
+            write!(
+                f,
+                "\nwarning: {} sampled extinctions above their majorant (a wrong bound: the \
+                 heterogeneous estimators are not unbiased there)",
+                c.majorant_violations
+            )?;
+        }
         if c.non_finite.iter().any(|&n| n > 0) {
             write!(f, "\nnon-finite values by stage:")?;
             for st in Stage::ALL {

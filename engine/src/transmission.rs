@@ -336,6 +336,7 @@ fn attenuate_in_volumes(
         let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
             .with_volume_techniques(volume);
         integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
+        stats.majorant_violations += ictx.take_majorant_violations();
         if gathers {
             stats.volume_event(VolumeEvent::Emission, m);
         }
