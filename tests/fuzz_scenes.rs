@@ -2,7 +2,8 @@
 //! each mutated file either fails with an error that names the file, or loads, compiles and
 //! renders (shrunk to 6 x 6 pixels, 1 spp, depth <= 6) to a finite image with nothing dropped.
 //! Never a panic. The parser-only fuzzer with more cases is
-//! `engine/src/scene_file/tests.rs::mutated_scenes_never_panic`.
+//! `engine/src/scene_file/tests.rs::mutated_scenes_never_panic`. Both run longer, or on
+//! other streams, with `RISOTTO_FUZZ_CASES` and `RISOTTO_FUZZ_SEED` (README, "Testing").
 
 use risotto::engine::load::{compile_scene, scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions};
@@ -107,16 +108,34 @@ fn shipped_scenes() -> Vec<PathBuf> {
     files
 }
 
+/// The fuzzer's budget: `RISOTTO_FUZZ_CASES` cases (default `default`) from stream
+/// `RISOTTO_FUZZ_SEED` (default 0), so anyone can run it longer or elsewhere:
+/// `RISOTTO_FUZZ_CASES=100000 RISOTTO_FUZZ_SEED=7 cargo test --release ...`.
+fn fuzz_budget(default: usize) -> (usize, u64) {
+    let read = |name: &str| {
+        std::env::var(name).ok().map(|v| {
+            v.trim()
+                .parse::<u64>()
+                .unwrap_or_else(|_| panic!("{name}={v:?} is not a whole number"))
+        })
+    };
+    (
+        read("RISOTTO_FUZZ_CASES").map_or(default, |n| n as usize),
+        read("RISOTTO_FUZZ_SEED").unwrap_or(0),
+    )
+}
+
 #[test]
 fn mutated_shipped_scenes_fail_located_or_render_finite() {
     let registry = MaterialRegistry::with_builtins();
-    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
+    let (cases, seed) = fuzz_budget(40);
+    let mut rng = Rng(0xD1B5_4A32_D192_ED03 ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let (mut rendered, mut rejected) = (0, 0);
     for file in shipped_scenes() {
         let text = std::fs::read_to_string(&file).unwrap();
         // Parsed under the real path, so meshes and maps resolve as for the original.
         let shown = file.display().to_string();
-        for case in 0..40 {
+        for case in 0..cases {
             let mutated = mutate(&text, &mut rng);
             let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 let desc = parse_scene(&mutated, &file).map_err(|e| e.to_string())?;
@@ -152,9 +171,11 @@ fn mutated_shipped_scenes_fail_located_or_render_finite() {
             }
         }
     }
-    // Both outcomes must occur, or the mutator tests nothing.
+    // Both outcomes must occur, or the mutator tests nothing (at the default budget, more
+    // than 20 of each).
+    let enough = (rendered + rejected) / 30;
     assert!(
-        rendered > 20 && rejected > 20,
+        rendered > enough && rejected > enough,
         "rendered {rendered}, rejected {rejected}"
     );
 }

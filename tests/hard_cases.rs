@@ -558,3 +558,38 @@ fn coincident_glass_balls_render_as_one() {
         assert!(msg.contains(needle), "{msg} lacks {needle}");
     }
 }
+
+/// A light value above the documented maximum (1e30, `MAX_RADIANCE`) is an error at its
+/// line, for every kind of light: the fuzzer found `emission = 3e38` behind a subsurface
+/// walk overflowing f32 on its way to the film (two samples dropped as infinite).
+#[test]
+fn light_values_above_the_documented_maximum_are_located_errors() {
+    use risotto::engine::scene_file::parse_scene;
+    let base = |extra: &str| {
+        format!(
+            "[camera]\nfov = 40\nfrom = [0, 0, 4]\nto = [0, 0, 0]\n\n[materials.m]\ntype = \"diffuse\"\n\n{extra}\n"
+        )
+    };
+    let cases = [
+        "[[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\nradius = 1\nemission = 3e38",
+        "[[lights]]\ntype = \"environment\"\nradiance = [1, 2e30, 1]",
+        "[[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 1e31",
+        "[[lights]]\ntype = \"distant\"\ndirection = [0, -1, 0]\nirradiance = 1e35",
+    ];
+    let path = std::path::Path::new("max.toml");
+    for case in cases {
+        let text = base(case);
+        let e = parse_scene(&text, path).expect_err(case).to_string();
+        let line = text.lines().count();
+        assert!(
+            e.contains("max.toml") && e.contains("1e30") && e.contains(&format!(":{line}:")),
+            "{case}: {e}"
+        );
+    }
+    // At the maximum: accepted.
+    assert!(parse_scene(
+        &base("[[lights]]\ntype = \"environment\"\nradiance = 1e30"),
+        path
+    )
+    .is_ok());
+}

@@ -377,8 +377,12 @@ enum EmissionKey {
 /// `{ grid = "file.vol" | "file.raw", header = "file.json", scale = colour }`
 /// (`j = scale * grid`).
 fn parse_emission(t: &MaterialParams) -> Result<Option<EmissionKey>, SceneError> {
-    let coefficient = "every channel >= 0 and finite (radiance per unit length)";
-    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
+    let coefficient = "every channel in [0, 1e30] (radiance per unit length; MAX_RADIANCE)";
+    let ok = |c: Rgb| {
+        c.min_channel() >= 0.0
+            && c.is_finite()
+            && c.max_channel() <= crate::scene_file::MAX_RADIANCE
+    };
     if !t.has("emission") {
         return Ok(None);
     }

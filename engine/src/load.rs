@@ -258,8 +258,8 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
     let emission = t.rgb_where(
         "emission",
         Some(Rgb::BLACK),
-        "every channel >= 0 and finite (radiance per unit length)",
-        ok,
+        "every channel in [0, 1e30] (radiance per unit length; MAX_RADIANCE)",
+        |c| ok(c) && c.max_channel() <= crate::scene_file::MAX_RADIANCE,
     )?;
     Ok(HomogeneousMedium {
         sigma_t,

@@ -65,6 +65,12 @@ impl ReferencedFiles {
     }
 }
 
+/// The largest light value a scene file accepts, per channel: shape `emission`, environment
+/// `radiance`, distant `irradiance`, point `intensity`. Paths multiply it by weights that
+/// can exceed 1 (MIS, roulette survivors, refraction), and f32 ends at 3.4e38; above this
+/// the loader reports the value (`docs/scene-format.md`).
+pub const MAX_RADIANCE: f32 = 1e30;
+
 /// A loaded scene file: everything the engine needs to build the render world.
 #[derive(Clone, Debug)]
 pub struct SceneDesc {
@@ -510,7 +516,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
                     message,
                 )
             })?;
-        let emission = r.rgb_opt("emission")?.filter(|e| !e.is_black());
+        let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
 
         let geometry = match type_name {
             "sphere" => {
@@ -592,7 +598,7 @@ fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, Sc
                 LightDesc::Distant {
                     name,
                     direction: direction / len,
-                    irradiance: r.rgb("irradiance", None)?,
+                    irradiance: r.radiance("irradiance", None)?,
                 }
             }
             "point" => {
@@ -600,7 +606,7 @@ fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, Sc
                 LightDesc::Point {
                     name,
                     position: r.vec3("position", None)?,
-                    intensity: r.rgb("intensity", None)?,
+                    intensity: r.radiance("intensity", None)?,
                 }
             }
             "environment" => {
@@ -632,9 +638,9 @@ fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, Sc
                     }
                 };
                 let radiance = if map.is_some() {
-                    r.rgb("radiance", Some(Rgb::WHITE))?
+                    r.radiance("radiance", Some(Rgb::WHITE))?
                 } else {
-                    r.rgb("radiance", None)?
+                    r.radiance("radiance", None)?
                 };
                 LightDesc::Environment {
                     name,

@@ -283,6 +283,36 @@ impl<'a> Reader<'a> {
         self.get(key).map(|n| self.rgb_of(key, n)).transpose()
     }
 
+    /// A light's colour (emission, radiance, irradiance, intensity): as [`Self::rgb_opt`],
+    /// and every channel at most [`MAX_RADIANCE`](super::MAX_RADIANCE).
+    pub(crate) fn radiance_opt(&self, key: &str) -> Result<Option<Rgb>, SceneError> {
+        let Some(node) = self.get(key) else {
+            return Ok(None);
+        };
+        let c = self.rgb_of(key, node)?;
+        if c.max_channel() > super::MAX_RADIANCE {
+            return Err(self.invalid(
+                key,
+                node,
+                &format!(
+                    "channels must be at most {:e}, the largest light value a scene may give \
+                     (paths multiply it by weights that can exceed 1, and f32 ends at 3.4e38)",
+                    super::MAX_RADIANCE
+                ),
+            ));
+        }
+        Ok(Some(c))
+    }
+
+    /// [`Self::radiance_opt`] with a default (not checked).
+    pub(crate) fn radiance(&self, key: &str, default: Option<Rgb>) -> Result<Rgb, SceneError> {
+        match (self.radiance_opt(key)?, default) {
+            (Some(v), _) => Ok(v),
+            (None, Some(d)) => Ok(d),
+            (None, None) => Err(self.missing(key, "a colour [r, g, b]")),
+        }
+    }
+
     pub(crate) fn rgb(&self, key: &str, default: Option<Rgb>) -> Result<Rgb, SceneError> {
         match (self.rgb_opt(key)?, default) {
             (Some(v), _) => Ok(v),

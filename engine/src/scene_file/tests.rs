@@ -977,6 +977,23 @@ impl Rng {
     }
 }
 
+/// The fuzzer's budget: `RISOTTO_FUZZ_CASES` cases (default `default`) from stream
+/// `RISOTTO_FUZZ_SEED` (default 0), so anyone can run it longer or elsewhere:
+/// `RISOTTO_FUZZ_CASES=100000 RISOTTO_FUZZ_SEED=7 cargo test --release ...`.
+fn fuzz_budget(default: usize) -> (usize, u64) {
+    let read = |name: &str| {
+        std::env::var(name).ok().map(|v| {
+            v.trim()
+                .parse::<u64>()
+                .unwrap_or_else(|_| panic!("{name}={v:?} is not a whole number"))
+        })
+    };
+    (
+        read("RISOTTO_FUZZ_CASES").map_or(default, |n| n as usize),
+        read("RISOTTO_FUZZ_SEED").unwrap_or(0),
+    )
+}
+
 #[test]
 fn mutated_scenes_never_panic() {
     let dir = scratch_dir("mutations");
@@ -1023,9 +1040,10 @@ fn mutated_scenes_never_panic() {
         "{}",
         "[]",
     ];
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let (cases, seed) = fuzz_budget(3000);
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
     let (mut ok, mut err) = (0, 0);
-    for _ in 0..3000 {
+    for _ in 0..cases {
         let mut chars: Vec<char> = base.chars().collect();
         for _ in 0..1 + rng.below(3) {
             let at = rng.below(chars.len() + 1);
