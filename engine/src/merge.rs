@@ -18,14 +18,24 @@
 //! f64 the two differ by a few ulps (relative error below 1e-15 per addition), so after the
 //! conversion to f32 beauty and variance are equal or one f32 ulp apart; counts are exact.
 //! The variance of the mean is recomputed from the merged sums.
+//!
+//! # AOVs
+//! A piece rendered with `--aovs` also carries the f64 sums of first-hit albedo, normal and
+//! depth ([`AovFilm`]); they are merged in the same order as the film's sums, so tiles give
+//! the one-process AOV layers bit for bit and sample ranges give them up to the same f64
+//! summation order: each mean is equal or one f32 ulp apart, except where a component's
+//! samples cancel to nearly zero (a normal component at a silhouette), where the difference
+//! is at most about 1e-15 times the mean of the samples' magnitudes. (The f64 sum of a few
+//! f32 values of similar size is exact in any order, so in practice most pixels agree bit
+//! for bit.) Either all parts carry AOVs or none does: a mix is refused.
 
 use std::path::{Path, PathBuf};
 
-use risotto_systems::film::Film;
+use risotto_systems::film::{AovFilm, Film};
 use serde_json::Value;
 
 use crate::output::{Image, OutputError};
-use crate::render::{RenderOutput, SampleRange, Window};
+use crate::render::{aov_means, RenderOutput, SampleRange, Window};
 
 pub mod partial_exr;
 pub use partial_exr::{parse_sample_range, read_partial, write_partial};
@@ -52,13 +62,17 @@ pub struct PartialHeader {
     pub stats: Value,
 }
 
-/// A partial render: its header and its film (sums and counts over the window).
+/// A partial render: its header, its film (sums and counts over the window) and, when it
+/// was rendered with AOVs, their sums.
 #[derive(Clone, Debug)]
 pub struct Partial {
     /// What it is a piece of.
     pub header: PartialHeader,
     /// Sums and counts, `window.width() x window.height()`.
     pub film: Film,
+    /// Sums of first-hit albedo, normal and depth over the same pixels and samples (their
+    /// means divide by `film.count`), when the piece carries AOVs.
+    pub aovs: Option<AovFilm>,
 }
 
 /// Errors of reading, checking and merging partial renders.
@@ -99,13 +113,14 @@ pub fn scene_hash(pieces: &[&[u8]]) -> String {
 
 impl Partial {
     /// The partial of a render's output: `resolution`, `spp`, `seed` and `scene_hash` say
-    /// what it is a piece of.
+    /// what it is a piece of; with `aovs` it carries the output's AOV sums.
     pub fn of_render(
         out: &RenderOutput,
         resolution: (u32, u32),
         spp: u32,
         seed: u64,
         scene_hash: String,
+        aovs: bool,
     ) -> Self {
         Partial {
             header: PartialHeader {
@@ -118,7 +133,14 @@ impl Partial {
                 stats: serde_json::from_str(&out.stats.to_json()).unwrap_or(Value::Null),
             },
             film: out.film.clone(),
+            aovs: aovs.then(|| out.aovs.clone()),
         }
+    }
+
+    /// The AOV layers a render writes (mean albedo, mean normal, mean depth: see
+    /// [`aov_means`]), when the piece carries AOVs.
+    pub fn aov_layers(&self) -> Option<(Image, Image, Vec<f32>)> {
+        self.aovs.as_ref().map(|a| aov_means(a, &self.film.count))
     }
 
     /// Mean radiance per pixel of the window.
@@ -190,10 +212,10 @@ fn keep_first_cases(cases: &mut Vec<Value>) {
 }
 
 /// Merges partial renders (each with the file it came from, for messages) into the whole
-/// render: checks that they fit (module docs), places tiles and adds sample passes in the
-/// stated order. The result is a partial covering the whole image and `0..spp`; its stats
-/// are the parts' summed (`wall_seconds` is then the total task time) with `"parts"`, the
-/// number of parts.
+/// render: checks that they fit (module docs; all carry AOVs or none does), places tiles
+/// and adds sample passes (and their AOV sums) in the stated order. The result is a
+/// partial covering the whole image and `0..spp`; its stats are the parts' summed
+/// (`wall_seconds` is then the total task time) with `"parts"`, the number of parts.
 pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
     let refuse = |m: String| Err(MergeError::Refused(m));
     let Some((first_path, first)) = parts.first() else {
@@ -229,6 +251,29 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
                 h.scene_hash, f.scene_hash
             ));
         }
+    }
+    let (with, without): (Vec<_>, Vec<_>) = parts.iter().partition(|(_, p)| p.aovs.is_some());
+    if !with.is_empty() && !without.is_empty() {
+        let list = |v: &[&(PathBuf, Partial)]| {
+            let mut names: Vec<String> = v.iter().take(4).map(|(p, _)| name(p)).collect();
+            if v.len() > 4 {
+                names.push(format!("and {} more", v.len() - 4));
+            }
+            names.join(", ")
+        };
+        let verb = |n: usize| if n == 1 { "does" } else { "do" };
+        return refuse(format!(
+            "some parts carry AOVs and some do not: {} {} (rendered with --aovs), {} {} not; \
+             render every part with --aovs, or none",
+            list(&with),
+            if with.len() == 1 {
+                "carries them"
+            } else {
+                "carry them"
+            },
+            list(&without),
+            verb(without.len())
+        ));
     }
     for (i, (pa, a)) in parts.iter().enumerate() {
         for (pb, b) in &parts[i + 1..] {
@@ -318,9 +363,14 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
         )
     });
     let mut film = Film::new(w, h);
+    let mut aovs = first.aovs.is_some().then(|| AovFilm::new(w, h));
     let mut stats = Value::Null;
     for p in &order {
-        film.add_tile(&p.film, p.header.window.x0, p.header.window.y0);
+        let (x0, y0) = (p.header.window.x0, p.header.window.y0);
+        film.add_tile(&p.film, x0, y0);
+        if let (Some(sum), Some(part)) = (&mut aovs, &p.aovs) {
+            sum.add_tile(part, x0, y0);
+        }
         add_stats(&mut stats, &p.header.stats);
     }
     if let Value::Object(m) = &mut stats {
@@ -343,6 +393,7 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
             stats,
         },
         film,
+        aovs,
     })
 }
 
@@ -371,7 +422,26 @@ pub(crate) mod tests {
                 stats: serde_json::json!({"samples": 1, "wall_seconds": 0.5, "features": ["a"]}),
             },
             film,
+            aovs: None,
         }
+    }
+
+    /// [`part`] with made-up AOV sums: `value` in every albedo sum, bit patterns that an
+    /// f32 would not keep in the normal and depth sums.
+    pub(crate) fn part_with_aovs(window: Window, samples: SampleRange, value: f64) -> Partial {
+        let mut p = part(window, samples, value);
+        let mut a = AovFilm::new(window.width(), window.height());
+        for (i, s) in a.albedo.iter_mut().enumerate() {
+            *s = [value, 0.25 * i as f64, 0.0];
+        }
+        for (i, s) in a.normal.iter_mut().enumerate() {
+            *s = [1.0 / 3.0, -(i as f64) / 7.0, -0.0];
+        }
+        for (i, d) in a.depth.iter_mut().enumerate() {
+            *d = value * 1e10 + i as f64 / 9.0;
+        }
+        p.aovs = Some(a);
+        p
     }
 
     #[test]
@@ -417,5 +487,35 @@ pub(crate) mod tests {
         assert_eq!(ab.film.count, vec![8; 8]);
         assert_eq!(ab.header.stats["samples"], 2);
         assert_eq!(ab.header.stats["parts"], 2);
+    }
+
+    #[test]
+    fn aov_sums_merge_in_sample_order_and_mixed_parts_are_refused() {
+        let full = Window::full(4, 2);
+        let a = part_with_aovs(full, SampleRange { start: 0, end: 3 }, 0.1);
+        let b = part_with_aovs(full, SampleRange { start: 3, end: 8 }, 1e7);
+        let ba = merge(&[("b".into(), b.clone()), ("a".into(), a.clone())]).unwrap();
+        let (sa, sb, m) = (
+            a.aovs.as_ref().unwrap(),
+            b.aovs.as_ref().unwrap(),
+            ba.aovs.as_ref().unwrap(),
+        );
+        for i in 0..8 {
+            assert_eq!(m.depth[i], (0.0 + sa.depth[i]) + sb.depth[i]);
+            for c in 0..3 {
+                assert_eq!(m.albedo[i][c], (0.0 + sa.albedo[i][c]) + sb.albedo[i][c]);
+                assert_eq!(m.normal[i][c], (0.0 + sa.normal[i][c]) + sb.normal[i][c]);
+            }
+        }
+        let (albedo, _, depth) = ba.aov_layers().unwrap();
+        assert_eq!(albedo.get(0, 0).r, ((0.1 + 1e7) / 8.0) as f32);
+        assert_eq!(depth[0], (m.depth[0] / 8.0) as f32);
+        // Half of a render with AOVs and half without do not make a render with AOVs.
+        let plain = part(full, SampleRange { start: 3, end: 8 }, 1e7);
+        let err = merge(&[("with.exr".into(), a), ("plain.exr".into(), plain)]).unwrap_err();
+        let msg = err.to_string();
+        for needle in ["with.exr carries them", "plain.exr does not", "--aovs"] {
+            assert!(msg.contains(needle), "{msg}");
+        }
     }
 }

@@ -2,8 +2,9 @@
 //!
 //! # Layout
 //! The two parts of [`write_exr`](crate::output::write_exr) (`beauty`, `aovs`: beauty,
-//! variance and sample count of the piece, so it can be viewed as it is) plus a third part,
-//! `merge`, with what merging needs:
+//! variance and sample count of the piece, and its albedo, normal and depth layers when it
+//! carries AOVs, so it can be viewed as it is) plus a third part, `merge`, with what merging
+//! needs:
 //!
 //! - **windows**: the display window is the full image (`0,0` to `width-1,height-1`), the data
 //!   window of every part is the piece's window in it;
@@ -11,7 +12,10 @@
 //!   film's per-pixel f64 sums of sample radiance and of its square, each f64 stored
 //!   bit-exactly as its upper (`.hi`) and lower (`.lo`) 32 bits, because EXR has no 64-bit
 //!   float and an f32 sum would lose the bits that make the merge exact; `count`: samples
-//!   per pixel;
+//!   per pixel; and, for a piece rendered with `--aovs` (an [`AovFilm`]), the f64 sums of
+//!   first-hit albedo, normal and depth the same way: `albedoSum.R.hi` ... `albedoSum.B.lo`, `normalSum.X.hi` ...
+//!   `normalSum.Z.lo`, `depthSum.Z.hi`, `depthSum.Z.lo` (all of them or none; their means
+//!   divide by `count`);
 //! - **text attributes**: `risotto.samples` (`START..END`), `risotto.spp`, `risotto.seed`,
 //!   `risotto.sceneHash` ([`scene_hash`](super::scene_hash)), `risotto.stats` (the piece's
 //!   stats JSON) and `risotto.encoding` (the channel encoding above, in words).
@@ -19,7 +23,7 @@
 use std::path::Path;
 
 use exr::prelude as x;
-use risotto_systems::film::Film;
+use risotto_systems::film::{AovFilm, Film};
 use serde_json::Value;
 
 use super::{MergeError, Partial, PartialHeader, MERGE_PART};
@@ -36,8 +40,31 @@ const STATS: &str = "risotto.stats";
 const ENCODING: &str = "risotto.encoding";
 const ENCODING_TEXT: &str = "sum.C, sumSq.C (C = R, G, B): per-pixel f64 sums of sample \
     radiance and of its square, each f64's bits split into two UINT channels (.hi = upper 32 \
-    bits, .lo = lower 32 bits); count: samples per pixel";
+    bits, .lo = lower 32 bits); count: samples per pixel; albedoSum.C (C = R, G, B), \
+    normalSum.C (C = X, Y, Z), depthSum.Z, present only with AOVs: per-pixel f64 sums of \
+    first-hit albedo, shading normal and distance, split the same way, whose means divide \
+    by count";
 const CHANNELS: [char; 3] = ['R', 'G', 'B'];
+/// The AOV sums' channel prefixes and per-component suffixes in the `merge` part.
+const ALBEDO_SUM: (&str, [char; 3]) = ("albedoSum", ['R', 'G', 'B']);
+const NORMAL_SUM: (&str, [char; 3]) = ("normalSum", ['X', 'Y', 'Z']);
+const DEPTH_SUM: &str = "depthSum.Z";
+
+/// Appends the two UINT channels `NAME.hi`, `NAME.lo` holding the bits of `values`.
+fn push_f64(
+    channels: &mut Vec<x::AnyChannel<x::FlatSamples>>,
+    name: &str,
+    values: impl Iterator<Item = f64>,
+) {
+    let bits: Vec<u64> = values.map(f64::to_bits).collect();
+    for (half, shift) in [("hi", 32), ("lo", 0)] {
+        let words = bits.iter().map(|b| (b >> shift) as u32).collect();
+        channels.push(x::AnyChannel::new(
+            format!("{name}.{half}").as_str(),
+            x::FlatSamples::U32(words),
+        ));
+    }
+}
 /// JSON text with every non-ASCII character escaped (`\uXXXX`), as EXR text attributes
 /// hold Latin-1 only.
 fn ascii_json(v: &Value) -> String {
@@ -70,15 +97,25 @@ pub fn write_partial(path: &Path, partial: &Partial) -> Result<(), MergeError> {
     let mut channels = Vec::new();
     for (name, sums) in [("sum", &f.sum), ("sumSq", &f.sum_sq)] {
         for (c, letter) in CHANNELS.iter().enumerate() {
-            let bits: Vec<u64> = sums.iter().map(|s| s[c].to_bits()).collect();
-            for (half, shift) in [("hi", 32), ("lo", 0)] {
-                let values = bits.iter().map(|b| (b >> shift) as u32).collect();
-                channels.push(x::AnyChannel::new(
-                    format!("{name}.{letter}.{half}").as_str(),
-                    x::FlatSamples::U32(values),
-                ));
+            push_f64(
+                &mut channels,
+                &format!("{name}.{letter}"),
+                sums.iter().map(|s| s[c]),
+            );
+        }
+    }
+    let layers = partial.aov_layers();
+    if let Some(a) = &partial.aovs {
+        for ((name, letters), sums) in [(ALBEDO_SUM, &a.albedo), (NORMAL_SUM, &a.normal)] {
+            for (c, letter) in letters.iter().enumerate() {
+                push_f64(
+                    &mut channels,
+                    &format!("{name}.{letter}"),
+                    sums.iter().map(|s| s[c]),
+                );
             }
         }
+        push_f64(&mut channels, DEPTH_SUM, a.depth.iter().copied());
     }
     channels.push(x::AnyChannel::new(
         "count",
@@ -100,9 +137,9 @@ pub fn write_partial(path: &Path, partial: &Partial) -> Result<(), MergeError> {
         beauty: &beauty,
         variance: &variance,
         sample_count: &counts,
-        albedo: None,
-        normal: None,
-        depth: None,
+        albedo: layers.as_ref().map(|l| &l.0),
+        normal: layers.as_ref().map(|l| &l.1),
+        depth: layers.as_ref().map(|l| l.2.as_slice()),
     };
     let placement = Placement {
         full: (h.resolution.0 as usize, h.resolution.1 as usize),
@@ -208,17 +245,47 @@ pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
             _ => Err(not(format!("channel {name} is not UINT"))),
         }
     };
-    let mut film = Film::new(window.width(), window.height());
+    // One f64 plane from the channels `NAME.hi` and `NAME.lo`.
+    let plane = |name: &str| -> Result<Vec<f64>, MergeError> {
+        let hi = channel(&format!("{name}.hi"))?;
+        let lo = channel(&format!("{name}.lo"))?;
+        Ok(hi
+            .iter()
+            .zip(lo)
+            .map(|(&h, &l)| f64::from_bits(((h as u64) << 32) | l as u64))
+            .collect())
+    };
+    let (w, h) = (window.width(), window.height());
+    let mut film = Film::new(w, h);
     for (name, sums) in [("sum", &mut film.sum), ("sumSq", &mut film.sum_sq)] {
         for (c, letter) in CHANNELS.iter().enumerate() {
-            let hi = channel(&format!("{name}.{letter}.hi"))?;
-            let lo = channel(&format!("{name}.{letter}.lo"))?;
-            for (i, s) in sums.iter_mut().enumerate() {
-                s[c] = f64::from_bits(((hi[i] as u64) << 32) | lo[i] as u64);
+            for (s, v) in sums.iter_mut().zip(plane(&format!("{name}.{letter}"))?) {
+                s[c] = v;
             }
         }
     }
     film.count = channel("count")?.to_vec();
+    // AOV sums: any of their channels means all of them must be there.
+    let has_aovs = layer.channel_data.list.iter().any(|c| {
+        let name = c.name.to_string();
+        ["albedoSum.", "normalSum.", "depthSum."]
+            .iter()
+            .any(|p| name.starts_with(p))
+    });
+    let aovs = if has_aovs {
+        let mut a = AovFilm::new(w, h);
+        for ((name, letters), sums) in [(ALBEDO_SUM, &mut a.albedo), (NORMAL_SUM, &mut a.normal)] {
+            for (c, letter) in letters.iter().enumerate() {
+                for (s, v) in sums.iter_mut().zip(plane(&format!("{name}.{letter}"))?) {
+                    s[c] = v;
+                }
+            }
+        }
+        a.depth = plane(DEPTH_SUM)?;
+        Some(a)
+    } else {
+        None
+    };
     Ok(Partial {
         header: PartialHeader {
             resolution,
@@ -230,6 +297,7 @@ pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
             stats,
         },
         film,
+        aovs,
     })
 }
 
@@ -252,7 +320,7 @@ pub fn parse_sample_range(s: &str) -> Result<SampleRange, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::merge::tests::part;
+    use crate::merge::tests::{part, part_with_aovs};
 
     #[test]
     fn partial_round_trip_is_bit_exact() {
@@ -278,5 +346,56 @@ mod tests {
         // The beauty part is a plain viewable crop.
         let rgb = crate::output::read_exr_rgb(&path).unwrap();
         assert_eq!(rgb, p.beauty());
+    }
+
+    #[test]
+    fn aov_sums_round_trip_bit_exactly_with_viewable_layers() {
+        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("aovs.exr");
+        let window = Window {
+            x0: 0,
+            y0: 1,
+            x1: 4,
+            y1: 2,
+        };
+        let p = part_with_aovs(window, SampleRange { start: 0, end: 8 }, 0.3);
+        write_partial(&path, &p).unwrap();
+        let back = read_partial(&path).unwrap();
+        assert_eq!(back.aovs, p.aovs);
+        assert_eq!(back.film.sum, p.film.sum);
+        // The `aovs` part holds the mean layers a render writes, recomputed from the sums.
+        let image = read_exr_all(&path).unwrap();
+        let layer = image
+            .layer_data
+            .iter()
+            .find(|l| l.attributes.layer_name == Some(x::Text::from(crate::output::AOV_PART)))
+            .unwrap();
+        let plane = |name: &str| -> Vec<f32> {
+            let c = layer.channel_data.list.iter().find(|c| c.name.eq(name));
+            c.unwrap_or_else(|| panic!("no {name}"))
+                .sample_data
+                .values_as_f32()
+                .collect()
+        };
+        let (albedo, normal, depth) = p.aov_layers().unwrap();
+        assert_eq!(plane("depth.Z"), depth);
+        let g: Vec<f32> = albedo.pixels.iter().map(|c| c.g).collect();
+        assert_eq!(plane("albedo.G"), g);
+        let y: Vec<f32> = normal.pixels.iter().map(|c| c.g).collect();
+        assert_eq!(plane("normal.Y"), y);
+        // Without AOVs there are neither sums nor layers.
+        let plain = part(window, SampleRange { start: 0, end: 8 }, 0.3);
+        write_partial(&path, &plain).unwrap();
+        assert!(read_partial(&path).unwrap().aovs.is_none());
+        let names: Vec<String> = read_exr_all(&path)
+            .unwrap()
+            .layer_data
+            .iter()
+            .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
+            .collect();
+        assert!(!names
+            .iter()
+            .any(|n| n.contains("albedo") || n.contains("depth")));
     }
 }
