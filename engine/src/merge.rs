@@ -24,10 +24,11 @@
 //! depth ([`AovFilm`]); they are merged in the same order as the film's sums, so tiles give
 //! the one-process AOV layers bit for bit and sample ranges give them up to the same f64
 //! summation order: each mean is equal or one f32 ulp apart, except where a component's
-//! samples cancel to nearly zero (a normal component at a silhouette), where the difference
-//! is at most about 1e-15 times the mean of the samples' magnitudes. (The f64 sum of a few
-//! f32 values of similar size is exact in any order, so in practice most pixels agree bit
-//! for bit.) Either all parts carry AOVs or none does: a mix is refused.
+//! samples cancel to nearly zero (a normal component at a silhouette): there the bound is
+//! absolute, the f64 rounding of the two sums, at most about `2e-16 * spp` times the mean
+//! magnitude of the pixel's samples. (The f64 sum of a few f32 values of similar size is
+//! exact in any order, so in practice most pixels agree bit for bit.) Either all parts
+//! carry AOVs or none does: a mix is refused.
 
 use std::path::{Path, PathBuf};
 
