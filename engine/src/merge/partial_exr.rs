@@ -398,4 +398,28 @@ mod tests {
             .iter()
             .any(|n| n.contains("albedo") || n.contains("depth")));
     }
+
+    #[test]
+    fn a_partial_with_some_aov_sums_missing_is_refused_by_name() {
+        use exr::prelude::WritableImage as _;
+        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("half-aovs.exr");
+        let p = part_with_aovs(Window::full(4, 2), SampleRange { start: 0, end: 8 }, 0.3);
+        write_partial(&path, &p).unwrap();
+        let mut image = read_exr_all(&path).unwrap();
+        let merge_part = image
+            .layer_data
+            .iter_mut()
+            .find(|l| l.attributes.layer_name == Some(x::Text::from(MERGE_PART)))
+            .unwrap();
+        merge_part
+            .channel_data
+            .list
+            .retain(|c| !c.name.eq("normalSum.Y.lo"));
+        image.write().to_file(&path).unwrap();
+        let err = read_partial(&path).unwrap_err().to_string();
+        assert!(err.contains("half-aovs.exr"), "{err}");
+        assert!(err.contains("no channel normalSum.Y.lo"), "{err}");
+    }
 }
