@@ -58,10 +58,11 @@ enum Command {
     /// equal-time error and equal-error time relative to the best technique.
     Converge(ConvergeArgs),
     /// Merge partial renders (tiles from --crop, sample passes from --samples, checkpoints)
-    /// into the whole render: writes the EXR, its PNG preview and merged stats JSON.
+    /// into the whole render: writes the EXR (with the AOV layers when the parts carry them),
+    /// its PNG preview and merged stats JSON.
     Merge(MergeArgs),
     /// Print a partial render's header as JSON: resolution, window, sample range, spp,
-    /// seed, scene hash.
+    /// seed, scene hash, whether it carries AOVs.
     Info {
         /// The partial EXR.
         part: PathBuf,
@@ -157,7 +158,9 @@ struct RenderArgs {
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
-    /// Also write albedo, normal and depth AOVs into the EXR.
+    /// Also write albedo, normal and depth AOVs into the EXR (means of each sample's first
+    /// hit). Partial renders (--crop, --grid, --samples, --chunks, --checkpoint, --partial)
+    /// then carry the AOVs' f64 sums too, and `risotto merge` writes the same layers.
     #[arg(long)]
     aovs: bool,
     /// Direct-lighting technique: mis (the default), nee, bxdf. An alias of
@@ -331,11 +334,6 @@ fn render_command(args: RenderArgs) -> Result<()> {
         None => None,
     };
     let partial = args.partial || crop.is_some() || samples.is_some() || checkpoint.is_some();
-    anyhow::ensure!(
-        !(partial && args.aovs),
-        "--aovs: partial renders (--crop, --samples, --checkpoint, --partial) carry beauty \
-         sums only; render AOVs in a whole render"
-    );
     let options = techniques.render_options(RenderOptions {
         threads: args.threads,
         batch_size: args.batch_size,
@@ -402,7 +400,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
         String::new()
     };
     let (spp, seed) = (settings.spp, settings.seed);
-    let to_partial = |r: &RenderOutput| Partial::of_render(r, resolution, spp, seed, hash.clone());
+    let to_partial =
+        |r: &RenderOutput| Partial::of_render(r, resolution, spp, seed, hash.clone(), args.aovs);
     let tick = |n: u64| {
         bar.inc(n);
         if let Some(j) = &json {
@@ -617,6 +616,7 @@ fn info_command(path: &Path) -> Result<()> {
             "spp": h.spp,
             "seed": h.seed,
             "scene_hash": h.scene_hash,
+            "aovs": p.aovs.is_some(),
         })
     );
     Ok(())

@@ -2,7 +2,8 @@
 //! bits of the whole render's, a 2x2 tile x 2 sample-range split merges to the one-process
 //! render (tiles exactly; sample passes to the stated f64 summation order), every misfit is
 //! refused with a message naming the files, bad `--crop` / `--samples` values are named, and
-//! a checkpointed render that is killed resumes to the uninterrupted image.
+//! a checkpointed render that is killed resumes to the uninterrupted image; with `--aovs`
+//! the parts carry the AOVs and the merge writes the one-process AOV layers.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -68,6 +69,47 @@ fn layers(p: &Partial) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
 }
 
 const TILES: [&str; 4] = ["0,0,8,6", "8,0,16,6", "0,6,8,12", "8,6,16,12"];
+
+/// The AOV layers of an EXR's `aovs` part (`albedo.*`, `normal.*`, `depth.Z`), by name.
+fn aov_layers(path: &Path) -> Vec<(String, Vec<f32>)> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+    let part = image
+        .layer_data
+        .iter()
+        .find(|l| {
+            l.attributes
+                .layer_name
+                .as_ref()
+                .is_some_and(|n| n.eq("aovs"))
+        })
+        .expect("an aovs part");
+    let mut layers: Vec<(String, Vec<f32>)> = part
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .filter(|(name, _)| {
+            ["albedo.", "normal.", "depth."]
+                .iter()
+                .any(|p| name.starts_with(p))
+        })
+        .collect();
+    layers.sort_by(|a, b| a.0.cmp(&b.0));
+    layers
+}
+
+/// f32 values at most `ulps` apart (as ordered bit patterns; +0 and -0 are equal).
+fn within_ulps(a: f32, b: f32, ulps: i64) -> bool {
+    let key = |x: f32| {
+        let i = x.to_bits() as i32 as i64;
+        if i < 0 {
+            i64::from(i32::MIN) - i
+        } else {
+            i
+        }
+    };
+    a == b || (key(a) - key(b)).abs() <= ulps
+}
 
 #[test]
 fn crop_pixels_are_the_bits_of_the_whole_render() {
@@ -194,6 +236,122 @@ fn a_two_way_sample_split_merges_to_the_one_process_render() {
     assert_eq!(ab.film.count, whole.film.count);
 }
 
+/// `--aovs` on farm tasks: a 2x2 grid x 2 sample chunks merges to the one-process `--aovs`
+/// render's albedo, normal and depth layers (every value equal or one f32 ulp apart: the
+/// f64 sums differ only in summation order, see `engine::merge`), the tiles alone merge to
+/// them bit for bit, and carrying AOVs changes no bit of the beauty.
+#[test]
+fn aovs_of_tiles_times_sample_chunks_merge_to_the_one_process_aovs() {
+    let (dir, scene) = setup("aovs");
+    let one = aov_layers(&render(&dir, &scene, "one.exr", &["--aovs"]));
+    let names: Vec<&str> = one.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        ["albedo.B", "albedo.G", "albedo.R", "depth.Z", "normal.X", "normal.Y", "normal.Z"]
+    );
+    assert!(
+        one[3].1.iter().any(|&d| d > 0.0),
+        "the camera sees something"
+    );
+    let whole_path = render(&dir, &scene, "whole.exr", &["--partial", "--aovs"]);
+    let whole = read_partial(&whole_path).unwrap();
+    let plain = read_partial(&render(&dir, &scene, "plain.exr", &["--partial"])).unwrap();
+    assert!(plain.aovs.is_none());
+    assert_eq!(whole.film.sum, plain.film.sum, "--aovs changed the beauty");
+    assert_eq!(whole.film.sum_sq, plain.film.sum_sq);
+    assert_eq!(
+        aov_layers(&whole_path),
+        one,
+        "a partial writes the same layers"
+    );
+    let whole_aovs = whole.aovs.as_ref().expect("the partial carries AOV sums");
+
+    let mut parts = Vec::new();
+    for (col, row) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        for chunk in ["0", "1"] {
+            let tile = format!("{col},{row}");
+            let args = [
+                "--grid", "2x2", "--tile", &tile, "--chunks", "2", "--chunk", chunk, "--aovs",
+            ];
+            parts.push(render(
+                &dir,
+                &scene,
+                &format!("t{col}{row}-{chunk}.exr"),
+                &args,
+            ));
+        }
+    }
+    let info = ok("info", risotto(&["info", parts[0].to_str().unwrap()]));
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["aovs"], true);
+    let refs: Vec<&PathBuf> = parts.iter().collect();
+    let (out, merged_path) = merge(&dir, &refs, "merged.exr");
+    ok("merge", out);
+    let merged = read_partial(&merged_path).unwrap();
+    let sums = merged.aovs.as_ref().expect("the merge carries AOV sums");
+    // Sums: (0 + S(0..4)) + S(4..8) against the sequential S(0..8), to f64 rounding.
+    let close = |m: f64, w: f64| (m - w).abs() <= 1e-14 * w.abs().max(1.0);
+    for i in 0..sums.depth.len() {
+        assert!(close(sums.depth[i], whole_aovs.depth[i]), "depth sum {i}");
+        for c in 0..3 {
+            assert!(
+                close(sums.albedo[i][c], whole_aovs.albedo[i][c]),
+                "albedo {i}"
+            );
+            assert!(
+                close(sums.normal[i][c], whole_aovs.normal[i][c]),
+                "normal {i}"
+            );
+        }
+    }
+    // Layers: equal or one f32 ulp apart.
+    let merged_layers = aov_layers(&merged_path);
+    assert_eq!(merged_layers.len(), one.len());
+    for ((name, m), (_, w)) in merged_layers.iter().zip(&one) {
+        for (i, (a, b)) in m.iter().zip(w).enumerate() {
+            assert!(within_ulps(*a, *b, 1), "{name} pixel {i}: {a} vs {b}");
+        }
+    }
+    // Beauty: as without AOVs (within the same summation tolerance), counts exact.
+    assert_eq!(merged.film.count, whole.film.count);
+    let ((mb, _, _), (wb, _, _)) = (layers(&merged), layers(&whole));
+    for (i, (x, y)) in mb.iter().zip(&wb).enumerate() {
+        for c in 0..3 {
+            assert!(within_ulps(x[c], y[c], 1), "beauty pixel {i}");
+        }
+    }
+
+    // The tiles alone (every sample each) merge to the one-process layers bit for bit.
+    let tiles: Vec<PathBuf> = TILES
+        .iter()
+        .enumerate()
+        .map(|(t, tile)| {
+            render(
+                &dir,
+                &scene,
+                &format!("tile{t}.exr"),
+                &["--crop", tile, "--aovs"],
+            )
+        })
+        .collect();
+    let refs: Vec<&PathBuf> = tiles.iter().collect();
+    let (out, tiled_path) = merge(&dir, &refs, "tiled.exr");
+    ok("merge tiles", out);
+    let tiled = read_partial(&tiled_path).unwrap();
+    assert_eq!(
+        tiled.aovs.as_ref(),
+        Some(whole_aovs),
+        "tile merge must be exact"
+    );
+    assert_eq!(tiled.film.sum, whole.film.sum);
+    let bits = |l: &[(String, Vec<f32>)]| -> Vec<Vec<u32>> {
+        l.iter()
+            .map(|(_, v)| v.iter().map(|x| x.to_bits()).collect())
+            .collect()
+    };
+    assert_eq!(bits(&aov_layers(&tiled_path)), bits(&one));
+}
+
 #[test]
 fn merge_refuses_parts_that_do_not_fit() {
     let (dir, scene) = setup("refuse");
@@ -203,8 +361,10 @@ fn merge_refuses_parts_that_do_not_fit() {
     let (out, _) = merge(&dir, &[&tl, &tr, &bottom], "good.exr");
     ok("the fitting parts", out);
     // The top tiles and a bottom half rendered with one option changed.
-    let fit_but_bottom = |name: &str, flag: &str, value: &str| {
-        let bottom = render(&dir, &scene, name, &["--crop", "0,6,16,12", flag, value]);
+    let fit_but_bottom = |name: &str, options: &[&str]| {
+        let mut args = vec!["--crop", "0,6,16,12"];
+        args.extend_from_slice(options);
+        let bottom = render(&dir, &scene, name, &args);
         vec![tl.clone(), tr.clone(), bottom]
     };
     let cases: Vec<(&str, Vec<PathBuf>, Vec<&str>)> = vec![
@@ -238,18 +398,28 @@ fn merge_refuses_parts_that_do_not_fit() {
         ),
         (
             "different seed",
-            fit_but_bottom("seed.exr", "--seed", "9"),
+            fit_but_bottom("seed.exr", &["--seed", "9"]),
             vec!["seed.exr", "seed 9", "tl.exr", "seed 0"],
         ),
         (
             "different scene",
-            fit_but_bottom("depth.exr", "--max-depth", "2"),
+            fit_but_bottom("depth.exr", &["--max-depth", "2"]),
             vec!["depth.exr", "scene hash", "tl.exr"],
         ),
         (
             "different spp",
-            fit_but_bottom("spp.exr", "--spp", "4"),
+            fit_but_bottom("spp.exr", &["--spp", "4"]),
             vec!["spp.exr", "4 spp", "8 spp"],
+        ),
+        (
+            "AOVs in some parts only",
+            fit_but_bottom("aovs.exr", &["--aovs"]),
+            vec![
+                "aovs.exr carries them",
+                "tl.exr, ",
+                "tr.exr do not",
+                "--aovs",
+            ],
         ),
     ];
     for (what, parts, needles) in cases {
@@ -318,12 +488,10 @@ fn bad_crop_and_sample_ranges_are_named() {
         assert_fails(&format!("{flag} {value}"), &r, &needles);
         assert!(!out.exists(), "{flag} {value} wrote a file");
     }
-    let r = risotto(&["render", s, "--out", o, "--quiet", "--partial", "--aovs"]);
-    assert_fails("--aovs with a partial", &r, &["--aovs", "partial"]);
 }
 
 /// A render killed after its first checkpoint leaves a valid partial at --out; rendering
-/// the missing samples and merging gives the uninterrupted render.
+/// the missing samples and merging gives the uninterrupted render, AOVs included.
 #[test]
 fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
     let (dir, scene) = setup("resume");
@@ -343,6 +511,7 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
             "1",
             "--checkpoint",
             "0.2",
+            "--aovs",
         ])
         .spawn()
         .unwrap();
@@ -366,6 +535,7 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
     assert_eq!(done.start, 0);
     assert!(done.end > 0 && done.end < 4096, "{done}");
     assert!(checkpoint.film.count.iter().all(|&c| c == done.end));
+    assert!(checkpoint.aovs.is_some(), "the checkpoint keeps the AOVs");
     // `risotto info` says what is done.
     let info = ok("info", risotto(&["info", out.to_str().unwrap()]));
     let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
@@ -375,7 +545,13 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
         &dir,
         &scene,
         "rest.exr",
-        &["--spp", spp, "--samples", &format!("{}..{spp}", done.end)],
+        &[
+            "--spp",
+            spp,
+            "--samples",
+            &format!("{}..{spp}", done.end),
+            "--aovs",
+        ],
     );
     let (o, merged) = merge(&dir, &[&out, &rest], "resumed.exr");
     ok("merge resumed", o);
@@ -384,7 +560,7 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
         &dir,
         &scene,
         "whole.exr",
-        &["--spp", spp, "--partial"],
+        &["--spp", spp, "--partial", "--aovs"],
     ))
     .unwrap();
     assert_eq!(merged.film.count, whole.film.count);
@@ -398,6 +574,15 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
             );
         }
     }
+    let (m, w) = (merged.aovs.unwrap(), whole.aovs.unwrap());
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * b.abs().max(1.0);
+    for i in 0..w.depth.len() {
+        assert!(close(m.depth[i], w.depth[i]), "depth sum {i}");
+        for c in 0..3 {
+            assert!(close(m.albedo[i][c], w.albedo[i][c]), "albedo sum {i}");
+            assert!(close(m.normal[i][c], w.normal[i][c]), "normal sum {i}");
+        }
+    }
 }
 
 /// Checkpoints do not change the image: tiles keep their films across passes, so the sums
@@ -405,16 +590,18 @@ fn a_killed_checkpointed_render_resumes_to_the_uninterrupted_one() {
 #[test]
 fn a_checkpointed_render_is_the_same_bits() {
     let (dir, scene) = setup("checkpoint-bits");
-    let plain = read_partial(&render(&dir, &scene, "plain.exr", &["--partial"])).unwrap();
+    let plain = read_partial(&render(&dir, &scene, "plain.exr", &["--partial", "--aovs"])).unwrap();
     let cp = read_partial(&render(
         &dir,
         &scene,
         "cp.exr",
-        &["--checkpoint", "0.000001"],
+        &["--checkpoint", "0.000001", "--aovs"],
     ))
     .unwrap();
     assert_eq!(cp.film.sum, plain.film.sum);
     assert_eq!(cp.film.sum_sq, plain.film.sum_sq);
+    assert!(cp.aovs.is_some());
+    assert_eq!(cp.aovs, plain.aovs);
     assert_eq!(cp.header.samples, plain.header.samples);
 }
 

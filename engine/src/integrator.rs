@@ -9,9 +9,8 @@
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
-use glam::Vec3;
-use risotto_components::{Paths, Rgb};
-use risotto_systems::film::{splat, Film};
+use risotto_components::Paths;
+use risotto_systems::film::{splat, AovFilm, Film};
 use risotto_systems::sampler::pixel_seed;
 
 pub use crate::path_tracer::PathTracer;
@@ -66,16 +65,12 @@ pub trait Integrator: Sync {
     );
 }
 
-/// Film plus optional AOV accumulators for one tile.
+/// Film plus AOV accumulators for one tile.
 pub struct TileFilm {
     /// Beauty.
     pub film: Film,
-    /// Sum of first-hit albedo.
-    pub albedo: Vec<Rgb>,
-    /// Sum of first-hit normals.
-    pub normal: Vec<Vec3>,
-    /// Sum of first-hit depths.
-    pub depth: Vec<f32>,
+    /// Sums of first-hit albedo, normal and depth.
+    pub aovs: AovFilm,
     /// Tile origin in the image.
     pub x0: u32,
     /// Tile origin in the image.
@@ -85,12 +80,9 @@ pub struct TileFilm {
 impl TileFilm {
     /// An empty tile.
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
-        let n = (w * h) as usize;
         TileFilm {
             film: Film::new(w, h),
-            albedo: vec![Rgb::BLACK; n],
-            normal: vec![Vec3::ZERO; n],
-            depth: vec![0.0; n],
+            aovs: AovFilm::new(w, h),
             x0,
             y0,
         }
@@ -207,21 +199,25 @@ fn splat_batch(tile: &mut TileFilm, film_pixel: &[u32], paths: &Paths, stats: &m
     // Runs of `spp` paths per film pixel: each pixel's sums are added up in registers, in
     // path order (the same bits as adding to the film per path, without a store and reload
     // between additions).
-    let (mut p, mut sums) = (usize::MAX, (Rgb::BLACK, Vec3::ZERO, 0.0));
+    let sums = &mut tile.aovs;
+    let (mut p, mut run) = (usize::MAX, ([0.0f64; 3], [0.0f64; 3], 0.0f64));
     for (&q, ((&albedo, &normal), &d)) in film_pixel.iter().zip(aovs) {
         let q = q as usize;
         if q != p {
             if p != usize::MAX {
-                (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
+                (sums.albedo[p], sums.normal[p], sums.depth[p]) = run;
             }
             p = q;
-            sums = (tile.albedo[p], tile.normal[p], tile.depth[p]);
+            run = (sums.albedo[p], sums.normal[p], sums.depth[p]);
         }
-        sums.0 += albedo;
-        sums.1 += normal;
-        sums.2 += if d.is_finite() { d } else { 0.0 };
+        let (a, n) = (albedo.to_array(), normal.to_array());
+        for c in 0..3 {
+            run.0[c] += a[c] as f64;
+            run.1[c] += n[c] as f64;
+        }
+        run.2 += if d.is_finite() { d as f64 } else { 0.0 };
     }
     if p != usize::MAX {
-        (tile.albedo[p], tile.normal[p], tile.depth[p]) = sums;
+        (sums.albedo[p], sums.normal[p], sums.depth[p]) = run;
     }
 }

@@ -5,21 +5,8 @@
 //! cropped render's pixels are the bits of the same pixels of the whole render. Such a piece
 //! is written as a **partial EXR** ([`write_partial`]) and [`merge`] puts pieces back together.
 //!
-//! # The partial EXR
-//! The two parts of [`write_exr`](crate::output::write_exr) (`beauty`, `aovs`: beauty,
-//! variance and sample count of the piece, so it can be viewed as it is) plus a third part,
-//! `merge`, with what merging needs:
-//!
-//! - **windows**: the display window is the full image (`0,0` to `width-1,height-1`), the data
-//!   window of every part is the piece's window in it;
-//! - **channels** (all `UINT`, ZIP, lossless): `sum.R.hi`, `sum.R.lo`, ... `sumSq.B.lo`: the
-//!   film's per-pixel f64 sums of sample radiance and of its square, each f64 stored
-//!   bit-exactly as its upper (`.hi`) and lower (`.lo`) 32 bits, because EXR has no 64-bit
-//!   float and an f32 sum would lose the bits that make the merge exact; `count`: samples
-//!   per pixel;
-//! - **text attributes**: `risotto.samples` (`START..END`), `risotto.spp`, `risotto.seed`,
-//!   `risotto.sceneHash` ([`scene_hash`]), `risotto.stats` (the piece's stats JSON) and
-//!   `risotto.encoding` (the channel encoding above, in words).
+//! The file format is in [`partial_exr`]; this module says what a piece is ([`Partial`]) and
+//! merges pieces.
 //!
 //! # Merging and its summation order
 //! Parts must agree on resolution, seed, spp and scene hash; parts whose windows share a
@@ -31,31 +18,31 @@
 //! f64 the two differ by a few ulps (relative error below 1e-15 per addition), so after the
 //! conversion to f32 beauty and variance are equal or one f32 ulp apart; counts are exact.
 //! The variance of the mean is recomputed from the merged sums.
+//!
+//! # AOVs
+//! A piece rendered with `--aovs` also carries the f64 sums of first-hit albedo, normal and
+//! depth ([`AovFilm`]); they are merged in the same order as the film's sums, so tiles give
+//! the one-process AOV layers bit for bit and sample ranges give them up to the same f64
+//! summation order: each mean is equal or one f32 ulp apart, except where a component's
+//! samples cancel to nearly zero (a normal component at a silhouette): there the bound is
+//! absolute, the f64 rounding of the two sums, at most about `2e-16 * spp` times the mean
+//! magnitude of the pixel's samples. (The f64 sum of a few f32 values of similar size is
+//! exact in any order, so in practice most pixels agree bit for bit.) Either all parts
+//! carry AOVs or none does: a mix is refused.
 
 use std::path::{Path, PathBuf};
 
-use exr::prelude as x;
-use risotto_systems::film::Film;
+use risotto_systems::film::{AovFilm, Film};
 use serde_json::Value;
 
-use crate::output::{
-    read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, OutputError, Placement,
-};
-use crate::render::{RenderOutput, SampleRange, Window};
+use crate::output::{Image, OutputError};
+use crate::render::{aov_means, RenderOutput, SampleRange, Window};
+
+pub mod partial_exr;
+pub use partial_exr::{parse_sample_range, read_partial, write_partial};
 
 /// Name of the EXR part with the merge data.
 pub const MERGE_PART: &str = "merge";
-
-const SAMPLES: &str = "risotto.samples";
-const SPP: &str = "risotto.spp";
-const SEED: &str = "risotto.seed";
-const SCENE_HASH: &str = "risotto.sceneHash";
-const STATS: &str = "risotto.stats";
-const ENCODING: &str = "risotto.encoding";
-const ENCODING_TEXT: &str = "sum.C, sumSq.C (C = R, G, B): per-pixel f64 sums of sample \
-    radiance and of its square, each f64's bits split into two UINT channels (.hi = upper 32 \
-    bits, .lo = lower 32 bits); count: samples per pixel";
-const CHANNELS: [char; 3] = ['R', 'G', 'B'];
 
 /// What a partial render is a piece of, and which piece.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,13 +63,17 @@ pub struct PartialHeader {
     pub stats: Value,
 }
 
-/// A partial render: its header and its film (sums and counts over the window).
+/// A partial render: its header, its film (sums and counts over the window) and, when it
+/// was rendered with AOVs, their sums.
 #[derive(Clone, Debug)]
 pub struct Partial {
     /// What it is a piece of.
     pub header: PartialHeader,
     /// Sums and counts, `window.width() x window.height()`.
     pub film: Film,
+    /// Sums of first-hit albedo, normal and depth over the same pixels and samples (their
+    /// means divide by `film.count`), when the piece carries AOVs.
+    pub aovs: Option<AovFilm>,
 }
 
 /// Errors of reading, checking and merging partial renders.
@@ -123,13 +114,14 @@ pub fn scene_hash(pieces: &[&[u8]]) -> String {
 
 impl Partial {
     /// The partial of a render's output: `resolution`, `spp`, `seed` and `scene_hash` say
-    /// what it is a piece of.
+    /// what it is a piece of; with `aovs` it carries the output's AOV sums.
     pub fn of_render(
         out: &RenderOutput,
         resolution: (u32, u32),
         spp: u32,
         seed: u64,
         scene_hash: String,
+        aovs: bool,
     ) -> Self {
         Partial {
             header: PartialHeader {
@@ -142,7 +134,14 @@ impl Partial {
                 stats: serde_json::from_str(&out.stats.to_json()).unwrap_or(Value::Null),
             },
             film: out.film.clone(),
+            aovs: aovs.then(|| out.aovs.clone()),
         }
+    }
+
+    /// The AOV layers a render writes (mean albedo, mean normal, mean depth: see
+    /// [`aov_means`]), when the piece carries AOVs.
+    pub fn aov_layers(&self) -> Option<(Image, Image, Vec<f32>)> {
+        self.aovs.as_ref().map(|a| aov_means(a, &self.film.count))
     }
 
     /// Mean radiance per pixel of the window.
@@ -155,217 +154,6 @@ impl Partial {
             (0..n).map(|i| f.mean(i)).collect(),
         )
     }
-}
-
-/// JSON text with every non-ASCII character escaped (`\uXXXX`), as EXR text attributes
-/// hold Latin-1 only.
-fn ascii_json(v: &Value) -> String {
-    let s = v.to_string();
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        if c.is_ascii() {
-            out.push(c);
-        } else {
-            let mut buf = [0u16; 2];
-            for u in c.encode_utf16(&mut buf) {
-                out.push_str(&format!("\\u{u:04x}"));
-            }
-        }
-    }
-    out
-}
-
-/// Writes `partial` as a partial EXR (layout in the module docs), atomically: into a
-/// temporary file beside `path`, then renamed over it, so a reader (or a render killed
-/// mid-write) never sees half a file.
-pub fn write_partial(path: &Path, partial: &Partial) -> Result<(), MergeError> {
-    let f = &partial.film;
-    let h = &partial.header;
-    let (w, ht) = (f.width as usize, f.height as usize);
-    let n = f.count.len();
-    let beauty = partial.beauty();
-    let variance = Image::from_pixels(w, ht, (0..n).map(|i| f.variance_of_mean(i)).collect());
-    let counts: Vec<f32> = f.count.iter().map(|&c| c as f32).collect();
-    let mut channels = Vec::new();
-    for (name, sums) in [("sum", &f.sum), ("sumSq", &f.sum_sq)] {
-        for (c, letter) in CHANNELS.iter().enumerate() {
-            let bits: Vec<u64> = sums.iter().map(|s| s[c].to_bits()).collect();
-            for (half, shift) in [("hi", 32), ("lo", 0)] {
-                let values = bits.iter().map(|b| (b >> shift) as u32).collect();
-                channels.push(x::AnyChannel::new(
-                    format!("{name}.{letter}.{half}").as_str(),
-                    x::FlatSamples::U32(values),
-                ));
-            }
-        }
-    }
-    channels.push(x::AnyChannel::new(
-        "count",
-        x::FlatSamples::U32(f.count.clone()),
-    ));
-    let extra = ExtraPart {
-        name: MERGE_PART,
-        channels,
-        attributes: vec![
-            (SAMPLES, h.samples.to_string()),
-            (SPP, h.spp.to_string()),
-            (SEED, h.seed.to_string()),
-            (SCENE_HASH, h.scene_hash.clone()),
-            (STATS, ascii_json(&h.stats)),
-            (ENCODING, ENCODING_TEXT.to_string()),
-        ],
-    };
-    let film = FilmOutput {
-        beauty: &beauty,
-        variance: &variance,
-        sample_count: &counts,
-        albedo: None,
-        normal: None,
-        depth: None,
-    };
-    let placement = Placement {
-        full: (h.resolution.0 as usize, h.resolution.1 as usize),
-        origin: (h.window.x0 as usize, h.window.y0 as usize),
-    };
-    let name = path.file_name().map_or_else(
-        || "partial.exr".into(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    write_exr_placed(&tmp, &film, Some(placement), Some(extra))?;
-    std::fs::rename(&tmp, path).map_err(|cause| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Io {
-            path: path.to_path_buf(),
-            cause,
-        }
-    })?;
-    Ok(())
-}
-
-/// Reads a partial EXR written by [`write_partial`] (or by `risotto merge`).
-pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
-    let not = |reason: String| MergeError::NotPartial {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let image = read_exr_all(path)?;
-    let layer = image
-        .layer_data
-        .iter()
-        .find(|l| l.attributes.layer_name == Some(x::Text::from(MERGE_PART)))
-        .ok_or_else(|| {
-            not(format!(
-                "no \"{MERGE_PART}\" part (render with --crop, --samples, --checkpoint or \
-                 --partial to write one)"
-            ))
-        })?;
-    let text = |key: &str| -> Result<String, MergeError> {
-        match layer.attributes.other.get(&x::Text::from(key)) {
-            Some(x::AttributeValue::Text(t)) => Ok(t.to_string()),
-            Some(_) => Err(not(format!("attribute {key} is not text"))),
-            None => Err(not(format!("no attribute {key}"))),
-        }
-    };
-    let number = |key: &str| -> Result<u64, MergeError> {
-        let t = text(key)?;
-        t.parse()
-            .map_err(|_| not(format!("attribute {key} = \"{t}\" is not a whole number")))
-    };
-    let samples_text = text(SAMPLES)?;
-    let samples =
-        parse_sample_range(&samples_text).map_err(|e| not(format!("attribute {SAMPLES}: {e}")))?;
-    let spp = u32::try_from(number(SPP)?).map_err(|_| not(format!("{SPP} too large")))?;
-    let seed = number(SEED)?;
-    let scene_hash = text(SCENE_HASH)?;
-    let stats =
-        serde_json::from_str(&text(STATS)?).map_err(|e| not(format!("attribute {STATS}: {e}")))?;
-
-    let display = image.attributes.display_window;
-    let (pos, size) = (layer.attributes.layer_position, layer.size);
-    let resolution = (display.size.width() as u32, display.size.height() as u32);
-    let inside = display.position.x() == 0
-        && display.position.y() == 0
-        && pos.x() >= 0
-        && pos.y() >= 0
-        && pos.x() as usize + size.width() <= resolution.0 as usize
-        && pos.y() as usize + size.height() <= resolution.1 as usize;
-    if !inside {
-        return Err(not(format!(
-            "data window at ({}, {}) of {}x{} is not inside the display window {}x{} at \
-             ({}, {})",
-            pos.x(),
-            pos.y(),
-            size.width(),
-            size.height(),
-            resolution.0,
-            resolution.1,
-            display.position.x(),
-            display.position.y()
-        )));
-    }
-    let window = Window {
-        x0: pos.x() as u32,
-        y0: pos.y() as u32,
-        x1: pos.x() as u32 + size.width() as u32,
-        y1: pos.y() as u32 + size.height() as u32,
-    };
-    let n = window.pixels();
-    let channel = |name: &str| -> Result<&[u32], MergeError> {
-        let c = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.eq(name))
-            .ok_or_else(|| not(format!("no channel {name}")))?;
-        match &c.sample_data {
-            x::FlatSamples::U32(v) if v.len() == n => Ok(v.as_slice()),
-            x::FlatSamples::U32(v) => Err(not(format!(
-                "channel {name} has {} values for {n} pixels",
-                v.len()
-            ))),
-            _ => Err(not(format!("channel {name} is not UINT"))),
-        }
-    };
-    let mut film = Film::new(window.width(), window.height());
-    for (name, sums) in [("sum", &mut film.sum), ("sumSq", &mut film.sum_sq)] {
-        for (c, letter) in CHANNELS.iter().enumerate() {
-            let hi = channel(&format!("{name}.{letter}.hi"))?;
-            let lo = channel(&format!("{name}.{letter}.lo"))?;
-            for (i, s) in sums.iter_mut().enumerate() {
-                s[c] = f64::from_bits(((hi[i] as u64) << 32) | lo[i] as u64);
-            }
-        }
-    }
-    film.count = channel("count")?.to_vec();
-    Ok(Partial {
-        header: PartialHeader {
-            resolution,
-            window,
-            samples,
-            spp,
-            seed,
-            scene_hash,
-            stats,
-        },
-        film,
-    })
-}
-
-/// Parses `START..END` (whole numbers; not checked for START < END).
-pub fn parse_sample_range(s: &str) -> Result<SampleRange, String> {
-    let (a, b) = s
-        .split_once("..")
-        .ok_or_else(|| format!("\"{s}\" is not START..END"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("\"{s}\": \"{t}\" is not a whole number"))
-    };
-    Ok(SampleRange {
-        start: num(a)?,
-        end: num(b)?,
-    })
 }
 
 /// Adds stats JSON `b` into `a`: numbers add, objects merge key by key, arrays gain the
@@ -425,10 +213,10 @@ fn keep_first_cases(cases: &mut Vec<Value>) {
 }
 
 /// Merges partial renders (each with the file it came from, for messages) into the whole
-/// render: checks that they fit (module docs), places tiles and adds sample passes in the
-/// stated order. The result is a partial covering the whole image and `0..spp`; its stats
-/// are the parts' summed (`wall_seconds` is then the total task time) with `"parts"`, the
-/// number of parts.
+/// render: checks that they fit (module docs; all carry AOVs or none does), places tiles
+/// and adds sample passes (and their AOV sums) in the stated order. The result is a
+/// partial covering the whole image and `0..spp`; its stats are the parts' summed
+/// (`wall_seconds` is then the total task time) with `"parts"`, the number of parts.
 pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
     let refuse = |m: String| Err(MergeError::Refused(m));
     let Some((first_path, first)) = parts.first() else {
@@ -464,6 +252,29 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
                 h.scene_hash, f.scene_hash
             ));
         }
+    }
+    let (with, without): (Vec<_>, Vec<_>) = parts.iter().partition(|(_, p)| p.aovs.is_some());
+    if !with.is_empty() && !without.is_empty() {
+        let list = |v: &[&(PathBuf, Partial)]| {
+            let mut names: Vec<String> = v.iter().take(4).map(|(p, _)| name(p)).collect();
+            if v.len() > 4 {
+                names.push(format!("and {} more", v.len() - 4));
+            }
+            names.join(", ")
+        };
+        let verb = |n: usize| if n == 1 { "does" } else { "do" };
+        return refuse(format!(
+            "some parts carry AOVs and some do not: {} {} (rendered with --aovs), {} {} not; \
+             render every part with --aovs, or none",
+            list(&with),
+            if with.len() == 1 {
+                "carries them"
+            } else {
+                "carry them"
+            },
+            list(&without),
+            verb(without.len())
+        ));
     }
     for (i, (pa, a)) in parts.iter().enumerate() {
         for (pb, b) in &parts[i + 1..] {
@@ -553,9 +364,14 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
         )
     });
     let mut film = Film::new(w, h);
+    let mut aovs = first.aovs.is_some().then(|| AovFilm::new(w, h));
     let mut stats = Value::Null;
     for p in &order {
-        film.add_tile(&p.film, p.header.window.x0, p.header.window.y0);
+        let (x0, y0) = (p.header.window.x0, p.header.window.y0);
+        film.add_tile(&p.film, x0, y0);
+        if let (Some(sum), Some(part)) = (&mut aovs, &p.aovs) {
+            sum.add_tile(part, x0, y0);
+        }
         add_stats(&mut stats, &p.header.stats);
     }
     if let Value::Object(m) = &mut stats {
@@ -578,14 +394,16 @@ pub fn merge(parts: &[(PathBuf, Partial)]) -> Result<Partial, MergeError> {
             stats,
         },
         film,
+        aovs,
     })
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn part(window: Window, samples: SampleRange, value: f64) -> Partial {
+    /// A piece with made-up sums: `value` in the red sums, tiny and zero others.
+    pub(crate) fn part(window: Window, samples: SampleRange, value: f64) -> Partial {
         let mut film = Film::new(window.width(), window.height());
         for (i, s) in film.sum.iter_mut().enumerate() {
             *s = [value + i as f64 / 3.0, 0.1, 1e-300];
@@ -605,33 +423,26 @@ mod tests {
                 stats: serde_json::json!({"samples": 1, "wall_seconds": 0.5, "features": ["a"]}),
             },
             film,
+            aovs: None,
         }
     }
 
-    #[test]
-    fn partial_round_trip_is_bit_exact() {
-        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("p.exr");
-        let p = part(
-            Window {
-                x0: 1,
-                y0: 0,
-                x1: 3,
-                y1: 2,
-            },
-            SampleRange { start: 2, end: 6 },
-            0.7,
-        );
-        write_partial(&path, &p).unwrap();
-        let back = read_partial(&path).unwrap();
-        assert_eq!(back.header, p.header);
-        assert_eq!(back.film.sum, p.film.sum);
-        assert_eq!(back.film.sum_sq, p.film.sum_sq);
-        assert_eq!(back.film.count, p.film.count);
-        // The beauty part is a plain viewable crop.
-        let rgb = crate::output::read_exr_rgb(&path).unwrap();
-        assert_eq!(rgb, p.beauty());
+    /// [`part`] with made-up AOV sums: `value` in every albedo sum, bit patterns that an
+    /// f32 would not keep in the normal and depth sums.
+    pub(crate) fn part_with_aovs(window: Window, samples: SampleRange, value: f64) -> Partial {
+        let mut p = part(window, samples, value);
+        let mut a = AovFilm::new(window.width(), window.height());
+        for (i, s) in a.albedo.iter_mut().enumerate() {
+            *s = [value, 0.25 * i as f64, 0.0];
+        }
+        for (i, s) in a.normal.iter_mut().enumerate() {
+            *s = [1.0 / 3.0, -(i as f64) / 7.0, -0.0];
+        }
+        for (i, d) in a.depth.iter_mut().enumerate() {
+            *d = value * 1e10 + i as f64 / 9.0;
+        }
+        p.aovs = Some(a);
+        p
     }
 
     #[test]
@@ -677,5 +488,35 @@ mod tests {
         assert_eq!(ab.film.count, vec![8; 8]);
         assert_eq!(ab.header.stats["samples"], 2);
         assert_eq!(ab.header.stats["parts"], 2);
+    }
+
+    #[test]
+    fn aov_sums_merge_in_sample_order_and_mixed_parts_are_refused() {
+        let full = Window::full(4, 2);
+        let a = part_with_aovs(full, SampleRange { start: 0, end: 3 }, 0.1);
+        let b = part_with_aovs(full, SampleRange { start: 3, end: 8 }, 1e7);
+        let ba = merge(&[("b".into(), b.clone()), ("a".into(), a.clone())]).unwrap();
+        let (sa, sb, m) = (
+            a.aovs.as_ref().unwrap(),
+            b.aovs.as_ref().unwrap(),
+            ba.aovs.as_ref().unwrap(),
+        );
+        for i in 0..8 {
+            assert_eq!(m.depth[i], (0.0 + sa.depth[i]) + sb.depth[i]);
+            for c in 0..3 {
+                assert_eq!(m.albedo[i][c], (0.0 + sa.albedo[i][c]) + sb.albedo[i][c]);
+                assert_eq!(m.normal[i][c], (0.0 + sa.normal[i][c]) + sb.normal[i][c]);
+            }
+        }
+        let (albedo, _, depth) = ba.aov_layers().unwrap();
+        assert_eq!(albedo.get(0, 0).r, ((0.1 + 1e7) / 8.0) as f32);
+        assert_eq!(depth[0], (m.depth[0] / 8.0) as f32);
+        // Half of a render with AOVs and half without do not make a render with AOVs.
+        let plain = part(full, SampleRange { start: 3, end: 8 }, 1e7);
+        let err = merge(&[("with.exr".into(), a), ("plain.exr".into(), plain)]).unwrap_err();
+        let msg = err.to_string();
+        for needle in ["with.exr carries them", "plain.exr does not", "--aovs"] {
+            assert!(msg.contains(needle), "{msg}");
+        }
     }
 }

@@ -14,10 +14,9 @@ use crate::output::Image;
 use crate::scene::CompiledScene;
 use crate::stats::{RenderStats, SystemStats};
 use bumpalo::Bump;
-use glam::Vec3;
 use rayon::prelude::*;
 use risotto_components::Rgb;
-use risotto_systems::film::Film;
+use risotto_systems::film::{AovFilm, Film};
 use risotto_systems::independent_sampler::SamplerKind;
 
 /// A pixel window of the full image: columns `x0..x1`, rows `y0..y1` (half-open; row 0 is
@@ -164,6 +163,8 @@ pub struct RenderOutput {
     /// The per-pixel sums (f64) and counts the means come from, over the window: what
     /// merging partial renders adds up.
     pub film: Film,
+    /// The per-pixel sums (f64) the AOV means come from (divided by `film.count`).
+    pub aovs: AovFilm,
     /// The window of the full image these pixels are.
     pub window: Window,
     /// The sample indices rendered (of every pixel of the window).
@@ -399,29 +400,15 @@ fn gather(
 ) -> RenderOutput {
     let (w, h) = (window.width(), window.height());
     let mut film = Film::new(w, h);
+    let mut aovs = AovFilm::new(w, h);
     let n = (w * h) as usize;
-    let mut albedo = vec![Rgb::BLACK; n];
-    let mut normal = vec![Vec3::ZERO; n];
-    let mut depth = vec![0.0f32; n];
     let mut counters = SystemStats::default();
     for (tile, stats) in tiles {
         let (x0, y0) = (tile.x0 - window.x0, tile.y0 - window.y0);
         film.add_tile(&tile.film, x0, y0);
-        for ty in 0..tile.film.height {
-            for tx in 0..tile.film.width {
-                let src = (ty * tile.film.width + tx) as usize;
-                let dst = ((y0 + ty) * w + x0 + tx) as usize;
-                albedo[dst] = tile.albedo[src];
-                normal[dst] = tile.normal[src];
-                depth[dst] = tile.depth[src];
-            }
-        }
+        aovs.add_tile(&tile.aovs, x0, y0);
         counters.merge(stats);
     }
-    let mean = |v: Rgb, i: usize| {
-        let c = film.count[i].max(1) as f32;
-        v / c
-    };
     let image = |f: &dyn Fn(usize) -> Rgb| Image {
         width: w as usize,
         height: h as usize,
@@ -429,14 +416,7 @@ fn gather(
     };
     let beauty = image(&|i| film.mean(i));
     let variance = image(&|i| film.variance_of_mean(i));
-    let albedo_img = image(&|i| mean(albedo[i], i));
-    let normal_img = image(&|i| {
-        let v = normal[i] / film.count[i].max(1) as f32;
-        Rgb::new(v.x, v.y, v.z)
-    });
-    let depth = (0..n)
-        .map(|i| depth[i] / film.count[i].max(1) as f32)
-        .collect();
+    let (albedo, normal, depth) = aov_means(&aovs, &film.count);
     let sample_count = film.count.iter().map(|&c| c as f32).collect();
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();
@@ -447,10 +427,11 @@ fn gather(
         beauty,
         variance,
         sample_count,
-        albedo: albedo_img,
-        normal: normal_img,
+        albedo,
+        normal,
         depth,
         film,
+        aovs,
         window,
         samples: SampleRange {
             start: samples.start,
@@ -458,6 +439,27 @@ fn gather(
         },
         stats,
     }
+}
+
+/// The AOV layers of the sums `aovs` over `count` samples per pixel: mean albedo, mean
+/// shading normal (`x, y, z` in `r, g, b`) and mean first-hit distance, as a render writes
+/// them.
+pub fn aov_means(aovs: &AovFilm, count: &[u32]) -> (Image, Image, Vec<f32>) {
+    let (w, h) = (aovs.width as usize, aovs.height as usize);
+    let n = w * h;
+    let albedo = (0..n).map(|i| aovs.albedo_mean(i, count[i])).collect();
+    let normal = (0..n)
+        .map(|i| {
+            let [x, y, z] = aovs.normal_mean(i, count[i]);
+            Rgb::new(x, y, z)
+        })
+        .collect();
+    let depth = (0..n).map(|i| aovs.depth_mean(i, count[i])).collect();
+    (
+        Image::from_pixels(w, h, albedo),
+        Image::from_pixels(w, h, normal),
+        depth,
+    )
 }
 
 /// The kept non-finite cases of `counters`, with pixel coordinates, material names and the

@@ -88,6 +88,82 @@ impl Film {
     }
 }
 
+/// Per-pixel sums of first-hit AOVs for a rectangle of pixels (a whole image or one tile),
+/// in f64 like [`Film`]'s sums. Each camera sample adds its first hit's albedo, shading
+/// normal and distance along the camera ray; a sample whose camera ray hit nothing adds
+/// zeros (and an infinite distance adds zero). The means divide by the [`Film::count`] of
+/// the same pixel: every sample taken, including those whose radiance was dropped as
+/// non-finite.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovFilm {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Sum of first-hit albedo per pixel (r, g, b).
+    pub albedo: Vec<[f64; 3]>,
+    /// Sum of first-hit shading normals per pixel (x, y, z; world space).
+    pub normal: Vec<[f64; 3]>,
+    /// Sum of first-hit distances per pixel.
+    pub depth: Vec<f64>,
+}
+
+impl AovFilm {
+    /// Empty sums.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = (width as usize) * (height as usize);
+        AovFilm {
+            width,
+            height,
+            albedo: vec![[0.0; 3]; n],
+            normal: vec![[0.0; 3]; n],
+            depth: vec![0.0; n],
+        }
+    }
+
+    /// Mean albedo of pixel `i` over `count` samples (black for none).
+    pub fn albedo_mean(&self, i: usize, count: u32) -> Rgb {
+        let [r, g, b] = self.albedo[i].map(|s| mean(s, count));
+        Rgb::new(r, g, b)
+    }
+
+    /// Mean shading normal of pixel `i` over `count` samples (not renormalised; zero for
+    /// none).
+    pub fn normal_mean(&self, i: usize, count: u32) -> [f32; 3] {
+        self.normal[i].map(|s| mean(s, count))
+    }
+
+    /// Mean first-hit distance of pixel `i` over `count` samples (0 for none).
+    pub fn depth_mean(&self, i: usize, count: u32) -> f32 {
+        mean(self.depth[i], count)
+    }
+
+    /// Adds the sums of `tile` (a rectangle at `(x0, y0)` of this one), as
+    /// [`Film::add_tile`] does.
+    pub fn add_tile(&mut self, tile: &AovFilm, x0: u32, y0: u32) {
+        for ty in 0..tile.height {
+            for tx in 0..tile.width {
+                let src = (ty * tile.width + tx) as usize;
+                let dst = ((y0 + ty) * self.width + (x0 + tx)) as usize;
+                for c in 0..3 {
+                    self.albedo[dst][c] += tile.albedo[src][c];
+                    self.normal[dst][c] += tile.normal[src][c];
+                }
+                self.depth[dst] += tile.depth[src];
+            }
+        }
+    }
+}
+
+/// `sum / count` as f32, 0 for no samples.
+fn mean(sum: f64, count: u32) -> f32 {
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64) as f32
+    }
+}
+
 /// Splats finished samples: `pixel[i]` (an index into `film`) receives `radiance[i]`.
 /// Returns how many samples were dropped as non-finite.
 pub fn splat(film: &mut Film, pixel: &[u32], radiance: &[Rgb]) -> u64 {
@@ -218,5 +294,25 @@ mod tests {
         assert!(v.g < 1e-3 * v.r, "{v:?}");
         assert_eq!(v.b, f32::MAX);
         assert_eq!(f.nan_dropped, 0);
+    }
+
+    #[test]
+    fn aov_tiles_add_in_place_and_means_divide_by_the_count() {
+        let mut tile = AovFilm::new(1, 2);
+        tile.albedo[1] = [1.5, 0.0, 3.0];
+        tile.normal[1] = [0.0, -2.0, 0.0];
+        tile.depth[1] = 7.0;
+        let mut whole = AovFilm::new(3, 2);
+        whole.add_tile(&tile, 2, 0);
+        whole.add_tile(&tile, 2, 0);
+        // Pixel (2, 1): twice the tile's pixel 1.
+        assert_eq!(whole.albedo[5], [3.0, 0.0, 6.0]);
+        assert_eq!(whole.depth[5], 14.0);
+        assert_eq!(whole.albedo_mean(5, 4), Rgb::new(0.75, 0.0, 1.5));
+        assert_eq!(whole.normal_mean(5, 4), [0.0, -1.0, 0.0]);
+        assert_eq!(whole.depth_mean(5, 4), 3.5);
+        // No samples: zero, not NaN.
+        assert_eq!(whole.depth_mean(0, 0), 0.0);
+        assert_eq!(whole.albedo_mean(5, 0), Rgb::BLACK);
     }
 }
