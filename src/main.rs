@@ -3,6 +3,10 @@
 //! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
 mod progress;
+mod replay_args;
+mod split;
+use replay_args::{parse_replay, replay_base_command};
+use split::{grid_tile, info_command, merge_command, parse_crop, sample_chunk};
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -10,13 +14,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::compare::compare;
 use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
-use risotto::engine::merge::{
-    merge, parse_sample_range, read_partial, scene_hash, write_partial, Partial,
-};
+use risotto::engine::merge::{parse_sample_range, write_partial, Partial};
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
-    RenderOutput, SampleRange, Window,
+    RenderOutput,
 };
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
@@ -366,36 +368,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let settings = &compiled.settings;
     let resolution = (compiled.camera.width, compiled.camera.height);
     let hash = if partial {
-        let text = std::fs::read(&args.scene)
-            .with_context(|| format!("cannot read {}", args.scene.display()))?;
-        let effective = format!(
-            "{}x{} max_depth={} rr_depth={} max_passes={} techniques={}",
-            resolution.0,
-            resolution.1,
-            settings.max_depth,
-            settings.rr_depth,
-            settings.max_passes,
-            techniques.label()
-        );
-        // Every file the scene reads (meshes, grids, environment maps), path and contents:
-        // a task that saw a different mesh is refused at merge time.
-        let mut files = Vec::with_capacity(compiled.files.len());
-        for path in &compiled.files {
-            let bytes = std::fs::read(path).with_context(|| {
-                format!(
-                    "{}: cannot read {} (a file the scene reads) to hash it",
-                    args.scene.display(),
-                    path.display()
-                )
-            })?;
-            files.push((path.to_string_lossy().into_owned(), bytes));
-        }
-        let mut pieces: Vec<&[u8]> = vec![&text, effective.as_bytes()];
-        for (name, bytes) in &files {
-            pieces.push(name.as_bytes());
-            pieces.push(bytes);
-        }
-        scene_hash(&pieces)
+        split::partial_scene_hash(&args.scene, &compiled, &techniques)?
     } else {
         String::new()
     };
@@ -455,170 +428,6 @@ fn render_command(args: RenderArgs) -> Result<()> {
         eprintln!("{}", result.stats);
         eprintln!("wrote {} and {}", out.display(), png.display());
     }
-    Ok(())
-}
-
-/// Parses `--replay X,Y,SAMPLE`.
-fn parse_replay(s: &str) -> Result<(u32, u32, u32)> {
-    let v: Vec<&str> = s.split(',').collect();
-    anyhow::ensure!(
-        v.len() == 3,
-        "--replay {s}: expected three whole numbers X,Y,SAMPLE (pixel column, row, sample index)"
-    );
-    let mut n = [0u32; 3];
-    for (i, t) in v.iter().enumerate() {
-        n[i] = t
-            .trim()
-            .parse()
-            .with_context(|| format!("--replay {s}: \"{t}\" is not a whole number"))?;
-    }
-    Ok((n[0], n[1], n[2]))
-}
-
-/// The `risotto render` command with the options of `args` that decide a path (scene, spp,
-/// seed, depth, techniques), to which a non-finite case's `--replay X,Y,SAMPLE` is appended.
-fn replay_base_command(args: &RenderArgs) -> String {
-    /// `s`, single-quoted for a POSIX shell when it holds anything but plain characters.
-    fn quoted(s: &str) -> String {
-        let plain = |c: char| c.is_ascii_alphanumeric() || "-_./=+,:@%".contains(c);
-        if !s.is_empty() && s.chars().all(plain) {
-            s.to_string()
-        } else {
-            format!("'{}'", s.replace('\'', "'\\''"))
-        }
-    }
-    let mut cmd = format!("risotto render {}", quoted(&args.scene.to_string_lossy()));
-    if let Some(spp) = args.spp {
-        cmd += &format!(" --spp {spp}");
-    }
-    if let Some(seed) = args.seed {
-        cmd += &format!(" --seed {seed}");
-    }
-    if let Some(d) = args.max_depth {
-        cmd += &format!(" --max-depth {d}");
-    }
-    if let Some(l) = &args.lighting {
-        cmd += &format!(" --lighting {}", quoted(l));
-    }
-    for t in &args.techniques {
-        cmd += &format!(" --technique {}", quoted(t));
-    }
-    cmd
-}
-
-/// Two whole numbers `A{sep}B` of option `flag`.
-fn number_pair(flag: &str, s: &str, sep: char) -> Result<(u32, u32)> {
-    let (a, b) = s
-        .split_once(sep)
-        .with_context(|| format!("{flag} {s}: expected two whole numbers A{sep}B"))?;
-    let num = |t: &str| -> Result<u32> {
-        t.trim()
-            .parse()
-            .with_context(|| format!("{flag} {s}: \"{t}\" is not a whole number"))
-    };
-    Ok((num(a)?, num(b)?))
-}
-
-/// The window of `--grid COLSxROWS --tile COL,ROW` in a `w` x `h` image.
-fn grid_tile(grid: &str, tile: &str, w: u32, h: u32) -> Result<Window> {
-    let (cols, rows) = number_pair("--grid", grid, 'x')?;
-    anyhow::ensure!(
-        (1..=w).contains(&cols) && (1..=h).contains(&rows),
-        "--grid {grid}: need 1 to {w} columns and 1 to {h} rows for the {w}x{h} image"
-    );
-    let (c, r) = number_pair("--tile", tile, ',')?;
-    anyhow::ensure!(
-        c < cols && r < rows,
-        "--tile {tile}: outside the {cols}x{rows} grid (COL below {cols}, ROW below {rows})"
-    );
-    let cut = |i: u32, n: u32, len: u32| (i as u64 * len as u64 / n as u64) as u32;
-    Ok(Window {
-        x0: cut(c, cols, w),
-        y0: cut(r, rows, h),
-        x1: cut(c + 1, cols, w),
-        y1: cut(r + 1, rows, h),
-    })
-}
-
-/// The sample range of `--chunks n --chunk j` of `spp` samples.
-fn sample_chunk(n: u32, j: u32, spp: u32) -> Result<SampleRange> {
-    anyhow::ensure!(
-        (1..=spp).contains(&n),
-        "--chunks {n}: need 1 to {spp} chunks (the scene's spp)"
-    );
-    anyhow::ensure!(j < n, "--chunk {j}: must be below --chunks {n}");
-    let cut = |i: u32| (i as u64 * spp as u64 / n as u64) as u32;
-    Ok(SampleRange {
-        start: cut(j),
-        end: cut(j + 1),
-    })
-}
-
-/// Parses `--crop X0,Y0,X1,Y1`.
-fn parse_crop(s: &str) -> Result<Window> {
-    let v: Vec<&str> = s.split(',').collect();
-    anyhow::ensure!(
-        v.len() == 4,
-        "--crop {s}: expected four whole numbers X0,Y0,X1,Y1"
-    );
-    let mut n = [0u32; 4];
-    for (i, t) in v.iter().enumerate() {
-        n[i] = t
-            .trim()
-            .parse()
-            .with_context(|| format!("--crop {s}: \"{t}\" is not a whole number"))?;
-    }
-    Ok(Window {
-        x0: n[0],
-        y0: n[1],
-        x1: n[2],
-        y1: n[3],
-    })
-}
-
-fn merge_command(args: MergeArgs) -> Result<()> {
-    let mut parts = Vec::with_capacity(args.parts.len());
-    for path in &args.parts {
-        parts.push((path.clone(), read_partial(path)?));
-    }
-    let merged = merge(&parts)?;
-    write_partial(&args.out, &merged)?;
-    let png = args.out.with_extension("png");
-    write_png(&png, &merged.beauty(), args.exposure)?;
-    let stats = args
-        .stats
-        .clone()
-        .unwrap_or_else(|| args.out.with_extension("stats.json"));
-    let mut text = serde_json::to_string_pretty(&merged.header.stats)?;
-    text.push('\n');
-    std::fs::write(&stats, text)
-        .with_context(|| format!("cannot write stats to {}", stats.display()))?;
-    eprintln!(
-        "merged {} parts into {}, {} and {}",
-        parts.len(),
-        args.out.display(),
-        png.display(),
-        stats.display()
-    );
-    Ok(())
-}
-
-fn info_command(path: &Path) -> Result<()> {
-    let p = read_partial(path)?;
-    let h = &p.header;
-    let w = h.window;
-    println!(
-        "{}",
-        serde_json::json!({
-            "resolution": [h.resolution.0, h.resolution.1],
-            "window": [w.x0, w.y0, w.x1, w.y1],
-            "samples": [h.samples.start, h.samples.end],
-            "spp": h.spp,
-            "seed": h.seed,
-            "scene_hash": h.scene_hash,
-            "aovs": p.aovs.is_some(),
-        })
-    );
     Ok(())
 }
 
@@ -912,55 +721,4 @@ fn default_output(scene: &Path) -> PathBuf {
         .file_stem()
         .map_or_else(|| "render".into(), |s| s.to_os_string());
     PathBuf::from(stem).with_extension("exr")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn render_args(args: &[&str]) -> RenderArgs {
-        let argv = ["risotto", "render"].iter().chain(args);
-        match Cli::try_parse_from(argv).unwrap().command {
-            Command::Render(a) => a,
-            _ => unreachable!("a render command"),
-        }
-    }
-
-    #[test]
-    fn the_replay_command_keeps_what_decides_a_path_and_quotes_the_scene() {
-        let a = render_args(&[
-            "my scene.toml",
-            "--spp",
-            "16",
-            "--seed",
-            "3",
-            "--threads",
-            "2",
-            "--out",
-            "x.exr",
-            "--technique",
-            "sampler=independent",
-            "--max-depth",
-            "-1",
-        ]);
-        assert_eq!(
-            replay_base_command(&a),
-            "risotto render 'my scene.toml' --spp 16 --seed 3 --max-depth -1 \
-             --technique sampler=independent"
-        );
-        let a = render_args(&["scenes/it's.toml", "--lighting", "nee"]);
-        assert_eq!(
-            replay_base_command(&a),
-            "risotto render 'scenes/it'\\''s.toml' --lighting nee"
-        );
-    }
-
-    #[test]
-    fn replay_values_parse_or_name_the_flag() {
-        assert_eq!(parse_replay("3, 4,5").unwrap(), (3, 4, 5));
-        for bad in ["3,4", "3,4,5,6", "a,1,2", "1,2,-3", ""] {
-            let e = format!("{:#}", parse_replay(bad).unwrap_err());
-            assert!(e.starts_with(&format!("--replay {bad}:")), "{e}");
-        }
-    }
 }

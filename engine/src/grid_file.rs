@@ -79,7 +79,8 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> GridFileError + '_ {
     }
 }
 
-fn format(path: &Path, message: impl Into<String>) -> GridFileError {
+/// A [`GridFileError::Format`] of `path`.
+pub(crate) fn format(path: &Path, message: impl Into<String>) -> GridFileError {
     GridFileError::Format {
         path: path.to_path_buf(),
         message: message.into(),

@@ -21,7 +21,7 @@
 //! expose it); root-level tiles are not read. The crate itself panics on some malformed
 //! files: the panic is caught and reported as a format error naming the file.
 
-use crate::grid_file::{GridFileError, MAX_VOXELS};
+use crate::grid_file::{format, GridFileError, MAX_VOXELS};
 use risotto_systems::grid::DensityGrid;
 use std::fs::File;
 use std::io::BufReader;
@@ -30,13 +30,6 @@ use std::path::{Path, PathBuf};
 
 /// The grid read when the scene names none and the file has several.
 pub const DEFAULT_GRID: &str = "density";
-
-fn format(path: &Path, message: impl Into<String>) -> GridFileError {
-    GridFileError::Format {
-        path: path.to_path_buf(),
-        message: message.into(),
-    }
-}
 
 /// Runs the crate's `f`, turning its errors and panics into format errors.
 fn guarded<T, E: std::fmt::Display>(
