@@ -30,17 +30,35 @@ fn positive(x: f32) -> bool {
     x > 0.0
 }
 
-/// The next tentative collision after `t` for majorant `majorant > 0`: an exponential step,
-/// at least one ulp (so that tracking ends even where steps underflow against `t`).
+/// `t + depth / rate` for `rate > 0`: where the optical depth `depth` of tentative
+/// collisions runs out, at least one ulp past `t` (so that tracking ends even where steps
+/// underflow against `t`).
 #[inline]
-fn step(t: f32, majorant: f32, u: f32) -> f32 {
-    let s = sample_optical_depth(u) / majorant;
-    let next = t + s;
+fn advance(t: f32, rate: f32, depth: f32) -> f32 {
+    let next = t + depth / rate;
     if next > t {
         next
     } else {
         f32::from_bits(t.max(0.0).to_bits() + 1)
     }
+}
+
+/// The optical depth of tentative collisions still to go before the next one, carried from
+/// segment to segment along one ray (`NaN`: none drawn yet).
+///
+/// Tentative collisions form a Poisson process whose rate is piecewise constant (each
+/// segment's bound), so the next one lies where the integrated rate reaches an `Exp(1)`
+/// draw; a segment that ends first consumes `rate x length` of the draw and the rest carries
+/// into the next segment. That is the same process as restarting the exponential at every
+/// segment boundary (memorylessness), with one random number and one logarithm per
+/// collision instead of one more per segment crossed: a fine majorant grid then costs only
+/// its DDA steps.
+#[derive(Clone, Copy, Debug)]
+struct DepthToNext(f32);
+
+impl DepthToNext {
+    /// No draw yet.
+    const NONE: DepthToNext = DepthToNext(f32::NAN);
 }
 
 /// The outcome of [`delta_tracking`].
@@ -57,7 +75,7 @@ pub struct FreeFlight {
 }
 
 /// Visits the tentative collisions of a segment sampled from `bound` (> 0) on
-/// `[seg.t0, seg.t1)`: `visit(t, s, rand)` gets the distance, `sigma_t` there and the random
+/// `[seg.t0, seg.t1)`, continuing the ray's carried `depth`: `visit(t, s, rand)` gets the distance, `sigma_t` there and the random
 /// source; it returns `false` to stop the walk (and `tentative` returns `Some(t)`). Counts
 /// majorant violations (`sigma_t > seg.majorant`) into `violations`.
 fn tentative<R: FnMut() -> f32>(
@@ -66,17 +84,27 @@ fn tentative<R: FnMut() -> f32>(
     sigma_t: &mut impl FnMut(f32) -> f32,
     rand: &mut R,
     violations: &mut u32,
+    depth: &mut DepthToNext,
     mut visit: impl FnMut(f32, f32, &mut R) -> bool,
 ) -> Option<f32> {
     if !positive(bound) {
+        // No collisions here: the draw carries over unchanged.
         return None;
     }
     let mut t = seg.t0;
     loop {
-        t = step(t, bound, rand());
-        if t >= seg.t1 {
+        if depth.0.is_nan() {
+            depth.0 = sample_optical_depth(rand());
+        }
+        let next = advance(t, bound, depth.0);
+        if next >= seg.t1 {
+            // Rounding may take the rest a hair below 0: the next segment then collides at
+            // its start, a shift far below one ulp of optical depth.
+            depth.0 = (depth.0 - (seg.t1 - t) * bound).max(0.0);
             return None;
         }
+        *depth = DepthToNext::NONE;
+        t = next;
         let s = sigma_t(t);
         if s > seg.majorant {
             *violations += 1;
@@ -90,8 +118,8 @@ fn tentative<R: FnMut() -> f32>(
 /// Delta tracking (Woodcock et al. 1965; Novák et al. 2018, sec. 4.1): samples the distance
 /// to the next real collision with density `sigma_t(t) exp(-int_0^t sigma_t)`, or passes the
 /// segments with probability `exp(-int sigma_t)` (the transmittance). Tentative collisions
-/// are sampled from each segment's majorant (restarted at segment boundaries, which the
-/// exponential's memorylessness allows) and accepted with probability
+/// are sampled from each segment's majorant (one exponential draw carried across segment
+/// boundaries, [`DepthToNext`]) and accepted with probability
 /// `sigma_t(t) / majorant`.
 pub fn delta_tracking(
     segments: impl IntoIterator<Item = MajorantSegment>,
@@ -99,6 +127,7 @@ pub fn delta_tracking(
     mut rand: impl FnMut() -> f32,
 ) -> FreeFlight {
     let mut out = FreeFlight::default();
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         out.t = seg.t1;
         let mut nulls = 0;
@@ -108,6 +137,7 @@ pub fn delta_tracking(
             &mut sigma_t,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |_, s, rand| {
                 let null = rand() * seg.majorant >= s;
                 nulls += null as u32;
@@ -187,6 +217,7 @@ fn ratio_tracking_with_control(
         ..Transmittance::default()
     };
     let mut control_depth = 0.0f32;
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         let control = if residual {
             seg.minorant.clamp(0.0, seg.majorant.max(0.0))
@@ -204,6 +235,7 @@ fn ratio_tracking_with_control(
             &mut sigma_t,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |_, s, _| {
                 value *= 1.0 - (s - control) / bound;
                 nulls += 1;
@@ -239,6 +271,7 @@ pub fn delta_tracking_emitting(
 ) -> (FreeFlight, Rgb) {
     let mut out = FreeFlight::default();
     let mut gathered = Rgb::BLACK;
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         out.t = seg.t1;
         let mut nulls = 0;
@@ -249,6 +282,7 @@ pub fn delta_tracking_emitting(
             &mut sigma_t,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |t, s, rand| {
                 gathered += emission(t, s) * inv;
                 let null = rand() * seg.majorant >= s;
@@ -289,6 +323,7 @@ pub fn ratio_tracking_emitting(
     };
     let mut gathered = Rgb::BLACK;
     let mut control_depth = 0.0f32;
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         let control = if residual {
             seg.minorant.clamp(0.0, seg.majorant.max(0.0))
@@ -305,6 +340,7 @@ pub fn ratio_tracking_emitting(
             &mut sigma_t,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |t, s, _| {
                 let before = if control > 0.0 {
                     value * (-(depth0 + control * (t - seg.t0))).exp()
@@ -344,6 +380,30 @@ mod tests {
         }]
     }
 
+    /// Checks a histogram of free-flight distances over `[0, tmax]` (`hist.len() - 1` equal
+    /// bins, the last entry the flights that passed) against the distribution of optical
+    /// depth `depth(t)`, within 4 sigma per bin.
+    fn assert_flight_histogram(hist: &[u32], tmax: f32, n: u32, depth: impl Fn(f32) -> f32) {
+        let bins = hist.len() - 1;
+        for (b, &count) in hist.iter().enumerate() {
+            let p = if b == bins {
+                (-depth(tmax)).exp()
+            } else {
+                let (a, c) = (
+                    b as f32 * tmax / bins as f32,
+                    (b + 1) as f32 * tmax / bins as f32,
+                );
+                (-depth(a)).exp() - (-depth(c - 1e-6)).exp()
+            } as f64;
+            let expected = p * n as f64;
+            let sd = (n as f64 * p * (1.0 - p)).sqrt();
+            assert!(
+                (count as f64 - expected).abs() < 4.0 * sd,
+                "bin {b}: {count} vs {expected:.0} +- {sd:.0}"
+            );
+        }
+    }
+
     #[test]
     fn delta_tracking_samples_the_exponential_in_a_constant_medium() {
         // sigma_t = 2 under majorant 5 (60 % null collisions), segment [0, 1.5]: the
@@ -366,27 +426,81 @@ mod tests {
             };
             hist[b] += 1;
         }
-        for (b, &count) in hist.iter().enumerate() {
-            let p = if b == bins {
-                (-sigma * tmax).exp()
-            } else {
-                let (a, c) = (
-                    b as f32 * tmax / bins as f32,
-                    (b + 1) as f32 * tmax / bins as f32,
-                );
-                (-sigma * a).exp() - (-sigma * c).exp()
-            } as f64;
-            let expected = p * n as f64;
-            let sd = (n as f64 * p * (1.0 - p)).sqrt();
-            assert!(
-                (count as f64 - expected).abs() < 4.0 * sd,
-                "bin {b}: {count} vs {expected:.0} +- {sd:.0}"
-            );
-        }
+        assert_flight_histogram(&hist, tmax, n, |t| sigma * t);
         // Expected null collisions: (majorant - sigma) * E[distance travelled].
         let mean_distance = (1.0 - (-sigma * tmax).exp()) / sigma;
         let expected_nulls = 3.0 * mean_distance * n as f32;
         assert!((nulls as f32 / expected_nulls - 1.0).abs() < 0.02);
+    }
+
+    /// The carried optical depth ([`DepthToNext`]) across many short segments of different
+    /// majorants (some 0, as empty majorant cells are): the free flight still has the
+    /// exponential distance distribution of the constant medium, and the random numbers drawn
+    /// follow the tentative collisions, not the segments crossed (restarting the exponential
+    /// at each of the 60 boundaries would draw about 60 more per flight).
+    #[test]
+    fn carried_depth_across_many_segments_keeps_the_distribution() {
+        let (sigma, tmax, n) = (2.0f32, 1.5f32, 200_000);
+        // 60 segments of length 0.025, majorants cycling 2, 7, 3.5 (all >= sigma_t = 2) and
+        // a zero-majorant segment wherever sigma_t is 0 there (every tenth: [0.225, 0.25)...).
+        let segs: Vec<MajorantSegment> = (0..60)
+            .map(|k| MajorantSegment {
+                t0: k as f32 * 0.025,
+                t1: (k + 1) as f32 * 0.025,
+                majorant: if k % 10 == 9 {
+                    0.0
+                } else {
+                    [2.0, 7.0, 3.5][k % 3]
+                },
+                minorant: 0.0,
+            })
+            .collect();
+        let field = |t: f32| {
+            if ((t / 0.025) as usize) % 10 == 9 {
+                0.0
+            } else {
+                sigma
+            }
+        };
+        // The optical depth up to t of that field (6 empty segments of 0.025 in [0, 1.5]).
+        let depth = |t: f32| {
+            let cell = (t / 0.025) as usize;
+            // Empty cells wholly before this one: 9, 19, ... below `cell`.
+            let empty_before = cell / 10;
+            let in_empty = cell % 10 == 9;
+            let empty = empty_before as f32 * 0.025
+                + if in_empty {
+                    t - cell as f32 * 0.025
+                } else {
+                    0.0
+                };
+            sigma * (t - empty)
+        };
+        let bins = 12;
+        let mut hist = vec![0u32; bins + 1];
+        let mut rng = SplitMix64(3);
+        let mut draws = 0u64;
+        let mut tentatives = 0u64;
+        for _ in 0..n {
+            let f = delta_tracking(segs.iter().copied(), field, || {
+                draws += 1;
+                rng.f32()
+            });
+            tentatives += (f.nulls + f.collided as u32) as u64;
+            let b = if f.collided {
+                ((f.t / tmax * bins as f32) as usize).min(bins - 1)
+            } else {
+                bins
+            };
+            hist[b] += 1;
+        }
+        assert_flight_histogram(&hist, tmax, n, |t| depth(t.min(tmax - 1e-6)));
+        // Delta tracking draws two numbers per tentative collision (distance, acceptance)
+        // and one more for a flight that passes (its last draw runs past the end).
+        assert!(
+            draws <= 2 * tentatives + n as u64,
+            "{draws} draws for {tentatives} tentative collisions of {n} flights"
+        );
     }
 
     #[test]
