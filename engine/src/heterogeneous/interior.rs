@@ -8,13 +8,19 @@ use crate::stats::VolumeEvent;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
 use risotto_systems::grid::{Dda, MajorantSegment};
+use risotto_systems::medium::channel_pdf;
 use risotto_systems::ray_marching::{
     ray_marching_free_flight, ray_marching_transmittance, unbiased_ray_marching,
 };
 use risotto_systems::sampler::PathSampler;
+use risotto_systems::spectral_tracking::{
+    delta_tracking_emitting_rgb, delta_tracking_transmittance_rgb, ratio_tracking_emitting_rgb,
+    ratio_tracking_rgb, ray_marching_transmittance_rgb, spectral_tracking_emitting,
+    unbiased_ray_marching_rgb, RgbTransmittance,
+};
 use risotto_systems::tracking::{
     delta_tracking, delta_tracking_emitting, delta_tracking_transmittance, ratio_tracking,
-    ratio_tracking_emitting, residual_ratio_tracking, Transmittance,
+    ratio_tracking_emitting, residual_ratio_tracking, FreeFlight, Transmittance,
 };
 
 /// The heterogeneous medium's volume integrator, bound to the bundle's shading context (which
@@ -65,8 +71,9 @@ impl Iterator for EmissiveSegments<'_> {
 }
 
 impl HeterogeneousInterior<'_> {
-    /// The majorant segments of the grid-space ray `(o, d)` on `[0, tmax]`, for an emissive
-    /// medium ([`EmissiveSegments`]).
+    /// The majorant segments of the grid-space ray `(o, d)` on `[0, tmax]`, raised where an
+    /// emissive medium emits ([`EmissiveSegments`]); for a medium that does not emit, the
+    /// density's segments scaled to extinction (a floor of 0 raises nothing).
     fn emissive_segments(&self, o: Vec3, d: Vec3, tmax: f32) -> EmissiveSegments<'_> {
         let m = self.medium;
         let res = m.majorants.res();
@@ -79,7 +86,7 @@ impl HeterogeneousInterior<'_> {
             .map(|a| extent[a] / res[a] as f32)
             .filter(|w| *w > 0.0 && w.is_finite())
             .fold(0.0f32, f32::max);
-        let floor = if width > 0.0 {
+        let floor = if width > 0.0 && m.emits() {
             (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
         } else {
             0.0
@@ -93,7 +100,7 @@ impl HeterogeneousInterior<'_> {
         EmissiveSegments {
             density: m.majorants.traverse(o, d, 0.0, tmax),
             emission,
-            scale: m.scale,
+            scale: m.max_scale(),
             floor,
         }
     }
@@ -105,8 +112,10 @@ impl HeterogeneousInterior<'_> {
         match &m.emission {
             None => Rgb::BLACK,
             Some(HeterogeneousEmission::FollowsDensity(c)) => {
-                let density = if m.scale > 0.0 {
-                    sigma_t / m.scale
+                // sigma_t is the densest channel's (module docs), max_scale * density.
+                let smax = m.max_scale();
+                let density = if smax > 0.0 {
+                    sigma_t / smax
                 } else {
                     m.density.lookup(uvw)
                 };
@@ -125,29 +134,37 @@ impl HeterogeneousInterior<'_> {
         length: f32,
         tracking: Tracking,
         s: &mut PathSampler,
-    ) -> (Transmittance, Rgb) {
+    ) -> (RgbTransmittance, Rgb) {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
         let segs = self.emissive_segments(o, d, length);
-        let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
+        let smax = m.max_scale();
+        let sigma = |t: f32| smax * m.density.lookup(o + d * t);
         let emission = |t: f32, sigma_t: f32| self.emission_at(o + d * t, sigma_t);
         let start = s.dimension;
         let rand = || s.next_1d();
         // The ray-marching estimators gather no emission: emissive media ratio-track.
-        let r = match tracking {
-            Tracking::Ratio | Tracking::RayMarching | Tracking::UnbiasedRayMarching => {
-                ratio_tracking_emitting(segs, sigma, emission, rand, false)
+        let residual = tracking == Tracking::Residual;
+        let r = if m.is_chromatic() {
+            let k = m.channel_ratios();
+            match tracking {
+                Tracking::Delta => delta_tracking_emitting_rgb(segs, sigma, k, emission, rand),
+                _ => ratio_tracking_emitting_rgb(segs, sigma, k, emission, rand, residual),
             }
-            Tracking::Residual => ratio_tracking_emitting(segs, sigma, emission, rand, true),
-            Tracking::Delta => {
-                let (f, e) = delta_tracking_emitting(segs, sigma, emission, rand);
-                let t = Transmittance {
-                    value: if f.collided { 0.0 } else { 1.0 },
-                    nulls: f.nulls + f.collided as u32,
-                    violations: f.violations,
-                };
-                (t, e)
-            }
+        } else {
+            let (t, e) = match tracking {
+                Tracking::Delta => {
+                    let (f, e) = delta_tracking_emitting(segs, sigma, emission, rand);
+                    let t = Transmittance {
+                        value: if f.collided { 0.0 } else { 1.0 },
+                        nulls: f.nulls + f.collided as u32,
+                        violations: f.violations,
+                    };
+                    (t, e)
+                }
+                _ => ratio_tracking_emitting(segs, sigma, emission, rand, residual),
+            };
+            (grey(t), e)
         };
         align(s, start);
         r
@@ -177,7 +194,7 @@ impl HeterogeneousInterior<'_> {
         })
     }
 
-    /// Transmittance of one world-space segment with `tracking`.
+    /// Transmittance of one world-space segment with `tracking`, per channel.
     fn segment_transmittance(
         &self,
         o: Vec3,
@@ -185,30 +202,57 @@ impl HeterogeneousInterior<'_> {
         length: f32,
         tracking: Tracking,
         s: &mut PathSampler,
-    ) -> Transmittance {
+    ) -> RgbTransmittance {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
+        let smax = m.max_scale();
         let segs = || {
             m.majorants
                 .traverse(o, d, 0.0, length)
-                .map(|g| g.scaled(m.scale))
+                .map(|g| g.scaled(smax))
         };
-        let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
+        let sigma = |t: f32| smax * m.density.lookup(o + d * t);
         let start = s.dimension;
         let rand = || s.next_1d();
-        let r = match tracking {
-            Tracking::Ratio => ratio_tracking(segs(), sigma, rand),
-            Tracking::Residual => residual_ratio_tracking(segs(), sigma, rand),
-            Tracking::Delta => delta_tracking_transmittance(segs(), sigma, rand),
-            Tracking::RayMarching => {
-                ray_marching_transmittance(segs(), sigma, rand, self.march_step())
+        let r = if m.is_chromatic() {
+            // One grey majorant (the densest channel's), three running estimates
+            // (risotto_systems::spectral_tracking).
+            let k = m.channel_ratios();
+            match tracking {
+                Tracking::Ratio => ratio_tracking_rgb(segs(), sigma, k, rand, false),
+                Tracking::Residual => ratio_tracking_rgb(segs(), sigma, k, rand, true),
+                Tracking::Delta => delta_tracking_transmittance_rgb(segs(), sigma, k, rand),
+                Tracking::RayMarching => {
+                    ray_marching_transmittance_rgb(segs(), sigma, k, rand, self.march_step())
+                }
+                Tracking::UnbiasedRayMarching => {
+                    unbiased_ray_marching_rgb(segs, sigma, k, rand, self.march_step())
+                }
             }
-            Tracking::UnbiasedRayMarching => {
-                unbiased_ray_marching(segs, sigma, rand, self.march_step())
-            }
+        } else {
+            grey(match tracking {
+                Tracking::Ratio => ratio_tracking(segs(), sigma, rand),
+                Tracking::Residual => residual_ratio_tracking(segs(), sigma, rand),
+                Tracking::Delta => delta_tracking_transmittance(segs(), sigma, rand),
+                Tracking::RayMarching => {
+                    ray_marching_transmittance(segs(), sigma, rand, self.march_step())
+                }
+                Tracking::UnbiasedRayMarching => {
+                    unbiased_ray_marching(segs, sigma, rand, self.march_step())
+                }
+            })
         };
         align(s, start);
         r
+    }
+}
+
+/// A grey estimate as the same value in every channel.
+fn grey(t: Transmittance) -> RgbTransmittance {
+    RgbTransmittance {
+        value: Rgb::splat(t.value),
+        nulls: t.nulls,
+        violations: t.violations,
     }
 }
 
@@ -237,12 +281,56 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let tracking = services.techniques.tracking.unwrap_or(m.tracking);
         let step = self.march_step();
         let emits = m.emits();
+        let smax = m.max_scale();
+        // A chromatic medium's flights carry per-channel weights (spectral MIS); a grey one's
+        // are 1 on passing and the albedo at a collision, as before.
+        let chromatic = m.is_chromatic();
+        let k = m.channel_ratios();
+        let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
             let start = s.dimension;
-            let sigma = |t: f32| m.scale * m.density.lookup(o + d * t);
-            let f = if emits {
+            let sigma = |t: f32| smax * m.density.lookup(o + d * t);
+            let f = if chromatic {
+                // One-sample spectral MIS over the channels, in proportion to the path's
+                // throughput (as the homogeneous medium), or one channel for comparison.
+                let p = match m.single_channel {
+                    Some(c) => {
+                        let mut p = [0.0; 3];
+                        p[c.min(2)] = 1.0;
+                        p
+                    }
+                    None => channel_pdf(rays.throughput[i]),
+                };
+                // Ray-marched free flights are grey only: a chromatic medium's flights are
+                // always tracked (module docs). An emissive one gathers pbrt-v4's estimate at
+                // the flight's running per-channel weight.
+                let (f, e) = spectral_tracking_emitting(
+                    self.emissive_segments(o, d, tmax[i]),
+                    sigma,
+                    k,
+                    p,
+                    |t, sigma_t| {
+                        if emits {
+                            self.emission_at(o + d * t, sigma_t)
+                        } else {
+                            Rgb::BLACK
+                        }
+                    },
+                    || s.next_1d(),
+                );
+                if emits {
+                    out.emitted.push(i as u32, e);
+                }
+                weight[i] = f.weight;
+                FreeFlight {
+                    t: f.t,
+                    collided: f.collided,
+                    nulls: f.nulls,
+                    violations: f.violations,
+                }
+            } else if emits {
                 // pbrt-v4's estimator: j / majorant at every tentative collision (module
                 // docs), at the path's weight, which delta tracking keeps at 1.
                 let (f, e) = delta_tracking_emitting(
@@ -257,7 +345,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 let segs = m
                     .majorants
                     .traverse(o, d, 0.0, tmax[i])
-                    .map(|g| g.scaled(m.scale));
+                    .map(|g| g.scaled(smax));
                 if tracking == Tracking::RayMarching {
                     ray_marching_free_flight(segs, sigma, || s.next_1d(), step)
                 } else {
@@ -269,6 +357,16 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             violations += f.violations as u64;
             scattered[i] = f.collided;
             t[i] = f.t;
+        }
+        if chromatic {
+            // Passing rays' hits and misses carry the pass weight (the scattering rays'
+            // leave below).
+            for k in p0..out.points.len() {
+                out.points.transmission[k] *= weight[out.points.ray_id[k] as usize];
+            }
+            for k in m0..out.misses.len() {
+                out.miss_transmission[k] *= weight[out.misses[k] as usize];
+            }
         }
         let stats = &mut *services.ictx.stats;
         stats.majorant_violations += violations;
@@ -282,8 +380,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         if events == 0 {
             return;
         }
-        // Passing rays keep their hits (weight 1); the hits and misses of rays that scatter
-        // leave.
+        // Passing rays keep their hits (weight 1, or the chromatic pass weight); the hits and
+        // misses of rays that scatter leave.
         let keep: Vec<bool> = (p0..out.points.len())
             .map(|k| !scattered[out.points.ray_id[k] as usize])
             .collect();
@@ -298,7 +396,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         out.misses.truncate(j);
         out.miss_transmission.truncate(j);
-        // The scattering points: a volume-sampling context at P = o + t d, weight albedo.
+        // The scattering points: a volume-sampling context at P = o + t d, weight albedo
+        // (times the flight's per-channel weight, for a chromatic medium).
         let own = (self.ctx.num_points() != n).then(|| {
             let mut pts = ShadingPoints::with_capacity(n);
             for i in 0..n {
@@ -326,7 +425,12 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             .collect();
         v.set_builtin(Builtin::P, &p);
         v.set_vlen(&t);
-        v.set_transmission(&vec![m.albedo; n]);
+        let w: Vec<Rgb> = if chromatic {
+            weight.iter().map(|&w| w * m.albedo).collect()
+        } else {
+            vec![m.albedo; n]
+        };
+        v.set_transmission(&w);
         v.end_volume_sampling(&scattered, out);
     }
 
@@ -351,7 +455,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     tracking,
                     &mut samplers[i],
                 );
-                trans[i] = Rgb::splat(r.value);
+                trans[i] = r.value;
                 ictx.count_majorant_violations(r.violations as u64);
                 emission[i] = e;
             }
@@ -365,7 +469,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 tracking,
                 &mut samplers[i],
             );
-            trans[i] = Rgb::splat(r.value);
+            trans[i] = r.value;
             ictx.count_majorant_violations(r.violations as u64);
         }
         emission.fill(Rgb::BLACK);

@@ -1,13 +1,14 @@
-//! The heterogeneous scattering medium: extinction `sigma_t(p) = scale * density(p)` from a
-//! density grid placed in the shape's bounds, a constant single-scattering albedo and a
-//! phase function (scene files: `interior = { type = "heterogeneous", ... }`,
+//! The heterogeneous scattering medium: extinction `sigma_t(p) = scale * density(p)` (per
+//! channel: `scale` may be a colour) from a density grid placed in the shape's bounds, a
+//! constant single-scattering albedo and a phase function (scene files: `interior = { type = "heterogeneous", ... }`,
 //! `docs/scene-format.md`).
 //!
 //! # Estimators
 //! - **Free flights** ([`HeterogeneousInterior::nearest_hits`]): delta tracking (Woodcock)
 //!   against the **majorant grid** ([`MajorantGrid`], `majorant_grid` cells per axis, 16 by
 //!   default; 1 = one global majorant as in Mitsuba), traversed with a 3D DDA so that each
-//!   tentative collision is sampled from its own cell's bound. A real collision scatters
+//!   tentative collision is sampled from its own cell's bound (spectral tracking for a
+//!   chromatic scale, see Spectral handling). A real collision scatters
 //!   with weight `albedo` (`sigma_s / sigma_t`, the same convention as the homogeneous
 //!   medium's [`FreeFlight`](risotto_systems::medium::FreeFlight) weight); the points go to
 //!   the global integrator as a [`ShadingMode::VolumeScatter`] group (multiple scattering;
@@ -49,11 +50,27 @@
 //! before (the same bounds, the same random numbers).
 //!
 //! # Spectral handling
-//! The density scale is grey (one `sigma_t` for R, G and B); the albedo may be a colour.
-//! With a grey extinction every channel shares the free-flight distribution, so the
-//! estimator's weights are `albedo` at a collision and 1 on passing: bounded, and no colour
-//! noise. A chromatic scale (spectral tracking) is not implemented yet.
-
+//! The albedo may be a colour, and so may the density `scale`.
+//! - **Grey scale** (one `sigma_t` for R, G and B): every channel shares the free-flight
+//!   distribution, so the estimators' weights are `albedo` at a collision and 1 on passing:
+//!   bounded, and no colour noise.
+//! - **Chromatic scale** (`scale = [r, g, b]`): `sigma_t,c = k_c * max(scale) * density`,
+//!   `k = scale / max(scale)`, and every estimator tracks against one **grey majorant**,
+//!   the largest channel of the scale times the majorant grid's cell bound
+//!   ([`risotto_systems::spectral_tracking`]). Free flights use **spectral tracking with
+//!   one-sample spectral MIS** (Miller, Georgiev and Jarosz 2019, sec. 5; Mitsuba 3's
+//!   `volpathmis`): channel probabilities in proportion to the ray's throughput (as the
+//!   homogeneous medium's [`channel_pdf`](risotto_systems::medium::channel_pdf)), each
+//!   tentative collision real with the channel-weighted probability, and the flight's
+//!   per-channel weight `f_c / p` (at most `1 / p_c`) multiplies the passing ray's hit or the
+//!   scattering point's `albedo`. Emission is gathered at that running weight. Ray-marched
+//!   free flights are grey only: with `tracking = "ray_marching"` a chromatic medium still
+//!   tracks its free flights (and marches its shadow rays). Shadow rays: ratio and residual
+//!   ratio tracking with one sequence of tentative collisions and three running products,
+//!   delta tracking as a spectral-MIS flight's pass weight (equal channel probabilities:
+//!   each channel unbiased, at most 3), and the marching estimators on one shared march per
+//!   channel. A grey scale keeps exactly the grey estimators (the same random numbers and
+//!   images).
 //!
 //! # Files
 //! `parse.rs` reads the scene table, `interior.rs` is the volume integrator (free flights,
@@ -133,8 +150,9 @@ pub struct HeterogeneousMedium {
     pub density: Arc<DensityGrid>,
     /// Bounds of `density` over coarse cells (density units).
     pub majorants: Arc<MajorantGrid>,
-    /// `sigma_t = scale * density`, per world unit, >= 0.
-    pub scale: f32,
+    /// `sigma_t = scale * density` per channel, per world unit, >= 0 (grey: the same in
+    /// every channel; chromatic: spectral tracking, see the module docs).
+    pub scale: Rgb,
     /// Single-scattering albedo `sigma_s / sigma_t` per channel, in [0, 1].
     pub albedo: Rgb,
     /// Phase function.
@@ -146,6 +164,13 @@ pub struct HeterogeneousMedium {
     pub march_step: Option<f32>,
     /// What the medium emits; `None` (the default): nothing.
     pub emission: Option<HeterogeneousEmission>,
+    /// A diagnostic, not a scene key: `Some(c)` makes a chromatic medium's free flights
+    /// track channel `c` alone (channel probabilities one-hot) instead of spectral MIS over
+    /// the throughput. Unbiased where that channel's extinction is nowhere the largest-and-
+    /// tight one, but the other channels' weights grow without bound (`(k_c / k_hero)^n`
+    /// after `n` scattering events): the fireflies spectral MIS removes, for tests that
+    /// compare the two. `None` (the default): spectral MIS.
+    pub single_channel: Option<usize>,
 }
 
 /// What a heterogeneous medium emits: its **emission coefficient** `j(p)`, radiance per
@@ -175,7 +200,8 @@ pub const EMISSION_COLLISIONS_PER_CELL: f32 = 1.0;
 
 impl HeterogeneousMedium {
     /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
-    /// `[1, voxels]` per axis).
+    /// `[1, voxels]` per axis) and a grey `scale` ([`HeterogeneousMedium::with_scale`] makes
+    /// it chromatic).
     pub fn new(
         density: DensityGrid,
         majorant_cells: usize,
@@ -189,13 +215,45 @@ impl HeterogeneousMedium {
         HeterogeneousMedium {
             density: Arc::new(density),
             majorants: Arc::new(majorants),
-            scale,
+            scale: Rgb::splat(scale),
             albedo,
             phase,
             tracking,
             march_step: None,
             emission: None,
+            single_channel: None,
         }
+    }
+
+    /// The medium with the density scale `scale` per channel (`sigma_t,c = scale_c *
+    /// density`).
+    pub fn with_scale(mut self, scale: Rgb) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    /// The extinction scale of the densest channel: the grey majorant is this times the
+    /// majorant grid's density bound (for a grey scale, the scale itself).
+    pub fn max_scale(&self) -> f32 {
+        self.scale.max_channel()
+    }
+
+    /// `k = scale / max_scale` (every channel in `[0, 1]`, `(1, 1, 1)` for a grey or zero
+    /// scale): `sigma_t,c = k_c * max_scale * density`
+    /// ([`risotto_systems::spectral_tracking`]'s convention).
+    pub fn channel_ratios(&self) -> Rgb {
+        let s = self.max_scale();
+        if self.is_chromatic() {
+            self.scale * (1.0 / s)
+        } else {
+            Rgb::WHITE
+        }
+    }
+
+    /// Whether the channels' scales differ (spectral tracking), rather than one grey scale.
+    pub fn is_chromatic(&self) -> bool {
+        let c = self.scale;
+        !(c.r == c.g && c.g == c.b) && c.max_channel() > 0.0
     }
 
     /// The medium emitting `j(p) = colour * density(p)` (black: no emission).

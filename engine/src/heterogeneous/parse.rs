@@ -56,12 +56,23 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             ))
         }
     };
-    let scale = t.f32_where("scale", Some(1.0), "must be >= 0", |v| v >= 0.0)?;
+    // A number (grey) or a colour (chromatic: spectral tracking), like every colour key.
+    let scale = t.rgb_where(
+        "scale",
+        Some(Rgb::WHITE),
+        "must be >= 0 and finite in every channel",
+        |c| c.min_channel() >= 0.0 && c.is_finite(),
+    )?;
     if !(scale * density.max()).is_finite() {
+        let shown = if scale.r == scale.g && scale.g == scale.b {
+            format!("{}", scale.r)
+        } else {
+            format!("[{}, {}, {}]", scale.r, scale.g, scale.b)
+        };
         return Err(t.error(
             Some("scale"),
             format!(
-                "scale {scale} times the grid's max {} overflows",
+                "scale {shown} times the grid's max {} overflows",
                 density.max()
             ),
         ));
@@ -97,7 +108,8 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     }
     let medium = HeterogeneousMedium {
         march_step,
-        ..HeterogeneousMedium::new(density, cells as usize, scale, albedo, phase, tracking)
+        ..HeterogeneousMedium::new(density, cells as usize, 1.0, albedo, phase, tracking)
+            .with_scale(scale)
     };
     Ok(match parse_emission(t)? {
         None => medium,
