@@ -6,7 +6,7 @@ one channel), 48 x 32 x 48 voxels (295 KB), over the unit cube of the cloud's bo
   base and billowing on top -- whose edge is eroded by fBm value noise (four octaves), so
   the density rises from 0 at a wispy, noisy boundary to about 1 in the core.
 
-The noise is deterministic lattice hashing (no random module), so the file is the same on
+The noise is gen_flame.py's deterministic lattice hashing (no random module), so the file is the same on
 every machine; pure Python, no numpy. scenes/cloud.toml gives the extinction as
 sigma_t = scale * density with a colour `scale` (a chromatic medium, spectral tracking).
 
@@ -16,6 +16,10 @@ import math
 import os
 import struct
 import sys
+
+# The lattice noise and smoothstep of the flame's generator beside this script.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from gen_flame import smoothstep, value_noise  # noqa: E402
 
 NX, NY, NZ = 48, 32, 48
 
@@ -31,30 +35,6 @@ PUFFS = [
 ]
 
 
-def hash3(ix, iy, iz, seed):
-    """A deterministic pseudo-random number in [0, 1) per lattice point."""
-    h = (ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791) ^ (seed * 2654435761)
-    h &= 0xFFFFFFFF
-    h = ((h >> 16) ^ h) * 0x45D9F3B & 0xFFFFFFFF
-    h = ((h >> 16) ^ h) * 0x45D9F3B & 0xFFFFFFFF
-    h = (h >> 16) ^ h
-    return (h & 0xFFFFFF) / float(1 << 24)
-
-
-def value_noise(x, y, z, seed):
-    """Trilinearly interpolated lattice noise with smoothstep weights, in [0, 1)."""
-    x0, y0, z0 = math.floor(x), math.floor(y), math.floor(z)
-    fx, fy, fz = x - x0, y - y0, z - z0
-    sx, sy, sz = (f * f * (3 - 2 * f) for f in (fx, fy, fz))
-    acc = 0.0
-    for dz in (0, 1):
-        for dy in (0, 1):
-            for dx in (0, 1):
-                w = (sx if dx else 1 - sx) * (sy if dy else 1 - sy) * (sz if dz else 1 - sz)
-                acc += w * hash3(x0 + dx, y0 + dy, z0 + dz, seed)
-    return acc
-
-
 def fbm(x, y, z, seed, octaves=4):
     """fBm: octaves of value noise at doubling frequency and halving amplitude, in [0, 1)."""
     acc, amp, norm = 0.0, 0.5, 0.0
@@ -64,11 +44,6 @@ def fbm(x, y, z, seed, octaves=4):
         norm += amp
         amp *= 0.5
     return acc / norm
-
-
-def smoothstep(e0, e1, x):
-    t = min(max((x - e0) / (e1 - e0), 0.0), 1.0)
-    return t * t * (3 - 2 * t)
 
 
 def cloud(u, v, w):
