@@ -166,10 +166,11 @@ pub struct HeterogeneousMedium {
     pub emission: Option<HeterogeneousEmission>,
     /// A diagnostic, not a scene key: `Some(c)` makes a chromatic medium's free flights
     /// track channel `c` alone (channel probabilities one-hot) instead of spectral MIS over
-    /// the throughput. Unbiased where that channel's extinction is nowhere the largest-and-
-    /// tight one, but the other channels' weights grow without bound (`(k_c / k_hero)^n`
-    /// after `n` scattering events): the fireflies spectral MIS removes, for tests that
-    /// compare the two. `None` (the default): spectral MIS.
+    /// the throughput. Unbiased when the tracked channel's null-collision probability is
+    /// positive wherever another channel's is (e.g. it is the thinnest channel), but the
+    /// other channels' weights grow without bound (`(k_c / k_hero)^n` after `n` scattering
+    /// events): the fireflies spectral MIS removes, for tests that compare the two. `None`
+    /// (the default): spectral MIS.
     pub single_channel: Option<usize>,
 }
 
