@@ -2,6 +2,9 @@
 //! must render the homogeneous medium's image, an albedo-1 medium is a white furnace, bad
 //! grids and parameters are located errors, and features and stats show what ran.
 
+mod common;
+
+use common::constant_vol;
 use risotto::engine::load::{scene_from_desc, LoadError, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
@@ -21,45 +24,9 @@ fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
-/// A unit sphere of medium (index-matched boundary) at the origin seen whole by a 16 x 16
-/// camera, lit by a sun (shadow rays cross the medium) and an environment; `interior` is
-/// the interior table's text.
+/// The unit ball of medium of [`common::medium_ball_scene`], seen by a 16 x 16 camera.
 fn sphere_scene(interior: &str, spp: u32, seed: u64, sun: f32) -> String {
-    format!(
-        r#"
-[render]
-width = 16
-height = 16
-spp = {spp}
-max_depth = -1
-seed = {seed}
-
-[camera]
-fov = 40
-from = [0, 0, 4]
-to = [0, 0, 0]
-
-[materials.medium]
-type = "interface"
-interior = {interior}
-
-[[shapes]]
-name = "ball"
-type = "sphere"
-material = "medium"
-center = [0, 0, 0]
-radius = 1
-
-[[lights]]
-type = "environment"
-radiance = 0.5
-
-[[lights]]
-type = "distant"
-direction = [1, -1, -0.5]
-irradiance = {sun}
-"#
-    )
+    common::medium_ball_scene(interior, 16, spp, seed, sun)
 }
 
 fn load(dir: &Path, text: &str) -> Result<CompiledScene, LoadError> {
@@ -80,21 +47,6 @@ fn mean_se(out: &RenderOutput) -> (f64, f64) {
     let m = out.beauty.pixels.iter().map(|p| p.g as f64).sum::<f64>() / n;
     let v = out.variance.pixels.iter().map(|p| p.g as f64).sum::<f64>() / (n * n);
     (m, v.sqrt())
-}
-
-/// Writes a Mitsuba `.vol` of `dims` voxels, all `value`.
-fn constant_vol(path: &Path, dims: [i32; 3], value: f32) {
-    let mut b = b"VOL\x03".to_vec();
-    for v in [1, dims[0], dims[1], dims[2], 1] {
-        b.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
-        b.extend_from_slice(&v.to_le_bytes());
-    }
-    for _ in 0..dims.iter().product::<i32>() {
-        b.extend_from_slice(&value.to_le_bytes());
-    }
-    std::fs::write(path, b).unwrap();
 }
 
 #[test]

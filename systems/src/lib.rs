@@ -24,6 +24,7 @@ pub mod ray;
 pub mod ray_marching;
 pub mod sampler;
 mod simd8;
+pub mod spectral_tracking;
 pub mod tracking;
 
 /// Mean and standard error of `n` estimates `f()` (unit tests of the estimators).

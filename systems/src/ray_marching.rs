@@ -40,7 +40,9 @@
 
 use crate::grid::MajorantSegment;
 use crate::medium::sample_optical_depth;
+use crate::spectral_tracking::unbiased_ray_marching_rgb;
 use crate::tracking::{FreeFlight, Transmittance};
+use risotto_components::Rgb;
 
 /// The most steps one majorant segment is cut into (a tiny `step` on a long segment marches
 /// this many steps of `len / MAX_STEPS_PER_SEGMENT`): bounds the work of one march.
@@ -66,15 +68,15 @@ fn positive(x: f32) -> bool {
 
 /// One march along a ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct March {
+pub(crate) struct March {
     /// The optical-depth estimate `X`.
-    depth: f32,
+    pub(crate) depth: f32,
     /// `sum h |Delta sigma_t|` between neighbouring steps of a segment.
-    variation: f32,
+    pub(crate) variation: f32,
     /// `sigma_t` lookups.
-    lookups: u32,
+    pub(crate) lookups: u32,
     /// Lookups above their segment's majorant.
-    violations: u32,
+    pub(crate) violations: u32,
 }
 
 /// The step count and length of a segment of length `len > 0`.
@@ -102,7 +104,7 @@ fn constant(seg: &MajorantSegment) -> Option<f32> {
 }
 
 /// Marches the segments with jitter `u`.
-fn march<I: IntoIterator<Item = MajorantSegment>>(
+pub(crate) fn march<I: IntoIterator<Item = MajorantSegment>>(
     segments: I,
     sigma_t: &mut impl FnMut(f32) -> f32,
     step: f32,
@@ -151,36 +153,20 @@ pub fn ray_marching_transmittance<I: IntoIterator<Item = MajorantSegment>>(
 }
 
 /// The unbiased ray-marching transmittance estimator (module docs): a pivot march, then
-/// independent marches for the terms of the power series the roulette keeps.
+/// independent marches for the terms of the power series the roulette keeps. (The grey case
+/// of [`crate::spectral_tracking::unbiased_ray_marching_rgb`], whose arithmetic with
+/// `k = (1, 1, 1)` is exactly this estimator's; the marches dominate its cost.)
 pub fn unbiased_ray_marching<I: IntoIterator<Item = MajorantSegment>>(
     segments: impl Fn() -> I,
-    mut sigma_t: impl FnMut(f32) -> f32,
-    mut rand: impl FnMut() -> f32,
+    sigma_t: impl FnMut(f32) -> f32,
+    rand: impl FnMut() -> f32,
     step: f32,
 ) -> Transmittance {
-    let pivot = march(segments(), &mut sigma_t, step, rand());
-    let (mut lookups, mut violations) = (pivot.lookups, pivot.violations);
-    let rho = (2.0 * pivot.variation).clamp(RHO_MIN, RHO_MAX);
-    let (mut sum, mut term) = (1.0f32, 1.0f32);
-    for k in 1..=MAX_ORDER {
-        let q = (rho / k as f32).min(1.0);
-        if q < 1.0 && rand() >= q {
-            break;
-        }
-        let x = march(segments(), &mut sigma_t, step, rand());
-        lookups += x.lookups;
-        violations += x.violations;
-        term *= (pivot.depth - x.depth) / (k as f32 * q);
-        sum += term;
-        if term == 0.0 {
-            // Every later term is 0 too (a constant ray: each march is exact).
-            break;
-        }
-    }
+    let t = unbiased_ray_marching_rgb(segments, sigma_t, Rgb::WHITE, rand, step);
     Transmittance {
-        value: (-pivot.depth).exp() * sum,
-        nulls: lookups,
-        violations,
+        value: t.value.r,
+        nulls: t.nulls,
+        violations: t.violations,
     }
 }
 

@@ -78,7 +78,7 @@ pub struct FreeFlight {
 /// `[seg.t0, seg.t1)`, continuing the ray's carried `depth`: `visit(t, s, rand)` gets the distance, `sigma_t` there and the random
 /// source; it returns `false` to stop the walk (and `tentative` returns `Some(t)`). Counts
 /// majorant violations (`sigma_t > seg.majorant`) into `violations`.
-fn tentative<R: FnMut() -> f32>(
+pub(crate) fn tentative<R: FnMut() -> f32>(
     seg: &MajorantSegment,
     bound: f32,
     sigma_t: &mut impl FnMut(f32) -> f32,

@@ -308,3 +308,59 @@ pub fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
     );
     nodes
 }
+
+/// Writes a Mitsuba `.vol` of `dims` voxels, all `value`.
+pub fn constant_vol(path: &std::path::Path, dims: [i32; 3], value: f32) {
+    let mut b = b"VOL\x03".to_vec();
+    for v in [1, dims[0], dims[1], dims[2], 1] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for _ in 0..dims.iter().product::<i32>() {
+        b.extend_from_slice(&value.to_le_bytes());
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+/// A scene file's text: a unit sphere of medium (index-matched boundary) at the origin seen
+/// whole by an `n x n` camera, lit by a sun of irradiance `sun` (shadow rays cross the
+/// medium) and an environment of 0.5; `interior` is the interior table's text.
+pub fn medium_ball_scene(interior: &str, n: u32, spp: u32, seed: u64, sun: f32) -> String {
+    format!(
+        r#"
+[render]
+width = {n}
+height = {n}
+spp = {spp}
+max_depth = -1
+seed = {seed}
+
+[camera]
+fov = 40
+from = [0, 0, 4]
+to = [0, 0, 0]
+
+[materials.medium]
+type = "interface"
+interior = {interior}
+
+[[shapes]]
+name = "ball"
+type = "sphere"
+material = "medium"
+center = [0, 0, 0]
+radius = 1
+
+[[lights]]
+type = "environment"
+radiance = 0.5
+
+[[lights]]
+type = "distant"
+direction = [1, -1, -0.5]
+irradiance = {sun}
+"#
+    )
+}

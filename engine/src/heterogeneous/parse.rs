@@ -1,0 +1,214 @@
+//! Reading `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
+
+use super::{HeterogeneousMedium, Tracking, DEFAULT_MAJORANT_CELLS, TRACKINGS};
+use crate::grid_file::{is_vdb, read_grid_named};
+use crate::load::phase_function;
+use crate::scene_file::{MaterialParams, SceneError};
+use risotto_components::Rgb;
+use risotto_systems::grid::DensityGrid;
+use risotto_systems::phase::PhaseFunction;
+
+/// Reads `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
+pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneError> {
+    t.deny_unknown(&[
+        "type",
+        "density",
+        "scale",
+        "albedo",
+        "phase",
+        "tracking",
+        "march_step",
+        "majorant_grid",
+        "emission",
+    ])?;
+    let d = t
+        .table("density")?
+        .ok_or_else(|| t.error(None, "a heterogeneous interior needs `density = { grid = \"file.vol\" }` (or `{ constant = .. }`)"))?;
+    d.deny_unknown(&["grid", "header", "name", "constant"])?;
+    let density = match (d.path("grid")?, d.has("constant")) {
+        (Some(path), false) => {
+            let header = d.path("header")?;
+            let name = if d.has("name") {
+                Some(d.string("name", None)?)
+            } else {
+                None
+            };
+            grid_file(&d, &path, header, name)?
+        }
+        (None, true) => {
+            if d.has("header") {
+                return Err(d.error(Some("header"), "`header` belongs to a raw `grid` file"));
+            }
+            let c = d.f32_where("constant", None, "must be >= 0", |v| v >= 0.0)?;
+            DensityGrid::constant([1, 1, 1], c)
+                .map_err(|e| d.error(Some("constant"), e.to_string()))?
+        }
+        (Some(_), true) => {
+            return Err(d.error(
+                Some("constant"),
+                "give either `grid` or `constant`, not both",
+            ))
+        }
+        (None, false) => {
+            return Err(d.error(
+                None,
+                "`density` needs `grid = \"file\"` or `constant = number`",
+            ))
+        }
+    };
+    // A number (grey) or a colour (chromatic: spectral tracking), like every colour key.
+    let scale = t.rgb_where(
+        "scale",
+        Some(Rgb::WHITE),
+        "must be >= 0 and finite in every channel",
+        |c| c.min_channel() >= 0.0 && c.is_finite(),
+    )?;
+    if !(scale * density.max()).is_finite() {
+        let shown = if scale.r == scale.g && scale.g == scale.b {
+            format!("{}", scale.r)
+        } else {
+            format!("[{}, {}, {}]", scale.r, scale.g, scale.b)
+        };
+        return Err(t.error(
+            Some("scale"),
+            format!(
+                "scale {shown} times the grid's max {} overflows",
+                density.max()
+            ),
+        ));
+    }
+    let albedo = t.rgb_where("albedo", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
+        c.min_channel() >= 0.0 && c.max_channel() <= 1.0
+    })?;
+    let phase = match t.table("phase")? {
+        None => PhaseFunction::Isotropic,
+        Some(p) => phase_function(&p)?,
+    };
+    let name = t.string("tracking", Some("ratio"))?;
+    let tracking = Tracking::from_name(&name).ok_or_else(|| {
+        t.error(
+            Some("tracking"),
+            format!(
+                "unknown tracking \"{name}\" (known: {})",
+                TRACKINGS.map(Tracking::name).join(", ")
+            ),
+        )
+    })?;
+    let march_step = if t.has("march_step") {
+        Some(t.f32_where("march_step", None, "must be > 0 (world units)", |v| v > 0.0)?)
+    } else {
+        None
+    };
+    let cells = t.u32("majorant_grid", Some(DEFAULT_MAJORANT_CELLS as u32))?;
+    if cells == 0 || cells > 256 {
+        return Err(t.error(
+            Some("majorant_grid"),
+            format!("must be in [1, 256] cells per axis, got {cells}"),
+        ));
+    }
+    let medium = HeterogeneousMedium {
+        march_step,
+        ..HeterogeneousMedium::new(density, cells as usize, 1.0, albedo, phase, tracking)
+            .with_scale(scale)
+    };
+    Ok(match parse_emission(t)? {
+        None => medium,
+        Some(EmissionKey::Colour(c)) => {
+            let max = medium.density.max();
+            if !(c * max).is_finite() {
+                return Err(t.error(
+                    Some("emission"),
+                    format!("emission {c:?} times the density grid's max {max} overflows"),
+                ));
+            }
+            medium.with_emission_following_density(c)
+        }
+        Some(EmissionKey::Grid(grid, scale)) => medium.with_emission_grid(grid, scale),
+    })
+}
+
+/// Reads the grid file of a `{ grid = .., header = .., name = .. }` table `t` (density or
+/// emission): `header` only for raw files, `name` only for `.vdb` ones.
+fn grid_file(
+    t: &MaterialParams,
+    path: &std::path::Path,
+    header: Option<std::path::PathBuf>,
+    name: Option<String>,
+) -> Result<DensityGrid, SceneError> {
+    if is_vdb(path) && header.is_some() {
+        return Err(t.error(
+            Some("header"),
+            "`header` belongs to a raw `grid` file, not a .vdb",
+        ));
+    }
+    if !is_vdb(path) && name.is_some() {
+        return Err(t.error(Some("name"), "`name` picks a grid of a .vdb file"));
+    }
+    let vol = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vol"));
+    if header.is_none() && !vol && !is_vdb(path) {
+        // A raw grid's header beside it is read too.
+        t.note_file(&path.with_extension("json"));
+    }
+    read_grid_named(path, header.as_deref(), name.as_deref())
+        .map_err(|e| t.error(Some("grid"), e.to_string()))
+}
+
+/// The two forms of a heterogeneous interior's `emission` key.
+enum EmissionKey {
+    /// `emission = colour`.
+    Colour(Rgb),
+    /// `emission = { grid = "file", scale = colour }`.
+    Grid(DensityGrid, Rgb),
+}
+
+/// Reads `emission` (absent: none): a colour (`j = colour * density`) or a table
+/// `{ grid = "file.vol" | "file.raw", header = "file.json", scale = colour }`
+/// (`j = scale * grid`).
+fn parse_emission(t: &MaterialParams) -> Result<Option<EmissionKey>, SceneError> {
+    let coefficient = "every channel in [0, 1e30] (radiance per unit length; MAX_RADIANCE)";
+    let ok = |c: Rgb| {
+        c.min_channel() >= 0.0
+            && c.is_finite()
+            && c.max_channel() <= crate::scene_file::MAX_RADIANCE
+    };
+    if !t.has("emission") {
+        return Ok(None);
+    }
+    if !t.is_table("emission") {
+        return Ok(Some(EmissionKey::Colour(t.rgb_where(
+            "emission",
+            None,
+            coefficient,
+            ok,
+        )?)));
+    }
+    let e = t.table("emission")?.expect("checked: a table");
+    e.deny_unknown(&["grid", "header", "name", "scale"])?;
+    let Some(path) = e.path("grid")? else {
+        return Err(e.error(
+            None,
+            "an emission table needs `grid = \"file.vol\"` (or give `emission` as a colour: \
+             j = colour * density)",
+        ));
+    };
+    let header = e.path("header")?;
+    let name = if e.has("name") {
+        Some(e.string("name", None)?)
+    } else {
+        None
+    };
+    let grid = grid_file(&e, &path, header, name)?;
+    let scale = e.rgb_where("scale", Some(Rgb::WHITE), coefficient, ok)?;
+    if !(scale * grid.max()).is_finite() {
+        return Err(e.error(
+            Some("scale"),
+            format!(
+                "scale {scale:?} times the emission grid's max {} overflows",
+                grid.max()
+            ),
+        ));
+    }
+    Ok(Some(EmissionKey::Grid(grid, scale)))
+}
