@@ -51,7 +51,7 @@
 use crate::grid::MajorantSegment;
 use crate::medium::channel_pdf;
 use crate::ray_marching::{march, MAX_ORDER, RHO_MAX, RHO_MIN};
-use crate::tracking::tentative;
+use crate::tracking::{tentative, DepthToNext};
 use risotto_components::Rgb;
 
 /// Whether every channel of `k` is the same (a grey medium: the spectral estimators reduce
@@ -135,6 +135,7 @@ fn track(
     };
     let mut gathered = Rgb::BLACK;
     let mut w = Rgb::WHITE;
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         out.t = seg.t1;
         let mu = seg.majorant;
@@ -146,6 +147,7 @@ fn track(
             &mut sigma,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |t, s, rand| {
                 if let Some(e) = &mut emission {
                     gathered += e(t, s) * w * inv;
@@ -295,6 +297,7 @@ fn ratio_rgb(
     let mut gathered = Rgb::BLACK;
     // Per channel: int_0 k_c m over the segments so far.
     let mut control_depth = Rgb::BLACK;
+    let mut depth = DepthToNext::NONE;
     for seg in segments {
         let control = if residual {
             seg.minorant.clamp(0.0, seg.majorant.max(0.0))
@@ -312,6 +315,7 @@ fn ratio_rgb(
             &mut sigma,
             &mut rand,
             &mut out.violations,
+            &mut depth,
             |t, s, _| {
                 if let Some(e) = &mut emission {
                     let depth = depth0 + control_c * (t - seg.t0);

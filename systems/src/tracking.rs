@@ -54,11 +54,11 @@ fn advance(t: f32, rate: f32, depth: f32) -> f32 {
 /// collision instead of one more per segment crossed: a fine majorant grid then costs only
 /// its DDA steps.
 #[derive(Clone, Copy, Debug)]
-struct DepthToNext(f32);
+pub(crate) struct DepthToNext(f32);
 
 impl DepthToNext {
     /// No draw yet.
-    const NONE: DepthToNext = DepthToNext(f32::NAN);
+    pub(crate) const NONE: DepthToNext = DepthToNext(f32::NAN);
 }
 
 /// The outcome of [`delta_tracking`].
