@@ -393,7 +393,9 @@ fn eval_node(
         Node::Grid { grid, min, max } => {
             let extent = *max - *min;
             for (o, p) in out.iter_mut().zip(p) {
-                *o = Rgb::splat(grid.lookup((*p - *min) / extent));
+                // The lookup is a convex combination of voxels; the clamp keeps rounding
+                // within the grid's range, which the bounds rely on.
+                *o = Rgb::splat(grid.lookup((*p - *min) / extent).min(grid.max()));
             }
         }
         Node::Mix { a, b, t } => {

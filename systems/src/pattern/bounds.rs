@@ -4,8 +4,8 @@
 //! Every bound is conservative in floating point, not only in real arithmetic: where a node
 //! is a composition of monotone steps (gradient, remap, scale, a product in one sign
 //! quadrant), rounding is monotone too, so the node evaluated at the interval's ends bounds
-//! it evaluated anywhere inside; where it interpolates (image, grid, mix), the bound is
-//! widened by a few ulps of its magnitude.
+//! it evaluated anywhere inside; where it interpolates (grid, mix), the bound is widened by
+//! a few ulps of its magnitude, within a hull the node clamps its values to.
 
 use super::{cell_parity, gradient_at, mix, remap, Axis, Node, PatternGraph, Space};
 use crate::grid::DensityGrid;
@@ -83,11 +83,14 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
                 gradient_at(c1, *from, *to, *a, *b),
             )
         }
-        Node::Image(texture) => widen(texture.range()),
+        Node::Image(texture) => texture.range(),
         Node::Grid { grid, min, max } => {
             let extent = *max - *min;
             let (g0, g1) = grid_range(grid, (lo - *min) / extent, (hi - *min) / extent);
-            widen((Rgb::splat(g0), Rgb::splat(g1)))
+            // Widened for the lerps' rounding, within the grid's range [0, max], to which
+            // the node clamps.
+            let (l, h) = widen((Rgb::splat(g0), Rgb::splat(g1)));
+            (l.map(|v| v.max(0.0)), h.map(|v| v.min(grid.max())))
         }
         Node::Mix { a, b, t } => {
             let (a, b, t) = (at(*a), at(*b), at(*t));

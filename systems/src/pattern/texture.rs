@@ -65,8 +65,8 @@ impl Texture {
         self.texels[x + self.width * y]
     }
 
-    /// Per-channel minimum and maximum texel: the texture's range (bilinear weights are
-    /// convex).
+    /// Per-channel minimum and maximum texel: the range of [`Texture::lookup`] (bilinear
+    /// weights are convex, and the lookup clamps rounding into it).
     pub fn range(&self) -> (Rgb, Rgb) {
         (self.min, self.max)
     }
@@ -79,7 +79,15 @@ impl Texture {
         let lerp = |a: Rgb, b: Rgb, t: f32| a + (b - a) * t;
         let top = lerp(self.texel(x0, y0), self.texel(x1, y0), fx);
         let bottom = lerp(self.texel(x0, y1), self.texel(x1, y1), fx);
-        lerp(top, bottom, fy)
+        // The weights are convex, so the value lies in the texels' range; the clamp keeps
+        // rounding from leaving it (the pattern bounds rely on it).
+        let (lo, hi) = (self.min, self.max);
+        let c = lerp(top, bottom, fy);
+        Rgb::new(
+            c.r.max(lo.r).min(hi.r),
+            c.g.max(lo.g).min(hi.g),
+            c.b.max(lo.b).min(hi.b),
+        )
     }
 }
 
