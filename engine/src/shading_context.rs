@@ -527,6 +527,52 @@ mod tests {
     }
 
     #[test]
+    fn a_pattern_parameter_is_evaluated_at_p_once_per_context() {
+        use crate::builtin::{BuiltinMaterial, Interior, Surface};
+        use risotto_systems::pattern::{Axis, Node, PatternGraph};
+        use std::sync::Arc;
+        // reflectance = gradient along x from 0 at x = 0 to 1 at x = 4.
+        let graph = PatternGraph::new(vec![Node::Gradient {
+            axis: Axis::X,
+            from: 0.0,
+            to: 4.0,
+            a: Rgb::BLACK,
+            b: Rgb::WHITE,
+        }])
+        .unwrap();
+        let material = BuiltinMaterial {
+            surface: Surface::DiffusePattern {
+                reflectance: Arc::new(graph),
+            },
+            interior: Interior::None,
+        };
+        let mut t = ShadingPoints::default();
+        for i in 0..3 {
+            let p = Vec3::new(i as f32, 0.0, 0.0);
+            t.push(ShadingPointRow::in_volume(p, Vec3::X, i, 0));
+        }
+        let (arena, counters) = (Bump::new(), PatternCounters::default());
+        let cache = ParamCache::new(&arena, &counters);
+        let ctx = ShadingContext::new(&t, 0..3, ShadingMode::Scatter, 0, &[])
+            .with_factory(&material)
+            .with_cache(&cache);
+        let bxdf = material.begin_scatter(&ctx, ShadingMode::Scatter, &arena);
+        let mut albedo = [Rgb::BLACK; 3];
+        bxdf.albedo(&ctx, &mut albedo);
+        assert_eq!(albedo, [0.0, 0.25, 0.5].map(Rgb::splat));
+        // The Bxdf pulled the column once; another pull on the context is a cache hit.
+        assert_eq!((counters.hits.get(), counters.evals.get()), (0, 1));
+        assert_eq!(ctx.eval_param("reflectance").unwrap(), &albedo[..]);
+        assert_eq!((counters.hits.get(), counters.evals.get()), (1, 1));
+        // Without a cache the Bxdf evaluates the graph itself, to the same values.
+        let bare = ShadingContext::new(&t, 1..3, ShadingMode::Scatter, 0, &[]);
+        let bxdf = material.begin_scatter(&bare, ShadingMode::Scatter, &arena);
+        let mut two = [Rgb::BLACK; 2];
+        bxdf.albedo(&bare, &mut two);
+        assert_eq!(two, albedo[1..]);
+    }
+
+    #[test]
     fn volume_sampling_derives_uvw_and_keeps_the_members() {
         let t = table(3);
         let ctx = ShadingContext::new(&t, 1..3, ShadingMode::Interior, 7, &[])
