@@ -137,6 +137,10 @@ fn what_the_engine_puts_in_the_arena_has_no_drop_glue() {
     use std::mem::needs_drop;
     // Built-in closures (Bxdfs, phase function, interiors).
     assert!(!needs_drop::<DiffuseBxdf>());
+    // A patterned reflectance is a column borrowed from the arena; a parameter value borrows
+    // its pattern graph from the factory.
+    assert!(!needs_drop::<DiffuseBxdf<&'static [risotto_components::Rgb]>>());
+    assert!(!needs_drop::<risotto::engine::plugin::ParamValue<'static>>());
     assert!(!needs_drop::<DielectricBxdf>());
     assert!(!needs_drop::<MirrorBxdf>());
     assert!(!needs_drop::<HenyeyGreensteinPhase>());

@@ -377,8 +377,8 @@ fn camera_on_a_glass_surface_is_inside_the_glass() {
             ),
         ] {
             let what = format!("{surface:?} at {on}");
-            let on = camera_in_slab(surface, on, dir);
-            let inside = camera_in_slab(surface, inside, dir);
+            let on = camera_in_slab(surface.clone(), on, dir);
+            let inside = camera_in_slab(surface.clone(), inside, dir);
             assert_finite("camera on glass", &on);
             let (m, s) = image_mean(&on);
             let (mi, si) = image_mean(&inside);
@@ -433,7 +433,7 @@ fn balls_scene(materials: &[(&str, i32, Surface, Interior)], balls: &[(usize, &s
     let ids: Vec<u32> = materials
         .iter()
         .map(|(name, priority, surface, interior)| {
-            scene.add_material(name, *priority, mat_in(*surface, interior.clone()))
+            scene.add_material(name, *priority, mat_in(surface.clone(), interior.clone()))
         })
         .collect();
     for &(m, name) in balls {
@@ -495,7 +495,7 @@ fn coincident_glass_balls_render_as_one() {
         // Water of priority 1 and glass of priority 0: the water fills the ball.
         (
             vec![
-                ("water", 1, water, ink.clone()),
+                ("water", 1, water.clone(), ink.clone()),
                 ("glass", 0, glass(), Interior::None),
             ],
             vec![(0, "drop"), (1, "ball")],

@@ -354,7 +354,7 @@ fn a_medium_inside_glass_sharing_its_surface_is_a_white_furnace() {
     for phase in [hg(0.7), hg(-0.999)] {
         let what = format!("glass with {phase:?} inside");
         let interior = medium(Rgb::splat(2.0), 1.0, phase);
-        let out = render_mis(ball(ortho(2.4, 8), 8, 8, 1.0, glass, interior));
+        let out = render_mis(ball(ortho(2.4, 8), 8, 8, 1.0, glass.clone(), interior));
         assert_clean(&what, &out);
         assert_every_pixel(&what, &out, 1.0, 1e-3);
     }

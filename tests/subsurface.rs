@@ -233,7 +233,7 @@ fn walk_and_bounces_render_the_same_image() {
             12,
         );
         let mut scene = Scene::new(cam, settings(12, 12, 512, u32::MAX));
-        let m = scene.add_material("ball", 1, mat_in(surface, interior));
+        let m = scene.add_material("ball", 1, mat_in(surface.clone(), interior));
         scene.add_shape(
             "ball",
             ShapeGeometry::Sphere(Sphere {

@@ -13,6 +13,7 @@ use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb};
 use risotto_systems::bxdf;
+use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::sampler::{next_2d_column, PathSampler};
 use std::ops::Range;
 use std::sync::Arc;
@@ -47,11 +48,41 @@ fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2
 /// Lobe bits of a Lambertian sample.
 const DIFFUSE_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSampled::DIFFUSE.0);
 
-/// Lambertian reflection (one-sided: black seen from behind).
+/// Lambertian reflection (one-sided: black seen from behind). The reflectance is one colour
+/// (`R = Rgb`, the default) or one per point of the context (`R = &[Rgb]`, a pattern's column
+/// from [`ShadingContext::eval_param`]).
 #[derive(Clone, Copy, Debug)]
-pub struct DiffuseBxdf {
+pub struct DiffuseBxdf<R = Rgb> {
     /// Reflectance (albedo) per channel, in [0, 1].
-    pub reflectance: Rgb,
+    pub reflectance: R,
+}
+
+/// A reflectance a closure reads per point: a constant or a column.
+pub trait Reflectance: Copy {
+    /// The value at point `i` of the context.
+    fn at(&self, i: usize) -> Rgb;
+    /// The values of every point (`out` has one entry per point).
+    fn fill(&self, out: &mut [Rgb]);
+}
+
+impl Reflectance for Rgb {
+    #[inline]
+    fn at(&self, _i: usize) -> Rgb {
+        *self
+    }
+    fn fill(&self, out: &mut [Rgb]) {
+        out.fill(*self);
+    }
+}
+
+impl Reflectance for &[Rgb] {
+    #[inline]
+    fn at(&self, i: usize) -> Rgb {
+        self[i]
+    }
+    fn fill(&self, out: &mut [Rgb]) {
+        out.copy_from_slice(&self[..out.len()]);
+    }
 }
 
 /// Local direction `w` relative to a frame whose normal is the point's shading normal, flipped
@@ -61,7 +92,7 @@ fn frame(n: Vec3) -> bxdf::Frame {
     bxdf::Frame::from_normal(n)
 }
 
-impl Bxdf for DiffuseBxdf {
+impl<R: Reflectance> Bxdf for DiffuseBxdf<R> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::DIFFUSE
     }
@@ -83,9 +114,10 @@ impl Bxdf for DiffuseBxdf {
         });
         // Cosine-weighted sampling of f = reflectance / pi: the weight is the reflectance.
         // (`out.reset` left black weights and no lobe where there is no sample.)
-        for ((weight, lobe), &pdf) in out.weight.iter_mut().zip(&mut out.lobe).zip(&out.pdf) {
+        let weights = out.weight.iter_mut().zip(&mut out.lobe).zip(&out.pdf);
+        for (i, ((weight, lobe), &pdf)) in weights.enumerate() {
             if pdf > 0.0 {
-                *weight = self.reflectance;
+                *weight = self.reflectance.at(i);
                 *lobe = DIFFUSE_REFLECT;
             }
         }
@@ -100,13 +132,13 @@ impl Bxdf for DiffuseBxdf {
         let (nn, vn) = (ctx.nn(), ctx.vn());
         for i in 0..ctx.num_points() {
             let (v, p) =
-                bxdf::diffuse_eval_cos(self.reflectance, nn[i].dot(vn[i]), nn[i].dot(wi[i]));
+                bxdf::diffuse_eval_cos(self.reflectance.at(i), nn[i].dot(vn[i]), nn[i].dot(wi[i]));
             value[i] = v;
             pdf[i] = p;
         }
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.reflectance);
+        self.reflectance.fill(out);
     }
 }
 
@@ -447,12 +479,19 @@ impl Interior {
 }
 
 /// The surface part of a built-in material.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Surface {
     /// Lambertian.
     Diffuse {
         /// Reflectance.
         reflectance: Rgb,
+    },
+    /// Lambertian with a reflectance pattern (every value in [0, 1] by the graph's bounds,
+    /// which the scene loader checks), evaluated per point through the context's cache
+    /// (parameter `reflectance`).
+    DiffusePattern {
+        /// The reflectance graph.
+        reflectance: Arc<PatternGraph>,
     },
     /// Smooth dielectric.
     Dielectric {
@@ -484,9 +523,13 @@ pub struct BuiltinMaterial {
 
 impl BxdfFactory for BuiltinMaterial {
     fn instance_hints(&self) -> InstanceHints {
-        let surface = match self.surface {
+        let surface = match &self.surface {
             Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
-            Surface::Dielectric { cheap_shadows, .. } => {
+            Surface::DiffusePattern { reflectance } if reflectance.reads_uv() => {
+                InstanceHints::READS_SURFACE_UV
+            }
+            Surface::DiffusePattern { .. } => InstanceHints::NONE,
+            &Surface::Dielectric { cheap_shadows, .. } => {
                 let h = InstanceHints::TRANSMITS;
                 if cheap_shadows {
                     h | InstanceHints::TRANSMISSION_SHADOWS
@@ -505,7 +548,7 @@ impl BxdfFactory for BuiltinMaterial {
 
     fn begin_scatter<'a>(
         &'a self,
-        _ctx: &'a ShadingContext<'a>,
+        ctx: &'a ShadingContext<'a>,
         mode: ShadingMode,
         arena: &'a Bump,
     ) -> &'a mut (dyn Bxdf + 'a) {
@@ -533,6 +576,16 @@ impl BxdfFactory for BuiltinMaterial {
         }
         match self.surface {
             Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
+            Surface::DiffusePattern { ref reflectance } => {
+                // Through the context's cache; a context without one (a plug-in's own)
+                // evaluates the graph here.
+                let column = ctx
+                    .eval_param("reflectance")
+                    .unwrap_or_else(|| eval_uncached(reflectance, ctx, arena));
+                arena.alloc(DiffuseBxdf {
+                    reflectance: column,
+                })
+            }
             Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
             Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
             Surface::Interface => arena.alloc(NullBxdf),
@@ -561,10 +614,33 @@ impl BxdfFactory for BuiltinMaterial {
         }
     }
 
+    fn param(&self, name: &str) -> Option<ParamValue<'_>> {
+        match (&self.surface, name) {
+            (Surface::Diffuse { reflectance } | Surface::Mirror { reflectance }, "reflectance") => {
+                Some(ParamValue::Color(*reflectance))
+            }
+            (Surface::DiffusePattern { reflectance }, "reflectance") => {
+                Some(ParamValue::Pattern(reflectance))
+            }
+            (Surface::Dielectric { ior, .. }, "ior") => Some(ParamValue::Float(*ior)),
+            (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
+            _ => None,
+        }
+    }
+
     fn ior(&self) -> f32 {
         match self.surface {
             Surface::Dielectric { ior, .. } => ior,
             _ => 1.0,
         }
     }
+}
+
+/// `graph` at every point of `ctx`, in the arena (for contexts without a cache).
+fn eval_uncached<'a>(graph: &PatternGraph, ctx: &ShadingContext<'a>, arena: &'a Bump) -> &'a [Rgb] {
+    let n = ctx.num_points();
+    let out = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
+    let scratch = arena.alloc_slice_fill_copy(graph.scratch_len(n), Rgb::BLACK);
+    pattern::eval_with(graph, ctx.p(), ctx.u(), ctx.v(), out, scratch);
+    out
 }

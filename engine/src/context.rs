@@ -459,8 +459,8 @@ mod tests {
             reflectance: Rgb::splat(0.5),
         };
         // Material 0 is used by no shape (an empty group must not appear).
-        scene.add_material("unused", 0, material(grey));
-        let m_floor = scene.add_material("floor", 0, material(grey));
+        scene.add_material("unused", 0, material(grey.clone()));
+        let m_floor = scene.add_material("floor", 0, material(grey.clone()));
         let m_glass = scene.add_material(
             "glass",
             1,

@@ -27,5 +27,6 @@ pub mod shading_context;
 pub mod stats;
 pub mod subsurface;
 pub mod technique;
+pub mod texture_file;
 pub mod transmission;
 pub mod vdb_file;

@@ -26,8 +26,8 @@ use crate::output::{read_exr_rgb, Image, OutputError};
 use crate::plugin::BxdfFactory;
 use crate::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use crate::scene_file::{
-    load_scene, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc, SceneError,
-    SceneErrorKind, ShapeGeometry as DescGeometry,
+    load_scene, ColourParam, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc,
+    SceneError, SceneErrorKind, ShapeGeometry as DescGeometry,
 };
 use risotto_components::Rgb;
 use risotto_systems::camera::{Camera, Projection};
@@ -82,13 +82,14 @@ impl MaterialRegistry {
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
-            let reflectance = p.rgb_where(
-                "reflectance",
-                Some(Rgb::splat(0.5)),
-                "every channel in [0, 1]",
-                |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
-            )?;
-            builtin(p, Surface::Diffuse { reflectance }, &["reflectance"])
+            // A colour, or a pattern table (evaluated per point through the context's cache).
+            let surface = match p.colour_or_pattern("reflectance", Rgb::splat(0.5), [0.0, 1.0])? {
+                ColourParam::Constant(reflectance) => Surface::Diffuse { reflectance },
+                ColourParam::Pattern(graph) => Surface::DiffusePattern {
+                    reflectance: Arc::new(graph),
+                },
+            };
+            builtin(p, surface, &["reflectance"])
         });
         r.register("dielectric", |p| {
             let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;

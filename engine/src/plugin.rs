@@ -301,7 +301,7 @@ pub trait BxdfFactory: Send + Sync {
 
     /// The value of material parameter `name` (RIS: a parameter's connection), what
     /// [`ShadingContext::eval_param`] evaluates and caches. Defaults to none.
-    fn param(&self, name: &str) -> Option<ParamValue> {
+    fn param(&self, name: &str) -> Option<ParamValue<'_>> {
         let _ = name;
         None
     }

@@ -19,6 +19,7 @@
 mod error;
 mod geometry;
 mod params;
+mod pattern;
 mod raw;
 #[cfg(test)]
 mod tests;
@@ -34,6 +35,7 @@ use risotto_systems::sampler::MAX_SPP;
 
 pub use error::{Location, SceneError, SceneErrorKind};
 pub use params::MaterialParams;
+pub use pattern::ColourParam;
 
 use error::Source;
 use params::Reader;

@@ -9,8 +9,10 @@
 //! in [`BxdfFactory::param`]) for every point of the context, once: the column is kept in the
 //! context's [`ParamCache`] (keyed by name, its columns in the worker's per-batch arena), so
 //! a Bxdf and a volume integrator pulling the same parameter on one context evaluate it once.
-//! Lookups and evaluations are counted ([`PatternCounters`], in the stats as
-//! `pattern_cache_hits` and `pattern_evals`). Setting a builtin on a volume-sampling context
+//! A parameter is a constant or a pattern graph ([`ParamValue::Pattern`], a
+//! [`risotto_systems::pattern::PatternGraph`] the factory owns), evaluated over the context's
+//! `P`, `u` and `v` columns at once. Lookups and evaluations are counted
+//! ([`PatternCounters`], in the stats as `pattern_cache_hits` and `pattern_evals`). Setting a builtin on a volume-sampling context
 //! flushes its cache (patterns may depend on `P`, `u`, `v`, `w`).
 //!
 //! # Shading in a volume
@@ -40,6 +42,7 @@ use crate::shade_groups::{ShadeGroups, ShadingMode};
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{Rgb, ShadingPoints, VolumeEntry};
+use risotto_systems::pattern::{self, PatternGraph};
 use std::cell::Cell;
 use std::ops::Range;
 
@@ -54,24 +57,25 @@ pub struct OverlappingVolume<'a> {
     pub integrator: Option<&'a (dyn VolumeIntegrator + 'a)>,
 }
 
-/// A material parameter's value as its factory gives it (RIS: a parameter's connection).
-/// Constants today; spatially varying patterns evaluate through the same cache.
+/// A material parameter's value as its factory gives it (RIS: a parameter's connection):
+/// a constant, or a pattern graph borrowed from the factory (a reference, so the value stays
+/// plain `Copy` data that contexts in the arena can hold).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ParamValue {
+pub enum ParamValue<'a> {
     /// One number for every point (broadcast to all three channels).
     Float(f32),
     /// One colour for every point.
     Color(Rgb),
+    /// A pattern graph, evaluated at the context's `P`, `u`, `v`.
+    Pattern(&'a PatternGraph),
 }
 
-impl ParamValue {
-    /// The value at one point.
-    fn at(self) -> Rgb {
-        match self {
-            ParamValue::Float(f) => Rgb::splat(f),
-            ParamValue::Color(c) => c,
-        }
-    }
+/// The builtins a pattern reads, one entry per point.
+#[derive(Clone, Copy)]
+struct PatternInputs<'a> {
+    p: &'a [Vec3],
+    u: &'a [f32],
+    v: &'a [f32],
 }
 
 /// Counts of parameter-cache lookups of a worker (plain `Cell`s: contexts and their caches
@@ -120,13 +124,23 @@ impl<'a> ParamCache<'a> {
 /// A parameter cache as contexts see it (a trait object, so that a context stays covariant
 /// in its lifetime while the cache's `Cell`s are not).
 trait ParamLookup {
-    /// The column of `value` (parameter `name`) for `n` points, cached.
-    fn column(&self, name: &str, n: usize, value: ParamValue) -> &[Rgb];
+    /// The column of `value` (parameter `name`) at the points of `at`, cached.
+    fn column(&self, name: &str, value: ParamValue<'_>, at: PatternInputs<'_>) -> &[Rgb];
 }
 
 impl ParamLookup for ParamCache<'_> {
-    fn column(&self, name: &str, n: usize, value: ParamValue) -> &[Rgb] {
-        self.get_or_eval(name, n, |column| column.fill(value.at()))
+    fn column(&self, name: &str, value: ParamValue<'_>, at: PatternInputs<'_>) -> &[Rgb] {
+        self.get_or_eval(name, at.p.len(), |column| match value {
+            ParamValue::Float(f) => column.fill(Rgb::splat(f)),
+            ParamValue::Color(c) => column.fill(c),
+            ParamValue::Pattern(graph) => {
+                // The nodes' block columns live in the arena with the result.
+                let scratch = self
+                    .arena
+                    .alloc_slice_fill_copy(graph.scratch_len(column.len()), Rgb::BLACK);
+                pattern::eval_with(graph, at.p, at.u, at.v, column, scratch);
+            }
+        })
     }
 }
 
@@ -299,7 +313,12 @@ impl<'a> ShadingContext<'a> {
     pub fn eval_param(&self, name: &str) -> Option<&'a [Rgb]> {
         let value = self.factory?.param(name)?;
         let cache = self.cache?;
-        Some(cache.column(name, self.num_points(), value))
+        let at = PatternInputs {
+            p: self.p(),
+            u: self.u(),
+            v: self.v(),
+        };
+        Some(cache.column(name, value, at))
     }
 
     /// Starts shading inside the volume (RIS `BeginVolumeSampling`): a mutable child context
@@ -470,7 +489,7 @@ mod tests {
         ) -> &'a mut (dyn Bxdf + 'a) {
             arena.alloc(crate::builtin::NullBxdf)
         }
-        fn param(&self, name: &str) -> Option<ParamValue> {
+        fn param(&self, name: &str) -> Option<ParamValue<'_>> {
             (name == "albedo").then_some(ParamValue::Color(Rgb::new(0.1, 0.2, 0.3)))
         }
     }
@@ -505,6 +524,52 @@ mod tests {
         v.set_builtin(Builtin::P, &[Vec3::ONE; 4]);
         v.context().eval_param("albedo").unwrap();
         assert_eq!((counters.hits.get(), counters.evals.get()), (2, 3));
+    }
+
+    #[test]
+    fn a_pattern_parameter_is_evaluated_at_p_once_per_context() {
+        use crate::builtin::{BuiltinMaterial, Interior, Surface};
+        use risotto_systems::pattern::{Axis, Node, PatternGraph};
+        use std::sync::Arc;
+        // reflectance = gradient along x from 0 at x = 0 to 1 at x = 4.
+        let graph = PatternGraph::new(vec![Node::Gradient {
+            axis: Axis::X,
+            from: 0.0,
+            to: 4.0,
+            a: Rgb::BLACK,
+            b: Rgb::WHITE,
+        }])
+        .unwrap();
+        let material = BuiltinMaterial {
+            surface: Surface::DiffusePattern {
+                reflectance: Arc::new(graph),
+            },
+            interior: Interior::None,
+        };
+        let mut t = ShadingPoints::default();
+        for i in 0..3 {
+            let p = Vec3::new(i as f32, 0.0, 0.0);
+            t.push(ShadingPointRow::in_volume(p, Vec3::X, i, 0));
+        }
+        let (arena, counters) = (Bump::new(), PatternCounters::default());
+        let cache = ParamCache::new(&arena, &counters);
+        let ctx = ShadingContext::new(&t, 0..3, ShadingMode::Scatter, 0, &[])
+            .with_factory(&material)
+            .with_cache(&cache);
+        let bxdf = material.begin_scatter(&ctx, ShadingMode::Scatter, &arena);
+        let mut albedo = [Rgb::BLACK; 3];
+        bxdf.albedo(&ctx, &mut albedo);
+        assert_eq!(albedo, [0.0, 0.25, 0.5].map(Rgb::splat));
+        // The Bxdf pulled the column once; another pull on the context is a cache hit.
+        assert_eq!((counters.hits.get(), counters.evals.get()), (0, 1));
+        assert_eq!(ctx.eval_param("reflectance").unwrap(), &albedo[..]);
+        assert_eq!((counters.hits.get(), counters.evals.get()), (1, 1));
+        // Without a cache the Bxdf evaluates the graph itself, to the same values.
+        let bare = ShadingContext::new(&t, 1..3, ShadingMode::Scatter, 0, &[]);
+        let bxdf = material.begin_scatter(&bare, ShadingMode::Scatter, &arena);
+        let mut two = [Rgb::BLACK; 2];
+        bxdf.albedo(&bare, &mut two);
+        assert_eq!(two, albedo[1..]);
     }
 
     #[test]

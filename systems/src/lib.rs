@@ -19,6 +19,7 @@ pub mod lights;
 pub mod medium;
 pub mod partition;
 pub mod path;
+pub mod pattern;
 pub mod phase;
 pub mod ray;
 pub mod ray_marching;

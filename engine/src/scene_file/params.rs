@@ -125,7 +125,7 @@ impl<'a> Reader<'a> {
     }
 
     /// A finite f32 from a node.
-    fn f32_of(&self, field: &str, node: &'a Node) -> Result<f32, SceneError> {
+    pub(crate) fn f32_of(&self, field: &str, node: &'a Node) -> Result<f32, SceneError> {
         let v = self.number_of(field, node)? as f32;
         if v.is_finite() {
             Ok(v)
@@ -418,7 +418,7 @@ impl MaterialParams {
         }
     }
 
-    fn reader(&self) -> Reader<'_> {
+    pub(super) fn reader(&self) -> Reader<'_> {
         Reader {
             src: &self.src,
             node: &self.node,

@@ -1243,7 +1243,12 @@ fn every_shipped_scene_loads_and_is_well_formed() {
         for m in &s.materials {
             let p = &m.params;
             match m.type_name.as_str() {
-                "diffuse" | "mirror" | "conductor" => {
+                "diffuse" => {
+                    // A colour or a pattern table (scenes/patterns.toml).
+                    p.colour_or_pattern("reflectance", Rgb::splat(0.5), [0.0, 1.0])
+                        .unwrap();
+                }
+                "mirror" | "conductor" => {
                     p.rgb("reflectance", Some(Rgb::splat(0.5))).unwrap();
                 }
                 "dielectric" => {

@@ -1,0 +1,284 @@
+//! Pattern tables in material parameters: a colour key may be a table
+//! `{ pattern = "noise", frequency = 4, ... }`, nested for combinators, read into a
+//! [`PatternGraph`] with located errors (see `docs/scene-format.md`, Patterns).
+
+use super::params::MaterialParams;
+use super::SceneError;
+use glam::Vec3;
+use risotto_components::Rgb;
+use risotto_systems::pattern::{self, Axis, Fbm, Node, NodeId, PatternGraph, Space, MAX_OCTAVES};
+
+/// A colour parameter as written: a constant or a pattern graph.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColourParam {
+    /// `[r, g, b]` or one number.
+    Constant(Rgb),
+    /// `{ pattern = "...", ... }`.
+    Pattern(PatternGraph),
+}
+
+/// The pattern types, in the order messages list them.
+const PATTERNS: [&str; 10] = [
+    "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "scale",
+    "remap",
+];
+
+/// Nesting deeper than this is refused (no scene needs it; it bounds the recursion).
+const MAX_DEPTH: usize = 32;
+
+impl MaterialParams {
+    /// A colour that may also be a pattern table. A constant must have every channel in
+    /// `[range[0], range[1]]` (the message says "every channel in [lo, hi]"); a pattern must
+    /// be bounded within the range everywhere, by its interval bounds over all of space
+    /// ([`pattern::bounds`]): wrap it in `remap` or `scale` otherwise.
+    pub fn colour_or_pattern(
+        &self,
+        key: &str,
+        default: Rgb,
+        range: [f32; 2],
+    ) -> Result<ColourParam, SceneError> {
+        let requirement = format!("every channel in [{}, {}]", range[0], range[1]);
+        let in_range = |c: Rgb| c.min_channel() >= range[0] && c.max_channel() <= range[1];
+        if !self.is_table(key) {
+            let c = self.rgb_where(key, Some(default), &requirement, in_range)?;
+            return Ok(ColourParam::Constant(c));
+        }
+        let graph = self.pattern(key)?.expect("checked: a table");
+        let everywhere = (Vec3::NEG_INFINITY, Vec3::INFINITY);
+        let (lo, hi) = pattern::bounds(&graph, everywhere.0, everywhere.1);
+        if !(in_range(lo) && in_range(hi)) {
+            return Err(self.error(
+                Some(key),
+                format!(
+                    "the pattern must keep {requirement}, but its values may reach \
+                     [{}, {}, {}] .. [{}, {}, {}] (interval bounds over all of space): \
+                     wrap it in `remap` or `scale`",
+                    lo.r, lo.g, lo.b, hi.r, hi.g, hi.b
+                ),
+            ));
+        }
+        Ok(ColourParam::Pattern(graph))
+    }
+
+    /// The pattern table at `key` as a graph; `None` if the key is absent, an error if it is
+    /// not a table or the table is not a valid pattern.
+    pub fn pattern(&self, key: &str) -> Result<Option<PatternGraph>, SceneError> {
+        let Some(t) = self.table(key)? else {
+            return Ok(None);
+        };
+        let mut nodes = Vec::new();
+        node(&t, &mut nodes, 0)?;
+        // Children are pushed before their parents, so the order is valid by construction;
+        // a parameter error left unchecked above would surface here.
+        PatternGraph::new(nodes)
+            .map(Some)
+            .map_err(|e| self.error(Some(key), e.to_string()))
+    }
+}
+
+/// Pushes the nodes of pattern table `t` (children first) and returns its root's index.
+fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeId, SceneError> {
+    if depth > MAX_DEPTH {
+        return Err(t.error(None, format!("patterns nest at most {MAX_DEPTH} deep")));
+    }
+    let kind = t.string("pattern", None)?;
+    let n = match kind.as_str() {
+        "constant" => {
+            t.deny_unknown(&["pattern", "value"])?;
+            Node::Constant(t.rgb("value", None)?)
+        }
+        "noise" => {
+            t.deny_unknown(&[
+                "pattern",
+                "frequency",
+                "octaves",
+                "lacunarity",
+                "gain",
+                "seed",
+            ])?;
+            let frequency = t.f32_where("frequency", Some(1.0), "must be >= 0", |v| v >= 0.0)?;
+            let octaves = t.u32("octaves", Some(4))?;
+            if !(1..=MAX_OCTAVES).contains(&octaves) {
+                return Err(t.error(
+                    Some("octaves"),
+                    format!("must be in [1, {MAX_OCTAVES}], got `{octaves}`"),
+                ));
+            }
+            let lacunarity = t.f32_where("lacunarity", Some(2.0), "must be > 0", |v| v > 0.0)?;
+            let gain = t.f32_where("gain", Some(0.5), "must be >= 0", |v| v >= 0.0)?;
+            let seed = t.u32("seed", Some(0))?;
+            Node::Noise(
+                Fbm::new(frequency, octaves, lacunarity, gain, seed)
+                    .map_err(|e| t.error(None, e.to_string()))?,
+            )
+        }
+        "checker" => {
+            t.deny_unknown(&["pattern", "scale", "a", "b", "space"])?;
+            let space = match t.string("space", Some("p"))?.as_str() {
+                "p" | "P" => Space::P,
+                "uv" => Space::Uv,
+                other => {
+                    return Err(t.error(
+                        Some("space"),
+                        format!("must be \"p\" or \"uv\", got \"{other}\""),
+                    ))
+                }
+            };
+            Node::Checker {
+                scale: t.f32_where("scale", Some(1.0), "must be > 0", |v| v > 0.0)?,
+                a: t.rgb("a", Some(Rgb::BLACK))?,
+                b: t.rgb("b", Some(Rgb::WHITE))?,
+                space,
+            }
+        }
+        "gradient" => {
+            t.deny_unknown(&["pattern", "axis", "from", "to", "a", "b"])?;
+            let axis = match t.string("axis", Some("y"))?.as_str() {
+                "x" => Axis::X,
+                "y" => Axis::Y,
+                "z" => Axis::Z,
+                "u" => Axis::U,
+                "v" => Axis::V,
+                other => {
+                    return Err(t.error(
+                        Some("axis"),
+                        format!("must be \"x\", \"y\", \"z\", \"u\" or \"v\", got \"{other}\""),
+                    ))
+                }
+            };
+            let from = t.f32("from", Some(0.0))?;
+            let to = t.f32("to", Some(1.0))?;
+            if from == to {
+                return Err(t.error(
+                    Some("to"),
+                    format!("must differ from `from`, got `{to}` for both"),
+                ));
+            }
+            Node::Gradient {
+                axis,
+                from,
+                to,
+                a: t.rgb("a", Some(Rgb::BLACK))?,
+                b: t.rgb("b", Some(Rgb::WHITE))?,
+            }
+        }
+        "image" => {
+            t.deny_unknown(&["pattern", "path"])?;
+            let path = t
+                .path("path")?
+                .ok_or_else(|| t.error(None, "an image pattern needs `path = \"file.png\"`"))?;
+            Node::Image(
+                crate::texture_file::read_texture(&path).map_err(|e| t.error(Some("path"), e))?,
+            )
+        }
+        "grid" => grid(t)?,
+        "mix" => {
+            t.deny_unknown(&["pattern", "a", "b", "t"])?;
+            let a = input(t, "a", Some(Rgb::BLACK), nodes, depth)?;
+            let b = input(t, "b", Some(Rgb::WHITE), nodes, depth)?;
+            let tt = input(t, "t", None, nodes, depth)?;
+            Node::Mix { a, b, t: tt }
+        }
+        "multiply" => {
+            t.deny_unknown(&["pattern", "a", "b"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let b = input(t, "b", None, nodes, depth)?;
+            Node::Multiply { a, b }
+        }
+        "scale" => {
+            t.deny_unknown(&["pattern", "a", "factor"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            Node::Scale {
+                a,
+                factor: t.rgb("factor", None)?,
+            }
+        }
+        "remap" => {
+            t.deny_unknown(&["pattern", "a", "from", "to"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let from = pair(t, "from", [0.0, 1.0])?;
+            if from[0] == from[1] {
+                return Err(t.error(
+                    Some("from"),
+                    format!(
+                        "the input range must not be empty, got `[{}, {}]`",
+                        from[0], from[1]
+                    ),
+                ));
+            }
+            Node::Remap {
+                a,
+                from,
+                to: pair(t, "to", [0.0, 1.0])?,
+            }
+        }
+        other => {
+            return Err(t.error(
+                Some("pattern"),
+                format!(
+                    "unknown pattern \"{other}\" (known: {})",
+                    PATTERNS.join(", ")
+                ),
+            ))
+        }
+    };
+    nodes.push(n);
+    Ok((nodes.len() - 1) as NodeId)
+}
+
+/// A combinator's input `key`: a colour (a constant node), a pattern table, or the default.
+fn input(
+    t: &MaterialParams,
+    key: &str,
+    default: Option<Rgb>,
+    nodes: &mut Vec<Node>,
+    depth: usize,
+) -> Result<NodeId, SceneError> {
+    if let Some(sub) = t.table(key).ok().flatten() {
+        return node(&sub, nodes, depth + 1);
+    }
+    nodes.push(Node::Constant(t.rgb(key, default)?));
+    Ok((nodes.len() - 1) as NodeId)
+}
+
+/// `{ pattern = "grid", path = "file", header = .., name = .., min = [..], max = [..] }`.
+fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
+    use crate::grid_file::{is_vdb, read_grid_named};
+    t.deny_unknown(&["pattern", "path", "header", "name", "min", "max"])?;
+    let path = t
+        .path("path")?
+        .ok_or_else(|| t.error(None, "a grid pattern needs `path = \"file.vol\"`"))?;
+    let header = t.path("header")?;
+    let name = t.has("name").then(|| t.string("name", None)).transpose()?;
+    let vol = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vol"));
+    if header.is_none() && !vol && !is_vdb(&path) {
+        // A raw grid's header beside it is read too.
+        t.note_file(&path.with_extension("json"));
+    }
+    let grid = read_grid_named(&path, header.as_deref(), name.as_deref())
+        .map_err(|e| t.error(Some("path"), e.to_string()))?;
+    let min = t.vec3("min", Some(Vec3::splat(-1.0)))?;
+    let max = t.vec3("max", Some(Vec3::ONE))?;
+    if !min.cmplt(max).all() {
+        return Err(t.error(
+            Some("max"),
+            format!("must be > `min` on every axis, got {max} and {min}"),
+        ));
+    }
+    Ok(Node::Grid { grid, min, max })
+}
+
+/// Two finite numbers `[a, b]`.
+fn pair(t: &MaterialParams, key: &str, default: [f32; 2]) -> Result<[f32; 2], SceneError> {
+    let r = t.reader();
+    let Some(items) = r.array_opt(key)? else {
+        return Ok(default);
+    };
+    let node = r.get(key).expect("present: an array");
+    if items.len() != 2 {
+        return Err(r.invalid(key, node, "expected 2 numbers [lo, hi]"));
+    }
+    Ok([r.f32_of(key, &items[0])?, r.f32_of(key, &items[1])?])
+}

@@ -1,0 +1,106 @@
+//! An RGB texture read by `(u, v)`: bilinear between texel centres, repeat wrap.
+
+use super::PatternError;
+use risotto_components::Rgb;
+
+/// A `width x height` RGB texture (linear values), row 0 at the top.
+///
+/// Texel `(x, y)` (x to the right, y down from the top row) is centred at
+/// `u = (x + 0.5) / width`, `v = 1 - (y + 0.5) / height`: `v` grows upwards, as on a surface
+/// parameterised like pbrt's image textures. Between centres the texture is bilinear; outside
+/// `[0, 1]^2` it repeats (the wrap applies to the texel indices, so the seam interpolates
+/// between the last and the first column).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    width: usize,
+    height: usize,
+    texels: Vec<Rgb>,
+    min: Rgb,
+    max: Rgb,
+}
+
+impl Texture {
+    /// A texture from `width * height` texels, row after row from the top; every channel
+    /// finite and >= 0, both sizes >= 1.
+    pub fn new(width: usize, height: usize, texels: Vec<Rgb>) -> Result<Texture, PatternError> {
+        if width == 0 || height == 0 || width.checked_mul(height) != Some(texels.len()) {
+            return Err(PatternError::Parameter(format!(
+                "image: {width} x {height} texels do not match the {} given",
+                texels.len()
+            )));
+        }
+        if let Some(i) = texels
+            .iter()
+            .position(|t| !(t.is_finite() && t.min_channel() >= 0.0))
+        {
+            return Err(PatternError::Parameter(format!(
+                "image: texel ({}, {}) is {:?}: channels must be finite and >= 0",
+                i % width,
+                i / width,
+                texels[i]
+            )));
+        }
+        let fold = |f: fn(f32, f32) -> f32, init: f32| {
+            texels.iter().fold(Rgb::splat(init), |m, t| {
+                Rgb::new(f(m.r, t.r), f(m.g, t.g), f(m.b, t.b))
+            })
+        };
+        let (min, max) = (fold(f32::min, f32::INFINITY), fold(f32::max, 0.0));
+        Ok(Texture {
+            width,
+            height,
+            texels,
+            min,
+            max,
+        })
+    }
+
+    /// `(width, height)`.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// Texel `(x, y)` (y from the top).
+    pub fn texel(&self, x: usize, y: usize) -> Rgb {
+        self.texels[x + self.width * y]
+    }
+
+    /// Per-channel minimum and maximum texel: the range of [`Texture::lookup`] (bilinear
+    /// weights are convex, and the lookup clamps rounding into it).
+    pub fn range(&self) -> (Rgb, Rgb) {
+        (self.min, self.max)
+    }
+
+    /// The bilinear, repeating lookup at `(u, v)` (non-finite coordinates read as 0).
+    #[inline]
+    pub fn lookup(&self, u: f32, v: f32) -> Rgb {
+        let (x0, x1, fx) = wrap_axis(u, self.width);
+        let (y0, y1, fy) = wrap_axis(1.0 - v, self.height);
+        let lerp = |a: Rgb, b: Rgb, t: f32| a + (b - a) * t;
+        let top = lerp(self.texel(x0, y0), self.texel(x1, y0), fx);
+        let bottom = lerp(self.texel(x0, y1), self.texel(x1, y1), fx);
+        // The weights are convex, so the value lies in the texels' range; the clamp keeps
+        // rounding from leaving it (the pattern bounds rely on it).
+        let (lo, hi) = (self.min, self.max);
+        let c = lerp(top, bottom, fy);
+        Rgb::new(
+            c.r.max(lo.r).min(hi.r),
+            c.g.max(lo.g).min(hi.g),
+            c.b.max(lo.b).min(hi.b),
+        )
+    }
+}
+
+/// `(index, next index, fraction)` of coordinate `t` on an axis of `n` texels with centres at
+/// `(i + 0.5) / n`, wrapping.
+#[inline]
+fn wrap_axis(t: f32, n: usize) -> (usize, usize, f32) {
+    let t = if t.is_finite() { t } else { 0.0 };
+    let g = t * n as f32 - 0.5;
+    let g0 = g.floor();
+    let f = (g - g0).clamp(0.0, 1.0);
+    let n = n as i64;
+    // Saturating cast for huge coordinates, then wrap.
+    let i = (g0 as i64).rem_euclid(n);
+    (i as usize, ((i + 1) % n) as usize, f)
+}

@@ -1,0 +1,252 @@
+//! Patterns in scene files (issue 11): pattern tables load into graphs with located errors,
+//! their files join the scene's referenced files, they evaluate through the shading
+//! context's cache (counted in the stats), the constant fast path is untouched, and the
+//! albedo AOV of a patterned surface is the pattern.
+
+use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::engine::plugin::ParamValue;
+use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use std::path::{Path, PathBuf};
+
+/// A fresh directory for one test's files.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("risotto-patterns-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// An orthographic 4 x 4 view of a 6 x 6 quad at z = 0.5 (mid-cell of a unit checker), facing the
+/// camera, with `reflectance` as its material's value; lit by a constant sky.
+fn flat_scene(reflectance: &str, spp: u32) -> String {
+    format!(
+        r#"[render]
+width = 8
+height = 8
+spp = {spp}
+max_depth = 2
+
+[camera]
+projection = "orthographic"
+width = 4
+from = [0, 0, 5]
+to = [0, 0, 0]
+
+[materials.wall]
+type = "diffuse"
+reflectance = {reflectance}
+
+[[shapes]]
+name = "wall"
+type = "quad"
+material = "wall"
+corner = [-3, -3, 0.5]
+edge1 = [6, 0, 0]
+edge2 = [0, 6, 0]
+
+[[lights]]
+type = "environment"
+radiance = 1
+"#
+    )
+}
+
+fn load_text(dir: &Path, text: &str) -> Result<risotto::engine::scene::Scene, String> {
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    load_scene_file(&path, &MaterialRegistry::with_builtins()).map_err(|e| e.to_string())
+}
+
+fn render_text(dir: &Path, text: &str) -> RenderOutput {
+    let path = dir.join("scene.toml");
+    let scene = load_text(dir, text).unwrap_or_else(|e| panic!("{e}"));
+    let compiled = compile_scene(scene, &path).unwrap();
+    render(&compiled, &RenderOptions::default(), &|_| {}).unwrap()
+}
+
+fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) {
+    let mut e = png::Encoder::new(std::fs::File::create(path).unwrap(), w, h);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header().unwrap().write_image_data(rgb).unwrap();
+}
+
+#[test]
+fn pattern_tables_load_into_graphs_and_name_their_files() {
+    let dir = temp_dir("load");
+    write_png(&dir.join("tex.png"), 2, 1, &[255, 0, 0, 0, 0, 255]);
+    let reflectance = r#"{ pattern = "mix", a = { pattern = "image", path = "tex.png" }, b = 0.25, t = { pattern = "checker", scale = 2, space = "uv" } }"#;
+    let scene = load_text(&dir, &flat_scene(reflectance, 1)).unwrap();
+    let factory = &scene.materials[0].factory;
+    let Some(ParamValue::Pattern(graph)) = factory.param("reflectance") else {
+        panic!("reflectance is not a pattern");
+    };
+    // image, constant 0.25, checker, mix: children first, the root last.
+    assert_eq!(graph.nodes().len(), 4);
+    assert!(graph.reads_uv());
+    let files = scene.files.paths();
+    assert!(
+        files.iter().any(|f| f.ends_with("tex.png")),
+        "the texture is a referenced file: {files:?}"
+    );
+    // A constant stays a constant (the fast path).
+    let scene = load_text(&dir, &flat_scene("[0.1, 0.2, 0.3]", 1)).unwrap();
+    assert!(matches!(
+        scene.materials[0].factory.param("reflectance"),
+        Some(ParamValue::Color(_))
+    ));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_patterns_are_located_errors_naming_key_and_value() {
+    let dir = temp_dir("errors");
+    // (reflectance, expected pieces of the message). The reflectance is on line 15.
+    let cases: &[(&str, &[&str])] = &[
+        (
+            r#"{ pattern = "plaid" }"#,
+            &[
+                "scene.toml:15:",
+                "`pattern`",
+                "unknown pattern \"plaid\"",
+                "checker",
+            ],
+        ),
+        (
+            r#"{ pattern = "noise", frequncy = 2 }"#,
+            &[
+                "scene.toml:15:",
+                "unknown field `frequncy`",
+                "did you mean `frequency`",
+            ],
+        ),
+        (
+            r#"{ pattern = "remap", a = { pattern = "noise", octaves = 0 }, from = [-1, 1] }"#,
+            &[
+                "scene.toml:15:",
+                "reflectance.a",
+                "`octaves`",
+                "[1, 16], got `0`",
+            ],
+        ),
+        (
+            r#"{ pattern = "remap", a = { pattern = "noise", octaves = 17 } }"#,
+            &["`octaves`", "got `17`"],
+        ),
+        (
+            r#"{ pattern = "remap", a = { pattern = "noise", frequency = -2 } }"#,
+            &["`frequency`", "must be >= 0, got `-2`"],
+        ),
+        (
+            r#"{ pattern = "remap", a = 0.5, from = [0.3, 0.3] }"#,
+            &["`from`", "must not be empty", "[0.3, 0.3]"],
+        ),
+        (
+            r#"{ pattern = "image", path = "missing.png" }"#,
+            &["scene.toml:15:", "`path`", "missing.png"],
+        ),
+        (
+            r#"{ pattern = "grid", path = "missing.vol" }"#,
+            &["`path`", "missing.vol"],
+        ),
+        (
+            r#"{ pattern = "noise" }"#,
+            &[
+                "`reflectance`",
+                "every channel in [0, 1]",
+                "-2.8125",
+                "remap",
+            ],
+        ),
+        (
+            r#"{ pattern = "checker", a = 2 }"#,
+            &["`reflectance`", "every channel in [0, 1]"],
+        ),
+        (
+            r#"{ pattern = "mix", a = 0.1, b = 0.2 }"#,
+            &["missing required field `t`"],
+        ),
+    ];
+    for (reflectance, pieces) in cases {
+        let e = match load_text(&dir, &flat_scene(reflectance, 1)) {
+            Ok(_) => panic!("{reflectance}: loaded"),
+            Err(e) => e,
+        };
+        for piece in *pieces {
+            assert!(e.contains(piece), "{reflectance}: `{piece}` not in\n{e}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_constant_pattern_renders_bit_identical_to_the_constant_and_is_counted() {
+    let dir = temp_dir("identical");
+    let constant = render_text(&dir, &flat_scene("[0.3, 0.5, 0.7]", 4));
+    let pattern = render_text(
+        &dir,
+        &flat_scene(r#"{ pattern = "constant", value = [0.3, 0.5, 0.7] }"#, 4),
+    );
+    assert_eq!(constant.beauty.pixels, pattern.beauty.pixels);
+    assert_eq!(constant.albedo.pixels, pattern.albedo.pixels);
+    // The constant never touches the cache; the pattern is evaluated once per shade group.
+    let (c, p) = (&constant.stats.counters, &pattern.stats.counters);
+    assert_eq!((c.pattern_evals, c.pattern_cache_hits), (0, 0));
+    assert!(p.pattern_evals > 0, "{p:?}");
+    assert_eq!(constant.stats.features, pattern.stats.features);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_shipped_patterns_scene_evaluates_patterns_and_cornell_does_not() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let registry = MaterialRegistry::with_builtins();
+    let tiny = |name: &str| {
+        let file = scenes.join(name);
+        let mut scene = load_scene_file(&file, &registry).unwrap();
+        let s = &mut scene.settings;
+        let h = ((32 * s.height) / s.width).max(1);
+        (s.width, s.height, s.spp) = (32, h, 2);
+        (scene.camera.width, scene.camera.height) = (32, h);
+        let compiled = compile_scene(scene, &file).unwrap();
+        render(&compiled, &RenderOptions::default(), &|_| {}).unwrap()
+    };
+    let patterns = tiny("patterns.toml");
+    assert!(patterns.stats.counters.pattern_evals > 0);
+    assert_eq!(patterns.stats.counters.nan_dropped, 0);
+    let cornell = tiny("cornell-box.toml");
+    let c = &cornell.stats.counters;
+    assert_eq!((c.pattern_evals, c.pattern_cache_hits), (0, 0));
+    assert!(
+        !cornell.stats.features.iter().any(|f| f == "surface_uv"),
+        "{:?}",
+        cornell.stats.features
+    );
+}
+
+#[test]
+fn the_albedo_aov_of_a_patterned_surface_is_the_pattern() {
+    let dir = temp_dir("albedo");
+    // Unit cells by P: the 8 x 8 pixels of the 4 x 4 view hold 2 x 2 pixels per cell, and the
+    // wall at z = 0.5 lies inside one layer of cells.
+    let (a, b) = (0.2f32, 0.8f32);
+    let out = render_text(
+        &dir,
+        &flat_scene(
+            &format!(r#"{{ pattern = "checker", scale = 1, a = {a}, b = {b} }}"#),
+            4,
+        ),
+    );
+    for y in 0..8 {
+        for x in 0..8 {
+            // Pixel (x, y) covers world x in [-2 + x / 2, ..], world y downwards from 2.
+            let (cx, cy) = ((x / 2) as i32 - 2, 1 - (y / 2) as i32);
+            let expected = if (cx + cy).rem_euclid(2) == 0 { a } else { b };
+            let got = out.albedo.pixels[y * 8 + x];
+            assert!(
+                (got.r - expected).abs() < 1e-5 && got.r == got.g && got.g == got.b,
+                "pixel ({x}, {y}): {got:?}, expected {expected}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
