@@ -504,9 +504,19 @@ fn thick_ball(mode: risotto::engine::subsurface::SubsurfaceMode, n: u32) -> Comp
         g: 0.0,
         mode,
     };
-    let material = params.material();
     let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 2.0, n, n);
-    let mut scene = Scene::new(cam, settings(n, n, 256, u32::MAX));
+    unit_ball(params.material(), cam, n, 256)
+}
+
+/// A unit ball of `material` at the origin under a uniform sky of radiance 1, seen by
+/// `cam` (`n x n` pixels, `spp`).
+fn unit_ball(
+    material: risotto::engine::builtin::BuiltinMaterial,
+    cam: risotto::systems::camera::Camera,
+    n: u32,
+    spp: u32,
+) -> CompiledScene {
+    let mut scene = Scene::new(cam, settings(n, n, spp, u32::MAX));
     let m = scene.add_material("ball", 0, mat_in(material.surface, material.interior));
     scene.add_shape(
         "ball",
@@ -650,4 +660,77 @@ fn diffusion_attenuates_through_a_thin_slab() {
         assert!((rd.0 - rw.0).abs() < 0.1, "{what}");
         assert!((td.0 - tw.0).abs() < 0.1, "{what}");
     }
+}
+
+/// The diffusion mode's MIS pdf on a ball about as large as the profile's reach (radius 1,
+/// `r_max` 1.5: the feeler finds the far side, so the object counts as thin), seen at its
+/// top under a uniform sky, index-matched: every exit sees the sky, so the pixel is the
+/// model's integral over the ball's surface within `r_max` of the entry point,
+/// `2 pi int f(theta) R(dist(theta)) sin(theta) dtheta` (entry side above the half-depth:
+/// `f = R_KM / A`, `dist = |v|`; far side: `f = T_KM / A`, `dist` across), integrated
+/// numerically here. With the probes' hit counts traced on every axis the render matches it
+/// within 3 standard errors (0.3 % here). The sampled probe's count used for every axis
+/// (the production approximation, `exact_counts = false`) is printed for comparison: on
+/// this ball it came out at -0.16 % +- 0.33 %, too small to measure (the normal probes find
+/// one hit and the tangent ones two, but where they differ the tangents' `|n_i . a_k|` is
+/// small); it is not asserted.
+#[test]
+fn diffusion_mis_counts_every_axis_on_a_small_ball() {
+    use risotto::engine::subsurface::{SubsurfaceMode, SubsurfaceParams};
+    let albedo = 0.8f32;
+    let s = risotto::systems::bssrdf::scaling(albedo);
+    let d = 1.5 / 26.7;
+    let params = SubsurfaceParams {
+        ior: 1.0,
+        albedo: Rgb::splat(albedo),
+        mean_free_path: Rgb::splat(d * s),
+        unit_length: 1.0,
+        g: 0.0,
+        mode: SubsurfaceMode::Diffusion,
+    };
+    let medium = params.diffusion();
+    let (near, far) = medium.layer_factors(2.0);
+    let d = medium.d.g;
+    let r_max = risotto::systems::bssrdf::max_radius(d);
+    let n = 400_000;
+    let theta_max = 2.0 * (r_max as f64 / 2.0).min(1.0).asin();
+    let dt = theta_max / n as f64;
+    let want: f64 = (0..n)
+        .map(|k| {
+            let t = (k as f64 + 0.5) * dt;
+            let (f, dist) = if t.cos() - 1.0 < -1.0 {
+                (far[1] as f64, t.sin())
+            } else {
+                (near[1] as f64, 2.0 * (t / 2.0).sin())
+            };
+            let r = risotto::systems::bssrdf::profile(albedo, d, dist as f32) as f64;
+            2.0 * std::f64::consts::PI * f * r * t.sin() * dt
+        })
+        .sum();
+    let render_ball = |exact: bool| {
+        let mut material = params.material();
+        let Interior::Subsurface(interior) = &mut material.interior else {
+            panic!("subsurface interior");
+        };
+        interior.diffusion.exact_counts = exact;
+        let cam = ortho_camera(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO, Vec3::Z, 0.02, 4, 4);
+        let out = render_with(
+            &unit_ball(material, cam, 4, 4096),
+            LightingTechnique::Mis,
+            None,
+        );
+        assert_clean_walk("small ball", &out);
+        let (mean, se) = image_mean(&out);
+        (mean.g as f64, se.g as f64)
+    };
+    let (exact, se) = render_ball(true);
+    let (approx, se_approx) = render_ball(false);
+    let what = format!(
+        "model {want:.4}: traced counts {exact:.4} +- {se:.4}, sampled count \
+         {approx:.4} +- {se_approx:.4} ({:+.2} %)",
+        100.0 * (approx - want) / want
+    );
+    eprintln!("{what}");
+    assert!(se < 0.005 * want, "{what}: not converged enough to test");
+    assert!((exact - want).abs() < 3.0 * se, "{what}");
 }

@@ -18,10 +18,17 @@
 //! 4. weighs it by the profile over its pdf, **multiple-importance weighted** over the
 //!    three axes and three channels (one-sample balance heuristic): with `v = pi - po`,
 //!    `r_k` its distance from axis `k`'s line through `po`, and `n_i` the normal at `pi`,
-//!    `pdf(pi) = sum_k p_k sum_c (1/3) pdf_c(r_k) / (2 pi r_k) |n_i . a_k| / N` (`N` the
-//!    number of hits of the sampled probe -- the same `N` is used for the other axes'
-//!    probes, which are not traced: the usual production approximation) and
-//!    `weight_c = f_c R_c(dist) / pdf(pi)` (the layer factor `f_c` and `dist` below);
+//!    `pdf(pi) = sum_k p_k sum_c (1/3) pdf_c(r_k) / (2 pi r_k) |n_i . a_k| / N_kc` and
+//!    `weight_c = f_c R_c(dist) / pdf(pi)` (the layer factor `f_c` and `dist` below).
+//!    `N_kc` is the number of hits the probe of axis `k` and channel `c`'s sphere through
+//!    `pi` collects (0 terms where `pi` would come after the first [`MAX_PROBE_HITS`]).
+//!    Where a thickness was measured, the three axes' lines through `pi` are traced
+//!    (over the largest sphere, three more rays per thin entry) and counted per channel
+//!    sphere: the pdf is then exact. Elsewhere -- the object is more than `2 D` thick
+//!    under `po`, so each probe meets one surface, locally flat at the profile's scale --
+//!    the sampled probe's count `N` is used for every axis and channel, the usual
+//!    production approximation, which is exact for a flat half-space and biased by how
+//!    much the untraced probes' counts differ on curved or cornered ones;
 //! 5. returns `pi` as the ray's exit, the weight in its transmission, arriving from inside
 //!    along a cosine-distributed direction about `n_i` (the direction distribution of light
 //!    leaving a diffusing medium), so the dielectric boundary then refracts it out (or
@@ -94,6 +101,11 @@ pub struct DiffusionMedium {
     pub slab_scattering: Rgb,
     /// Extinction for shadow segments.
     pub sigma_t: Rgb,
+    /// Where the object is thin, count every axis' and channel's probe hits through the
+    /// picked hit for the MIS pdf (by tracing them) instead of using the sampled probe's
+    /// count `N` for all (see the module docs). On by default; off only to measure the
+    /// approximation.
+    pub exact_counts: bool,
 }
 
 impl DiffusionMedium {
@@ -241,14 +253,46 @@ impl VolumeIntegrator for DiffusionInterior {
             .collect();
         trace_own_hits(scene, &own, &mut lines, MAX_PROBE_HITS);
         // 4. and 5.: pick a hit, weigh it, and leave from it.
-        let mut exits = Exits::default();
-        for (i, (p, line)) in probes.iter().zip(&lines).enumerate() {
-            let count = line.hits.len();
-            if count == 0 {
-                continue;
+        let picks: Vec<Option<(Vec3, Vec3, usize)>> = probes
+            .iter()
+            .zip(&lines)
+            .map(|(p, line)| {
+                let count = line.hits.len();
+                (count > 0).then(|| {
+                    let pick = ((p.u_pick * count as f32) as usize).min(count - 1);
+                    (line.hits[pick].0, line.hits[pick].1, count)
+                })
+            })
+            .collect();
+        // Where the object is thin, the probes of the other axes (and of the other channels'
+        // spheres) through the picked hit may find another number of hits than the sampled
+        // one: trace the three axes' lines through it, over the largest sphere, and count.
+        let mut recount: Vec<Line> = Vec::new();
+        let mut recount_own: Vec<Option<u32>> = Vec::new();
+        let mut recount_at = vec![usize::MAX; n];
+        if m.exact_counts {
+            for i in 0..n {
+                let Some((pi, _, _)) = picks[i] else { continue };
+                if !thickness[i].is_finite() {
+                    continue;
+                }
+                recount_at[i] = recount.len();
+                let v = pi - rays.origin[i];
+                for &a in &probes[i].axes {
+                    let b = v.dot(a);
+                    let disc = (b * b - (v.length_squared() - reach * reach)).max(0.0);
+                    let (hi, lo) = (-b + disc.sqrt(), -b - disc.sqrt());
+                    recount.push(Line::new(pi + a * hi, -a, 0.0, (hi - lo).max(0.0)));
+                    recount_own.push(own[i]);
+                }
             }
-            let pick = ((p.u_pick * count as f32) as usize).min(count - 1);
-            let (pi, ng) = line.hits[pick];
+            trace_own_hits(scene, &recount_own, &mut recount, 2 * MAX_PROBE_HITS);
+        }
+        let mut exits = Exits::default();
+        for (i, p) in probes.iter().enumerate() {
+            let Some((pi, ng, count)) = picks[i] else {
+                continue;
+            };
             // The outward normal at the exit (the boundary's geometric normal is outward
             // for the closed shapes volumes are made of).
             let ni = ng;
@@ -259,12 +303,21 @@ impl VolumeIntegrator for DiffusionInterior {
                 let rk = (v - a * v.dot(a)).length();
                 let cos = ni.dot(a).abs();
                 for dc in d {
-                    if rk < max_radius(dc) && rk > 0.0 {
-                        pdf += AXIS_PDF[k] / 3.0 * radius_pdf(dc, rk) / (2.0 * PI * rk) * cos;
+                    if !(rk < max_radius(dc) && rk > 0.0) {
+                        continue;
+                    }
+                    let hits = if recount_at[i] == usize::MAX {
+                        Some(count)
+                    } else {
+                        let line = &recount[recount_at[i] + k];
+                        probe_count(&line.hits, pi, a, po, max_radius(dc), thickness[i])
+                    };
+                    if let Some(hits) = hits {
+                        pdf += AXIS_PDF[k] / 3.0 * radius_pdf(dc, rk) / (2.0 * PI * rk) * cos
+                            / hits as f32;
                     }
                 }
             }
-            pdf /= count as f32;
             if !(pdf > 0.0 && pdf.is_finite()) {
                 continue;
             }
@@ -399,6 +452,37 @@ fn trace_own_hits(
             p.tmin = t[j] + ray_offset(s.p) / cos;
         }
     }
+}
+
+/// How many hits the probe of a sphere of radius `r_max` around `po` along `-a` through
+/// `pi` collects (`hits`: the own-boundary hits along `-a` on the line through `pi`, over
+/// a sphere at least as large), or `None` if `pi` comes after the first [`MAX_PROBE_HITS`]
+/// and so cannot be picked. `pi` itself is counted whether or not the retrace found it
+/// (hits within a small tolerance of it are taken for it).
+fn probe_count(
+    hits: &[(Vec3, Vec3)],
+    pi: Vec3,
+    a: Vec3,
+    po: Vec3,
+    r_max: f32,
+    thickness: f32,
+) -> Option<usize> {
+    let tol = (1e-4 * r_max).min(0.1 * thickness);
+    let (mut above, mut others) = (0usize, 0usize);
+    for &(x, _) in hits {
+        if (x - po).length() > r_max {
+            continue;
+        }
+        let s = (x - pi).dot(a);
+        if s.abs() <= tol {
+            continue;
+        }
+        others += 1;
+        if s > 0.0 {
+            above += 1;
+        }
+    }
+    (above < MAX_PROBE_HITS).then_some((others + 1).min(MAX_PROBE_HITS))
 }
 
 /// One ray's probe: its line, and the samples that pick a hit and the exit direction.

@@ -123,6 +123,7 @@ impl SubsurfaceParams {
             ),
             slab_scattering: self.slab_scattering(),
             sigma_t: l.map(|l| 1.0 / l),
+            exact_counts: true,
         }
     }
 
