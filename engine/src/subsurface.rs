@@ -121,8 +121,22 @@ impl SubsurfaceParams {
                 l.g / risotto_systems::bssrdf::scaling(self.albedo.g),
                 l.b / risotto_systems::bssrdf::scaling(self.albedo.b),
             ),
+            slab_scattering: self.slab_scattering(),
             sigma_t: l.map(|l| 1.0 / l),
+            exact_counts: true,
         }
+    }
+
+    /// The two-flux scattering coefficient of the diffusion mode's thin-layer split, per
+    /// world unit: `S = (3/4) sigma_s (1 - g)`, three quarters of the reduced scattering
+    /// coefficient of the walked medium ([`Self::medium`]), the diffusion-theory value of
+    /// Kubelka-Munk's `S` (W. M. Star, J. P. A. Marijnissen and M. J. C. van Gemert, "Light
+    /// dosimetry in optical phantoms and in tissues: I. Multiple flux and transport theory",
+    /// Phys. Med. Biol. 33, 1988: `S = (3/4) sigma_s' - (1/4) sigma_a`, whose absorption
+    /// part is left to `R_inf = A` here).
+    pub fn slab_scattering(&self) -> Rgb {
+        let walk = self.medium();
+        walk.sigma_s * (0.75 * (1.0 - self.g))
     }
 
     /// The material: a smooth dielectric (shadow rays blocked, as a real boundary does)
