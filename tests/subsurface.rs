@@ -598,7 +598,7 @@ fn thin_slab(
         let m = scene.add_material(
             "slab",
             0,
-            mat_in(material.surface, material.interior.clone()),
+            mat_in(material.surface.clone(), material.interior.clone()),
         );
         let black = add_diffuse(&mut scene, "black", 0.0);
         add_box(
