@@ -119,7 +119,7 @@ pub(crate) fn tentative<R: FnMut() -> f32>(
 /// to the next real collision with density `sigma_t(t) exp(-int_0^t sigma_t)`, or passes the
 /// segments with probability `exp(-int sigma_t)` (the transmittance). Tentative collisions
 /// are sampled from each segment's majorant (one exponential draw carried across segment
-/// boundaries, [`DepthToNext`]) and accepted with probability
+/// boundaries: the rest of a draw carries into the next segment) and accepted with probability
 /// `sigma_t(t) / majorant`.
 pub fn delta_tracking(
     segments: impl IntoIterator<Item = MajorantSegment>,
