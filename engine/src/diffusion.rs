@@ -38,7 +38,7 @@ use risotto_systems::bssrdf::{max_radius, profile, radius_pdf, sample_radius};
 use risotto_systems::bxdf::Frame;
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::medium::transmittance;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::{coordinate_epsilon, tmin_past_hit};
 use risotto_systems::sampler::PathSampler;
 use std::f32::consts::PI;
 
@@ -91,7 +91,7 @@ impl VolumeIntegrator for DiffusionInterior {
         let mut fd = Vec::with_capacity(n);
         let mut fmax = Vec::with_capacity(n);
         for i in 0..n {
-            let h = 1000.0 * ray_offset(rays.origin[i]);
+            let h = 1000.0 * coordinate_epsilon(rays.origin[i]);
             fo.push(rays.origin[i] - rays.direction[i] * h);
             fd.push(rays.direction[i]);
             fmax.push(2.0 * h);
@@ -179,8 +179,7 @@ impl VolumeIntegrator for DiffusionInterior {
                     p.hits.push((s.p, s.ng));
                 }
                 // Go on past this surface along the same line.
-                let cos = dd[j].dot(s.ng).abs().max(1e-3);
-                p.tmin = t[j] + ray_offset(s.p) / cos;
+                p.tmin = tmin_past_hit(t[j], s.offset(), s.ng, dd[j]);
             }
         }
         // 4. and 5.: pick a hit, weigh it, and leave from it.
@@ -225,7 +224,7 @@ impl VolumeIntegrator for DiffusionInterior {
             let (rr, phi) = (ux.sqrt(), 2.0 * PI * uy);
             let local = Vec3::new(rr * phi.cos(), rr * phi.sin(), (1.0 - ux).max(0.0).sqrt());
             let dir = Frame::from_normal(ni).to_world(local).normalize_or(ni);
-            let delta = 1000.0 * ray_offset(pi);
+            let delta = 1000.0 * coordinate_epsilon(pi);
             exits.ray.push(i as u32);
             exits.origin.push(pi - dir * delta);
             exits.direction.push(dir);

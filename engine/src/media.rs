@@ -53,7 +53,7 @@ use risotto_systems::medium::{
     sample_free_flight, transmittance,
 };
 use risotto_systems::phase::PhaseFunction;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::{before_hit, coordinate_epsilon};
 use risotto_systems::sampler::{next_4d_column, PathSampler};
 
 /// Lobe bits of a phase-function sample.
@@ -293,11 +293,12 @@ impl HomogeneousInterior<'_> {
             // 1000 offsets of the hit.
             let near_hit = tmax[i] < rays.tmax[i]
                 && f.t
-                    > tmax[i] - 2000.0 * ray_offset(rays.origin[i] + rays.direction[i] * tmax[i]);
+                    > tmax[i]
+                        - 2000.0 * coordinate_epsilon(rays.origin[i] + rays.direction[i] * tmax[i]);
             let scatter_max = match near_hit.then(|| ictx.traced_surface(rays, i)).flatten() {
-                Some((p, ng)) => {
-                    let cos = rays.direction[i].dot(ng).abs().max(1e-3);
-                    let s = tmax[i] - ray_offset(p) / cos;
+                Some(surf) => {
+                    let (o, d) = (rays.origin[i], rays.direction[i]);
+                    let s = before_hit(tmax[i], surf.offset(), surf.ng, o, d);
                     if s < rays.tmin[i] {
                         0.5 * (rays.tmin[i] + tmax[i])
                     } else {
