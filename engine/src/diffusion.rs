@@ -87,6 +87,8 @@ impl VolumeIntegrator for DiffusionInterior {
         let d = m.d.to_array();
         let albedo = m.albedo.to_array();
         // 1. Feelers: a short ray through each entry point along the ray, from just outside.
+        // A feeler must find the surface again, so it starts a positive distance off it:
+        // 1000 `coordinate_epsilon`s of the point (the points' own bounds can be zero).
         let mut fo = Vec::with_capacity(n);
         let mut fd = Vec::with_capacity(n);
         let mut fmax = Vec::with_capacity(n);
@@ -224,6 +226,7 @@ impl VolumeIntegrator for DiffusionInterior {
             let (rr, phi) = (ux.sqrt(), 2.0 * PI * uy);
             let local = Vec3::new(rr * phi.cos(), rr * phi.sin(), (1.0 - ux).max(0.0).sqrt());
             let dir = Frame::from_normal(ni).to_world(local).normalize_or(ni);
+            // A feeler that finds the surface at `pi` again (as the entry feelers above).
             let delta = 1000.0 * coordinate_epsilon(pi);
             exits.ray.push(i as u32);
             exits.origin.push(pi - dir * delta);

@@ -283,6 +283,8 @@ pub fn walk_bundle(
                     }
                 }
                 let end = if f.scattered && !emits {
+                    // How far past the event the segment is traced: a gate with no surface
+                    // yet, in `coordinate_epsilon`s of the event.
                     let margin = 4000.0 * coordinate_epsilon(w.origin[j] + w.direction[j] * f.t);
                     (f.t + margin).min(w.tmax[j])
                 } else {
@@ -383,8 +385,9 @@ pub fn walk_bundle(
                 continue;
             }
             // A new empty ball around the event: the distance to the nearest surface, less
-            // a relative margin for its rounding and the spawn offset (so that no free
-            // step ends within rounding of a surface).
+            // a relative margin for its rounding (`coordinate_epsilon`s of the event: the
+            // nearest surface's bound is not known here), so that no free step ends within
+            // rounding of a surface.
             if !emits {
                 let c = clearance(&scene.geometry, p, f32::INFINITY);
                 w.anchor[j] = p;
