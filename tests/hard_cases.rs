@@ -180,16 +180,13 @@ fn huge_sphere_ground_has_no_black_horizon_band() {
     assert!(checked >= 8 * w, "{checked} pixels checked");
 }
 
-/// A 1 x 1 lamp (radiance 1, facing down) 1 unit over a diffuse floor, both moved by
-/// `offset`; an orthographic camera from above (through the one-sided lamp's back) sees the
-/// floor under it.
-fn lamp_over_floor(offset: Vec3) -> RenderOutput {
-    let n = 16;
+/// A scene of `n x n` pixels, `spp` samples, direct lighting only: a grey (0.5) diffuse
+/// floor, the 10 x 10 square of `y = 0` (normal +y, z x x) around `offset`, seen straight
+/// from above by an orthographic camera 2 units across.
+fn grey_floor_from_above(offset: Vec3, n: u32, spp: u32) -> Scene {
     let cam = ortho_camera(offset + Vec3::Y * 3.0, offset, Vec3::Z, 2.0, n, n);
-    let mut scene = Scene::new(cam, settings(n, n, 16, 2));
+    let mut scene = Scene::new(cam, settings(n, n, spp, 2));
     let grey = add_diffuse(&mut scene, "grey", 0.5);
-    let black = add_diffuse(&mut scene, "lamp", 0.0);
-    // Floor normal +y (z x x); lamp normal -y (x x z).
     scene.add_shape(
         "floor",
         quad(
@@ -200,6 +197,16 @@ fn lamp_over_floor(offset: Vec3) -> RenderOutput {
         grey,
         None,
     );
+    scene
+}
+
+/// A 1 x 1 lamp (radiance 1, facing down) 1 unit over a diffuse floor, both moved by
+/// `offset`; an orthographic camera from above (through the one-sided lamp's back) sees the
+/// floor under it.
+fn lamp_over_floor(offset: Vec3) -> RenderOutput {
+    let mut scene = grey_floor_from_above(offset, 16, 16);
+    let black = add_diffuse(&mut scene, "lamp", 0.0);
+    // Lamp normal -y (x x z).
     scene.add_shape(
         "lamp",
         quad(offset + Vec3::new(-0.5, 1.0, -0.5), Vec3::X, Vec3::Z),
@@ -226,6 +233,50 @@ fn area_light_far_from_the_origin_matches_the_origin() {
             1.0,
             0.0,
         );
+    }
+}
+
+/// The grey floor ([`grey_floor_from_above`]) under a slab of absorbing medium `1e-4` thick
+/// (an index-matched box `y in [1e-4, 2e-4]`, Beer `sigma_a = 5000`) and a sun straight down
+/// (irradiance pi), all moved by `offset`: the camera ray and the shadow ray each cross the
+/// slab once, normally, so every pixel is `0.5 exp(-sigma_a d)^2 = 0.5 / e`.
+fn floor_under_thin_slab(offset: Vec3) -> RenderOutput {
+    let mut scene = grey_floor_from_above(offset, 8, 4);
+    let absorber = scene.add_material(
+        "absorber",
+        0,
+        mat_in(
+            Surface::Interface,
+            Interior::Beer {
+                sigma_a: Rgb::splat(5000.0),
+            },
+        ),
+    );
+    add_box(
+        &mut scene,
+        "slab",
+        offset + Vec3::new(-4.0, 1e-4, -4.0),
+        offset + Vec3::new(4.0, 2e-4, 4.0),
+        absorber,
+    );
+    add_sun(&mut scene, 0.0, Rgb::splat(std::f32::consts::PI));
+    render_default(&scene.compile().unwrap())
+}
+
+/// Thin shells far from the origin: the spawn offset was `5e-7` of the largest coordinate
+/// (`5e-3` at `1e4`), so rays restarting on a face of a slab `1e-4` thick skipped the other
+/// face, and shadow rays from the floor started above the slab. With offsets from the
+/// points' own error bounds (zero along `y` here: every face has exact `y` coordinates) the
+/// camera ray and the shadow ray both cross it, at every offset: `0.5 exp(-1) = 0.18394`.
+#[test]
+fn thin_absorbing_slab_far_from_the_origin_attenuates_by_beer() {
+    let want = 0.5 * (-1.0f64).exp();
+    for far in [0.0f32, 1e2, 1e4, 1e5] {
+        let out = floor_under_thin_slab(Vec3::new(far, 0.0, far));
+        assert_finite("thin slab", &out);
+        // Slab faces are 1e-4 apart in f32: `2e-4 - 1e-4` is exact to 1e-11, but the
+        // thickness itself is f32's 1e-4, 2.5e-9 relative from the decimal; allow 1e-4.
+        assert_matches(&format!("offset {far}"), image_mean(&out), want, 1e-4);
     }
 }
 

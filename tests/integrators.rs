@@ -52,7 +52,7 @@ use risotto::engine::stats::SystemStats;
 use risotto::engine::transmission::trace_shadow_rays;
 use risotto::systems::camera::push_camera_rays;
 use risotto::systems::lights::LightSampleColumns;
-use risotto::systems::ray::{ray_offset, spawn_origin};
+use risotto::systems::ray::{shadow_ray, skip_tmin, spawn_origin};
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{
     LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints, ShadowRayRow, ShadowRays, VolumeEntry,
@@ -250,7 +250,7 @@ impl DirectOnly {
                     let p = pts.p[i];
                     row.throughput *= pts.transmission[i];
                     row.origin = p;
-                    row.tmin = ray_offset(p) / row.direction.dot(pts.ng[i]).abs().max(1e-3);
+                    row.tmin = skip_tmin(pts.p[i], pts.p_offset[i], pts.ng[i], row.direction);
                     row.tmax = f32::INFINITY;
                     row.passes += 1;
                     let shape = pts.shape[i];
@@ -299,6 +299,7 @@ impl DirectOnly {
             let (mut wi, mut distance) = (vec![Vec3::Z; m], vec![0.0; m]);
             let (mut radiance, mut pdf, mut delta) =
                 (vec![Rgb::BLACK; m], vec![0.0; m], vec![false; m]);
+            let mut margin = vec![0.0; m];
             scene.lights.sample_column(
                 &scene.geometry,
                 ctx.p(),
@@ -310,6 +311,7 @@ impl DirectOnly {
                     radiance: &mut radiance,
                     pdf: &mut pdf,
                     delta: &mut delta,
+                    margin: &mut margin,
                 },
             );
             let (mut value, mut bxdf_pdf) = (vec![Rgb::BLACK; m], vec![0.0; m]);
@@ -325,15 +327,12 @@ impl DirectOnly {
                     continue;
                 }
                 let p = ctx.p()[k];
-                let offset = if on_surface { ray_offset(p) } else { 0.0 };
+                let origin = spawn_origin(p, ctx.ng()[k], ctx.p_offset()[k], wi[k], on_surface);
+                let (direction, tmax) = shadow_ray(p, origin, wi[k], distance[k], margin[k]);
                 shadow.push(ShadowRayRow {
-                    origin: spawn_origin(p, ctx.ng()[k], wi[k], on_surface),
-                    direction: wi[k],
-                    tmax: if distance[k].is_finite() {
-                        distance[k] * (1.0 - 1e-4) - offset
-                    } else {
-                        f32::INFINITY
-                    },
+                    origin,
+                    direction,
+                    tmax,
                     contribution,
                     weight,
                     path: rays.path[r],

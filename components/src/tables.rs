@@ -269,6 +269,11 @@ soa_table! {
         p: Vec3,
         /// Geometric normal `Ng` (outward for closed shapes).
         ng: Vec3,
+        /// How far along `ng` the exact surface can be from `p`: `dot(|ng|, p_error)` of
+        /// the point's per-component rounding-error bound (0 inside a volume). Rays spawned
+        /// here move off the surface by it (`risotto_systems::ray`); one `f32` rather than
+        /// the `Vec3` bound because every use is along `ng`.
+        p_offset: f32,
         /// Shading normal `Nn`, on the same side as `ng`.
         nn: Vec3,
         /// Unit vector towards the viewer `Vn` (`-ray direction`).
@@ -336,6 +341,7 @@ impl ShadingPointRow {
         ShadingPointRow {
             p,
             ng: -direction,
+            p_offset: 0.0,
             nn: -direction,
             vn: -direction,
             vlen: 0.0,
@@ -366,6 +372,7 @@ impl ShadingPoints {
         let facing = || direction.iter().map(|&d| -d);
         self.p.extend_from_slice(p);
         self.ng.extend(facing());
+        self.p_offset.resize(start + m, row.p_offset);
         self.nn.extend(facing());
         self.vn.extend(facing());
         self.vlen.resize(start + m, row.vlen);

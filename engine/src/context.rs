@@ -6,7 +6,7 @@ use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::stats::{System, SystemStats};
 use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
-use risotto_systems::geometry::SceneGeometry;
+use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
@@ -143,9 +143,9 @@ impl<'s> IntegratorContext<'s> {
         &hits.t[..n]
     }
 
-    /// Where ray `i` of the last [`trace`](Self::trace) (of `rays`) hits, and the surface's
-    /// geometric normal there; `None` for a miss.
-    pub fn traced_surface(&self, rays: &Rays, i: usize) -> Option<(Vec3, Vec3)> {
+    /// Where ray `i` of the last [`trace`](Self::trace) (of `rays`) hits: the point, the
+    /// surface's geometric normal and the point's error bound; `None` for a miss.
+    pub fn traced_surface(&self, rays: &Rays, i: usize) -> Option<SurfaceSample> {
         let h = &self.scratch.hits;
         if h.prim[i] == NO_HIT {
             return None;
@@ -158,7 +158,7 @@ impl<'s> IntegratorContext<'s> {
             h.b1[i],
             h.b2[i],
         );
-        Some((s.p, s.ng))
+        Some(s)
     }
 
     /// The second half of [`nearest_hits`](Self::nearest_hits), for the rays of the last
@@ -214,6 +214,7 @@ impl<'s> IntegratorContext<'s> {
         let end = base + count;
         pts.p.extend_from_slice(&s.zeros[..count]);
         pts.ng.extend_from_slice(&s.zeros[..count]);
+        pts.p_offset.resize(end, 0.0);
         pts.vn.extend_from_slice(&s.zeros[..count]);
         pts.vlen.resize(end, 0.0);
         pts.u.resize(end, 0.0);
@@ -296,7 +297,7 @@ fn group_by_material(
     }
 }
 
-/// Pass 1: `p`, `ng`, `u`, `v` (on spheres `u = v = 0` unless `sphere_uv`: some material
+/// Pass 1: `p`, `ng`, `p_offset`, `u`, `v` (on spheres `u = v = 0` unless `sphere_uv`: some material
 /// reads them, [`crate::plugin::InstanceHints::READS_SURFACE_UV`]).
 #[inline(never)]
 fn write_surfaces(
@@ -310,6 +311,7 @@ fn write_surfaces(
 ) {
     let (n, count) = (hits.len(), sorted.len());
     let (p, ng) = (&mut pts.p[base..][..count], &mut pts.ng[base..][..count]);
+    let p_offset = &mut pts.p_offset[base..][..count];
     let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
     let (prims, b1, b2) = (&hits.prim[..n], &hits.b1[..n], &hits.b2[..n]);
     let triangles = geometry.triangles();
@@ -319,6 +321,7 @@ fn write_surfaces(
         if let Some(surf) = triangles.surface_at(prims[i], b1[i], b2[i]) {
             p[k] = surf.p;
             ng[k] = surf.ng;
+            p_offset[k] = surf.offset();
             u[k] = surf.uv.x;
             v[k] = surf.uv.y;
         } else {
@@ -339,6 +342,7 @@ fn write_surfaces(
                 );
                 p[k] = surf.p;
                 ng[k] = surf.ng;
+                p_offset[k] = surf.offset();
                 let uv = if sphere_uv {
                     geometry.surface_uv(
                         prims[i],
@@ -618,6 +622,7 @@ mod tests {
                         .surface_at(prim, o, d, t, hits.b1[i], hits.b2[i]);
                     assert_eq!(pts.p[k], surf.p);
                     assert_eq!(pts.ng[k], surf.ng);
+                    assert_eq!(pts.p_offset[k], surf.offset());
                     assert_eq!(pts.nn[k], surf.ng);
                     assert_eq!((pts.u[k], pts.v[k]), (surf.uv.x, surf.uv.y));
                     assert!((pts.p[k] - (o + t * d)).length() < 1e-4);

@@ -76,7 +76,7 @@ use risotto_systems::bssrdf::{
 use risotto_systems::bxdf::Frame;
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::medium::transmittance;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::{coordinate_epsilon, tmin_past_hit};
 use risotto_systems::sampler::PathSampler;
 use std::f32::consts::PI;
 
@@ -167,12 +167,14 @@ impl VolumeIntegrator for DiffusionInterior {
             .map(|i| rays.volume_stack[i].innermost().map(|e| e.shape))
             .collect();
         // 1. Feelers: a short ray through each entry point along the ray, from just outside,
-        // for the normal there.
+        // for the normal there. A feeler must find the surface again, so it starts a positive
+        // distance off it: 1000 `coordinate_epsilon`s of the point (the points' own bounds can
+        // be zero).
         let mut fo = Vec::with_capacity(n);
         let mut fd = Vec::with_capacity(n);
         let mut fmax = Vec::with_capacity(n);
         for i in 0..n {
-            let h = 1000.0 * ray_offset(rays.origin[i]);
+            let h = 1000.0 * coordinate_epsilon(rays.origin[i]);
             fo.push(rays.origin[i] - rays.direction[i] * h);
             fd.push(rays.direction[i]);
             fmax.push(2.0 * h);
@@ -203,7 +205,12 @@ impl VolumeIntegrator for DiffusionInterior {
         let mut feelers: Vec<Line> = (0..n)
             .map(|i| {
                 let po = rays.origin[i];
-                Line::new(po, -normals[i], 1000.0 * ray_offset(po), 2.0 * reach)
+                Line::new(
+                    po,
+                    -normals[i],
+                    1000.0 * coordinate_epsilon(po),
+                    2.0 * reach,
+                )
             })
             .collect();
         trace_own_hits(scene, &own, &mut feelers, 1);
@@ -358,7 +365,7 @@ impl VolumeIntegrator for DiffusionInterior {
             // grows with the triangle's coordinates, not `pi`'s) would miss the surface and
             // be taken for an escape to the environment; the inset is kept within a quarter
             // of the thickness so that it stays inside thin objects.
-            let inset = (1000.0 * ray_offset(pi))
+            let inset = (1000.0 * coordinate_epsilon(pi))
                 .max(1e-3 * reach)
                 .min(0.25 * thickness[i]);
             exits.ray.push(i as u32);
@@ -448,8 +455,7 @@ fn trace_own_hits(
                 p.hits.push((s.p, s.ng));
             }
             // Go on past this surface along the same line.
-            let cos = dd[j].dot(s.ng).abs().max(1e-3);
-            p.tmin = t[j] + ray_offset(s.p) / cos;
+            p.tmin = tmin_past_hit(t[j], s.offset(), s.ng, dd[j]);
         }
     }
 }

@@ -53,7 +53,7 @@ use risotto_systems::medium::{
     sample_free_flight, transmittance,
 };
 use risotto_systems::phase::PhaseFunction;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::{before_hit, coordinate_epsilon};
 use risotto_systems::sampler::{next_4d_column, PathSampler};
 
 /// Lobe bits of a phase-function sample.
@@ -287,17 +287,17 @@ impl HomogeneousInterior<'_> {
             // (spawned without an offset) would then cross that boundary again, and the
             // volume stack would never see the ray leave (an albedo-1 furnace then walks
             // forever outside). Such points move to `[tmin, scatter_max]`, a shift of
-            // ~1e-6 relative, far below any noise; `scatter_max` is the hit less its
-            // spawn offset along the ray (as pass-throughs measure it, the cosine clamped
-            // at 1e-3), needed (and the hit's normal computed) only for points within
-            // 1000 offsets of the hit.
+            // ~1e-6 relative, far below any noise; `scatter_max` is the hit less the hit's
+            // error offset and the point's own rounding along the ray (`before_hit`, the
+            // cosine clamped at 1e-3), needed (and the hit's surface computed) only for
+            // points near the hit. The gate has no surface bound yet: it allows 2000
+            // `coordinate_epsilon`s of `|o| + |t d|` (which bound the point's rounding).
+            let (o, d) = (rays.origin[i], rays.direction[i]);
             let near_hit = tmax[i] < rays.tmax[i]
-                && f.t
-                    > tmax[i] - 2000.0 * ray_offset(rays.origin[i] + rays.direction[i] * tmax[i]);
+                && f.t > tmax[i] - 2000.0 * coordinate_epsilon(o.abs() + (d * tmax[i]).abs());
             let scatter_max = match near_hit.then(|| ictx.traced_surface(rays, i)).flatten() {
-                Some((p, ng)) => {
-                    let cos = rays.direction[i].dot(ng).abs().max(1e-3);
-                    let s = tmax[i] - ray_offset(p) / cos;
+                Some(surf) => {
+                    let s = before_hit(tmax[i], surf.offset(), surf.ng, o, d);
                     if s < rays.tmin[i] {
                         0.5 * (rays.tmin[i] + tmax[i])
                     } else {

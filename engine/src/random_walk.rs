@@ -89,7 +89,7 @@ use risotto_systems::clearance::clearance;
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::medium::{channel_pdf, emitted_radiance, sample_free_flight, FreeFlight};
 use risotto_systems::phase::PhaseFunction;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::{before_hit, coordinate_epsilon};
 use risotto_systems::sampler::{PathSampler, SplitMix64};
 
 /// The smallest survival probability of the walk's Russian roulette (see the module docs).
@@ -283,7 +283,9 @@ pub fn walk_bundle(
                     }
                 }
                 let end = if f.scattered && !emits {
-                    let margin = 4000.0 * ray_offset(w.origin[j] + w.direction[j] * f.t);
+                    // How far past the event the segment is traced: a gate with no surface
+                    // yet, in `coordinate_epsilon`s of the event.
+                    let margin = 4000.0 * coordinate_epsilon(w.origin[j] + w.direction[j] * f.t);
                     (f.t + margin).min(w.tmax[j])
                 } else {
                     w.tmax[j]
@@ -368,8 +370,7 @@ pub fn walk_bundle(
             if hit {
                 let seg = t_hit[j];
                 let s = scene.geometry.surface_at(prim[j], o, d, seg, b1[j], b2[j]);
-                let cos = d.dot(s.ng).abs().max(1e-3);
-                let end = seg - ray_offset(s.p) / cos;
+                let end = before_hit(seg, s.offset(), s.ng, o, d);
                 t = t.min(if end < w.tmin[j] {
                     0.5 * (w.tmin[j] + seg)
                 } else {
@@ -384,12 +385,13 @@ pub fn walk_bundle(
                 continue;
             }
             // A new empty ball around the event: the distance to the nearest surface, less
-            // a relative margin for its rounding and the spawn offset (so that no free
-            // step ends within rounding of a surface).
+            // a relative margin for its rounding (`coordinate_epsilon`s of the event: the
+            // nearest surface's bound is not known here), so that no free step ends within
+            // rounding of a surface.
             if !emits {
                 let c = clearance(&scene.geometry, p, f32::INFINITY);
                 w.anchor[j] = p;
-                w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * ray_offset(p)).max(0.0);
+                w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * coordinate_epsilon(p)).max(0.0);
             }
             if live != j {
                 w.keep(j, live);

@@ -690,16 +690,16 @@ impl CompiledScene {
                 break;
             }
             let shape = self.prim_shape[prim[0] as usize];
+            let s = self
+                .geometry
+                .surface_at(prim[0], origin, d, t[0], b1[0], b2[0]);
             if self.tracks_interior(shape) {
-                let s = self
-                    .geometry
-                    .surface_at(prim[0], origin, d, t[0], b1[0], b2[0]);
                 // Seen along `forward`, the opposite of the walk's direction.
                 crossings.push((shape, forward.dot(s.ng) < 0.0));
             }
-            // Past this hit by the spawn offset at the hit point (coincident hits, such as
-            // an edge two triangles share, count once).
-            t0 = t[0] + risotto_systems::ray::ray_offset(origin + d * t[0]);
+            // Past this hit by its surface's error offset along the ray (coincident hits,
+            // such as an edge two triangles share, count once).
+            t0 = risotto_systems::ray::tmin_past_hit(t[0], s.offset(), s.ng, d);
         }
         for &(shape, front) in crossings.iter().rev() {
             stack.cross(self.volume_entry(shape), front);

@@ -257,6 +257,11 @@ impl<'a> ShadingContext<'a> {
     pub fn ng(&self) -> &'a [Vec3] {
         &self.points.ng[self.range.clone()]
     }
+    /// Error offsets of the positions along `Ng` (`dot(|Ng|, p_error)`, 0 inside volumes):
+    /// what rays spawned here move off the surface by (`risotto_systems::ray::spawn_origin`).
+    pub fn p_offset(&self) -> &'a [f32] {
+        &self.points.p_offset[self.range.clone()]
+    }
     /// Shading normals `Nn`.
     pub fn nn(&self) -> &'a [Vec3] {
         &self.points.nn[self.range.clone()]

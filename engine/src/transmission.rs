@@ -27,7 +27,7 @@ use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
 use risotto_systems::intersect::{intersect_closest, intersect_occluded};
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::tmin_past_hit;
 use risotto_systems::sampler::PathSampler;
 
 /// Seed salt of shadow rays' sampler sequences: decorrelated from the camera path's sequence
@@ -219,9 +219,13 @@ pub fn trace_shadow_rays_with(
                         .hit_is_front(prim[k], origin[k], direction[k], t[k], b1[k]);
                 stacks[iu].cross(scene.volume_entry(shape), front);
             }
-            let p = origin[k] + direction[k] * t[k];
+            // Past the hit by its surface's error offset along the ray (coincident hits,
+            // such as an edge two triangles share, count once).
+            let s = scene
+                .geometry
+                .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
             entered[iu] = t[k];
-            t0[iu] = t[k] + ray_offset(p);
+            t0[iu] = tmin_past_hit(t[k], s.offset(), s.ng, direction[k]);
             if t0[iu] < shadow.tmax[iu] {
                 next.push(i);
             }

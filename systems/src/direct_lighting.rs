@@ -9,7 +9,7 @@
 
 use crate::lights::{power_heuristic, LightSampleColumns};
 use crate::path::Vertices;
-use crate::ray::{ray_offset, shadow_ray, toward, InteriorBoundaries};
+use crate::ray::{offset_origin, shadow_ray, InteriorBoundaries};
 use glam::{BVec4A, Vec4};
 use risotto_components::{Rgb, ShadowRayColumns};
 
@@ -126,9 +126,11 @@ pub fn spawn_shadow_rays(
     let (in_path, in_dimension) = (&incoming.path[..n], &dimension[..n]);
     let ls = &light.samples;
     let (l_wi, l_distance, l_radiance) = (&ls.wi[..m], &ls.distance[..m], &ls.radiance[..m]);
+    let l_margin = &ls.margin[..m];
     let l_pdf = &ls.pdf[..m];
     let value = &light.value[..m];
     let (p, ng) = (&pts.p[range.clone()][..m], &pts.ng[range.clone()][..m]);
+    let p_offset = &pts.p_offset[range.clone()][..m];
     // The factors `w / pdf` of all points, vectorised.
     light_weights(
         l_pdf,
@@ -163,18 +165,18 @@ pub fn spawn_shadow_rays(
         o_direction[count] = wi;
         o_path[count] = in_path[r];
         o_dimension[count] = in_dimension[r];
-        // Origin offset to the side of the surface the ray leaves to; the length stops
-        // short of the light by the same offset.
+        // Origin offset by its error bound to the side of the surface the ray leaves to
+        // (`crate::ray`).
         let (p, ng) = (p[k], ng[k]);
-        let offset = ray_offset(p);
         o_origin[count] = if on_surface {
-            p + ng * toward(wi, ng, offset)
+            offset_origin(p, ng, p_offset[k], wi)
         } else {
             p
         };
-        // Aimed at the light point from the origin itself, stopping short of it by its own
-        // rounding (`shadow_ray`).
-        (o_direction[count], o_tmax[count]) = shadow_ray(p, o_origin[count], wi, l_distance[k]);
+        // Aimed at the light point from the origin itself, stopping short of it by the
+        // light point's own bound (`shadow_ray`).
+        (o_direction[count], o_tmax[count]) =
+            shadow_ray(p, o_origin[count], wi, l_distance[k], l_margin[k]);
         if let Some(b) = boundaries {
             let stack = &mut o_stack[count];
             *stack = incoming.volume_stack[r].clone();

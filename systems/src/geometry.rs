@@ -40,6 +40,78 @@ pub struct SurfaceSample {
     /// always `(0, 0)` from [`SceneGeometry::surface_at`] (their parameters cost two `atan2`
     /// that hardly any material wants: [`SceneGeometry::surface_uv`] computes them).
     pub uv: Vec2,
+    /// Conservative per-component absolute bound of `p`'s rounding error: a point of the
+    /// exact surface lies in the box `p +- p_error` (pbrt-v4 sec. 6.8; how each shape's
+    /// bound is derived: [`triangle_point_error`], [`sphere_point_error`]).
+    pub p_error: Vec3,
+}
+
+impl SurfaceSample {
+    /// `dot(|ng|, p_error)`: how far along `ng` the surface can be from `p`, the distance a
+    /// ray spawned here moves off ([`crate::ray::spawn_origin`]).
+    #[inline(always)]
+    pub fn offset(&self) -> f32 {
+        surface_offset(self.ng, self.p_error)
+    }
+}
+
+/// `dot(|ng|, p_error)` (pbrt-v4's `OffsetRayOrigin`): the largest distance along the unit
+/// normal `ng` between a point and the surface it is within `p_error` of.
+#[inline(always)]
+pub fn surface_offset(ng: Vec3, p_error: Vec3) -> f32 {
+    ng.abs().dot(p_error)
+}
+
+/// `gamma(n) = n eps / (1 - n eps)` with `eps = 2^-24` (unit roundoff): the relative error
+/// bound of `n` chained f32 operations (Higham; pbrt-v4 sec. 6.8.1).
+#[inline(always)]
+pub(crate) const fn gamma(n: f32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    n * e / (1.0 - n * e)
+}
+
+/// The smallest subnormal: bounds the absolute error of an f32 product or sum that
+/// underflows (the relative bounds `gamma` do not cover results below `f32::MIN_POSITIVE`).
+pub(crate) const UNDERFLOW: f32 = f32::from_bits(8);
+
+/// Error bound of `p = v0 b0 + v1 b1 + v2 b2` computed in f32 as [`SceneGeometry::surface_at`] interpolates
+/// triangle hits,
+/// with `b0 = (1 - b1) - b2` rounded (`b0` here is that computed value), against the exact
+/// point `(1 - b1 - b2) v0 + b1 v1 + b2 v2` of the triangle's plane.
+///
+/// pbrt-v4 sec. 6.8.6 bounds a barycentric point by `gamma(7) sum |b_i p_i|` with all three
+/// `b_i` from the intersection test; here `b0` is derived from `b1, b2`, which is exact in
+/// its own right but for the rounding of `b0`: `fl(fl(1 - b1) - b2)` errs by at most
+/// `gamma(2) (1 + |b1| + |b2|)`, an error that multiplies `v0` whatever `b0`'s size (near
+/// the edge `v1 v2`, `b0` is small while its error is not), so the bound is
+/// - `gamma(3) sum |b_i v_i|` for the three products and two sums (Higham's bound of a
+///   sum of products), plus
+/// - `gamma(2) (1 + |b1| + |b2|) |v0|` for `b0`'s rounding,
+///
+/// each `gamma` raised by one to cover the rounding of the bound's own arithmetic, and a
+/// few subnormals for products that underflow. Per component: a floor at `y = 0` has
+/// `p_error.y = 0` whatever its `x` and `z`.
+#[inline(always)]
+pub fn triangle_point_error(v: [Vec3A; 3], b0: f32, b1: f32, b2: f32) -> Vec3 {
+    let [v0, v1, v2] = v.map(Vec3A::abs);
+    let sum = v0 * b0.abs() + v1 * b1.abs() + v2 * b2.abs();
+    let e = sum * gamma(4.0) + v0 * (gamma(3.0) * (1.0 + b1.abs() + b2.abs()));
+    Vec3::from(e) + Vec3::splat(UNDERFLOW)
+}
+
+/// Error bound of a sphere point computed as `(centre + n r)` in double precision from the
+/// f32 centre and radius and a unit `n` normalised in double precision, then rounded once to
+/// f32 (`p` is that rounded point): the f64 point is within about ten f64 ulps of `|centre| +
+/// r` of the exact sphere (`n`'s length errs by a few ulps, the sum by two), bounded by
+/// `2^-48 (|centre_i| + r)`, and the final rounding adds half an f32 ulp of `p_i`, bounded by
+/// `eps |p_i|` plus a subnormal. pbrt-v4 (sec. 6.8.6) re-projects an f32 point and bounds it
+/// by `gamma(5) |p|`; one rounding from f64 is tighter by a factor of ten, and per component.
+#[inline(always)]
+pub fn sphere_point_error(center: Vec3, radius: f32, p: Vec3) -> Vec3 {
+    const F64_PART: f32 = 1.0 / (1u64 << 48) as f32;
+    p.abs() * f32::EPSILON
+        + (center.abs() + Vec3::splat(radius)) * F64_PART
+        + Vec3::splat(UNDERFLOW)
 }
 
 /// All primitives of a compiled scene and the BVH over them.
@@ -111,10 +183,12 @@ impl Triangle {
     /// [`SceneGeometry::surface_at`] on this triangle.
     #[inline(always)]
     fn surface_at(&self, b1: f32, b2: f32) -> SurfaceSample {
+        let b0 = 1.0 - b1 - b2;
         SurfaceSample {
             p: self.point(b1, b2),
             ng: self.ng(),
             uv: Vec2::new(b1, b2),
+            p_error: triangle_point_error(self.v, b0, b1, b2),
         }
     }
 }
@@ -416,10 +490,12 @@ impl SceneGeometry {
         // that coordinate) covers. `centre + n r` in f32 erred by ulps of |centre| + r: at
         // the top of a unit sphere centred at (0, -1, 0), where p is near zero, a 6e-8
         // error against a 1e-9 offset put a quarter of the shadow rays inside (acne).
+        let p = (s.center.as_dvec3() + n * s.radius as f64).as_vec3();
         SurfaceSample {
-            p: (s.center.as_dvec3() + n * s.radius as f64).as_vec3(),
+            p,
             ng: n.as_vec3(),
             uv: Vec2::ZERO,
+            p_error: sphere_point_error(s.center, s.radius, p),
         }
     }
 
@@ -437,9 +513,21 @@ impl SceneGeometry {
     /// Samples a point uniformly by area on primitive `prim` (for area lights) from
     /// `u` in `[0, 1)^2`. Returns the point and the unit geometric normal (as in
     /// [`Self::surface_at`]); the area-measure pdf is `1 / prim_area(prim)`. Degenerate
-    /// triangles (zero area) return a zero normal.
+    /// triangles (zero area) return a zero normal. [`Self::sample_surface`] also returns the
+    /// point's error bound.
     #[inline]
     pub fn sample_prim(&self, prim: u32, u: Vec2) -> (Vec3, Vec3) {
+        let s = self.sample_surface(prim, u);
+        (s.p, s.ng)
+    }
+
+    /// [`Self::sample_prim`] with the point's error bound (`p_error`; `uv` is `(0, 0)`).
+    /// Triangles: the barycentrics of the Heitz map, `b2 = (1 - b0) - b1` rounded, bounded
+    /// as [`triangle_point_error`] with the roles of `v0` and `v2` swapped. Spheres: the
+    /// point on the unit sphere in double precision, rounded once (bound:
+    /// [`sphere_point_error`]).
+    #[inline]
+    pub fn sample_surface(&self, prim: u32, u: Vec2) -> SurfaceSample {
         let prim = prim as usize;
         if prim < self.triangles.len() {
             let tri = &self.triangles[prim];
@@ -454,15 +542,27 @@ impl SceneGeometry {
             };
             let b2 = 1.0 - b0 - b1;
             let [v0, v1, v2] = tri.v;
-            ((v0 * b0 + v1 * b1 + v2 * b2).into(), tri.ng())
+            SurfaceSample {
+                p: (v0 * b0 + v1 * b1 + v2 * b2).into(),
+                ng: tri.ng(),
+                uv: Vec2::ZERO,
+                p_error: triangle_point_error([v2, v1, v0], b2, b1, b0),
+            }
         } else {
+            use std::f64::consts::PI as PI64;
             let s = self.spheres[prim - self.triangles.len()];
             // Archimedes: z = cos(theta) is uniform on [-1, 1] for area-uniform points.
-            let z = 1.0 - 2.0 * u.x;
+            let z = 1.0 - 2.0 * u.x as f64;
             let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.y;
-            let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-            (s.center + n * s.radius, n)
+            let phi = 2.0 * PI64 * u.y as f64;
+            let n = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            let p = (s.center.as_dvec3() + n * s.radius as f64).as_vec3();
+            SurfaceSample {
+                p,
+                ng: n.as_vec3(),
+                uv: Vec2::ZERO,
+                p_error: sphere_point_error(s.center, s.radius, p),
+            }
         }
     }
 }

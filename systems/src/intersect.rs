@@ -334,11 +334,10 @@ impl WatertightRay {
 /// of its origin are decided in double precision instead of rejected.
 ///
 /// A ray spawned off a surface must keep `tmin = +0.0`: its origin is the surface point
-/// moved by [`crate::ray::ray_offset`], which is relative to the point's coordinates, while
-/// the point's own rounding error is relative to its triangle's vertices (pbrt-v4 sec.
-/// 6.8.6): on a large triangle near the origin the spawned ray can start on the wrong side
-/// of its own triangle, and only the f32 bound, which grows with the vertices too, rejects
-/// that re-hit.
+/// moved off by the point's error bound ([`crate::ray::spawn_origin`]), which is zero where
+/// the point is exact (a floor at `y = 0` has exact `y` coordinates), so such a ray may start
+/// on its own surface, and only the triangle test's f32 bound on `t` rejects the re-hit at
+/// `t ~ 0`.
 pub const FREE_ORIGIN: f32 = -0.0;
 
 /// Whether `tmin` marks a ray from a free origin ([`FREE_ORIGIN`]).

@@ -8,7 +8,7 @@
 //! shading point, Dirac lights (distant, point) report `delta = true` and pdf 1 x selection.
 
 use crate::distribution::{Distribution1D, EnvironmentMap, ONE_MINUS_EPSILON};
-use crate::geometry::SceneGeometry;
+use crate::geometry::{gamma, SceneGeometry, UNDERFLOW};
 use crate::simd8::{Backend, Kernel8, Lanes8, Mask8, Row8, Simd};
 use glam::{Vec2, Vec3};
 use risotto_components::Rgb;
@@ -135,6 +135,29 @@ pub struct LightSample {
     pub pdf: f32,
     /// True for Dirac lights (no MIS).
     pub delta: bool,
+    /// How far short of the sampled point a shadow ray must stop, along the ray: the
+    /// projection of the point's error bound (and of its rounding when the shadow ray
+    /// rebuilds it as `p + distance * wi`) on the light's normal, over `|cos|` at the light
+    /// ([`light_margin`]); 0 for point lights (no surface) and lights at infinity.
+    pub margin: f32,
+}
+
+/// [`LightSample::margin`] of a point `q` on a light surface with unit normal `n` and
+/// error bound `q_error`, sampled from a point `p` (`d = q - p` as computed, `cos_light =
+/// |n . wi|`): the surface is within `dot(|n|, q_error)` of `q` along `n`, and the shadow
+/// ray's rebuilt `p + distance * wi` within `gamma(5) (|d_i| + |q_i|)` of `q` per component
+/// (the product `(d_i / distance) distance` errs by `gamma(3)` whatever `distance`'s error,
+/// the subtraction and the sum by one rounding each); along the ray both are divided by the
+/// cosine. The sum is raised by `1 + gamma(4)` for its own rounding. Written per component
+/// so that [`LightSet::sample_column`]'s lanes repeat the same operations.
+#[inline(always)]
+pub fn light_margin(n: Vec3, q_error: Vec3, q: Vec3, d: Vec3, cos_light: f32) -> f32 {
+    let g = gamma(5.0);
+    let ex = q_error.x + g * (d.x.abs() + q.x.abs());
+    let ey = q_error.y + g * (d.y.abs() + q.y.abs());
+    let ez = q_error.z + g * (d.z.abs() + q.z.abs());
+    let along_n = n.x.abs() * ex + n.y.abs() * ey + n.z.abs() * ez;
+    along_n * (1.0 + gamma(4.0)) / cos_light
 }
 
 /// Output columns of [`LightSet::sample_column`], one row per point (all equally long). A
@@ -153,6 +176,8 @@ pub struct LightSampleColumns<'a> {
     pub pdf: &'a mut [f32],
     /// True for Dirac lights (no MIS).
     pub delta: &'a mut [bool],
+    /// Where the shadow ray stops short of the sampled point (see [`LightSample::margin`]).
+    pub margin: &'a mut [f32],
 }
 
 impl LightSampleColumns<'_> {
@@ -174,6 +199,7 @@ impl LightSampleColumns<'_> {
             radiance: self.radiance[i],
             pdf: self.pdf[i],
             delta: self.delta[i],
+            margin: self.margin[i],
         })
     }
 
@@ -186,12 +212,14 @@ impl LightSampleColumns<'_> {
             radiance: Rgb::BLACK,
             pdf: 0.0,
             delta: false,
+            margin: 0.0,
         });
         self.wi[i] = s.wi;
         self.distance[i] = s.distance;
         self.radiance[i] = s.radiance;
         self.pdf[i] = s.pdf;
         self.delta[i] = s.delta;
+        self.margin[i] = s.margin;
     }
 
     fn columns_equally_long(&self) -> bool {
@@ -200,6 +228,7 @@ impl LightSampleColumns<'_> {
             && self.radiance.len() == n
             && self.pdf.len() == n
             && self.delta.len() == n
+            && self.margin.len() == n
     }
 }
 
@@ -397,7 +426,8 @@ impl LightSet {
         }
         match &self.lights[index] {
             Light::Area { prim, radiance } => {
-                let (q, n) = geometry.sample_prim(*prim, u);
+                let surf = geometry.sample_surface(*prim, u);
+                let (q, n) = (surf.p, surf.ng);
                 let d = q - p;
                 let dist2 = d.length_squared();
                 if dist2 <= 0.0 || !dist2.is_finite() {
@@ -419,6 +449,7 @@ impl LightSet {
                     radiance: *radiance,
                     pdf,
                     delta: false,
+                    margin: light_margin(n, surf.p_error, q, d, cos_light),
                 })
             }
             Light::Distant {
@@ -430,6 +461,7 @@ impl LightSet {
                 radiance: *irradiance,
                 pdf: pmf,
                 delta: true,
+                margin: 0.0,
             }),
             Light::Point {
                 position,
@@ -447,6 +479,7 @@ impl LightSet {
                     radiance: *intensity / dist2,
                     pdf: pmf,
                     delta: true,
+                    margin: 0.0,
                 })
             }
             Light::Environment { radiance, map } => {
@@ -468,6 +501,7 @@ impl LightSet {
                     radiance: le,
                     pdf,
                     delta: false,
+                    margin: 0.0,
                 })
             }
         }
@@ -600,15 +634,25 @@ impl LightSet {
         let [x0, y0, z0, x1, y1, z1, x2, y2, z2, nx, ny, nz, pmf_over_area, r, g, b, triangle] =
             &l8.attr;
         let triangle = s.lookup(triangle, column).gt(zero).bits();
-        let dx =
-            (s.lookup(x0, column) * b0 + s.lookup(x1, column) * b1 + s.lookup(x2, column) * b2)
-                - px;
-        let dy =
-            (s.lookup(y0, column) * b0 + s.lookup(y1, column) * b1 + s.lookup(y2, column) * b2)
-                - py;
-        let dz =
-            (s.lookup(z0, column) * b0 + s.lookup(z1, column) * b1 + s.lookup(z2, column) * b2)
-                - pz;
+        let (x0, y0, z0) = (
+            s.lookup(x0, column),
+            s.lookup(y0, column),
+            s.lookup(z0, column),
+        );
+        let (x1, y1, z1) = (
+            s.lookup(x1, column),
+            s.lookup(y1, column),
+            s.lookup(z1, column),
+        );
+        let (x2, y2, z2) = (
+            s.lookup(x2, column),
+            s.lookup(y2, column),
+            s.lookup(z2, column),
+        );
+        let qx = x0 * b0 + x1 * b1 + x2 * b2;
+        let qy = y0 * b0 + y1 * b1 + y2 * b2;
+        let qz = z0 * b0 + z1 * b1 + z2 * b2;
+        let (dx, dy, dz) = (qx - px, qy - py, qz - pz);
         let dist2 = dx * dx + dy * dy + dz * dz;
         // dist2 > 0 and finite (false for NaN), like sample's early return.
         let ok = dist2.gt(zero) & dist2.lt(inf);
@@ -616,9 +660,30 @@ impl LightSet {
         let inv = one / dist;
         let (wx, wy, wz) = (dx * inv, dy * inv, dz * inv);
         // One-sided emitter: cos_light = -n . wi > 0.
-        let cos_light =
-            (s.lookup(nx, column) * wx + s.lookup(ny, column) * wy + s.lookup(nz, column) * wz)
-                .neg();
+        let (nx, ny, nz) = (
+            s.lookup(nx, column),
+            s.lookup(ny, column),
+            s.lookup(nz, column),
+        );
+        let cos_light = (nx * wx + ny * wy + nz * wz).neg();
+        // `light_margin` of `sample_surface`'s bound, `triangle_point_error([v2, v1, v0],
+        // b2, b1, b0)`, operation for operation.
+        let (ab0, ab1, ab2) = (b0.abs(), b1.abs(), b2.abs());
+        let (g3, g4, g5) = (
+            s.splat(gamma(3.0)),
+            s.splat(gamma(4.0)),
+            s.splat(gamma(5.0)),
+        );
+        let tiny = s.splat(UNDERFLOW);
+        let lever = g3 * ((one + ab1) + ab0);
+        let ex = (x2.abs() * ab2 + x1.abs() * ab1 + x0.abs() * ab0) * g4 + x2.abs() * lever + tiny;
+        let ey = (y2.abs() * ab2 + y1.abs() * ab1 + y0.abs() * ab0) * g4 + y2.abs() * lever + tiny;
+        let ez = (z2.abs() * ab2 + z1.abs() * ab1 + z0.abs() * ab0) * g4 + z2.abs() * lever + tiny;
+        let ex = ex + g5 * (dx.abs() + qx.abs());
+        let ey = ey + g5 * (dy.abs() + qy.abs());
+        let ez = ez + g5 * (dz.abs() + qz.abs());
+        let along_n = nx.abs() * ex + ny.abs() * ey + nz.abs() * ez;
+        let margin = along_n * s.splat(1.0 + gamma(4.0)) / cos_light;
         let pdf = s.lookup(pmf_over_area, column) * dist2 / cos_light;
         let act = s.load(&Row8(active.map(|a| if a { 1.0 } else { 0.0 })));
         let ok = ok & cos_light.gt(zero) & pdf.gt(zero) & pdf.lt(inf) & act.gt(zero);
@@ -638,6 +703,7 @@ impl LightSet {
         *out.distance = dist.to_array();
         *out.pdf = S::F::select(ok, pdf, zero).to_array();
         *out.delta = [false; 8];
+        *out.margin = S::F::select(ok, margin, zero).to_array();
         if triangle != 0xff {
             self.other_lanes(geometry, triangle, p, u, active, out);
         }
@@ -662,6 +728,7 @@ impl LightSet {
             radiance: out.radiance,
             pdf: out.pdf,
             delta: out.delta,
+            margin: out.margin,
         };
         for j in (0..8).filter(|&j| triangle & (1 << j) == 0) {
             let s = active[j]
@@ -697,6 +764,7 @@ struct Out8<'a> {
     radiance: &'a mut [Rgb; 8],
     pdf: &'a mut [f32; 8],
     delta: &'a mut [bool; 8],
+    margin: &'a mut [f32; 8],
 }
 
 /// The arguments of [`LightSet::sample_column`] (columns of equal length, a selection
@@ -725,20 +793,23 @@ impl Kernel8 for LightColumns<'_, '_> {
         let (radiance8, radiance_rest) = out.radiance.as_chunks_mut::<8>();
         let (pdf8, pdf_rest) = out.pdf.as_chunks_mut::<8>();
         let (delta8, delta_rest) = out.delta.as_chunks_mut::<8>();
+        let (margin8, margin_rest) = out.margin.as_chunks_mut::<8>();
         let outs = wi8
             .iter_mut()
             .zip(distance8)
             .zip(radiance8)
             .zip(pdf8)
-            .zip(delta8);
+            .zip(delta8)
+            .zip(margin8);
         for (((p, u), a), o) in p8.iter().zip(u8).zip(a8).zip(outs) {
-            let ((((wi, distance), radiance), pdf), delta) = o;
+            let (((((wi, distance), radiance), pdf), delta), margin) = o;
             let o = Out8 {
                 wi,
                 distance,
                 radiance,
                 pdf,
                 delta,
+                margin,
             };
             set.sample_eight(s, selection, geometry, (p, u, a), o);
         }
@@ -751,13 +822,14 @@ impl Kernel8 for LightColumns<'_, '_> {
                 (p[j], u[j], a[j]) = (pr, ur, ar);
             }
             let (mut wi, mut distance, mut radiance) = ([Vec3::Z; 8], [0.0; 8], [Rgb::BLACK; 8]);
-            let (mut pdf, mut delta) = ([0.0; 8], [false; 8]);
+            let (mut pdf, mut delta, mut margin) = ([0.0; 8], [false; 8], [0.0; 8]);
             let o = Out8 {
                 wi: &mut wi,
                 distance: &mut distance,
                 radiance: &mut radiance,
                 pdf: &mut pdf,
                 delta: &mut delta,
+                margin: &mut margin,
             };
             set.sample_eight(s, selection, geometry, (&p, &u, &a), o);
             let rest = wi_rest
@@ -765,9 +837,11 @@ impl Kernel8 for LightColumns<'_, '_> {
                 .zip(distance_rest)
                 .zip(radiance_rest)
                 .zip(pdf_rest)
-                .zip(delta_rest);
-            for (j, ((((w, d), r), p), de)) in rest.enumerate() {
+                .zip(delta_rest)
+                .zip(margin_rest);
+            for (j, (((((w, d), r), p), de), mg)) in rest.enumerate() {
                 (*w, *d, *r, *p, *de) = (wi[j], distance[j], radiance[j], pdf[j], delta[j]);
+                *mg = margin[j];
             }
         }
     }
@@ -859,13 +933,14 @@ mod tests {
         let n = p.len();
         let (mut wi, mut distance, mut radiance) =
             (vec![Vec3::NAN; n], vec![-1.0; n], vec![Rgb::splat(-1.0); n]);
-        let (mut pdf, mut delta) = (vec![-1.0; n], vec![true; n]);
+        let (mut pdf, mut delta, mut margin) = (vec![-1.0; n], vec![true; n], vec![-1.0; n]);
         let mut cols = LightSampleColumns {
             wi: &mut wi,
             distance: &mut distance,
             radiance: &mut radiance,
             pdf: &mut pdf,
             delta: &mut delta,
+            margin: &mut margin,
         };
         set.sample_column_on(backend, geometry, p, u, active, &mut cols);
         for i in 0..n {
@@ -920,6 +995,7 @@ mod tests {
                             s.radiance.to_array().map(f32::to_bits),
                             s.pdf.to_bits(),
                             s.delta,
+                            s.margin.to_bits(),
                         )
                     })
                 };

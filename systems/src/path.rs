@@ -2,7 +2,7 @@
 //! path that goes on from a group of scattering vertices.
 
 use crate::bxdf_samples::BxdfSamples;
-use crate::ray::{ray_offset, toward, InteriorBoundaries};
+use crate::ray::{offset_origin, InteriorBoundaries};
 use risotto_components::{RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
 use std::ops::Range;
 
@@ -118,9 +118,10 @@ pub fn continue_paths(
         &u4[..m],
     );
     let mut done = Continuations::default();
-    let (p, ng, s_wi) = (
+    let (p, ng, p_offset, s_wi) = (
         &pts.p[range.clone()][..m],
         &pts.ng[range.clone()][..m],
+        &pts.p_offset[range.clone()][..m],
         &samples.wi[..m],
     );
     let (in_path, in_passes, in_dimension) = (
@@ -185,8 +186,7 @@ pub fn continue_paths(
         o_dimension[j] = in_dimension[r] + limits.dims_per_vertex;
         let (p, wi) = (p[k], s_wi[k]);
         o_origin[j] = if on_surface {
-            let ng = ng[k];
-            p + ng * toward(wi, ng, ray_offset(p))
+            offset_origin(p, ng[k], p_offset[k], wi)
         } else {
             p
         };

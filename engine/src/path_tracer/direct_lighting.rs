@@ -84,6 +84,7 @@ pub(super) fn sample_lights(
         radiance: scratch(&mut buffers.radiance, m, Rgb::BLACK),
         pdf: scratch(&mut buffers.pdf, m, 0.0),
         delta: scratch(&mut buffers.delta, m, false),
+        margin: scratch(&mut buffers.margin, m, 0.0),
     };
     let range = vertices.range.clone();
     lights.sample_column(

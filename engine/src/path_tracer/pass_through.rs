@@ -10,7 +10,7 @@ use crate::scene::CompiledScene;
 use crate::shade_groups::{ShadeGroup, ShadingMode};
 use crate::stats::{Stage, SystemStats, Termination};
 use risotto_components::StackEvent;
-use risotto_systems::ray::ray_offset;
+use risotto_systems::ray::skip_tmin;
 
 /// Moves the points of `hits` that lie on pass-through boundaries out of their groups and
 /// queues their rays, continued past the boundary, in `rays`. Emission on such a surface still
@@ -89,11 +89,10 @@ pub(super) fn boundaries(
             }
             // The ray goes on along the same line. It restarts on the boundary itself, so
             // that the next segment's length (what volume integrators attenuate by) is the
-            // true distance, and skips the boundary with `tmin`: the spawn offset, measured
-            // along the ray (clamped for grazing rays).
-            let cos = row.direction.dot(pts.ng[i]).abs().max(1e-3);
+            // true distance, and skips the boundary with `tmin`: the point's error offset,
+            // measured along the ray (clamped for grazing rays).
             row.origin = p;
-            row.tmin = ray_offset(p) / cos;
+            row.tmin = skip_tmin(pts.p[i], pts.p_offset[i], pts.ng[i], row.direction);
             row.tmax = f32::INFINITY;
             if scene.tracks_interior(shape) {
                 match row.volume_stack.cross(scene.volume_entry(shape), front) {

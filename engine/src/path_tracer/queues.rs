@@ -96,6 +96,8 @@ pub struct LightBuffers {
     pub pdf: Vec<f32>,
     /// Whether each light sample is a Dirac light.
     pub delta: Vec<bool>,
+    /// Where each light sample's shadow ray stops short of it.
+    pub margin: Vec<f32>,
     /// Bxdf value at each light sample's direction.
     pub value: Vec<Rgb>,
     /// Bxdf pdf at each light sample's direction.

@@ -328,6 +328,7 @@ impl Recorder {
         light.radiance.clear();
         light.pdf.clear();
         light.delta.clear();
+        light.margin.clear();
         light.value.clear();
         light.eval_pdf.clear();
         q.group.active.clear();
