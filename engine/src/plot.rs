@@ -96,7 +96,7 @@ where
         .y_desc("RMSE vs reference")
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
-        .x_label_formatter(&|x| format!("{x:.3}"))
+        .x_label_formatter(&|x| seconds_label(*x))
         .y_label_formatter(&|y| format!("{y:.1e}"))
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
@@ -156,4 +156,23 @@ pub fn plot_sweep(sweep: &Sweep, png: &Path, svg: &Path) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", png.display()))?;
     let root = SVGBackend::new(svg, (w, h)).into_drawing_area();
     draw(&root, sweep)
+}
+
+/// A time axis label: three decimals with the trailing zeros dropped ("0.25", "6", "10"),
+/// short enough that a log axis's labels between 1 and 10 s do not run into each other.
+fn seconds_label(x: f64) -> String {
+    let s = format!("{x:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    s.to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn seconds_labels_drop_trailing_zeros() {
+        assert_eq!(super::seconds_label(6.0), "6");
+        assert_eq!(super::seconds_label(10.0), "10");
+        assert_eq!(super::seconds_label(0.25), "0.25");
+        assert_eq!(super::seconds_label(0.0015), "0.002");
+    }
 }
