@@ -51,7 +51,7 @@
 use crate::grid::MajorantSegment;
 use crate::medium::channel_pdf;
 use crate::ray_marching::{march, MAX_ORDER, RHO_MAX, RHO_MIN};
-use crate::tracking::{tentative, DepthToNext};
+use crate::tracking::{control_extinction, tentative, DepthToNext};
 use risotto_components::Rgb;
 
 /// Whether every channel of `k` is the same (a grey medium: the spectral estimators reduce
@@ -299,11 +299,7 @@ fn ratio_rgb(
     let mut control_depth = Rgb::BLACK;
     let mut depth = DepthToNext::NONE;
     for seg in segments {
-        let control = if residual {
-            seg.minorant.clamp(0.0, seg.majorant.max(0.0))
-        } else {
-            0.0
-        };
+        let control = control_extinction(&seg, residual);
         let bound = seg.majorant - control;
         let inv = 1.0 / bound;
         let control_c = k * control;

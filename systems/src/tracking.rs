@@ -61,6 +61,18 @@ impl DepthToNext {
     pub(crate) const NONE: DepthToNext = DepthToNext(f32::NAN);
 }
 
+/// The control extinction of residual ratio tracking on `seg`: its minorant, clamped into
+/// `[0, majorant]` (a bound from rounding may cross it); 0 without `residual` (plain ratio
+/// tracking).
+#[inline]
+pub(crate) fn control_extinction(seg: &MajorantSegment, residual: bool) -> f32 {
+    if residual {
+        seg.minorant.clamp(0.0, seg.majorant.max(0.0))
+    } else {
+        0.0
+    }
+}
+
 /// The outcome of [`delta_tracking`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FreeFlight {
@@ -219,11 +231,7 @@ fn ratio_tracking_with_control(
     let mut control_depth = 0.0f32;
     let mut depth = DepthToNext::NONE;
     for seg in segments {
-        let control = if residual {
-            seg.minorant.clamp(0.0, seg.majorant.max(0.0))
-        } else {
-            0.0
-        };
+        let control = control_extinction(&seg, residual);
         if control > 0.0 {
             control_depth += control * (seg.t1 - seg.t0);
         }
@@ -325,11 +333,7 @@ pub fn ratio_tracking_emitting(
     let mut control_depth = 0.0f32;
     let mut depth = DepthToNext::NONE;
     for seg in segments {
-        let control = if residual {
-            seg.minorant.clamp(0.0, seg.majorant.max(0.0))
-        } else {
-            0.0
-        };
+        let control = control_extinction(&seg, residual);
         let bound = seg.majorant - control;
         let inv = 1.0 / bound;
         let (mut value, mut nulls) = (out.value, 0);
