@@ -504,6 +504,13 @@ pub fn intersect_sphere(
     sphere_t64(origin, direction, center, radius, tmin, tmax).map_or(f32::INFINITY, |t| t as f32)
 }
 
+/// The double-precision root of [`intersect_sphere`] over `(0, inf)`, for the geometry
+/// tests of the hit direction.
+#[cfg(test)]
+pub(crate) fn sphere_root_for_tests(o: Vec3, d: Vec3, s: crate::geometry::Sphere) -> Option<f64> {
+    sphere_t64(o, d, s.center, s.radius, 0.0, f32::INFINITY)
+}
+
 /// Smallest direction component used in the slab test; `1/d` is clamped to `1e20` so no
 /// infinities (and `0 * inf` NaNs) arise for axis-parallel rays.
 const MIN_DIR: f32 = 1e-20;
