@@ -119,16 +119,21 @@ macro_rules! soa_table {
                     self.len().saturating_sub(start),
                     "one flag per row"
                 );
+                // The kept rows up to the first removed one stay where they are; the kept
+                // rows after it are listed once, so each column moves just those, without a
+                // branch per row and column.
+                let first = keep.iter().position(|&k| !k).unwrap_or(keep.len());
+                let later: Vec<usize> = (first..keep.len())
+                    .filter(|&k| keep[k])
+                    .map(|k| start + k)
+                    .collect();
+                let at = start + first;
                 $( {
                     let column = &mut self.$field[..];
-                    let mut kept = start;
-                    for (k, &flag) in keep.iter().enumerate() {
-                        if flag {
-                            column.swap(kept, start + k);
-                            kept += 1;
-                        }
+                    for (j, &src) in later.iter().enumerate() {
+                        column.swap(at + j, src);
                     }
-                    self.$field.truncate(kept);
+                    self.$field.truncate(at + later.len());
                 } )*
             }
             /// Appends copies of the rows `rows` of `other`, in that order: one gather per

@@ -193,8 +193,8 @@ impl<'s> IntegratorContext<'s> {
         s.buckets.resize_with(scene.materials.len(), Vec::new);
         group_by_material(scene, &hits.prim[..n], keep, &mut s.buckets, &mut s.escaped);
         s.sorted.clear();
-        for b in &s.buckets {
-            s.sorted.extend_from_slice(b);
+        for m in material_order(scene) {
+            s.sorted.extend_from_slice(&s.buckets[m]);
         }
         let count = s.sorted.len();
         if s.zeros.len() < n {
@@ -239,7 +239,8 @@ impl<'s> IntegratorContext<'s> {
         pts.transmission.extend_from_slice(&s.whites[..count]);
         pts.ray_id.extend_from_slice(&s.sorted[..count]);
         let mut start = base;
-        for (m, b) in s.buckets.iter().enumerate() {
+        for m in material_order(scene) {
+            let b = &s.buckets[m];
             if !b.is_empty() {
                 let end = start + b.len();
                 pts.material.resize(end, m as u32);
@@ -261,6 +262,21 @@ impl<'s> IntegratorContext<'s> {
 // pointers and no call inside keeps everything in registers, where one loop inside the big
 // function spilled about a dozen values per point. Every slice is cut to its exact length
 // first, so the compiler drops the bounds checks on the outputs.
+
+/// The order in which hits are grouped by material: index-matched materials last, so that
+/// the points the pass-through stage removes tend to end the hit queue, where removing them
+/// moves no other point (the order of groups is otherwise free).
+fn material_order(scene: &CompiledScene) -> impl Iterator<Item = usize> + '_ {
+    let matched = |m: &usize| {
+        scene.material_info[*m]
+            .hints
+            .contains(crate::plugin::InstanceHints::INDEX_MATCHED)
+    };
+    let n = scene.material_info.len();
+    (0..n)
+        .filter(move |m| !matched(m))
+        .chain((0..n).filter(matched))
+}
 
 /// Clears `buckets` (one per material) and `escaped`, then appends the index of every ray
 /// whose hit is on a surface of material `m` to `buckets[m]` and of every miss to `escaped`.

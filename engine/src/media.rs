@@ -245,7 +245,7 @@ impl HomogeneousInterior<'_> {
     ) {
         let m = &self.medium;
         let n = rays.len();
-        let (p0, m0) = (out.points.len(), out.misses.len());
+        let m0 = out.misses.len();
         let mut tmax = rays.tmax.clone();
         for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
             *tmax = tmax.min(hit);
@@ -308,7 +308,24 @@ impl HomogeneousInterior<'_> {
             };
             t[i] = f.t.min(scatter_max).max(rays.tmin[i].min(0.5 * tmax[i]));
         }
+        let events = scattered.iter().filter(|&&s| s).count();
+        // The scattering points (a volume-sampling context at P = o + t d) before the hits
+        // of the rays that pass: those hits are mostly the medium's index-matched boundary,
+        // which the pass-through stage then removes from the end of the hit queue without
+        // moving the scattering points.
+        if events > 0 {
+            let own = self.origins(rays);
+            let parent = own.as_ref().map(|pts| {
+                ShadingContext::new(pts, 0..n, ShadingMode::Interior, self.ctx.material(), &[])
+            });
+            let parent = parent.as_ref().unwrap_or(self.ctx);
+            let mut v = parent.begin_volume_sampling();
+            v.set_along_rays(rays, &t);
+            v.set_transmission(&weight);
+            v.end_volume_sampling(&scattered, out);
+        }
         // Rays that pass keep their hit (or miss), attenuated by the pass weight.
+        let p0 = out.points.len();
         ictx.shade_traced(rays, Some(&passes), out);
         for k in p0..out.points.len() {
             out.points.transmission[k] *= weight[out.points.ray_id[k] as usize];
@@ -317,26 +334,8 @@ impl HomogeneousInterior<'_> {
             out.miss_transmission[k] *= weight[out.misses[k] as usize];
         }
         let stats = &mut *ictx.stats;
-        let events = scattered.iter().filter(|&&s| s).count();
         stats.volume_event(crate::stats::VolumeEvent::Scatter, events);
         stats.volume_event(crate::stats::VolumeEvent::Pass, n - events);
-        if events == 0 {
-            return;
-        }
-        // The scattering points: a volume-sampling context at P = o + t d.
-        let own = self.origins(rays);
-        let parent = own.as_ref().map(|pts| {
-            ShadingContext::new(pts, 0..n, ShadingMode::Interior, self.ctx.material(), &[])
-        });
-        let parent = parent.as_ref().unwrap_or(self.ctx);
-        let mut v = parent.begin_volume_sampling();
-        let p: Vec<Vec3> = (0..n)
-            .map(|i| rays.origin[i] + rays.direction[i] * t[i])
-            .collect();
-        v.set_builtin(Builtin::P, &p);
-        v.set_vlen(&t);
-        v.set_transmission(&weight);
-        v.end_volume_sampling(&scattered, out);
     }
 
     /// Reports the medium's emission along each ray's segment `[0, tmax[i]]` in
@@ -463,11 +462,7 @@ impl HomogeneousInterior<'_> {
             }
             lit += count;
             let mut v = parent.begin_volume_sampling();
-            let p: Vec<Vec3> = (0..n)
-                .map(|i| rays.origin[i] + rays.direction[i] * t[i])
-                .collect();
-            v.set_builtin(Builtin::P, &p);
-            v.set_vlen(&t);
+            v.set_along_rays(rays, &t);
             // Light only the members: a context of those points alone.
             let mut pts = ShadingPoints::with_capacity(count);
             let mut w = Vec::with_capacity(count);

@@ -416,6 +416,21 @@ impl<'a> VolumeSampling<'a> {
         self.points.vlen.copy_from_slice(vlen);
     }
 
+    /// Moves every point to distance `t[i]` along ray `i` of `rays` (the rays this context's
+    /// points start on): `P = origin + t direction` and `VLen = t`, where free flights
+    /// stopped.
+    ///
+    /// # Panics
+    /// When `rays` and `t` do not have one entry per point.
+    pub fn set_along_rays(&mut self, rays: &risotto_components::Rays, t: &[f32]) {
+        assert_eq!(rays.len(), t.len(), "one distance per ray");
+        let p: Vec<Vec3> = (0..rays.len())
+            .map(|i| rays.origin[i] + rays.direction[i] * t[i])
+            .collect();
+        self.set_builtin(Builtin::P, &p);
+        self.set_vlen(t);
+    }
+
     /// Sets the transmission of every point's incident segment (what the global integrator
     /// multiplies into the path: for a free-flight sample, the estimator's weight).
     pub fn set_transmission(&mut self, transmission: &[Rgb]) {
