@@ -217,3 +217,28 @@ fn cli_replay_rejects_pixels_samples_and_malformed_values() {
         }
     }
 }
+
+/// In a random-walk subsurface material the recorder reports the walk each entering ray
+/// made inside the volume (`walk_events`, looked up among the rays of the volume's bundle):
+/// some segments of centre-pixel paths in marble.toml carry a walk of at least one event.
+#[test]
+fn replay_records_random_walks_inside_subsurface_volumes() {
+    let scene = load("scenes/marble.toml");
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let mut walks = 0;
+    for sample in 0..8 {
+        let r = replay(&scene, &RenderOptions::default(), w / 2, h / 2, sample).unwrap();
+        for v in &r.trace.vertices {
+            for s in &v.segments {
+                if s.walk_events > 0 {
+                    walks += 1;
+                    assert!(r.to_string().contains("after a random walk of"), "{r}");
+                }
+            }
+        }
+    }
+    assert!(
+        walks > 0,
+        "no segment of 8 centre-pixel paths reports a random walk"
+    );
+}

@@ -112,8 +112,12 @@ pub struct LightBuffers {
 pub struct TraceScratch {
     /// Answers of one `nearest_hits` call before they are appended to the hit queue.
     pub answers: ShadeGroups,
-    /// The rays of one volume bundle.
+    /// The rays of one volume bundle (moved on to the hit queue's incoming rays when they
+    /// are its first).
     pub bundle: Rays,
+    /// Where the last bundle's rays start in the hit queue's incoming rays (what the
+    /// answers' `walked` rows index from).
+    pub bundle_start: usize,
     /// Shading points at the bundle rays' origins, bound to the bundle's volume integrator.
     pub bundle_points: ShadingPoints,
     /// Samplers of the bundle's rays.

@@ -268,8 +268,8 @@ impl Recorder {
         let walk_events = if scene.features.volumes {
             (0..walked.len())
                 .find(|&k| {
-                    let w = walked.ray[k] as usize;
-                    q.trace.bundle.path.get(w) == Some(&0)
+                    let w = q.trace.bundle_start + walked.ray[k] as usize;
+                    incoming.path.get(w) == Some(&0)
                 })
                 .map_or(0, |k| walked.vertices[k])
         } else {

@@ -75,10 +75,16 @@ fn take_misses(hits: &mut HitQueue, escaped: &mut EscapedRayQueue) {
     hits.groups.miss_transmission.clear();
 }
 
-/// Appends `answers` (the answer for `rays`) to the hit queue, `rays` to its incoming rays.
-fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &Rays) {
+/// Appends `answers` (the answer for `rays`) to the hit queue, `rays` to its incoming rays
+/// (moved there when the queue is empty, so `rays` is left empty or unchanged).
+fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &mut Rays) {
     let offset = hits.incoming.len() as u32;
-    hits.incoming.extend_from(rays);
+    if offset == 0 {
+        std::mem::swap(&mut hits.incoming, rays);
+        rays.clear();
+    } else {
+        hits.incoming.extend_from(rays);
+    }
     hits.groups.append_offset(answers, offset);
 }
 
@@ -121,7 +127,7 @@ fn partitioned(
     tracer: &PathTracer,
     scene: &CompiledScene,
     batch: &mut PathBatch,
-    rays: &Rays,
+    rays: &mut Rays,
     hits: &mut HitQueue,
     shadow: &mut risotto_components::ShadowRays,
     group: &mut super::queues::GroupScratch,
@@ -158,7 +164,13 @@ fn partitioned(
     for (key, range) in &runs {
         let stack = &stacks[(*key / 2) as usize];
         t.bundle.clear();
-        t.bundle.extend_gather(rays, &t.order[range.clone()]);
+        if runs.len() == 1 {
+            // One bundle holds every ray, in order (the partition is stable): take the
+            // table instead of copying it (the caller clears `rays` after the round).
+            std::mem::swap(&mut t.bundle, rays);
+        } else {
+            t.bundle.extend_gather(rays, &t.order[range.clone()]);
+        }
         for (k, s) in t.bundle.shading_ctx_index.iter_mut().enumerate() {
             *s = k as u32;
         }
@@ -265,7 +277,8 @@ fn partitioned(
                 }
             }
         }
-        append(hits, &t.answers, &t.bundle);
+        t.bundle_start = hits.incoming.len();
+        append(hits, &t.answers, &mut t.bundle);
     }
     t.runs = runs;
 }
