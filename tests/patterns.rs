@@ -18,6 +18,14 @@ fn temp_dir(name: &str) -> PathBuf {
 /// An orthographic 4 x 4 view of a 6 x 6 quad at z = 0.5 (mid-cell of a unit checker), facing the
 /// camera, with `reflectance` as its material's value; lit by a constant sky.
 fn flat_scene(reflectance: &str, spp: u32) -> String {
+    flat_material_scene(
+        &format!("type = \"diffuse\"\nreflectance = {reflectance}"),
+        spp,
+    )
+}
+
+/// [`flat_scene`] with the quad's material table given whole (`material`: its lines).
+fn flat_material_scene(material: &str, spp: u32) -> String {
     format!(
         r#"[render]
 width = 8
@@ -32,8 +40,7 @@ from = [0, 0, 5]
 to = [0, 0, 0]
 
 [materials.wall]
-type = "diffuse"
-reflectance = {reflectance}
+{material}
 
 [[shapes]]
 name = "wall"
@@ -249,4 +256,63 @@ fn the_albedo_aov_of_a_patterned_surface_is_the_pattern() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Renders [`flat_material_scene`] with `material` and checks that each pixel is the colour of
+/// a unit checker by P at its point, red (`[0.9, 0.1, 0.1]`) on even cells and blue
+/// (`[0.1, 0.1, 0.9]`) on odd ones: the 0.5-wide pixels each lie in one cell, and the
+/// pixels centred at (x, y) = (+-0.75, 0.75) in cells of opposite parity, whichever way the
+/// image's rows and columns run.
+fn assert_checker_quad(name: &str, material: &str) {
+    let dir = temp_dir(name);
+    let out = render_text(&dir, &flat_material_scene(material, 1));
+    let px = |x: usize, y: usize| out.beauty.pixels[y * 8 + x];
+    let near = |c: risotto_components::Rgb, r: f32, b: f32| {
+        (c.r - r).abs() < 1e-3 && (c.g - 0.1).abs() < 1e-3 && (c.b - b).abs() < 1e-3
+    };
+    let red = |c| near(c, 0.9, 0.1);
+    let blue = |c| near(c, 0.1, 0.9);
+    let (a, b) = (px(5, 2), px(2, 2));
+    assert!(
+        (red(a) && blue(b)) || (blue(a) && red(b)),
+        "{name}: {a:?} {b:?}"
+    );
+    // Diagonal neighbours share a parity.
+    assert_eq!(red(px(5, 2)), red(px(2, 5)), "{name}");
+    let reds = out.beauty.pixels.iter().filter(|&&c| red(c)).count();
+    let blues = out.beauty.pixels.iter().filter(|&&c| blue(c)).count();
+    assert_eq!((reds, blues), (32, 32), "{name}");
+    assert!(out.stats.counters.pattern_evals > 0, "{name}");
+}
+
+#[test]
+fn a_checker_patterned_mirror_reflects_both_colours_where_expected() {
+    // The camera sees the sky (1) mirrored: each pixel is the reflectance.
+    assert_checker_quad(
+        "mirror",
+        "type = \"mirror\"\nreflectance = { pattern = \"checker\", a = [0.9, 0.1, 0.1], b = [0.1, 0.1, 0.9] }",
+    );
+}
+
+#[test]
+fn a_checker_tinted_dielectric_transmits_both_colours_where_expected() {
+    // ior 1: no Fresnel reflection, every path refracts straight through with weight tint.
+    assert_checker_quad(
+        "tint",
+        "type = \"dielectric\"\nior = 1\ntint = { pattern = \"checker\", a = [0.9, 0.1, 0.1], b = [0.1, 0.1, 0.9] }",
+    );
+}
+
+#[test]
+fn a_tint_pattern_with_cheap_shadows_is_a_located_error() {
+    let dir = temp_dir("cheap");
+    let text = flat_material_scene(
+        "type = \"dielectric\"\ntint = { pattern = \"checker\" }\ncheap_shadows = true",
+        1,
+    );
+    let err = load_text(&dir, &text).err().expect("refused");
+    assert!(
+        err.contains("cheap_shadows") && err.contains("scene.toml:"),
+        "{err}"
+    );
 }

@@ -142,16 +142,17 @@ impl<R: Reflectance> Bxdf for DiffuseBxdf<R> {
     }
 }
 
-/// Smooth dielectric boundary: Fresnel chooses reflection or refraction.
+/// Smooth dielectric boundary: Fresnel chooses reflection or refraction. The tint is one
+/// colour (`R = Rgb`, the default) or one per point (`R = &[Rgb]`, a pattern's column).
 #[derive(Clone, Copy, Debug)]
-pub struct DielectricBxdf {
+pub struct DielectricBxdf<R = Rgb> {
     /// Index of refraction of the interior.
     pub ior: f32,
     /// Colour multiplying refracted light.
-    pub tint: Rgb,
+    pub tint: R,
 }
 
-impl Bxdf for DielectricBxdf {
+impl<R: Reflectance> Bxdf for DielectricBxdf<R> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::TRANSMIT | LobeSampled::SPECULAR
     }
@@ -167,7 +168,7 @@ impl Bxdf for DielectricBxdf {
             // (inside / outside) whichever side the ray arrives from.
             let f = frame(ng[i]);
             let eta = self.ior / ior_out[i].max(1e-6);
-            if let Some(s) = bxdf::dielectric_sample(eta, self.tint, f.to_local(vn[i]), u) {
+            if let Some(s) = bxdf::dielectric_sample(eta, self.tint.at(i), f.to_local(vn[i]), u) {
                 out.set_local(i, &f, s);
             }
         });
@@ -187,14 +188,15 @@ impl Bxdf for DielectricBxdf {
     }
 }
 
-/// Perfect specular reflection weighted by a reflectance.
+/// Perfect specular reflection weighted by a reflectance: one colour (`R = Rgb`, the
+/// default) or one per point (`R = &[Rgb]`, a pattern's column), as [`DiffuseBxdf`].
 #[derive(Clone, Copy, Debug)]
-pub struct MirrorBxdf {
-    /// Reflectance per channel.
-    pub reflectance: Rgb,
+pub struct MirrorBxdf<R = Rgb> {
+    /// Reflectance per channel, in [0, 1].
+    pub reflectance: R,
 }
 
-impl Bxdf for MirrorBxdf {
+impl<R: Reflectance> Bxdf for MirrorBxdf<R> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::SPECULAR
     }
@@ -213,7 +215,7 @@ impl Bxdf for MirrorBxdf {
                 -nn[i]
             };
             let f = frame(n);
-            if let Some(s) = bxdf::mirror_sample(self.reflectance, f.to_local(vn[i])) {
+            if let Some(s) = bxdf::mirror_sample(self.reflectance.at(i), f.to_local(vn[i])) {
                 out.set_local(i, &f, s);
             }
         }
@@ -229,7 +231,7 @@ impl Bxdf for MirrorBxdf {
         pdf.fill(0.0);
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.reflectance);
+        self.reflectance.fill(out);
     }
 }
 
@@ -503,10 +505,26 @@ pub enum Surface {
         /// non-refracting glass shadows.
         cheap_shadows: bool,
     },
+    /// Smooth dielectric with a tint pattern (every value in [0, 1] by the graph's bounds,
+    /// checked by the scene loader), evaluated per hit through the context's cache
+    /// (parameter `tint`). Shadow rays are blocked (cheap shadows attenuate by one colour).
+    DielectricPattern {
+        /// Interior IOR.
+        ior: f32,
+        /// The tint graph.
+        tint: Arc<PatternGraph>,
+    },
     /// Perfect mirror / smooth conductor.
     Mirror {
         /// Reflectance.
         reflectance: Rgb,
+    },
+    /// Perfect mirror with a reflectance pattern (every value in [0, 1] by the graph's
+    /// bounds, checked by the scene loader), evaluated per point through the context's cache
+    /// (parameter `reflectance`), as [`Surface::DiffusePattern`].
+    MirrorPattern {
+        /// The reflectance graph.
+        reflectance: Arc<PatternGraph>,
     },
     /// Index-matched boundary: rays pass unchanged.
     Interface,
@@ -525,10 +543,16 @@ impl BxdfFactory for BuiltinMaterial {
     fn instance_hints(&self) -> InstanceHints {
         let surface = match &self.surface {
             Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
-            Surface::DiffusePattern { reflectance } if reflectance.reads_uv() => {
+            Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
+                if reflectance.reads_uv() =>
+            {
                 InstanceHints::READS_SURFACE_UV
             }
-            Surface::DiffusePattern { .. } => InstanceHints::NONE,
+            Surface::DiffusePattern { .. } | Surface::MirrorPattern { .. } => InstanceHints::NONE,
+            Surface::DielectricPattern { tint, .. } if tint.reads_uv() => {
+                InstanceHints::TRANSMITS | InstanceHints::READS_SURFACE_UV
+            }
+            Surface::DielectricPattern { .. } => InstanceHints::TRANSMITS,
             &Surface::Dielectric { cheap_shadows, .. } => {
                 let h = InstanceHints::TRANSMITS;
                 if cheap_shadows {
@@ -576,18 +600,19 @@ impl BxdfFactory for BuiltinMaterial {
         }
         match self.surface {
             Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
-            Surface::DiffusePattern { ref reflectance } => {
-                // Through the context's cache; a context without one (a plug-in's own)
-                // evaluates the graph here.
-                let column = ctx
-                    .eval_param("reflectance")
-                    .unwrap_or_else(|| eval_uncached(reflectance, ctx, arena));
-                arena.alloc(DiffuseBxdf {
-                    reflectance: column,
-                })
-            }
+            // Patterns go through the context's cache ([`pattern_column`]).
+            Surface::DiffusePattern { ref reflectance } => arena.alloc(DiffuseBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
             Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
+            Surface::DielectricPattern { ior, ref tint } => arena.alloc(DielectricBxdf {
+                ior,
+                tint: pattern_column(ctx, "tint", tint, arena),
+            }),
             Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
+            Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
             Surface::Interface => arena.alloc(NullBxdf),
         }
     }
@@ -619,10 +644,14 @@ impl BxdfFactory for BuiltinMaterial {
             (Surface::Diffuse { reflectance } | Surface::Mirror { reflectance }, "reflectance") => {
                 Some(ParamValue::Color(*reflectance))
             }
-            (Surface::DiffusePattern { reflectance }, "reflectance") => {
-                Some(ParamValue::Pattern(reflectance))
+            (
+                Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance },
+                "reflectance",
+            ) => Some(ParamValue::Pattern(reflectance)),
+            (Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. }, "ior") => {
+                Some(ParamValue::Float(*ior))
             }
-            (Surface::Dielectric { ior, .. }, "ior") => Some(ParamValue::Float(*ior)),
+            (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
             (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
             _ => None,
         }
@@ -630,10 +659,23 @@ impl BxdfFactory for BuiltinMaterial {
 
     fn ior(&self) -> f32 {
         match self.surface {
-            Surface::Dielectric { ior, .. } => ior,
+            Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,
             _ => 1.0,
         }
     }
+}
+
+/// The column of pattern parameter `name` (the material's `graph`) over `ctx`'s points:
+/// through the context's cache, or, for a context without one (a plug-in's own), evaluated
+/// here.
+fn pattern_column<'a>(
+    ctx: &ShadingContext<'a>,
+    name: &str,
+    graph: &PatternGraph,
+    arena: &'a Bump,
+) -> &'a [Rgb] {
+    ctx.eval_param(name)
+        .unwrap_or_else(|| eval_uncached(graph, ctx, arena))
 }
 
 /// `graph` at every point of `ctx`, in the arena (for contexts without a cache).

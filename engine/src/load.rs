@@ -93,29 +93,40 @@ impl MaterialRegistry {
         });
         r.register("dielectric", |p| {
             let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
-            let tint = p.rgb_where("tint", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
-                c.min_channel() >= 0.0 && c.max_channel() <= 1.0
-            })?;
             let cheap_shadows = p.bool("cheap_shadows", Some(false))?;
-            builtin(
-                p,
-                Surface::Dielectric {
+            // A colour, or a pattern table (as the diffuse reflectance).
+            let surface = match p.colour_or_pattern("tint", Rgb::WHITE, [0.0, 1.0])? {
+                ColourParam::Constant(tint) => Surface::Dielectric {
                     ior,
                     tint,
                     cheap_shadows,
                 },
-                &["ior", "tint", "cheap_shadows"],
-            )
+                // Cheap shadows attenuate a shadow ray by one colour per surface, which a
+                // pattern does not have.
+                ColourParam::Pattern(_) if cheap_shadows => {
+                    return Err(p.error(
+                        Some("cheap_shadows"),
+                        "cheap shadows attenuate by one tint colour: give `tint` as a colour, \
+                         or drop `cheap_shadows` for a tint pattern",
+                    ))
+                }
+                ColourParam::Pattern(graph) => Surface::DielectricPattern {
+                    ior,
+                    tint: Arc::new(graph),
+                },
+            };
+            builtin(p, surface, &["ior", "tint", "cheap_shadows"])
         });
         for name in ["conductor", "mirror"] {
             r.register(name, |p| {
-                let reflectance = p.rgb_where(
-                    "reflectance",
-                    Some(Rgb::splat(1.0)),
-                    "every channel in [0, 1]",
-                    |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
-                )?;
-                builtin(p, Surface::Mirror { reflectance }, &["reflectance"])
+                // A colour, or a pattern table (as the diffuse reflectance).
+                let surface = match p.colour_or_pattern("reflectance", Rgb::WHITE, [0.0, 1.0])? {
+                    ColourParam::Constant(reflectance) => Surface::Mirror { reflectance },
+                    ColourParam::Pattern(graph) => Surface::MirrorPattern {
+                        reflectance: Arc::new(graph),
+                    },
+                };
+                builtin(p, surface, &["reflectance"])
             });
         }
         r.register("interface", |p| builtin(p, Surface::Interface, &[]));

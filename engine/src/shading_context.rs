@@ -326,6 +326,15 @@ impl<'a> ShadingContext<'a> {
         Some(cache.column(name, value, at))
     }
 
+    /// Counts `n` pattern evaluations made outside [`eval_param`](Self::eval_param) (a
+    /// volume integrator evaluating a pattern coefficient point by point) into the
+    /// context's cache counters (the stats' `pattern_evals`); without a cache, nothing.
+    pub fn count_pattern_evals(&self, n: u64) {
+        if let Some((_, counters)) = self.cache_parts {
+            counters.evals.set(counters.evals.get() + n);
+        }
+    }
+
     /// Starts shading inside the volume (RIS `BeginVolumeSampling`): a mutable child context
     /// that inherits this context's builtins, except `u, v, w`, which are the position of `P`
     /// relative to the volume's bounds ([`with_volume_bounds`](Self::with_volume_bounds); 0

@@ -246,6 +246,32 @@ impl MajorantGrid {
         MajorantGrid { res, max, min }
     }
 
+    /// A grid of `res` cells per axis (each at least 1) whose cell `(cx, cy, cz)` has the
+    /// bounds `(min, max) = cell_bounds([cx, cy, cz])`: for fields that are not a
+    /// [`DensityGrid`] (a procedural pattern's interval bounds over each cell's box). NaN
+    /// bounds read as unbounded (`min` 0, `max` infinite), a `min` above `max` as `max`.
+    pub fn from_cell_bounds(
+        res: [usize; 3],
+        mut cell_bounds: impl FnMut([usize; 3]) -> (f32, f32),
+    ) -> Self {
+        let res = res.map(|r| r.max(1));
+        let cells = res[0] * res[1] * res[2];
+        let mut max = Vec::with_capacity(cells);
+        let mut min = Vec::with_capacity(cells);
+        for cz in 0..res[2] {
+            for cy in 0..res[1] {
+                for cx in 0..res[0] {
+                    let (lo, hi) = cell_bounds([cx, cy, cz]);
+                    let hi = if hi.is_nan() { f32::INFINITY } else { hi };
+                    let lo = if lo.is_nan() { 0.0 } else { lo.min(hi) };
+                    max.push(hi);
+                    min.push(lo);
+                }
+            }
+        }
+        MajorantGrid { res, max, min }
+    }
+
     /// One cell over the whole cube holding the grid's global max (Mitsuba's majorant).
     pub fn global(grid: &DensityGrid) -> Self {
         Self::new(grid, [1, 1, 1])

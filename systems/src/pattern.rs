@@ -37,7 +37,7 @@
 mod noise;
 mod texture;
 
-pub use noise::{perlin, Fbm, MAX_OCTAVES, PERLIN_BOUND};
+pub use noise::{perlin, Fbm, MAX_OCTAVES, PERLIN_BOUND, PERLIN_SLOPE};
 pub use texture::Texture;
 
 use crate::grid::DensityGrid;
@@ -278,6 +278,26 @@ impl PatternGraph {
                         ..
                     }
             )
+        })
+    }
+
+    /// Whether every value of the graph is grey (equal channels) at every point: its
+    /// leaves are grey (constants and the colours of `checker` and `gradient` with equal
+    /// channels; `noise` and `grid` always) and its `scale` factors are grey (`mix`,
+    /// `multiply` and `remap` act per channel, so they keep grey inputs grey). An `image`
+    /// counts as not grey (its texels are not inspected).
+    pub fn is_grey(&self) -> bool {
+        let grey = |c: &Rgb| c.r == c.g && c.g == c.b;
+        self.nodes.iter().all(|n| match n {
+            Node::Constant(c) => grey(c),
+            Node::Checker { a, b, .. } | Node::Gradient { a, b, .. } => grey(a) && grey(b),
+            Node::Scale { factor, .. } => grey(factor),
+            Node::Image(_) => false,
+            Node::Noise(_)
+            | Node::Grid { .. }
+            | Node::Mix { .. }
+            | Node::Multiply { .. }
+            | Node::Remap { .. } => true,
         })
     }
 

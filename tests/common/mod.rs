@@ -364,3 +364,21 @@ irradiance = {sun}
 "#
     )
 }
+
+/// Loads and compiles the scene file text `text` as if it were `dir/scene.toml` (relative
+/// paths from `dir`).
+pub fn load_scene_text(
+    dir: &std::path::Path,
+    text: &str,
+) -> Result<CompiledScene, risotto::engine::load::LoadError> {
+    use risotto::engine::load::{scene_from_desc, MaterialRegistry};
+    let desc = risotto::engine::scene_file::parse_scene(text, &dir.join("scene.toml"))?;
+    Ok(scene_from_desc(desc, &MaterialRegistry::with_builtins())?
+        .compile()
+        .expect("the scene compiles"))
+}
+
+/// Renders the scene file text `text` ([`load_scene_text`]) with the default options.
+pub fn render_scene_text(dir: &std::path::Path, text: &str) -> RenderOutput {
+    render_default(&load_scene_text(dir, text).expect("the scene loads"))
+}

@@ -1,13 +1,14 @@
 //! The heterogeneous medium's volume integrator: free flights, transmittance and emission
 //! along each ray (the estimators are described in the [module docs](super)).
 
+use super::field::Field;
 use super::{HeterogeneousEmission, HeterogeneousMedium, Tracking, EMISSION_COLLISIONS_PER_CELL};
 use crate::media::retain_points;
 use crate::plugin::*;
 use crate::stats::VolumeEvent;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
-use risotto_systems::grid::{Dda, MajorantSegment};
+use risotto_systems::grid::{Dda, MajorantGrid, MajorantSegment};
 use risotto_systems::medium::channel_pdf;
 use risotto_systems::ray_marching::{
     ray_marching_free_flight, ray_marching_transmittance, unbiased_ray_marching,
@@ -22,6 +23,7 @@ use risotto_systems::tracking::{
     delta_tracking, delta_tracking_emitting, delta_tracking_transmittance, ratio_tracking,
     ratio_tracking_emitting, residual_ratio_tracking, FreeFlight, Transmittance,
 };
+use std::sync::Arc;
 
 /// The heterogeneous medium's volume integrator, bound to the bundle's shading context (which
 /// carries the shape's bounds, where the grid is placed).
@@ -74,9 +76,15 @@ impl HeterogeneousInterior<'_> {
     /// The majorant segments of the grid-space ray `(o, d)` on `[0, tmax]`, raised where an
     /// emissive medium emits ([`EmissiveSegments`]); for a medium that does not emit, the
     /// density's segments scaled to extinction (a floor of 0 raises nothing).
-    fn emissive_segments(&self, o: Vec3, d: Vec3, tmax: f32) -> EmissiveSegments<'_> {
+    fn emissive_segments<'g>(
+        &self,
+        grids: &'g Majorants,
+        o: Vec3,
+        d: Vec3,
+        tmax: f32,
+    ) -> EmissiveSegments<'g> {
         let m = self.medium;
-        let res = m.majorants.res();
+        let res = grids.density.res();
         let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
         let extent = (hi - lo).to_array();
         // The widest side of a cell in world units; the floor is so many collisions per
@@ -91,23 +99,61 @@ impl HeterogeneousInterior<'_> {
         } else {
             0.0
         };
-        let emission = match &m.emission {
-            Some(HeterogeneousEmission::Grid { majorants, .. }) => {
-                Some(majorants.traverse(o, d, 0.0, tmax))
-            }
-            _ => None,
-        };
+        let emission = grids.emission.as_ref().map(|e| e.traverse(o, d, 0.0, tmax));
         EmissiveSegments {
-            density: m.majorants.traverse(o, d, 0.0, tmax),
+            density: grids.density.traverse(o, d, 0.0, tmax),
             emission,
             scale: m.max_scale(),
             floor,
         }
     }
 
-    /// The emission coefficient at grid point `uvw`, where the extinction is `sigma_t`.
+    /// The world box the grid's unit cube is placed in (the shape's bounds).
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE))
+    }
+
+    /// The fields and majorant grids of one integrator call over the shape's bounds: the
+    /// density (the grid, or the pattern), the emission pattern if the medium emits one,
+    /// and the majorant grids of the density and, where the emission has its own field, of
+    /// the emission (same resolution).
+    fn fields(&self) -> Fields<'_> {
+        let m = self.medium;
+        let (lo, hi) = self.bounds();
+        let density = match &m.density_pattern {
+            Some(p) => Field::pattern(&p.graph, lo, hi),
+            None => Field::Grid(&m.density),
+        };
+        let emission = match &m.emission {
+            Some(HeterogeneousEmission::Pattern(p)) => Some(Field::pattern(&p.graph, lo, hi)),
+            _ => None,
+        };
+        Fields {
+            grids: self.majorants(lo, hi),
+            density,
+            emission,
+        }
+    }
+
+    /// The majorant grids over the world box `[lo, hi]` ([`Self::fields`]).
+    fn majorants(&self, lo: Vec3, hi: Vec3) -> Majorants {
+        let m = self.medium;
+        let density = match &m.density_pattern {
+            Some(p) => p.majorants(lo, hi),
+            None => m.majorants.clone(),
+        };
+        let emission = match &m.emission {
+            Some(HeterogeneousEmission::Grid { majorants, .. }) => Some(majorants.clone()),
+            Some(HeterogeneousEmission::Pattern(p)) => Some(p.majorants(lo, hi)),
+            _ => None,
+        };
+        Majorants { density, emission }
+    }
+
+    /// The emission coefficient at grid point `uvw`, where the extinction is `sigma_t`
+    /// (the call's [`Fields`]).
     #[inline]
-    fn emission_at(&self, uvw: Vec3, sigma_t: f32) -> Rgb {
+    fn emission_at(&self, uvw: Vec3, sigma_t: f32, fields: &Fields<'_>) -> Rgb {
         let m = self.medium;
         match &m.emission {
             None => Rgb::BLACK,
@@ -117,11 +163,15 @@ impl HeterogeneousInterior<'_> {
                 let density = if smax > 0.0 {
                     sigma_t / smax
                 } else {
-                    m.density.lookup(uvw)
+                    fields.density.grey(uvw)
                 };
                 *c * density
             }
             Some(HeterogeneousEmission::Grid { grid, scale, .. }) => *scale * grid.lookup(uvw),
+            Some(HeterogeneousEmission::Pattern(_)) => fields
+                .emission
+                .as_ref()
+                .map_or(Rgb::BLACK, |p| p.colour(uvw)),
         }
     }
 
@@ -129,6 +179,7 @@ impl HeterogeneousInterior<'_> {
     /// emission reaching its start, for an emissive medium.
     fn segment_emission(
         &self,
+        fields: &Fields<'_>,
         o: Vec3,
         d: Vec3,
         length: f32,
@@ -137,10 +188,10 @@ impl HeterogeneousInterior<'_> {
     ) -> (RgbTransmittance, Rgb) {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
-        let segs = self.emissive_segments(o, d, length);
+        let segs = self.emissive_segments(&fields.grids, o, d, length);
         let smax = m.max_scale();
-        let sigma = |t: f32| smax * m.density.lookup(o + d * t);
-        let emission = |t: f32, sigma_t: f32| self.emission_at(o + d * t, sigma_t);
+        let sigma = |t: f32| smax * fields.density.grey(o + d * t);
+        let emission = |t: f32, sigma_t: f32| self.emission_at(o + d * t, sigma_t, fields);
         let start = s.dimension;
         let rand = || s.next_1d();
         // The ray-marching estimators gather no emission: emissive media ratio-track.
@@ -182,7 +233,11 @@ impl HeterogeneousInterior<'_> {
     fn march_step(&self) -> f32 {
         self.medium.march_step.unwrap_or_else(|| {
             let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-            let dims = self.medium.density.dims();
+            // A pattern density marches by its majorant cells, four steps per cell.
+            let dims = match &self.medium.density_pattern {
+                Some(p) => p.res.map(|r| r.saturating_mul(4)),
+                None => self.medium.density.dims(),
+            };
             let voxel = (hi - lo) / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
             let v = voxel.min_element();
             // A flat box (zero extent on an axis) marches by its other voxels.
@@ -197,6 +252,7 @@ impl HeterogeneousInterior<'_> {
     /// Transmittance of one world-space segment with `tracking`, per channel.
     fn segment_transmittance(
         &self,
+        fields: &Fields<'_>,
         o: Vec3,
         d: Vec3,
         length: f32,
@@ -207,11 +263,13 @@ impl HeterogeneousInterior<'_> {
         let (o, d) = self.to_grid(o, d);
         let smax = m.max_scale();
         let segs = || {
-            m.majorants
+            fields
+                .grids
+                .density
                 .traverse(o, d, 0.0, length)
                 .map(|g| g.scaled(smax))
         };
-        let sigma = |t: f32| smax * m.density.lookup(o + d * t);
+        let sigma = |t: f32| smax * fields.density.grey(o + d * t);
         let start = s.dimension;
         let rand = || s.next_1d();
         let r = if m.is_chromatic() {
@@ -244,6 +302,27 @@ impl HeterogeneousInterior<'_> {
         };
         align(s, start);
         r
+    }
+}
+
+/// The majorant grids of one integrator call ([`HeterogeneousInterior::fields`]).
+struct Majorants {
+    density: Arc<MajorantGrid>,
+    emission: Option<Arc<MajorantGrid>>,
+}
+
+/// The coefficient fields of one integrator call and their majorant grids
+/// ([`HeterogeneousInterior::fields`]).
+struct Fields<'a> {
+    grids: Majorants,
+    density: Field<'a>,
+    emission: Option<Field<'a>>,
+}
+
+impl Fields<'_> {
+    /// Pattern evaluations so far (the stats' `pattern_evals`).
+    fn evals(&self) -> u64 {
+        self.density.evals() + self.emission.as_ref().map_or(0, Field::evals)
     }
 }
 
@@ -287,11 +366,13 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let chromatic = m.is_chromatic();
         let k = m.channel_ratios();
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
+        let fields = self.fields();
+        let emission_at = |uvw: Vec3, sigma_t: f32| self.emission_at(uvw, sigma_t, &fields);
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
             let start = s.dimension;
-            let sigma = |t: f32| smax * m.density.lookup(o + d * t);
+            let sigma = |t: f32| smax * fields.density.grey(o + d * t);
             let f = if chromatic {
                 // One-sample spectral MIS over the channels, in proportion to the path's
                 // throughput (as the homogeneous medium), or one channel for comparison.
@@ -307,13 +388,13 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 // always tracked (module docs). An emissive one gathers pbrt-v4's estimate at
                 // the flight's running per-channel weight.
                 let (f, e) = spectral_tracking_emitting(
-                    self.emissive_segments(o, d, tmax[i]),
+                    self.emissive_segments(&fields.grids, o, d, tmax[i]),
                     sigma,
                     k,
                     p,
                     |t, sigma_t| {
                         if emits {
-                            self.emission_at(o + d * t, sigma_t)
+                            emission_at(o + d * t, sigma_t)
                         } else {
                             Rgb::BLACK
                         }
@@ -334,16 +415,17 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 // pbrt-v4's estimator: j / majorant at every tentative collision (module
                 // docs), at the path's weight, which delta tracking keeps at 1.
                 let (f, e) = delta_tracking_emitting(
-                    self.emissive_segments(o, d, tmax[i]),
+                    self.emissive_segments(&fields.grids, o, d, tmax[i]),
                     sigma,
-                    |t, sigma_t| self.emission_at(o + d * t, sigma_t),
+                    |t, sigma_t| emission_at(o + d * t, sigma_t),
                     || s.next_1d(),
                 );
                 out.emitted.push(i as u32, e);
                 f
             } else {
-                let segs = m
-                    .majorants
+                let segs = fields
+                    .grids
+                    .density
                     .traverse(o, d, 0.0, tmax[i])
                     .map(|g| g.scaled(smax));
                 if tracking == Tracking::RayMarching {
@@ -370,6 +452,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         let stats = &mut *services.ictx.stats;
         stats.majorant_violations += violations;
+        stats.pattern_evals += fields.evals();
         if emits {
             stats.volume_event(VolumeEvent::Emission, n);
         }
@@ -446,9 +529,11 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             .volume_techniques()
             .tracking
             .unwrap_or(self.medium.tracking);
+        let fields = self.fields();
         if self.medium.emits() {
             for i in 0..segments.len() {
                 let (r, e) = self.segment_emission(
+                    &fields,
                     segments.origin[i],
                     segments.direction[i],
                     segments.length[i],
@@ -459,10 +544,12 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 ictx.count_majorant_violations(r.violations as u64);
                 emission[i] = e;
             }
+            self.ctx.count_pattern_evals(fields.evals());
             return;
         }
         for i in 0..segments.len() {
             let r = self.segment_transmittance(
+                &fields,
                 segments.origin[i],
                 segments.direction[i],
                 segments.length[i],
@@ -472,6 +559,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             trans[i] = r.value;
             ictx.count_majorant_violations(r.violations as u64);
         }
+        self.ctx.count_pattern_evals(fields.evals());
         emission.fill(Rgb::BLACK);
     }
 }

@@ -3,6 +3,18 @@
 //! constant single-scattering albedo and a phase function (scene files: `interior = { type = "heterogeneous", ... }`,
 //! `docs/scene-format.md`).
 //!
+//! # Pattern coefficients
+//! `density` and `emission` may be pattern graphs ([`PatternField`], `field.rs`) of the
+//! **world-space position `P`** (the `P` surface patterns see; `u`, `v` are refused inside a
+//! medium). A density pattern must be grey (the density is one number; chromatic extinction
+//! is the `scale`, and averaging a colour would drop it silently) and bounded in
+//! `[0, inf)` with a finite upper bound, checked with the graph's interval bounds at load
+//! time. It is evaluated one point per tentative collision (the trackers ask for one point at
+//! a time) and counted in the stats' `pattern_evals`. Its majorant grid holds, per cell, the
+//! graph's interval bounds over the cell's world box ([`risotto_systems::pattern::bounds`];
+//! Lipschitz bounds for `noise`): built per shape on first use, since the shape's bounds
+//! are known only after the scene is compiled.
+//!
 //! # Estimators
 //! - **Free flights** ([`HeterogeneousInterior::nearest_hits`]): delta tracking (Woodcock)
 //!   against the **majorant grid** ([`MajorantGrid`], `majorant_grid` cells per axis, 16 by
@@ -76,9 +88,11 @@
 //! `parse.rs` reads the scene table, `interior.rs` is the volume integrator (free flights,
 //! transmittance, emission); this file holds the medium's parameters.
 
+mod field;
 mod interior;
 mod parse;
 
+pub use field::PatternField;
 pub use interior::HeterogeneousInterior;
 pub(crate) use parse::parse;
 
@@ -146,10 +160,15 @@ pub const DEFAULT_MAJORANT_CELLS: usize = 16;
 /// A heterogeneous medium's parameters (shared by every integrator built for it).
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeterogeneousMedium {
-    /// The density field over the unit cube of the shape's bounds.
+    /// The density field over the unit cube of the shape's bounds (for a pattern density, a
+    /// one-voxel grid holding the pattern's global upper bound).
     pub density: Arc<DensityGrid>,
-    /// Bounds of `density` over coarse cells (density units).
+    /// Bounds of `density` over coarse cells (density units); for a pattern density, one
+    /// global cell (the per-shape grids are the pattern's, [`PatternField::majorants`]).
     pub majorants: Arc<MajorantGrid>,
+    /// A density given by a pattern of the world position instead of `density`'s grid
+    /// (`density = { pattern = .. }`), grey; `None` (the default): the grid.
+    pub density_pattern: Option<Arc<PatternField>>,
     /// `sigma_t = scale * density` per channel, per world unit, >= 0 (grey: the same in
     /// every channel; chromatic: spectral tracking, see the module docs).
     pub scale: Rgb,
@@ -193,6 +212,10 @@ pub enum HeterogeneousEmission {
         /// say where the medium emits.
         majorants: Arc<MajorantGrid>,
     },
+    /// `j(p) = pattern(P)`: a pattern of the world position (colour-valued, >= 0), with
+    /// majorant grids of the density's resolution from its interval bounds, which say where
+    /// the medium emits.
+    Pattern(Arc<PatternField>),
 }
 
 /// Tentative collisions per majorant-cell width that a ray gets at least in a cell where
@@ -223,7 +246,47 @@ impl HeterogeneousMedium {
             march_step: None,
             emission: None,
             single_channel: None,
+            density_pattern: None,
         }
+    }
+
+    /// The medium with the grey pattern `graph` of the world position as its density
+    /// (replacing the grid), with majorant grids of `majorant_cells` per axis (at least 1)
+    /// from the graph's interval bounds. `graph` must be grey and bounded in `[0, inf)` with
+    /// a finite upper bound (the scene reader checks all three with located errors).
+    pub fn with_density_pattern(
+        self,
+        graph: risotto_systems::pattern::PatternGraph,
+        majorant_cells: usize,
+    ) -> Self {
+        let field = PatternField::new(graph, [majorant_cells.max(1); 3]);
+        let max = field.global_bounds().1.max(0.0);
+        let grid = DensityGrid::constant([1, 1, 1], if max.is_finite() { max } else { 0.0 })
+            .expect("a finite, non-negative constant");
+        let majorants = MajorantGrid::global(&grid);
+        HeterogeneousMedium {
+            density: Arc::new(grid),
+            majorants: Arc::new(majorants),
+            density_pattern: Some(Arc::new(field)),
+            ..self
+        }
+    }
+
+    /// The majorant cells per axis of the medium's density (the grid's or the pattern's).
+    pub fn majorant_res(&self) -> [usize; 3] {
+        match &self.density_pattern {
+            Some(p) => p.res,
+            None => self.majorants.res(),
+        }
+    }
+
+    /// The medium emitting the pattern `graph` of the world position as its emission
+    /// coefficient (`graph` bounded in `[0, inf)` per channel; checked by the reader).
+    pub fn with_emission_pattern(mut self, graph: risotto_systems::pattern::PatternGraph) -> Self {
+        let field = PatternField::new(graph, self.majorant_res());
+        let emits = field.global_bounds().1 > 0.0;
+        self.emission = emits.then(|| HeterogeneousEmission::Pattern(Arc::new(field)));
+        self
     }
 
     /// The medium with the density scale `scale` per channel (`sigma_t,c = scale_c *
@@ -268,7 +331,7 @@ impl HeterogeneousMedium {
     /// black `scale` or an all-zero grid: no emission).
     pub fn with_emission_grid(mut self, grid: DensityGrid, scale: Rgb) -> Self {
         self.emission = (!scale.is_black() && grid.max() > 0.0).then(|| {
-            let majorants = MajorantGrid::new(&grid, self.majorants.res());
+            let majorants = MajorantGrid::new(&grid, self.majorant_res());
             HeterogeneousEmission::Grid {
                 grid: Arc::new(grid),
                 scale,

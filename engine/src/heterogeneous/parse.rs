@@ -4,8 +4,10 @@ use super::{HeterogeneousMedium, Tracking, DEFAULT_MAJORANT_CELLS, TRACKINGS};
 use crate::grid_file::{is_vdb, read_grid_named};
 use crate::load::phase_function;
 use crate::scene_file::{MaterialParams, SceneError};
+use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::grid::DensityGrid;
+use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
 
 /// Reads `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
@@ -23,7 +25,10 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     ])?;
     let d = t
         .table("density")?
-        .ok_or_else(|| t.error(None, "a heterogeneous interior needs `density = { grid = \"file.vol\" }` (or `{ constant = .. }`)"))?;
+        .ok_or_else(|| t.error(None, "a heterogeneous interior needs `density = { grid = \"file.vol\" }` (or `{ constant = .. }`, or a pattern table)"))?;
+    if d.has("pattern") {
+        return parse_pattern_density(t);
+    }
     d.deny_unknown(&["grid", "header", "name", "constant"])?;
     let density = match (d.path("grid")?, d.has("constant")) {
         (Some(path), false) => {
@@ -57,12 +62,7 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
         }
     };
     // A number (grey) or a colour (chromatic: spectral tracking), like every colour key.
-    let scale = t.rgb_where(
-        "scale",
-        Some(Rgb::WHITE),
-        "must be >= 0 and finite in every channel",
-        |c| c.min_channel() >= 0.0 && c.is_finite(),
-    )?;
+    let scale = scale(t)?;
     if !(scale * density.max()).is_finite() {
         let shown = if scale.r == scale.g && scale.g == scale.b {
             format!("{}", scale.r)
@@ -77,6 +77,19 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             ),
         ));
     }
+    let (albedo, phase, tracking, march_step, cells) = common(t)?;
+    let medium = HeterogeneousMedium {
+        march_step,
+        ..HeterogeneousMedium::new(density, cells, 1.0, albedo, phase, tracking).with_scale(scale)
+    };
+    with_emission(t, medium)
+}
+
+/// The keys every form of density shares: `(albedo, phase, tracking, march_step,
+/// majorant_grid)`.
+fn common(
+    t: &MaterialParams,
+) -> Result<(Rgb, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
     let albedo = t.rgb_where("albedo", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
         c.min_channel() >= 0.0 && c.max_channel() <= 1.0
     })?;
@@ -106,11 +119,78 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             format!("must be in [1, 256] cells per axis, got {cells}"),
         ));
     }
+    Ok((albedo, phase, tracking, march_step, cells as usize))
+}
+
+/// `scale`: a number (grey) or a colour (chromatic: spectral tracking), like every colour
+/// key.
+fn scale(t: &MaterialParams) -> Result<Rgb, SceneError> {
+    t.rgb_where(
+        "scale",
+        Some(Rgb::WHITE),
+        "must be >= 0 and finite in every channel",
+        |c| c.min_channel() >= 0.0 && c.is_finite(),
+    )
+}
+
+/// `density = { pattern = .., .. }`: a grey pattern of the world position `P`, bounded in
+/// `[0, inf)` by its interval bounds over all of space (module docs).
+fn parse_pattern_density(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneError> {
+    let graph = t.pattern("density")?.expect("checked: a table");
+    if graph.reads_uv() {
+        return Err(t.error(
+            Some("density"),
+            "a medium's pattern sees the world position P only (u and v belong to surfaces): \
+             use `space = \"P\"` and an axis x, y or z",
+        ));
+    }
+    if !graph.is_grey() {
+        return Err(t.error(
+            Some("density"),
+            "a density pattern must be grey (every colour in it a single number): the \
+             density is one number per point, and a colour extinction is `scale = [r, g, b]`",
+        ));
+    }
+    let (lo, hi) = pattern::bounds(&graph, Vec3::NEG_INFINITY, Vec3::INFINITY);
+    // NaN reads as not >= 0.
+    if lo.r.is_nan() || lo.r < 0.0 {
+        return Err(t.error(
+            Some("density"),
+            format!(
+                "the density pattern may reach {} (interval bounds over all of space), but a \
+                 density must be >= 0: wrap it in `remap` (e.g. from = [-1, 1], to = [0, 1])",
+                lo.r
+            ),
+        ));
+    }
+    let scale = scale(t)?;
+    if !(hi.r.is_finite() && (scale * hi.r).is_finite()) {
+        return Err(t.error(
+            Some("density"),
+            format!(
+                "the density pattern's upper bound {} (times scale {}) is not finite: the \
+                 trackers need a finite majorant",
+                hi.r,
+                scale.max_channel()
+            ),
+        ));
+    }
+    let (albedo, phase, tracking, march_step, cells) = common(t)?;
+    let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
     let medium = HeterogeneousMedium {
         march_step,
-        ..HeterogeneousMedium::new(density, cells as usize, 1.0, albedo, phase, tracking)
+        ..HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, tracking)
+            .with_density_pattern(graph, cells)
             .with_scale(scale)
     };
+    with_emission(t, medium)
+}
+
+/// `medium` with the interior's `emission` key, if any.
+fn with_emission(
+    t: &MaterialParams,
+    medium: HeterogeneousMedium,
+) -> Result<HeterogeneousMedium, SceneError> {
     Ok(match parse_emission(t)? {
         None => medium,
         Some(EmissionKey::Colour(c)) => {
@@ -124,6 +204,7 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             medium.with_emission_following_density(c)
         }
         Some(EmissionKey::Grid(grid, scale)) => medium.with_emission_grid(grid, scale),
+        Some(EmissionKey::Pattern(graph)) => medium.with_emission_pattern(graph),
     })
 }
 
@@ -161,6 +242,8 @@ enum EmissionKey {
     Colour(Rgb),
     /// `emission = { grid = "file", scale = colour }`.
     Grid(DensityGrid, Rgb),
+    /// `emission = { pattern = .., .. }`.
+    Pattern(PatternGraph),
 }
 
 /// Reads `emission` (absent: none): a colour (`j = colour * density`) or a table
@@ -185,6 +268,29 @@ fn parse_emission(t: &MaterialParams) -> Result<Option<EmissionKey>, SceneError>
         )?)));
     }
     let e = t.table("emission")?.expect("checked: a table");
+    if e.has("pattern") {
+        let graph = t.pattern("emission")?.expect("checked: a table");
+        if graph.reads_uv() {
+            return Err(t.error(
+                Some("emission"),
+                "a medium's pattern sees the world position P only (u and v belong to \
+                 surfaces)",
+            ));
+        }
+        let (lo, hi) = pattern::bounds(&graph, Vec3::NEG_INFINITY, Vec3::INFINITY);
+        if !(lo.min_channel() >= 0.0 && ok(hi)) {
+            return Err(t.error(
+                Some("emission"),
+                format!(
+                    "the emission pattern must keep {coefficient}, but its values may reach \
+                     [{}, {}, {}] .. [{}, {}, {}] (interval bounds over all of space): wrap it \
+                     in `remap` or `scale`",
+                    lo.r, lo.g, lo.b, hi.r, hi.g, hi.b
+                ),
+            ));
+        }
+        return Ok(Some(EmissionKey::Pattern(graph)));
+    }
     e.deny_unknown(&["grid", "header", "name", "scale"])?;
     let Some(path) = e.path("grid")? else {
         return Err(e.error(

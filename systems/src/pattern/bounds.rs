@@ -26,7 +26,9 @@ const WIDEN: f32 = 8.0 * f32::EPSILON;
 /// - `constant`: exact. `checker` by `P`: exact (one colour when the box lies in one cell,
 ///   both otherwise); by `uv`: both colours. `gradient` along `x`/`y`/`z`: exact (the colours
 ///   at the box's two ends on the axis); along `u`/`v`: the two colours.
-/// - `noise`: `+-PERLIN_BOUND sum_k gain^k` ([`super::Fbm::bound`]).
+/// - `noise`: per octave, the value at the box's centre plus or minus a Lipschitz bound
+///   times the box's half-extents, within `+-PERLIN_BOUND` ([`super::Fbm::bounds_over`]);
+///   over an unbounded box `+-PERLIN_BOUND sum_k gain^k` ([`super::Fbm::bound`]).
 /// - `image`: the texture's per-channel range. `grid`: the min and max of the voxels whose
 ///   trilinear support meets the box (after the box is mapped into the grid's unit cube and
 ///   clamped like the lookup).
@@ -48,7 +50,10 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
     let at = |id: u32| done[id as usize];
     match node {
         Node::Constant(c) => (*c, *c),
-        Node::Noise(fbm) => (Rgb::splat(-fbm.bound()), Rgb::splat(fbm.bound())),
+        Node::Noise(fbm) => {
+            let (l, h) = fbm.bounds_over(lo, hi);
+            (Rgb::splat(l), Rgb::splat(h))
+        }
         Node::Checker { scale, a, b, space } => {
             let both = hull(*a, *b);
             if *space == Space::Uv {

@@ -112,6 +112,70 @@ impl Fbm {
     }
 }
 
+/// A Lipschitz bound of one octave of [`perlin`] per axis: `|dn/dx_i| <= PERLIN_SLOPE`
+/// everywhere, so `|n(x) - n(c)| <= PERLIN_SLOPE |x - c|_1` (and, as `|d|_1 <= sqrt(3) |d|_2`,
+/// `L = sqrt(3) PERLIN_SLOPE` in the Euclidean form `|n(x) - n(c)| <= L |x - c|`).
+///
+/// Derivation (the notation of [`PERLIN_BOUND`]): in a cell, write the noise as the fade
+/// lerp along `x` of two faces, `n = (1 - s(x)) A0 + s(x) A1`, where `A0` (`A1`) is the
+/// fade-weighted average over the four corners with `c_x = 0` (`c_x = 1`) of `g_c . (p - c)`.
+/// Then `dn/dx = s'(x) (A1 - A0) + (1 - s(x)) dA0/dx + s(x) dA1/dx`.
+/// - `dA_i/dx` is a weighted average (weights >= 0 summing to 1) of `g_c.x` in {-1, 0, 1}:
+///   at most 1, and so is the convex combination of the two.
+/// - `|g_c . d| <= |d_x| + |d_y| + |d_z|` (edge gradients), so `|A0| <= x + h(y) + h(z)` and
+///   `|A1| <= (1 - x) + h(y) + h(z)`, with `h <= 1/2` as in [`PERLIN_BOUND`]: `|A1 - A0| <=
+///   1 + 2 (1/2 + 1/2) = 3`.
+/// - The quintic fade's slope `s'(t) = 30 t^2 (1 - t)^2` peaks at `t = 1/2`: `15/8`.
+///
+/// Hence `|dn/dx| <= 3 * 15/8 + 1 = 53/8`, the same for `y` and `z` by symmetry. The noise is
+/// C2 across cell faces, so the bound holds along any segment, not only inside one cell.
+pub const PERLIN_SLOPE: f32 = 53.0 / 8.0;
+
+impl Fbm {
+    /// Bounds `(lo, hi)` of the fBm over the box `[lo, hi]` of `P` (any corner may be
+    /// infinite; NaN corners read as unbounded), octave by octave: octave `k` (amplitude
+    /// `gain^k`, lattice frequency `f_k = frequency lacunarity^k`) lies within `n_k(c) +-
+    /// PERLIN_SLOPE f_k |e|_1` at the box's centre `c` with half-extents `e` ([`PERLIN_SLOPE`]),
+    /// clamped to `+-PERLIN_BOUND`; the sum of the octaves' intervals bounds the fBm.
+    ///
+    /// A rounding margin per octave covers the `f32` evaluation: the lattice coordinate
+    /// `q = f_k p + offset` is rounded (a relative error of a few ulps of `|q|`, times the
+    /// slope), and the noise's own arithmetic (a few ulps of its magnitude <= 3/2).
+    pub fn bounds_over(&self, lo: Vec3, hi: Vec3) -> (f32, f32) {
+        let global = self.bound();
+        let finite = lo.is_finite() && hi.is_finite() && lo.cmple(hi).all();
+        if !finite {
+            return (-global, global);
+        }
+        let c = (lo + hi) * 0.5;
+        let e = ((hi - lo) * 0.5).max(Vec3::ZERO);
+        let e1 = f64::from(e.x) + f64::from(e.y) + f64::from(e.z);
+        let (mut l, mut h) = (0.0f64, 0.0f64);
+        // The frequency in f32 as `eval` computes it, so that `q` is `eval`'s at `c`.
+        let (mut amplitude, mut frequency32) = (1.0f64, self.frequency);
+        let eps = f64::from(f32::EPSILON);
+        for k in 0..self.octaves {
+            let frequency = f64::from(frequency32);
+            let q = c * frequency32 + OCTAVE_OFFSET * k as f32;
+            let nc = f64::from(perlin(&self.perm, q));
+            let q1 = f64::from(q.x.abs() + q.y.abs() + q.z.abs());
+            let slope = f64::from(PERLIN_SLOPE);
+            let reach = slope * frequency * e1
+                + slope * 8.0 * eps * (q1 + frequency * e1 + 3.0)
+                + 32.0 * eps;
+            let bound = f64::from(PERLIN_BOUND);
+            l += amplitude * (nc - reach).max(-bound);
+            h += amplitude * (nc + reach).min(bound);
+            amplitude *= f64::from(self.gain);
+            frequency32 *= self.lacunarity;
+        }
+        // The sum itself is rounded in `eval` (one rounding per octave).
+        let slack = 4.0 * eps * f64::from(global) * f64::from(self.octaves);
+        let (l, h) = ((l - slack) as f32, (h + slack) as f32);
+        (l.max(-global), h.min(global))
+    }
+}
+
 /// Perlin's fade curve `6t^5 - 15t^4 + 10t^3` (C2 at the lattice).
 #[inline]
 fn fade(t: f32) -> f32 {

@@ -392,3 +392,70 @@ fn graphs_refuse_forward_references_and_bad_parameters() {
     assert!(g.reads_uv());
     assert!(!graph(vec![Node::Noise(fbm(1.0, 2))]).reads_uv());
 }
+
+#[test]
+fn lipschitz_noise_bounds_hold_on_small_and_large_boxes_and_are_tight_when_small() {
+    let mut rng = SplitMix64(0x11F5);
+    let fbms = [
+        fbm(1.7, 1),
+        fbm(0.9, 6),
+        Fbm::new(3.0, 8, 2.3, 0.7, 5).unwrap(),
+        Fbm::new(0.05, 16, 1.9, 0.55, 11).unwrap(),
+    ];
+    let (mut violations, mut checked) = (0usize, 0usize);
+    let mut small_widths = Vec::new();
+    for f in &fbms {
+        for b in 0..400 {
+            // Box sides from 1e-5 to 1e2, centres near the origin and far from it.
+            let reach = if b % 4 == 0 { 2000.0 } else { 8.0 };
+            let centre = (Vec3::new(rng.f32(), rng.f32(), rng.f32()) - 0.5) * reach;
+            let size = 10f32.powf(-5.0 + 7.0 * rng.f32());
+            let half = Vec3::new(rng.f32(), rng.f32(), rng.f32()) * size;
+            let (lo, hi) = (centre - half, centre + half);
+            let (l, h) = f.bounds_over(lo, hi);
+            assert!(l <= h && l >= -f.bound() && h <= f.bound());
+            if size < 1e-3 {
+                small_widths.push((h - l) / (2.0 * f.bound()));
+            }
+            for k in 0..64 {
+                // Corners and faces too: the extremes of a box are often on its boundary.
+                let t = if k < 8 {
+                    Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32)
+                } else {
+                    Vec3::new(rng.f32(), rng.f32(), rng.f32())
+                };
+                let p = lo + (hi - lo) * t;
+                let v = f.eval(p);
+                if !(l <= v && v <= h) {
+                    if violations == 0 {
+                        eprintln!("{v} at {p} outside [{l}, {h}] (box {lo} .. {hi})");
+                    }
+                    violations += 1;
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(violations, 0, "noise values outside their Lipschitz bounds");
+    assert_eq!(checked, 4 * 400 * 64);
+    // Tiny boxes get a small fraction of the global interval (the old bound's width is 1).
+    small_widths.sort_by(f32::total_cmp);
+    let median = small_widths[small_widths.len() / 2];
+    assert!(
+        median < 0.05,
+        "median relative width {median} of tiny boxes"
+    );
+}
+
+#[test]
+fn noise_bounds_over_unbounded_boxes_are_the_global_bound() {
+    let f = fbm(2.0, 4);
+    let g = f.bound();
+    assert_eq!(f.bounds_over(Vec3::NEG_INFINITY, Vec3::ZERO), (-g, g));
+    assert_eq!(f.bounds_over(Vec3::splat(f32::NAN), Vec3::ONE), (-g, g));
+    // A box much wider than the lattice: every octave's interval is clamped.
+    assert_eq!(
+        f.bounds_over(Vec3::splat(-100.0), Vec3::splat(100.0)),
+        (-g, g)
+    );
+}
