@@ -287,6 +287,14 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let chromatic = m.is_chromatic();
         let k = m.channel_ratios();
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
+        // MIS against light sampling of this medium's emitter (crate::volume_lights): the
+        // collision estimator's weight at the ray's tentative collision at `t`.
+        let volume_light = services.volume_light;
+        let light_weight = |i: usize, t: f32| {
+            volume_light.map_or(1.0, |l| {
+                l.unidirectional_weight(rays, i, rays.origin[i] + rays.direction[i] * t)
+            })
+        };
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
@@ -313,7 +321,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     p,
                     |t, sigma_t| {
                         if emits {
-                            self.emission_at(o + d * t, sigma_t)
+                            self.emission_at(o + d * t, sigma_t) * light_weight(i, t)
                         } else {
                             Rgb::BLACK
                         }
@@ -336,7 +344,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 let (f, e) = delta_tracking_emitting(
                     self.emissive_segments(o, d, tmax[i]),
                     sigma,
-                    |t, sigma_t| self.emission_at(o + d * t, sigma_t),
+                    |t, sigma_t| self.emission_at(o + d * t, sigma_t) * light_weight(i, t),
                     || s.next_1d(),
                 );
                 out.emitted.push(i as u32, e);
