@@ -17,6 +17,7 @@ use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::scene_file::parse_scene;
+use risotto::engine::stats::VolumeEvent;
 use risotto_components::Rgb;
 use std::path::{Path, PathBuf};
 
@@ -179,6 +180,12 @@ fn a_uniform_emissive_box_lights_a_floor_as_the_brute_force_integral_says() {
         let out = render_with_technique(&scene, technique);
         let (mean, se) = image_mean(&out);
         errors.push(se.r);
+        let samples = out.stats.counters.volume_events[VolumeEvent::LightSample as usize];
+        assert_eq!(
+            samples > 0,
+            technique == LightingTechnique::Mis,
+            "{technique:?}: {samples} volume-light samples"
+        );
         for (c, (g, s)) in [(mean.r, se.r), (mean.g, se.g), (mean.b, se.b)]
             .into_iter()
             .enumerate()

@@ -421,6 +421,15 @@ impl LightSet {
         self.pmf_over_area[l as usize] * dist2 / cos
     }
 
+    /// Whether the selection sample `u_select` selects a volume light (as [`Self::sample`]
+    /// and [`Self::sample_column`] select).
+    pub fn selects_volume(&self, u_select: f32) -> bool {
+        self.selection.as_ref().is_some_and(|d| {
+            let i = d.sample_discrete(u_select).0;
+            matches!(self.lights.get(i), Some(Light::Volume { .. }))
+        })
+    }
+
     /// Volume-measure pdf (including selection) that light sampling picks the point `x` of
     /// the volume light `index` (0 for other lights): `P(light) p_V(x)`
     /// ([`crate::volume_lights`]).
