@@ -192,7 +192,11 @@ fn a_grey_scale_renders_exactly_as_before_spectral_tracking() {
 /// with the engine before spectral tracking (commit 1106d47) and matched by the chromatic
 /// code's grey path; re-taken when the trackers began carrying one exponential draw across
 /// majorant segments (397d628), which changed the grey trackers' random numbers on purpose
-/// (ray marching, which draws none there, kept its hash). The estimator-level equality of the
+/// (ray marching, which draws none there, kept its hash). The two emissive cases were
+/// re-taken when emissive heterogeneous media became lights under MIS (the ball is
+/// light-sampled and its path rays' emission MIS-weighted: a new estimator, checked
+/// analytically by `tests/volume_lights.rs` and the equilibrium spheres of
+/// `tests/emissive_media.rs`). The estimator-level equality of the
 /// grey and `k = 1` spectral trackers is `a_grey_k_reproduces_the_grey_estimators_bit_for_bit`
 /// in `systems/src/spectral_tracking.rs`.
 const GREY_HASHES: [u64; 7] = [
@@ -201,8 +205,8 @@ const GREY_HASHES: [u64; 7] = [
     0x8607_8376_c820_9309,
     0x1daa_073e_eac4_639e,
     0x2043_ba4a_149d_6ad1,
-    0xd186_dbb4_ae30_88a4,
-    0xd1ec_012e_3ce8_de0f,
+    0x47bf_b5a8_2180_336f,
+    0x704a_18dd_d72c_7241,
 ];
 
 /// A unit ball of constant density 1 with extinction `scale` per channel, albedo 0.95,

@@ -212,6 +212,7 @@ fn volume_hits(
             lighting: None,
             factory,
             arena,
+            volume_light: None,
         },
         out,
     );

@@ -663,6 +663,19 @@ impl BxdfFactory for BuiltinMaterial {
             _ => 1.0,
         }
     }
+
+    /// A heterogeneous emissive interior behind an index-matched `interface` is a light
+    /// (behind other surfaces path rays do not keep their pdf, `crate::volume_lights`).
+    fn volume_emitter(
+        &self,
+        bounds: (glam::Vec3, glam::Vec3),
+        support: crate::volume_lights::EmitterSupport,
+    ) -> Option<crate::volume_lights::VolumeEmitter> {
+        match (&self.surface, &self.interior) {
+            (Surface::Interface, Interior::Heterogeneous(m)) => m.volume_emitter(bounds, support),
+            _ => None,
+        }
+    }
 }
 
 /// The column of pattern parameter `name` (the material's `graph`) over `ctx`'s points:

@@ -30,3 +30,4 @@ pub mod technique;
 pub mod texture_file;
 pub mod transmission;
 pub mod vdb_file;
+pub mod volume_lights;

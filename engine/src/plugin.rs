@@ -210,6 +210,10 @@ pub struct VolumeServices<'a, 's> {
     /// Technique choices of this render that override what the volume's material says
     /// (the built-in media honour them; a plug-in may).
     pub techniques: VolumeTechniques,
+    /// When the volume's emitter ([`BxdfFactory::volume_emitter`]) is light-sampled: how
+    /// to weight the emission gathered along the rays against those light samples
+    /// ([`crate::volume_lights`]). `None`: weight 1.
+    pub volume_light: Option<crate::volume_lights::VolumeLightMis<'a>>,
 }
 
 /// Technique choices a render makes for every volume (`risotto render --technique`,
@@ -303,6 +307,21 @@ pub trait BxdfFactory: Send + Sync {
     /// [`ShadingContext::eval_param`] evaluates and caches. Defaults to none.
     fn param(&self, name: &str) -> Option<ParamValue<'_>> {
         let _ = name;
+        None
+    }
+
+    /// The interior's emission as a light, for a shape with bounds `bounds` where the
+    /// interior is `support` (next-event estimation towards emissive media,
+    /// [`crate::volume_lights`]). A factory that returns one promises that its integrator
+    /// weights the emission it gathers along path rays by
+    /// [`VolumeServices::volume_light`] and that shadow rays cross its boundary as its path
+    /// rays do. Asked once per emissive shape at scene compilation. Defaults to none.
+    fn volume_emitter(
+        &self,
+        bounds: (Vec3, Vec3),
+        support: crate::volume_lights::EmitterSupport,
+    ) -> Option<crate::volume_lights::VolumeEmitter> {
+        let _ = (bounds, support);
         None
     }
 

@@ -123,6 +123,8 @@ pub struct Features {
     pub subsurface: bool,
     /// Some interior emits.
     pub emissive_media: bool,
+    /// Some emissive medium is light-sampled ([`crate::volume_lights`]).
+    pub emissive_volume_lights: bool,
     /// Some surface passes shadow rays (transmission system must walk through surfaces).
     pub transmission_shadows: bool,
     /// Some material reads surface `u`, `v` (sphere hits compute theirs,
@@ -148,6 +150,7 @@ impl Features {
             (self.heterogeneous, "heterogeneous_media"),
             (self.subsurface, "subsurface"),
             (self.emissive_media, "emissive_media"),
+            (self.emissive_volume_lights, "emissive_volume_lights"),
             (self.transmission_shadows, "transmission_shadows"),
             (self.surface_uv, "surface_uv"),
             (self.area_lights, "area_lights"),
@@ -252,6 +255,9 @@ pub struct CompiledScene {
     /// Per shape: its world-space bounding box `(min, max)`, the bounds a volume's `u, v, w`
     /// are relative to.
     pub shape_bounds: Vec<(Vec3, Vec3)>,
+    /// Per shape: the index (in `mis_lights`) of the volume light its emissive interior
+    /// offered ([`crate::volume_lights`]), or `u32::MAX`.
+    pub volume_light: Vec<u32>,
     /// What compiling changed about the scene as written that a user should know (shapes
     /// hidden by a coincident shape); every render's stats repeat them.
     pub warnings: Vec<String>,
@@ -516,6 +522,7 @@ impl Scene {
             shape_tracked: Vec::new(),
             shape_entry: Vec::new(),
             shape_bounds: Vec::new(),
+            volume_light: Vec::new(),
             warnings,
         };
         let mut bounds = vec![
@@ -538,6 +545,7 @@ impl Scene {
             *b = (b.0.min(lo), b.1.max(hi));
         }
         compiled.shape_bounds = bounds;
+        compiled.add_volume_lights();
         let shapes = 0..compiled.shapes.len() as u32;
         compiled.shape_tracked = shapes
             .clone()
@@ -586,6 +594,48 @@ impl Scene {
 }
 
 impl CompiledScene {
+    /// Adds the volume emitters of the emissive interiors to both light sets (after the
+    /// shapes' bounds are known), and records each shape's light.
+    fn add_volume_lights(&mut self) {
+        self.volume_light = vec![u32::MAX; self.shapes.len()];
+        let emitters = crate::volume_lights::collect(self);
+        if emitters.is_empty() {
+            return;
+        }
+        // Only the MIS set: light sampling alone (`lighting = nee`, the lighting delegate)
+        // leaves emissive media to their collision estimator (crate::volume_lights).
+        let mut lights = self.mis_lights.lights().to_vec();
+        for ((shape, _), light) in emitters.iter().zip(crate::volume_lights::lights(&emitters)) {
+            self.volume_light[*shape as usize] = lights.len() as u32;
+            lights.push(light);
+        }
+        self.mis_lights =
+            LightSet::with_environment_sampling(lights, &self.geometry, self.radius, false);
+        self.features.emissive_volume_lights = true;
+    }
+
+    /// The MIS data of the volume light of `shape`'s interior under `technique`, if it has one
+    /// that the technique samples (only [`LightingTechnique::Mis`](crate::integrator::LightingTechnique::Mis) does).
+    pub fn volume_light_mis(
+        &self,
+        shape: u32,
+        technique: crate::integrator::LightingTechnique,
+    ) -> Option<crate::volume_lights::VolumeLightMis<'_>> {
+        if technique != crate::integrator::LightingTechnique::Mis {
+            return None;
+        }
+        let index = *self.volume_light.get(shape as usize)?;
+        let set = &self.mis_lights;
+        match set.lights().get(index as usize)? {
+            Light::Volume { emitter } => Some(crate::volume_lights::VolumeLightMis {
+                emitter,
+                selection: set.selection_pmf(index),
+                technique,
+            }),
+            _ => None,
+        }
+    }
+
     /// The volume entry for crossing into `shape`'s interior, if its material has one.
     pub fn volume_entry(&self, shape: u32) -> risotto_components::VolumeEntry {
         let material = self.shapes[shape as usize].material;

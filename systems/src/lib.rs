@@ -27,6 +27,7 @@ pub mod sampler;
 mod simd8;
 pub mod spectral_tracking;
 pub mod tracking;
+pub mod volume_lights;
 
 /// Mean and standard error of `n` estimates `f()` (unit tests of the estimators).
 #[cfg(test)]

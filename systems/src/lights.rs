@@ -10,9 +10,11 @@
 use crate::distribution::{Distribution1D, EnvironmentMap, ONE_MINUS_EPSILON};
 use crate::geometry::{gamma, SceneGeometry, UNDERFLOW};
 use crate::simd8::{Backend, Kernel8, Lanes8, Mask8, Row8, Simd};
+use crate::volume_lights::VolumeEmitter;
 use glam::{Vec2, Vec3};
 use risotto_components::Rgb;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// One light.
 #[derive(Clone, Debug)]
@@ -44,6 +46,11 @@ pub enum Light {
         radiance: Rgb,
         /// Optional equirectangular map.
         map: Option<Box<EnvironmentMap>>,
+    },
+    /// An emissive medium ([`crate::volume_lights`]): its samples are points inside it.
+    Volume {
+        /// The cells, their emission bounds and the emission field.
+        emitter: Arc<VolumeEmitter>,
     },
 }
 
@@ -266,6 +273,8 @@ impl LightSet {
                 }
                 Light::Distant { irradiance, .. } => irradiance.average() * PI * r2,
                 Light::Point { intensity, .. } => 4.0 * PI * intensity.average(),
+                // As an area light's `L pi A`: radiance per length times volume, times pi.
+                Light::Volume { emitter } => emitter.power() * PI,
                 Light::Environment {
                     radiance,
                     map: None,
@@ -283,6 +292,7 @@ impl LightSet {
             })
             .map(|p| if p.is_finite() { p.max(0.0) } else { 0.0 })
             .collect();
+        let power = cap_volume_power(&lights, power);
         // Without constant-environment sampling, a set whose lights all have zero power
         // selects nothing (rather than falling back to a uniform choice that would pick
         // the environment).
@@ -411,7 +421,29 @@ impl LightSet {
         self.pmf_over_area[l as usize] * dist2 / cos
     }
 
-    /// Samples a light from `p`. `u_select` chooses the light, `u` the point on it.
+    /// Whether the selection sample `u_select` selects a volume light (as [`Self::sample`]
+    /// and [`Self::sample_column`] select).
+    pub fn selects_volume(&self, u_select: f32) -> bool {
+        self.selection.as_ref().is_some_and(|d| {
+            let i = d.sample_discrete(u_select).0;
+            matches!(self.lights.get(i), Some(Light::Volume { .. }))
+        })
+    }
+
+    /// Volume-measure pdf (including selection) that light sampling picks the point `x` of
+    /// the volume light `index` (0 for other lights): `P(light) p_V(x)`
+    /// ([`crate::volume_lights`]).
+    pub fn volume_pdf(&self, index: u32, x: Vec3) -> f32 {
+        match self.lights.get(index as usize) {
+            Some(Light::Volume { emitter }) => self.selection_pmf(index) * emitter.pdf(x),
+            _ => 0.0,
+        }
+    }
+
+    /// Samples a light from `p`. `u_select` chooses the light, `u` the point on it (a volume
+    /// light's cell from `u_select` rescaled within the light's selection interval, its
+    /// point in the cell from `u` and what is left of that rescaled value,
+    /// [`VolumeEmitter::sample`]).
     pub fn sample(
         &self,
         geometry: &SceneGeometry,
@@ -479,6 +511,41 @@ impl LightSet {
                     radiance: *intensity / dist2,
                     pdf: pmf,
                     delta: true,
+                    margin: 0.0,
+                })
+            }
+            Light::Volume { emitter } => {
+                let cdf = self.selection.as_ref()?.cdf();
+                let (a, b) = (cdf[index], cdf[index + 1]);
+                // The selection sample rescaled to [0, 1) within the light's interval picks
+                // the cell (a uniform variable independent of the choice of light).
+                let u_cell = if b > a {
+                    ((u_select - a) / (b - a)).clamp(0.0, ONE_MINUS_EPSILON)
+                } else {
+                    0.0
+                };
+                let (x, pdf_v) = emitter.sample([u.x, u.y], u_cell)?;
+                let d = x - p;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 || !dist2.is_finite() {
+                    return None;
+                }
+                let j = emitter.emission(x);
+                if j.is_black() {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                // `radiance` and `pdf` both over the tracking bound: the power heuristic
+                // of `pdf` against a Bxdf pdf is then the MIS weight against the collision
+                // estimator (crate::volume_lights).
+                let maj = emitter.mis_majorant(x);
+                let pdf = pmf * pdf_v * dist2 / maj;
+                (pdf > 0.0 && pdf.is_finite()).then_some(LightSample {
+                    wi: d * (1.0 / dist),
+                    distance: dist,
+                    radiance: j * (1.0 / maj),
+                    pdf,
+                    delta: false,
                     margin: 0.0,
                 })
             }
@@ -862,6 +929,32 @@ pub fn sample_lights(
     for i in 0..p.len() {
         out[i] = lights.sample(geometry, p[i], u_select[i], u[i]);
     }
+}
+
+/// The selection powers with the volume lights' share capped at one half when other lights
+/// have power: a volume emitter's `j_max V` overstates what reaches a vertex (much of it is
+/// absorbed inside the medium, and the cells of a large emitter far from the vertex light it
+/// little), and at full weight a wide emissive slab took all but `1e-5` of the light
+/// samples from a point light beside it. Sets without volume lights are unchanged.
+fn cap_volume_power(lights: &[Light], mut power: Vec<f32>) -> Vec<f32> {
+    let is_volume = |i: usize| matches!(lights[i], Light::Volume { .. });
+    let (mut volume, mut other) = (0.0f64, 0.0f64);
+    for (i, &p) in power.iter().enumerate() {
+        if is_volume(i) {
+            volume += p as f64;
+        } else {
+            other += p as f64;
+        }
+    }
+    if volume > other && other > 0.0 {
+        let k = (other / volume) as f32;
+        for (i, p) in power.iter_mut().enumerate() {
+            if is_volume(i) {
+                *p *= k;
+            }
+        }
+    }
+    power
 }
 
 /// Power heuristic with exponent 2 (Veach 1997, eq. 9.13) for one sample of each strategy.

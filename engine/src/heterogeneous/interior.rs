@@ -368,6 +368,14 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
         let fields = self.fields();
         let emission_at = |uvw: Vec3, sigma_t: f32| self.emission_at(uvw, sigma_t, &fields);
+        // MIS against light sampling of this medium's emitter (crate::volume_lights): the
+        // collision estimator's weight at the ray's tentative collision at `t`.
+        let volume_light = services.volume_light;
+        let light_weight = |i: usize, t: f32| {
+            volume_light.map_or(1.0, |l| {
+                l.unidirectional_weight(rays, i, rays.origin[i] + rays.direction[i] * t)
+            })
+        };
         for i in 0..n {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
@@ -394,7 +402,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     p,
                     |t, sigma_t| {
                         if emits {
-                            emission_at(o + d * t, sigma_t)
+                            emission_at(o + d * t, sigma_t) * light_weight(i, t)
                         } else {
                             Rgb::BLACK
                         }
@@ -417,7 +425,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 let (f, e) = delta_tracking_emitting(
                     self.emissive_segments(&fields.grids, o, d, tmax[i]),
                     sigma,
-                    |t, sigma_t| emission_at(o + d * t, sigma_t),
+                    |t, sigma_t| emission_at(o + d * t, sigma_t) * light_weight(i, t),
                     || s.next_1d(),
                 );
                 out.emitted.push(i as u32, e);

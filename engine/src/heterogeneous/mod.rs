@@ -88,6 +88,7 @@
 //! `parse.rs` reads the scene table, `interior.rs` is the volume integrator (free flights,
 //! transmittance, emission); this file holds the medium's parameters.
 
+mod emitter;
 mod field;
 mod interior;
 mod parse;

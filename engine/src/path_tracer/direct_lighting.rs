@@ -21,7 +21,7 @@ use super::queues::{scratch, GroupScratch, LightBuffers};
 use crate::integrator::LightingTechnique;
 use crate::plugin::{Bxdf, LightingDelegate, ShadingContext};
 use crate::scene::CompiledScene;
-use crate::stats::{Stage, System, SystemStats};
+use crate::stats::{Stage, System, SystemStats, VolumeEvent};
 use glam::Vec3;
 use risotto_components::{Paths, Rays, Rgb, ShadowRayColumns, ShadowRays};
 use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
@@ -95,6 +95,12 @@ pub(super) fn sample_lights(
         &mut light,
     );
     stats.record(System::Lights, m, lstart.elapsed().as_secs_f64());
+    if scene.features.emissive_volume_lights {
+        let volume = (0..m)
+            .filter(|&k| light.pdf[k] > 0.0 && lights.selects_volume(u4[k][2]))
+            .count();
+        stats.volume_event(VolumeEvent::LightSample, volume);
+    }
     let (value, pdf) = (
         scratch(&mut buffers.value, m, Rgb::BLACK),
         scratch(&mut buffers.eval_pdf, m, 0.0),

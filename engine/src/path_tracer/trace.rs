@@ -227,6 +227,7 @@ fn partitioned(
                         factory,
                         arena,
                         techniques: tracer.volume,
+                        volume_light: scene.volume_light_mis(entry.shape, tracer.technique),
                     },
                     &mut t.answers,
                 );

@@ -130,11 +130,15 @@ pub enum VolumeEvent {
     /// step's) in an emissive medium, or a shadow-ray interval whose emission is added.
     /// Zero in scenes without emissive media, where that code never runs.
     Emission,
+    /// A light sample of a volume emitter (next-event estimation towards an emissive
+    /// medium, [`crate::volume_lights`]). Zero in scenes without the
+    /// `emissive_volume_lights` feature.
+    LightSample,
 }
 
 impl VolumeEvent {
     /// Number of kinds.
-    pub const COUNT: usize = 5;
+    pub const COUNT: usize = 6;
     /// Every kind, in discriminant order.
     pub const ALL: [VolumeEvent; VolumeEvent::COUNT] = [
         VolumeEvent::Scatter,
@@ -142,6 +146,7 @@ impl VolumeEvent {
         VolumeEvent::Absorbed,
         VolumeEvent::Pass,
         VolumeEvent::Emission,
+        VolumeEvent::LightSample,
     ];
     /// The snake_case name used in JSON and in the summary.
     pub const fn name(self) -> &'static str {
@@ -151,6 +156,7 @@ impl VolumeEvent {
             VolumeEvent::Absorbed => "absorbed",
             VolumeEvent::Pass => "pass",
             VolumeEvent::Emission => "emission",
+            VolumeEvent::LightSample => "light_sample",
         }
     }
 }

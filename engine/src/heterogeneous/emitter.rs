@@ -1,0 +1,72 @@
+//! The heterogeneous medium as a light ([`crate::volume_lights`]): its majorant cells with
+//! their emission bounds and tracking bounds.
+
+use super::{HeterogeneousEmission, HeterogeneousMedium, EMISSION_COLLISIONS_PER_CELL};
+use glam::Vec3;
+use risotto_systems::volume_lights::{EmitterSupport, VolumeEmitter};
+
+impl HeterogeneousMedium {
+    /// The medium placed in `bounds` as a volume emitter over its majorant-grid cells:
+    /// `j_max(cell)` from the emission's bound there (the density's times the colour, or the
+    /// emission grid's times its scale), and the free flights' tracking bound (the extinction
+    /// bound, raised in emitting cells to `minorant + EMISSION_COLLISIONS_PER_CELL / width`
+    /// as the integrator's emissive segments raise it). `None` when the medium does not emit
+    /// or the box has no volume, and for pattern densities and pattern emission (the
+    /// emitter samples grids: such media keep the collision estimator alone, at weight 1).
+    pub fn volume_emitter(
+        &self,
+        (lo, hi): (Vec3, Vec3),
+        support: EmitterSupport,
+    ) -> Option<VolumeEmitter> {
+        let emission = self.emission.as_ref()?;
+        if self.density_pattern.is_some() {
+            return None;
+        }
+        let res = self.majorants.res();
+        let (field, scale, bound) = match emission {
+            HeterogeneousEmission::FollowsDensity(c) => (&self.density, *c, &self.majorants),
+            HeterogeneousEmission::Grid {
+                grid,
+                scale,
+                majorants,
+            } => (grid, *scale, majorants),
+            HeterogeneousEmission::Pattern(_) => return None,
+        };
+        let extent = (hi - lo).to_array();
+        let width = (0..3)
+            .map(|a| extent[a] / res[a] as f32)
+            .filter(|w| *w > 0.0 && w.is_finite())
+            .fold(0.0f32, f32::max);
+        let floor = if width > 0.0 {
+            (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
+        } else {
+            0.0
+        };
+        let smax = self.max_scale();
+        let n = res.iter().product::<usize>();
+        let (mut j_max, mut majorant) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for cz in 0..res[2] {
+            for cy in 0..res[1] {
+                for cx in 0..res[0] {
+                    let b = bound.max_at(cx, cy, cz);
+                    j_max.push(scale * b);
+                    let mut m = self.majorants.max_at(cx, cy, cz) * smax;
+                    if b > 0.0 {
+                        m = m.max(self.majorants.min_at(cx, cy, cz) * smax + floor);
+                    }
+                    majorant.push(m);
+                }
+            }
+        }
+        VolumeEmitter::new(
+            (lo, hi),
+            res,
+            &j_max,
+            majorant,
+            field.clone(),
+            scale,
+            support,
+        )
+        .ok()
+    }
+}
