@@ -122,6 +122,11 @@ fn noise_densities_track_against_pattern_bounds_without_violations() {
             let c = &out.stats.counters;
             assert_eq!(c.majorant_violations, 0, "{tracking} {emission}");
             assert!(c.pattern_evals > 0);
+            // Every evaluation here is the medium's (no surface pattern in the scene).
+            assert_eq!(
+                c.volume_pattern_evals, c.pattern_evals,
+                "{tracking} {emission}"
+            );
             assert_eq!(c.nan_dropped, 0);
             assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
         }

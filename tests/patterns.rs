@@ -219,6 +219,14 @@ fn the_shipped_patterns_scene_evaluates_patterns_and_cornell_does_not() {
     };
     let patterns = tiny("patterns.toml");
     assert!(patterns.stats.counters.pattern_evals > 0);
+    // Surface patterns only: none of the evaluations is a volume's (the scene has no
+    // heterogeneous medium).
+    assert_eq!(patterns.stats.counters.volume_pattern_evals, 0);
+    assert!(!patterns
+        .stats
+        .features
+        .iter()
+        .any(|f| f == "heterogeneous_media"));
     assert_eq!(patterns.stats.counters.nan_dropped, 0);
     let cornell = tiny("cornell-box.toml");
     let c = &cornell.stats.counters;

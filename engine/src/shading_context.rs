@@ -86,6 +86,9 @@ pub struct PatternCounters {
     pub hits: Cell<u64>,
     /// Parameter evaluations (cache misses).
     pub evals: Cell<u64>,
+    /// Of `evals`, the pattern evaluations volume integrators made point by point
+    /// ([`ShadingContext::count_pattern_evals`]).
+    pub volume_evals: Cell<u64>,
 }
 
 /// Entries a [`ParamCache`] holds; a context pulling more distinct parameters re-evaluates
@@ -328,10 +331,12 @@ impl<'a> ShadingContext<'a> {
 
     /// Counts `n` pattern evaluations made outside [`eval_param`](Self::eval_param) (a
     /// volume integrator evaluating a pattern coefficient point by point) into the
-    /// context's cache counters (the stats' `pattern_evals`); without a cache, nothing.
+    /// context's cache counters (the stats' `pattern_evals` and `volume_pattern_evals`);
+    /// without a cache, nothing.
     pub fn count_pattern_evals(&self, n: u64) {
         if let Some((_, counters)) = self.cache_parts {
             counters.evals.set(counters.evals.get() + n);
+            counters.volume_evals.set(counters.volume_evals.get() + n);
         }
     }
 

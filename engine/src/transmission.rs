@@ -243,6 +243,7 @@ pub fn trace_shadow_rays_with(
     }
     stats.pattern_cache_hits += walk.counters.hits.take();
     stats.pattern_evals += walk.counters.evals.take();
+    stats.volume_pattern_evals += walk.counters.volume_evals.take();
 }
 
 /// The state of every shadow ray's walk that volume intervals update.

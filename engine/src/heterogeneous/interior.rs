@@ -461,6 +461,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let stats = &mut *services.ictx.stats;
         stats.majorant_violations += violations;
         stats.pattern_evals += fields.evals();
+        stats.volume_pattern_evals += fields.evals();
         if emits {
             stats.volume_event(VolumeEvent::Emission, n);
         }

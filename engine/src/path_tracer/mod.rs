@@ -131,6 +131,7 @@ impl Integrator for PathTracer {
         }
         stats.pattern_cache_hits += q.counters.hits.take();
         stats.pattern_evals += q.counters.evals.take();
+        stats.volume_pattern_evals += q.counters.volume_evals.take();
         batch.trace = rec.map(|r| r.trace);
     }
 }

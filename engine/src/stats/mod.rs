@@ -406,6 +406,9 @@ pub struct SystemStats {
     pub pattern_cache_hits: u64,
     /// Parameter evaluations (pattern-cache misses).
     pub pattern_evals: u64,
+    /// Of `pattern_evals`, the patterns volumes evaluated (medium coefficients, point by
+    /// point): 0 in a scene without pattern-driven media.
+    pub volume_pattern_evals: u64,
     /// Sampled extinctions above their majorant's bound (heterogeneous media): 0 when the
     /// bounds are right. The estimators stay finite but lose their guarantees: reported,
     /// never clamped silently.
@@ -569,6 +572,7 @@ impl SystemStats {
         }
         self.pattern_cache_hits += other.pattern_cache_hits;
         self.pattern_evals += other.pattern_evals;
+        self.volume_pattern_evals += other.volume_pattern_evals;
     }
 }
 

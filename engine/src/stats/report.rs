@@ -126,6 +126,7 @@ impl Serialize for RenderStats {
         if c.pattern_cache_hits + c.pattern_evals > 0 {
             m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
             m.serialize_entry("pattern_evals", &c.pattern_evals)?;
+            m.serialize_entry("volume_pattern_evals", &c.volume_pattern_evals)?;
         }
         m.serialize_entry("wall_seconds", &self.wall_seconds)?;
         m.serialize_entry("features", &self.features)?;
