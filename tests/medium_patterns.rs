@@ -216,3 +216,65 @@ fn the_noise_cloud_scene_has_no_majorant_violation() {
     let json = serde_json::to_value(&out.stats).unwrap();
     assert_eq!(json["majorant_violations"], 0, "{json}");
 }
+
+/// `albedo = { pattern = .. }`: a constant pattern renders the constant albedo bit for bit
+/// (grey and chromatic media), and a gradient along x makes one half of the ball darker and
+/// the reversed gradient the other: the albedo is read at the scattering points' world P.
+#[test]
+fn an_albedo_pattern_is_read_at_each_scattering_point() {
+    let d = dir("albedo");
+    let render = |albedo: &str, scale: &str| {
+        let interior = format!(
+            r#"{{ type = "heterogeneous", density = {{ constant = 1 }}, scale = {scale}, albedo = {albedo} }}"#
+        );
+        common::render_scene_text(&d, &ball(&interior, 8, 5))
+    };
+    for scale in ["2", "[1, 2, 4]"] {
+        let constant = render("[0.8, 0.5, 0.3]", scale);
+        let pattern = render(
+            r#"{ pattern = "constant", value = [0.8, 0.5, 0.3] }"#,
+            scale,
+        );
+        assert_eq!(
+            constant.beauty.pixels, pattern.beauty.pixels,
+            "scale {scale}"
+        );
+        let c = &pattern.stats.counters;
+        assert!(c.volume_pattern_evals > 0, "scale {scale}");
+        assert_eq!(constant.stats.counters.volume_pattern_evals, 0);
+    }
+    // Mean of the left minus the right half of the 16-pixel-wide image.
+    let halves = |img: &risotto::engine::output::Image| {
+        let (w, h) = (img.width, img.height);
+        let (mut left, mut right) = (0.0f64, 0.0f64);
+        for y in 0..h {
+            for x in 0..w {
+                let v = img.pixels[y * w + x].average() as f64;
+                if x < w / 2 {
+                    left += v;
+                } else {
+                    right += v;
+                }
+            }
+        }
+        (left - right) / (w * h / 2) as f64
+    };
+    let up = halves(
+        &render(
+            r#"{ pattern = "gradient", axis = "x", from = -1, to = 1, a = 0, b = 1 }"#,
+            "2",
+        )
+        .beauty,
+    );
+    let down = halves(
+        &render(
+            r#"{ pattern = "gradient", axis = "x", from = -1, to = 1, a = 1, b = 0 }"#,
+            "2",
+        )
+        .beauty,
+    );
+    assert!(
+        up * down < 0.0 && up.abs() > 0.01 && down.abs() > 0.01,
+        "left - right: {up} and {down}"
+    );
+}

@@ -512,16 +512,27 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         });
         let parent = own_ctx.as_ref().unwrap_or(self.ctx);
         let mut v = parent.begin_volume_sampling();
-        let p: Vec<Vec3> = (0..n)
-            .map(|i| rays.origin[i] + rays.direction[i] * t[i])
-            .collect();
-        v.set_builtin(Builtin::P, &p);
-        v.set_vlen(&t);
-        let w: Vec<Rgb> = if chromatic {
+        v.set_along_rays(rays, &t);
+        let mut w: Vec<Rgb> = if chromatic {
             weight.iter().map(|&w| w * m.albedo).collect()
         } else {
             vec![m.albedo; n]
         };
+        if let Some(graph) = &m.albedo_pattern {
+            // The albedo pattern at the scattering points (world P), one column.
+            let rows: Vec<usize> = (0..n).filter(|&i| scattered[i]).collect();
+            let p: Vec<Vec3> = rows
+                .iter()
+                .map(|&i| rays.origin[i] + rays.direction[i] * t[i])
+                .collect();
+            let zeros = vec![0.0f32; rows.len()];
+            let mut albedo = vec![Rgb::BLACK; rows.len()];
+            risotto_systems::pattern::eval(graph, &p, &zeros, &zeros, &mut albedo);
+            for (&i, a) in rows.iter().zip(&albedo) {
+                w[i] *= *a;
+            }
+            self.ctx.count_pattern_evals(rows.len() as u64);
+        }
         v.set_transmission(&w);
         v.end_volume_sampling(&scattered, out);
     }

@@ -192,6 +192,10 @@ pub struct HeterogeneousMedium {
     /// events): the fireflies spectral MIS removes, for tests that compare the two. `None`
     /// (the default): spectral MIS.
     pub single_channel: Option<usize>,
+    /// The albedo as a pattern of the world position (`albedo = { pattern = .. }`, every
+    /// channel in `[0, 1]` by its interval bounds), evaluated at each scattering point; the
+    /// constant `albedo` is then unused (1) except by the albedo AOV. `None`: `albedo`.
+    pub albedo_pattern: Option<Arc<risotto_systems::pattern::PatternGraph>>,
 }
 
 /// What a heterogeneous medium emits: its **emission coefficient** `j(p)`, radiance per
@@ -248,6 +252,7 @@ impl HeterogeneousMedium {
             emission: None,
             single_channel: None,
             density_pattern: None,
+            albedo_pattern: None,
         }
     }
 

@@ -3,7 +3,7 @@
 use super::{HeterogeneousMedium, Tracking, DEFAULT_MAJORANT_CELLS, TRACKINGS};
 use crate::grid_file::{is_vdb, read_grid_named};
 use crate::load::phase_function;
-use crate::scene_file::{MaterialParams, SceneError};
+use crate::scene_file::{ColourParam, MaterialParams, SceneError};
 use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::grid::DensityGrid;
@@ -78,21 +78,51 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
         ));
     }
     let (albedo, phase, tracking, march_step, cells) = common(t)?;
+    let (albedo, albedo_pattern) = albedo.split();
     let medium = HeterogeneousMedium {
         march_step,
+        albedo_pattern,
         ..HeterogeneousMedium::new(density, cells, 1.0, albedo, phase, tracking).with_scale(scale)
     };
     with_emission(t, medium)
+}
+
+/// A medium's albedo key: a colour or a pattern.
+enum Albedo {
+    Constant(Rgb),
+    Pattern(std::sync::Arc<PatternGraph>),
+}
+
+impl Albedo {
+    /// The constant albedo (1 for a pattern, which the medium evaluates per point) and the
+    /// pattern, for [`HeterogeneousMedium`].
+    fn split(self) -> (Rgb, Option<std::sync::Arc<PatternGraph>>) {
+        match self {
+            Albedo::Constant(c) => (c, None),
+            Albedo::Pattern(g) => (Rgb::WHITE, Some(g)),
+        }
+    }
 }
 
 /// The keys every form of density shares: `(albedo, phase, tracking, march_step,
 /// majorant_grid)`.
 fn common(
     t: &MaterialParams,
-) -> Result<(Rgb, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
-    let albedo = t.rgb_where("albedo", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
-        c.min_channel() >= 0.0 && c.max_channel() <= 1.0
-    })?;
+) -> Result<(Albedo, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
+    // A colour, or a pattern of the world position (bounded in [0, 1] everywhere).
+    let albedo = match t.colour_or_pattern("albedo", Rgb::WHITE, [0.0, 1.0])? {
+        ColourParam::Constant(c) => Albedo::Constant(c),
+        ColourParam::Pattern(graph) => {
+            if graph.reads_uv() {
+                return Err(t.error(
+                    Some("albedo"),
+                    "a medium's pattern sees the world position P only (u and v belong to \
+                     surfaces)",
+                ));
+            }
+            Albedo::Pattern(std::sync::Arc::new(graph))
+        }
+    };
     let phase = match t.table("phase")? {
         None => PhaseFunction::Isotropic,
         Some(p) => phase_function(&p)?,
@@ -176,9 +206,11 @@ fn parse_pattern_density(t: &MaterialParams) -> Result<HeterogeneousMedium, Scen
         ));
     }
     let (albedo, phase, tracking, march_step, cells) = common(t)?;
+    let (albedo, albedo_pattern) = albedo.split();
     let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
     let medium = HeterogeneousMedium {
         march_step,
+        albedo_pattern,
         ..HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, tracking)
             .with_density_pattern(graph, cells)
             .with_scale(scale)
