@@ -78,7 +78,7 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
         ));
     }
     let (albedo, phase, tracking, march_step, cells) = common(t)?;
-    let (albedo, albedo_pattern) = albedo.split();
+    let (albedo, albedo_pattern) = albedo_parts(albedo);
     let medium = HeterogeneousMedium {
         march_step,
         albedo_pattern,
@@ -87,20 +87,12 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     with_emission(t, medium)
 }
 
-/// A medium's albedo key: a colour or a pattern.
-enum Albedo {
-    Constant(Rgb),
-    Pattern(std::sync::Arc<PatternGraph>),
-}
-
-impl Albedo {
-    /// The constant albedo (1 for a pattern, which the medium evaluates per point) and the
-    /// pattern, for [`HeterogeneousMedium`].
-    fn split(self) -> (Rgb, Option<std::sync::Arc<PatternGraph>>) {
-        match self {
-            Albedo::Constant(c) => (c, None),
-            Albedo::Pattern(g) => (Rgb::WHITE, Some(g)),
-        }
+/// The constant albedo (1 for a pattern, which the medium evaluates per point) and the
+/// pattern, for [`HeterogeneousMedium`].
+fn albedo_parts(albedo: ColourParam) -> (Rgb, Option<std::sync::Arc<PatternGraph>>) {
+    match albedo {
+        ColourParam::Constant(c) => (c, None),
+        ColourParam::Pattern(g) => (Rgb::WHITE, Some(std::sync::Arc::new(g))),
     }
 }
 
@@ -108,21 +100,15 @@ impl Albedo {
 /// majorant_grid)`.
 fn common(
     t: &MaterialParams,
-) -> Result<(Albedo, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
+) -> Result<(ColourParam, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
     // A colour, or a pattern of the world position (bounded in [0, 1] everywhere).
-    let albedo = match t.colour_or_pattern("albedo", Rgb::WHITE, [0.0, 1.0])? {
-        ColourParam::Constant(c) => Albedo::Constant(c),
-        ColourParam::Pattern(graph) => {
-            if graph.reads_uv() {
-                return Err(t.error(
-                    Some("albedo"),
-                    "a medium's pattern sees the world position P only (u and v belong to \
-                     surfaces)",
-                ));
-            }
-            Albedo::Pattern(std::sync::Arc::new(graph))
-        }
-    };
+    let albedo = t.colour_or_pattern("albedo", Rgb::WHITE, [0.0, 1.0])?;
+    if matches!(&albedo, ColourParam::Pattern(g) if g.reads_uv()) {
+        return Err(t.error(
+            Some("albedo"),
+            "a medium's pattern sees the world position P only (u and v belong to surfaces)",
+        ));
+    }
     let phase = match t.table("phase")? {
         None => PhaseFunction::Isotropic,
         Some(p) => phase_function(&p)?,
@@ -206,7 +192,7 @@ fn parse_pattern_density(t: &MaterialParams) -> Result<HeterogeneousMedium, Scen
         ));
     }
     let (albedo, phase, tracking, march_step, cells) = common(t)?;
-    let (albedo, albedo_pattern) = albedo.split();
+    let (albedo, albedo_pattern) = albedo_parts(albedo);
     let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
     let medium = HeterogeneousMedium {
         march_step,
