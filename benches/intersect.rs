@@ -20,7 +20,7 @@ use obvhs::ray::{Ray, RayHit};
 use risotto::components::NO_HIT;
 use risotto::systems::geometry::SceneGeometry;
 use risotto::systems::intersect::{
-    intersect_closest, intersect_occluded, PackedTriangle, WatertightRay,
+    intersect_all, intersect_closest, intersect_occluded, PackedTriangle, RayHits, WatertightRay,
 };
 
 const BATCH: usize = 4096;
@@ -193,6 +193,19 @@ fn ours_occluded(geom: &SceneGeometry, rays: &Rays, out: &mut [bool]) {
     black_box(&out);
 }
 
+/// Every hit of each ray's segment (up to `MAX_HITS`), as the shadow-ray walk asks.
+fn ours_all(geom: &SceneGeometry, rays: &Rays, out: &mut [RayHits]) {
+    intersect_all(
+        geom,
+        black_box(&rays.o),
+        black_box(&rays.d),
+        black_box(&rays.tmin),
+        black_box(&rays.tmax),
+        out,
+    );
+    black_box(&out);
+}
+
 /// The reference loop: obvhs' own traversal (`ray_traverse`, its SIMD node test) calling
 /// the same watertight triangle test on triangles stored in BVH order, packed as ours are.
 fn bare_closest(
@@ -334,6 +347,10 @@ fn bench_intersect(c: &mut Criterion) {
         });
         group.bench_function(format!("{name}/occluded/bare_obvhs"), |b| {
             b.iter(|| bare_occluded(bvh, &tris, rays, &mut occluded))
+        });
+        let mut all = vec![RayHits::EMPTY; n];
+        group.bench_function(format!("{name}/all_hits/ours"), |b| {
+            b.iter(|| ours_all(&geom, rays, &mut all))
         });
     }
     group.finish();

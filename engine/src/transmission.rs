@@ -26,7 +26,7 @@ use crate::stats::{System, SystemStats, VolumeEvent};
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{Rgb, ShadingPoints, ShadowRays, VolumeStack, NO_HIT};
-use risotto_systems::intersect::{intersect_closest, intersect_occluded};
+use risotto_systems::intersect::{intersect_all, intersect_occluded, NextHit, RayHits};
 use risotto_systems::ray::tmin_past_hit;
 use risotto_systems::sampler::PathSampler;
 
@@ -127,10 +127,26 @@ pub fn trace_shadow_rays_with(
         counters: PatternCounters::default(),
         gather,
     };
-    let mut origin = Vec::with_capacity(n);
-    let mut direction = Vec::with_capacity(n);
-    let mut tmin = Vec::with_capacity(n);
-    let mut tmax = Vec::with_capacity(n);
+    // Each ray's hits from one traversal of its whole segment, taken one per round:
+    // `RayHits::next_after` says what a closest-hit query from `t0` would find, and where
+    // it cannot (a hit within its error bound of `t0`, a full list), the ray queries again
+    // from `t0`. The same hits as one closest-hit query per round, for a third of the
+    // traversals on a shadow ray that leaves a medium.
+    let lists = arena.alloc_slice_fill_copy(n, RayHits::EMPTY);
+    let taken = arena.alloc_slice_fill_copy(n, 0u8);
+    stats.time(System::Intersect, n, || {
+        intersect_all(
+            &scene.geometry,
+            &shadow.origin,
+            &shadow.direction,
+            &t0,
+            &shadow.tmax,
+            lists,
+        )
+    });
+    let mut query: Vec<(usize, usize)> = Vec::new();
+    let (mut origin, mut direction) = (Vec::new(), Vec::new());
+    let (mut tmin, mut tmax, mut found) = (Vec::new(), Vec::new(), Vec::new());
     let (mut t, mut prim) = (Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut b1, mut b2) = (Vec::with_capacity(n), Vec::with_capacity(n));
     let mut segs: Vec<(usize, f32, f32)> = Vec::with_capacity(n);
@@ -139,34 +155,64 @@ pub fn trace_shadow_rays_with(
     while !active.is_empty() && rounds < scene.settings.max_passes {
         rounds += 1;
         let m = active.len();
-        origin.clear();
-        direction.clear();
-        tmin.clear();
-        tmax.clear();
-        for &i in &active {
-            let i = i as usize;
-            origin.push(shadow.origin[i]);
-            direction.push(shadow.direction[i]);
-            tmin.push(t0[i]);
-            tmax.push(shadow.tmax[i]);
-        }
-        t.resize(m, 0.0);
+        t.clear();
+        t.resize(m, f32::INFINITY);
+        prim.clear();
         prim.resize(m, NO_HIT);
+        b1.clear();
         b1.resize(m, 0.0);
+        b2.clear();
         b2.resize(m, 0.0);
-        stats.time(System::Intersect, m, || {
-            intersect_closest(
-                &scene.geometry,
-                &origin,
-                &direction,
-                &tmin,
-                &tmax,
-                &mut t,
-                &mut prim,
-                &mut b1,
-                &mut b2,
-            )
-        });
+        query.clear();
+        for (k, &i) in active.iter().enumerate() {
+            let i = i as usize;
+            let h = &lists[i];
+            // The nearest hit of a new list is the closest-hit query's answer.
+            let next_hit = match (rounds, h.len) {
+                (1, 0) => NextHit::Miss,
+                (1, _) => NextHit::Hit(0),
+                _ => h.next_after(taken[i] as usize, t0[i]),
+            };
+            match next_hit {
+                NextHit::Hit(j) => {
+                    taken[i] = j as u8 + 1;
+                    (t[k], prim[k], b1[k], b2[k]) = (h.t[j], h.prim[j], h.b1[j], h.b2[j]);
+                }
+                NextHit::Query => query.push((k, i)),
+                NextHit::Miss => {}
+            }
+        }
+        if !query.is_empty() {
+            origin.clear();
+            direction.clear();
+            tmin.clear();
+            tmax.clear();
+            for &(_, i) in &query {
+                origin.push(shadow.origin[i]);
+                direction.push(shadow.direction[i]);
+                tmin.push(t0[i]);
+                tmax.push(shadow.tmax[i]);
+            }
+            found.clear();
+            found.resize(query.len(), RayHits::EMPTY);
+            stats.time(System::Intersect, query.len(), || {
+                intersect_all(
+                    &scene.geometry,
+                    &origin,
+                    &direction,
+                    &tmin,
+                    &tmax,
+                    &mut found,
+                )
+            });
+            for (&(k, i), h) in query.iter().zip(&found) {
+                lists[i] = *h;
+                if h.len > 0 {
+                    taken[i] = 1;
+                    (t[k], prim[k], b1[k], b2[k]) = (h.t[0], h.prim[0], h.b1[0], h.b2[0]);
+                }
+            }
+        }
         // Intervals inside volumes for this round: (ray, start, length).
         if f.volumes {
             segs.clear();
@@ -213,19 +259,16 @@ pub fn trace_shadow_rays_with(
                 walk.transmittance[iu] *= info.shadow_transmittance;
             }
             if scene.tracks_interior(shape) {
-                let front =
-                    scene
-                        .geometry
-                        .hit_is_front(prim[k], origin[k], direction[k], t[k], b1[k]);
+                let (o, d) = (shadow.origin[iu], shadow.direction[iu]);
+                let front = scene.geometry.hit_is_front(prim[k], o, d, t[k], b1[k]);
                 stacks[iu].cross(scene.volume_entry(shape), front);
             }
             // Past the hit by its surface's error offset along the ray (coincident hits,
             // such as an edge two triangles share, count once).
-            let s = scene
-                .geometry
-                .surface_at(prim[k], origin[k], direction[k], t[k], b1[k], b2[k]);
+            let (o, d) = (shadow.origin[iu], shadow.direction[iu]);
+            let s = scene.geometry.surface_at(prim[k], o, d, t[k], b1[k], b2[k]);
             entered[iu] = t[k];
-            t0[iu] = tmin_past_hit(t[k], s.offset(), s.ng, direction[k]);
+            t0[iu] = tmin_past_hit(t[k], s.offset(), s.ng, d);
             if t0[iu] < shadow.tmax[iu] {
                 next.push(i);
             }

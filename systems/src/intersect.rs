@@ -426,6 +426,38 @@ fn edge_functions_f64(x: Vec4, y: Vec4) -> Option<Vec4> {
 /// The nearest root of the ray/sphere quadratic with `tmin < t < tmax` (compared after
 /// rounding `t` to f32), in double precision.
 fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32) -> Option<f64> {
+    let (t0, t1) = sphere_roots64(o, d, center, radius, tmin, tmax)?;
+    // The nearer root in range, without branches (a mispredicted branch here stalls the
+    // traversal behind the square root and division).
+    let t = if sphere_root_in_range(t0, tmin, tmax) {
+        t0
+    } else {
+        t1
+    };
+    sphere_root_in_range(t, tmin, tmax).then_some(t)
+}
+
+/// Whether a sphere root lies in `(tmin, tmax)`, compared after rounding it to f32 (the
+/// distance the hit reports).
+#[inline(always)]
+fn sphere_root_in_range(t: f64, tmin: f32, tmax: f32) -> bool {
+    let t32 = t as f32;
+    t32 > tmin && t32 < tmax
+}
+
+/// Both roots `t0 <= t1` of the ray/sphere quadratic in double precision, or `None` where
+/// neither can lie in `(tmin, tmax)` (the early rejections below decide only that) or the
+/// ray misses the sphere. The caller picks the roots in range
+/// ([`sphere_root_in_range`]).
+#[inline(always)]
+fn sphere_roots64(
+    o: Vec3,
+    d: Vec3,
+    center: Vec3,
+    radius: f32,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f64, f64)> {
     // A segment whose two ends lie inside the ball cannot cross the sphere (the ball is
     // convex). The margin (1e-3 of r^2, i.e. 5e-4 r) is far above the f32 rounding of the
     // ends, so the test is conservative; it spares the double-precision roots for the short
@@ -481,14 +513,7 @@ fn sphere_t64(o: Vec3, d: Vec3, center: Vec3, radius: f32, tmin: f32, tmax: f32)
         let (x, y) = (cc / q, q * inv_a);
         (x.min(y), x.max(y))
     };
-    // The nearer root in range, without branches (a mispredicted branch here stalls the
-    // traversal behind the square root and division).
-    let in_range = |t: f64| {
-        let t32 = t as f32;
-        t32 > tmin && t32 < tmax
-    };
-    let t = if in_range(t0) { t0 } else { t1 };
-    in_range(t).then_some(t)
+    Some((t0, t1))
 }
 
 /// Ray/sphere intersection: the nearest `t` with `tmin < t < tmax`, or `f32::INFINITY`.
@@ -875,6 +900,10 @@ struct PacketHits<F> {
     t: F,
     b1: F,
     b2: F,
+    /// Per accepted lane, an upper bound on the error bound of its `t`: a later query from
+    /// any `tmin' < t` accepts the hit if `t - tmin' > bound` (what
+    /// [`intersect_all`](all_hits) records to replay those queries).
+    bound: F,
 }
 
 /// One vertex of eight triangles translated, permuted and sheared, as in the scalar test:
@@ -936,6 +965,7 @@ fn intersect_packet<S: Simd>(
             t: u,
             b1: v,
             b2: w,
+            bound: u,
         };
     }
     let det = u + v + w;
@@ -959,6 +989,7 @@ fn intersect_packet<S: Simd>(
             t,
             b1: v,
             b2: w,
+            bound: t,
         };
     }
     // `t_error_bound` per lane, the same operations (max is exact, so the order of the
@@ -1010,6 +1041,7 @@ fn intersect_packet<S: Simd>(
         t,
         b1: v * inv_det,
         b2: w * inv_det,
+        bound: bound_max,
     }
 }
 
@@ -1132,18 +1164,25 @@ fn traverse_closest<S: Simd>(
     }
 }
 
-/// Any-hit traversal of the 8-wide BVH for shadow rays: the hit leaf children of a node are
-/// tested as soon as the node is visited (a blocker found early ends the ray, and testing
-/// them costs less than stacking them), then the hit inner children are visited nearest
-/// first. Returns whether a leaf ([`AnyRay::leaf`]) reported a hit.
+/// What a leaves-first traversal ([`traverse_leaves_first`]) does at a leaf child.
+trait LeafVisitor<S: Simd> {
+    /// Tests leaf child `child` against the segment up to `tmax` (which it may shrink);
+    /// `true` ends the traversal.
+    fn visit(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) -> bool;
+}
+
+/// Traversal of the 8-wide BVH that tests the hit leaf children of a node as soon as the
+/// node is visited (for shadow rays a blocker found early ends the ray, and testing them
+/// costs less than stacking them), then visits the hit inner children nearest first.
+/// Returns whether the visitor ended it.
 #[inline(always)]
-fn traverse_any<S: Simd>(
+fn traverse_leaves_first<S: Simd, V: LeafVisitor<S>>(
     s: S,
     bvh: &Bvh8,
     ray: &NodeRay<S::F>,
     stack: &mut [u32],
-    tmax: f32,
-    leaf: &AnyRay<'_, S>,
+    tmax: &mut f32,
+    leaf: &mut V,
 ) -> bool {
     // As in `traverse_closest`: a fixed slice and a local depth.
     let mut sp = 0usize;
@@ -1151,12 +1190,12 @@ fn traverse_any<S: Simd>(
     let mut index = 0usize;
     loop {
         let node = &nodes[index];
-        let (mask, tnear) = intersect_node8(s, node, ray, tmax);
+        let (mask, tnear) = intersect_node8(s, node, ray, *tmax);
         let mut leaves = mask & node.leaf_mask;
         while leaves != 0 {
             let c = leaves.trailing_zeros() as usize & 7;
             leaves &= leaves - 1;
-            if leaf.leaf(bvh, node.child[c], tmax) {
+            if leaf.visit(bvh, node.child[c], tmax) {
                 return true;
             }
         }
@@ -1386,10 +1425,11 @@ struct AnyRay<'a, S: Simd> {
     tmin: f32,
 }
 
-impl<S: Simd> AnyRay<'_, S> {
-    /// Whether leaf child `child` has a hit before `tmax`.
+impl<S: Simd> LeafVisitor<S> for AnyRay<'_, S> {
+    /// Whether leaf child `child` has a hit before `tmax` (which stays).
     #[inline(always)]
-    fn leaf(&self, bvh: &Bvh8, child: u32, tmax: f32) -> bool {
+    fn visit(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) -> bool {
+        let tmax = *tmax;
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
             let (o, d) = (self.tri.origin(), self.tri.direction());
@@ -1434,73 +1474,65 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
-            let ray = AnyRay {
+            let mut ray = AnyRay {
                 s,
                 tri: PacketRay::new(s, &block, lane),
                 tmin: ray_tmin,
             };
-            occluded[i] = traverse_any(s, bvh, &node_ray, &mut stack, tmax[i], &ray);
+            let mut ray_tmax = tmax[i];
+            occluded[i] =
+                traverse_leaves_first(s, bvh, &node_ray, &mut stack, &mut ray_tmax, &mut ray);
         }
     }
 }
 
-#[inline(never)]
-fn closest_portable(bvh: &Bvh8, c: ClosestColumns) {
-    closest_kernel(Portable, bvh, c)
-}
-
-#[inline(never)]
-fn occluded_portable(bvh: &Bvh8, c: OccludedColumns) {
-    occluded_kernel(Portable, bvh, c)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[allow(
-    unsafe_code,
-    reason = "enables AVX2 and FMA for the kernel instantiation"
-)]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn closest_avx2(s: Avx2, bvh: &Bvh8, c: ClosestColumns) {
-    closest_kernel(s, bvh, c)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[allow(
-    unsafe_code,
-    reason = "enables AVX2 and FMA for the kernel instantiation"
-)]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn occluded_avx2(s: Avx2, bvh: &Bvh8, c: OccludedColumns) {
-    occluded_kernel(s, bvh, c)
-}
-
-/// Runs the closest-hit kernel of `backend`.
-#[allow(
-    unsafe_code,
-    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
-)]
-fn closest_dispatch(backend: Backend, bvh: &Bvh8, c: ClosestColumns) {
-    match backend {
-        Backend::Portable => closest_portable(bvh, c),
+/// Defines `$dispatch(backend, bvh, columns)`, which runs the kernel `$kernel` (generic over
+/// the lanes) on `backend`: its portable instantiation, or the one compiled with AVX2 and
+/// FMA enabled (`$avx2`, chosen only where the CPU has them).
+macro_rules! kernel_dispatch {
+    ($dispatch:ident, $avx2:ident, $kernel:ident, $columns:ident) => {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
-        Backend::Avx2(s) => unsafe { closest_avx2(s, bvh, c) },
-    }
+        #[allow(
+            unsafe_code,
+            reason = "enables AVX2 and FMA for the kernel instantiation"
+        )]
+        #[target_feature(enable = "avx2,fma")]
+        unsafe fn $avx2(s: Avx2, bvh: &Bvh8, c: $columns) {
+            $kernel(s, bvh, c)
+        }
+
+        #[allow(
+            unsafe_code,
+            reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
+        )]
+        fn $dispatch(backend: Backend, bvh: &Bvh8, c: $columns) {
+            #[inline(never)]
+            fn portable(bvh: &Bvh8, c: $columns) {
+                $kernel(Portable, bvh, c)
+            }
+            match backend {
+                Backend::Portable => portable(bvh, c),
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on
+                // this CPU.
+                Backend::Avx2(s) => unsafe { $avx2(s, bvh, c) },
+            }
+        }
+    };
 }
 
-/// Runs the occlusion kernel of `backend`.
-#[allow(
-    unsafe_code,
-    reason = "calls the AVX2 kernel on a CPU checked to have AVX2"
-)]
-fn occluded_dispatch(backend: Backend, bvh: &Bvh8, c: OccludedColumns) {
-    match backend {
-        Backend::Portable => occluded_portable(bvh, c),
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the token exists only if `Avx2::detect` found AVX2 and FMA on this CPU.
-        Backend::Avx2(s) => unsafe { occluded_avx2(s, bvh, c) },
-    }
-}
+kernel_dispatch!(
+    closest_dispatch,
+    closest_avx2,
+    closest_kernel,
+    ClosestColumns
+);
+kernel_dispatch!(
+    occluded_dispatch,
+    occluded_avx2,
+    occluded_kernel,
+    OccludedColumns
+);
 
 /// Closest hit of every ray `origin[i] + t * direction[i]` with `tmin[i] < t < tmax[i]`.
 ///
@@ -1595,6 +1627,9 @@ pub fn intersect_occluded(
         },
     );
 }
+
+mod all_hits;
+pub use all_hits::{intersect_all, NextHit, RayHits, MAX_HITS};
 
 #[cfg(test)]
 mod tests;
