@@ -1,0 +1,371 @@
+//! [`Scene::compile`]: the world flattened into a [`CompiledScene`], with the checks that
+//! need every entity at once (coincident shapes, the camera's volume stack).
+
+use super::*;
+
+impl Scene {
+    /// Flattens the world into a [`CompiledScene`].
+    pub fn compile(self) -> Result<CompiledScene, CompileError> {
+        let Scene {
+            files,
+            world,
+            materials,
+            camera,
+            settings,
+            camera_volume,
+            camera_volume_at,
+        } = self;
+        // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
+        // primitive numbering is stable).
+        let mut shape_entities: Vec<(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)> =
+            Vec::new();
+        for (e, (name, geom, mat)) in world
+            .query::<(&Name, &ShapeGeometry, &MaterialRef)>()
+            .iter()
+        {
+            let emission = world.get::<&Emission>(e).ok().map(|em| em.0);
+            shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
+        }
+        shape_entities.sort_by_key(|s| s.0.id());
+        let mut warnings = Vec::new();
+        let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
+
+        let mut triangles = Vec::new();
+        let mut tri_shape = Vec::new();
+        let mut spheres = Vec::new();
+        let mut sphere_shape = Vec::new();
+        let mut shapes = Vec::new();
+        for (i, (_, name, geom, mat, emission)) in shape_entities.into_iter().enumerate() {
+            if mat as usize >= materials.len() {
+                return Err(CompileError::MissingMaterial {
+                    shape: name,
+                    index: mat,
+                });
+            }
+            match geom {
+                // A hidden shape keeps its index and name, but has no primitive to hit.
+                _ if hidden[i] => {}
+                ShapeGeometry::Sphere(s) => {
+                    spheres.push(s);
+                    sphere_shape.push(i as u32);
+                }
+                ShapeGeometry::Triangles(t) => {
+                    tri_shape.extend(std::iter::repeat_n(i as u32, t.len()));
+                    triangles.extend(t);
+                }
+            }
+            shapes.push(ShapeInfo {
+                name,
+                material: mat,
+                emission,
+            });
+        }
+        let num_tris = triangles.len();
+        let geometry = SceneGeometry::build(triangles, spheres);
+        let mut prim_shape = tri_shape;
+        prim_shape.extend(sphere_shape);
+
+        let (lo, hi) = geometry.bounds();
+        let (center, radius) = if lo.cmple(hi).all() {
+            // No absolute floor beyond keeping radius^2 a normal f32: the lights at infinity
+            // are priced by pi radius^2 (systems::lights), and a floor of 1e-3 made the sky
+            // of a scene 1e-6 across a million times brighter than its point light, which
+            // was then almost never selected (issue 14 item 8).
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-18))
+        } else {
+            (Vec3::ZERO, 1.0)
+        };
+
+        let mut lights = Vec::new();
+        let mut features = Features::default();
+        for (prim, &s) in prim_shape.iter().enumerate() {
+            if let Some(radiance) = shapes[s as usize].emission {
+                if !radiance.is_black() {
+                    lights.push(Light::Area {
+                        prim: prim as u32,
+                        radiance,
+                    });
+                    features.area_lights = true;
+                }
+            }
+        }
+        let _ = num_tris;
+        let mut light_entities: Vec<(hecs::Entity, LightComponent)> = world
+            .query::<&LightComponent>()
+            .iter()
+            .map(|(e, l)| (e, l.clone()))
+            .collect();
+        light_entities.sort_by_key(|l| l.0.id());
+        for (_, l) in light_entities {
+            lights.push(match l {
+                LightComponent::Distant {
+                    direction,
+                    irradiance,
+                } => {
+                    features.distant_lights = true;
+                    Light::Distant {
+                        direction,
+                        irradiance,
+                    }
+                }
+                LightComponent::Point {
+                    position,
+                    intensity,
+                } => {
+                    features.point_lights = true;
+                    Light::Point {
+                        position,
+                        intensity,
+                    }
+                }
+                LightComponent::Environment { radiance, map } => {
+                    features.environment = true;
+                    Light::Environment {
+                        radiance,
+                        map: map.map(|m| Box::new((*m).clone())),
+                    }
+                }
+            });
+        }
+        let mis_lights =
+            LightSet::with_environment_sampling(lights.clone(), &geometry, radius, false);
+        let lights = LightSet::new(lights, &geometry, radius);
+
+        let material_info: Vec<MaterialInfo> = materials
+            .iter()
+            .map(|m| MaterialInfo {
+                hints: m.factory.instance_hints(),
+                priority: m.priority,
+                ior: m.factory.ior(),
+                shadow_transmittance: m.factory.shadow_transmittance(),
+            })
+            .collect();
+        // Only materials some shape uses decide the features.
+        let mut used = vec![false; materials.len()];
+        for s in &shapes {
+            used[s.material as usize] = true;
+        }
+        for (info, _) in material_info.iter().zip(&used).filter(|(_, &u)| u) {
+            let h = info.hints;
+            features.volumes |= h.contains(InstanceHints::COMPUTES_INTERIOR);
+            features.transmissive |=
+                h.contains(InstanceHints::TRANSMITS) || h.contains(InstanceHints::INDEX_MATCHED);
+            features.scattering_media |= h.contains(InstanceHints::INTERIOR_SCATTERS);
+            features.heterogeneous |= h.contains(InstanceHints::INTERIOR_HETEROGENEOUS);
+            features.subsurface |= h.contains(InstanceHints::INTERIOR_SUBSURFACE);
+            features.emissive_media |= h.contains(InstanceHints::INTERIOR_EMITS);
+            features.transmission_shadows |= h.contains(InstanceHints::TRANSMISSION_SHADOWS);
+            features.surface_uv |= h.contains(InstanceHints::READS_SURFACE_UV);
+        }
+
+        let prim_material = prim_shape
+            .iter()
+            .map(|&s| shapes[s as usize].material)
+            .collect();
+        let mut compiled = CompiledScene {
+            files: files.paths(),
+            geometry,
+            prim_shape,
+            prim_material,
+            shapes,
+            materials,
+            material_info,
+            lights,
+            mis_lights,
+            camera,
+            settings,
+            features,
+            camera_stack: VolumeStack::new(),
+            radius,
+            center,
+            shape_tracked: Vec::new(),
+            shape_entry: Vec::new(),
+            shape_bounds: Vec::new(),
+            volume_light: Vec::new(),
+            warnings,
+        };
+        let mut bounds = vec![
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            compiled.shapes.len()
+        ];
+        let g = &compiled.geometry;
+        for (p, &shape) in compiled.prim_shape.iter().enumerate() {
+            let (lo, hi) = if p < g.num_triangles() {
+                let v = g.triangle(p);
+                (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+            } else {
+                let s = g.sphere(p - g.num_triangles());
+                (
+                    s.center - Vec3::splat(s.radius),
+                    s.center + Vec3::splat(s.radius),
+                )
+            };
+            let b = &mut bounds[shape as usize];
+            *b = (b.0.min(lo), b.1.max(hi));
+        }
+        compiled.shape_bounds = bounds;
+        compiled.add_volume_lights();
+        let shapes = 0..compiled.shapes.len() as u32;
+        compiled.shape_tracked = shapes
+            .clone()
+            .map(|s| compiled.tracks_interior(s))
+            .collect();
+        compiled.shape_entry = shapes.map(|s| compiled.volume_entry(s)).collect();
+        let probed = compiled.probe_stack(camera.from, camera.forward);
+        compiled.camera_stack = match camera_volume {
+            Some(names) => {
+                let fail = |message: String| match &camera_volume_at {
+                    Some(at) => CompileError::Scene(
+                        at.error(crate::scene_file::SceneErrorKind::InvalidValue, message),
+                    ),
+                    None => CompileError::CameraVolume(message),
+                };
+                let given = compiled.explicit_stack(&names).map_err(fail)?;
+                // A stated stack only states what probing finds (issue 14: a wrong one, say
+                // `inside = []` for a camera in fog, rendered every camera ray without the
+                // fog and said nothing). The probe is exact for closed shapes; a shape that
+                // is not closed cannot be listed meaningfully anyway.
+                if given != probed {
+                    let list = |s: &VolumeStack| {
+                        let names: Vec<String> = s
+                            .entries()
+                            .iter()
+                            .map(|e| format!("\"{}\"", compiled.shapes[e.shape as usize].name))
+                            .collect();
+                        format!("[{}]", names.join(", "))
+                    };
+                    return Err(fail(format!(
+                        "the camera is stated to be inside {} (outermost first), but the camera \
+                         at {} looking along {} is inside {}; remove `inside` to let the \
+                         engine find it, or correct it",
+                        list(&given),
+                        fmt_point(camera.from),
+                        fmt_point(camera.forward),
+                        list(&probed)
+                    )));
+                }
+                given
+            }
+            None => probed,
+        };
+        Ok(compiled)
+    }
+}
+
+/// A point or direction for messages: `(x, y, z)` with the shortest exact digits.
+fn fmt_point(p: Vec3) -> String {
+    format!("({}, {}, {})", p.x, p.y, p.z)
+}
+
+/// The shapes compiling leaves out because an identical one takes their place: among shapes
+/// with exactly the same geometry (same sphere, or the same triangles in the same order)
+/// whose materials track an interior (glass, media), without emission, only the one of
+/// highest priority is built; ties go to the first in file order when the tied shapes share
+/// a material, and are an error otherwise.
+///
+/// Why: crossing one of two coincident surfaces moves the new ray's origin past both (the
+/// spawn offset), so the other's crossing is never seen and the volume stacks go wrong. Two
+/// identical glass balls rendered visibly unlike one (issue 14 item 10), with warnings of
+/// rays leaving shapes they never entered. By the priority rule (Schmidt and Budge 2002) a
+/// volume inside one of higher priority never shows, so leaving it out is exact; for equal
+/// priorities and one material the shapes are the same solid. Equal priorities with
+/// different materials leave undefined which one fills the shape: an error naming both.
+/// Emissive shapes are kept (their emission would be lost), as are shapes that track no
+/// interior (an opaque surface hides what coincides with it either way).
+fn hidden_coincident_shapes(
+    shapes: &[(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)],
+    materials: &[Material],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<bool>, CompileError> {
+    use std::collections::HashMap;
+    use std::hash::{Hash, Hasher};
+    let mut hidden = vec![false; shapes.len()];
+    let candidate = |(_, _, _, mat, emission): &(_, _, _, u32, Option<Rgb>)| {
+        let Some(m) = materials.get(*mat as usize) else {
+            // Reported as a missing material by the caller.
+            return false;
+        };
+        let h = m.factory.instance_hints();
+        emission.is_none_or(|e| e.is_black())
+            && (h.contains(InstanceHints::COMPUTES_INTERIOR)
+                || h.contains(InstanceHints::TRANSMITS))
+    };
+    // Group by a hash of the geometry's bits, then compare exactly within a group.
+    let bits = |g: &ShapeGeometry, h: &mut std::collections::hash_map::DefaultHasher| match g {
+        ShapeGeometry::Sphere(s) => {
+            0u8.hash(h);
+            s.center.to_array().map(f32::to_bits).hash(h);
+            s.radius.to_bits().hash(h);
+        }
+        ShapeGeometry::Triangles(t) => {
+            1u8.hash(h);
+            t.len().hash(h);
+            for v in t.iter().flatten() {
+                v.to_array().map(f32::to_bits).hash(h);
+            }
+        }
+    };
+    let same = |a: &ShapeGeometry, b: &ShapeGeometry| match (a, b) {
+        (ShapeGeometry::Sphere(a), ShapeGeometry::Sphere(b)) => a == b,
+        (ShapeGeometry::Triangles(a), ShapeGeometry::Triangles(b)) => a == b,
+        _ => false,
+    };
+    let mut groups: HashMap<u64, Vec<usize>> = HashMap::new();
+    for (i, s) in shapes.iter().enumerate().filter(|(_, s)| candidate(s)) {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        bits(&s.2, &mut h);
+        groups.entry(h.finish()).or_default().push(i);
+    }
+    let mut groups: Vec<Vec<usize>> = groups.into_values().filter(|g| g.len() > 1).collect();
+    groups.sort();
+    for group in groups {
+        // Split a (improbable) hash collision into classes of equal geometry.
+        let mut rest = group;
+        while let Some(&first) = rest.first() {
+            let (class, others): (Vec<usize>, Vec<usize>) = rest
+                .iter()
+                .partition(|&&j| same(&shapes[j].2, &shapes[first].2));
+            rest = others;
+            if class.len() < 2 {
+                continue;
+            }
+            let priority = |j: usize| materials[shapes[j].3 as usize].priority;
+            let top = class.iter().map(|&j| priority(j)).max().unwrap_or(0);
+            let tied: Vec<usize> = class
+                .iter()
+                .copied()
+                .filter(|&j| priority(j) == top)
+                .collect();
+            let winner = tied[0];
+            if let Some(&other) = tied.iter().find(|&&j| shapes[j].3 != shapes[winner].3) {
+                return Err(CompileError::Invalid {
+                    entity: format!("shape \"{}\"", shapes[other].1),
+                    message: format!(
+                        "has the same geometry as shape \"{}\" and the same priority ({top}) \
+                         but another material (\"{}\" against \"{}\"): which one fills the \
+                         shape is undefined; give one material a higher `priority`",
+                        shapes[winner].1,
+                        materials[shapes[other].3 as usize].name,
+                        materials[shapes[winner].3 as usize].name,
+                    ),
+                });
+            }
+            for &j in class.iter().filter(|&&j| j != winner) {
+                hidden[j] = true;
+                warnings.push(format!(
+                    "shape \"{}\" has the same geometry as shape \"{}\" and {}: it is left \
+                     out (its surface is \"{}\"'s)",
+                    shapes[j].1,
+                    shapes[winner].1,
+                    if priority(j) < top {
+                        "a lower priority"
+                    } else {
+                        "the same material and priority"
+                    },
+                    shapes[winner].1,
+                ));
+            }
+        }
+    }
+    Ok(hidden)
+}
