@@ -35,6 +35,8 @@ pub struct IntegratorContext<'s> {
     pub stats: &'s mut SystemStats,
     scratch: HitScratch,
     volume: crate::plugin::VolumeTechniques,
+    /// Whether the caller of a volume's `transmission` uses its `emission` output.
+    emission_wanted: bool,
     /// Majorant violations a volume's `transmission` reported (it sees the context shared).
     violations: std::cell::Cell<u64>,
 }
@@ -56,6 +58,7 @@ impl<'s> IntegratorContext<'s> {
             stats,
             scratch,
             volume: crate::plugin::VolumeTechniques::default(),
+            emission_wanted: true,
             violations: std::cell::Cell::new(0),
         }
     }
@@ -78,6 +81,21 @@ impl<'s> IntegratorContext<'s> {
     pub fn with_volume_techniques(mut self, volume: crate::plugin::VolumeTechniques) -> Self {
         self.volume = volume;
         self
+    }
+
+    /// This context, telling volumes' `transmission` whether its `emission` output is used
+    /// (default `true`).
+    pub fn with_emission_wanted(mut self, wanted: bool) -> Self {
+        self.emission_wanted = wanted;
+        self
+    }
+
+    /// Whether the caller of [`VolumeIntegrator::transmission`](crate::plugin::VolumeIntegrator::transmission)
+    /// uses its `emission` output. Where it does not (the path tracer adds a built-in
+    /// medium's emission along its path rays, so it drops what shadow rays gather), an
+    /// integrator may leave `emission` black and run a cheaper transmittance estimator.
+    pub fn emission_wanted(&self) -> bool {
+        self.emission_wanted
     }
 
     /// The render's technique choices for volumes (defaults: as each material says).

@@ -257,7 +257,8 @@ pub trait VolumeIntegrator {
     /// entirely inside this volume (RIS `GetTransmission`). `emission[i]` is the radiance
     /// the volume emits along segment `i` that arrives at its start, attenuated within the
     /// segment (`int_0^L T(s) j(s) ds` for an emission coefficient `j`); black for a volume
-    /// that does not emit.
+    /// that does not emit. Where [`IntegratorContext::emission_wanted`] is false the caller
+    /// drops `emission`, and the integrator may skip gathering it (leave it black).
     fn transmission(
         &self,
         segments: &Segments,

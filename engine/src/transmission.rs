@@ -382,7 +382,8 @@ fn attenuate_in_volumes(
         let mut emission = vec![Rgb::BLACK; m];
         let mut scratch_stats = SystemStats::default();
         let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
-            .with_volume_techniques(volume);
+            .with_volume_techniques(volume)
+            .with_emission_wanted(gathers);
         integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
         stats.majorant_violations += ictx.take_majorant_violations();
         if gathers {

@@ -550,7 +550,9 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             .tracking
             .unwrap_or(self.medium.tracking);
         let fields = self.fields();
-        if self.medium.emits() {
+        // Emission nobody uses is not gathered: the plain trackers then estimate the same
+        // transmittance (unbiased either way) without an emission lookup per collision.
+        if self.medium.emits() && ictx.emission_wanted() {
             for i in 0..segments.len() {
                 let (r, e) = self.segment_emission(
                     &fields,
