@@ -513,13 +513,15 @@ fn transmission_returns_the_emission_reaching_the_segment_start() {
         phase: PhaseFunction::Isotropic,
         scattering: Scattering::Multiple,
         emission: Rgb::new(1.0, 2.0, 3.0),
+        albedo_pattern: None,
+        g_pattern: None,
     };
     let (segs, mut samplers) = segments(4, origin, direction, length);
     let mut pts = ShadingPoints::with_capacity(4);
     pts.extend_in_volume(&segs.origin, &segs.direction, 0);
     let ctx = ShadingContext::new(&pts, 0..4, ShadingMode::Interior, 0, &[]);
     let homogeneous = HomogeneousInterior {
-        medium,
+        medium: &medium,
         ctx: &ctx,
         boundary_blocks_shadows: false,
     };

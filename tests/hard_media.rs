@@ -28,6 +28,8 @@ fn medium(sigma_t: Rgb, albedo: f32, phase: PhaseFunction) -> Interior {
         phase,
         scattering: Scattering::Multiple,
         emission: Rgb::BLACK,
+        albedo_pattern: None,
+        g_pattern: None,
     })
 }
 

@@ -22,6 +22,8 @@ fn medium(sigma_t: f32, albedo: f32, phase: PhaseFunction, scattering: Scatterin
         phase,
         scattering,
         emission: Rgb::BLACK,
+        albedo_pattern: None,
+        g_pattern: None,
     })
 }
 

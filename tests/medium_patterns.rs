@@ -148,6 +148,22 @@ fn media_without_patterns_evaluate_none() {
     }
 }
 
+/// Each interior table's keys `case` fail to load with an error holding every needle and
+/// the line of the interior table.
+fn assert_located_errors(d: &std::path::Path, cases: &[(String, &[&str])]) {
+    for (case, needles) in cases {
+        let text = ball(&format!("{{ {case} }}"), 1, 0);
+        let err = match common::load_scene_text(d, &text) {
+            Ok(_) => panic!("{case}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        for n in needles.iter() {
+            assert!(err.contains(n), "{case}: `{n}` missing from: {err}");
+        }
+        assert!(err.contains("scene.toml:16:"), "{case}: no line in {err}");
+    }
+}
+
 #[test]
 fn bad_medium_patterns_are_located_errors() {
     let d = dir("errors");
@@ -183,18 +199,9 @@ fn bad_medium_patterns_are_located_errors() {
             &["octaves", "0"][..],
         ),
     ];
-    for (case, needles) in cases {
-        let text = ball(&format!(r#"{{ type = "heterogeneous", {case} }}"#), 1, 0);
-        let err = match common::load_scene_text(&d, &text) {
-            Ok(_) => panic!("{case}: loaded"),
-            Err(e) => e.to_string(),
-        };
-        for n in needles {
-            assert!(err.contains(n), "{case}: `{n}` missing from: {err}");
-        }
-        // The line of the interior table.
-        assert!(err.contains("scene.toml:16:"), "{case}: no line in {err}");
-    }
+    let cases =
+        cases.map(|(case, needles)| (format!(r#"type = "heterogeneous", {case}"#), needles));
+    assert_located_errors(&d, &cases);
 }
 
 #[test]
@@ -276,5 +283,246 @@ fn an_albedo_pattern_is_read_at_each_scattering_point() {
     assert!(
         up * down < 0.0 && up.abs() > 0.01 && down.abs() > 0.01,
         "left - right: {up} and {down}"
+    );
+}
+
+/// Asserts two images are equal bit for bit, saying how many pixels differ otherwise.
+fn same_image(a: &[risotto::components::Rgb], b: &[risotto::components::Rgb], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+    assert_eq!(differ, 0, "{what}: {differ} of {} pixels differ", a.len());
+}
+
+/// A homogeneous interior of the ball with `rest` (its other keys).
+fn homogeneous(rest: &str) -> String {
+    format!(r#"{{ type = "homogeneous", {rest} }}"#)
+}
+
+/// `albedo` and the HG `g` of a homogeneous medium as patterns: a constant pattern renders
+/// the constant's image bit for bit in every scattering mode (the flights run at albedo 1
+/// and a power-of-two albedo scales their weights exactly; `g` is read per event), for a
+/// grey and a chromatic medium; the heterogeneous medium's `g` likewise.
+#[test]
+fn constant_albedo_and_g_patterns_render_their_constants_bit_for_bit() {
+    let d = dir("constant-scatter");
+    let media = [("2", "0.5"), ("[1, 2, 4]", "[0.5, 0.25, 1]")];
+    for scattering in ["bounce", "walk", "single"] {
+        for (sigma_t, albedo) in media {
+            let render = |albedo: &str, g: &str| {
+                let interior = homogeneous(&format!(
+                    r#"sigma_t = {sigma_t}, albedo = {albedo}, phase = {{ type = "hg", g = {g} }}, scattering = "{scattering}""#
+                ));
+                common::render_scene_text(&d, &ball(&interior, 4, 7))
+            };
+            let constant = render(albedo, "0.7");
+            assert_eq!(constant.stats.counters.volume_pattern_evals, 0);
+            let cases = [
+                (
+                    format!(r#"{{ pattern = "constant", value = {albedo} }}"#),
+                    "0.7".to_string(),
+                ),
+                (
+                    albedo.to_string(),
+                    r#"{ pattern = "constant", value = 0.7 }"#.to_string(),
+                ),
+            ];
+            for (a, g) in &cases {
+                let pattern = render(a, g);
+                let what = format!("{scattering}, sigma_t {sigma_t}, albedo {a}, g {g}");
+                same_image(&constant.beauty.pixels, &pattern.beauty.pixels, &what);
+                assert!(pattern.stats.counters.volume_pattern_evals > 0, "{what}");
+                assert_eq!(pattern.stats.counters.nan_dropped, 0, "{what}");
+            }
+        }
+    }
+    let render = |g: &str| {
+        let interior = format!(
+            r#"{{ type = "heterogeneous", density = {{ constant = 1 }}, scale = 2, albedo = 0.8, phase = {{ type = "hg", g = {g} }} }}"#
+        );
+        common::render_scene_text(&d, &ball(&interior, 4, 8))
+    };
+    // Pattern colours are >= 0: a negative g comes from `remap` (exactly -0.5 here).
+    let constant = render("-0.5");
+    let pattern = render(r#"{ pattern = "remap", a = 0, to = [-0.5, 0.75] }"#);
+    same_image(
+        &constant.beauty.pixels,
+        &pattern.beauty.pixels,
+        "heterogeneous g",
+    );
+    assert!(pattern.stats.counters.volume_pattern_evals > 0);
+    assert_eq!(constant.stats.counters.volume_pattern_evals, 0);
+}
+
+/// Single scattering is local to each camera ray: seen from the camera on the z axis, the
+/// rays of the image's left half stay at x < 0 inside the ball and those of the right half
+/// at x > 0. So with an `albedo` or `g` pattern that steps at x = 0, the left half of the
+/// image is the left half of the render with the left value everywhere, bit for bit, and
+/// the right half that of the right value: the pattern is read at each scattering point,
+/// in world space.
+#[test]
+fn stepped_albedo_and_g_patterns_are_read_at_each_scattering_point() {
+    let d = dir("step");
+    let step = |a: &str, b: &str| {
+        format!(
+            r#"{{ pattern = "gradient", axis = "x", from = -1e-4, to = 1e-4, a = {a}, b = {b} }}"#
+        )
+    };
+    let render = |albedo: &str, g: &str| {
+        let interior = homogeneous(&format!(
+            r#"sigma_t = [1, 2, 4], albedo = {albedo}, phase = {{ type = "hg", g = {g} }}, scattering = "single""#
+        ));
+        common::render_scene_text(&d, &ball(&interior, 4, 9))
+    };
+    let halves_match = |stepped: &[risotto::components::Rgb],
+                        left: &[risotto::components::Rgb],
+                        right: &[risotto::components::Rgb],
+                        what: &str| {
+        let w = 16;
+        let mut differs = 0;
+        for (k, px) in stepped.iter().enumerate() {
+            let want = if k % w < w / 2 { left[k] } else { right[k] };
+            assert!(*px == want, "{what}: pixel {k} is {px:?}, not {want:?}");
+            differs += (left[k] != right[k]) as usize;
+        }
+        // The two values do change the image (the test could fail).
+        assert!(
+            differs > 50,
+            "{what}: only {differs} pixels differ between the halves' media"
+        );
+    };
+    let (left, right) = (render("0.5", "0.3"), render("0.25", "0.3"));
+    let stepped = render(&step("0.5", "0.25"), "0.3");
+    halves_match(
+        &stepped.beauty.pixels,
+        &left.beauty.pixels,
+        &right.beauty.pixels,
+        "albedo",
+    );
+    // 0 and 1 remapped to exactly -0.5 and 0.75.
+    let (left, right) = (render("0.5", "-0.5"), render("0.5", "0.75"));
+    let g = format!(
+        r#"{{ pattern = "remap", a = {}, to = [-0.5, 0.75] }}"#,
+        step("0", "1")
+    );
+    let stepped = render("0.5", &g);
+    halves_match(
+        &stepped.beauty.pixels,
+        &left.beauty.pixels,
+        &right.beauty.pixels,
+        "g",
+    );
+}
+
+/// A homogeneous interior with a pattern `sigma_t` or `emission` is built as a
+/// heterogeneous medium: a gradient extinction along the diameter gives the closed-form
+/// transmittance (as the heterogeneous density does), and an emission pattern over a
+/// constant extinction the closed-form emission of the absorbing, emitting ball,
+/// `T + j (1 - T) / sigma_t` with `T = exp(-2 sigma_t)` (environment 1 behind it).
+#[test]
+fn pattern_extinction_and_emission_make_a_homogeneous_interior_heterogeneous() {
+    let d = dir("homogeneous-heterogeneous");
+    // sigma_t(P) = 0.75 (z + 1): optical depth 1.5 along the diameter.
+    let interior = homogeneous(
+        r#"sigma_t = { pattern = "gradient", axis = "z", from = -1, to = 1, a = 0, b = 1.5 }, albedo = 0"#,
+    );
+    let expected = (-1.5f64).exp();
+    let n = 8192;
+    let out = common::render_scene_text(&d, &diameter_scene(&interior, n, 11));
+    let m = out.beauty.pixels[0].g as f64;
+    let se = (expected * (1.0 - expected) / n as f64).sqrt();
+    assert!(
+        ((m - expected) / se).abs() < 3.0,
+        "T {m} vs exp(-1.5) = {expected} (se {se})"
+    );
+    assert_eq!(out.stats.counters.majorant_violations, 0);
+    assert!(out.stats.counters.volume_pattern_evals > 0);
+    // Emission j = (0.6, 0.3, 0.9) by a pattern, sigma_t = 1.5, a black environment: means
+    // over 8 seeds within 4 standard errors of the closed form j (1 - T) / sigma_t; the
+    // constant emission (the homogeneous integrator's exact segment integral) matches it to
+    // rounding.
+    let sigma = 1.5f64;
+    let t = (-2.0 * sigma).exp();
+    let want = [0.6f64, 0.3, 0.9].map(|j| j * (1.0 - t) / sigma);
+    let dark = |interior: &str, spp: u32, seed: u64| {
+        let text = diameter_scene(interior, spp, seed).replace("radiance = 1\n", "radiance = 0\n");
+        assert!(text.contains("radiance = 0\n"));
+        common::render_scene_text(&d, &text)
+    };
+    let exact = dark(
+        &homogeneous("sigma_t = 1.5, albedo = 0, emission = [0.6, 0.3, 0.9]"),
+        4,
+        1,
+    );
+    for (c, w) in exact.beauty.pixels[0].to_array().into_iter().zip(want) {
+        assert!(
+            (c as f64 - w).abs() < 1e-4 * w,
+            "constant emission {c} vs {w}"
+        );
+    }
+    let interior = homogeneous(
+        r#"sigma_t = 1.5, albedo = 0, emission = { pattern = "constant", value = [0.6, 0.3, 0.9] }"#,
+    );
+    let runs: Vec<[f64; 3]> = (0..8)
+        .map(|seed| {
+            let out = dark(&interior, 512, 100 + seed);
+            out.beauty.pixels[0].to_array().map(|c| c as f64)
+        })
+        .collect();
+    for c in 0..3 {
+        let mean = runs.iter().map(|r| r[c]).sum::<f64>() / 8.0;
+        let var = runs.iter().map(|r| (r[c] - mean).powi(2)).sum::<f64>() / 7.0;
+        let se = (var / 8.0).sqrt().max(1e-6);
+        assert!(
+            ((mean - want[c]) / se).abs() < 4.0,
+            "channel {c}: {mean} +- {se} vs {}",
+            want[c]
+        );
+    }
+}
+
+#[test]
+fn bad_scattering_patterns_are_located_errors() {
+    let d = dir("scatter-errors");
+    let cases = [
+        (
+            r#"type = "homogeneous", sigma_t = 1, albedo = { pattern = "checker", space = "uv" }"#,
+            &["albedo", "world position P"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = 1, albedo = { pattern = "gradient", a = 0, b = 2 }"#,
+            &["albedo", "[0, 1]", "2"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = 1, phase = { type = "hg", g = { pattern = "constant", value = 1 } }"#,
+            &["phase", "g", "(-1, 1)"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = 1, phase = { type = "hg", g = { pattern = "constant", value = [0.1, 0.2, 0.3] } }"#,
+            &["g", "grey"][..],
+        ),
+        (
+            r#"type = "heterogeneous", density = { constant = 1 }, phase = { type = "double_hg", g1 = { pattern = "constant", value = 0.5 }, g2 = 0.1 }"#,
+            &["phase", "`hg`", "double_hg"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_a = { pattern = "constant", value = 1 }"#,
+            &["sigma_a", "sigma_t"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = { pattern = "constant", value = 1 }, scattering = "walk""#,
+            &["scattering", "walk", "heterogeneous"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = { pattern = "constant", value = [1, 2, 3] }"#,
+            &["sigma_t", "grey"][..],
+        ),
+        (
+            r#"type = "homogeneous", sigma_t = 1, emission = { grid = "x.vol" }"#,
+            &["emission", "heterogeneous"][..],
+        ),
+    ];
+    assert_located_errors(
+        &d,
+        &cases.map(|(case, needles)| (case.to_string(), needles)),
     );
 }

@@ -226,6 +226,8 @@ fn only_scattering_media_run_the_volume_scatter_stage() {
                     phase: risotto::systems::phase::PhaseFunction::Isotropic,
                     scattering: risotto::engine::media::Scattering::Multiple,
                     emission: Rgb::BLACK,
+                    albedo_pattern: None,
+                    g_pattern: None,
                 }),
             ),
         )

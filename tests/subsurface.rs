@@ -26,6 +26,8 @@ fn walked(sigma_t: Rgb, albedo: Rgb, phase: PhaseFunction) -> Interior {
         phase,
         scattering: Scattering::Walk,
         emission: Rgb::BLACK,
+        albedo_pattern: None,
+        g_pattern: None,
     })
 }
 
@@ -115,7 +117,7 @@ fn subsurface_material_furnace_is_white() {
             material.interior
         );
     };
-    let medium = interior.walk;
+    let medium = &interior.walk;
     assert_eq!(medium.sigma_t, Rgb::new(20.0, 10.0, 5.0));
     assert_eq!(medium.sigma_s, medium.sigma_t, "albedo 1 inverts to 1");
     let out = furnace(material.surface, material.interior, 128);
@@ -224,6 +226,8 @@ fn walk_and_bounces_render_the_same_image() {
             phase: hg(0.4),
             scattering: Scattering::Multiple,
             emission: Rgb::BLACK,
+            albedo_pattern: None,
+            g_pattern: None,
         });
         let cam = perspective(
             Vec3::new(0.0, 1.0, 3.0),

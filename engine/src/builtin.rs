@@ -9,6 +9,7 @@ use crate::context::IntegratorContext;
 use crate::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium};
 use crate::media::{HomogeneousInterior, HomogeneousMedium, PhaseBxdf};
 use crate::plugin::*;
+use crate::scatter_patterns::phase_bxdf;
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb};
@@ -458,7 +459,7 @@ impl Interior {
             Interior::Subsurface(params) => {
                 Some(arena.alloc(crate::subsurface::SubsurfaceInterior {
                     walk: HomogeneousInterior {
-                        medium: params.walk,
+                        medium: &params.walk,
                         ctx,
                         boundary_blocks_shadows,
                     },
@@ -469,7 +470,7 @@ impl Interior {
                 }))
             }
             Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior {
-                medium: *medium,
+                medium,
                 ctx,
                 boundary_blocks_shadows,
             })),
@@ -585,11 +586,13 @@ impl BxdfFactory for BuiltinMaterial {
                         phase: params.walk.phase,
                         albedo: params.walk.albedo(),
                     }),
-                    Interior::Homogeneous(m) => arena.alloc(PhaseBxdf {
-                        phase: m.phase,
-                        albedo: m.albedo(),
-                    }),
-                    Interior::Heterogeneous(m) => arena.alloc(m.phase_bxdf()),
+                    // A `g` pattern is read through the context's cache.
+                    Interior::Homogeneous(m) => {
+                        phase_bxdf(ctx, m.phase, m.g_pattern.as_deref(), m.albedo(), arena)
+                    }
+                    Interior::Heterogeneous(m) => {
+                        phase_bxdf(ctx, m.phase, m.g_pattern.as_deref(), m.albedo, arena)
+                    }
                     _ => arena.alloc(NullBxdf),
                 };
             }
@@ -653,6 +656,11 @@ impl BxdfFactory for BuiltinMaterial {
             }
             (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
             (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
+            (_, crate::scatter_patterns::G_PARAM) => match &self.interior {
+                Interior::Homogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
+                Interior::Heterogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
+                _ => None,
+            },
             _ => None,
         }
     }
@@ -692,7 +700,11 @@ fn pattern_column<'a>(
 }
 
 /// `graph` at every point of `ctx`, in the arena (for contexts without a cache).
-fn eval_uncached<'a>(graph: &PatternGraph, ctx: &ShadingContext<'a>, arena: &'a Bump) -> &'a [Rgb] {
+pub(crate) fn eval_uncached<'a>(
+    graph: &PatternGraph,
+    ctx: &ShadingContext<'a>,
+    arena: &'a Bump,
+) -> &'a [Rgb] {
     let n = ctx.num_points();
     let out = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
     let scratch = arena.alloc_slice_fill_copy(graph.scratch_len(n), Rgb::BLACK);

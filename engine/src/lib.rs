@@ -20,6 +20,7 @@ pub mod plugin;
 pub mod random_walk;
 pub mod render;
 pub mod replay;
+pub mod scatter_patterns;
 pub mod scene;
 pub mod scene_file;
 pub mod shade_groups;

@@ -182,7 +182,7 @@ fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
             })?;
             Ok(Interior::Beer { sigma_a })
         }
-        "homogeneous" => Ok(Interior::Homogeneous(homogeneous(&t)?)),
+        "homogeneous" => homogeneous(&t),
         "heterogeneous" => Ok(Interior::Heterogeneous(std::sync::Arc::new(
             crate::heterogeneous::parse(&t)?,
         ))),
@@ -197,8 +197,11 @@ fn interior(p: &MaterialParams) -> Result<Interior, SceneError> {
 
 /// `interior = { type = "homogeneous", ... }`: `sigma_t` and `albedo`, or `sigma_a` and
 /// `sigma_s` (colours or numbers, per world unit); `phase`; `scattering`; `emission` (the
-/// emission coefficient, radiance per unit length).
-fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
+/// emission coefficient, radiance per unit length). `albedo` and the HG `g` may be patterns
+/// read at the scattering points ([`crate::scatter_patterns`]); a pattern `sigma_t` or
+/// `emission` makes the medium heterogeneous
+/// ([`crate::heterogeneous::homogeneous_with_patterns`]).
+fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
     t.deny_unknown(&[
         "type",
         "sigma_t",
@@ -213,7 +216,7 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
     let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
     let by_extinction = t.has("sigma_t") || t.has("albedo");
     let by_coefficients = t.has("sigma_a") || t.has("sigma_s");
-    let (sigma_t, sigma_s) = match (by_extinction, by_coefficients) {
+    let (sigma_t, sigma_s, albedo_pattern) = match (by_extinction, by_coefficients) {
         (true, true) => {
             let key = if t.has("sigma_a") {
                 "sigma_a"
@@ -231,15 +234,21 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
                 "a homogeneous interior needs sigma_t (and albedo) or sigma_a and sigma_s",
             ))
         }
+        _ if t.is_table("sigma_t")
+            || t.is_table("emission")
+            || t.is_table("sigma_a")
+            || t.is_table("sigma_s") =>
+        {
+            return Ok(Interior::Heterogeneous(std::sync::Arc::new(
+                crate::heterogeneous::homogeneous_with_patterns(t)?,
+            )));
+        }
         (true, false) => {
             let sigma_t = t.rgb_where("sigma_t", None, non_negative, ok)?;
-            let albedo = t.rgb_where(
-                "albedo",
-                Some(Rgb::splat(1.0)),
-                "every channel in [0, 1]",
-                |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
-            )?;
-            (sigma_t, sigma_t * albedo)
+            // With a pattern the flights run at albedo 1 and each collision's weight is
+            // scaled by the pattern there.
+            let (albedo, pattern) = crate::scatter_patterns::parse_albedo(t)?;
+            (sigma_t, sigma_t * albedo, pattern)
         }
         (false, true) => {
             let sigma_a = t.rgb_where("sigma_a", Some(Rgb::BLACK), non_negative, ok)?;
@@ -248,13 +257,10 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
             if !sigma_t.is_finite() {
                 return Err(t.error(Some("sigma_a"), "sigma_a + sigma_s overflows"));
             }
-            (sigma_t, sigma_s)
+            (sigma_t, sigma_s, None)
         }
     };
-    let phase = match t.table("phase")? {
-        None => PhaseFunction::Isotropic,
-        Some(p) => phase_function(&p)?,
-    };
+    let (phase, g_pattern) = crate::scatter_patterns::parse_phase(t)?;
     let scattering = match t.string("scattering", Some("multiple"))?.as_str() {
         "multiple" => Scattering::Multiple,
         "walk" => Scattering::Walk,
@@ -273,13 +279,15 @@ fn homogeneous(t: &MaterialParams) -> Result<HomogeneousMedium, SceneError> {
         "every channel in [0, 1e30] (radiance per unit length; MAX_RADIANCE)",
         |c| ok(c) && c.max_channel() <= crate::scene_file::MAX_RADIANCE,
     )?;
-    Ok(HomogeneousMedium {
+    Ok(Interior::Homogeneous(HomogeneousMedium {
         sigma_t,
         sigma_s,
         phase,
         scattering,
         emission,
-    })
+        albedo_pattern,
+        g_pattern,
+    }))
 }
 
 /// `phase = { type = "isotropic" | "hg" | "double_hg", ... }`.

@@ -45,6 +45,7 @@
 //! scattering is of the scene's lights).
 
 use crate::plugin::*;
+use crate::scatter_patterns::scale_by_albedo;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
@@ -52,12 +53,28 @@ use risotto_systems::medium::{
     channel_pdf, emitted_radiance, equiangular_pdf, equiangular_sample, free_flight_pdf,
     sample_free_flight, transmittance,
 };
+use risotto_systems::pattern::PatternGraph;
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::{before_hit, coordinate_epsilon};
 use risotto_systems::sampler::{next_4d_column, PathSampler};
+use std::sync::Arc;
 
 /// Lobe bits of a phase-function sample.
-const SCATTER: LobeSampled = LobeSampled(LobeSampled::SCATTER.0 | LobeSampled::DIFFUSE.0);
+pub(crate) const PHASE_LOBE: LobeSampled =
+    LobeSampled(LobeSampled::SCATTER.0 | LobeSampled::DIFFUSE.0);
+
+/// Writes a phase-function sample `(wi, pdf)` into row `i` of `out` (weight 1: exact
+/// sampling), unless its pdf is not positive and finite (the row stays empty).
+#[inline]
+fn write_phase_sample(out: &mut BxdfSamples, i: usize, wi: Vec3, pdf: f32) {
+    if pdf > 0.0 && pdf.is_finite() {
+        out.wi[i] = wi;
+        out.weight[i] = Rgb::WHITE;
+        out.pdf[i] = pdf;
+        out.lobe[i] = PHASE_LOBE;
+        out.eta[i] = 1.0;
+    }
+}
 
 /// A phase function as the Bxdf of [`ShadingMode::VolumeScatter`] contexts (RenderMan's
 /// `PxrDoubleHenyeyGreenstein` and its siblings). Weight 1 per sample (exact sampling), value
@@ -72,7 +89,7 @@ pub struct PhaseBxdf {
 
 impl Bxdf for PhaseBxdf {
     fn lobes(&self) -> LobeSampled {
-        SCATTER
+        PHASE_LOBE
     }
     fn generate_samples(
         &mut self,
@@ -80,19 +97,7 @@ impl Bxdf for PhaseBxdf {
         samplers: &mut [PathSampler],
         out: &mut BxdfSamples,
     ) {
-        let vn = ctx.vn();
-        for (i, s) in samplers.iter_mut().enumerate() {
-            let u = s.next_2d();
-            let u_lobe = s.next_1d();
-            let (wi, pdf) = self.phase.sample(vn[i], u, u_lobe);
-            if pdf > 0.0 && pdf.is_finite() {
-                out.wi[i] = wi;
-                out.weight[i] = Rgb::WHITE;
-                out.pdf[i] = pdf;
-                out.lobe[i] = SCATTER;
-                out.eta[i] = 1.0;
-            }
-        }
+        sample_phase(ctx, samplers, out, |_| self.phase);
     }
     fn evaluate_samples(
         &mut self,
@@ -101,15 +106,44 @@ impl Bxdf for PhaseBxdf {
         value: &mut [Rgb],
         pdf: &mut [f32],
     ) {
-        let vn = ctx.vn();
-        for i in 0..ctx.num_points() {
-            let p = self.phase.eval(vn[i], wi[i]);
-            value[i] = Rgb::splat(p);
-            pdf[i] = p;
-        }
+        evaluate_phase(ctx, wi, value, pdf, |_| self.phase);
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
         out.fill(self.albedo);
+    }
+}
+
+/// Samples the phase function `phase(i)` of every point `i` of `ctx` (three dimensions per
+/// point: direction and lobe choice) into `out`, weight 1.
+pub(crate) fn sample_phase(
+    ctx: &ShadingContext<'_>,
+    samplers: &mut [PathSampler],
+    out: &mut BxdfSamples,
+    phase: impl Fn(usize) -> PhaseFunction,
+) {
+    let vn = ctx.vn();
+    for (i, s) in samplers.iter_mut().enumerate() {
+        let u = s.next_2d();
+        let u_lobe = s.next_1d();
+        let (wi, pdf) = phase(i).sample(vn[i], u, u_lobe);
+        write_phase_sample(out, i, wi, pdf);
+    }
+}
+
+/// The value and pdf (equal) of the phase function `phase(i)` of every point `i` of `ctx`
+/// towards `wi[i]`.
+pub(crate) fn evaluate_phase(
+    ctx: &ShadingContext<'_>,
+    wi: &[Vec3],
+    value: &mut [Rgb],
+    pdf: &mut [f32],
+    phase: impl Fn(usize) -> PhaseFunction,
+) {
+    let vn = ctx.vn();
+    for i in 0..ctx.num_points() {
+        let p = phase(i).eval(vn[i], wi[i]);
+        value[i] = Rgb::splat(p);
+        pdf[i] = p;
     }
 }
 
@@ -134,7 +168,7 @@ pub enum Scattering {
 }
 
 /// A homogeneous scattering medium's parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct HomogeneousMedium {
     /// Extinction coefficient per channel (per world unit), >= 0.
     pub sigma_t: Rgb,
@@ -149,6 +183,15 @@ pub struct HomogeneousMedium {
     /// does not emit. A medium with `j = sigma_a L0` inside an environment of radiance `L0`
     /// is in equilibrium: it looks like `L0` from everywhere.
     pub emission: Rgb,
+    /// The albedo as a pattern of the world position (`albedo = { pattern = .. }`, every
+    /// channel in `[0, 1]` by its interval bounds), read at each scattering point
+    /// ([`crate::scatter_patterns`]); `sigma_s` is then `sigma_t` (albedo 1) and the
+    /// pattern scales each collision's weight. `None`: `sigma_s` alone.
+    pub albedo_pattern: Option<Arc<PatternGraph>>,
+    /// The Henyey-Greenstein `g` as a grey pattern of the world position (within `(-1, 1)`
+    /// by its interval bounds), read at each scattering point; `phase` is then HG (its own
+    /// `g` unused). `None`: `phase` alone.
+    pub g_pattern: Option<Arc<PatternGraph>>,
 }
 
 impl HomogeneousMedium {
@@ -179,7 +222,7 @@ fn ratio(a: f32, b: f32) -> f32 {
 /// point per ray, at its origin, as the renderer binds it).
 pub struct HomogeneousInterior<'a> {
     /// The medium.
-    pub medium: HomogeneousMedium,
+    pub medium: &'a HomogeneousMedium,
     /// The context `begin_interior` bound.
     pub ctx: &'a ShadingContext<'a>,
     /// The volume's boundary blocks shadow rays (neither index-matched nor letting shadows
@@ -309,6 +352,11 @@ impl HomogeneousInterior<'_> {
             t[i] = f.t.min(scatter_max).max(rays.tmin[i].min(0.5 * tmax[i]));
         }
         let events = scattered.iter().filter(|&&s| s).count();
+        if let Some(graph) = &m.albedo_pattern {
+            // The flights ran at albedo 1: each collision's weight times the albedo there.
+            let evals = scale_by_albedo(graph, rays, &t, &scattered, &mut weight);
+            self.ctx.count_pattern_evals(evals);
+        }
         // The scattering points (a volume-sampling context at P = o + t d) before the hits
         // of the rays that pass: those hits are mostly the medium's index-matched boundary,
         // which the pass-through stage then removes from the end of the hit queue without
@@ -460,6 +508,11 @@ impl HomogeneousInterior<'_> {
             if count == 0 {
                 continue;
             }
+            if let Some(graph) = &m.albedo_pattern {
+                // The weights were of albedo 1: times the albedo at each point.
+                let evals = scale_by_albedo(graph, rays, &t, &member, &mut weight);
+                self.ctx.count_pattern_evals(evals);
+            }
             lit += count;
             let mut v = parent.begin_volume_sampling();
             v.set_along_rays(rays, &t);
@@ -482,6 +535,10 @@ impl HomogeneousInterior<'_> {
                 &[],
             );
             let bxdf = factory.begin_scatter(&ctx, ShadingMode::VolumeScatter, arena);
+            if m.g_pattern.is_some() {
+                // This context has no cache: the phase Bxdf evaluated `g` at every point.
+                self.ctx.count_pattern_evals(count as u64);
+            }
             lighting.perform_direct_lighting(&ctx, bxdf, rays, samplers, &w);
         }
         ictx.stats
@@ -542,7 +599,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             Scattering::Single => services.lighting.is_none() && self.walks(services.ictx),
         };
         if walk {
-            crate::random_walk::walk_bundle(&self.medium, rays, samplers, services.ictx, out);
+            crate::random_walk::walk_bundle(self.medium, rays, samplers, services.ictx, out);
             return;
         }
         let u = Self::draw(samplers);

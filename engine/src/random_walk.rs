@@ -81,6 +81,7 @@
 
 use crate::context::IntegratorContext;
 use crate::media::HomogeneousMedium;
+use crate::scatter_patterns::{hg_at, PointPattern};
 use crate::shade_groups::ShadeGroups;
 use crate::stats::{System, VolumeEvent};
 use glam::{Vec2, Vec3};
@@ -212,12 +213,14 @@ pub fn walk_bundle(
     }
     let scene = ictx.scene;
     let (st, ss) = (medium.sigma_t, medium.sigma_s);
-    let walk = Walk {
+    let mut walk = Walk {
         sigma_t: st,
         sigma_s: ss,
         phase: medium.phase,
         max_depth: scene.settings.max_depth,
         grey: st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b,
+        albedo: medium.albedo_pattern.as_deref().map(PointPattern::new),
+        g: medium.g_pattern.as_deref().map(PointPattern::new),
     };
     // An emissive medium's exact segment integrals need every step's full segment: each
     // step is traced to the surface ahead, without empty balls (module docs, "Emission").
@@ -402,6 +405,10 @@ pub fn walk_bundle(
     }
     ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
     ictx.stats.volume_event(VolumeEvent::Pass, passes);
+    let evals =
+        walk.albedo.as_ref().map_or(0, |a| a.evals) + walk.g.as_ref().map_or(0, |g| g.evals);
+    ictx.stats.pattern_evals += evals;
+    ictx.stats.volume_pattern_evals += evals;
     for (i, &e) in emitted.iter().enumerate() {
         out.emitted.push(i as u32, e);
     }
@@ -409,16 +416,21 @@ pub fn walk_bundle(
 }
 
 /// The medium and limits of one bundle's walks.
-struct Walk {
+struct Walk<'g> {
     sigma_t: Rgb,
     sigma_s: Rgb,
     phase: PhaseFunction,
     max_depth: u32,
     /// Every channel alike: the channel probabilities do not matter.
     grey: bool,
+    /// The albedo pattern, read at each event (`sigma_s` is then `sigma_t`,
+    /// [`crate::scatter_patterns`]).
+    albedo: Option<PointPattern<'g>>,
+    /// The HG `g` pattern, read at each event (`phase` is then HG).
+    g: Option<PointPattern<'g>>,
 }
 
-impl Walk {
+impl Walk<'_> {
     /// A free flight on a segment of length `tmax` ([`sample_free_flight`]).
     #[inline]
     fn flight(&self, pdf: [f32; 3], u_channel: f32, u_distance: f32, tmax: f32) -> FreeFlight {
@@ -430,7 +442,7 @@ impl Walk {
     /// walker's row and returns true, or false when the walk ends here.
     #[inline]
     fn event(
-        &self,
+        &mut self,
         w: &mut Walkers,
         j: usize,
         rays: &Rays,
@@ -448,6 +460,9 @@ impl Walk {
         // Russian roulette on the albedo-corrected throughput (module docs). A walk that
         // carries nothing (albedo 0) ends here rather than walking on with weight 0.
         let mut weight = w.weight[j] * flight_weight;
+        if let Some(albedo) = &mut self.albedo {
+            weight *= albedo.at(p);
+        }
         if weight.is_black() {
             return false;
         }
@@ -466,7 +481,11 @@ impl Walk {
             let v = w.rng[j].next_u64();
             Vec2::new(unit(v as u32), unit((v >> 32) as u32))
         };
-        let (wi, pdf) = self.phase.sample(-w.direction[j], u_phase, u_lobe);
+        let phase = match &mut self.g {
+            Some(g) => hg_at(g.at(p)),
+            None => self.phase,
+        };
+        let (wi, pdf) = phase.sample(-w.direction[j], u_phase, u_lobe);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return false;
         }

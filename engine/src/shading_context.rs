@@ -86,8 +86,9 @@ pub struct PatternCounters {
     pub hits: Cell<u64>,
     /// Parameter evaluations (cache misses).
     pub evals: Cell<u64>,
-    /// Of `evals`, the pattern evaluations volume integrators made point by point
-    /// ([`ShadingContext::count_pattern_evals`]).
+    /// Of `evals`, the pattern evaluations of medium coefficients: those volume integrators
+    /// made point by point ([`ShadingContext::count_pattern_evals`]) and the columns
+    /// evaluated for contexts inside a volume (a phase function's `g` pattern).
     pub volume_evals: Cell<u64>,
 }
 
@@ -127,13 +128,26 @@ impl<'a> ParamCache<'a> {
 /// A parameter cache as contexts see it (a trait object, so that a context stays covariant
 /// in its lifetime while the cache's `Cell`s are not).
 trait ParamLookup {
-    /// The column of `value` (parameter `name`) at the points of `at`, cached.
-    fn column(&self, name: &str, value: ParamValue<'_>, at: PatternInputs<'_>) -> &[Rgb];
+    /// The column of `value` (parameter `name`) at the points of `at`, cached; `in_volume`:
+    /// the points lie inside a volume (a miss counts as a volume evaluation too).
+    fn column(
+        &self,
+        name: &str,
+        value: ParamValue<'_>,
+        at: PatternInputs<'_>,
+        in_volume: bool,
+    ) -> &[Rgb];
 }
 
 impl ParamLookup for ParamCache<'_> {
-    fn column(&self, name: &str, value: ParamValue<'_>, at: PatternInputs<'_>) -> &[Rgb] {
-        self.get_or_eval(name, at.p.len(), |column| match value {
+    fn column(
+        &self,
+        name: &str,
+        value: ParamValue<'_>,
+        at: PatternInputs<'_>,
+        in_volume: bool,
+    ) -> &[Rgb] {
+        self.get_or_eval(name, at.p.len(), in_volume, |column| match value {
             ParamValue::Float(f) => column.fill(Rgb::splat(f)),
             ParamValue::Color(c) => column.fill(c),
             ParamValue::Pattern(graph) => {
@@ -150,7 +164,13 @@ impl ParamLookup for ParamCache<'_> {
 impl<'a> ParamCache<'a> {
     /// The column of parameter `name` for `n` points, from the cache or evaluated with
     /// `eval` (which fills the column) and then cached.
-    fn get_or_eval(&self, name: &str, n: usize, eval: impl FnOnce(&mut [Rgb])) -> &'a [Rgb] {
+    fn get_or_eval(
+        &self,
+        name: &str,
+        n: usize,
+        in_volume: bool,
+        eval: impl FnOnce(&mut [Rgb]),
+    ) -> &'a [Rgb] {
         for s in &self.slots {
             match s.get() {
                 Some((key, column)) if key == name && column.len() == n => {
@@ -161,6 +181,10 @@ impl<'a> ParamCache<'a> {
             }
         }
         self.counters.evals.set(self.counters.evals.get() + 1);
+        if in_volume {
+            let v = &self.counters.volume_evals;
+            v.set(v.get() + 1);
+        }
         let column = self.arena.alloc_slice_fill_copy(n, Rgb::BLACK);
         eval(column);
         let column: &'a [Rgb] = column;
@@ -326,7 +350,8 @@ impl<'a> ShadingContext<'a> {
             u: self.u(),
             v: self.v(),
         };
-        Some(cache.column(name, value, at))
+        let in_volume = self.mode != ShadingMode::Scatter;
+        Some(cache.column(name, value, at, in_volume))
     }
 
     /// Counts `n` pattern evaluations made outside [`eval_param`](Self::eval_param) (a

@@ -107,6 +107,8 @@ impl SubsurfaceParams {
             phase,
             scattering: Scattering::Walk,
             emission: Rgb::BLACK,
+            albedo_pattern: None,
+            g_pattern: None,
         }
     }
 
@@ -159,7 +161,7 @@ impl SubsurfaceParams {
 
 /// What a `subsurface` material's interior is built from: both modes' media (the render's
 /// `subsurface` technique may pick either) and the material's mode.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SubsurfaceInteriorParams {
     /// The walked medium (`mode = "random_walk"`).
     pub walk: HomogeneousMedium,

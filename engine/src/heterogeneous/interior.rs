@@ -5,6 +5,7 @@ use super::field::Field;
 use super::{HeterogeneousEmission, HeterogeneousMedium, Tracking, EMISSION_COLLISIONS_PER_CELL};
 use crate::media::retain_points;
 use crate::plugin::*;
+use crate::scatter_patterns::scale_by_albedo;
 use crate::stats::VolumeEvent;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
@@ -520,18 +521,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         };
         if let Some(graph) = &m.albedo_pattern {
             // The albedo pattern at the scattering points (world P), one column.
-            let rows: Vec<usize> = (0..n).filter(|&i| scattered[i]).collect();
-            let p: Vec<Vec3> = rows
-                .iter()
-                .map(|&i| rays.origin[i] + rays.direction[i] * t[i])
-                .collect();
-            let zeros = vec![0.0f32; rows.len()];
-            let mut albedo = vec![Rgb::BLACK; rows.len()];
-            risotto_systems::pattern::eval(graph, &p, &zeros, &zeros, &mut albedo);
-            for (&i, a) in rows.iter().zip(&albedo) {
-                w[i] *= *a;
-            }
-            self.ctx.count_pattern_evals(rows.len() as u64);
+            let evals = scale_by_albedo(graph, rays, &t, &scattered, &mut w);
+            self.ctx.count_pattern_evals(evals);
         }
         v.set_transmission(&w);
         v.end_volume_sampling(&scattered, out);

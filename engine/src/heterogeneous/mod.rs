@@ -95,7 +95,7 @@ mod parse;
 
 pub use field::PatternField;
 pub use interior::HeterogeneousInterior;
-pub(crate) use parse::parse;
+pub(crate) use parse::{homogeneous_with_patterns, parse};
 
 use crate::media::PhaseBxdf;
 use risotto_components::Rgb;
@@ -196,6 +196,10 @@ pub struct HeterogeneousMedium {
     /// channel in `[0, 1]` by its interval bounds), evaluated at each scattering point; the
     /// constant `albedo` is then unused (1) except by the albedo AOV. `None`: `albedo`.
     pub albedo_pattern: Option<Arc<risotto_systems::pattern::PatternGraph>>,
+    /// The Henyey-Greenstein `g` as a grey pattern of the world position (within `(-1, 1)`),
+    /// read by the phase Bxdf at each scattering point through the context's cache
+    /// ([`crate::scatter_patterns`]); `phase` is then HG. `None`: `phase` alone.
+    pub g_pattern: Option<Arc<risotto_systems::pattern::PatternGraph>>,
 }
 
 /// What a heterogeneous medium emits: its **emission coefficient** `j(p)`, radiance per
@@ -253,6 +257,7 @@ impl HeterogeneousMedium {
             single_channel: None,
             density_pattern: None,
             albedo_pattern: None,
+            g_pattern: None,
         }
     }
 

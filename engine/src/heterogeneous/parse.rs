@@ -2,13 +2,14 @@
 
 use super::{HeterogeneousMedium, Tracking, DEFAULT_MAJORANT_CELLS, TRACKINGS};
 use crate::grid_file::{is_vdb, read_grid_named};
-use crate::load::phase_function;
-use crate::scene_file::{ColourParam, MaterialParams, SceneError};
+use crate::scatter_patterns::{parse_albedo, parse_phase};
+use crate::scene_file::{MaterialParams, SceneError};
 use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::grid::DensityGrid;
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
+use std::sync::Arc;
 
 /// Reads `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
 pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneError> {
@@ -77,42 +78,43 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             ),
         ));
     }
-    let (albedo, phase, tracking, march_step, cells) = common(t)?;
-    let (albedo, albedo_pattern) = albedo_parts(albedo);
-    let medium = HeterogeneousMedium {
-        march_step,
-        albedo_pattern,
-        ..HeterogeneousMedium::new(density, cells, 1.0, albedo, phase, tracking).with_scale(scale)
-    };
-    with_emission(t, medium)
+    let c = common(t)?;
+    let medium = HeterogeneousMedium::new(density, c.cells, 1.0, c.albedo, c.phase, c.tracking)
+        .with_scale(scale);
+    with_emission(t, c.apply(medium))
 }
 
-/// The constant albedo (1 for a pattern, which the medium evaluates per point) and the
-/// pattern, for [`HeterogeneousMedium`].
-fn albedo_parts(albedo: ColourParam) -> (Rgb, Option<std::sync::Arc<PatternGraph>>) {
-    match albedo {
-        ColourParam::Constant(c) => (c, None),
-        ColourParam::Pattern(g) => (Rgb::WHITE, Some(std::sync::Arc::new(g))),
+/// The keys every form of density shares.
+struct Common {
+    albedo: Rgb,
+    albedo_pattern: Option<Arc<PatternGraph>>,
+    phase: PhaseFunction,
+    g_pattern: Option<Arc<PatternGraph>>,
+    tracking: Tracking,
+    march_step: Option<f32>,
+    cells: usize,
+}
+
+impl Common {
+    /// `medium` with these keys' values (its own density and scale kept).
+    fn apply(self, medium: HeterogeneousMedium) -> HeterogeneousMedium {
+        HeterogeneousMedium {
+            albedo: self.albedo,
+            albedo_pattern: self.albedo_pattern,
+            phase: self.phase,
+            g_pattern: self.g_pattern,
+            tracking: self.tracking,
+            march_step: self.march_step,
+            ..medium
+        }
     }
 }
 
-/// The keys every form of density shares: `(albedo, phase, tracking, march_step,
-/// majorant_grid)`.
-fn common(
-    t: &MaterialParams,
-) -> Result<(ColourParam, PhaseFunction, Tracking, Option<f32>, usize), SceneError> {
-    // A colour, or a pattern of the world position (bounded in [0, 1] everywhere).
-    let albedo = t.colour_or_pattern("albedo", Rgb::WHITE, [0.0, 1.0])?;
-    if matches!(&albedo, ColourParam::Pattern(g) if g.reads_uv()) {
-        return Err(t.error(
-            Some("albedo"),
-            "a medium's pattern sees the world position P only (u and v belong to surfaces)",
-        ));
-    }
-    let phase = match t.table("phase")? {
-        None => PhaseFunction::Isotropic,
-        Some(p) => phase_function(&p)?,
-    };
+/// Reads the keys every form of density shares: `albedo` and `phase` (either may hold
+/// patterns, [`crate::scatter_patterns`]), `tracking`, `march_step`, `majorant_grid`.
+fn common(t: &MaterialParams) -> Result<Common, SceneError> {
+    let (albedo, albedo_pattern) = parse_albedo(t)?;
+    let (phase, g_pattern) = parse_phase(t)?;
     let name = t.string("tracking", Some("ratio"))?;
     let tracking = Tracking::from_name(&name).ok_or_else(|| {
         t.error(
@@ -135,7 +137,15 @@ fn common(
             format!("must be in [1, 256] cells per axis, got {cells}"),
         ));
     }
-    Ok((albedo, phase, tracking, march_step, cells as usize))
+    Ok(Common {
+        albedo,
+        albedo_pattern,
+        phase,
+        g_pattern,
+        tracking,
+        march_step,
+        cells: cells as usize,
+    })
 }
 
 /// `scale`: a number (grey) or a colour (chromatic: spectral tracking), like every colour
@@ -152,56 +162,161 @@ fn scale(t: &MaterialParams) -> Result<Rgb, SceneError> {
 /// `density = { pattern = .., .. }`: a grey pattern of the world position `P`, bounded in
 /// `[0, inf)` by its interval bounds over all of space (module docs).
 fn parse_pattern_density(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneError> {
-    let graph = t.pattern("density")?.expect("checked: a table");
+    let scale = scale(t)?;
+    let graph = grey_density_pattern(t, "density", scale.max_channel())?;
+    let c = common(t)?;
+    let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
+    let medium = HeterogeneousMedium::new(unit, 1, 1.0, c.albedo, c.phase, c.tracking)
+        .with_density_pattern(graph, c.cells)
+        .with_scale(scale);
+    with_emission(t, c.apply(medium))
+}
+
+/// The pattern table at `key` as a density: grey, of `P` only, bounded in `[0, inf)` with a
+/// finite upper bound (times `scale`) by its interval bounds over all of space; each a
+/// located error.
+fn grey_density_pattern(
+    t: &MaterialParams,
+    key: &str,
+    scale: f32,
+) -> Result<PatternGraph, SceneError> {
+    let graph = t.pattern(key)?.expect("checked: a table");
     if graph.reads_uv() {
         return Err(t.error(
-            Some("density"),
+            Some(key),
             "a medium's pattern sees the world position P only (u and v belong to surfaces): \
              use `space = \"P\"` and an axis x, y or z",
         ));
     }
     if !graph.is_grey() {
         return Err(t.error(
-            Some("density"),
-            "a density pattern must be grey (every colour in it a single number): the \
-             density is one number per point, and a colour extinction is `scale = [r, g, b]`",
+            Some(key),
+            format!(
+                "a {key} pattern must be grey (every colour in it a single number): the \
+                 density is one number per point, and a colour extinction is `scale = [r, g, b]`"
+            ),
         ));
     }
     let (lo, hi) = pattern::bounds(&graph, Vec3::NEG_INFINITY, Vec3::INFINITY);
     // NaN reads as not >= 0.
     if lo.r.is_nan() || lo.r < 0.0 {
         return Err(t.error(
-            Some("density"),
+            Some(key),
             format!(
-                "the density pattern may reach {} (interval bounds over all of space), but a \
-                 density must be >= 0: wrap it in `remap` (e.g. from = [-1, 1], to = [0, 1])",
+                "the {key} pattern may reach {} (interval bounds over all of space), but it \
+                 must be >= 0: wrap it in `remap` (e.g. from = [-1, 1], to = [0, 1])",
                 lo.r
             ),
         ));
     }
-    let scale = scale(t)?;
     if !(hi.r.is_finite() && (scale * hi.r).is_finite()) {
         return Err(t.error(
-            Some("density"),
+            Some(key),
             format!(
-                "the density pattern's upper bound {} (times scale {}) is not finite: the \
+                "the {key} pattern's upper bound {} (times scale {scale}) is not finite: the \
                  trackers need a finite majorant",
                 hi.r,
-                scale.max_channel()
             ),
         ));
     }
-    let (albedo, phase, tracking, march_step, cells) = common(t)?;
-    let (albedo, albedo_pattern) = albedo_parts(albedo);
+    Ok(graph)
+}
+
+/// Why a homogeneous interior refuses an emission grid.
+const HOMOGENEOUS_EMISSION: &str = "a homogeneous interior's emission is a colour or a \
+     pattern table; an emission grid belongs to `type = \"heterogeneous\"`";
+
+/// A `homogeneous` interior whose `sigma_t` or `emission` is a pattern table: such a medium
+/// is heterogeneous, and is built as one (see `docs/scene-format.md`).
+/// - `sigma_t = { pattern = .. }` (grey): the density pattern, scale 1, ratio tracking,
+///   the default majorant grid; a colour `emission` is then `j = emission` everywhere.
+/// - a constant `sigma_t` (or `sigma_a` + `sigma_s`) with `emission = { pattern = .. }`:
+///   density 1 with `scale = sigma_t` (chromatic as the colour says), tracked by residual
+///   ratio tracking, which integrates the constant cell exactly (no tentative collisions).
+///
+/// `albedo` and `phase` read as for any medium; `sigma_a` and `sigma_s` take no pattern
+/// (give `sigma_t` and `albedo`), and `scattering` must be `"multiple"` or `"bounce"`
+/// (a heterogeneous medium's points always go back to the path tracer).
+pub(crate) fn homogeneous_with_patterns(
+    t: &MaterialParams,
+) -> Result<HeterogeneousMedium, SceneError> {
+    for key in ["sigma_a", "sigma_s"] {
+        if t.is_table(key) {
+            return Err(t.error(
+                Some(key),
+                "sigma_a and sigma_s take no pattern: give sigma_t (a grey pattern) and \
+                 albedo (a colour or a pattern) instead",
+            ));
+        }
+    }
+    let scattering = t.string("scattering", Some("multiple"))?;
+    if scattering != "multiple" && scattering != "bounce" {
+        return Err(t.error(
+            Some("scattering"),
+            format!(
+                "scattering = \"{scattering}\" needs a constant sigma_t and emission: with a \
+                 pattern the medium is heterogeneous, whose scattering points go back to the \
+                 path tracer (\"multiple\" or \"bounce\")"
+            ),
+        ));
+    }
+    if t.is_table("emission") && !t.table("emission")?.is_some_and(|e| e.has("pattern")) {
+        return Err(t.error(Some("emission"), HOMOGENEOUS_EMISSION));
+    }
     let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
-    let medium = HeterogeneousMedium {
-        march_step,
-        albedo_pattern,
-        ..HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, tracking)
-            .with_density_pattern(graph, cells)
-            .with_scale(scale)
+    let (phase, g_pattern) = parse_phase(t)?;
+    let non_negative = "every channel >= 0 and finite";
+    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
+    let (medium, albedo, albedo_pattern) = if t.is_table("sigma_t") {
+        let graph = grey_density_pattern(t, "sigma_t", 1.0)?;
+        let (albedo, albedo_pattern) = parse_albedo(t)?;
+        let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Ratio)
+            .with_density_pattern(graph, DEFAULT_MAJORANT_CELLS);
+        (m, albedo, albedo_pattern)
+    } else {
+        let (sigma_t, albedo, albedo_pattern) = if t.has("sigma_a") || t.has("sigma_s") {
+            let sigma_a = t.rgb_where("sigma_a", Some(Rgb::BLACK), non_negative, ok)?;
+            let sigma_s = t.rgb_where("sigma_s", Some(Rgb::BLACK), non_negative, ok)?;
+            let sigma_t = sigma_a + sigma_s;
+            let ratio = |s: f32, t: f32| if t > 0.0 { s / t } else { 0.0 };
+            let albedo = Rgb::new(
+                ratio(sigma_s.r, sigma_t.r),
+                ratio(sigma_s.g, sigma_t.g),
+                ratio(sigma_s.b, sigma_t.b),
+            );
+            (sigma_t, albedo, None)
+        } else {
+            let sigma_t = t.rgb_where("sigma_t", None, non_negative, ok)?;
+            let (albedo, albedo_pattern) = parse_albedo(t)?;
+            (sigma_t, albedo, albedo_pattern)
+        };
+        if !sigma_t.is_finite() {
+            return Err(t.error(Some("sigma_a"), "sigma_a + sigma_s overflows"));
+        }
+        let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Residual)
+            .with_scale(sigma_t);
+        (m, albedo, albedo_pattern)
     };
-    with_emission(t, medium)
+    let medium = HeterogeneousMedium {
+        albedo,
+        albedo_pattern,
+        g_pattern,
+        ..medium
+    };
+    Ok(match parse_emission(t)? {
+        None => medium,
+        Some(EmissionKey::Pattern(graph)) => medium.with_emission_pattern(graph),
+        // The density is 1 here: j = colour.
+        Some(EmissionKey::Colour(c)) if medium.density_pattern.is_none() => {
+            medium.with_emission_following_density(c)
+        }
+        Some(EmissionKey::Colour(c)) => {
+            let constant = PatternGraph::new(vec![pattern::Node::Constant(c)])
+                .expect("one constant node is a graph");
+            medium.with_emission_pattern(constant)
+        }
+        Some(EmissionKey::Grid(..)) => return Err(t.error(Some("emission"), HOMOGENEOUS_EMISSION)),
+    })
 }
 
 /// `medium` with the interior's `emission` key, if any.
