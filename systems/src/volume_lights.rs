@@ -4,8 +4,9 @@
 //! axis-aligned box cut into `res` cells, the majorant grid's), an emission bound
 //! `j_max(cell)` per cell, a [`Distribution1D`] over the cells in proportion to their power
 //! `j_max * V(cell)` (channels averaged), the tracking bound `majorant(cell)` the medium's
-//! free flights use there, and the emission field `j(x)` (a grid times a colour, placed in
-//! the box), clipped to the shape's support (the whole box, or the ball a sphere encloses).
+//! free flights use there, and the emission field `j(x)` ([`EmissionField`]: a grid placed
+//! in the box, or a pattern graph of the world position, times a colour), clipped to the
+//! shape's support (the whole box, or the ball a sphere encloses).
 //!
 //! Sampling picks a cell by power and a uniform point in it: the density in **volume
 //! measure** is `p_V(x) = P(cell(x)) / V(cell)` (times the light's selection probability in
@@ -35,6 +36,7 @@
 
 use crate::distribution::{Distribution1D, ONE_MINUS_EPSILON};
 use crate::grid::DensityGrid;
+use crate::pattern::PatternGraph;
 use glam::Vec3;
 use risotto_components::Rgb;
 use std::sync::Arc;
@@ -51,6 +53,55 @@ pub enum EmitterSupport {
         /// Radius.
         radius: f32,
     },
+}
+
+/// What a [`VolumeEmitter`]'s emission coefficient `j(x)` is made of.
+#[derive(Clone, Debug)]
+pub enum EmissionField {
+    /// `j(x) = scale * grid(uvw)`, `uvw` the point's coordinates in the box's unit cube.
+    Grid {
+        /// The grid (placed in the box).
+        grid: Arc<DensityGrid>,
+        /// Per channel, >= 0.
+        scale: Rgb,
+    },
+    /// `j(x) = scale * graph(x)` per channel, the graph a pattern of the world position
+    /// (values >= 0; `u = v = 0`: medium patterns read `P` only).
+    Pattern {
+        /// The graph.
+        graph: Arc<PatternGraph>,
+        /// Per channel, >= 0.
+        scale: Rgb,
+    },
+}
+
+/// Scratch colours kept on the stack for a one-point pattern evaluation (graphs of more
+/// nodes use the heap).
+const STACK_SCRATCH: usize = 32;
+
+impl EmissionField {
+    /// `j` at world point `x`, `uvw` its coordinates in the emitter's box.
+    #[inline]
+    fn at(&self, x: Vec3, uvw: Vec3) -> Rgb {
+        match self {
+            EmissionField::Grid { grid, scale } => *scale * grid.lookup(uvw),
+            EmissionField::Pattern { graph, scale } => {
+                let need = graph.scratch_len(1);
+                let mut stack = [Rgb::BLACK; STACK_SCRATCH];
+                let mut heap = Vec::new();
+                let scratch: &mut [Rgb] = if need <= STACK_SCRATCH {
+                    &mut stack[..need]
+                } else {
+                    heap.resize(need, Rgb::BLACK);
+                    &mut heap
+                };
+                let mut out = [Rgb::BLACK];
+                crate::pattern::eval_with(graph, &[x], &[0.0], &[0.0], &mut out, scratch);
+                // Bounded below by 0 at load time up to rounding.
+                *scale * out[0].map(|v| v.max(0.0))
+            }
+        }
+    }
 }
 
 /// Why a [`VolumeEmitter`] could not be built.
@@ -87,8 +138,7 @@ pub struct VolumeEmitter {
     cell_volume: f32,
     cells: Distribution1D,
     majorant: Vec<f32>,
-    field: Arc<DensityGrid>,
-    scale: Rgb,
+    field: EmissionField,
     support: EmitterSupport,
     power: f32,
 }
@@ -101,15 +151,14 @@ const MIN_MAJORANT: f32 = 1e-12;
 impl VolumeEmitter {
     /// An emitter over the box `lo..hi` cut into `res` cells (x fastest, then y, then z),
     /// `j_max[c]` bounding the emission in cell `c` and `majorant[c]` the medium's tracking
-    /// bound there (per world unit); the field is `j(x) = scale * field(uvw)`, `uvw` the
-    /// point's coordinates in the box's unit cube, zero outside `support`.
+    /// bound there (per world unit); the emission is `field`'s ([`EmissionField`]), zero
+    /// outside `support`.
     pub fn new(
         (lo, hi): (Vec3, Vec3),
         res: [usize; 3],
         j_max: &[Rgb],
         majorant: Vec<f32>,
-        field: Arc<DensityGrid>,
-        scale: Rgb,
+        field: EmissionField,
         support: EmitterSupport,
     ) -> Result<Self, VolumeEmitterError> {
         let n = res.iter().try_fold(1usize, |a, &r| a.checked_mul(r));
@@ -139,7 +188,6 @@ impl VolumeEmitter {
             cells: Distribution1D::new(&power),
             majorant,
             field,
-            scale,
             support,
             power: total,
         })
@@ -202,7 +250,7 @@ impl VolumeEmitter {
                 }
             };
         if inside {
-            self.scale * self.field.lookup(uvw)
+            self.field.at(x, uvw)
         } else {
             Rgb::BLACK
         }
@@ -249,8 +297,10 @@ mod tests {
             res,
             &j_max,
             vec![2.0; n],
-            Arc::new(field),
-            Rgb::splat(1.0),
+            EmissionField::Grid {
+                grid: Arc::new(field),
+                scale: Rgb::splat(1.0),
+            },
             EmitterSupport::Box,
         )
         .unwrap()
@@ -336,7 +386,11 @@ mod tests {
         let f = Arc::new(DensityGrid::constant([1, 1, 1], 1.0).unwrap());
         let b = (Vec3::ZERO, Vec3::ONE);
         let new = |res, j: &[Rgb], maj: Vec<f32>, b| {
-            VolumeEmitter::new(b, res, j, maj, f.clone(), Rgb::WHITE, EmitterSupport::Box)
+            let field = EmissionField::Grid {
+                grid: f.clone(),
+                scale: Rgb::WHITE,
+            };
+            VolumeEmitter::new(b, res, j, maj, field, EmitterSupport::Box)
         };
         assert!(new([2, 1, 1], &[Rgb::WHITE], vec![1.0], b).is_err());
         assert!(new([0, 1, 1], &[], vec![], b).is_err());
@@ -396,9 +450,49 @@ mod tests {
             radius: 1.0,
         };
         let b = (Vec3::splat(-1.0), Vec3::splat(1.0));
-        let e = VolumeEmitter::new(b, [1, 1, 1], &[Rgb::WHITE], vec![1.0], f, Rgb::WHITE, ball)
-            .unwrap();
+        let field = EmissionField::Grid {
+            grid: f,
+            scale: Rgb::WHITE,
+        };
+        let e = VolumeEmitter::new(b, [1, 1, 1], &[Rgb::WHITE], vec![1.0], field, ball).unwrap();
         assert_eq!(e.emission(Vec3::splat(0.1)), Rgb::WHITE);
         assert_eq!(e.emission(Vec3::splat(0.9)), Rgb::BLACK);
+    }
+
+    #[test]
+    fn a_pattern_field_emits_the_pattern_at_world_points_times_its_scale() {
+        use crate::pattern::{Axis, Node};
+        // j(x) = (2, 1, 0.5) * clamp(x.y, 0, 1) over the box [-1, 1] x [0, 2] x [-1, 1]:
+        // the graph sees world x (not the box's unit cube, where uvw.y = x.y / 2).
+        let graph = PatternGraph::new(vec![Node::Gradient {
+            axis: Axis::Y,
+            from: 0.0,
+            to: 1.0,
+            a: Rgb::BLACK,
+            b: Rgb::WHITE,
+        }])
+        .unwrap();
+        let field = EmissionField::Pattern {
+            graph: Arc::new(graph),
+            scale: Rgb::new(2.0, 1.0, 0.5),
+        };
+        let b = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
+        let e = VolumeEmitter::new(
+            b,
+            [1, 2, 1],
+            &[Rgb::WHITE; 2],
+            vec![1.0; 2],
+            field,
+            EmitterSupport::Box,
+        )
+        .unwrap();
+        let j = e.emission(Vec3::new(0.3, 0.25, -0.2));
+        assert_eq!(j, Rgb::new(0.5, 0.25, 0.125));
+        assert_eq!(
+            e.emission(Vec3::new(0.0, 1.5, 0.0)),
+            Rgb::new(2.0, 1.0, 0.5)
+        );
+        // Outside the box: nothing.
+        assert_eq!(e.emission(Vec3::new(0.0, 2.5, 0.0)), Rgb::BLACK);
     }
 }

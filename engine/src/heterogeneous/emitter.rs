@@ -3,35 +3,66 @@
 
 use super::{HeterogeneousEmission, HeterogeneousMedium, EMISSION_COLLISIONS_PER_CELL};
 use glam::Vec3;
-use risotto_systems::volume_lights::{EmitterSupport, VolumeEmitter};
+use risotto_components::Rgb;
+use risotto_systems::volume_lights::{EmissionField, EmitterSupport, VolumeEmitter};
 
 impl HeterogeneousMedium {
     /// The medium placed in `bounds` as a volume emitter over its majorant-grid cells:
-    /// `j_max(cell)` from the emission's bound there (the density's times the colour, or the
-    /// emission grid's times its scale), and the free flights' tracking bound (the extinction
-    /// bound, raised in emitting cells to `minorant + EMISSION_COLLISIONS_PER_CELL / width`
-    /// as the integrator's emissive segments raise it). `None` when the medium does not emit
-    /// or the box has no volume, and for pattern densities and pattern emission (the
-    /// emitter samples grids: such media keep the collision estimator alone, at weight 1).
+    /// `j_max(cell)` from the emission's bound there (the density's times the colour, the
+    /// emission grid's times its scale, or the emission pattern's interval bound), and the
+    /// free flights' tracking bound (the extinction bound, raised in emitting cells to
+    /// `minorant + EMISSION_COLLISIONS_PER_CELL / width` as the integrator's emissive
+    /// segments raise it). Grid and pattern densities and emissions alike: the bounds are
+    /// the majorant grids the integrator tracks against over the same box. `None` when the
+    /// medium does not emit or the box has no volume.
     pub fn volume_emitter(
         &self,
         (lo, hi): (Vec3, Vec3),
         support: EmitterSupport,
     ) -> Option<VolumeEmitter> {
         let emission = self.emission.as_ref()?;
-        if self.density_pattern.is_some() {
-            return None;
-        }
-        let res = self.majorants.res();
-        let (field, scale, bound) = match emission {
-            HeterogeneousEmission::FollowsDensity(c) => (&self.density, *c, &self.majorants),
+        // The density's majorant grid over this box (a pattern's is made per box).
+        let density = match &self.density_pattern {
+            Some(p) => p.majorants(lo, hi),
+            None => self.majorants.clone(),
+        };
+        let (field, bound) = match emission {
+            HeterogeneousEmission::FollowsDensity(c) => {
+                let field = match &self.density_pattern {
+                    Some(p) => EmissionField::Pattern {
+                        graph: p.graph.clone(),
+                        scale: *c,
+                    },
+                    None => EmissionField::Grid {
+                        grid: self.density.clone(),
+                        scale: *c,
+                    },
+                };
+                (field, density.clone())
+            }
             HeterogeneousEmission::Grid {
                 grid,
                 scale,
                 majorants,
-            } => (grid, *scale, majorants),
-            HeterogeneousEmission::Pattern(_) => return None,
+            } => (
+                EmissionField::Grid {
+                    grid: grid.clone(),
+                    scale: *scale,
+                },
+                majorants.clone(),
+            ),
+            HeterogeneousEmission::Pattern(p) => (
+                EmissionField::Pattern {
+                    graph: p.graph.clone(),
+                    scale: Rgb::WHITE,
+                },
+                p.majorants(lo, hi),
+            ),
         };
+        let scale = match &field {
+            EmissionField::Grid { scale, .. } | EmissionField::Pattern { scale, .. } => *scale,
+        };
+        let res = density.res();
         let extent = (hi - lo).to_array();
         let width = (0..3)
             .map(|a| extent[a] / res[a] as f32)
@@ -50,23 +81,14 @@ impl HeterogeneousMedium {
                 for cx in 0..res[0] {
                     let b = bound.max_at(cx, cy, cz);
                     j_max.push(scale * b);
-                    let mut m = self.majorants.max_at(cx, cy, cz) * smax;
+                    let mut m = density.max_at(cx, cy, cz) * smax;
                     if b > 0.0 {
-                        m = m.max(self.majorants.min_at(cx, cy, cz) * smax + floor);
+                        m = m.max(density.min_at(cx, cy, cz) * smax + floor);
                     }
                     majorant.push(m);
                 }
             }
         }
-        VolumeEmitter::new(
-            (lo, hi),
-            res,
-            &j_max,
-            majorant,
-            field.clone(),
-            scale,
-            support,
-        )
-        .ok()
+        VolumeEmitter::new((lo, hi), res, &j_max, majorant, field, support).ok()
     }
 }

@@ -16,8 +16,8 @@ use std::sync::{Arc, RwLock};
 /// shapes), on first use, and kept.
 #[derive(Debug)]
 pub struct PatternField {
-    /// The graph.
-    pub graph: PatternGraph,
+    /// The graph (shared with the medium's volume emitter).
+    pub graph: Arc<PatternGraph>,
     /// Majorant cells per axis.
     pub res: [usize; 3],
     /// Majorant grids made so far, by world box.
@@ -26,7 +26,7 @@ pub struct PatternField {
 
 impl Clone for PatternField {
     fn clone(&self) -> Self {
-        PatternField::new(self.graph.clone(), self.res)
+        PatternField::new((*self.graph).clone(), self.res)
     }
 }
 
@@ -40,7 +40,7 @@ impl PatternField {
     /// The field of `graph` with majorant grids of `res` cells per axis (each at least 1).
     pub fn new(graph: PatternGraph, res: [usize; 3]) -> Self {
         PatternField {
-            graph,
+            graph: Arc::new(graph),
             res: res.map(|r| r.max(1)),
             grids: RwLock::new(Vec::new()),
         }
