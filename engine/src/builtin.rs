@@ -467,6 +467,7 @@ impl Interior {
                         medium: params.diffusion,
                     },
                     mode: params.mode,
+                    patterned: params.patterned.as_deref(),
                 }))
             }
             Interior::Homogeneous(medium) => Some(arena.alloc(HomogeneousInterior {

@@ -152,17 +152,47 @@ impl VolumeIntegrator for DiffusionInterior {
         services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
+        self.diffuse(None, rays, samplers, services.ictx, out);
+    }
+
+    fn transmission(
+        &self,
+        segments: &Segments,
+        _samplers: &mut [PathSampler],
+        _ictx: &crate::context::IntegratorContext<'_>,
+        trans: &mut [Rgb],
+        emission: &mut [Rgb],
+    ) {
+        for i in 0..segments.len() {
+            trans[i] = transmittance(self.medium.sigma_t, segments.length[i]);
+        }
+        emission.fill(Rgb::BLACK);
+    }
+}
+
+impl DiffusionInterior {
+    /// The diffusion estimate of every ray's exit (see the module docs), each ray's profile
+    /// from `per_ray[i]` if given (a `subsurface` material whose albedo or mean free path is
+    /// a pattern, read at the ray's entry point), else from the interior's medium.
+    pub fn diffuse(
+        &self,
+        per_ray: Option<&[DiffusionMedium]>,
+        rays: &Rays,
+        samplers: &mut [PathSampler],
+        ictx: &mut crate::context::IntegratorContext<'_>,
+        out: &mut ShadeGroups,
+    ) {
         let n = rays.len();
         if n == 0 {
             return;
         }
-        let ictx = services.ictx;
+        if let Some(p) = per_ray {
+            assert_eq!(p.len(), n, "one medium per ray");
+        }
         let scene = ictx.scene;
         let geometry = &scene.geometry;
-        let m = &self.medium;
-        let d = m.d.to_array();
-        let albedo = m.albedo.to_array();
-        let reach = m.reach();
+        let exact_counts = self.medium.exact_counts;
+        let medium_of = |i: usize| per_ray.map_or(&self.medium, |p| &p[i]);
         let own: Vec<Option<u32>> = (0..n)
             .map(|i| rays.volume_stack[i].innermost().map(|e| e.shape))
             .collect();
@@ -209,7 +239,7 @@ impl VolumeIntegrator for DiffusionInterior {
                     po,
                     -normals[i],
                     1000.0 * coordinate_epsilon(po),
-                    2.0 * reach,
+                    2.0 * medium_of(i).reach(),
                 )
             })
             .collect();
@@ -224,6 +254,7 @@ impl VolumeIntegrator for DiffusionInterior {
         let mut probes: Vec<Probe> = Vec::with_capacity(n);
         for i in 0..n {
             let po = rays.origin[i];
+            let d = medium_of(i).d.to_array();
             let [u_axis, u_channel, u_r, u_phi] = samplers[i].next_4d();
             let [u_lobe, u_pick, ux, uy] = samplers[i].next_4d();
             let c = ((u_channel * 3.0) as usize).min(2);
@@ -277,12 +308,13 @@ impl VolumeIntegrator for DiffusionInterior {
         let mut recount: Vec<Line> = Vec::new();
         let mut recount_own: Vec<Option<u32>> = Vec::new();
         let mut recount_at = vec![usize::MAX; n];
-        if m.exact_counts {
+        if exact_counts {
             for i in 0..n {
                 let Some((pi, _, _)) = picks[i] else { continue };
                 if !thickness[i].is_finite() {
                     continue;
                 }
+                let reach = medium_of(i).reach();
                 recount_at[i] = recount.len();
                 let v = pi - rays.origin[i];
                 for &a in &probes[i].axes {
@@ -300,6 +332,8 @@ impl VolumeIntegrator for DiffusionInterior {
             let Some((pi, ng, count)) = picks[i] else {
                 continue;
             };
+            let m = medium_of(i);
+            let (d, albedo, reach) = (m.d.to_array(), m.albedo.to_array(), m.reach());
             // The outward normal at the exit (the boundary's geometric normal is outward
             // for the closed shapes volumes are made of).
             let ni = ng;
@@ -379,20 +413,6 @@ impl VolumeIntegrator for DiffusionInterior {
         ictx.stats
             .volume_event(crate::stats::VolumeEvent::Scatter, exits.ray.len());
         answer_exits(rays, &exits, ictx, out);
-    }
-
-    fn transmission(
-        &self,
-        segments: &Segments,
-        _samplers: &mut [PathSampler],
-        _ictx: &crate::context::IntegratorContext<'_>,
-        trans: &mut [Rgb],
-        emission: &mut [Rgb],
-    ) {
-        for i in 0..segments.len() {
-            trans[i] = transmittance(self.medium.sigma_t, segments.length[i]);
-        }
-        emission.fill(Rgb::BLACK);
     }
 }
 

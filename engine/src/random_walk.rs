@@ -207,18 +207,48 @@ pub fn walk_bundle(
     ictx: &mut IntegratorContext<'_>,
     out: &mut ShadeGroups,
 ) {
+    let (sigma_t, sigma_s) = (medium.sigma_t, medium.sigma_s);
+    let uniform = Uniform {
+        sigma_t,
+        sigma_s,
+        grey: is_grey(sigma_t, sigma_s),
+    };
+    walk_bundle_in(medium, uniform, rays, samplers, ictx, out);
+}
+
+/// [`walk_bundle`] where each ray walks in a medium of its own extinction and scattering
+/// coefficients `per_ray[i] = (sigma_t, sigma_s)` (a `subsurface` material whose albedo or
+/// mean free path is a pattern, read at the ray's entry point); the rest of `medium` (phase
+/// function, patterns, emission) is shared.
+pub fn walk_bundle_per_ray(
+    medium: &HomogeneousMedium,
+    per_ray: &[(Rgb, Rgb)],
+    rays: &Rays,
+    samplers: &mut [PathSampler],
+    ictx: &mut IntegratorContext<'_>,
+    out: &mut ShadeGroups,
+) {
+    assert_eq!(per_ray.len(), rays.len(), "one medium per ray");
+    walk_bundle_in(medium, PerRay(per_ray), rays, samplers, ictx, out);
+}
+
+fn walk_bundle_in<C: Coefficients>(
+    medium: &HomogeneousMedium,
+    coefficients: C,
+    rays: &Rays,
+    samplers: &mut [PathSampler],
+    ictx: &mut IntegratorContext<'_>,
+    out: &mut ShadeGroups,
+) {
     let n = rays.len();
     if n == 0 {
         return;
     }
     let scene = ictx.scene;
-    let (st, ss) = (medium.sigma_t, medium.sigma_s);
     let mut walk = Walk {
-        sigma_t: st,
-        sigma_s: ss,
+        coefficients,
         phase: medium.phase,
         max_depth: scene.settings.max_depth,
-        grey: st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b,
         albedo: medium.albedo_pattern.as_deref().map(PointPattern::new),
         g: medium.g_pattern.as_deref().map(PointPattern::new),
     };
@@ -266,12 +296,12 @@ pub fn walk_bundle(
                     let u = w.rng[j].next_u64();
                     (unit(u as u32), unit((u >> 32) as u32))
                 };
-                let pdf = if walk.grey {
+                let pdf = if walk.coefficients.grey(r) {
                     [1.0 / 3.0; 3]
                 } else {
                     channel_pdf(rays.throughput[r] * w.weight[j])
                 };
-                let f = walk.flight(pdf, u_channel, u_distance, w.tmax[j]);
+                let f = walk.flight(r, pdf, u_channel, u_distance, w.tmax[j]);
                 if f.scattered && w.radius[j] > 0.0 {
                     let p = w.origin[j] + w.direction[j] * f.t;
                     if (p - w.anchor[j]).length_squared() < w.radius[j] * w.radius[j] {
@@ -336,7 +366,11 @@ pub fn walk_bundle(
                 } else {
                     f32::INFINITY
                 };
-                let e = emitted_radiance(st, medium.emission, seg);
+                let e = emitted_radiance(
+                    walk.coefficients.at(w.ray[j] as usize).0,
+                    medium.emission,
+                    seg,
+                );
                 emitted[w.ray[j] as usize] += w.weight[j] * e;
             }
             ictx.stats.volume_event(VolumeEvent::Emission, m);
@@ -351,7 +385,7 @@ pub fn walk_bundle(
                 // A surface before the sampled distance: the flight passes to it, with the
                 // pass weight of that segment (the same numbers, so the same channel and
                 // distance, now beyond the segment's end).
-                f = walk.flight(pdf, u_channel, u_distance, t_hit[j]);
+                f = walk.flight(r, pdf, u_channel, u_distance, t_hit[j]);
             }
             if !f.scattered {
                 passes += 1;
@@ -415,14 +449,59 @@ pub fn walk_bundle(
     answer_exits(rays, &exits, ictx, out);
 }
 
-/// The medium and limits of one bundle's walks.
-struct Walk<'g> {
+/// Whether `(sigma_t, sigma_s)` are the same in every channel.
+#[inline]
+fn is_grey(st: Rgb, ss: Rgb) -> bool {
+    st.r == st.g && st.g == st.b && ss.r == ss.g && ss.g == ss.b
+}
+
+/// Where a bundle's walks take their `(sigma_t, sigma_s)` from (a type parameter, so the
+/// common uniform walk pays nothing for the per-ray one).
+trait Coefficients {
+    /// Ray `r`'s `(sigma_t, sigma_s)`.
+    fn at(&self, r: usize) -> (Rgb, Rgb);
+    /// Whether ray `r`'s medium is alike in every channel (channel probabilities then do
+    /// not matter).
+    fn grey(&self, r: usize) -> bool;
+}
+
+/// One medium for every ray.
+struct Uniform {
     sigma_t: Rgb,
     sigma_s: Rgb,
+    grey: bool,
+}
+
+impl Coefficients for Uniform {
+    #[inline]
+    fn at(&self, _r: usize) -> (Rgb, Rgb) {
+        (self.sigma_t, self.sigma_s)
+    }
+    #[inline]
+    fn grey(&self, _r: usize) -> bool {
+        self.grey
+    }
+}
+
+/// A medium per ray.
+struct PerRay<'a>(&'a [(Rgb, Rgb)]);
+
+impl Coefficients for PerRay<'_> {
+    #[inline]
+    fn at(&self, r: usize) -> (Rgb, Rgb) {
+        self.0[r]
+    }
+    #[inline]
+    fn grey(&self, r: usize) -> bool {
+        is_grey(self.0[r].0, self.0[r].1)
+    }
+}
+
+/// The medium and limits of one bundle's walks.
+struct Walk<'g, C> {
+    coefficients: C,
     phase: PhaseFunction,
     max_depth: u32,
-    /// Every channel alike: the channel probabilities do not matter.
-    grey: bool,
     /// The albedo pattern, read at each event (`sigma_s` is then `sigma_t`,
     /// [`crate::scatter_patterns`]).
     albedo: Option<PointPattern<'g>>,
@@ -430,11 +509,19 @@ struct Walk<'g> {
     g: Option<PointPattern<'g>>,
 }
 
-impl Walk<'_> {
-    /// A free flight on a segment of length `tmax` ([`sample_free_flight`]).
+impl<C: Coefficients> Walk<'_, C> {
+    /// A free flight of ray `r` on a segment of length `tmax` ([`sample_free_flight`]).
     #[inline]
-    fn flight(&self, pdf: [f32; 3], u_channel: f32, u_distance: f32, tmax: f32) -> FreeFlight {
-        sample_free_flight(self.sigma_t, self.sigma_s, pdf, u_channel, u_distance, tmax)
+    fn flight(
+        &self,
+        r: usize,
+        pdf: [f32; 3],
+        u_channel: f32,
+        u_distance: f32,
+        tmax: f32,
+    ) -> FreeFlight {
+        let (st, ss) = self.coefficients.at(r);
+        sample_free_flight(st, ss, pdf, u_channel, u_distance, tmax)
     }
 
     /// Walker `j` (of ray `r`) scatters at `p` with the flight weight `flight_weight`: the

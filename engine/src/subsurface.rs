@@ -31,13 +31,27 @@
 //! `mean_free_path` is the literal mean free path `1 / sigma_t` per channel, in units of
 //! `unit_length` world units: `sigma_t = 1 / (mean_free_path * unit_length)`. So
 //! `unit_length = 0.01` says "the mean free paths are in centimetres of a scene in metres".
+//!
+//! # Patterns
+//! `albedo` and `mean_free_path` may be pattern graphs of the world position `P`
+//! ([`SubsurfacePatterns`]), read at each ray's **entry point** (the start of its segment
+//! inside the boundary, where the bundle's shading context sits): every ray then walks in,
+//! or diffuses with the profile of, the homogeneous medium of its entry point's values, as
+//! if the material were that constant there. Light entering a region of another colour
+//! keeps its entry colour until it leaves (or reflects back in off the boundary, where it
+//! reads the values again): the usual treatment of textured subsurface albedo (the seed's
+//! SSDiffusion evaluates its parameters at the entry point's context too). Medium patterns
+//! see `P` only (`u`, `v` belong to surfaces).
 
 use crate::builtin::{BuiltinMaterial, Interior, Surface};
 use crate::media::{HomogeneousMedium, Scattering};
 use crate::plugin::BxdfFactory;
-use crate::scene_file::{MaterialParams, SceneError};
+use crate::scene_file::{ColourParam, MaterialParams, SceneError};
+use glam::Vec3;
 use risotto_components::Rgb;
+use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
+use std::sync::Arc;
 
 /// How the `subsurface` material's interior is integrated (scene files:
 /// `mode = "random_walk" | "diffusion"`).
@@ -144,6 +158,18 @@ impl SubsurfaceParams {
     /// The material: a smooth dielectric (shadow rays blocked, as a real boundary does)
     /// over the walked medium.
     pub fn material(&self) -> BuiltinMaterial {
+        self.material_with(SubsurfacePatterns::default())
+    }
+
+    /// [`Self::material`] with `albedo` and `mean_free_path` from `patterns` where they
+    /// are given (read at each ray's entry point, see the module docs).
+    pub fn material_with(&self, patterns: SubsurfacePatterns) -> BuiltinMaterial {
+        let patterned = (!patterns.is_empty()).then(|| {
+            Arc::new(PatternedSubsurface {
+                params: *self,
+                patterns,
+            })
+        });
         BuiltinMaterial {
             surface: Surface::Dielectric {
                 ior: self.ior,
@@ -154,6 +180,7 @@ impl SubsurfaceParams {
                 walk: self.medium(),
                 diffusion: self.diffusion(),
                 mode: self.mode,
+                patterned,
             }),
         }
     }
@@ -169,6 +196,67 @@ pub struct SubsurfaceInteriorParams {
     pub diffusion: crate::diffusion::DiffusionMedium,
     /// The material's mode.
     pub mode: SubsurfaceMode,
+    /// The parameters with their patterns, when `albedo` or `mean_free_path` is one (the
+    /// media above are then those of the constant parameters, used by no ray).
+    pub patterned: Option<Arc<PatternedSubsurface>>,
+}
+
+/// A `subsurface` material's pattern parameters, each a pattern graph of the world
+/// position read at the entry points (see the module docs); `None`: the constant.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SubsurfacePatterns {
+    /// Multiple-scattering albedo, every channel in `[0, 1]` by the graph's bounds.
+    pub albedo: Option<Arc<PatternGraph>>,
+    /// Mean free path in `unit_length` units, every channel > 0 by the graph's bounds.
+    pub mean_free_path: Option<Arc<PatternGraph>>,
+}
+
+impl SubsurfacePatterns {
+    /// Whether neither parameter is a pattern.
+    pub fn is_empty(&self) -> bool {
+        self.albedo.is_none() && self.mean_free_path.is_none()
+    }
+}
+
+/// A `subsurface` material's constant parameters and its patterns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatternedSubsurface {
+    /// The constants (`albedo` and `mean_free_path` where no pattern gives them).
+    pub params: SubsurfaceParams,
+    /// The patterns.
+    pub patterns: SubsurfacePatterns,
+}
+
+impl PatternedSubsurface {
+    /// The constant parameters at each world point of `p`, and the pattern evaluations made
+    /// (one per point and pattern).
+    pub fn at(&self, p: &[Vec3]) -> (Vec<SubsurfaceParams>, u64) {
+        let n = p.len();
+        let zeros = vec![0.0f32; n];
+        let mut evals = 0u64;
+        let mut column = |graph: Option<&Arc<PatternGraph>>, constant: Rgb| -> Vec<Rgb> {
+            let mut out = vec![constant; n];
+            if let Some(g) = graph {
+                pattern::eval(g, p, &zeros, &zeros, &mut out);
+                evals += n as u64;
+            }
+            out
+        };
+        let albedo = column(self.patterns.albedo.as_ref(), self.params.albedo);
+        let mfp = column(
+            self.patterns.mean_free_path.as_ref(),
+            self.params.mean_free_path,
+        );
+        let params = (0..n)
+            .map(|i| SubsurfaceParams {
+                // Within the load-time bounds up to rounding.
+                albedo: albedo[i].map(|a| a.clamp(0.0, 1.0)),
+                mean_free_path: mfp[i].map(|l| l.max(f32::MIN_POSITIVE)),
+                ..self.params
+            })
+            .collect();
+        (params, evals)
+    }
 }
 
 /// The `subsurface` material's volume integrator: the walk or diffusion, as the render's
@@ -180,6 +268,8 @@ pub struct SubsurfaceInterior<'a> {
     pub diffusion: crate::diffusion::DiffusionInterior,
     /// The material's mode.
     pub mode: SubsurfaceMode,
+    /// The patterned parameters, if any ([`SubsurfaceInteriorParams::patterned`]).
+    pub patterned: Option<&'a PatternedSubsurface>,
 }
 
 impl crate::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
@@ -191,7 +281,38 @@ impl crate::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
         services: crate::plugin::VolumeServices<'_, '_>,
         out: &mut crate::plugin::ShadeGroups,
     ) {
-        match services.techniques.subsurface.unwrap_or(self.mode) {
+        let mode = services.techniques.subsurface.unwrap_or(self.mode);
+        if let Some(patterned) = self.patterned {
+            // Every ray in the medium of its entry point's values (module docs).
+            let (params, evals) = patterned.at(&rays.origin);
+            self.walk.ctx.count_pattern_evals(evals);
+            match mode {
+                SubsurfaceMode::RandomWalk => {
+                    let per_ray: Vec<(Rgb, Rgb)> = params
+                        .iter()
+                        .map(|p| {
+                            let m = p.medium();
+                            (m.sigma_t, m.sigma_s)
+                        })
+                        .collect();
+                    crate::random_walk::walk_bundle_per_ray(
+                        self.walk.medium,
+                        &per_ray,
+                        rays,
+                        samplers,
+                        services.ictx,
+                        out,
+                    );
+                }
+                SubsurfaceMode::Diffusion => {
+                    let per_ray: Vec<_> = params.iter().map(|p| p.diffusion()).collect();
+                    self.diffusion
+                        .diffuse(Some(&per_ray), rays, samplers, services.ictx, out);
+                }
+            }
+            return;
+        }
+        match mode {
             SubsurfaceMode::RandomWalk => {
                 self.walk
                     .nearest_hits(rays, samplers, lobes_wanted, services, out)
@@ -211,13 +332,44 @@ impl crate::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
+        if let Some(patterned) = self.patterned {
+            // The extinction of each segment's start (a dielectric boundary lets no shadow
+            // ray in; this serves integrators that trace their own segments inside).
+            let (params, evals) = patterned.at(&segments.origin);
+            self.walk.ctx.count_pattern_evals(evals);
+            for (i, p) in params.iter().enumerate() {
+                let sigma_t = p.medium().sigma_t;
+                trans[i] = risotto_systems::medium::transmittance(sigma_t, segments.length[i]);
+            }
+            emission.fill(Rgb::BLACK);
+            return;
+        }
         self.walk
             .transmission(segments, samplers, ictx, trans, emission)
     }
 }
 
-/// Reads a `type = "subsurface"` material (keys and defaults in `docs/scene-format.md`).
+/// Reads a `type = "subsurface"` material (keys and defaults in `docs/scene-format.md`);
+/// `albedo` and `mean_free_path` must be constants here ([`parse_with_patterns`] takes
+/// patterns too).
 pub fn parse(p: &MaterialParams) -> Result<SubsurfaceParams, SceneError> {
+    let (params, patterns) = parse_with_patterns(p)?;
+    for (key, pattern) in [
+        ("albedo", patterns.albedo.is_some()),
+        ("mean_free_path", patterns.mean_free_path.is_some()),
+    ] {
+        if pattern {
+            return Err(p.error(Some(key), "a pattern is not taken here: give a colour"));
+        }
+    }
+    Ok(params)
+}
+
+/// Reads a `type = "subsurface"` material whose `albedo` and `mean_free_path` may be
+/// patterns of `P` (the constants then hold the defaults, used by no ray).
+pub fn parse_with_patterns(
+    p: &MaterialParams,
+) -> Result<(SubsurfaceParams, SubsurfacePatterns), SceneError> {
     p.deny_unknown(&[
         "ior",
         "albedo",
@@ -228,18 +380,44 @@ pub fn parse(p: &MaterialParams) -> Result<SubsurfaceParams, SceneError> {
     ])?;
     let positive_finite = |v: f32| v > 0.0 && v.is_finite();
     let ior = p.f32_where("ior", Some(1.4), "must be > 0 and finite", positive_finite)?;
-    let albedo = p.rgb_where(
-        "albedo",
-        Some(Rgb::splat(0.8)),
-        "every channel in [0, 1]",
-        |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
-    )?;
-    let mean_free_path = p.rgb_where(
-        "mean_free_path",
-        Some(Rgb::splat(1.0)),
-        "every channel > 0 and finite",
-        |c| c.min_channel() > 0.0 && c.is_finite(),
-    )?;
+    let mut patterns = SubsurfacePatterns::default();
+    let albedo = match p.colour_or_pattern("albedo", Rgb::splat(0.8), [0.0, 1.0])? {
+        ColourParam::Constant(c) => c,
+        ColourParam::Pattern(g) => {
+            patterns.albedo = Some(Arc::new(world_p_only(p, "albedo", g)?));
+            Rgb::splat(0.8)
+        }
+    };
+    let mean_free_path = if p.is_table("mean_free_path") {
+        let g = world_p_only(
+            p,
+            "mean_free_path",
+            p.pattern("mean_free_path")?.expect("a table"),
+        )?;
+        let (lo, hi) = pattern::bounds(&g, Vec3::NEG_INFINITY, Vec3::INFINITY);
+        // NaN reads as out of range.
+        if !(lo.min_channel() > 0.0 && hi.is_finite()) {
+            return Err(p.error(
+                Some("mean_free_path"),
+                format!(
+                    "the pattern must keep every channel > 0 and finite, but its values may \
+                     reach [{}, {}, {}] .. [{}, {}, {}] (interval bounds over all of space): \
+                     wrap it in `remap` with a positive range",
+                    lo.r, lo.g, lo.b, hi.r, hi.g, hi.b
+                ),
+            ));
+        }
+        patterns.mean_free_path = Some(Arc::new(g));
+        // The smallest mean free path the pattern reaches decides the overflow check.
+        lo
+    } else {
+        p.rgb_where(
+            "mean_free_path",
+            Some(Rgb::splat(1.0)),
+            "every channel > 0 and finite",
+            |c| c.min_channel() > 0.0 && c.is_finite(),
+        )?
+    };
     let unit_length = p.f32_where(
         "unit_length",
         Some(1.0),
@@ -267,17 +445,35 @@ pub fn parse(p: &MaterialParams) -> Result<SubsurfaceParams, SceneError> {
             ))
         }
     };
-    Ok(SubsurfaceParams {
+    let params = SubsurfaceParams {
         ior,
         albedo,
         mean_free_path,
         unit_length,
         g,
         mode,
-    })
+    };
+    Ok((params, patterns))
+}
+
+/// `graph` if it reads `P` only, else an error at `key`.
+fn world_p_only(
+    p: &MaterialParams,
+    key: &str,
+    graph: PatternGraph,
+) -> Result<PatternGraph, SceneError> {
+    if graph.reads_uv() {
+        return Err(p.error(
+            Some(key),
+            "a subsurface pattern is read at the entry point's world position P only (u and \
+             v belong to surfaces)",
+        ));
+    }
+    Ok(graph)
 }
 
 /// The registry's constructor for `type = "subsurface"`.
 pub fn construct(p: &MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError> {
-    Ok(Box::new(parse(p)?.material()))
+    let (params, patterns) = parse_with_patterns(p)?;
+    Ok(Box::new(params.material_with(patterns)))
 }
