@@ -682,6 +682,7 @@ impl BxdfFactory for BuiltinMaterial {
     ) -> Option<crate::volume_lights::VolumeEmitter> {
         match (&self.surface, &self.interior) {
             (Surface::Interface, Interior::Heterogeneous(m)) => m.volume_emitter(bounds, support),
+            (Surface::Interface, Interior::Homogeneous(m)) => m.volume_emitter(bounds, support),
             _ => None,
         }
     }

@@ -8,6 +8,7 @@ pub mod converge;
 pub mod diffusion;
 pub mod grid_file;
 pub mod heterogeneous;
+pub mod homogeneous_emission;
 pub mod integrator;
 mod interior;
 pub mod load;

@@ -44,6 +44,7 @@
 //! is exact too; the light the medium emits is not scattered again there (single
 //! scattering is of the scene's lights).
 
+use crate::homogeneous_emission::emission_along;
 use crate::plugin::*;
 use crate::scatter_patterns::scale_by_albedo;
 use glam::Vec3;
@@ -283,6 +284,8 @@ impl HomogeneousInterior<'_> {
         &self,
         rays: &Rays,
         u: &[[f32; DIMS_PER_SEGMENT]],
+        samplers: &[PathSampler],
+        light: Option<&crate::volume_lights::VolumeLightMis<'_>>,
         ictx: &mut crate::context::IntegratorContext<'_>,
         out: &mut ShadeGroups,
     ) {
@@ -293,7 +296,7 @@ impl HomogeneousInterior<'_> {
         for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
             *tmax = tmax.min(hit);
         }
-        self.emit_along(&tmax, ictx.stats, out);
+        self.emit_along(rays, &tmax, samplers, light, ictx.stats, out);
         let mut scattered = vec![false; n];
         let mut passes = vec![true; n];
         let mut t = vec![0.0f32; n];
@@ -389,12 +392,17 @@ impl HomogeneousInterior<'_> {
     /// Reports the medium's emission along each ray's segment `[0, tmax[i]]` in
     /// `out.emitted`: the exact integral [`emitted_radiance`] (deterministic: no variance,
     /// and independent of the free flight sampled on the segment, which estimates the
-    /// other terms of the segment's radiance). Segments with nothing ahead (`tmax = inf`,
-    /// a ray that has already left the medium) emit nothing. No-op for a medium that does
-    /// not emit.
+    /// other terms of the segment's radiance), or, for a ray weighed against light samples
+    /// of the medium (`light`), the point estimator of the weighted integral
+    /// ([`crate::homogeneous_emission`]). Segments with nothing ahead (`tmax = inf`, a ray
+    /// that has already left the medium) emit nothing. No-op for a medium that does not
+    /// emit.
     fn emit_along(
         &self,
+        rays: &Rays,
         tmax: &[f32],
+        samplers: &[PathSampler],
+        light: Option<&crate::volume_lights::VolumeLightMis<'_>>,
         stats: &mut crate::stats::SystemStats,
         out: &mut ShadeGroups,
     ) {
@@ -403,8 +411,8 @@ impl HomogeneousInterior<'_> {
             return;
         }
         for (i, &t) in tmax.iter().enumerate() {
-            out.emitted
-                .push(i as u32, emitted_radiance(m.sigma_t, m.emission, t));
+            let e = emission_along(m, rays, i, t, light, &samplers[i]);
+            out.emitted.push(i as u32, e);
         }
         stats.volume_event(crate::stats::VolumeEvent::Emission, tmax.len());
     }
@@ -599,7 +607,8 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             Scattering::Single => services.lighting.is_none() && self.walks(services.ictx),
         };
         if walk {
-            crate::random_walk::walk_bundle(self.medium, rays, samplers, services.ictx, out);
+            let light = services.volume_light.as_ref();
+            crate::random_walk::walk_bundle(self.medium, light, rays, samplers, services.ictx, out);
             return;
         }
         let u = Self::draw(samplers);
@@ -612,10 +621,12 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
                 let r = out.points.ray_id[k] as usize;
                 tmax[r] = tmax[r].min(out.points.vlen[k]);
             }
-            self.emit_along(&tmax, services.ictx.stats, out);
+            let light = services.volume_light.as_ref();
+            self.emit_along(rays, &tmax, samplers, light, services.ictx.stats, out);
             self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
         } else {
-            self.scatter_inside(rays, &u, services.ictx, out);
+            let light = services.volume_light.as_ref();
+            self.scatter_inside(rays, &u, samplers, light, services.ictx, out);
         }
     }
 

@@ -80,10 +80,12 @@
 //! sampler state, deterministic per pixel sample.
 
 use crate::context::IntegratorContext;
+use crate::homogeneous_emission::emission_along;
 use crate::media::HomogeneousMedium;
 use crate::scatter_patterns::{hg_at, PointPattern};
 use crate::shade_groups::ShadeGroups;
 use crate::stats::{System, VolumeEvent};
+use crate::volume_lights::VolumeLightMis;
 use glam::{Vec2, Vec3};
 use risotto_components::{Rays, Rgb, NO_HIT};
 use risotto_systems::clearance::clearance;
@@ -200,8 +202,13 @@ fn carried(b: Rgb, w: Rgb) -> f32 {
 /// `out.walked` (see the module docs). Walkers killed by the roulette, the depth limit or the
 /// event guard return nothing (the caller counts them absorbed). `samplers[i]` is ray `i`'s
 /// sample source; each advances by four dimensions.
+///
+/// `light`: the medium as a light, whose samples the first step of each walk is weighed
+/// against ([`crate::homogeneous_emission`]; later steps follow scattering events, which
+/// sample no light, and keep the exact emission).
 pub fn walk_bundle(
     medium: &HomogeneousMedium,
+    light: Option<&VolumeLightMis<'_>>,
     rays: &Rays,
     samplers: &mut [PathSampler],
     ictx: &mut IntegratorContext<'_>,
@@ -213,7 +220,7 @@ pub fn walk_bundle(
         sigma_s,
         grey: is_grey(sigma_t, sigma_s),
     };
-    walk_bundle_in(medium, uniform, rays, samplers, ictx, out);
+    walk_bundle_in(medium, uniform, light, rays, samplers, ictx, out);
 }
 
 /// [`walk_bundle`] where each ray walks in a medium of its own extinction and scattering
@@ -229,12 +236,13 @@ pub fn walk_bundle_per_ray(
     out: &mut ShadeGroups,
 ) {
     assert_eq!(per_ray.len(), rays.len(), "one medium per ray");
-    walk_bundle_in(medium, PerRay(per_ray), rays, samplers, ictx, out);
+    walk_bundle_in(medium, PerRay(per_ray), None, rays, samplers, ictx, out);
 }
 
 fn walk_bundle_in<C: Coefficients>(
     medium: &HomogeneousMedium,
     coefficients: C,
+    light: Option<&VolumeLightMis<'_>>,
     rays: &Rays,
     samplers: &mut [PathSampler],
     ictx: &mut IntegratorContext<'_>,
@@ -366,12 +374,15 @@ fn walk_bundle_in<C: Coefficients>(
                 } else {
                     f32::INFINITY
                 };
-                let e = emitted_radiance(
-                    walk.coefficients.at(w.ray[j] as usize).0,
-                    medium.emission,
-                    seg,
-                );
-                emitted[w.ray[j] as usize] += w.weight[j] * e;
+                let r = w.ray[j] as usize;
+                let e = if w.events[j] == 0 {
+                    // The ray's own first segment: weighed against the light samples of the
+                    // vertex it left, if any.
+                    emission_along(medium, rays, r, seg, light, &samplers[r])
+                } else {
+                    emitted_radiance(walk.coefficients.at(r).0, medium.emission, seg)
+                };
+                emitted[r] += w.weight[j] * e;
             }
             ictx.stats.volume_event(VolumeEvent::Emission, m);
         }

@@ -62,20 +62,23 @@ impl VolumeLightMis<'_> {
     /// of `rays` (see the [module docs](self)).
     #[inline]
     pub fn unidirectional_weight(&self, rays: &Rays, r: usize, x: Vec3) -> f32 {
-        let pdf = rays.pdf[r];
-        if rays.depth[r] == 0 || rays.lobe[r].is_specular() || pdf.is_nan() || pdf <= 0.0 {
+        if !self.weighs(rays, r) {
             return 1.0;
         }
-        match self.technique {
-            // Neither samples volume lights (module docs).
-            LightingTechnique::BxdfOnly | LightingTechnique::NeeOnly => 1.0,
-            LightingTechnique::Mis => {
-                let s2 = (x - rays.prev_p[r]).length_squared();
-                let p_v = self.selection * self.emitter.pdf(x);
-                let p_u = pdf * self.emitter.mis_majorant(x) / s2;
-                power_heuristic(p_u, p_v)
-            }
-        }
+        let s2 = (x - rays.prev_p[r]).length_squared();
+        let p_v = self.selection * self.emitter.pdf(x);
+        let p_u = rays.pdf[r] * self.emitter.mis_majorant(x) / s2;
+        power_heuristic(p_u, p_v)
+    }
+
+    /// Whether ray `r`'s emission is weighed against light samples at all: not for camera
+    /// rays, rays with a Dirac lobe or no pdf, nor under `nee` and `bxdf` (neither samples
+    /// volume lights, module docs); [`Self::unidirectional_weight`] is 1 on those.
+    #[inline]
+    pub fn weighs(&self, rays: &Rays, r: usize) -> bool {
+        let pdf = rays.pdf[r];
+        let plain = rays.depth[r] == 0 || rays.lobe[r].is_specular() || pdf.is_nan() || pdf <= 0.0;
+        !plain && self.technique == LightingTechnique::Mis
     }
 }
 

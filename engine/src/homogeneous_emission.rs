@@ -1,0 +1,144 @@
+//! A homogeneous medium's emission along path rays, and the medium as a light
+//! ([`crate::volume_lights`]).
+//!
+//! # Along path rays
+//! A ray crossing the medium on `[0, d]` gathers `int_0^d T(s) j ds` with
+//! `T(s) = exp(-sigma_t s)` (the in-scattered and transmitted terms are the free flight's,
+//! independently). Where no light sample competes for the emission, the weight of the
+//! unidirectional technique is 1 everywhere and the integral is exact:
+//! `j (1 - exp(-sigma_t d)) / sigma_t` per channel ([`emitted_radiance`]).
+//!
+//! # As a light
+//! Behind an index-matched `interface`, the medium is also a [`VolumeEmitter`]. It is one
+//! cell over the shape's bounds, with `j_max = j` and the tracking bound `rate` below.
+//! Every vertex that light-samples it needs the density with which path rays reach `x`,
+//! to weigh its sample against them. So the rays that a light sample competed with
+//! (`VolumeLightMis::weighs`) gather the weighted integral `int_0^d T(s) j w_U(x(s)) ds`
+//! instead, with a point estimator of known density. The estimator sums
+//! `T(s_k) j w_U(x_k) / rate` over the points `s_k` of a Poisson process of rate `rate` on
+//! `[0, d]`; its expectation is the weighted integral (Campbell's theorem:
+//! `E[sum_k f(s_k)] = int_0^d rate f(s) ds`). As a technique over the volume, it places
+//! points at `x` with density `pdf_dir(w) rate / s^2` in volume measure, for the
+//! direction's pdf `pdf_dir` and the distance `s` from the ray's last vertex. That is the
+//! heterogeneous media's collision estimator with `majorant = rate`, so
+//! [`VolumeLightMis::unidirectional_weight`] gives `w_U` and the light side `w_V`
+//! unchanged, and the two form a partition of unity.
+//!
+//! `rate = max(max_c sigma_t,c, EMISSION_COLLISIONS_PER_CELL / width)` for the widest side
+//! `width` of the box: at least about one point per crossing of a thin medium, and no more
+//! points than a tracker's tentative collisions in a dense one. The sum stops where `T`
+//! falls below `1e-12` in every channel: the rest of the integral is below `1e-12 j /
+//! sigma_t`, far below the sum's rounding. Camera rays, rays after a
+//! Dirac event and every ray under `lighting = nee | bxdf` keep the exact integral.
+//!
+//! In a random walk (`scattering = "walk"`) only each walk's first step is weighed: the
+//! walk's events sample no light, so the segments after them compete with no light sample
+//! (a light sample from the vertex the ray left estimates the unscattered emission only)
+//! and keep the exact integral.
+
+use crate::heterogeneous::EMISSION_COLLISIONS_PER_CELL;
+use crate::media::HomogeneousMedium;
+use crate::volume_lights::{EmitterSupport, VolumeEmitter, VolumeLightMis};
+use glam::Vec3;
+use risotto_components::{Rays, Rgb};
+use risotto_systems::grid::DensityGrid;
+use risotto_systems::medium::{emitted_radiance, transmittance};
+use risotto_systems::sampler::{PathSampler, SplitMix64};
+use risotto_systems::volume_lights::EmissionField;
+use std::sync::Arc;
+
+/// Transmittance below which the point estimator stops (module docs).
+const TAIL: f32 = 1e-12;
+
+/// The Poisson rate of the point estimator over the box `(lo, hi)` (module docs).
+fn rate(m: &HomogeneousMedium, (lo, hi): (Vec3, Vec3)) -> f32 {
+    let width = (hi - lo).max_element();
+    let floor = if width > 0.0 && width.is_finite() {
+        EMISSION_COLLISIONS_PER_CELL / width
+    } else {
+        0.0
+    };
+    m.sigma_t.max_channel().max(floor)
+}
+
+impl HomogeneousMedium {
+    /// The medium placed in `bounds` as a volume emitter: one cell, emitting `emission`
+    /// within `support`, with the point estimator's rate as its tracking bound (module
+    /// docs). `None` when it does not emit or the box has no volume.
+    pub fn volume_emitter(
+        &self,
+        bounds: (Vec3, Vec3),
+        support: EmitterSupport,
+    ) -> Option<VolumeEmitter> {
+        if !self.emits() {
+            return None;
+        }
+        let one = DensityGrid::constant([1, 1, 1], 1.0).ok()?;
+        let field = EmissionField::Grid {
+            grid: Arc::new(one),
+            scale: self.emission,
+        };
+        let majorant = vec![rate(self, bounds)];
+        VolumeEmitter::new(
+            bounds,
+            [1, 1, 1],
+            &[self.emission],
+            majorant,
+            field,
+            support,
+        )
+        .ok()
+    }
+}
+
+/// The random stream of ray `r`'s point estimator: its sampler's state, mixed with a salt
+/// of its own (no sampler dimension is drawn, so scenes where no light sample competes
+/// keep their images).
+fn stream(s: &PathSampler) -> SplitMix64 {
+    let key = ((s.seed as u64) << 32 | s.sample as u64)
+        ^ (s.dimension as u64).wrapping_mul(0x9E6C_63D0_676A_9A99)
+        ^ 0x5851_F42D_4C95_7F2D;
+    SplitMix64(key)
+}
+
+/// The emission ray `i` of `rays` gathers on its segment `[0, d]` in medium `m`: exact, or
+/// with `light` and a ray it weighs, the point estimator of the weighted integral (module
+/// docs). `d = inf` (nothing ahead) gathers nothing.
+pub(crate) fn emission_along(
+    m: &HomogeneousMedium,
+    rays: &Rays,
+    i: usize,
+    d: f32,
+    light: Option<&VolumeLightMis<'_>>,
+    sampler: &PathSampler,
+) -> Rgb {
+    let Some(light) = light.filter(|l| l.weighs(rays, i)) else {
+        return emitted_radiance(m.sigma_t, m.emission, d);
+    };
+    if !d.is_finite() {
+        return Rgb::BLACK;
+    }
+    let (lo, hi) = light.emitter.bounds();
+    let rate = light.emitter.mis_majorant(0.5 * (lo + hi));
+    if !(rate > 0.0 && rate.is_finite()) {
+        return emitted_radiance(m.sigma_t, m.emission, d);
+    }
+    let mut rng = stream(sampler);
+    let (o, dir) = (rays.origin[i], rays.direction[i]);
+    let mut sum = Rgb::BLACK;
+    let mut s = 0.0f32;
+    loop {
+        // Exponential gaps of mean 1 / rate; 1 - u in (0, 1].
+        s += -(1.0 - rng.f32()).ln() / rate;
+        if s >= d {
+            break;
+        }
+        let t = transmittance(m.sigma_t, s);
+        if t.max_channel() < TAIL {
+            // What is left is below TAIL j / sigma_t: far below the sum's rounding.
+            break;
+        }
+        sum += t * light.unidirectional_weight(rays, i, o + dir * s);
+    }
+    m.emission * sum * (1.0 / rate)
+}
