@@ -385,3 +385,32 @@ fn a_scene_without_emissive_media_has_no_volume_lights() {
         .any(|n| n == "emissive_volume_lights"));
     assert!(scene.volume_light.iter().all(|&l| l == u32::MAX));
 }
+
+/// Behind a dielectric, path rays refract (a Dirac event) and shadow rays cannot pass
+/// straight through, so an emissive medium there is no light (module docs of
+/// `risotto_engine::volume_lights`): the scene has no volume light, MIS draws no volume
+/// light sample, and its image agrees with unidirectional estimation.
+#[test]
+fn an_emissive_medium_behind_a_dielectric_is_no_light() {
+    let d = dir("dielectric");
+    for interior in [
+        r#"{ type = "homogeneous", sigma_t = 1.5, albedo = 0.5, emission = 2 }"#,
+        r#"{ type = "heterogeneous", density = { constant = 1 }, scale = 1.5, albedo = 0.5, emission = 2 }"#,
+    ] {
+        let text = floor_scene(interior, 256)
+            .replace("type = \"interface\"", "type = \"dielectric\"\nior = 1.5")
+            .replace("max_depth = 2", "max_depth = 8");
+        assert!(text.contains("ior = 1.5"));
+        let scene = compile(&d, &text);
+        assert!(!scene.features.emissive_volume_lights, "{interior}");
+        assert!(scene.volume_light.iter().all(|&l| l == u32::MAX));
+        let out = render_with_technique(&scene, LightingTechnique::Mis);
+        assert_eq!(
+            out.stats.counters.volume_events[VolumeEvent::LightSample as usize],
+            0
+        );
+        let mis = image_mean(&out);
+        let uni = image_mean(&render_with_technique(&scene, LightingTechnique::BxdfOnly));
+        assert_agree(&format!("{interior}: mis vs bxdf"), mis, uni);
+    }
+}
