@@ -60,8 +60,8 @@ pub(crate) fn parse_albedo(
 
 /// Reads a medium's `phase` key (absent: isotropic). `g` of an `hg` phase may be a grey
 /// pattern of `P` whose interval bounds lie in `(-1, 1)`: the phase function is then
-/// Henyey-Greenstein with `g` read per scattering point, and the returned function holds
-/// `g = 0` (unused but by the albedo AOV's neighbours; the pattern is returned beside it).
+/// Henyey-Greenstein with `g` read per scattering point: the returned function is HG with
+/// `g = 0`, a placeholder no point uses, and the pattern is returned beside it.
 pub(crate) fn parse_phase(
     t: &MaterialParams,
 ) -> Result<(PhaseFunction, Option<Arc<PatternGraph>>), SceneError> {
