@@ -57,7 +57,7 @@ use risotto_systems::medium::{
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::{before_hit, coordinate_epsilon};
-use risotto_systems::sampler::{next_4d_column, PathSampler};
+use risotto_systems::sampler::{next_2d_column, next_4d_column, PathSampler};
 use std::sync::Arc;
 
 /// Lobe bits of a phase-function sample.
@@ -122,12 +122,21 @@ pub(crate) fn sample_phase(
     out: &mut BxdfSamples,
     phase: impl Fn(usize) -> PhaseFunction,
 ) {
+    // The direction's two dimensions through the column sampler (the same values as each
+    // sampler's `next_2d`, eight lanes at a time), then each point's lobe dimension.
+    const BLOCK: usize = 64;
     let vn = ctx.vn();
-    for (i, s) in samplers.iter_mut().enumerate() {
-        let u = s.next_2d();
-        let u_lobe = s.next_1d();
-        let (wi, pdf) = phase(i).sample(vn[i], u, u_lobe);
-        write_phase_sample(out, i, wi, pdf);
+    let mut u = [glam::Vec2::ZERO; BLOCK];
+    for start in (0..samplers.len()).step_by(BLOCK) {
+        let end = (start + BLOCK).min(samplers.len());
+        let u = &mut u[..end - start];
+        next_2d_column(&mut samplers[start..end], u);
+        for (k, &u) in u.iter().enumerate() {
+            let i = start + k;
+            let u_lobe = samplers[i].next_1d();
+            let (wi, pdf) = phase(i).sample(vn[i], u, u_lobe);
+            write_phase_sample(out, i, wi, pdf);
+        }
     }
 }
 
