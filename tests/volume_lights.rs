@@ -248,7 +248,7 @@ fn pattern_emitters_light_a_floor_as_the_brute_force_integral_says() {
 /// compete with light samples gather the point estimator of the weighted emission
 /// (`engine/src/homogeneous_emission.rs`), camera rays the exact integral. Its
 /// unidirectional estimate is exact along each segment, so MIS's margin is smaller than
-/// for the heterogeneous media's collision estimator (0.78 of its error here).
+/// for the heterogeneous media's collision estimator (0.66 of its error here).
 #[test]
 fn a_homogeneous_emissive_box_lights_a_floor_as_the_brute_force_integral_says() {
     let d = dir("homogeneous-box");
@@ -257,7 +257,7 @@ fn a_homogeneous_emissive_box_lights_a_floor_as_the_brute_force_integral_says() 
         let interior = format!(
             r#"{{ type = "homogeneous", sigma_t = {sigma_a}, albedo = 0, emission = {j}, scattering = "{scattering}" }}"#
         );
-        assert_box_lights_floor(&d, &interior, j, sigma_a, 0.9);
+        assert_box_lights_floor(&d, &interior, j, sigma_a, 0.75);
     }
 }
 
@@ -416,7 +416,7 @@ fn an_emissive_medium_behind_a_dielectric_is_no_light() {
 }
 
 /// The homogeneous emitter's point estimator at extreme densities: a box of extinction
-/// 1e-3 (about one Poisson point per crossing, from the rate's floor) and 1e3 (thousands of
+/// 1e-3 (about one comb point per crossing, from the rate's floor) and 1e3 (thousands of
 /// mean free paths across; the sum stops where the transmittance falls below 1e-12), with
 /// `j = 2 sigma_t` so that the box glows with about `2 (1 - T)`. No sample is dropped as
 /// NaN, and MIS agrees with unidirectional estimation.

@@ -16,8 +16,8 @@
 //! measure (the derivation is in [`risotto_systems::volume_lights`]). Camera rays and rays
 //! with a Dirac lobe or no pdf keep weight 1 (no light sample was weighed against them).
 //! A homogeneous medium, whose path rays gather their emission exactly, switches the rays
-//! that are weighed to a point estimator of that density (the points of a Poisson process
-//! of rate `majorant` along the segment, [`crate::homogeneous_emission`]).
+//! that are weighed to a point estimator of that density (a randomly offset comb of
+//! `majorant` points per unit length along the segment, [`crate::homogeneous_emission`]).
 //! Shadow rays end at the sampled point inside the medium, so their transmittance covers the
 //! emitter's own medium up to it; the emitter's emission along them is not added (the
 //! built-in media report emission along path rays,

@@ -1258,7 +1258,7 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                 // Index-matched boundaries take no surface parameters.
                 "interface" => {}
                 "subsurface" => {
-                    crate::subsurface::parse(p).unwrap();
+                    crate::subsurface::parse_with_patterns(p).unwrap();
                 }
                 other => panic!("{what}: unexpected material type {other}"),
             }
