@@ -39,14 +39,15 @@
 //! (a light sample from the vertex the ray left estimates the unscattered emission only)
 //! and keep the exact integral.
 
-use crate::heterogeneous::EMISSION_COLLISIONS_PER_CELL;
+use crate::heterogeneous::emission_floor;
 use crate::media::HomogeneousMedium;
+use crate::random_walk::sampler_stream;
 use crate::volume_lights::{EmitterSupport, VolumeEmitter, VolumeLightMis};
 use glam::Vec3;
 use risotto_components::{Rays, Rgb};
 use risotto_systems::grid::DensityGrid;
 use risotto_systems::medium::{emitted_radiance, transmittance};
-use risotto_systems::sampler::{PathSampler, SplitMix64};
+use risotto_systems::sampler::PathSampler;
 use risotto_systems::volume_lights::EmissionField;
 use std::sync::Arc;
 
@@ -54,14 +55,10 @@ use std::sync::Arc;
 const TAIL: f32 = 1e-12;
 
 /// The rate (points per unit length) of the point estimator over the box `(lo, hi)` (module docs).
-fn rate(m: &HomogeneousMedium, (lo, hi): (Vec3, Vec3)) -> f32 {
-    let width = (hi - lo).max_element();
-    let floor = if width > 0.0 && width.is_finite() {
-        EMISSION_COLLISIONS_PER_CELL / width
-    } else {
-        0.0
-    };
-    m.sigma_t.max_channel().max(floor)
+fn rate(m: &HomogeneousMedium, bounds: (Vec3, Vec3)) -> f32 {
+    m.sigma_t
+        .max_channel()
+        .max(emission_floor(bounds, [1, 1, 1]))
 }
 
 impl HomogeneousMedium {
@@ -94,15 +91,9 @@ impl HomogeneousMedium {
     }
 }
 
-/// The random stream of ray `r`'s point estimator: its sampler's state, mixed with a salt
-/// of its own (no sampler dimension is drawn, so scenes where no light sample competes
-/// keep their images).
-fn stream(s: &PathSampler) -> SplitMix64 {
-    let key = ((s.seed as u64) << 32 | s.sample as u64)
-        ^ (s.dimension as u64).wrapping_mul(0x9E6C_63D0_676A_9A99)
-        ^ 0x5851_F42D_4C95_7F2D;
-    SplitMix64(key)
-}
+/// The salt of the point estimator's random stream ([`sampler_stream`]: no sampler
+/// dimension is drawn, so scenes where no light sample competes keep their images).
+const STREAM_SALT: u64 = 0x5851_F42D_4C95_7F2D;
 
 /// The emission ray `i` of `rays` gathers on its segment `[0, d]` in medium `m`: exact, or
 /// with `light` and a ray it weighs, the point estimator of the weighted integral (module
@@ -127,7 +118,7 @@ pub(crate) fn emission_along(
         return emitted_radiance(m.sigma_t, m.emission, d);
     }
     // One uniform offset for the whole comb of points `(k + u) / rate`.
-    let u = stream(sampler).f32();
+    let u = sampler_stream(sampler, STREAM_SALT).f32();
     let (o, dir) = (rays.origin[i], rays.direction[i]);
     let mut sum = Rgb::BLACK;
     for k in 0u32.. {

@@ -234,14 +234,21 @@ fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
                 "a homogeneous interior needs sigma_t (and albedo) or sigma_a and sigma_s",
             ))
         }
-        _ if t.is_table("sigma_t")
-            || t.is_table("emission")
-            || t.is_table("sigma_a")
-            || t.is_table("sigma_s") =>
-        {
-            return Ok(Interior::Heterogeneous(std::sync::Arc::new(
-                crate::heterogeneous::homogeneous_with_patterns(t)?,
-            )));
+        (false, true) if t.is_table("sigma_a") || t.is_table("sigma_s") => {
+            let key = if t.is_table("sigma_a") {
+                "sigma_a"
+            } else {
+                "sigma_s"
+            };
+            return Err(t.error(
+                Some(key),
+                "sigma_a and sigma_s take no pattern: give sigma_t (a grey pattern) and \
+                 albedo (a colour or a pattern) instead",
+            ));
+        }
+        (true, false) if t.is_table("sigma_t") => {
+            let medium = crate::heterogeneous::homogeneous_with_patterns(t, None)?;
+            return Ok(Interior::Heterogeneous(std::sync::Arc::new(medium)));
         }
         (true, false) => {
             let sigma_t = t.rgb_where("sigma_t", None, non_negative, ok)?;
@@ -260,6 +267,13 @@ fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
             (sigma_t, sigma_s, None)
         }
     };
+    if t.is_table("emission") {
+        // A constant extinction with an emission pattern: heterogeneous too.
+        let albedo = crate::media::albedo_of(sigma_s, sigma_t);
+        let constant = Some((sigma_t, albedo, albedo_pattern));
+        let medium = crate::heterogeneous::homogeneous_with_patterns(t, constant)?;
+        return Ok(Interior::Heterogeneous(std::sync::Arc::new(medium)));
+    }
     let (phase, g_pattern) = crate::scatter_patterns::parse_phase(t)?;
     let scattering = match t.string("scattering", Some("multiple"))?.as_str() {
         "multiple" => Scattering::Multiple,

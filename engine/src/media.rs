@@ -218,20 +218,18 @@ impl HomogeneousMedium {
 
     /// Single-scattering albedo `sigma_s / sigma_t` per channel (0 where `sigma_t` is 0).
     pub fn albedo(&self) -> Rgb {
-        Rgb::new(
-            ratio(self.sigma_s.r, self.sigma_t.r),
-            ratio(self.sigma_s.g, self.sigma_t.g),
-            ratio(self.sigma_s.b, self.sigma_t.b),
-        )
+        albedo_of(self.sigma_s, self.sigma_t)
     }
 }
 
-fn ratio(a: f32, b: f32) -> f32 {
-    if b > 0.0 {
-        a / b
-    } else {
-        0.0
-    }
+/// `sigma_s / sigma_t` per channel (0 where `sigma_t` is 0).
+pub(crate) fn albedo_of(sigma_s: Rgb, sigma_t: Rgb) -> Rgb {
+    let ratio = |a: f32, b: f32| if b > 0.0 { a / b } else { 0.0 };
+    Rgb::new(
+        ratio(sigma_s.r, sigma_t.r),
+        ratio(sigma_s.g, sigma_t.g),
+        ratio(sigma_s.b, sigma_t.b),
+    )
 }
 
 /// The homogeneous medium's volume integrator, bound to the bundle's shading context (one

@@ -161,11 +161,13 @@ impl Walkers {
     }
 }
 
-/// The seed of a walk's random stream: the path's sampler state, mixed (SplitMix64 mixes
-/// its state on every draw, so neighbouring seeds give unrelated streams).
-fn walk_seed(s: &PathSampler) -> SplitMix64 {
+/// A random stream seeded by the path's sampler state without drawing from it, `salt`
+/// telling apart the streams of different uses (0: the walk's). SplitMix64 mixes its state
+/// on every draw, so neighbouring seeds give unrelated streams.
+pub(crate) fn sampler_stream(s: &PathSampler, salt: u64) -> SplitMix64 {
     let key = ((s.seed as u64) << 32 | s.sample as u64)
-        ^ (s.dimension as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+        ^ (s.dimension as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
+        ^ salt;
     SplitMix64(key)
 }
 
@@ -265,7 +267,7 @@ fn walk_bundle_in<C: Coefficients>(
         w.tmax.push(rays.tmax[i]);
         w.weight.push(Rgb::WHITE);
         w.events.push(0);
-        w.rng.push(walk_seed(s));
+        w.rng.push(sampler_stream(s, 0));
         w.first.push(first);
         w.anchor.push(rays.origin[i]);
         w.radius.push(0.0);

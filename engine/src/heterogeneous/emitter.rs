@@ -1,7 +1,7 @@
 //! The heterogeneous medium as a light ([`crate::volume_lights`]): its majorant cells with
 //! their emission bounds and tracking bounds.
 
-use super::{HeterogeneousEmission, HeterogeneousMedium, EMISSION_COLLISIONS_PER_CELL};
+use super::{emission_floor, HeterogeneousEmission, HeterogeneousMedium};
 use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::volume_lights::{EmissionField, EmitterSupport, VolumeEmitter};
@@ -63,16 +63,7 @@ impl HeterogeneousMedium {
             EmissionField::Grid { scale, .. } | EmissionField::Pattern { scale, .. } => *scale,
         };
         let res = density.res();
-        let extent = (hi - lo).to_array();
-        let width = (0..3)
-            .map(|a| extent[a] / res[a] as f32)
-            .filter(|w| *w > 0.0 && w.is_finite())
-            .fold(0.0f32, f32::max);
-        let floor = if width > 0.0 {
-            (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
-        } else {
-            0.0
-        };
+        let floor = emission_floor((lo, hi), res);
         let smax = self.max_scale();
         let n = res.iter().product::<usize>();
         let (mut j_max, mut majorant) = (Vec::with_capacity(n), Vec::with_capacity(n));

@@ -2,7 +2,7 @@
 //! along each ray (the estimators are described in the [module docs](super)).
 
 use super::field::Field;
-use super::{HeterogeneousEmission, HeterogeneousMedium, Tracking, EMISSION_COLLISIONS_PER_CELL};
+use super::{emission_floor, HeterogeneousEmission, HeterogeneousMedium, Tracking};
 use crate::media::retain_points;
 use crate::plugin::*;
 use crate::scatter_patterns::scale_by_albedo;
@@ -85,18 +85,8 @@ impl HeterogeneousInterior<'_> {
         tmax: f32,
     ) -> EmissiveSegments<'g> {
         let m = self.medium;
-        let res = grids.density.res();
-        let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
-        let extent = (hi - lo).to_array();
-        // The widest side of a cell in world units; the floor is so many collisions per
-        // width. (The widest, not the narrowest: a flat box would otherwise get a rate that
-        // a ray travelling along it could not get through.)
-        let width = (0..3)
-            .map(|a| extent[a] / res[a] as f32)
-            .filter(|w| *w > 0.0 && w.is_finite())
-            .fold(0.0f32, f32::max);
-        let floor = if width > 0.0 && m.emits() {
-            (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
+        let floor = if m.emits() {
+            emission_floor(self.bounds(), grids.density.res())
         } else {
             0.0
         };

@@ -231,6 +231,23 @@ pub enum HeterogeneousEmission {
 /// the medium emits (see [`HeterogeneousInterior`]'s emission estimators).
 pub const EMISSION_COLLISIONS_PER_CELL: f32 = 1.0;
 
+/// The tentative-collision rate an emitting cell gets at least: [`EMISSION_COLLISIONS_PER_CELL`]
+/// per width of the widest side of a cell, for the box `(lo, hi)` cut into `res` cells (the
+/// widest, not the narrowest: a flat box would otherwise get a rate that a ray travelling
+/// along it could not get through); 0 for a box without extent.
+pub fn emission_floor((lo, hi): (glam::Vec3, glam::Vec3), res: [usize; 3]) -> f32 {
+    let extent = (hi - lo).to_array();
+    let width = (0..3)
+        .map(|a| extent[a] / res[a].max(1) as f32)
+        .filter(|w| *w > 0.0 && w.is_finite())
+        .fold(0.0f32, f32::max);
+    if width > 0.0 {
+        (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
+    } else {
+        0.0
+    }
+}
+
 impl HeterogeneousMedium {
     /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
     /// `[1, voxels]` per axis) and a grey `scale` ([`HeterogeneousMedium::with_scale`] makes

@@ -234,21 +234,14 @@ const HOMOGENEOUS_EMISSION: &str = "a homogeneous interior's emission is a colou
 ///   density 1 with `scale = sigma_t` (chromatic as the colour says), tracked by residual
 ///   ratio tracking, which integrates the constant cell exactly (no tentative collisions).
 ///
-/// `albedo` and `phase` read as for any medium; `sigma_a` and `sigma_s` take no pattern
-/// (give `sigma_t` and `albedo`), and `scattering` must be `"multiple"` or `"bounce"`
-/// (a heterogeneous medium's points always go back to the path tracer).
+/// `constant`: the constant extinction the homogeneous reader parsed, as `(sigma_t, albedo,
+/// albedo pattern)`, or `None` for a pattern `sigma_t` (read here, with `albedo`). `phase`
+/// reads as for any medium, and `scattering` must be `"multiple"` or `"bounce"` (a
+/// heterogeneous medium's points always go back to the path tracer).
 pub(crate) fn homogeneous_with_patterns(
     t: &MaterialParams,
+    constant: Option<(Rgb, Rgb, Option<Arc<PatternGraph>>)>,
 ) -> Result<HeterogeneousMedium, SceneError> {
-    for key in ["sigma_a", "sigma_s"] {
-        if t.is_table(key) {
-            return Err(t.error(
-                Some(key),
-                "sigma_a and sigma_s take no pattern: give sigma_t (a grey pattern) and \
-                 albedo (a colour or a pattern) instead",
-            ));
-        }
-    }
     let scattering = t.string("scattering", Some("multiple"))?;
     if scattering != "multiple" && scattering != "bounce" {
         return Err(t.error(
@@ -265,37 +258,19 @@ pub(crate) fn homogeneous_with_patterns(
     }
     let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
     let (phase, g_pattern) = parse_phase(t)?;
-    let non_negative = "every channel >= 0 and finite";
-    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
-    let (medium, albedo, albedo_pattern) = if t.is_table("sigma_t") {
-        let graph = grey_density_pattern(t, "sigma_t", 1.0)?;
-        let (albedo, albedo_pattern) = parse_albedo(t)?;
-        let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Ratio)
-            .with_density_pattern(graph, DEFAULT_MAJORANT_CELLS);
-        (m, albedo, albedo_pattern)
-    } else {
-        let (sigma_t, albedo, albedo_pattern) = if t.has("sigma_a") || t.has("sigma_s") {
-            let sigma_a = t.rgb_where("sigma_a", Some(Rgb::BLACK), non_negative, ok)?;
-            let sigma_s = t.rgb_where("sigma_s", Some(Rgb::BLACK), non_negative, ok)?;
-            let sigma_t = sigma_a + sigma_s;
-            let ratio = |s: f32, t: f32| if t > 0.0 { s / t } else { 0.0 };
-            let albedo = Rgb::new(
-                ratio(sigma_s.r, sigma_t.r),
-                ratio(sigma_s.g, sigma_t.g),
-                ratio(sigma_s.b, sigma_t.b),
-            );
-            (sigma_t, albedo, None)
-        } else {
-            let sigma_t = t.rgb_where("sigma_t", None, non_negative, ok)?;
+    let (medium, albedo, albedo_pattern) = match constant {
+        None => {
+            let graph = grey_density_pattern(t, "sigma_t", 1.0)?;
             let (albedo, albedo_pattern) = parse_albedo(t)?;
-            (sigma_t, albedo, albedo_pattern)
-        };
-        if !sigma_t.is_finite() {
-            return Err(t.error(Some("sigma_a"), "sigma_a + sigma_s overflows"));
+            let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Ratio)
+                .with_density_pattern(graph, DEFAULT_MAJORANT_CELLS);
+            (m, albedo, albedo_pattern)
         }
-        let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Residual)
-            .with_scale(sigma_t);
-        (m, albedo, albedo_pattern)
+        Some((sigma_t, albedo, albedo_pattern)) => {
+            let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Residual)
+                .with_scale(sigma_t);
+            (m, albedo, albedo_pattern)
+        }
     };
     let medium = HeterogeneousMedium {
         albedo,
