@@ -69,10 +69,12 @@ pub fn trace_shadow_rays(
         stats,
         arena,
         ShadowEmission::All,
+        &mut ShadowWalkScratch::default(),
     );
 }
 
-/// [`trace_shadow_rays`], adding the emission of the volumes `gather` names.
+/// [`trace_shadow_rays`], adding the emission of the volumes `gather` names, with the walk's
+/// buffers in `scratch`.
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub fn trace_shadow_rays_with(
     scene: &CompiledScene,
@@ -83,6 +85,7 @@ pub fn trace_shadow_rays_with(
     stats: &mut SystemStats,
     arena: &Bump,
     gather: ShadowEmission,
+    scratch: &mut ShadowWalkScratch,
 ) {
     let n = shadow.len();
     let f = scene.features;
@@ -110,20 +113,48 @@ pub fn trace_shadow_rays_with(
         return;
     }
 
-    let mut active: Vec<u32> = (0..n as u32).collect();
+    let ShadowWalkScratch {
+        active,
+        next,
+        t0,
+        entered,
+        stacks,
+        transmittance,
+        emitted,
+        dimension,
+        query,
+        origin,
+        direction,
+        tmin,
+        tmax,
+        found,
+        t,
+        prim,
+        b1,
+        b2,
+        segs,
+        volumes,
+    } = scratch;
+    active.clear();
+    active.extend(0..n as u32);
     // `t0`: where the next intersect query starts (past the last boundary by the spawn
     // offset); `entered`: where the ray crossed that boundary, the true start of the interval
     // inside the volume it entered (measuring from `t0` would lose the offset on every
     // interval, 33 ulps of the coordinates each).
-    let mut t0 = vec![0.0f32; n];
-    let mut entered = vec![0.0f32; n];
-    let mut stacks: Vec<VolumeStack> = shadow.volume_stack.clone();
+    refill(t0, n, 0.0f32);
+    refill(entered, n, 0.0f32);
+    stacks.clear();
+    stacks.extend_from_slice(&shadow.volume_stack);
     // Per shadow ray: transmittance so far (for what volumes emit), the emitted radiance
     // gathered, and the next sampler dimension of its own sequence.
+    refill(transmittance, n, Rgb::WHITE);
+    refill(emitted, n, Rgb::BLACK);
+    dimension.clear();
+    dimension.extend_from_slice(&shadow.dimension);
     let mut walk = Walk {
-        transmittance: vec![Rgb::WHITE; n],
-        emitted: vec![Rgb::BLACK; n],
-        dimension: shadow.dimension.clone(),
+        transmittance,
+        emitted,
+        dimension,
         counters: PatternCounters::default(),
         gather,
     };
@@ -139,30 +170,19 @@ pub fn trace_shadow_rays_with(
             &scene.geometry,
             &shadow.origin,
             &shadow.direction,
-            &t0,
+            t0,
             &shadow.tmax,
             lists,
         )
     });
-    let mut query: Vec<(usize, usize)> = Vec::new();
-    let (mut origin, mut direction) = (Vec::new(), Vec::new());
-    let (mut tmin, mut tmax, mut found) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut t, mut prim) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let (mut b1, mut b2) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let mut segs: Vec<(usize, f32, f32)> = Vec::with_capacity(n);
-    let mut next = Vec::with_capacity(n);
     let mut rounds = 0;
     while !active.is_empty() && rounds < scene.settings.max_passes {
         rounds += 1;
         let m = active.len();
-        t.clear();
-        t.resize(m, f32::INFINITY);
-        prim.clear();
-        prim.resize(m, NO_HIT);
-        b1.clear();
-        b1.resize(m, 0.0);
-        b2.clear();
-        b2.resize(m, 0.0);
+        refill(t, m, f32::INFINITY);
+        refill(prim, m, NO_HIT);
+        refill(b1, m, 0.0);
+        refill(b2, m, 0.0);
         query.clear();
         for (k, &i) in active.iter().enumerate() {
             let i = i as usize;
@@ -187,25 +207,17 @@ pub fn trace_shadow_rays_with(
             direction.clear();
             tmin.clear();
             tmax.clear();
-            for &(_, i) in &query {
+            for &(_, i) in query.iter() {
                 origin.push(shadow.origin[i]);
                 direction.push(shadow.direction[i]);
                 tmin.push(t0[i]);
                 tmax.push(shadow.tmax[i]);
             }
-            found.clear();
-            found.resize(query.len(), RayHits::EMPTY);
+            refill(found, query.len(), RayHits::EMPTY);
             stats.time(System::Intersect, query.len(), || {
-                intersect_all(
-                    &scene.geometry,
-                    &origin,
-                    &direction,
-                    &tmin,
-                    &tmax,
-                    &mut found,
-                )
+                intersect_all(&scene.geometry, origin, direction, tmin, tmax, found)
             });
-            for (&(k, i), h) in query.iter().zip(&found) {
+            for (&(k, i), h) in query.iter().zip(found.iter()) {
                 lists[i] = *h;
                 if h.len > 0 {
                     taken[i] = 1;
@@ -232,8 +244,9 @@ pub fn trace_shadow_rays_with(
                 shadow,
                 batch,
                 &mut walk,
-                &stacks,
-                &segs,
+                stacks,
+                segs,
+                volumes,
                 volume,
                 contribution,
                 stats,
@@ -273,14 +286,14 @@ pub fn trace_shadow_rays_with(
                 next.push(i);
             }
         }
-        std::mem::swap(&mut active, &mut next);
+        std::mem::swap(active, next);
     }
     // Rays still walking after the pass budget are treated as blocked (never silently lit).
-    for &i in &active {
+    for &i in active.iter() {
         contribution[i as usize] = Rgb::BLACK;
     }
     if f.emissive_media {
-        for (c, e) in contribution.iter_mut().zip(&walk.emitted) {
+        for (c, e) in contribution.iter_mut().zip(walk.emitted.iter()) {
             *c += *e;
         }
     }
@@ -289,14 +302,61 @@ pub fn trace_shadow_rays_with(
     stats.volume_pattern_evals += walk.counters.volume_evals.take();
 }
 
-/// The state of every shadow ray's walk that volume intervals update.
-struct Walk {
-    /// Transmittance from the origin to where the ray has got.
+/// `v` as `n` copies of `value`, in its existing allocation.
+fn refill<T: Copy>(v: &mut Vec<T>, n: usize, value: T) {
+    v.clear();
+    v.resize(n, value);
+}
+
+/// The buffers of the shadow-ray walk. A caller that traces shadow rays again and again keeps
+/// one (the path tracer: one per worker) so that, once they have grown to its largest batch,
+/// a walk allocates nothing; [`trace_shadow_rays`] starts from an empty one.
+#[derive(Default)]
+pub struct ShadowWalkScratch {
+    active: Vec<u32>,
+    next: Vec<u32>,
+    t0: Vec<f32>,
+    entered: Vec<f32>,
+    stacks: Vec<VolumeStack>,
     transmittance: Vec<Rgb>,
-    /// Radiance emitted by volumes along the way, weighted and attenuated.
     emitted: Vec<Rgb>,
-    /// Next sampler dimension.
     dimension: Vec<u32>,
+    query: Vec<(usize, usize)>,
+    origin: Vec<Vec3>,
+    direction: Vec<Vec3>,
+    tmin: Vec<f32>,
+    tmax: Vec<f32>,
+    found: Vec<RayHits>,
+    t: Vec<f32>,
+    prim: Vec<u32>,
+    b1: Vec<f32>,
+    b2: Vec<f32>,
+    segs: Vec<(usize, f32, f32)>,
+    volumes: VolumeScratch,
+}
+
+/// The buffers of one round's volume intervals ([`attenuate_in_volumes`]).
+#[derive(Default)]
+struct VolumeScratch {
+    /// One ray per distinct volume stack of the round (the stack is that ray's).
+    keys: Vec<usize>,
+    /// The intervals (indices into the round's list) in the current stack.
+    members: Vec<usize>,
+    segments: Segments,
+    samplers: Vec<PathSampler>,
+    points: ShadingPoints,
+    trans: Vec<Rgb>,
+    emission: Vec<Rgb>,
+}
+
+/// The state of every shadow ray's walk that volume intervals update.
+struct Walk<'a> {
+    /// Transmittance from the origin to where the ray has got.
+    transmittance: &'a mut [Rgb],
+    /// Radiance emitted by volumes along the way, weighted and attenuated.
+    emitted: &'a mut [Rgb],
+    /// Next sampler dimension.
+    dimension: &'a mut [u32],
     /// Parameter-cache counts of the volumes' contexts.
     counters: PatternCounters,
     /// Which volumes' emission is gathered.
@@ -309,9 +369,10 @@ fn attenuate_in_volumes(
     scene: &CompiledScene,
     shadow: &ShadowRays,
     batch: &PathBatch,
-    walk: &mut Walk,
+    walk: &mut Walk<'_>,
     stacks: &[VolumeStack],
     segs: &[(usize, f32, f32)],
+    scratch: &mut VolumeScratch,
     volume: crate::plugin::VolumeTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
@@ -321,14 +382,24 @@ fn attenuate_in_volumes(
         return;
     }
     let start = std::time::Instant::now();
+    let VolumeScratch {
+        keys,
+        members,
+        segments,
+        samplers,
+        points,
+        trans,
+        emission,
+    } = scratch;
     // Group by volume stack (few distinct ones per round): the innermost volume's integrator
     // answers, and it sees the other volumes of the same stack as overlapping ones (the seed:
     // "that single integrator is allowed to query properties of all other overlapping
     // volumes", for GetTransmission as for GetNearestHits).
-    let mut keys: Vec<&VolumeStack> = vec![&stacks[segs[0].0]];
+    keys.clear();
+    keys.push(segs[0].0);
     for &(i, _, _) in segs {
-        if !keys.contains(&&stacks[i]) {
-            keys.push(&stacks[i]);
+        if !keys.iter().any(|&k| stacks[k] == stacks[i]) {
+            keys.push(i);
         }
     }
     let single_stack = keys.len() == 1;
@@ -337,22 +408,23 @@ fn attenuate_in_volumes(
             .hints
             .contains(InstanceHints::COMPUTES_INTERIOR)
     };
-    for stack in keys {
+    for &key in keys.iter() {
+        let stack = &stacks[key];
         let entry = stack.innermost().expect("filtered above");
         if !computes_interior(&entry) {
             continue;
         }
-        let members: Vec<&(usize, f32, f32)> = if single_stack {
-            segs.iter().collect()
+        members.clear();
+        if single_stack {
+            members.extend(0..segs.len());
         } else {
-            segs.iter()
-                .filter(|(i, _, _)| &stacks[*i] == stack)
-                .collect()
-        };
+            members.extend((0..segs.len()).filter(|&j| &stacks[segs[j].0] == stack));
+        }
         let m = members.len();
-        let mut segments = Segments::default();
-        let mut samplers = Vec::with_capacity(m);
-        for &&(i, s0, len) in &members {
+        segments.clear();
+        samplers.clear();
+        for &j in members.iter() {
+            let (i, s0, len) = segs[j];
             let o: Vec3 = shadow.origin[i] + shadow.direction[i] * s0;
             segments.push(o, shadow.direction[i], len);
             let path = shadow.path[i] as usize;
@@ -364,13 +436,13 @@ fn attenuate_in_volumes(
                 dimension: walk.dimension[i],
             });
         }
-        let mut pts = ShadingPoints::with_capacity(m);
-        pts.extend_in_volume(&segments.origin, &segments.direction, entry.material);
-        // The points stay on this stack frame (the arena runs no destructors: a table moved
-        // there would never free its columns); the arena holds only the plain contexts.
-        let pts = &pts;
+        // The points live in the walk's scratch (the arena runs no destructors: a table
+        // moved there would never free its columns); the arena holds only the plain
+        // contexts.
+        points.clear();
+        points.extend_in_volume(&segments.origin, &segments.direction, entry.material);
         let cache = arena.alloc(ParamCache::new(arena, &walk.counters));
-        let Some((_, integrator)) = bind_interior(scene, stack, entry, pts, cache, arena) else {
+        let Some((_, integrator)) = bind_interior(scene, stack, entry, points, cache, arena) else {
             continue;
         };
         let hints = scene.material_info[entry.material as usize].hints;
@@ -378,18 +450,19 @@ fn attenuate_in_volumes(
             && hints.contains(InstanceHints::INTERIOR_EMITS)
             && !(walk.gather == ShadowEmission::NotAlongPaths
                 && hints.contains(InstanceHints::INTERIOR_EMITS_ALONG_PATHS));
-        let mut trans = vec![Rgb::WHITE; m];
-        let mut emission = vec![Rgb::BLACK; m];
+        refill(trans, m, Rgb::WHITE);
+        refill(emission, m, Rgb::BLACK);
         let mut scratch_stats = SystemStats::default();
         let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
             .with_volume_techniques(volume)
             .with_emission_wanted(gathers);
-        integrator.transmission(&segments, &mut samplers, &ictx, &mut trans, &mut emission);
+        integrator.transmission(segments, samplers, &ictx, trans, emission);
         stats.majorant_violations += ictx.take_majorant_violations();
         if gathers {
             stats.volume_event(VolumeEvent::Emission, m);
         }
-        for (k, &&(i, _, _)) in members.iter().enumerate() {
+        for (k, &j) in members.iter().enumerate() {
+            let i = segs[j].0;
             if gathers {
                 walk.emitted[i] += shadow.weight[i] * walk.transmittance[i] * emission[k];
             }

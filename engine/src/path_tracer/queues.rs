@@ -57,6 +57,8 @@ pub struct ShadowRayQueue {
     pub spare: ShadowRays,
     /// Contributions after transmission (parallel to `rays`).
     pub contribution: Vec<Rgb>,
+    /// The transmission walk's buffers.
+    pub walk: crate::transmission::ShadowWalkScratch,
 }
 
 /// Per-group buffers of the shade, direct-lighting and continue stages (overwritten for every

@@ -41,6 +41,7 @@ pub(super) fn shadow_rays(
         stats,
         arena,
         crate::transmission::ShadowEmission::NotAlongPaths,
+        &mut shadow.walk,
     );
     // NaN provenance: contributions the walk made non-finite (those non-finite before it
     // came from upstream and were counted there).
