@@ -200,15 +200,17 @@ fn a_grey_scale_renders_exactly_as_before_spectral_tracking() {
 /// grey and `k = 1` spectral trackers is `a_grey_k_reproduces_the_grey_estimators_bit_for_bit`
 /// in `systems/src/spectral_tracking.rs`. The emissive cases changed again when shadow rays
 /// stopped gathering the emission the path tracer drops (`IntegratorContext::emission_wanted`:
-/// their transmittance now comes from the plain trackers, another unbiased estimate).
+/// their transmittance now comes from the plain trackers, another unbiased estimate). All
+/// seven were re-taken when the path tracer's Russian roulette became Cycles' square-root
+/// survival (`risotto_systems::path::survival_probability`): other paths survive, by design.
 const GREY_HASHES: [u64; 7] = [
-    0x2afe_a7b4_3d51_aaab,
-    0x240e_022d_16c8_5525,
-    0x8607_8376_c820_9309,
-    0x1daa_073e_eac4_639e,
-    0x2043_ba4a_149d_6ad1,
-    0x8593_5e47_1a90_6950,
-    0x14c4_d77f_8252_afc7,
+    0xfc5c_006a_1df9_ef8a,
+    0x6a30_a1b9_703a_49e5,
+    0x7b4c_e3e5_052b_db9d,
+    0x458b_2b52_540b_1edd,
+    0x7aa3_40cc_f61b_80f9,
+    0x7080_c397_40e5_5a9c,
+    0xe7d5_2b4c_e8b0_da1b,
 ];
 
 /// A unit ball of constant density 1 with extinction `scale` per channel, albedo 0.95,
