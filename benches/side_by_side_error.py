@@ -38,7 +38,9 @@ def errors(prefix):
 tr, tm = statistics.median(rt), statistics.median(mt)
 raw = (mm * tm) / (mr * tr)
 sub = ((mm - noise) * tm) / ((mr - noise) * tr) if mr > noise else float("inf")
-var = (vm * tm) / (vr * tr)
+# A renderer whose images do not vary (the furnace: every pixel exactly 1) is infinitely
+# efficient by its variance.
+var = (vm * tm) / (vr * tr) if vr > 0 else float("inf")
 fmt = lambda xs: "[" + ", ".join(f"{x:.2f}" for x in xs) + "]"  # noqa: E731
 print(
     f"{scene}: risotto {tr:.3f}s {fmt(rt)} RMSE {mr ** 0.5:.5f} | mitsuba {tm:.3f}s {fmt(mt)} "
