@@ -60,13 +60,19 @@ pub(super) fn boundaries(
         hits.keep = keep;
         return;
     }
+    // Which passing points go on (in point order: the rays keep the order they had), then
+    // their rays copied over in one gather per column and updated in place: a row copied
+    // out and pushed back column by column paid a capacity check and a length store per
+    // column per ray.
+    let mut going = std::mem::take(&mut hits.going);
+    going.rays.clear();
+    going.points.clear();
     for g in new_groups.iter().filter(|g| g.mode == ShadingMode::Scatter) {
         for i in g.range.clone() {
             if keep[i - p0] {
                 continue;
             }
             let r = pts.ray_id[i] as usize;
-            let (shape, p, front) = (pts.shape[i], pts.p[i], pts.front_face[i]);
             let tr = pts.transmission[i];
             let bad =
                 tracer.surface_emission(scene, pts, &hits.incoming, &mut batch.paths, r, i, tr);
@@ -76,34 +82,42 @@ pub(super) fn boundaries(
                 let material = Some(g.material);
                 non_finite_case(stats, &batch.paths, path, depth, Stage::Emission, material);
             }
-            let mut row = hits.incoming.row(r);
-            if row.passes as u32 >= scene.settings.max_passes {
+            if hits.incoming.passes[r] as u32 >= scene.settings.max_passes {
                 stats.terminate(Termination::PassLimit, 1);
                 continue;
             }
-            row.passes += 1;
-            row.throughput *= tr;
-            if row.throughput.is_black() {
+            if (hits.incoming.throughput[r] * tr).is_black() {
                 stats.terminate(Termination::Absorbed, 1);
                 continue;
             }
-            // The ray goes on along the same line. It restarts on the boundary itself, so
-            // that the next segment's length (what volume integrators attenuate by) is the
-            // true distance, and skips the boundary with `tmin`: the point's error offset,
-            // measured along the ray (clamped for grazing rays).
-            row.origin = p;
-            row.tmin = skip_tmin(pts.p[i], pts.p_offset[i], pts.ng[i], row.direction);
-            row.tmax = f32::INFINITY;
-            if scene.tracks_interior(shape) {
-                match row.volume_stack.cross(scene.volume_entry(shape), front) {
-                    StackEvent::UnmatchedExit => stats.unmatched_exit(shape),
-                    StackEvent::EnteredAgain => stats.entered_twice(shape),
-                    _ => {}
-                }
-            }
-            rays.rays.push(row);
+            going.rays.push(r as u32);
+            going.points.push(i as u32);
         }
     }
+    let start = rays.rays.len();
+    rays.rays.extend_gather(&hits.incoming, &going.rays);
+    let out = &mut rays.rays;
+    for (j, &i) in going.points.iter().enumerate() {
+        let (row, i) = (start + j, i as usize);
+        let (shape, p, front) = (pts.shape[i], pts.p[i], pts.front_face[i]);
+        out.passes[row] += 1;
+        out.throughput[row] *= pts.transmission[i];
+        // The ray goes on along the same line. It restarts on the boundary itself, so
+        // that the next segment's length (what volume integrators attenuate by) is the
+        // true distance, and skips the boundary with `tmin`: the point's error offset,
+        // measured along the ray (clamped for grazing rays).
+        out.origin[row] = p;
+        out.tmin[row] = skip_tmin(p, pts.p_offset[i], pts.ng[i], out.direction[row]);
+        out.tmax[row] = f32::INFINITY;
+        if scene.tracks_interior(shape) {
+            match out.volume_stack[row].cross(scene.volume_entry(shape), front) {
+                StackEvent::UnmatchedExit => stats.unmatched_exit(shape),
+                StackEvent::EnteredAgain => stats.entered_twice(shape),
+                _ => {}
+            }
+        }
+    }
+    hits.going = going;
     // Compact: a group's range moves to the number of kept points before it.
     let mut kept_before = std::mem::take(&mut hits.kept_before);
     kept_before.clear();

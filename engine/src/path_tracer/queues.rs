@@ -34,6 +34,18 @@ pub struct HitQueue {
     /// Groups the pass-through stage has already examined this bounce (the earlier trace
     /// rounds' groups, which it left holding no pass-through points).
     pub(super) examined_groups: usize,
+    /// Pass-through continuation: the rays that go on past their boundary.
+    pub(super) going: PassingRays,
+}
+
+/// The rays the pass-through stage continues: rows of [`HitQueue::incoming`] and the
+/// boundary points (rows of the groups' points) they continue from, in step.
+#[derive(Default)]
+pub(super) struct PassingRays {
+    /// Ray rows.
+    pub(super) rays: Vec<u32>,
+    /// Point rows.
+    pub(super) points: Vec<u32>,
 }
 
 /// Rays that left the scene in the last trace round (ids into [`HitQueue::incoming`]) with
