@@ -74,8 +74,15 @@ pub struct VolumeStack {
 
 impl PartialEq for VolumeStack {
     /// Equal entries (not the same storage).
+    #[inline]
     fn eq(&self, other: &Self) -> bool {
-        self.entries() == other.entries()
+        match (&self.repr, &other.repr) {
+            (Repr::Empty, Repr::Empty) => true,
+            (Repr::One(a), Repr::One(b)) => a == b,
+            // The variant is the one of the length: different variants, different lengths.
+            (Repr::Many(a), Repr::Many(b)) => a[..] == b[..],
+            _ => false,
+        }
     }
 }
 
@@ -123,18 +130,27 @@ impl VolumeStack {
     }
 
     /// The innermost volume: highest priority, most recently entered among equals.
+    #[inline]
     pub fn innermost(&self) -> Option<VolumeEntry> {
-        self.innermost_index().map(|i| self.entries()[i])
+        match &self.repr {
+            Repr::Empty => None,
+            Repr::One(e) => Some(*e),
+            Repr::Many(entries) => self.innermost_index().map(|i| entries[i]),
+        }
     }
 
     /// True when a boundary of `priority` is a false boundary for a ray with this stack: the
     /// ray is inside a volume of strictly higher priority, so the boundary neither refracts nor
     /// shades. A boundary of a shape the ray is inside is judged against the *other* volumes,
     /// so that leaving the innermost volume is never false.
+    #[inline]
     pub fn is_false_boundary(&self, shape: u32, priority: i32) -> bool {
-        self.entries()
-            .iter()
-            .any(|e| e.shape != shape && e.priority > priority)
+        let judged = |e: &VolumeEntry| e.shape != shape && e.priority > priority;
+        match &self.repr {
+            Repr::Empty => false,
+            Repr::One(e) => judged(e),
+            Repr::Many(entries) => entries.iter().any(judged),
+        }
     }
 
     /// True when the ray is inside the interior of `shape`.
@@ -179,6 +195,7 @@ impl VolumeStack {
 
     /// Applies a transmit crossing of `entry.shape`'s surface: entering on a front face,
     /// leaving on a back face.
+    #[inline]
     pub fn cross(&mut self, entry: VolumeEntry, front_face: bool) -> StackEvent {
         if front_face {
             self.enter(entry)
@@ -254,6 +271,36 @@ mod tests {
         assert_eq!(s.innermost(), None);
         // Small enough that a column of empty stacks is cheap to fill.
         assert!(std::mem::size_of::<VolumeStack>() <= 16);
+    }
+
+    #[test]
+    fn equality_is_by_entries_at_every_depth() {
+        // Reached through different histories (a `Many` left down to one entry, entries
+        // entered in another order) the stacks compare by their entries alone.
+        let mut a = VolumeStack::new();
+        a.enter(e(1, 1, 0));
+        a.enter(e(2, 2, 0));
+        let mut one = a.clone();
+        one.exit(1);
+        let mut fresh = VolumeStack::new();
+        fresh.enter(e(2, 2, 0));
+        assert_eq!(one, fresh);
+        let mut b = VolumeStack::new();
+        b.enter(e(1, 1, 0));
+        b.enter(e(2, 2, 0));
+        assert_eq!(a, b);
+        let mut swapped = VolumeStack::new();
+        swapped.enter(e(2, 2, 0));
+        swapped.enter(e(1, 1, 0));
+        assert_ne!(a, swapped);
+        assert_ne!(a, one);
+        assert_ne!(one, VolumeStack::new());
+        b.enter(e(3, 3, 0));
+        assert_ne!(a, b);
+        // The innermost of each form matches the general search.
+        for s in [&a, &one, &fresh, &b, &swapped, &VolumeStack::new()] {
+            assert_eq!(s.innermost(), s.innermost_index().map(|i| s.entries()[i]));
+        }
     }
 
     #[test]

@@ -59,6 +59,7 @@ pub fn transmittance(sigma_t: Rgb, distance: f32) -> Rgb {
 /// always have `p_c > 0`, which the estimator's unbiasedness needs, see
 /// [`sample_free_flight`]). Negative and NaN channels count as 0; uniform when nothing is
 /// left or the sum is not finite.
+#[inline]
 pub fn channel_pdf(throughput: Rgb) -> [f32; 3] {
     let a = throughput.to_array().map(|c| c.max(0.0));
     let sum = a[0] + a[1] + a[2];
