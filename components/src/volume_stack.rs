@@ -197,10 +197,19 @@ impl VolumeStack {
     /// leaving on a back face.
     #[inline]
     pub fn cross(&mut self, entry: VolumeEntry, front_face: bool) -> StackEvent {
-        if front_face {
-            self.enter(entry)
-        } else {
-            self.exit(entry.shape)
+        // The two crossings of a single volume, the common case, without the general
+        // bookkeeping (the same results as `enter` and `exit`).
+        match (&self.repr, front_face) {
+            (Repr::Empty, true) => {
+                self.repr = Repr::One(entry);
+                StackEvent::Entered
+            }
+            (Repr::One(e), false) if e.shape == entry.shape => {
+                self.repr = Repr::Empty;
+                StackEvent::Exited
+            }
+            (_, true) => self.enter(entry),
+            (_, false) => self.exit(entry.shape),
         }
     }
 
@@ -300,6 +309,33 @@ mod tests {
         // The innermost of each form matches the general search.
         for s in [&a, &one, &fresh, &b, &swapped, &VolumeStack::new()] {
             assert_eq!(s.innermost(), s.innermost_index().map(|i| s.entries()[i]));
+        }
+    }
+
+    #[test]
+    fn cross_equals_enter_and_exit() {
+        // The fast paths of `cross` against the general `enter` / `exit`, from every form.
+        let starts = {
+            let mut one = VolumeStack::new();
+            one.enter(e(1, 1, 0));
+            let mut two = one.clone();
+            two.enter(e(2, 2, 1));
+            [VolumeStack::new(), one, two]
+        };
+        for start in &starts {
+            for entry in [e(1, 1, 0), e(2, 2, 1), e(3, 3, 5)] {
+                for front in [true, false] {
+                    let (mut a, mut b) = (start.clone(), start.clone());
+                    let event = a.cross(entry, front);
+                    let want = if front {
+                        b.enter(entry)
+                    } else {
+                        b.exit(entry.shape)
+                    };
+                    assert_eq!(event, want, "{start:?} {entry:?} {front}");
+                    assert_eq!(a, b, "{start:?} {entry:?} {front}");
+                }
+            }
         }
     }
 
