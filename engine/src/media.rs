@@ -53,6 +53,7 @@ mod single;
 use crate::homogeneous_emission::emission_along;
 use crate::plugin::*;
 use crate::scatter_patterns::scale_by_albedo;
+use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
@@ -273,10 +274,10 @@ impl HomogeneousInterior<'_> {
             })
     }
 
-    /// Draws the four dimensions of every ray's segment.
-    fn draw(samplers: &mut [PathSampler]) -> Vec<[f32; DIMS_PER_SEGMENT]> {
-        let mut u = vec![[0.0; DIMS_PER_SEGMENT]; samplers.len()];
-        next_4d_column(samplers, &mut u);
+    /// Draws the four dimensions of every ray's segment, into the batch arena (plain data).
+    fn draw<'b>(samplers: &mut [PathSampler], arena: &'b Bump) -> &'b [[f32; DIMS_PER_SEGMENT]] {
+        let u = arena.alloc_slice_fill_copy(samplers.len(), [0.0; DIMS_PER_SEGMENT]);
+        next_4d_column(samplers, u);
         u
     }
 
@@ -293,6 +294,10 @@ impl HomogeneousInterior<'_> {
     /// Multiple scattering (see the module docs): traces the rays, samples a free flight on
     /// each ray's segment to its hit (or unbounded), and shades only the hits of the rays that
     /// pass; the others become the scattering points.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the bundle's columns and services, named"
+    )]
     fn scatter_inside(
         &self,
         rays: &Rays,
@@ -300,20 +305,22 @@ impl HomogeneousInterior<'_> {
         samplers: &[PathSampler],
         light: Option<&crate::volume_lights::VolumeLightMis<'_>>,
         ictx: &mut crate::context::IntegratorContext<'_>,
+        arena: &Bump,
         out: &mut ShadeGroups,
     ) {
         let m = &self.medium;
         let n = rays.len();
         let m0 = out.misses.len();
-        let mut tmax = rays.tmax.clone();
+        // The per-ray columns of this call: plain data in the batch arena.
+        let tmax = arena.alloc_slice_copy(&rays.tmax);
         for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
             *tmax = tmax.min(hit);
         }
-        self.emit_along(rays, &tmax, samplers, light, ictx.stats, out);
-        let mut scattered = vec![false; n];
-        let mut passes = vec![true; n];
-        let mut t = vec![0.0f32; n];
-        let mut weight = vec![Rgb::BLACK; n];
+        self.emit_along(rays, tmax, samplers, light, ictx.stats, out);
+        let scattered = arena.alloc_slice_fill_copy(n, false);
+        let passes = arena.alloc_slice_fill_copy(n, true);
+        let t = arena.alloc_slice_fill_copy(n, 0.0f32);
+        let weight = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
         for i in 0..n {
             if tmax[i] == f32::INFINITY {
                 // Nothing ahead: the ray has already left the medium's closed boundary, which
@@ -370,7 +377,7 @@ impl HomogeneousInterior<'_> {
         let events = scattered.iter().filter(|&&s| s).count();
         if let Some(graph) = &m.albedo_pattern {
             // The flights ran at albedo 1: each collision's weight times the albedo there.
-            let evals = scale_by_albedo(graph, rays, &t, &scattered, &mut weight);
+            let evals = scale_by_albedo(graph, rays, t, scattered, weight);
             self.ctx.count_pattern_evals(evals);
         }
         // The scattering points (a volume-sampling context at P = o + t d) before the hits
@@ -384,13 +391,13 @@ impl HomogeneousInterior<'_> {
             });
             let parent = parent.as_ref().unwrap_or(self.ctx);
             let mut v = parent.begin_volume_sampling();
-            v.set_along_rays(rays, &t);
-            v.set_transmission(&weight);
-            v.end_volume_sampling(&scattered, out);
+            v.set_along_rays(rays, t);
+            v.set_transmission(weight);
+            v.end_volume_sampling(scattered, out);
         }
         // Rays that pass keep their hit (or miss), attenuated by the pass weight.
         let p0 = out.points.len();
-        ictx.shade_traced(rays, Some(&passes), out);
+        ictx.shade_traced(rays, Some(passes), out);
         for k in p0..out.points.len() {
             out.points.transmission[k] *= weight[out.points.ray_id[k] as usize];
         }
@@ -480,7 +487,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             crate::random_walk::walk_bundle(self.medium, light, rays, samplers, services.ictx, out);
             return;
         }
-        let u = Self::draw(samplers);
+        let u = Self::draw(samplers, services.arena);
         if scattering == Scattering::Single && services.lighting.is_some() {
             let start = (out.points.len(), out.groups.len(), out.misses.len());
             services.ictx.nearest_hits(rays, out);
@@ -492,10 +499,10 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             }
             let light = services.volume_light.as_ref();
             self.emit_along(rays, &tmax, samplers, light, services.ictx.stats, out);
-            self.single_scatter(rays, samplers, &u, &tmax, start, services, out);
+            self.single_scatter(rays, samplers, u, &tmax, start, services, out);
         } else {
             let light = services.volume_light.as_ref();
-            self.scatter_inside(rays, &u, samplers, light, services.ictx, out);
+            self.scatter_inside(rays, u, samplers, light, services.ictx, services.arena, out);
         }
     }
 

@@ -13,7 +13,16 @@ pub fn partition_by_key(
     order: &mut Vec<u32>,
     runs: &mut Vec<(u32, Range<usize>)>,
 ) {
-    let mut start = vec![0usize; num_keys + 1];
+    // Counts on the stack for the few keys a round has (bundles x transmit bit); the heap
+    // only for more.
+    let mut counts = [0usize; 17];
+    let mut heap = Vec::new();
+    let start: &mut [usize] = if num_keys < counts.len() {
+        &mut counts[..num_keys + 1]
+    } else {
+        heap.resize(num_keys + 1, 0);
+        &mut heap
+    };
     for &k in keys {
         start[k as usize + 1] += 1;
     }
@@ -28,7 +37,7 @@ pub fn partition_by_key(
     }
     order.clear();
     order.resize(keys.len(), 0);
-    let mut cursor = start;
+    let cursor = start;
     for (i, &k) in keys.iter().enumerate() {
         order[cursor[k as usize]] = i as u32;
         cursor[k as usize] += 1;
@@ -49,6 +58,18 @@ mod tests {
         for (k, r) in &runs {
             assert!(order[r.clone()].iter().all(|&i| keys[i as usize] == *k));
         }
+    }
+
+    #[test]
+    fn many_keys_sort_as_few() {
+        // Past the stack's counts (16 keys) the counts live on the heap: same sort.
+        let keys: Vec<u32> = (0..200u32).map(|i| (i * 37) % 40).collect();
+        let (mut order, mut runs) = (Vec::new(), Vec::new());
+        partition_by_key(&keys, 40, &mut order, &mut runs);
+        assert_eq!(runs.len(), 40);
+        let mut sorted: Vec<u32> = (0..200).collect();
+        sorted.sort_by_key(|&i| keys[i as usize]);
+        assert_eq!(order, sorted);
     }
 
     #[test]
