@@ -160,7 +160,10 @@ fn partitioned(
             .hints
             .contains(InstanceHints::COMPUTES_INTERIOR)
     };
-    let runs = std::mem::take(&mut t.runs);
+    let mut runs = std::mem::take(&mut t.runs);
+    // The largest bundle first: the first answers of a bounce move their rays into the
+    // empty hit queue instead of copying them (`append`).
+    runs.sort_by_key(|(_, range)| std::cmp::Reverse(range.len()));
     for (key, range) in &runs {
         let stack = &stacks[(*key / 2) as usize];
         t.bundle.clear();
