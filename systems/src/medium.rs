@@ -51,7 +51,14 @@ pub fn optical_depth(sigma_t: f32, distance: f32) -> f32 {
 /// exact, 1 for `sigma_t = 0` even at `d = inf`, 0 for `sigma_t > 0` at `d = inf`.
 #[inline]
 pub fn transmittance(sigma_t: Rgb, distance: f32) -> Rgb {
-    sigma_t.map(|s| (-optical_depth(s, distance)).exp())
+    let one = |s: f32| (-optical_depth(s, distance)).exp();
+    // A grey medium (the same bits in every channel) needs one exponential, not three.
+    let bits = sigma_t.to_array().map(f32::to_bits);
+    if bits[0] == bits[1] && bits[1] == bits[2] {
+        Rgb::splat(one(sigma_t.r))
+    } else {
+        sigma_t.map(one)
+    }
 }
 
 /// Channel-selection probabilities for [`sample_free_flight`] proportional to the path
@@ -430,6 +437,24 @@ pub fn emitted_radiance(sigma_t: Rgb, emission: Rgb, distance: f32) -> Rgb {
 #[cfg(test)]
 mod emission_tests {
     use super::*;
+
+    #[test]
+    fn grey_transmittance_is_the_per_channel_one_bit_for_bit() {
+        for s in [0.0f32, 1e-30, 0.5, 2.0, 1e30, f32::INFINITY] {
+            for d in [0.0f32, 1e-8, 0.3, 7.0, f32::INFINITY] {
+                let grey = transmittance(Rgb::splat(s), d);
+                let each = Rgb::splat((-optical_depth(s, d)).exp());
+                assert_eq!(
+                    grey.to_array().map(f32::to_bits),
+                    each.to_array().map(f32::to_bits)
+                );
+            }
+        }
+        // Channels that differ only in sign of zero are not grey: each keeps its own.
+        let t = transmittance(Rgb::new(0.0, -0.0, 1.0), 2.0);
+        assert_eq!((t.r, t.g), (1.0, 1.0));
+        assert!((t.b - (-2.0f32).exp()).abs() < 1e-7);
+    }
 
     #[test]
     fn emitted_radiance_is_the_segment_integral() {
