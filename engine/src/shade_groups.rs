@@ -231,6 +231,29 @@ impl ShadeGroups {
     pub fn num_points(&self) -> usize {
         self.points.len()
     }
+    /// [`append_offset`](Self::append_offset), moving `src`'s tables instead of copying
+    /// them when that gives the same result: this queue is empty, the offset is 0 and
+    /// `src`'s groups tile its points in order (no point outside a group, which
+    /// `append_offset` would drop). `src` is left with this queue's old (empty) tables, or
+    /// as it was; its `walked` and `emitted` rows stay with it either way.
+    pub fn take_or_append(&mut self, src: &mut ShadeGroups, ray_offset: u32) {
+        let empty = self.points.is_empty() && self.groups.is_empty() && self.misses.is_empty();
+        let mut next = 0;
+        let tiles = src.groups.iter().all(|g| {
+            let follows = g.range.start == next;
+            next = g.range.end;
+            follows
+        }) && next == src.points.len();
+        if empty && ray_offset == 0 && tiles {
+            std::mem::swap(&mut self.points, &mut src.points);
+            std::mem::swap(&mut self.groups, &mut src.groups);
+            std::mem::swap(&mut self.misses, &mut src.misses);
+            std::mem::swap(&mut self.miss_transmission, &mut src.miss_transmission);
+        } else {
+            self.append_offset(src, ray_offset);
+        }
+    }
+
     /// Appends `src`'s groups and misses, adding `ray_offset` to their ray ids (`src`
     /// answered a table whose rows were appended to this one's rays at that offset). Its
     /// [`walked`](Self::walked) rows are not copied: [`WalkedRays::apply`] them to the
@@ -251,6 +274,73 @@ impl ShadeGroups {
         }
         for (k, &r) in src.misses.iter().enumerate() {
             self.push_miss(r + ray_offset, src.miss_transmission[k]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// Groups of `sizes` points (material = group index), point `k` at `x = k`, ray `k`,
+    /// and one miss.
+    fn answers(sizes: &[usize]) -> ShadeGroups {
+        let mut g = ShadeGroups::default();
+        let mut k = 0;
+        for (m, &n) in sizes.iter().enumerate() {
+            let rows = (k..k + n).map(|k| {
+                ShadingPointRow::in_volume(Vec3::new(k as f32, 0.0, 0.0), Vec3::Z, k as u32, 7)
+            });
+            g.push_group(m as u32, ShadingMode::Scatter, rows);
+            k += n;
+        }
+        g.push_miss(k as u32, Rgb::splat(0.5));
+        g
+    }
+
+    /// What a queue holds, as plain values: (material, range) per group, the points' ray
+    /// ids and `x`, the misses.
+    type Contents = (Vec<(u32, Range<usize>)>, Vec<u32>, Vec<f32>, Vec<u32>);
+
+    fn contents(g: &ShadeGroups) -> Contents {
+        let groups = g
+            .groups
+            .iter()
+            .map(|x| (x.material, x.range.clone()))
+            .collect();
+        let xs = g.points.p.iter().map(|p| p.x).collect();
+        (groups, g.points.ray_id.clone(), xs, g.misses.clone())
+    }
+
+    #[test]
+    fn take_or_append_equals_append_offset() {
+        // An empty queue and tiling groups: moved. A non-empty queue, an offset, or a point
+        // outside every group: copied. The queue ends the same in every case.
+        let mut loose = answers(&[2, 3]);
+        loose
+            .points
+            .push(ShadingPointRow::in_volume(Vec3::ONE, Vec3::Z, 9, 7));
+        let cases: [(Option<ShadeGroups>, ShadeGroups, u32); 4] = [
+            (None, answers(&[2, 3]), 0),
+            (None, answers(&[4]), 5),
+            (Some(answers(&[1])), answers(&[2, 2]), 0),
+            (None, loose, 0),
+        ];
+        for (i, (start, src, offset)) in cases.into_iter().enumerate() {
+            let fresh = || {
+                start
+                    .as_ref()
+                    .map_or_else(ShadeGroups::default, |s| answers(&[s.points.len()]))
+            };
+            let (mut copied, mut moved) = (fresh(), fresh());
+            copied.append_offset(&src, offset);
+            let mut src = src;
+            let n = src.points.len();
+            moved.take_or_append(&mut src, offset);
+            assert_eq!(contents(&moved), contents(&copied), "case {i}");
+            // Only the first case moves (and leaves `src` with the empty tables).
+            assert_eq!(src.points.len(), if i == 0 { 0 } else { n }, "case {i}");
         }
     }
 }

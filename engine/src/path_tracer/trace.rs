@@ -58,7 +58,7 @@ pub(super) fn nearest_hits(
             .with_volume_techniques(tracer.volume);
         ictx.nearest_hits(rays, &mut t.answers);
         t.hits = ictx.into_scratch();
-        append(hits, &t.answers, rays);
+        append(hits, &mut t.answers, rays);
     }
     rays.clear();
     take_misses(hits, &mut q.escaped);
@@ -76,8 +76,9 @@ fn take_misses(hits: &mut HitQueue, escaped: &mut EscapedRayQueue) {
 }
 
 /// Appends `answers` (the answer for `rays`) to the hit queue, `rays` to its incoming rays
-/// (moved there when the queue is empty, so `rays` is left empty or unchanged).
-fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &mut Rays) {
+/// (moved there when the queue is empty, so `rays` is left empty or unchanged; the answers
+/// too, see [`ShadeGroups::take_or_append`]).
+fn append(hits: &mut HitQueue, answers: &mut ShadeGroups, rays: &mut Rays) {
     let offset = hits.incoming.len() as u32;
     if offset == 0 {
         std::mem::swap(&mut hits.incoming, rays);
@@ -85,7 +86,7 @@ fn append(hits: &mut HitQueue, answers: &ShadeGroups, rays: &mut Rays) {
     } else {
         hits.incoming.extend_from(rays);
     }
-    hits.groups.append_offset(answers, offset);
+    hits.groups.take_or_append(answers, offset);
 }
 
 /// Adds what a volume emitted along the bundle's rays ([`ShadeGroups::emitted`]) to their
@@ -282,7 +283,7 @@ fn partitioned(
             }
         }
         t.bundle_start = hits.incoming.len();
-        append(hits, &t.answers, &mut t.bundle);
+        append(hits, &mut t.answers, &mut t.bundle);
     }
     t.runs = runs;
 }
