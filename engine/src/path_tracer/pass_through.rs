@@ -60,10 +60,9 @@ pub(super) fn boundaries(
         hits.keep = keep;
         return;
     }
-    // Which passing points go on (in point order: the rays keep the order they had), then
-    // their rays copied over in one gather per column and updated in place: a row copied
-    // out and pushed back column by column paid a capacity check and a length store per
-    // column per ray.
+    // Which passing points go on (in point order: the rays keep the order they had); their
+    // rays are then copied in one gather per column (no capacity check or length store per
+    // column and ray, as pushing rows would do) and updated in place.
     let mut going = std::mem::take(&mut hits.going);
     going.rays.clear();
     going.points.clear();
