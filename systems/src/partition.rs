@@ -3,29 +3,53 @@
 
 use std::ops::Range;
 
+/// Keys up to which the counts stay on the stack (a round has a few: bundles x transmit bit).
+const STACK_KEYS: usize = 16;
+
+/// Runs up to which the indices are placed by one branchless pass per run.
+const PASS_RUNS: usize = 4;
+
 /// Stable counting sort of item indices by `keys` (each `< num_keys`).
 ///
 /// Outputs: `order` (item indices, grouped by key, original order within a key) and `runs`
 /// (`(key, range into order)` for every non-empty key, in key order).
+///
+/// A plain counting sort increments one counter per item, and consecutive items mostly
+/// share a key, so every increment waits for the previous one to reach memory. Here the
+/// counts go to four interleaved tables, and with at most `PASS_RUNS` (4) runs each run's
+/// indices are written by a pass of its own whose cursor stays in a register (every item
+/// is written at the cursor, which moves on only for the run's own items; the slot past
+/// a run is overwritten by the next run).
 pub fn partition_by_key(
     keys: &[u32],
     num_keys: usize,
     order: &mut Vec<u32>,
     runs: &mut Vec<(u32, Range<usize>)>,
 ) {
-    // Counts on the stack for the few keys a round has (bundles x transmit bit); the heap
-    // only for more.
-    let mut counts = [0usize; 17];
+    let mut small = [[0usize; STACK_KEYS + 1]; 4];
     let mut heap = Vec::new();
-    let start: &mut [usize] = if num_keys < counts.len() {
-        &mut counts[..num_keys + 1]
+    let start: &mut [usize] = if num_keys <= STACK_KEYS {
+        let [a, b, c, d] = &mut small;
+        for (j, &k) in keys.iter().enumerate() {
+            let table = match j & 3 {
+                0 => &mut *a,
+                1 => &mut *b,
+                2 => &mut *c,
+                _ => &mut *d,
+            };
+            table[k as usize + 1] += 1;
+        }
+        for k in 1..=num_keys {
+            a[k] += b[k] + c[k] + d[k];
+        }
+        &mut a[..num_keys + 1]
     } else {
         heap.resize(num_keys + 1, 0);
+        for &k in keys {
+            heap[k as usize + 1] += 1;
+        }
         &mut heap
     };
-    for &k in keys {
-        start[k as usize + 1] += 1;
-    }
     for k in 0..num_keys {
         start[k + 1] += start[k];
     }
@@ -36,11 +60,25 @@ pub fn partition_by_key(
         }
     }
     order.clear();
-    order.resize(keys.len(), 0);
-    let cursor = start;
-    for (i, &k) in keys.iter().enumerate() {
-        order[cursor[k as usize]] = i as u32;
-        cursor[k as usize] += 1;
+    let n = keys.len();
+    if runs.len() <= PASS_RUNS {
+        // One slot past the end for the last run's trailing write.
+        order.resize(n + 1, 0);
+        for (key, range) in runs.iter() {
+            let mut at = range.start;
+            for (i, &k) in keys.iter().enumerate() {
+                order[at] = i as u32;
+                at += (k == *key) as usize;
+            }
+        }
+        order.truncate(n);
+    } else {
+        order.resize(n, 0);
+        let cursor = start;
+        for (i, &k) in keys.iter().enumerate() {
+            order[cursor[k as usize]] = i as u32;
+            cursor[k as usize] += 1;
+        }
     }
 }
 
@@ -70,6 +108,38 @@ mod tests {
         let mut sorted: Vec<u32> = (0..200).collect();
         sorted.sort_by_key(|&i| keys[i as usize]);
         assert_eq!(order, sorted);
+    }
+
+    #[test]
+    fn every_run_count_sorts_stably() {
+        // Both placements (a pass per run up to PASS_RUNS runs, the counting scatter past
+        // it) and both count tables (stack, heap), against a stable sort.
+        let mut state = 0x2545_f491u32;
+        for num_keys in [1usize, 2, 3, 4, 5, 8, 16, 17, 40] {
+            for n in [0usize, 1, 3, 4, 5, 63, 64, 65, 1000] {
+                let keys: Vec<u32> = (0..n)
+                    .map(|_| {
+                        state ^= state << 13;
+                        state ^= state >> 17;
+                        state ^= state << 5;
+                        state % num_keys as u32
+                    })
+                    .collect();
+                let (mut order, mut runs) = (vec![7; 3], Vec::new());
+                partition_by_key(&keys, num_keys, &mut order, &mut runs);
+                let mut sorted: Vec<u32> = (0..n as u32).collect();
+                sorted.sort_by_key(|&i| keys[i as usize]);
+                assert_eq!(order, sorted, "{num_keys} keys, {n} items");
+                let mut at = 0;
+                for (k, r) in &runs {
+                    assert_eq!(r.start, at);
+                    assert!(!r.is_empty());
+                    assert!(order[r.clone()].iter().all(|&i| keys[i as usize] == *k));
+                    at = r.end;
+                }
+                assert_eq!(at, n);
+            }
+        }
     }
 
     #[test]
