@@ -159,7 +159,18 @@ impl VolumeStack {
     }
 
     /// Records that the ray entered `entry`'s volume.
+    #[inline]
     pub fn enter(&mut self, entry: VolumeEntry) -> StackEvent {
+        // Entering the first volume, the common case, inline; deeper stacks out of line.
+        if let Repr::Empty = self.repr {
+            self.repr = Repr::One(entry);
+            return StackEvent::Entered;
+        }
+        self.enter_nested(entry)
+    }
+
+    /// [`enter`](Self::enter) on a stack that holds a volume already.
+    fn enter_nested(&mut self, entry: VolumeEntry) -> StackEvent {
         let again = self.contains_shape(entry.shape);
         match &mut self.repr {
             Repr::Empty => self.repr = Repr::One(entry),
@@ -177,7 +188,20 @@ impl VolumeStack {
     }
 
     /// Records that the ray left the interior of `shape` (the most recent entry of it).
+    #[inline]
     pub fn exit(&mut self, shape: u32) -> StackEvent {
+        // Leaving the only volume, the common case, inline; the rest out of line.
+        if let Repr::One(e) = &self.repr {
+            if e.shape == shape {
+                self.repr = Repr::Empty;
+                return StackEvent::Exited;
+            }
+        }
+        self.exit_general(shape)
+    }
+
+    /// [`exit`](Self::exit) other than from a one-volume stack of `shape`.
+    fn exit_general(&mut self, shape: u32) -> StackEvent {
         let Some(i) = self.entries().iter().rposition(|e| e.shape == shape) else {
             return StackEvent::UnmatchedExit;
         };
@@ -197,19 +221,10 @@ impl VolumeStack {
     /// leaving on a back face.
     #[inline]
     pub fn cross(&mut self, entry: VolumeEntry, front_face: bool) -> StackEvent {
-        // The two crossings of a single volume, the common case, without the general
-        // bookkeeping (the same results as `enter` and `exit`).
-        match (&self.repr, front_face) {
-            (Repr::Empty, true) => {
-                self.repr = Repr::One(entry);
-                StackEvent::Entered
-            }
-            (Repr::One(e), false) if e.shape == entry.shape => {
-                self.repr = Repr::Empty;
-                StackEvent::Exited
-            }
-            (_, true) => self.enter(entry),
-            (_, false) => self.exit(entry.shape),
+        if front_face {
+            self.enter(entry)
+        } else {
+            self.exit(entry.shape)
         }
     }
 
@@ -314,7 +329,8 @@ mod tests {
 
     #[test]
     fn cross_equals_enter_and_exit() {
-        // The fast paths of `cross` against the general `enter` / `exit`, from every form.
+        // The inline fast paths of `enter` / `exit` (through `cross`) against their general
+        // forms, from every form of stack.
         let starts = {
             let mut one = VolumeStack::new();
             one.enter(e(1, 1, 0));
@@ -328,9 +344,9 @@ mod tests {
                     let (mut a, mut b) = (start.clone(), start.clone());
                     let event = a.cross(entry, front);
                     let want = if front {
-                        b.enter(entry)
+                        b.enter_nested(entry)
                     } else {
-                        b.exit(entry.shape)
+                        b.exit_general(entry.shape)
                     };
                     assert_eq!(event, want, "{start:?} {entry:?} {front}");
                     assert_eq!(a, b, "{start:?} {entry:?} {front}");
