@@ -294,20 +294,19 @@ impl HomogeneousInterior<'_> {
     /// Multiple scattering (see the module docs): traces the rays, samples a free flight on
     /// each ray's segment to its hit (or unbounded), and shades only the hits of the rays that
     /// pass; the others become the scattering points.
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the bundle's columns and services, named"
-    )]
     fn scatter_inside(
         &self,
         rays: &Rays,
         u: &[[f32; DIMS_PER_SEGMENT]],
         samplers: &[PathSampler],
-        light: Option<&crate::volume_lights::VolumeLightMis<'_>>,
-        ictx: &mut crate::context::IntegratorContext<'_>,
-        arena: &Bump,
+        services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
+        let (light, ictx, arena) = (
+            services.volume_light.as_ref(),
+            services.ictx,
+            services.arena,
+        );
         let m = &self.medium;
         let n = rays.len();
         let m0 = out.misses.len();
@@ -501,8 +500,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
             self.emit_along(rays, &tmax, samplers, light, services.ictx.stats, out);
             self.single_scatter(rays, samplers, u, &tmax, start, services, out);
         } else {
-            let light = services.volume_light.as_ref();
-            self.scatter_inside(rays, u, samplers, light, services.ictx, services.arena, out);
+            self.scatter_inside(rays, u, samplers, services, out);
         }
     }
 

@@ -1,5 +1,5 @@
 //! The partition system: orders rays by a small integer key (volume bundle and transmit bit)
-//! so that each bundle is a contiguous run, in one counting-sort pass.
+//! so that each bundle is a contiguous run, by a counting sort.
 
 use std::ops::Range;
 
@@ -29,20 +29,16 @@ pub fn partition_by_key(
     let mut small = [[0usize; STACK_KEYS + 1]; 4];
     let mut heap = Vec::new();
     let start: &mut [usize] = if num_keys <= STACK_KEYS {
-        let [a, b, c, d] = &mut small;
         for (j, &k) in keys.iter().enumerate() {
-            let table = match j & 3 {
-                0 => &mut *a,
-                1 => &mut *b,
-                2 => &mut *c,
-                _ => &mut *d,
-            };
-            table[k as usize + 1] += 1;
+            small[j & 3][k as usize + 1] += 1;
         }
-        for k in 1..=num_keys {
-            a[k] += b[k] + c[k] + d[k];
+        let (sum, others) = small.split_first_mut().expect("four tables");
+        for table in others {
+            for k in 1..=num_keys {
+                sum[k] += table[k];
+            }
         }
-        &mut a[..num_keys + 1]
+        &mut sum[..num_keys + 1]
     } else {
         heap.resize(num_keys + 1, 0);
         for &k in keys {

@@ -53,10 +53,8 @@ pub struct Continuations {
 /// Against pbrt-v4's and Mitsuba 3's `q = rr_throughput`, a path at throughput 1/4 survives
 /// with probability 1/2 instead of 1/4: the deep bounces of a dim-walled room or an albedo-0.8
 /// smoke still carry a good part of the image, and killing three quarters of them where half
-/// would do buys little time for much variance. Measured at equal spp on the Mitsuba suite
-/// (benches/README.md, "Russian roulette"): MSE x time 5.8% lower on `smoke_homog`, 1-3%
-/// on `cornell`, `glass_beer` and `hetero_grid`, within noise on `hg_sphere`. Either rule is
-/// unbiased. A path whose throughput cannot fall below 1 (an albedo-1 medium, a white furnace)
+/// would do buys little time for much variance (the equal-spp comparison on the Mitsuba suite
+/// is in benches/README.md, "Russian roulette"). Either rule is unbiased. A path whose throughput cannot fall below 1 (an albedo-1 medium, a white furnace)
 /// is never culled, where Mitsuba's `min(q, 0.95)` kills 5% per bounce and inflates the
 /// survivors' weights by 1/0.95: same expectation, much more variance. `NaN` in gives `NaN`
 /// out, which the caller's `q < 1` reads as "no roulette" (non-finite throughput is the
