@@ -202,15 +202,17 @@ fn a_grey_scale_renders_exactly_as_before_spectral_tracking() {
 /// stopped gathering the emission the path tracer drops (`IntegratorContext::emission_wanted`:
 /// their transmittance now comes from the plain trackers, another unbiased estimate). All
 /// seven were re-taken when the path tracer's Russian roulette became Cycles' square-root
-/// survival (`risotto_systems::path::survival_probability`): other paths survive, by design.
+/// survival (`risotto_systems::path::survival_probability`): other paths survive, by design;
+/// and again when the camera's sample set became a digitally shifted Sobol sequence instead
+/// of an Owen-scrambled one (`risotto_systems::sampler`): other pixel positions.
 const GREY_HASHES: [u64; 7] = [
-    0xfc5c_006a_1df9_ef8a,
-    0x6a30_a1b9_703a_49e5,
-    0x7b4c_e3e5_052b_db9d,
-    0x458b_2b52_540b_1edd,
-    0x7aa3_40cc_f61b_80f9,
-    0x7080_c397_40e5_5a9c,
-    0xe7d5_2b4c_e8b0_da1b,
+    0xed7f_de15_37f0_26c8,
+    0x7435_5355_cd7e_f26e,
+    0xb410_f773_d2b3_0cf9,
+    0xc2c6_89d4_315e_64f0,
+    0x9f6a_db64_742e_5e9e,
+    0x256a_d514_d4c2_2c8d,
+    0x1afd_3340_4f08_681f,
 ];
 
 /// A unit ball of constant density 1 with extinction `scale` per channel, albedo 0.95,
