@@ -123,10 +123,12 @@ fn heap_use_does_not_grow_with_the_number_of_batches() {
     );
     // Peak use: the image and stats are the same size for both; reused buffers grow to the
     // largest batch seen (which the longer render samples a little further into the tail),
-    // hence a slack of 1/8 of the shorter render's peak (a leak of 30 KB per batch adds
-    // 1.4 MB here, more than the whole peak).
+    // and the arena's chunks double (bumpalo), so a tail batch a little larger than any
+    // before can add one chunk (measured: 0.23 MB here; none when the arena starts large),
+    // hence a slack of 1/4 of the shorter render's peak (a leak of 30 KB per batch adds
+    // 1.4 MB here, more than three times that slack).
     assert!(
-        many <= few + few / 8,
+        many <= few + few / 4,
         "peak heap grew with the number of batches: {few} B for 16, {many} B for 64"
     );
 }

@@ -134,6 +134,7 @@ pub fn trace_shadow_rays_with(
         b2,
         segs,
         volumes,
+        lists,
     } = scratch;
     active.clear();
     active.extend(0..n as u32);
@@ -163,7 +164,7 @@ pub fn trace_shadow_rays_with(
     // it cannot (a hit within its error bound of `t0`, a full list), the ray queries again
     // from `t0`. The same hits as one closest-hit query per round, for a third of the
     // traversals on a shadow ray that leaves a medium.
-    let lists = arena.alloc_slice_fill_copy(n, RayHits::EMPTY);
+    let lists = stale_lists(lists, n);
     let taken = arena.alloc_slice_fill_copy(n, 0u8);
     stats.time(System::Intersect, n, || {
         intersect_all(
@@ -213,7 +214,7 @@ pub fn trace_shadow_rays_with(
                 tmin.push(t0[i]);
                 tmax.push(shadow.tmax[i]);
             }
-            refill(found, query.len(), RayHits::EMPTY);
+            let found = stale_lists(found, query.len());
             stats.time(System::Intersect, query.len(), || {
                 intersect_all(&scene.geometry, origin, direction, tmin, tmax, found)
             });
@@ -302,6 +303,18 @@ pub fn trace_shadow_rays_with(
     stats.volume_pattern_evals += walk.counters.volume_evals.take();
 }
 
+/// The first `n` lists of `v`, holding whatever earlier walks left there, for
+/// [`intersect_all`] to overwrite (it writes every one): `v` only grows, and nothing is
+/// written twice.
+fn stale_lists(v: &mut Vec<RayHits>, n: usize) -> &mut [RayHits] {
+    if v.len() < n {
+        // Exactly the largest walk's size: no doubling of a buffer that lives on.
+        v.reserve_exact(n - v.len());
+        v.resize(n, RayHits::EMPTY);
+    }
+    &mut v[..n]
+}
+
 /// `v` as `n` copies of `value`, in its existing allocation.
 fn refill<T: Copy>(v: &mut Vec<T>, n: usize, value: T) {
     v.clear();
@@ -333,6 +346,8 @@ pub struct ShadowWalkScratch {
     b2: Vec<f32>,
     segs: Vec<(usize, f32, f32)>,
     volumes: VolumeScratch,
+    /// Each ray's hits ([`intersect_all`] overwrites the first `n`).
+    lists: Vec<RayHits>,
 }
 
 /// The buffers of one round's volume intervals ([`attenuate_in_volumes`]).
