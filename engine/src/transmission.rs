@@ -255,6 +255,7 @@ pub fn trace_shadow_rays_with(
             );
         }
         next.clear();
+        let triangles = scene.geometry.triangles();
         for (k, &i) in active.iter().enumerate() {
             let iu = i as usize;
             if prim[k] == NO_HIT || contribution[iu].is_black() {
@@ -280,9 +281,17 @@ pub fn trace_shadow_rays_with(
             // Past the hit by its surface's error offset along the ray (coincident hits,
             // such as an edge two triangles share, count once).
             let (o, d) = (shadow.origin[iu], shadow.direction[iu]);
-            let s = scene.geometry.surface_at(prim[k], o, d, t[k], b1[k], b2[k]);
+            // Each branch takes what it needs of its own surface (merging two whole
+            // surfaces through memory would stall on the store).
+            let (offset, ng) = match triangles.surface_at(prim[k], b1[k], b2[k]) {
+                Some(s) => (s.offset(), s.ng),
+                None => {
+                    let s = scene.geometry.surface_at(prim[k], o, d, t[k], b1[k], b2[k]);
+                    (s.offset(), s.ng)
+                }
+            };
             entered[iu] = t[k];
-            t0[iu] = tmin_past_hit(t[k], s.offset(), s.ng, d);
+            t0[iu] = tmin_past_hit(t[k], offset, ng, d);
             if t0[iu] < shadow.tmax[iu] {
                 next.push(i);
             }
