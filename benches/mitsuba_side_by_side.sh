@@ -2,6 +2,8 @@
 # Interleaved side-by-side efficiency: R rounds (default 5) of (1 risotto run, 1 Mitsuba process
 # with 2 repeats, the second timed), round k with seed k in both renderers; medians of the render
 # times; errors from all R images of each (benches/side_by_side_error.py).
+# REF=path.exr (and REF_NOISE_MSE) measure against another reference than the harness's.
+# The analysis alone, on kept images: $MI/run.sh benches/side_by_side_error.py SCENE $MI DIR R "TIMES" "TIMES".
 set -euo pipefail
 S=$1; R=${R:-5}
 ROOT=$(cd "$(dirname "$0")/.." && pwd); BIN=${BIN:-$ROOT/target/release/risotto}; MI=${MI:-$ROOT/../shared/refs/mitsuba}

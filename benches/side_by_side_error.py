@@ -12,6 +12,7 @@ For each renderer, from its R images (seeds 1..R) of the same scene:
 """
 import itertools
 import json
+import os
 import statistics
 import sys
 
@@ -23,8 +24,14 @@ mt = [float(x) for x in sys.argv[6].split()]
 sys.path.insert(0, mi)
 from rmse import load_rgb  # noqa: E402
 
-ref = load_rgb(f"{mi}/ref/{scene}.exr").astype(np.float64)
-noise = json.load(open(f"{mi}/ref/manifest.json"))[scene]["noise_rmse"] ** 2
+# `REF=path.exr` measures against another reference (e.g. a longer Mitsuba render, see
+# benches/README.md); its own noise is then taken as `REF_NOISE_MSE` (default 0).
+if os.environ.get("REF"):
+    ref = load_rgb(os.environ["REF"]).astype(np.float64)
+    noise = float(os.environ.get("REF_NOISE_MSE", "0"))
+else:
+    ref = load_rgb(f"{mi}/ref/{scene}.exr").astype(np.float64)
+    noise = json.load(open(f"{mi}/ref/manifest.json"))[scene]["noise_rmse"] ** 2
 
 
 def errors(prefix):
