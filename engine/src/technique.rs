@@ -110,7 +110,7 @@ pub static REGISTRY: &[Technique] = &[
         values: &[
             TechniqueValue {
                 name: "sobol",
-                summary: "padded Owen-scrambled Sobol (Burley 2020), stratified",
+                summary: "padded Owen-scrambled Sobol (Burley 2020), the pixel jitter digitally shifted; stratified",
                 converges: always,
             },
             TechniqueValue {
