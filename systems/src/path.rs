@@ -54,9 +54,10 @@ pub struct Continuations {
 /// with probability 1/2 instead of 1/4: the deep bounces of a dim-walled room or an albedo-0.8
 /// smoke still carry a good part of the image, and killing three quarters of them where half
 /// would do buys little time for much variance (the equal-spp comparison on the Mitsuba suite
-/// is in benches/README.md, "Russian roulette"). Either rule is unbiased. A path whose throughput cannot fall below 1 (an albedo-1 medium, a white furnace)
-/// is never culled, where Mitsuba's `min(q, 0.95)` kills 5% per bounce and inflates the
-/// survivors' weights by 1/0.95: same expectation, much more variance. `NaN` in gives `NaN`
+/// is in benches/README.md, "Russian roulette"). Either rule is unbiased. A path whose
+/// throughput cannot fall below 1 (an albedo-1 medium, a white furnace) is never culled,
+/// where Mitsuba's `min(q, 0.95)` kills 5% per bounce and inflates the survivors' weights by
+/// 1/0.95: same expectation, much more variance. `NaN` in gives `NaN`
 /// out, which the caller's `q < 1` reads as "no roulette" (non-finite throughput is the
 /// film's to drop and count).
 #[inline]

@@ -126,13 +126,12 @@ pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
     let seed = set_seed(seed, set);
     let index_rev = owen_scramble_rev((sample % MAX_SPP).reverse_bits(), hash(seed ^ 0x79c6_8e4a));
     let table = sobol_byte_table();
-    let high: Int4 = table[0][(index_rev >> 24) as usize].into();
-    let low: Int4 = table[1][((index_rev >> 16) & 0xff) as usize].into();
+    let sobol: Int4 = sobol_rev(table, index_rev).into();
     let scramble: Int4 = {
         let s: Int4 = [seed.wrapping_mul(SCRAMBLE_SEED_MUL); 4].into();
         s ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into()
     };
-    owen_scramble_int4_rev(high ^ low, hash_int4(scramble))
+    owen_scramble_int4_rev(sobol, hash_int4(scramble))
         .reverse_bits()
         .to_f32_norm()
 }
@@ -142,11 +141,8 @@ pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
 /// module documentation for why the camera's set is shifted, not Owen-scrambled).
 #[inline]
 pub fn camera_set(seed: u32, sample: u32) -> [f32; 4] {
-    let table = sobol_byte_table();
-    let index_rev = (sample % MAX_SPP).reverse_bits();
-    let high = &table[0][(index_rev >> 24) as usize];
-    let low = &table[1][((index_rev >> 16) & 0xff) as usize];
-    std::array::from_fn(|d| shifted_unit(high[d] ^ low[d], seed, d))
+    let sobol = sobol_rev(sobol_byte_table(), (sample % MAX_SPP).reverse_bits());
+    std::array::from_fn(|d| shifted_unit(sobol[d], seed, d))
 }
 
 /// The bit-reversed Sobol value `sobol_rev` of dimension `d`, shifted by pixel `seed`'s word
@@ -161,6 +157,15 @@ fn shifted_unit(sobol_rev: u32, seed: u32, d: usize) -> f32 {
 #[inline(always)]
 fn to_unit(bits: u32) -> f32 {
     f32::from_bits((bits >> 9) | 0x3f80_0000) - 1.0
+}
+
+/// Bit-reversed Sobol dimensions 0..4 of the bit-reversed index `index_rev` (only its top 16
+/// bits matter, see [`sample_4d`]): the XOR of its two bytes' table entries.
+#[inline(always)]
+fn sobol_rev(table: &SobolTable, index_rev: u32) -> [u32; 4] {
+    let high = &table[0][(index_rev >> 24) as usize];
+    let low = &table[1][((index_rev >> 16) & 0xff) as usize];
+    std::array::from_fn(|d| high[d] ^ low[d])
 }
 
 /// The type of [`sobol_byte_table`].
@@ -242,10 +247,9 @@ fn draws_block<const D: usize>(
     let (mut sobol, mut seed_mul, mut salt) =
         ([0u32; 4 * BLOCK], [0u32; 4 * BLOCK], [0; 4 * BLOCK]);
     for l in 0..BLOCK {
-        let high = &table[0][(index_rev[l] >> 24) as usize];
-        let low = &table[1][((index_rev[l] >> 16) & 0xff) as usize];
+        let point = sobol_rev(table, index_rev[l]);
         for d in 0..D {
-            sobol[D * l + d] = high[d] ^ low[d];
+            sobol[D * l + d] = point[d];
             seed_mul[D * l + d] = seed[l].wrapping_mul(SCRAMBLE_SEED_MUL);
             salt[D * l + d] = DIM_SALT[d];
         }
@@ -272,11 +276,9 @@ fn camera_block(
     out: &mut [[f32; 2]; BLOCK],
 ) {
     for l in 0..BLOCK {
-        let index_rev = (sample[l] % MAX_SPP).reverse_bits();
-        let high = &table[0][(index_rev >> 24) as usize];
-        let low = &table[1][((index_rev >> 16) & 0xff) as usize];
+        let point = sobol_rev(table, (sample[l] % MAX_SPP).reverse_bits());
         for d in 0..2 {
-            out[l][d] = shifted_unit(high[d] ^ low[d], seed[l], d);
+            out[l][d] = shifted_unit(point[d], seed[l], d);
         }
     }
 }
