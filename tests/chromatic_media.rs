@@ -6,7 +6,9 @@
 
 mod common;
 
-use common::{constant_vol, environment, mat_in, ortho_camera, render_default, settings};
+use common::{
+    constant_vol, environment, mat_in, ortho_camera, render_default, scratch_dir, settings,
+};
 use glam::Vec3;
 use risotto::engine::builtin::{Interior, Surface};
 use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
@@ -20,12 +22,6 @@ use risotto::systems::phase::PhaseFunction;
 use risotto_components::Rgb;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-chroma-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -89,7 +85,7 @@ fn a_constant_chromatic_grid_renders_the_homogeneous_medium() {
     // the heterogeneous one with a constant density and a colour scale (one voxel, and an
     // 8^3 file of 0.5 through a 4^3 majorant grid, so the DDA crosses cells), with every
     // transmittance estimator. Channel means within 3 combined standard errors.
-    let d = dir("constant");
+    let d = scratch_dir("chroma", "constant");
     constant_vol(&d.join("half.vol"), [8, 8, 8], 0.5);
     let common = r#"albedo = [0.9, 0.8, 0.6], phase = { type = "hg", g = 0.3 }"#;
     let homogeneous = render_text(
@@ -121,7 +117,7 @@ fn a_chromatic_emitting_grid_renders_the_homogeneous_emitting_medium() {
     // j = (1, 0.5, 0.2) (the colour times a density of 1) in sigma_t = (1, 2, 4): the
     // emission estimator must carry the flights' per-channel weights, along path rays
     // (delta tracking) and shadow rays (ratio / residual / delta tracking).
-    let d = dir("emission");
+    let d = scratch_dir("chroma", "emission");
     let common = r#"albedo = [0.9, 0.8, 0.6], emission = [1, 0.5, 0.2]"#;
     let homogeneous = render_text(
         &d,
@@ -160,7 +156,7 @@ fn a_grey_scale_renders_exactly_as_before_spectral_tracking() {
     // hashes were taken with the engine before the chromatic scale existed (the grey path
     // must keep its random numbers and results bit for bit). A grey colour `[10, 10, 10]`
     // is the number 10.
-    let d = dir("grey");
+    let d = scratch_dir("chroma", "grey");
     let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");
     let g = grid.display();
     let cases = [
@@ -284,7 +280,7 @@ fn spectral_mis_removes_the_fireflies_of_tracking_one_channel() {
 
 #[test]
 fn bad_chromatic_scales_are_located_errors() {
-    let d = dir("errors");
+    let d = scratch_dir("chroma", "errors");
     for (scale, want) in [
         ("[1, -2, 3]", "-2"),
         ("[1, inf, 3]", "inf"),

@@ -7,14 +7,7 @@ use std::process::Output;
 
 mod common;
 use common::cli::{assert_fails, assert_fails_once, line_of, risotto, SCENE};
-
-/// A fresh directory for one test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{test}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::scratch_dir;
 
 /// `SCENE` with each `(from, to)` replacement applied once (each `from` must occur).
 fn scene_with(edits: &[(&str, &str)]) -> String {
@@ -54,7 +47,7 @@ fn calls(stats: &serde_json::Value, system: &str) -> u64 {
 
 #[test]
 fn valid_scene_renders_exr_png_and_stats() {
-    let dir = temp_dir("valid");
+    let dir = scratch_dir("cli", "valid");
     let stats = dir.join("stats.json");
     let (out, exr) = render(
         &dir,
@@ -104,7 +97,7 @@ fn valid_scene_renders_exr_png_and_stats() {
 
 #[test]
 fn volume_stages_run_only_when_a_scene_has_a_volume() {
-    let dir = temp_dir("volume");
+    let dir = scratch_dir("cli", "volume");
     let stats = dir.join("stats.json");
     // An index-matched box of absorbing fog in front of the camera.
     let text = format!(
@@ -133,7 +126,7 @@ fn volume_stages_run_only_when_a_scene_has_a_volume() {
 
 #[test]
 fn malformed_toml_reports_line_and_column() {
-    let dir = temp_dir("malformed");
+    let dir = scratch_dir("cli", "malformed");
     // Line 4, column 7 is the second `=`.
     let (out, _) = render(
         &dir,
@@ -146,7 +139,7 @@ fn malformed_toml_reports_line_and_column() {
 
 #[test]
 fn missing_obj_names_the_path_tried() {
-    let dir = temp_dir("missing_obj");
+    let dir = scratch_dir("cli", "missing_obj");
     let text = scene_with(&[(
         "type = \"quad\"\nmaterial = \"floor\"\ncorner = [-5, 0, -5]\nedge1 = [0, 0, 10]\nedge2 = [10, 0, 0]",
         "type = \"mesh\"\nmaterial = \"floor\"\npath = \"meshes/nowhere.obj\"",
@@ -162,7 +155,7 @@ fn missing_obj_names_the_path_tried() {
 
 #[test]
 fn invalid_values_are_reported_with_file_entity_and_field() {
-    let dir = temp_dir("invalid");
+    let dir = scratch_dir("cli", "invalid");
     // (file name, edits of SCENE, what stderr must say)
     type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a [&'a str]);
     let cases: [Case; 5] = [
@@ -217,7 +210,7 @@ fn invalid_values_are_reported_with_file_entity_and_field() {
 
 #[test]
 fn nonexistent_scene_is_reported() {
-    let dir = temp_dir("nonexistent");
+    let dir = scratch_dir("cli", "nonexistent");
     let missing = dir.join("no_such_scene.toml");
     let out = risotto(&["render", missing.to_str().unwrap(), "--quiet"]);
     assert_fails(
@@ -229,7 +222,7 @@ fn nonexistent_scene_is_reported() {
 
 #[test]
 fn bad_options_are_rejected_before_rendering() {
-    let dir = temp_dir("options");
+    let dir = scratch_dir("cli", "options");
     // Issue 14 item 6: `--batch-size 1099511627776` panicked.
     for (flag, value) in [
         ("--spp", "0"),
@@ -249,7 +242,7 @@ fn bad_options_are_rejected_before_rendering() {
 /// overwritten by another output.
 #[test]
 fn outputs_that_would_clobber_each_other_are_rejected_before_rendering() {
-    let dir = temp_dir("outputs");
+    let dir = scratch_dir("cli", "outputs");
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, SCENE).unwrap();
     let s = scene.to_str().unwrap();
@@ -304,7 +297,7 @@ fn run_with_timeout(args: &[&str], secs: u64) -> Option<Output> {
 
 #[test]
 fn an_unwritable_output_is_an_error_before_the_render() {
-    let dir = temp_dir("unwritable");
+    let dir = scratch_dir("cli", "unwritable");
     // A render that would take hours: only a check before it can answer in time.
     let slow = scene_with(&[
         ("width = 16", "width = 2048"),
@@ -345,7 +338,7 @@ fn an_unwritable_output_is_an_error_before_the_render() {
 /// and the value.
 #[test]
 fn bad_media_values_are_located_errors() {
-    let dir = temp_dir("media");
+    let dir = scratch_dir("cli", "media");
     let with_interior = |interior: &str| {
         scene_with(&[(
             "[materials.emitter]",
@@ -425,7 +418,7 @@ fn bad_media_values_are_located_errors() {
 /// environment map printed its EXR error three times).
 #[test]
 fn late_errors_are_located_and_printed_once() {
-    let dir = temp_dir("late_errors");
+    let dir = scratch_dir("cli", "late_errors");
     std::fs::write(dir.join("garbage.exr"), b"not an EXR file").unwrap();
     let glass_ball = "[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nmaterial = \"glass\"\n\
                       center = [0, 0.5, 0]\nradius = 0.5\n\n[[lights]]";
@@ -517,7 +510,7 @@ fn late_errors_are_located_and_printed_once() {
 /// the value; a valid one (all defaults but the colour) renders.
 #[test]
 fn bad_subsurface_values_are_located_errors() {
-    let dir = temp_dir("subsurface");
+    let dir = scratch_dir("cli", "subsurface");
     let with_material = |body: &str| {
         scene_with(&[(
             "[materials.emitter]",

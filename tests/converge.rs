@@ -10,6 +10,7 @@ use std::process::Output;
 
 mod common;
 use common::cli::{assert_fails, risotto};
+use common::scratch_dir;
 
 /// The cornell box of the Mitsuba suite at `size` x `size` pixels.
 fn cornell(dir: &Path, size: u32) -> PathBuf {
@@ -26,14 +27,6 @@ fn cornell(dir: &Path, size: u32) -> PathBuf {
     let path = dir.join(format!("cornell-{size}.toml"));
     std::fs::write(&path, text).unwrap();
     path
-}
-
-/// A fresh directory for one test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("converge-{test}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn assert_ok(what: &str, out: &Output) {
@@ -98,7 +91,7 @@ fn mse(rows: &[BTreeMap<String, String>], technique: &str, spp: u32) -> f64 {
 
 #[test]
 fn sweep_writes_csv_json_png_and_svg_that_agree() {
-    let dir = temp_dir("files");
+    let dir = scratch_dir("converge", "files");
     let scene = cornell(&dir, 16);
     let out_dir = dir.join("out");
     let out = converge(
@@ -186,7 +179,7 @@ fn mse_falls_with_spp_and_sobol_beats_the_independent_sampler() {
     // a factor 4 is a robust bound. The independent sampler's RMSE falls as spp^-1/2.
     // At 16 spp on the diffuse cornell box, stratification must show: independent's MSE
     // is well above Sobol's (about 5x at 256x256).
-    let dir = temp_dir("falls");
+    let dir = scratch_dir("converge", "falls");
     let scene = cornell(&dir, 24);
     let out_dir = dir.join("out");
     let out = converge(
@@ -221,7 +214,7 @@ fn independent_sampler_rmse_falls_as_the_inverse_square_root_of_spp() {
     // Monte Carlo: RMSE ~ spp^-1/2. The camera looks down so that the light is out of view:
     // at low spp a visible emitter's edge pixels are hit or missed as a whole (errors of
     // 17 in a pixel), a heavy tail that makes a few repeats' MSE erratic.
-    let dir = temp_dir("slope");
+    let dir = scratch_dir("converge", "slope");
     let scene = cornell(&dir, 24);
     let text = std::fs::read_to_string(&scene).unwrap();
     assert!(
@@ -264,7 +257,7 @@ fn error_against_the_render_itself_is_zero() {
     // The sweep's first repeat uses the scene's seed, as `render` does, so a reference that
     // is `render`'s output at the same spp gives exactly zero error (and the independent
     // sampler, a different image, does not).
-    let dir = temp_dir("itself");
+    let dir = scratch_dir("converge", "itself");
     let scene = cornell(&dir, 16);
     let exr = dir.join("ref.exr");
     let out = risotto(&[
@@ -312,7 +305,7 @@ fn listed(scene: &Path) -> Vec<String> {
 
 #[test]
 fn techniques_lists_only_what_applies() {
-    let dir = temp_dir("listing");
+    let dir = scratch_dir("converge", "listing");
     let scene = cornell(&dir, 16);
     // Cornell has no volumes: lighting and sampler, nothing else.
     assert_eq!(listed(&scene), ["lighting", "sampler"]);
@@ -353,7 +346,7 @@ fn techniques_lists_only_what_applies() {
 
 #[test]
 fn technique_flag_selects_and_lighting_stays_its_alias() {
-    let dir = temp_dir("flag");
+    let dir = scratch_dir("converge", "flag");
     let scene = cornell(&dir, 16);
     let render = |name: &str, extra: &[&str]| {
         let exr = dir.join(name);
@@ -386,7 +379,7 @@ fn technique_flag_selects_and_lighting_stays_its_alias() {
 
 #[test]
 fn bad_techniques_and_references_are_named_in_the_error() {
-    let dir = temp_dir("bad");
+    let dir = scratch_dir("converge", "bad");
     let scene = cornell(&dir, 16);
     let s = scene.to_str().unwrap();
     let out_dir = dir.join("out");
@@ -482,7 +475,7 @@ fn bad_techniques_and_references_are_named_in_the_error() {
 
 #[test]
 fn a_time_budget_doubles_spp_until_a_render_takes_that_long() {
-    let dir = temp_dir("budget");
+    let dir = scratch_dir("converge", "budget");
     let scene = cornell(&dir, 16);
     let out_dir = dir.join("out");
     let budget = 0.004;
@@ -517,7 +510,7 @@ fn a_rendered_reference_uses_the_most_efficient_converging_technique() {
     // order of magnitude less efficient than light sampling on the cornell box's small
     // light: judged from two seeds, without a reference, the reference must be rendered
     // with `lighting=nee`. One repeat, so the second image is the extra render.
-    let dir = temp_dir("reference-choice");
+    let dir = scratch_dir("converge", "reference-choice");
     let scene = cornell(&dir, 24);
     let out = converge(
         &scene,

@@ -16,6 +16,7 @@
 //!   (`int_0^1 mu e^{-tau / mu} dmu = E_3(tau)`, the exponential integral).
 
 mod common;
+use common::scratch_dir;
 use common::*;
 use glam::Vec3;
 use risotto::engine::context::IntegratorContext;
@@ -34,14 +35,7 @@ use risotto::systems::grid::DensityGrid;
 use risotto::systems::phase::PhaseFunction;
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{Rgb, ShadingPoints};
-use std::path::{Path, PathBuf};
-
-/// A scratch directory of this test binary.
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-emit-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::Path;
 
 /// Writes a Mitsuba `.vol` grid (version 3, float32, one channel).
 fn write_vol(path: &Path, dims: [usize; 3], data: &[f32]) {
@@ -149,7 +143,7 @@ fn an_emissive_absorbing_slab_shows_j_over_sigma_a_times_one_minus_t() {
     // (or by the full thickness) something else.
     assert!((j * d - want).abs() > 0.5 * want);
     assert!((j * d * (-sigma_a * d).exp() - want).abs() > 0.1 * want);
-    let dir = dir("slab");
+    let dir = scratch_dir("emit", "slab");
     // Homogeneous: the exact segment integral, whatever the scattering technique
     // (deterministic: every pixel is the closed form to float precision).
     for scattering in ["multiple", "walk", "bounce", "single"] {
@@ -305,7 +299,7 @@ const TECHNIQUES: [LightingTechnique; 3] = [
 
 #[test]
 fn an_emissive_scattering_sphere_with_j_sigma_a_l0_is_in_equilibrium() {
-    let dir = dir("equilibrium");
+    let dir = scratch_dir("emit", "equilibrium");
     // Every order of scattering, walked and bounced, any albedo and phase function, every
     // lighting technique: under `nee` the environment is light-sampled, so shadow rays cross
     // the emissive sphere -- emission gathered along them as well as along the paths would
@@ -351,7 +345,7 @@ fn an_emissive_scattering_sphere_with_j_sigma_a_l0_is_in_equilibrium() {
 
 #[test]
 fn an_emissive_heterogeneous_sphere_with_j_sigma_a_l0_is_in_equilibrium() {
-    let dir = dir("hetero-equilibrium");
+    let dir = scratch_dir("emit", "hetero-equilibrium");
     // Density ramped 0.2 .. 2 along x, sigma_t = 2 density, albedo 0.6: j(p) = sigma_a(p) =
     // 0.8 density(p), given as a colour (emission follows the density) or as the same grid
     // with scale 0.8.
@@ -447,7 +441,7 @@ fn an_emissive_slab_lights_the_floor_below_it_and_counts_once() {
     let seen_from_floor = 2.0 * std::f64::consts::PI * j / sigma_a * (0.5 - e3(sigma_a));
     let floor = rho / std::f64::consts::PI * (t * 4.0 / 4.0 + seen_from_floor);
     let want = slab_radiance(j, sigma_a, 1.0) + t * floor;
-    let dir = dir("floor");
+    let dir = scratch_dir("emit", "floor");
     // Homogeneous under every scattering technique (`single` runs the lighting delegate on
     // the camera ray's segment: with sigma_s = 0 it adds nothing, and the emission along
     // the segment must still be there, exactly once), and heterogeneous.
@@ -497,7 +491,11 @@ fn segments(n: usize, origin: Vec3, direction: Vec3, length: f32) -> (Segments, 
 
 /// A compiled scene to lend integrators an `IntegratorContext` (it plays no part).
 fn some_scene() -> CompiledScene {
-    load(&dir("ctx"), &slab_scene(r#"{ type = "null" }"#, 1.0, 1)).unwrap()
+    load(
+        &scratch_dir("emit", "ctx"),
+        &slab_scene(r#"{ type = "null" }"#, 1.0, 1),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -618,7 +616,7 @@ fn transmission_returns_the_emission_reaching_the_segment_start() {
 
 #[test]
 fn scenes_without_emission_run_no_emission_code() {
-    let dir = dir("gating");
+    let dir = scratch_dir("emit", "gating");
     let grid = dir.join("ramp.vol");
     write_vol(&grid, [8, 8, 8], &ramp(8, 0.2, 2.0));
     let plain = [
@@ -663,7 +661,7 @@ fn scenes_without_emission_run_no_emission_code() {
 
 #[test]
 fn extreme_emission_and_extinction_stay_finite() {
-    let dir = dir("extreme");
+    let dir = scratch_dir("emit", "extreme");
     let d = 0.5f32;
     for sigma_a in [1e-6f32, 1e6] {
         let want = slab_radiance(1e30, sigma_a as f64, d as f64);
@@ -694,7 +692,7 @@ fn extreme_emission_and_extinction_stay_finite() {
 
 #[test]
 fn bad_emission_values_are_located_errors() {
-    let d = dir("errors");
+    let d = scratch_dir("emit", "errors");
     write_vol(&d.join("ones.vol"), [2, 2, 2], &[1.0; 8]);
     let mut neg = vec![1.0f32; 8];
     neg[3] = -2.5;

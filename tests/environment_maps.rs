@@ -3,17 +3,11 @@
 //! the value; an EXR whose header claims more pixels than `MAX_IMAGE_PIXELS` (or more chunks
 //! than the file can hold) is a located error before anything is allocated for its pixels.
 
+mod common;
+use common::scratch_dir;
 use risotto::engine::load::{load_scene_file, MaterialRegistry};
 use risotto::engine::output::{read_exr_rgb, MAX_IMAGE_PIXELS};
 use std::path::{Path, PathBuf};
-
-/// A fresh directory for one test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("envmap-{test}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Writes `dir/scene.toml` lit only by the environment map `dir/sky.exr`.
 fn scene_with_map(dir: &Path) -> PathBuf {
@@ -88,7 +82,7 @@ fn assert_names(msg: &str, parts: &[&str]) {
 
 #[test]
 fn a_valid_map_loads() {
-    let dir = temp_dir("valid");
+    let dir = scratch_dir("envmap", "valid");
     write_map(&dir.join("sky.exr"), (2.0, 0.0, 1e30));
     load_scene_file(&scene_with_map(&dir), &MaterialRegistry::with_builtins()).unwrap();
 }
@@ -101,7 +95,7 @@ fn non_finite_and_negative_texels_are_located_errors() {
         ("negative", (-0.25, 0.5, 0.5), "R", "-0.25"),
     ];
     for (name, bad, channel, value) in cases {
-        let dir = temp_dir(name);
+        let dir = scratch_dir("envmap", name);
         let map = dir.join("sky.exr");
         write_map(&map, bad);
         assert_load_error(&dir, &["(5, 2)", channel, value]);
@@ -163,7 +157,7 @@ fn lying_map(dir: &Path, max: i32) -> (PathBuf, String) {
 
 #[test]
 fn a_header_claiming_a_huge_image_is_an_error_before_allocating() {
-    let dir = temp_dir("huge");
+    let dir = scratch_dir("envmap", "huge");
     let (map, err) = lying_map(&dir, 99_999);
     assert_names(
         &err,
@@ -180,6 +174,6 @@ fn a_header_claiming_a_huge_image_is_an_error_before_allocating() {
 fn a_header_claiming_more_chunks_than_the_file_holds_is_an_error() {
     // 4000 x 4000 is under the pixel limit, but its 250 chunks need a 2 KB offset table and
     // 250 chunk headers that a ~1 KB file cannot contain.
-    let (map, err) = lying_map(&temp_dir("chunks"), 3_999);
+    let (map, err) = lying_map(&scratch_dir("envmap", "chunks"), 3_999);
     assert_names(&err, &[&map.display().to_string(), "4000 x 4000", "bytes"]);
 }

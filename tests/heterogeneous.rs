@@ -3,6 +3,7 @@
 //! grids and parameters are located errors, and features and stats show what ran.
 
 mod common;
+use common::scratch_dir;
 
 use common::constant_vol;
 use risotto::engine::load::{scene_from_desc, LoadError, MaterialRegistry};
@@ -11,13 +12,6 @@ use risotto::engine::scene::CompiledScene;
 use risotto::engine::scene_file::parse_scene;
 use risotto::engine::stats::VolumeEvent;
 use std::path::{Path, PathBuf};
-
-/// A scratch directory of this test binary.
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-hetero-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The repository's scenes directory (absolute).
 fn scenes() -> PathBuf {
@@ -55,7 +49,7 @@ fn a_constant_grid_renders_the_homogeneous_medium() {
     // one with a constant density (one voxel, and an 8^3 file through a 4^3 majorant grid,
     // so the DDA crosses cells), with each transmittance estimator. Image means within
     // 3 combined standard errors (different seeds: independent estimates).
-    let d = dir("constant");
+    let d = scratch_dir("hetero", "constant");
     constant_vol(&d.join("half.vol"), [8, 8, 8], 0.5);
     let phase = r#"phase = { type = "hg", g = 0.3 }"#;
     let homogeneous = render_text(
@@ -97,7 +91,7 @@ fn a_constant_grid_renders_the_homogeneous_medium() {
 fn an_albedo_one_heterogeneous_medium_is_a_white_furnace() {
     // The harness's 64^3 grid (committed copy), scale 10, albedo 1, under an environment of
     // 1 and no other light: every path carries exactly 1 whatever the tracking.
-    let d = dir("furnace");
+    let d = scratch_dir("hetero", "furnace");
     let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");
     let interior = format!(
         r#"{{ type = "heterogeneous", density = {{ grid = "{}" }}, scale = 10, albedo = 1 }}"#,
@@ -117,7 +111,7 @@ fn an_albedo_one_heterogeneous_medium_is_a_white_furnace() {
 
 #[test]
 fn features_say_heterogeneous_only_for_heterogeneous_media() {
-    let d = dir("features");
+    let d = scratch_dir("hetero", "features");
     let het = load(
         &d,
         &sphere_scene(
@@ -139,7 +133,7 @@ fn features_say_heterogeneous_only_for_heterogeneous_media() {
 
 #[test]
 fn bad_grids_and_parameters_are_located_errors() {
-    let d = dir("errors");
+    let d = scratch_dir("hetero", "errors");
     let mut bad = std::fs::read(scenes().join("mitsuba-suite/hetero_grid_density.vol")).unwrap();
     // Voxel (1, 0, 0) negative: byte 48 + 4.
     bad[52..56].copy_from_slice(&(-0.5f32).to_le_bytes());
@@ -192,7 +186,7 @@ fn the_colour_of_the_albedo_carries_no_colour_noise() {
     // A chromatic albedo with a grey extinction: the free flight is shared by the channels,
     // so each path's R/G/B stay in the albedos' ratios (every sample of a pixel is
     // (0.9^k, 0.6^k, 0.3^k) times a grey, so R >= G >= B in every pixel, and no NaN).
-    let d = dir("colour");
+    let d = scratch_dir("hetero", "colour");
     let out = render_text(
         &d,
         &sphere_scene(
@@ -222,7 +216,7 @@ fn every_tracking_technique_renders_the_same_medium() {
     // 1-4 here; 0.95 is five of their spreads away).
     use risotto::engine::heterogeneous::Tracking;
     use risotto::engine::plugin::VolumeTechniques;
-    let d = dir("trackings");
+    let d = scratch_dir("hetero", "trackings");
     let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");
     let interior = format!(
         r#"{{ type = "heterogeneous", density = {{ grid = "{}" }}, scale = 10, albedo = 0.8, tracking = "delta", march_step = 0.01 }}"#,
@@ -273,7 +267,7 @@ fn every_tracking_technique_renders_the_same_medium() {
 
 #[test]
 fn a_march_step_must_be_positive() {
-    let d = dir("march-step");
+    let d = scratch_dir("hetero", "march-step");
     for bad in ["0", "-1", "nan"] {
         let interior = format!(
             r#"{{ type = "heterogeneous", density = {{ constant = 1 }}, tracking = "ray_marching", march_step = {bad} }}"#
@@ -295,7 +289,7 @@ fn openvdb_grids_load_through_the_scene_file() {
     // border (engine/src/vdb_file.rs); an absorbing-free, albedo-1 medium of it under a white
     // environment is a furnace, so the grid was read and tracked (null collisions against the
     // tile's bounds) and every pixel is 1.
-    let d = dir("vdb");
+    let d = scratch_dir("hetero", "vdb");
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let tile = data.join("tile.vdb");
     let interior = format!(

@@ -5,14 +5,7 @@
 //! patterns are evaluated.
 
 mod common;
-
-use std::path::PathBuf;
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-medpat-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::scratch_dir;
 
 /// The unit ball of medium of [`common::medium_ball_scene`], 16 x 16 pixels.
 fn ball(interior: &str, spp: u32, seed: u64) -> String {
@@ -24,7 +17,7 @@ fn a_constant_pattern_density_renders_the_constant_density_image_bit_for_bit() {
     // The same estimator and the same random numbers: one majorant cell holding the same
     // bound (the constant's interval bound is exact), the same density at every point. So
     // the images are compared exactly, for a free-flight estimator and each shadow one.
-    let d = dir("constant");
+    let d = scratch_dir("medpat", "constant");
     for tracking in ["ratio", "residual", "delta"] {
         let rest =
             format!(r#"scale = 2, albedo = 0.8, tracking = "{tracking}", majorant_grid = 1"#);
@@ -77,7 +70,7 @@ fn a_gradient_density_along_the_ray_gives_the_closed_form_transmittance() {
     // Camera rays take delta-tracking free flights (albedo 0: a collision ends the path);
     // the mean of 0/1 estimates within 3 standard errors, for two seeds and majorant grids
     // of 1 and 8 cells per axis.
-    let d = dir("gradient");
+    let d = scratch_dir("medpat", "gradient");
     let expected = (-1.5f64).exp();
     for (seed, cells) in [(5, 8), (6, 1)] {
         let interior = format!(
@@ -102,7 +95,7 @@ fn noise_densities_track_against_pattern_bounds_without_violations() {
     // An fBm cloud (remapped to [0, 1], clamped), a pattern emission, every tracking: the
     // majorant grid from the graph's interval bounds (Lipschitz noise bounds per cell) holds
     // at every sampled point.
-    let d = dir("noise");
+    let d = scratch_dir("medpat", "noise");
     let density = r#"density = { pattern = "remap", a = { pattern = "noise", frequency = 2.5, octaves = 5, seed = 3 }, from = [-0.4, 0.6], to = [0, 1] }"#;
     for tracking in [
         "ratio",
@@ -137,7 +130,7 @@ fn noise_densities_track_against_pattern_bounds_without_violations() {
 fn media_without_patterns_evaluate_none() {
     // A homogeneous medium and a grid medium (no surface pattern either): the stats count no
     // pattern evaluation, and only a pattern density evaluates in a volume.
-    let d = dir("none");
+    let d = scratch_dir("medpat", "none");
     for interior in [
         r#"{ type = "homogeneous", sigma_t = 2, albedo = 0.5 }"#,
         r#"{ type = "heterogeneous", density = { constant = 2 }, albedo = 0.5 }"#,
@@ -166,7 +159,7 @@ fn assert_located_errors(d: &std::path::Path, cases: &[(String, &[&str])]) {
 
 #[test]
 fn bad_medium_patterns_are_located_errors() {
-    let d = dir("errors");
+    let d = scratch_dir("medpat", "errors");
     let cases = [
         // Raw noise is signed.
         (
@@ -229,7 +222,7 @@ fn the_noise_cloud_scene_has_no_majorant_violation() {
 /// the reversed gradient the other: the albedo is read at the scattering points' world P.
 #[test]
 fn an_albedo_pattern_is_read_at_each_scattering_point() {
-    let d = dir("albedo");
+    let d = scratch_dir("medpat", "albedo");
     let render = |albedo: &str, scale: &str| {
         let interior = format!(
             r#"{{ type = "heterogeneous", density = {{ constant = 1 }}, scale = {scale}, albedo = {albedo} }}"#
@@ -304,7 +297,7 @@ fn homogeneous(rest: &str) -> String {
 /// grey and a chromatic medium; the heterogeneous medium's `g` likewise.
 #[test]
 fn constant_albedo_and_g_patterns_render_their_constants_bit_for_bit() {
-    let d = dir("constant-scatter");
+    let d = scratch_dir("medpat", "constant-scatter");
     let media = [("2", "0.5"), ("[1, 2, 4]", "[0.5, 0.25, 1]")];
     for scattering in ["bounce", "walk", "single"] {
         for (sigma_t, albedo) in media {
@@ -361,7 +354,7 @@ fn constant_albedo_and_g_patterns_render_their_constants_bit_for_bit() {
 /// in world space.
 #[test]
 fn stepped_albedo_and_g_patterns_are_read_at_each_scattering_point() {
-    let d = dir("step");
+    let d = scratch_dir("medpat", "step");
     let step = |a: &str, b: &str| {
         format!(
             r#"{{ pattern = "gradient", axis = "x", from = -1e-4, to = 1e-4, a = {a}, b = {b} }}"#
@@ -420,7 +413,7 @@ fn stepped_albedo_and_g_patterns_are_read_at_each_scattering_point() {
 /// `T + j (1 - T) / sigma_t` with `T = exp(-2 sigma_t)` (environment 1 behind it).
 #[test]
 fn pattern_extinction_and_emission_make_a_homogeneous_interior_heterogeneous() {
-    let d = dir("homogeneous-heterogeneous");
+    let d = scratch_dir("medpat", "homogeneous-heterogeneous");
     // sigma_t(P) = 0.75 (z + 1): optical depth 1.5 along the diameter.
     let interior = homogeneous(
         r#"sigma_t = { pattern = "gradient", axis = "z", from = -1, to = 1, a = 0, b = 1.5 }, albedo = 0"#,
@@ -482,7 +475,7 @@ fn pattern_extinction_and_emission_make_a_homogeneous_interior_heterogeneous() {
 
 #[test]
 fn bad_scattering_patterns_are_located_errors() {
-    let d = dir("scatter-errors");
+    let d = scratch_dir("medpat", "scatter-errors");
     let cases = [
         (
             r#"type = "homogeneous", sigma_t = 1, albedo = { pattern = "checker", space = "uv" }"#,

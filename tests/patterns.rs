@@ -3,17 +3,12 @@
 //! context's cache (counted in the stats), the constant fast path is untouched, and the
 //! albedo AOV of a patterned surface is the pattern.
 
+mod common;
+use common::scratch_dir;
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::plugin::ParamValue;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
-use std::path::{Path, PathBuf};
-
-/// A fresh directory for one test's files.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("risotto-patterns-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::path::Path;
 
 /// An orthographic 4 x 4 view of a 6 x 6 quad at z = 0.5 (mid-cell of a unit checker), facing the
 /// camera, with `reflectance` as its material's value; lit by a constant sky.
@@ -79,7 +74,7 @@ fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) {
 
 #[test]
 fn pattern_tables_load_into_graphs_and_name_their_files() {
-    let dir = temp_dir("load");
+    let dir = scratch_dir("patterns", "load");
     write_png(&dir.join("tex.png"), 2, 1, &[255, 0, 0, 0, 0, 255]);
     let reflectance = r#"{ pattern = "mix", a = { pattern = "image", path = "tex.png" }, b = 0.25, t = { pattern = "checker", scale = 2, space = "uv" } }"#;
     let scene = load_text(&dir, &flat_scene(reflectance, 1)).unwrap();
@@ -106,7 +101,7 @@ fn pattern_tables_load_into_graphs_and_name_their_files() {
 
 #[test]
 fn bad_patterns_are_located_errors_naming_key_and_value() {
-    let dir = temp_dir("errors");
+    let dir = scratch_dir("patterns", "errors");
     // (reflectance, expected pieces of the message). The reflectance is on line 15.
     let cases: &[(&str, &[&str])] = &[
         (
@@ -187,7 +182,7 @@ fn bad_patterns_are_located_errors_naming_key_and_value() {
 
 #[test]
 fn a_constant_pattern_renders_bit_identical_to_the_constant_and_is_counted() {
-    let dir = temp_dir("identical");
+    let dir = scratch_dir("patterns", "identical");
     let constant = render_text(&dir, &flat_scene("[0.3, 0.5, 0.7]", 4));
     let pattern = render_text(
         &dir,
@@ -240,7 +235,7 @@ fn the_shipped_patterns_scene_evaluates_patterns_and_cornell_does_not() {
 
 #[test]
 fn the_albedo_aov_of_a_patterned_surface_is_the_pattern() {
-    let dir = temp_dir("albedo");
+    let dir = scratch_dir("patterns", "albedo");
     // Unit cells by P: the 8 x 8 pixels of the 4 x 4 view hold 2 x 2 pixels per cell, and the
     // wall at z = 0.5 lies inside one layer of cells.
     let (a, b) = (0.2f32, 0.8f32);
@@ -272,7 +267,7 @@ fn the_albedo_aov_of_a_patterned_surface_is_the_pattern() {
 /// pixels centred at (x, y) = (+-0.75, 0.75) in cells of opposite parity, whichever way the
 /// image's rows and columns run.
 fn assert_checker_quad(name: &str, material: &str) {
-    let dir = temp_dir(name);
+    let dir = scratch_dir("patterns", name);
     let out = render_text(&dir, &flat_material_scene(material, 1));
     let px = |x: usize, y: usize| out.beauty.pixels[y * 8 + x];
     let near = |c: risotto_components::Rgb, r: f32, b: f32| {
@@ -313,7 +308,7 @@ fn a_checker_tinted_dielectric_transmits_both_colours_where_expected() {
 
 #[test]
 fn a_tint_pattern_with_cheap_shadows_is_a_located_error() {
-    let dir = temp_dir("cheap");
+    let dir = scratch_dir("patterns", "cheap");
     let text = flat_material_scene(
         "type = \"dielectric\"\ntint = { pattern = \"checker\" }\ncheap_shadows = true",
         1,

@@ -4,6 +4,7 @@
 
 mod common;
 use common::cli::{assert_fails, risotto};
+use common::scratch_dir;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::path_tracer::VertexEvent;
@@ -132,17 +133,9 @@ fn replay_rejects_pixels_and_samples_outside_the_render() {
     assert!(replay(&scene, &o, w - 1, h - 1, spp - 1).is_ok());
 }
 
-/// A fresh directory for one test.
-fn temp_dir(test: &str) -> std::path::PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("replay-{test}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn cli_replay_prints_the_vertices_and_writes_nothing() {
-    let dir = temp_dir("cli");
+    let dir = scratch_dir("replay", "cli");
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, common::cli::SCENE).unwrap();
     let scene = scene.to_str().unwrap();
@@ -176,7 +169,7 @@ fn cli_replay_prints_the_vertices_and_writes_nothing() {
 
 #[test]
 fn cli_replay_rejects_pixels_samples_and_malformed_values() {
-    let dir = temp_dir("cli-errors");
+    let dir = scratch_dir("replay", "cli-errors");
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, common::cli::SCENE).unwrap();
     let scene = scene.to_str().unwrap();

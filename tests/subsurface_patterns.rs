@@ -4,15 +4,9 @@
 //! located errors.
 
 mod common;
+use common::scratch_dir;
 
 use risotto::components::Rgb;
-use std::path::PathBuf;
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-sss-pattern-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The subsurface ball of [`common::medium_ball_scene`] (16 x 16 pixels, sun and sky), its
 /// material's keys `keys` one per line after `type` (line 16 on).
@@ -33,7 +27,7 @@ fn same_image(a: &[Rgb], b: &[Rgb], what: &str) {
 
 #[test]
 fn constant_patterns_render_the_constant_parameters_bit_for_bit() {
-    let d = dir("constant");
+    let d = scratch_dir("sss-pattern", "constant");
     for mode in ["random_walk", "diffusion"] {
         let render = |albedo: &str, mfp: &str| {
             let keys = [
@@ -85,7 +79,7 @@ fn a_stepped_albedo_is_read_where_light_enters() {
     // a ball of radius 1 (walks stay near where they enter): the left half of the image is
     // as bright as the constant 0.9 ball's left half and the right as the 0.2 ball's, within
     // a tolerance far below the difference between the two.
-    let d = dir("step");
+    let d = scratch_dir("sss-pattern", "step");
     for mode in ["random_walk", "diffusion"] {
         let render = |albedo: &str| {
             let keys = [
@@ -121,7 +115,7 @@ fn a_stepped_albedo_is_read_where_light_enters() {
 
 #[test]
 fn bad_subsurface_patterns_are_located_errors() {
-    let d = dir("errors");
+    let d = scratch_dir("sss-pattern", "errors");
     let cases: [(&str, &[&str]); 3] = [
         (
             r#"albedo = { pattern = "checker", space = "uv" }"#,

@@ -11,6 +11,7 @@
 //! agree with it.
 
 mod common;
+use common::scratch_dir;
 use common::*;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::load::{scene_from_desc, MaterialRegistry};
@@ -19,13 +20,7 @@ use risotto::engine::scene::CompiledScene;
 use risotto::engine::scene_file::parse_scene;
 use risotto::engine::stats::VolumeEvent;
 use risotto_components::Rgb;
-use std::path::{Path, PathBuf};
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("risotto-vlights-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::Path;
 
 fn compile(dir: &Path, text: &str) -> CompiledScene {
     let desc = parse_scene(text, &dir.join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
@@ -211,7 +206,7 @@ fn assert_box_lights_floor(d: &Path, interior: &str, j: f64, sigma_a: f64, ratio
 
 #[test]
 fn a_uniform_emissive_box_lights_a_floor_as_the_brute_force_integral_says() {
-    let d = dir("box");
+    let d = scratch_dir("vlights", "box");
     constant_vol(&d.join("one.vol"), [2, 2, 2], 1.0);
     let (j, sigma_a) = (2.0, 1.5);
     let interior = format!(
@@ -226,7 +221,7 @@ fn a_uniform_emissive_box_lights_a_floor_as_the_brute_force_integral_says() {
 /// grid density, and a homogeneous interior with an emission pattern (built heterogeneous).
 #[test]
 fn pattern_emitters_light_a_floor_as_the_brute_force_integral_says() {
-    let d = dir("pattern-box");
+    let d = scratch_dir("vlights", "pattern-box");
     constant_vol(&d.join("one.vol"), [2, 2, 2], 1.0);
     let (j, sigma_a) = (2.0, 1.5);
     for interior in [
@@ -251,7 +246,7 @@ fn pattern_emitters_light_a_floor_as_the_brute_force_integral_says() {
 /// for the heterogeneous media's collision estimator (0.66 of its error here).
 #[test]
 fn a_homogeneous_emissive_box_lights_a_floor_as_the_brute_force_integral_says() {
-    let d = dir("homogeneous-box");
+    let d = scratch_dir("vlights", "homogeneous-box");
     let (j, sigma_a) = (2.0, 1.5);
     for scattering in ["bounce", "walk"] {
         let interior = format!(
@@ -266,7 +261,7 @@ fn a_homogeneous_emissive_box_lights_a_floor_as_the_brute_force_integral_says() 
 /// the medium from inside it) and when it walks (only each walk's first step is weighed).
 #[test]
 fn a_scattering_homogeneous_emitter_under_mis_equals_unidirectional_estimation() {
-    let d = dir("homogeneous-scatter");
+    let d = scratch_dir("vlights", "homogeneous-scatter");
     for scattering in ["bounce", "walk"] {
         let interior = format!(
             r#"{{ type = "homogeneous", sigma_t = [1, 2, 4], albedo = 0.7, emission = [3, 1.5, 0.5], phase = {{ type = "hg", g = 0.4 }}, scattering = "{scattering}" }}"#
@@ -289,7 +284,7 @@ fn a_scattering_homogeneous_emitter_under_mis_equals_unidirectional_estimation()
 /// estimation, and so does NEE alone.
 #[test]
 fn a_scattering_pattern_emitter_under_mis_equals_unidirectional_estimation() {
-    let d = dir("pattern-grid");
+    let d = scratch_dir("vlights", "pattern-grid");
     let interior = r#"{ type = "heterogeneous", density = { pattern = "gradient", axis = "y", from = 0.5, to = 1.5, a = 2, b = 0.5 }, scale = 2, albedo = 0.6, emission = { pattern = "multiply", a = { pattern = "gradient", axis = "y", from = 0.6, to = 1.2, a = 4, b = 0 }, b = [1.5, 0.75, 0.25] }, majorant_grid = 4 }"#;
     let text = floor_scene(interior, 1024).replace("max_depth = 2", "max_depth = 6");
     let scene = compile(&d, &text);
@@ -348,7 +343,7 @@ fn assert_agree(what: &str, a: (Rgb, Rgb), b: (Rgb, Rgb)) {
 
 #[test]
 fn a_scattering_grid_emitter_under_mis_equals_unidirectional_estimation() {
-    let d = dir("grid");
+    let d = scratch_dir("vlights", "grid");
     // A density falling off along y and a hot spot of emission near one corner; the medium
     // scatters (albedo 0.6), so volume-scatter vertices light-sample it too.
     write_vol(&d.join("density.vol"), 8, |_, y, _| 0.5 + 1.5 * (1.0 - y));
@@ -372,7 +367,7 @@ fn a_scattering_grid_emitter_under_mis_equals_unidirectional_estimation() {
 
 #[test]
 fn a_scene_without_emissive_media_has_no_volume_lights() {
-    let d = dir("none");
+    let d = scratch_dir("vlights", "none");
     constant_vol(&d.join("one.vol"), [2, 2, 2], 1.0);
     let interior = "{ type = \"heterogeneous\", density = { grid = \"one.vol\" }, scale = 1, \
                     albedo = 0.5 }";
@@ -392,7 +387,7 @@ fn a_scene_without_emissive_media_has_no_volume_lights() {
 /// light sample, and its image agrees with unidirectional estimation.
 #[test]
 fn an_emissive_medium_behind_a_dielectric_is_no_light() {
-    let d = dir("dielectric");
+    let d = scratch_dir("vlights", "dielectric");
     for interior in [
         r#"{ type = "homogeneous", sigma_t = 1.5, albedo = 0.5, emission = 2 }"#,
         r#"{ type = "heterogeneous", density = { constant = 1 }, scale = 1.5, albedo = 0.5, emission = 2 }"#,
@@ -422,7 +417,7 @@ fn an_emissive_medium_behind_a_dielectric_is_no_light() {
 /// NaN, and MIS agrees with unidirectional estimation.
 #[test]
 fn homogeneous_emitters_stay_finite_and_unbiased_at_extreme_densities() {
-    let d = dir("homogeneous-extreme");
+    let d = scratch_dir("vlights", "homogeneous-extreme");
     for sigma in [1e-3f32, 1e3] {
         let j = 2.0 * sigma;
         let interior = format!(

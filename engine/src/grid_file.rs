@@ -270,11 +270,9 @@ pub fn read_vol(path: &Path) -> Result<DensityGrid, GridFileError> {
 mod tests {
     use super::*;
 
-    /// A scratch directory for this test's files.
-    fn dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("risotto-grid-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A scratch directory for this test's files, removed when dropped.
+    fn dir(name: &str) -> crate::scratch_dir::ScratchDir {
+        crate::scratch_dir::ScratchDir::new(&format!("grid-{name}"))
     }
 
     fn floats(v: &[f32]) -> Vec<u8> {

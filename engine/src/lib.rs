@@ -24,6 +24,8 @@ pub mod replay;
 pub mod scatter_patterns;
 pub mod scene;
 pub mod scene_file;
+#[cfg(test)]
+mod scratch_dir;
 pub mod shade_groups;
 pub mod shading_context;
 pub mod stats;

@@ -264,8 +264,7 @@ mod tests {
             e.contains("Tree_vec3s") && e.contains("not a float grid"),
             "{e}"
         );
-        let dir = std::env::temp_dir().join(format!("risotto-vdb-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::scratch_dir::ScratchDir::new("vdb");
         // Garbage, and the real file cut short at several places: errors, never a panic
         // escaping or a wrong grid.
         let bytes = std::fs::read(&small).unwrap();

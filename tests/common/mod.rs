@@ -382,3 +382,14 @@ pub fn load_scene_text(
 pub fn render_scene_text(dir: &std::path::Path, text: &str) -> RenderOutput {
     render_default(&load_scene_text(dir, text).expect("the scene loads"))
 }
+
+/// A fresh, empty directory for the files of test `test` of the binary `binary`, under
+/// Cargo's scratch directory for integration tests (`target/tmp`): the same path on every
+/// run, so a run replaces what the last one left there (kept for inspection after a
+/// failure) instead of piling directories up in the system's temporary directory.
+pub fn scratch_dir(binary: &str, test: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{binary}-{test}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

@@ -324,8 +324,7 @@ mod tests {
 
     #[test]
     fn partial_round_trip_is_bit_exact() {
-        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::scratch_dir::ScratchDir::new("merge-p");
         let path = dir.join("p.exr");
         let p = part(
             Window {
@@ -350,8 +349,7 @@ mod tests {
 
     #[test]
     fn aov_sums_round_trip_bit_exactly_with_viewable_layers() {
-        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::scratch_dir::ScratchDir::new("merge-aovs");
         let path = dir.join("aovs.exr");
         let window = Window {
             x0: 0,
@@ -402,8 +400,7 @@ mod tests {
     #[test]
     fn a_partial_with_some_aov_sums_missing_is_refused_by_name() {
         use exr::prelude::WritableImage as _;
-        let dir = std::env::temp_dir().join(format!("risotto-merge-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::scratch_dir::ScratchDir::new("merge-half-aovs");
         let path = dir.join("half-aovs.exr");
         let p = part_with_aovs(Window::full(4, 2), SampleRange { start: 0, end: 8 }, 0.3);
         write_partial(&path, &p).unwrap();

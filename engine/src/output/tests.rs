@@ -2,11 +2,11 @@
 
 use super::*;
 
-/// A scratch directory unique to this test process.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("risotto-output-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A scratch directory for one test (removed when dropped) and the file `name` in it.
+fn scratch(name: &str) -> (crate::scratch_dir::ScratchDir, PathBuf) {
+    let dir = crate::scratch_dir::ScratchDir::new(&format!("output-{name}"));
+    let path = dir.join(name);
+    (dir, path)
 }
 
 /// Pseudo-random but reproducible floats covering tiny, huge, negative and special-ish
@@ -40,7 +40,7 @@ fn exr_round_trip_is_bit_exact() {
     let normal = test_image(w, h, 4);
     let counts: Vec<f32> = (0..w * h).map(|i| i as f32).collect();
     let depth: Vec<f32> = (0..w * h).map(|i| 0.5 * i as f32).collect();
-    let path = scratch("roundtrip.exr");
+    let (_dir, path) = scratch("roundtrip.exr");
     write_exr(
         &path,
         &FilmOutput {
@@ -153,7 +153,7 @@ fn exr_without_optional_planes_and_top_left_origin() {
     beauty.set(3, 2, Rgb::new(-4.0, 5.5, 1e30));
     let variance = Image::filled(w, h, Rgb::splat(0.25));
     let counts = vec![8.0; w * h];
-    let path = scratch("minimal.exr");
+    let (_dir, path) = scratch("minimal.exr");
     let out = FilmOutput {
         beauty: &beauty,
         variance: &variance,
@@ -183,7 +183,7 @@ fn exr_rejects_mismatched_planes() {
     let beauty = Image::filled(4, 4, Rgb::WHITE);
     let small = Image::filled(2, 4, Rgb::WHITE);
     let counts = vec![1.0; 16];
-    let path = scratch("bad.exr");
+    let (_dir, path) = scratch("bad.exr");
     let err = write_exr(
         &path,
         &FilmOutput {
@@ -270,7 +270,7 @@ fn png_known_bytes() {
     img.set(1, 0, Rgb::new(f32::NAN, 0.003_130_8, 7.0));
     img.set(2, 0, Rgb::new(0.25, 0.09, -3.0));
     img.set(0, 1, Rgb::new(f32::INFINITY, f32::NEG_INFINITY, 0.001));
-    let path = scratch("known.png");
+    let (_dir, path) = scratch("known.png");
     write_png(&path, &img, 0.0).unwrap();
     let data = decode_png(&path);
     assert_eq!(

@@ -1,0 +1,31 @@
+//! Scratch directories for the engine's unit tests (integration tests use Cargo's
+//! `CARGO_TARGET_TMPDIR`, which unit tests do not get).
+
+use std::path::{Path, PathBuf};
+
+/// A fresh, empty directory in the system's temporary directory, unique to the test process
+/// and `name`, removed with everything in it when dropped (also when the test fails), so
+/// test runs leave nothing behind.
+pub(crate) struct ScratchDir(PathBuf);
+
+impl ScratchDir {
+    pub(crate) fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("risotto-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+}
+
+impl std::ops::Deref for ScratchDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
