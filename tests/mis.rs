@@ -174,6 +174,10 @@ fn mis_and_bxdf_only_agree_with_a_mirror_reflecting_the_light() {
     );
 }
 
+/// Seeds per technique of [`near_lamp`], and its image size.
+const SEEDS: u64 = 6;
+const NEAR_LAMP_SIZE: (u32, u32) = (48, 27);
+
 /// Renders of `scenes/near-lamp.toml` at 48 x 27 and 32 spp with the default sampler, one
 /// per seed `1..=SEEDS`: the per-pixel variance across the seeds (the error of one render,
 /// which the single render's sample variance does not show for a stratified sampler),
@@ -181,7 +185,6 @@ fn mis_and_bxdf_only_agree_with_a_mirror_reflecting_the_light() {
 fn near_lamp(technique: LightingTechnique) -> (f64, [f64; 3]) {
     use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
     use risotto::engine::render::{render, RenderOptions};
-    const SEEDS: u64 = 6;
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/near-lamp.toml");
     let images: Vec<Vec<Rgb>> = (1..=SEEDS)
         .map(|seed| {
@@ -190,8 +193,8 @@ fn near_lamp(technique: LightingTechnique) -> (f64, [f64; 3]) {
                 scene.settings.width,
                 scene.settings.height,
                 scene.settings.spp,
-            ) = (48, 27, 32);
-            (scene.camera.width, scene.camera.height) = (48, 27);
+            ) = (NEAR_LAMP_SIZE.0, NEAR_LAMP_SIZE.1, 32);
+            (scene.camera.width, scene.camera.height) = NEAR_LAMP_SIZE;
             scene.settings.seed = seed;
             let compiled = compile_scene(scene, &file).unwrap();
             let options = RenderOptions {
@@ -222,9 +225,9 @@ fn mis_beats_light_and_bxdf_sampling_where_each_fails_somewhere() {
     // it, where light sampling's cos cos / r^2 weights vary wildly, and a small bright lamp,
     // which Bxdf sampling rarely hits. The power heuristic keeps each strategy where it is
     // good, so MIS's variance must be far below either's (measured 32x and 270x at the
-    // scene's 256 x 144 and 64 spp, 17x and 100x here; 4x is the bar). Constant weights of 1/2 (checked: MIS
-    // then has 1.7x light sampling's variance), a pdf in the wrong measure or a
-    // strategy left out would lose this. The three means must still agree: within 5
+    // scene's 256 x 144 and 64 spp, 17x and 100x here; 4x is the bar). Constant weights of
+    // 1/2 (checked: MIS then has 1.7x light sampling's variance), a pdf in the wrong measure
+    // or a strategy left out would lose this. The three means must still agree: within 5
     // standard errors of the difference of the means over all seeds' pixels.
     let (mis, mis_mean) = near_lamp(LightingTechnique::Mis);
     for technique in [LightingTechnique::NeeOnly, LightingTechnique::BxdfOnly] {
@@ -233,7 +236,7 @@ fn mis_beats_light_and_bxdf_sampling_where_each_fails_somewhere() {
             v > 4.0 * mis,
             "{technique:?}: variance {v:.4e}, MIS {mis:.4e}"
         );
-        let n = (48 * 27 * 6) as f64;
+        let n = (NEAR_LAMP_SIZE.0 * NEAR_LAMP_SIZE.1) as f64 * SEEDS as f64;
         let se = ((v + mis) / n).sqrt();
         for c in 0..3 {
             assert!(

@@ -57,9 +57,9 @@ pub struct Continuations {
 /// is in benches/README.md, "Russian roulette"). Either rule is unbiased. A path whose
 /// throughput cannot fall below 1 (an albedo-1 medium, a white furnace) is never culled,
 /// where Mitsuba's `min(q, 0.95)` kills 5% per bounce and inflates the survivors' weights by
-/// 1/0.95: same expectation, much more variance. `NaN` in gives `NaN`
-/// out, which the caller's `q < 1` reads as "no roulette" (non-finite throughput is the
-/// film's to drop and count).
+/// 1/0.95: same expectation, much more variance. `NaN` in gives `NaN` out, which the
+/// caller's `q < 1` reads as "no roulette" (non-finite throughput is the film's to drop and
+/// count).
 #[inline]
 pub fn survival_probability(rr_throughput: f32) -> f32 {
     if rr_throughput >= 1.0 {
@@ -74,8 +74,9 @@ pub fn survival_probability(rr_throughput: f32) -> f32 {
 /// the path reached `max_depth`, the sample was absorbed or the roulette ended it. `boundaries`
 /// (when volume stacks can be non-empty) copies the stacks and lets a transmitted ray cross
 /// the surface's interior boundary, appending every crossing that corrupts the stack (leaving
-/// a volume the ray was not in, entering one it was already in) to `stack_errors`; `None` means every stack is empty, and the rows'
-/// stacks are left as they are. The caller sets `tmin` and `tmax`.
+/// a volume the ray was not in, entering one it was already in) to `stack_errors`; `None`
+/// means every stack is empty, and the rows' stacks are left as they are. The caller sets
+/// `tmin` and `tmax`.
 ///
 /// Russian roulette: survival probability [`survival_probability`] of `max(beta) * eta^2`, the
 /// throughput after the vertex with the radiance scaling of refraction undone (pbrt-v4's

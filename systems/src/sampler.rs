@@ -21,8 +21,9 @@
 //! shift keeps the net's lattice-like structure, which Owen scrambling randomises: a pixel's
 //! points then count the area on either side of a slanted edge more evenly (measured at 64
 //! spp: 24 % less variance along the slanted side edges of `smoke_homog`'s light, 4.5 % less
-//! over all of `cornell`). A shift leaves each point uniform and keeps the (0,2)-sequence property of
-//! the first two dimensions, so every prefix of a pixel's samples stays stratified.
+//! over all of `cornell`). A shift leaves each point uniform and keeps the (0,2)-sequence
+//! property of the first two dimensions, so every prefix of a pixel's samples stays
+//! stratified.
 //!
 //! A sample index with [`independent::INDEPENDENT_BIT`] set addresses the independent sampler
 //! instead (`crate::independent_sampler`): every draw function here dispatches on it.
@@ -129,7 +130,7 @@ pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
     let sobol: Int4 = sobol_rev(table, index_rev).into();
     let scramble: Int4 = {
         let s: Int4 = [seed.wrapping_mul(SCRAMBLE_SEED_MUL); 4].into();
-        s ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into()
+        s ^ DIM_SALT.into()
     };
     owen_scramble_int4_rev(sobol, hash_int4(scramble))
         .reverse_bits()
