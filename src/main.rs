@@ -282,9 +282,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             d => anyhow::bail!("--max-depth {d}: must be -1 (unbounded) or at least 1"),
         };
     }
-    if let Some(0) = args.threads {
-        anyhow::bail!("--threads 0: need at least one thread");
-    }
+    check_threads(args.threads)?;
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
@@ -547,9 +545,7 @@ fn converge_command(args: ConvergeArgs) -> Result<()> {
             }
         }
     };
-    if let Some(0) = args.threads {
-        anyhow::bail!("--threads 0: need at least one thread");
-    }
+    check_threads(args.threads)?;
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
@@ -617,6 +613,18 @@ fn converge_command(args: ConvergeArgs) -> Result<()> {
         eprintln!("wrote {}/converge.{{csv,json,png,svg}}", args.out.display());
     }
     Ok(())
+}
+
+/// `--threads`: 1 to the engine's [`risotto::engine::render::MAX_THREADS`], checked before
+/// the scene is loaded so a typo costs nothing.
+fn check_threads(threads: Option<usize>) -> Result<()> {
+    use risotto::engine::render::MAX_THREADS;
+    match threads {
+        Some(n) if n == 0 || n > MAX_THREADS => {
+            anyhow::bail!("--threads {n}: must be 1 to {MAX_THREADS}")
+        }
+        _ => Ok(()),
+    }
 }
 
 fn compare_command(test: &Path, reference: &Path) -> Result<()> {

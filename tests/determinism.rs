@@ -7,7 +7,7 @@ use common::*;
 use glam::Vec3;
 use risotto::engine::builtin::{Interior, Surface};
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::render::{render, RenderError, RenderOptions, RenderOutput, MAX_THREADS};
 use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};
 use risotto::systems::geometry::Sphere;
 use risotto_components::Rgb;
@@ -149,5 +149,27 @@ fn a_different_seed_gives_a_different_image() {
     for c in 0..3 {
         let se = (sa.to_array()[c].powi(2) + sb.to_array()[c].powi(2)).sqrt();
         assert!((ma.to_array()[c] - mb.to_array()[c]).abs() <= 4.0 * se);
+    }
+}
+
+/// A thread count the machine cannot start is an error for a library caller, not an abort
+/// (100 000 threads aborted the process when their stacks ran out).
+#[test]
+fn an_impossible_thread_count_is_an_error() {
+    let s = scene(7);
+    for threads in [0, MAX_THREADS + 1, 100_000] {
+        let options = RenderOptions {
+            threads: Some(threads),
+            ..RenderOptions::default()
+        };
+        match render(&s, &options, &|_| {}) {
+            Err(e @ RenderError::ThreadPool { .. }) => {
+                let message = e.to_string();
+                assert!(message.contains(&threads.to_string()), "{message}");
+                assert!(message.contains(&MAX_THREADS.to_string()), "{message}");
+            }
+            Err(e) => panic!("{threads} threads: {e}"),
+            Ok(_) => panic!("{threads} threads rendered"),
+        }
     }
 }

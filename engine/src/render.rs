@@ -105,10 +105,15 @@ impl std::fmt::Display for SampleRange {
     }
 }
 
+/// The most worker threads a render starts. Far above any core count a render uses; a
+/// larger request is a typo, and honouring it aborts the process when the operating system
+/// runs out of thread stacks (100 000 threads did), so it is an error instead.
+pub const MAX_THREADS: usize = 1024;
+
 /// Options of one render that are not part of the scene.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
-    /// Worker threads. Defaults to `None`: all cores.
+    /// Worker threads, 1 to [`MAX_THREADS`]. Defaults to `None`: all cores.
     pub threads: Option<usize>,
     /// Paths per batch. Defaults to 4096.
     pub batch_size: usize,
@@ -324,6 +329,12 @@ fn render_passes<I: Integrator>(
         }
     }
     let pool = match options.threads {
+        Some(threads) if threads == 0 || threads > MAX_THREADS => {
+            return Err(RenderError::ThreadPool {
+                threads,
+                message: format!("must be 1 to {MAX_THREADS}"),
+            })
+        }
         Some(threads) => Some(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
