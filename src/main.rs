@@ -2,9 +2,11 @@
 //! `risotto techniques SCENE.toml`, `risotto converge SCENE.toml [options]`,
 //! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
+mod converge_command;
 mod progress;
 mod replay_args;
 mod split;
+use converge_command::{converge_command, ConvergeArgs};
 use replay_args::{parse_replay, replay_base_command};
 use split::{grid_tile, info_command, merge_command, parse_crop, sample_chunk};
 
@@ -12,7 +14,6 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::compare::compare;
-use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::merge::{parse_sample_range, write_partial, Partial};
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
@@ -85,53 +86,6 @@ struct MergeArgs {
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
-}
-
-#[derive(clap::Args)]
-struct ConvergeArgs {
-    /// The scene file.
-    scene: PathBuf,
-    /// Reference image (EXR of the scene's size), taken as exact. Without it the reference
-    /// is rendered (see --reference-spp).
-    #[arg(long, conflicts_with = "reference_spp")]
-    reference: Option<PathBuf>,
-    /// Samples per pixel of the rendered reference, as two independent halves whose
-    /// difference estimates its noise, subtracted from every MSE. Defaults to 16 times the
-    /// largest spp of the sweep (at most 65536).
-    #[arg(long)]
-    reference_spp: Option<u32>,
-    /// Techniques of the rendered reference: NAME=VALUE[+NAME=VALUE...]; by default the
-    /// sweep's most efficient technique that converges to the exact image, judged from two
-    /// seeds of its largest spp.
-    #[arg(long)]
-    reference_technique: Option<String>,
-    /// The variants to sweep, comma-separated, each NAME=VALUE[+NAME=VALUE...] on top of the
-    /// defaults; `all`: the defaults and every other value of every technique that applies
-    /// to the scene, one at a time.
-    #[arg(long, default_value = "all")]
-    techniques: String,
-    /// Samples per pixel of the sweep, comma-separated.
-    #[arg(long, default_value = "1,2,4,8,16,32,64", conflicts_with = "budget")]
-    spp: String,
-    /// Instead of --spp: each variant renders 1, 2, 4, ... spp until one render takes at
-    /// least this many seconds.
-    #[arg(long)]
-    budget: Option<f64>,
-    /// Renders per point, with different seeds (min/max error bars).
-    #[arg(long, default_value_t = 1)]
-    repeats: u32,
-    /// Output directory.
-    #[arg(long, default_value = "converge")]
-    out: PathBuf,
-    /// Worker threads (defaults to all cores).
-    #[arg(long)]
-    threads: Option<usize>,
-    /// Paths per batch.
-    #[arg(long, default_value_t = 4096)]
-    batch_size: usize,
-    /// No progress bar.
-    #[arg(long)]
-    quiet: bool,
 }
 
 #[derive(clap::Args)]
@@ -470,148 +424,6 @@ fn techniques_command(scene_path: &Path) -> Result<()> {
     let scene = load_scene_file(scene_path, &registry)?;
     let compiled = compile_scene(scene, scene_path)?;
     print!("{}", technique::listing(&compiled.features));
-    Ok(())
-}
-
-/// Parses `--spp 1,2,4`.
-fn parse_spp_list(s: &str) -> Result<Vec<u32>> {
-    let mut v = Vec::new();
-    for item in s.split(',') {
-        let n: u32 = item
-            .trim()
-            .parse()
-            .with_context(|| format!("--spp {s}: \"{item}\" is not a whole number"))?;
-        anyhow::ensure!(
-            (1..=risotto::systems::sampler::MAX_SPP).contains(&n),
-            "--spp {s}: {n} is not between 1 and {}",
-            risotto::systems::sampler::MAX_SPP
-        );
-        v.push(n);
-    }
-    v.sort_unstable();
-    v.dedup();
-    Ok(v)
-}
-
-fn converge_command(args: ConvergeArgs) -> Result<()> {
-    let registry = MaterialRegistry::with_builtins();
-    let scene = load_scene_file(&args.scene, &registry)?;
-    let mut compiled = compile_scene(scene, &args.scene)?;
-    let variants = if args.techniques.trim() == "all" {
-        Techniques::variants(&compiled.features)
-    } else {
-        let mut v = Vec::new();
-        for spec in args.techniques.split(',') {
-            let t = Techniques::parse(spec.trim())
-                .with_context(|| format!("--techniques {}", args.techniques))?;
-            t.check_applicable(&compiled.features)
-                .with_context(|| format!("--techniques {spec} on {}", args.scene.display()))?;
-            if !v.contains(&t) {
-                v.push(t);
-            }
-        }
-        v
-    };
-    let plan = match args.budget {
-        Some(b) => SppPlan::Budget(b),
-        None => SppPlan::List(parse_spp_list(&args.spp)?),
-    };
-    let reference = match &args.reference {
-        Some(path) => {
-            let image = read_exr_rgb(path).context("--reference")?;
-            Reference::Image {
-                image,
-                path: path.display().to_string(),
-            }
-        }
-        None => {
-            if let Some(n) = args.reference_spp {
-                anyhow::ensure!(
-                    (2..=risotto::systems::sampler::MAX_SPP).contains(&n),
-                    "--reference-spp {n}: must be between 2 and {} (two halves)",
-                    risotto::systems::sampler::MAX_SPP
-                );
-            }
-            let techniques = match &args.reference_technique {
-                Some(spec) => Some(
-                    Techniques::parse(spec)
-                        .with_context(|| format!("--reference-technique {spec}"))?,
-                ),
-                None => None,
-            };
-            Reference::Render {
-                spp: args.reference_spp,
-                techniques,
-            }
-        }
-    };
-    check_threads(args.threads)?;
-    anyhow::ensure!(
-        args.batch_size > 0,
-        "--batch-size 0: need at least one path per batch"
-    );
-    let options = ConvergeOptions {
-        variants,
-        plan,
-        repeats: args.repeats,
-        reference,
-        render: RenderOptions {
-            threads: args.threads,
-            batch_size: args.batch_size,
-            ..RenderOptions::default()
-        },
-    };
-    let pixels = compiled.camera.width as u64 * compiled.camera.height as u64;
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let (bar, template) = match converge::total_samples(&options, pixels) {
-            Some(total) => (
-                ProgressBar::new(total),
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {eta} left  {msg}",
-            ),
-            None => (
-                ProgressBar::new_spinner(),
-                "{spinner} [{elapsed_precise}] {human_pos} samples  {msg}",
-            ),
-        };
-        bar.set_style(ProgressStyle::with_template(template).expect("static template is valid"));
-        bar
-    };
-    let stage = |s: &str| bar.set_message(s.to_string());
-    let samples = |n: u64| bar.inc(n);
-    let sweep = converge::run(
-        &mut compiled,
-        &options,
-        &converge::Progress {
-            stage: &stage,
-            samples: &samples,
-        },
-    )?;
-    bar.finish_and_clear();
-    sweep.write_all(&args.out)?;
-    print!("{}", sweep.table());
-    if let (
-        Reference::Render {
-            techniques: Some(techniques),
-            ..
-        },
-        Some(best),
-    ) = (&options.reference, sweep.most_efficient())
-    {
-        if best.label != techniques.label() {
-            println!(
-                "note: {} was more efficient than the reference's technique ({}); \
-                 --reference-technique {} renders the reference with it",
-                best.label,
-                techniques.label(),
-                best.label
-            );
-        }
-    }
-    if !args.quiet {
-        eprintln!("wrote {}/converge.{{csv,json,png,svg}}", args.out.display());
-    }
     Ok(())
 }
 
