@@ -4,8 +4,8 @@
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use risotto::components::{Rgb, Vec2, Vec3};
 use risotto::systems::bxdf::{
-    dielectric_sample, diffuse_sample, hg_sample, sample_cosine_hemisphere, sample_uniform_sphere,
-    BxdfSample,
+    dielectric_sample, diffuse_sample, diffuse_sample_world, hg_sample, sample_cosine_hemisphere,
+    sample_uniform_sphere, BxdfSample,
 };
 
 const N: usize = 4096;
@@ -46,6 +46,30 @@ fn bench_bxdf(c: &mut Criterion) {
                 *o = diffuse_sample(albedo, *wo, *u);
             }
             black_box(&out);
+        })
+    });
+    // The column kernel the renderer's Lambertian runs (world-space normals and directions,
+    // eight lanes at a time); `diffuse_sample` above is its per-point local-frame form.
+    let normal: Vec<Vec3> = u_column(3.0)
+        .into_iter()
+        .map(sample_uniform_sphere)
+        .collect();
+    let vn: Vec<Vec3> = normal
+        .iter()
+        .zip(&wo_up)
+        .map(|(n, wo)| risotto::systems::bxdf::Frame::from_normal(*n).to_world(*wo))
+        .collect();
+    let (mut wi, mut pdf) = (vec![Vec3::ZERO; N], vec![0.0f32; N]);
+    group.bench_function("diffuse_sample_world", |b| {
+        b.iter(|| {
+            diffuse_sample_world(
+                black_box(&normal),
+                black_box(&vn),
+                black_box(&u),
+                &mut wi,
+                &mut pdf,
+            );
+            black_box(&wi);
         })
     });
     group.bench_function("dielectric_sample", |b| {

@@ -1,18 +1,15 @@
 //! Criterion benches of the systems that are not benched elsewhere: camera ray generation,
-//! light sampling, partition and splat. Realistic batch size (4096 items), black_box on
+//! partition and splat (light sampling is in `benches/path.rs`, with the other per-vertex
+//! systems). Realistic batch size (4096 items), black_box on
 //! inputs and outputs, throughput in elements.
 
 use criterion::{black_box, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::{Vec2, Vec3};
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
-use risotto::engine::scene_file::load_scene;
+use glam::Vec3;
 use risotto::systems::camera::{generate_camera_rays, Camera, Projection};
 use risotto::systems::film::{splat, Film};
-use risotto::systems::lights::sample_lights;
 use risotto::systems::partition::partition_by_key;
-use risotto::systems::sampler::{pixel_seed, sample_1d, sample_2d};
+use risotto::systems::sampler::pixel_seed;
 use risotto_components::Rgb;
-use std::path::Path;
 
 const N: usize = 4096;
 
@@ -44,40 +41,6 @@ fn camera(c: &mut Criterion) {
                 &mut direction,
             );
             black_box(&direction);
-        })
-    });
-    g.finish();
-}
-
-fn lights(c: &mut Criterion) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let desc = load_scene(&root.join("scenes/mitsuba-suite/cornell.toml")).unwrap();
-    let scene = scene_from_desc(desc, &MaterialRegistry::with_builtins())
-        .unwrap()
-        .compile()
-        .unwrap();
-    let p: Vec<Vec3> = (0..N)
-        .map(|i| {
-            let u = sample_2d(1, i as u32, 0);
-            Vec3::new(u.x * 2.0 - 1.0, -1.0, u.y * 2.0 - 1.0)
-        })
-        .collect();
-    let u_select: Vec<f32> = (0..N).map(|i| sample_1d(2, i as u32, 0)).collect();
-    let u: Vec<Vec2> = (0..N).map(|i| sample_2d(3, i as u32, 0)).collect();
-    let mut out = vec![None; N];
-    let mut g = c.benchmark_group("lights");
-    g.throughput(Throughput::Elements(N as u64));
-    g.bench_function("cornell_area_light_4096", |b| {
-        b.iter(|| {
-            sample_lights(
-                &scene.lights,
-                &scene.geometry,
-                black_box(&p),
-                black_box(&u_select),
-                black_box(&u),
-                &mut out,
-            );
-            black_box(&out);
         })
     });
     g.finish();
@@ -116,12 +79,6 @@ fn splat_bench(c: &mut Criterion) {
 // criterion_group! expands to an undocumented `pub fn`; a private module keeps it out of the
 // `missing_docs` lint without an allow attribute.
 mod group {
-    criterion::criterion_group!(
-        benches,
-        super::camera,
-        super::lights,
-        super::partition,
-        super::splat_bench
-    );
+    criterion::criterion_group!(benches, super::camera, super::partition, super::splat_bench);
 }
 criterion_main!(group::benches);
