@@ -1,7 +1,7 @@
 //! Criterion benches of the path tracer's column systems that run at every vertex, each
 //! alone over one group of 4096 points: the sampler's column draws, light sampling
 //! (`LightSet::sample_column`, the kernel the renderer runs, against the per-point
-//! `sample_lights` reference), shadow-ray spawning and path continuation.
+//! `sample_lights` reference; and from `scenes/fire.toml`'s volume emitter), shadow-ray spawning and path continuation.
 //!
 //! The points are camera hits on `scenes/mitsuba-suite/cornell.toml`'s floor (`y = -1`,
 //! uniform in the square), lit by its area light; the incoming rays come from the camera;
@@ -38,8 +38,12 @@ const DIMS_PER_VERTEX: u32 = 8;
 const DEPTH: u16 = 6;
 
 fn cornell() -> CompiledScene {
+    compile("scenes/mitsuba-suite/cornell.toml")
+}
+
+fn compile(relative: &str) -> CompiledScene {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let desc = load_scene(&root.join("scenes/mitsuba-suite/cornell.toml")).unwrap();
+    let desc = load_scene(&root.join(relative)).unwrap();
     scene_from_desc(desc, &MaterialRegistry::with_builtins())
         .unwrap()
         .compile()
@@ -180,6 +184,43 @@ fn light_sampling(c: &mut Criterion) {
             scene.lights.sample_column(
                 &scene.geometry,
                 black_box(&points.p),
+                black_box(&u4),
+                &active,
+                &mut out,
+            );
+            black_box(&out.pdf);
+        })
+    });
+    // A volume emitter (scenes/fire.toml's flame, its emission grid's cells sampled by
+    // power), lighting points on that scene's floor: in the MIS light set, the one that
+    // holds volume emitters.
+    let fire = compile("scenes/fire.toml");
+    let fire_floor: Vec<Vec3> = (0..N)
+        .map(|i| {
+            let u = sample_2d(1, i as u32, 0);
+            Vec3::new(u.x * 3.0 - 1.5, 0.0, u.y * 3.0 - 1.5)
+        })
+        .collect();
+    fire.mis_lights.sample_column(
+        &fire.geometry,
+        &fire_floor,
+        &u4,
+        &active,
+        &mut samples.columns(),
+    );
+    let lit = samples.pdf.iter().filter(|&&p| p > 0.0).count();
+    // About 84 %: cells are drawn by their emission bound, and the other samples fall where
+    // the interpolated emission is 0 (no sample).
+    assert!(
+        lit > N / 2,
+        "{lit} of {N} floor points got a sample of the flame"
+    );
+    g.bench_function("fire_volume_emitter_4096_column", |b| {
+        b.iter(|| {
+            let mut out = samples.columns();
+            fire.mis_lights.sample_column(
+                &fire.geometry,
+                black_box(&fire_floor),
                 black_box(&u4),
                 &active,
                 &mut out,
