@@ -471,6 +471,28 @@ fn bad_techniques_and_references_are_named_in_the_error() {
         &risotto(&["converge", s, "--reference", "/nonexistent.exr", "--out", o]),
         &["/nonexistent.exr"],
     );
+    // Every render's image is kept until the sweep ends: 4294967295 repeats would grow
+    // memory without bound (before, the sweep started and never ended). Refused before
+    // anything is rendered, naming the numbers.
+    assert_fails(
+        "memory of the kept images",
+        &risotto(&[
+            "converge",
+            s,
+            "--repeats",
+            "4294967295",
+            "--spp",
+            "1,2",
+            "--out",
+            o,
+            "--quiet",
+        ]),
+        &["--repeats 4294967295", "2 spp counts", "16x16", "GiB"],
+    );
+    assert!(
+        !out_dir.join("converge.csv").exists(),
+        "the refused sweep wrote a CSV"
+    );
 }
 
 #[test]

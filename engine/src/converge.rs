@@ -286,6 +286,38 @@ fn reference_spp(requested: Option<u32>, largest: u32) -> u32 {
     (n.div_ceil(2) * 2).clamp(2, MAX_SPP)
 }
 
+/// The most memory the sweep's renders may keep. Every render's image is kept until the
+/// sweep ends (a rendered reference's spp follows from the largest spp reached, known only
+/// then), so `--repeats 4294967295` or a long spp list on a large image would otherwise
+/// grow without bound.
+pub const MAX_KEPT_BYTES: u64 = 4 << 30;
+
+/// Errors when the images the sweep keeps would exceed [`MAX_KEPT_BYTES`]: one per spp
+/// count (a budget doubles from 1 to at most `MAX_SPP`), technique and repeat.
+fn check_kept_images(options: &ConvergeOptions, w: usize, h: usize) -> Result<(), ConvergeError> {
+    let (counts, up_to) = match &options.plan {
+        SppPlan::List(spps) => (spps.len() as u64, ""),
+        SppPlan::Budget(_) => (MAX_SPP.ilog2() as u64 + 1, "up to "),
+    };
+    let images = counts
+        .saturating_mul(options.variants.len() as u64)
+        .saturating_mul(options.repeats as u64);
+    let bytes =
+        images.saturating_mul((w * h * std::mem::size_of::<risotto_components::Rgb>()) as u64);
+    if bytes > MAX_KEPT_BYTES {
+        return Err(ConvergeError::Options(format!(
+            "--repeats {} x {} techniques x {up_to}{counts} spp counts = {images} renders \
+             of {w}x{h} would keep {:.1} GiB of images (at most {} GiB): fewer repeats, \
+             techniques or spp counts, or a smaller image",
+            options.repeats,
+            options.variants.len(),
+            bytes as f64 / (1u64 << 30) as f64,
+            MAX_KEPT_BYTES >> 30
+        )));
+    }
+    Ok(())
+}
+
 /// Seeds of the reference halves: far from the sweep's `seed + repeat`.
 const REFERENCE_SEED_OFFSET: u64 = 0x5eed_0000_0000;
 
@@ -339,6 +371,7 @@ pub fn run(
             }
         }
     }
+    check_kept_images(options, w, h)?;
     let seed = scene.settings.seed;
     let base = options.render;
 
