@@ -209,12 +209,13 @@ fn main() -> ExitCode {
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {
+    check_exposure(args.exposure)?;
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
     if args.replay.is_none() {
-        check_outputs(&args.scene, &out, args.stats.as_deref())?;
+        check_outputs(&[("the scene", &args.scene)], &out, args.stats.as_deref())?;
     }
     let registry = MaterialRegistry::with_builtins();
     let mut scene = load_scene_file(&args.scene, &registry)?;
@@ -427,6 +428,17 @@ fn techniques_command(scene_path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// `--exposure`: finite and within the engine's
+/// [`risotto::engine::output::MAX_EXPOSURE_STOPS`], checked before any work.
+pub(crate) fn check_exposure(stops: f32) -> Result<()> {
+    use risotto::engine::output::MAX_EXPOSURE_STOPS;
+    anyhow::ensure!(
+        stops.abs() <= MAX_EXPOSURE_STOPS,
+        "--exposure {stops}: must be between -{MAX_EXPOSURE_STOPS} and {MAX_EXPOSURE_STOPS} stops"
+    );
+    Ok(())
+}
+
 /// `--threads`: 1 to the engine's [`risotto::engine::render::MAX_THREADS`], checked before
 /// the scene is loaded so a typo costs nothing.
 fn check_threads(threads: Option<usize>) -> Result<()> {
@@ -447,11 +459,16 @@ fn compare_command(test: &Path, reference: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Checks the outputs of `risotto render` before anything is rendered: `out` is an EXR, the
-/// PNG preview beside it and the stats file are distinct from it, from each other and from
-/// the scene, and each can be written (its directory exists, it is not a directory, and it can
-/// be opened for writing). Nothing is created or truncated here.
-fn check_outputs(scene: &Path, out: &Path, stats: Option<&Path>) -> Result<()> {
+/// Checks the outputs of `risotto render` and `risotto merge` before any work: `out` is an
+/// EXR, the PNG preview beside it and the stats file are distinct from it, from each other
+/// and from the command's `inputs` (the scene, or the parts merged: `(what, path)`), and
+/// each can be written (its directory exists, it is not a directory, and it can be opened
+/// for writing). Nothing is created or truncated here.
+pub(crate) fn check_outputs(
+    inputs: &[(&str, &Path)],
+    out: &Path,
+    stats: Option<&Path>,
+) -> Result<()> {
     let is_exr = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
@@ -462,15 +479,18 @@ fn check_outputs(scene: &Path, out: &Path, stats: Option<&Path>) -> Result<()> {
         out.display()
     );
     let png = out.with_extension("png");
-    let mut named = vec![
-        ("the scene", scene.to_path_buf()),
-        ("--out", out.to_path_buf()),
-        ("the PNG preview", png.clone()),
-    ];
+    let mut named: Vec<(&str, PathBuf)> = inputs
+        .iter()
+        .map(|&(what, p)| (what, p.to_path_buf()))
+        .collect();
+    named.push(("--out", out.to_path_buf()));
+    named.push(("the PNG preview", png.clone()));
     if let Some(stats) = stats {
         named.push(("--stats", stats.to_path_buf()));
     }
-    for (i, (a, pa)) in named.iter().enumerate() {
+    // Each output against the inputs and the outputs before it (inputs may repeat: that
+    // is the command's own error to report).
+    for (i, (a, pa)) in named.iter().enumerate().skip(inputs.len()) {
         for (b, pb) in &named[..i] {
             anyhow::ensure!(
                 !same_file(pa, pb),
@@ -480,7 +500,7 @@ fn check_outputs(scene: &Path, out: &Path, stats: Option<&Path>) -> Result<()> {
             );
         }
     }
-    for (what, path) in named.iter().skip(1) {
+    for (what, path) in named.iter().skip(inputs.len()) {
         check_writable(path).with_context(|| format!("{what} {}", path.display()))?;
     }
     Ok(())

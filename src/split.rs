@@ -124,6 +124,17 @@ pub(crate) fn parse_crop(s: &str) -> Result<Window> {
 }
 
 pub(crate) fn merge_command(args: MergeArgs) -> Result<()> {
+    crate::check_exposure(args.exposure)?;
+    let inputs: Vec<(&str, &Path)> = args
+        .parts
+        .iter()
+        .map(|p| ("the part", p.as_path()))
+        .collect();
+    let stats = args
+        .stats
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("stats.json"));
+    crate::check_outputs(&inputs, &args.out, Some(&stats))?;
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
         parts.push((path.clone(), read_partial(path)?));
@@ -132,10 +143,6 @@ pub(crate) fn merge_command(args: MergeArgs) -> Result<()> {
     write_partial(&args.out, &merged)?;
     let png = args.out.with_extension("png");
     write_png(&png, &merged.beauty(), args.exposure)?;
-    let stats = args
-        .stats
-        .clone()
-        .unwrap_or_else(|| args.out.with_extension("stats.json"));
     let mut text = serde_json::to_string_pretty(&merged.header.stats)?;
     text.push('\n');
     std::fs::write(&stats, text)

@@ -236,6 +236,13 @@ fn bad_options_are_rejected_before_rendering() {
         assert_fails(flag, &out, &[&format!("{flag} {value}")]);
         assert!(!exr.exists(), "{flag} {value}: an image was written");
     }
+    // `--exposure 1e30` (2^1e30 = inf) wrote an all-black preview of a lit image, NaN one
+    // too: refused before rendering.
+    for value in ["1e30", "-200", "nan", "inf"] {
+        let (out, exr) = render(&dir, "ok.toml", SCENE, &["--exposure", value]);
+        assert_fails(value, &out, &["--exposure", "between -64 and 64 stops"]);
+        assert!(!exr.exists(), "--exposure {value}: an image was written");
+    }
 }
 
 /// Outputs are checked before the render (issue 14 item 9): `--out` must be an EXR, the

@@ -454,6 +454,31 @@ fn merge_refuses_parts_that_do_not_fit() {
     );
     let (out, _) = merge(&dir, &[&dir.join("nothing.exr")], "none.exr");
     assert_fails("missing file", &out, &["nothing.exr"]);
+    // Outputs onto the parts: `--out tl.exr` merged and then overwrote the tile, and
+    // `--stats` could overwrite another. Refused before reading, the part left as it was.
+    let tl_bytes = std::fs::read(&tl).unwrap();
+    let (out, _) = merge(&dir, &[&tl, &tr, &bottom], "tl.exr");
+    let t = tl.to_str().unwrap();
+    assert_fails("--out = a part", &out, &["--out", t, "the part"]);
+    let o = dir.join("refused.exr");
+    let merge_with = |extra: &[&str]| {
+        let mut args = vec!["merge", t, tr.to_str().unwrap(), bottom.to_str().unwrap()];
+        args.extend_from_slice(&["--out", o.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        risotto(&args)
+    };
+    let r = merge_with(&["--stats", t]);
+    assert_fails("--stats = a part", &r, &["--stats", t, "the part"]);
+    assert!(!o.exists(), "the refused merge wrote {}", o.display());
+    assert_eq!(
+        std::fs::read(&tl).unwrap(),
+        tl_bytes,
+        "the part was changed"
+    );
+    // A preview exposure that would write a black PNG for a white image.
+    let r = merge_with(&["--exposure", "1e30"]);
+    assert_fails("--exposure 1e30", &r, &["--exposure", "between -64 and 64"]);
+    assert!(!o.exists(), "the refused merge wrote {}", o.display());
 }
 
 #[test]

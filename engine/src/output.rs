@@ -505,10 +505,25 @@ pub fn srgb_encode_u8(v: f32) -> u8 {
     (srgb_oetf(v) * 255.0).round() as u8
 }
 
+/// The largest exposure, in stops either way, [`write_png`] takes: `2^64` already turns
+/// every lit pixel white; beyond about 128 the scale overflows to infinity, and `0 x inf`
+/// would write black where the image is white.
+pub const MAX_EXPOSURE_STOPS: f32 = 64.0;
+
 /// Writes an 8-bit sRGB PNG preview: each channel is scaled by `2^exposure_stops`, clamped
 /// to `[0, 1]` and encoded with the exact sRGB curve ([`srgb_oetf`]). Non-finite values are
-/// written as 0. The file carries an `sRGB` chunk (perceptual intent).
+/// written as 0. The file carries an `sRGB` chunk (perceptual intent). An exposure that is
+/// not finite or beyond [`MAX_EXPOSURE_STOPS`] is an error.
 pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), OutputError> {
+    if exposure_stops.is_nan() || exposure_stops.abs() > MAX_EXPOSURE_STOPS {
+        return Err(invalid(
+            path,
+            format!(
+                "exposure {exposure_stops} stops: must be between -{MAX_EXPOSURE_STOPS} and \
+                 {MAX_EXPOSURE_STOPS}"
+            ),
+        ));
+    }
     if !img.is_consistent() {
         return Err(invalid(
             path,

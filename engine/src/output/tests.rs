@@ -287,6 +287,22 @@ fn png_known_bytes() {
     assert_eq!(data[6], 188);
 }
 
+/// The largest exposure still scales a lit pixel to white; beyond it, and for NaN, the
+/// scale would overflow to infinity (`0 x inf` = NaN, written black): an error, no file.
+#[test]
+fn png_exposure_is_bounded() {
+    let img = Image::filled(2, 1, Rgb::new(1e-10, 0.0, 0.5));
+    let (_dir, path) = scratch("exposure.png");
+    write_png(&path, &img, MAX_EXPOSURE_STOPS).unwrap();
+    assert_eq!(decode_png(&path), vec![255, 0, 255, 255, 0, 255]);
+    std::fs::remove_file(&path).unwrap();
+    for e in [MAX_EXPOSURE_STOPS + 1.0, -1e30, f32::NAN, f32::INFINITY] {
+        let err = write_png(&path, &img, e).unwrap_err().to_string();
+        assert!(err.contains("exposure") && err.contains("64"), "{e}: {err}");
+        assert!(!path.exists(), "{e}: a file was written");
+    }
+}
+
 fn decode_png(path: &Path) -> Vec<u8> {
     let decoder = png::Decoder::new(File::open(path).unwrap());
     let mut reader = decoder.read_info().unwrap();
