@@ -50,7 +50,7 @@ use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::builtin::DielectricBxdf;
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::load::{scene_from_desc, MaterialRegistry};
-use risotto::engine::output::{write_exr, write_png, FilmOutput};
+use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
@@ -285,17 +285,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::temp_dir();
     let exr = dir.join("custom_volume_integrator.exr");
     let png = dir.join("custom_volume_integrator.png");
-    write_exr(
-        &exr,
-        &FilmOutput {
-            beauty: &out.beauty,
-            variance: &out.variance,
-            sample_count: &out.sample_count,
-            albedo: None,
-            normal: None,
-            depth: None,
-        },
-    )?;
+    write_exr(&exr, &out.film_output(false))?;
     write_png(&png, &out.beauty, 0.0)?;
     let m = out.beauty.mean();
     println!(

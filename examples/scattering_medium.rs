@@ -27,7 +27,7 @@ use glam::Vec3;
 use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::builtin::{DiffuseBxdf, HenyeyGreensteinPhase, NullBxdf};
 use risotto::engine::context::IntegratorContext;
-use risotto::engine::output::{write_exr, write_png, FilmOutput};
+use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
     Builtin, Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
@@ -285,17 +285,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::temp_dir();
     let exr = dir.join("scattering_medium.exr");
     let png = dir.join("scattering_medium.png");
-    write_exr(
-        &exr,
-        &FilmOutput {
-            beauty: &out.beauty,
-            variance: &out.variance,
-            sample_count: &out.sample_count,
-            albedo: None,
-            normal: None,
-            depth: None,
-        },
-    )?;
+    write_exr(&exr, &out.film_output(false))?;
     write_png(&png, &out.beauty, 0.0)?;
     let m = out.beauty.mean();
     println!(

@@ -16,7 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::compare::compare;
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::merge::{parse_sample_range, write_partial, Partial};
-use risotto::engine::output::{read_exr_rgb, write_exr, write_png, FilmOutput};
+use risotto::engine::output::{read_exr_rgb, write_exr, write_png};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
     RenderOutput,
@@ -359,15 +359,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if partial {
         write_partial(&out, &to_partial(&result))?;
     } else {
-        let film = FilmOutput {
-            beauty: &result.beauty,
-            variance: &result.variance,
-            sample_count: &result.sample_count,
-            albedo: args.aovs.then_some(&result.albedo),
-            normal: args.aovs.then_some(&result.normal),
-            depth: args.aovs.then_some(result.depth.as_slice()),
-        };
-        write_exr(&out, &film)?;
+        write_exr(&out, &result.film_output(args.aovs))?;
     }
     let png = out.with_extension("png");
     write_png(&png, &result.beauty, args.exposure)?;

@@ -178,6 +178,21 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
+impl RenderOutput {
+    /// The layers [`write_exr`](crate::output::write_exr) writes: beauty, variance and
+    /// sample count, and with `aovs` the albedo, normal and depth means.
+    pub fn film_output(&self, aovs: bool) -> crate::output::FilmOutput<'_> {
+        crate::output::FilmOutput {
+            beauty: &self.beauty,
+            variance: &self.variance,
+            sample_count: &self.sample_count,
+            albedo: aovs.then_some(&self.albedo),
+            normal: aovs.then_some(&self.normal),
+            depth: aovs.then_some(self.depth.as_slice()),
+        }
+    }
+}
+
 /// Errors of [`render`].
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
