@@ -8,14 +8,14 @@
 //! the Bxdf samples are cosine-weighted (a white Lambertian floor), at depth 6 so that
 //! Russian roulette runs.
 
+mod common;
+use common::compile;
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use glam::{Vec2, Vec3};
 use risotto::components::{
     LobeSampled, RayRow, Rays, Rgb, ShadingPointRow, ShadingPoints, ShadowRays,
 };
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::scene_file::load_scene;
 use risotto::systems::bxdf::{diffuse_eval, sample_cosine_hemisphere, Frame};
 use risotto::systems::bxdf_samples::BxdfSamples;
 use risotto::systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
@@ -25,7 +25,6 @@ use risotto::systems::path::{continue_paths, PathLimits, Vertices};
 use risotto::systems::sampler::{
     next_2d_column, next_4d_column, pixel_seed, sample_2d, PathSampler,
 };
-use std::path::Path;
 
 const N: usize = 4096;
 /// The floor's reflectance in cornell.toml.
@@ -39,15 +38,6 @@ const DEPTH: u16 = 6;
 
 fn cornell() -> CompiledScene {
     compile("scenes/mitsuba-suite/cornell.toml")
-}
-
-fn compile(relative: &str) -> CompiledScene {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let desc = load_scene(&root.join(relative)).unwrap();
-    scene_from_desc(desc, &MaterialRegistry::with_builtins())
-        .unwrap()
-        .compile()
-        .unwrap()
 }
 
 /// The group: floor points and the camera rays that arrived there (ray `i` at point `i`).

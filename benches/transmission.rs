@@ -12,31 +12,21 @@
 //! - `glass`: `scenes/mitsuba-suite/glass_beer.toml`, a dielectric with a Beer interior whose
 //!   surface blocks shadow rays (the walk stops at the glass).
 
+mod common;
 use bumpalo::Bump;
+use common::compile;
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use glam::{Vec2, Vec3};
 use risotto::engine::integrator::PathBatch;
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::scene_file::load_scene;
 use risotto::engine::stats::SystemStats;
 use risotto::engine::transmission::trace_shadow_rays;
 use risotto::systems::camera::generate_camera_rays;
 use risotto::systems::intersect::intersect_closest;
 use risotto::systems::sampler::{pixel_seed, sample_4d};
 use risotto_components::{Paths, Rgb, ShadowRayRow, ShadowRays, NO_HIT};
-use std::path::Path;
 
 const N: usize = 4096;
-
-fn compile(relative: &str) -> CompiledScene {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let desc = load_scene(&root.join(relative)).unwrap();
-    scene_from_desc(desc, &MaterialRegistry::with_builtins())
-        .unwrap()
-        .compile()
-        .unwrap()
-}
 
 /// `N` shadow rays from camera hits on surfaces outside every volume towards light samples.
 fn shadow_rays(scene: &CompiledScene) -> ShadowRays {

@@ -420,27 +420,17 @@ fn techniques_command(scene_path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// `--exposure`: finite and within the engine's
-/// [`risotto::engine::output::MAX_EXPOSURE_STOPS`], checked before any work.
+/// `--exposure`, checked by the engine's rule before any work.
 pub(crate) fn check_exposure(stops: f32) -> Result<()> {
-    use risotto::engine::output::MAX_EXPOSURE_STOPS;
-    anyhow::ensure!(
-        stops.abs() <= MAX_EXPOSURE_STOPS,
-        "--exposure {stops}: must be between -{MAX_EXPOSURE_STOPS} and {MAX_EXPOSURE_STOPS} stops"
-    );
-    Ok(())
+    risotto::engine::output::check_exposure(stops)
+        .map_err(|why| anyhow::anyhow!("--exposure {stops}: {why}"))
 }
 
-/// `--threads`: 1 to the engine's [`risotto::engine::render::MAX_THREADS`], checked before
-/// the scene is loaded so a typo costs nothing.
+/// `--threads`, checked by the engine's rule before the scene is loaded so a typo costs
+/// nothing.
 fn check_threads(threads: Option<usize>) -> Result<()> {
-    use risotto::engine::render::MAX_THREADS;
-    match threads {
-        Some(n) if n == 0 || n > MAX_THREADS => {
-            anyhow::bail!("--threads {n}: must be 1 to {MAX_THREADS}")
-        }
-        _ => Ok(()),
-    }
+    let Some(n) = threads else { return Ok(()) };
+    risotto::engine::render::check_threads(n).map_err(|why| anyhow::anyhow!("--threads {n}: {why}"))
 }
 
 fn compare_command(test: &Path, reference: &Path) -> Result<()> {

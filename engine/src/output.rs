@@ -510,20 +510,24 @@ pub fn srgb_encode_u8(v: f32) -> u8 {
 /// would write black where the image is white.
 pub const MAX_EXPOSURE_STOPS: f32 = 64.0;
 
+/// Whether [`write_png`] takes the exposure `stops`: `Err` says why not (NaN, or beyond
+/// [`MAX_EXPOSURE_STOPS`]); a caller checks with it before the work whose preview it is.
+pub fn check_exposure(stops: f32) -> Result<(), String> {
+    if stops.is_nan() || stops.abs() > MAX_EXPOSURE_STOPS {
+        return Err(format!(
+            "must be between -{MAX_EXPOSURE_STOPS} and {MAX_EXPOSURE_STOPS} stops"
+        ));
+    }
+    Ok(())
+}
+
 /// Writes an 8-bit sRGB PNG preview: each channel is scaled by `2^exposure_stops`, clamped
 /// to `[0, 1]` and encoded with the exact sRGB curve ([`srgb_oetf`]). Non-finite values are
 /// written as 0. The file carries an `sRGB` chunk (perceptual intent). An exposure that is
 /// not finite or beyond [`MAX_EXPOSURE_STOPS`] is an error.
 pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), OutputError> {
-    if exposure_stops.is_nan() || exposure_stops.abs() > MAX_EXPOSURE_STOPS {
-        return Err(invalid(
-            path,
-            format!(
-                "exposure {exposure_stops} stops: must be between -{MAX_EXPOSURE_STOPS} and \
-                 {MAX_EXPOSURE_STOPS}"
-            ),
-        ));
-    }
+    check_exposure(exposure_stops)
+        .map_err(|why| invalid(path, format!("exposure {exposure_stops}: {why}")))?;
     if !img.is_consistent() {
         return Err(invalid(
             path,

@@ -110,6 +110,15 @@ impl std::fmt::Display for SampleRange {
 /// runs out of thread stacks (100 000 threads did), so it is an error instead.
 pub const MAX_THREADS: usize = 1024;
 
+/// Whether a render starts `threads` worker threads: `Err` says why not (0, or more than
+/// [`MAX_THREADS`]); a caller checks with it before loading the scene.
+pub fn check_threads(threads: usize) -> Result<(), String> {
+    if threads == 0 || threads > MAX_THREADS {
+        return Err(format!("must be 1 to {MAX_THREADS}"));
+    }
+    Ok(())
+}
+
 /// Options of one render that are not part of the scene.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
@@ -344,21 +353,12 @@ fn render_passes<I: Integrator>(
         }
     }
     let pool = match options.threads {
-        Some(threads) if threads == 0 || threads > MAX_THREADS => {
-            return Err(RenderError::ThreadPool {
-                threads,
-                message: format!("must be 1 to {MAX_THREADS}"),
-            })
+        Some(threads) => {
+            let error = |message| RenderError::ThreadPool { threads, message };
+            check_threads(threads).map_err(error)?;
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+            Some(pool.map_err(|e| error(e.to_string()))?)
         }
-        Some(threads) => Some(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|e| RenderError::ThreadPool {
-                    threads,
-                    message: e.to_string(),
-                })?,
-        ),
         None => None,
     };
     // One pass renders the sample indices `range` of every tile, continuing its film.
