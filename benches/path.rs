@@ -1,5 +1,6 @@
 //! Criterion benches of the path tracer's column systems that run at every vertex, each
-//! alone over one group of 4096 points: the sampler's column draws, light sampling
+//! alone over one group of 4096 points: the sampler's column draws (and single draws, one
+//! dimension at a time, as tracking takes them), light sampling
 //! (`LightSet::sample_column`, the kernel the renderer runs, against the per-point
 //! `sample_lights` reference; and from `scenes/fire.toml`'s volume emitter), shadow-ray spawning and path continuation.
 //!
@@ -112,9 +113,32 @@ fn sampler_columns(c: &mut Criterion) {
                 black_box(&u2);
             })
         });
+        // One dimension at a time, as tracking's tentative collisions draw them: each
+        // sampler's next `DRAWS` dimensions summed (the sum keeps the draws live).
+        for (how, streamed) in [("next_1d", false), ("stream", true)] {
+            g.bench_function(format!("{DRAWS}_single_draws_{how}_{name}"), |b| {
+                b.iter(|| {
+                    s.copy_from_slice(&start);
+                    let mut sum = 0.0f32;
+                    for p in black_box(&mut s).iter_mut() {
+                        if streamed {
+                            let mut stream = p.stream();
+                            sum += (0..DRAWS).map(|_| stream.next_1d()).sum::<f32>();
+                        } else {
+                            sum += (0..DRAWS).map(|_| p.next_1d()).sum::<f32>();
+                        }
+                    }
+                    black_box(sum)
+                })
+            });
+        }
     }
     g.finish();
 }
+
+/// Dimensions drawn one at a time per sampler in the single-draw benches (ratio tracking
+/// draws one per tentative collision: a variable number per ray).
+const DRAWS: usize = 16;
 
 /// The vertex's four-dimension sets: light position (0, 1), light selection (2), roulette (3).
 fn vertex_sets(rays: &Rays) -> Vec<[f32; 4]> {

@@ -536,6 +536,52 @@ impl PathSampler {
             std::array::from_fn(|k| sample_1d(self.seed, self.sample, d + k as u32))
         }
     }
+    /// The sampler's dimensions one at a time, each set of four evaluated once
+    /// ([`DimensionStream`]).
+    #[inline]
+    pub fn stream(&mut self) -> DimensionStream<'_> {
+        DimensionStream {
+            independent: SamplerKind::of(self.sample) == SamplerKind::Independent,
+            sampler: self,
+            set: u32::MAX,
+            values: [0.0; 4],
+        }
+    }
+}
+
+/// Successive dimensions of a [`PathSampler`] for code that draws a variable number of them
+/// one at a time (the tentative collisions of delta and ratio tracking): the same numbers as
+/// as many [`PathSampler::next_1d`] calls, bit for bit, but each set of four dimensions is
+/// evaluated once instead of once per dimension (a Sobol set costs its index scramble, table
+/// lookups and Owen scramble whichever of its dimensions is asked for; the independent
+/// sampler's dimensions are drawn one by one, as `next_1d` does). Advances the sampler's
+/// `dimension` as it goes.
+pub struct DimensionStream<'a> {
+    sampler: &'a mut PathSampler,
+    /// The sampler is the independent one.
+    independent: bool,
+    /// The set held in `values` (`u32::MAX`: none yet).
+    set: u32,
+    values: [f32; 4],
+}
+
+impl DimensionStream<'_> {
+    /// The next sample dimension.
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let s = &mut *self.sampler;
+        if self.independent {
+            // Its dimensions are independent hashes: one costs less than a cached set.
+            return s.next_1d();
+        }
+        let d = s.dimension;
+        if d / 4 != self.set {
+            self.set = d / 4;
+            self.values = sample_4d(s.seed, s.sample, self.set);
+        }
+        s.dimension += 1;
+        self.values[(d % 4) as usize]
+    }
 }
 
 #[cfg(test)]
@@ -585,6 +631,29 @@ mod tests {
                 for k in 0..4 {
                     assert_eq!(w[k], sample_1d(seed, sample, dim + k as u32));
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn a_dimension_stream_draws_what_next_1d_draws() {
+        // The stream only caches each set: from any start, for both samplers, its draws
+        // and the dimension it leaves must be those of as many `next_1d` calls.
+        let seed = pixel_seed(5, 777);
+        for sample in [0u32, 3, 1000, SamplerKind::Independent.address(3)] {
+            for start in [0u32, 1, 3, 4, 6, 255, 257] {
+                let mut a = PathSampler {
+                    seed,
+                    sample,
+                    dimension: start,
+                };
+                let mut b = a;
+                let mut stream = a.stream();
+                let drawn: Vec<f32> = (0..11).map(|_| stream.next_1d()).collect();
+                let expected: Vec<f32> = (0..11).map(|_| b.next_1d()).collect();
+                assert_eq!(drawn, expected, "sample {sample}, start {start}");
+                assert_eq!(a.dimension, start + 11);
+                assert_eq!(a.next_1d(), b.next_1d());
             }
         }
     }

@@ -184,7 +184,8 @@ impl HeterogeneousInterior<'_> {
         let sigma = |t: f32| smax * fields.density.grey(o + d * t);
         let emission = |t: f32, sigma_t: f32| self.emission_at(o + d * t, sigma_t, fields);
         let start = s.dimension;
-        let rand = || s.next_1d();
+        let mut stream = s.stream();
+        let rand = || stream.next_1d();
         // The ray-marching estimators gather no emission: emissive media ratio-track.
         let residual = tracking == Tracking::Residual;
         let r = if m.is_chromatic() {
@@ -262,7 +263,8 @@ impl HeterogeneousInterior<'_> {
         };
         let sigma = |t: f32| smax * fields.density.grey(o + d * t);
         let start = s.dimension;
-        let rand = || s.next_1d();
+        let mut stream = s.stream();
+        let rand = || stream.next_1d();
         let r = if m.is_chromatic() {
             // One grey majorant (the densest channel's), three running estimates
             // (risotto_systems::spectral_tracking).
@@ -371,6 +373,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
             let start = s.dimension;
+            let mut stream = s.stream();
             let sigma = |t: f32| smax * fields.density.grey(o + d * t);
             let f = if chromatic {
                 // One-sample spectral MIS over the channels, in proportion to the path's
@@ -398,7 +401,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                             Rgb::BLACK
                         }
                     },
-                    || s.next_1d(),
+                    || stream.next_1d(),
                 );
                 if emits {
                     out.emitted.push(i as u32, e);
@@ -417,7 +420,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     self.emissive_segments(&fields.grids, o, d, tmax[i]),
                     sigma,
                     |t, sigma_t| emission_at(o + d * t, sigma_t) * light_weight(i, t),
-                    || s.next_1d(),
+                    || stream.next_1d(),
                 );
                 out.emitted.push(i as u32, e);
                 f
@@ -428,9 +431,9 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     .traverse(o, d, 0.0, tmax[i])
                     .map(|g| g.scaled(smax));
                 if tracking == Tracking::RayMarching {
-                    ray_marching_free_flight(segs, sigma, || s.next_1d(), step)
+                    ray_marching_free_flight(segs, sigma, || stream.next_1d(), step)
                 } else {
-                    delta_tracking(segs, sigma, || s.next_1d())
+                    delta_tracking(segs, sigma, || stream.next_1d())
                 }
             };
             align(s, start);

@@ -243,7 +243,7 @@ impl LightingDelegate for DirectLighting<'_> {
             let r = ray_id[k] as usize;
             let s = &mut samplers[r];
             dimension[r] = s.dimension;
-            u4[k] = [s.next_1d(), s.next_1d(), s.next_1d(), s.next_1d()];
+            u4[k] = s.next_4d();
             // A light sample at a point on a ray of depth `d` closes a path of `d + 2`
             // segments.
             active[k] = rays.depth[r] as u32 + 2 <= scene.settings.max_depth;
