@@ -516,3 +516,51 @@ fn shadow_rays_pass_false_boundaries_unchanged() {
         albedo * e * (theta.cos() / std::f32::consts::PI) * beer(SIGMA_GLASS, 2.0 / theta.cos());
     render_and_check(scene, 1e-4, |_, _| Some(expected));
 }
+
+#[test]
+fn a_path_that_cannot_leave_ends_at_the_vertex_limit() {
+    // An albedo-1 medium of mean free path 1e-30 in a unit ball: every free flight is far
+    // below the float spacing of the coordinates, so a path's scattering point never moves,
+    // its throughput stays 1 (no roulette) and it can never leave. With an unbounded
+    // max_depth it must end at MAX_PATH_VERTICES (before the depth column wraps), be counted
+    // and warned about, and leave a finite pixel.
+    use risotto::engine::media::{HomogeneousMedium, Scattering};
+    use risotto::systems::path::MAX_PATH_VERTICES;
+    let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 0.1, 1, 1);
+    let mut scene = Scene::new(cam, settings(1, 1, 1, u32::MAX));
+    let frozen = Interior::Homogeneous(HomogeneousMedium {
+        sigma_t: Rgb::splat(1e30),
+        sigma_s: Rgb::splat(1e30),
+        phase: risotto::systems::phase::PhaseFunction::Isotropic,
+        scattering: Scattering::Bounce,
+        emission: Rgb::BLACK,
+        albedo_pattern: None,
+        g_pattern: None,
+    });
+    let m = scene.add_material("frozen", 1, mat_in(Surface::Interface, frozen));
+    let ball = Sphere {
+        center: Vec3::ZERO,
+        radius: 1.0,
+    };
+    scene.add_shape("ball", ShapeGeometry::Sphere(ball), m, None);
+    environment(&mut scene, Rgb::WHITE);
+    let out = render_default(&scene.compile().unwrap());
+    assert_eq!(
+        terminated(&out, Termination::DepthLimit),
+        1,
+        "{}",
+        out.stats
+    );
+    // The camera ray and one ray from every vertex but the last (the pass into the ball
+    // continues the camera ray): the path had exactly MAX_PATH_VERTICES vertices.
+    assert_eq!(out.stats.counters.rays, MAX_PATH_VERTICES as u64);
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+    assert_finite("frozen walk", &out);
+    let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
+    assert_eq!(json["terminated"]["depth_limit"], 1, "{json}");
+    let summary = out.stats.to_string();
+    assert!(
+        summary.contains(&format!("warning: 1 paths reached {MAX_PATH_VERTICES}")),
+        "{summary}"
+    );
+}

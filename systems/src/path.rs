@@ -43,7 +43,20 @@ pub struct Continuations {
     pub absorbed: usize,
     /// Paths ended by Russian roulette.
     pub roulette: usize,
+    /// Paths ended at their [`MAX_PATH_VERTICES`]-th scattering vertex (only a `max_depth`
+    /// above it, or an unbounded one, lets a path get there).
+    pub depth_limit: usize,
 }
+
+/// The most scattering vertices a path can have, whatever `max_depth` says: the range of the
+/// rays' `depth` column (`u16`, the vertices before the ray). A path ends at this vertex
+/// (counted in [`Continuations::depth_limit`]) where `max_depth` would let it go on: where
+/// that is at least `MAX_PATH_VERTICES + 1` segments, or unbounded (`-1`). Only light that cannot leave a region gets
+/// near it: paths in a closed room of albedo-1 walls, or frozen in an albedo-1 medium whose
+/// mean free path is below the resolution of its coordinates, whose throughput stays 1 so
+/// that Russian roulette never ends them; without the limit they would go on until a
+/// numerical leak let them out, or for ever.
+pub const MAX_PATH_VERTICES: u32 = u16::MAX as u32;
 
 /// The probability that Russian roulette lets a path go on, given `rr_throughput`: the
 /// largest channel of its throughput times `eta^2` (see [`continue_paths`]). Cycles' rule
@@ -155,9 +168,13 @@ pub fn continue_paths(
     let mut count = 0;
     for k in 0..m {
         let r = ray_id[k] as usize;
-        // The next segment must fit in max_depth.
+        // The next segment must fit in max_depth, and its vertex count in the depth column.
         if in_depth[r] as u32 + 2 > limits.max_depth {
             done.max_depth += 1;
+            continue;
+        }
+        if in_depth[r] as u32 + 1 >= MAX_PATH_VERTICES {
+            done.depth_limit += 1;
             continue;
         }
         let pdf = s_pdf[k];
@@ -271,6 +288,73 @@ mod tests {
         }
         // Non-finite throughput is left to the film (counted there), not culled silently.
         assert!(survival_probability(f32::NAN).is_nan());
+    }
+
+    #[test]
+    fn paths_end_at_the_vertex_limit_without_wrapping_their_depth() {
+        // Two volume points reached by rays of depth MAX - 2 and MAX - 1: vertices MAX - 1
+        // and MAX of their paths, throughput 1 (no roulette), an unbounded max_depth.
+        let (p, d) = (glam::Vec3::ZERO, glam::Vec3::Z);
+        let mut incoming = Rays::default();
+        for depth in [MAX_PATH_VERTICES - 2, MAX_PATH_VERTICES - 1] {
+            incoming.push(risotto_components::RayRow {
+                direction: d,
+                throughput: Rgb::WHITE,
+                eta_scale: 1.0,
+                depth: depth as u16,
+                ..Default::default()
+            });
+        }
+        let mut points = ShadingPoints::default();
+        points.extend_in_volume(&[p; 2], &[d; 2], 0);
+        let mut samples = BxdfSamples::default();
+        samples.reset(2);
+        for i in 0..2 {
+            (samples.wi[i], samples.weight[i], samples.pdf[i]) = (d, Rgb::WHITE, 1.0);
+            samples.eta[i] = 1.0;
+        }
+        let continue_with = |max_depth: u32| {
+            let mut next = Rays::default();
+            let from = Vertices {
+                points: &points,
+                range: 0..2,
+                on_surface: false,
+                incoming: &incoming,
+            };
+            let limits = PathLimits {
+                max_depth,
+                rr_depth: 5,
+                dims_per_vertex: 8,
+            };
+            let mut rows = next.reuse_rows(2);
+            let done = continue_paths(
+                limits,
+                from,
+                &samples,
+                &[[0.0; 4]; 2],
+                None,
+                &mut Vec::new(),
+                &mut rows,
+                0,
+            );
+            (done, rows.depth[0])
+        };
+        // Unbounded: the first goes on at depth MAX - 1, the second ends at the limit (its
+        // next depth, MAX, would be wrapped to 0 by the u16 column in release builds).
+        let (done, depth) = continue_with(u32::MAX);
+        assert_eq!(
+            (done.written, done.depth_limit, done.max_depth),
+            (1, 1, 0),
+            "{done:?}"
+        );
+        assert_eq!(depth as u32, MAX_PATH_VERTICES - 1);
+        // A max_depth that ends the second path first counts as max_depth, not the limit.
+        let (done, _) = continue_with(MAX_PATH_VERTICES);
+        assert_eq!(
+            (done.written, done.depth_limit, done.max_depth),
+            (1, 0, 1),
+            "{done:?}"
+        );
     }
 
     #[test]

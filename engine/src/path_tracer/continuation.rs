@@ -82,5 +82,6 @@ pub(super) fn continue_group(
     stats.terminate(Termination::MaxDepth, done.max_depth);
     stats.terminate(Termination::Absorbed, done.absorbed);
     stats.terminate(Termination::RussianRoulette, done.roulette);
+    stats.terminate(Termination::DepthLimit, done.depth_limit);
     done.written
 }

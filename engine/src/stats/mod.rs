@@ -176,11 +176,15 @@ pub enum Termination {
     PassLimit,
     /// Throughput became NaN or infinite; the path was dropped.
     NonFinite,
+    /// Reached the most scattering vertices a path can have
+    /// ([`MAX_PATH_VERTICES`](risotto_systems::path::MAX_PATH_VERTICES)) with a `max_depth`
+    /// that let it go on: light that cannot leave a region (the summary warns).
+    DepthLimit,
 }
 
 impl Termination {
     /// Number of reasons.
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = 7;
     /// Every reason, in discriminant order.
     pub const ALL: [Termination; Termination::COUNT] = [
         Termination::Escaped,
@@ -189,6 +193,7 @@ impl Termination {
         Termination::MaxDepth,
         Termination::PassLimit,
         Termination::NonFinite,
+        Termination::DepthLimit,
     ];
 
     /// The snake_case name used in JSON and in the summary table.
@@ -200,6 +205,7 @@ impl Termination {
             Termination::MaxDepth => "max_depth",
             Termination::PassLimit => "pass_limit",
             Termination::NonFinite => "non_finite",
+            Termination::DepthLimit => "depth_limit",
         }
     }
 }

@@ -209,6 +209,17 @@ impl fmt::Display for RenderStats {
                 c.majorant_violations
             )?;
         }
+        let cut = c.terminated[Termination::DepthLimit as usize];
+        if cut > 0 {
+            write!(
+                f,
+                "\nwarning: {cut} paths reached {} scattering vertices, the most a path can \
+                 have, and were ended there (light that cannot leave a region: albedo-1 walls \
+                 or media around it, or a medium too dense for its coordinates' precision); \
+                 the image misses what they would have carried on",
+                risotto_systems::path::MAX_PATH_VERTICES
+            )?;
+        }
         if c.non_finite.iter().any(|&n| n > 0) {
             write!(f, "\nnon-finite values by stage:")?;
             for st in Stage::ALL {
