@@ -41,3 +41,14 @@ pub(crate) fn mean_se(n: usize, mut f: impl FnMut() -> f32) -> (f64, f64) {
     let m = s / n as f64;
     (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
 }
+
+/// Simpson's rule for `int_0^1 f` with `n` (even) intervals, in f64 (the closed forms the
+/// estimators' unit tests compare against).
+#[cfg(test)]
+pub(crate) fn simpson_01(n: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let h = 1.0 / n as f64;
+    let inner: f64 = (1..n)
+        .map(|i| f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
+        .sum();
+    (f(0.0) + f(1.0) + inner) * h / 3.0
+}
