@@ -519,48 +519,111 @@ fn shadow_rays_pass_false_boundaries_unchanged() {
 
 #[test]
 fn a_path_that_cannot_leave_ends_at_the_vertex_limit() {
-    // An albedo-1 medium of mean free path 1e-30 in a unit ball: every free flight is far
-    // below the float spacing of the coordinates, so a path's scattering point never moves,
-    // its throughput stays 1 (no roulette) and it can never leave. With an unbounded
-    // max_depth it must end at MAX_PATH_VERTICES (before the depth column wraps), be counted
-    // and warned about, and leave a finite pixel.
-    use risotto::engine::media::{HomogeneousMedium, Scattering};
+    // The camera and a point light inside a closed room of reflectance-1 walls (six quads
+    // facing in): a path's throughput stays 1, so Russian roulette never ends it, and only a
+    // numerical leak at an edge lets it out. With an unbounded max_depth every path must end,
+    // at MAX_PATH_VERTICES (before the depth column wraps) or through a leak, be counted and
+    // warned about, and leave a finite image.
+    use risotto::engine::scene::LightComponent;
     use risotto::systems::path::MAX_PATH_VERTICES;
-    let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 0.1, 1, 1);
-    let mut scene = Scene::new(cam, settings(1, 1, 1, u32::MAX));
-    let frozen = Interior::Homogeneous(HomogeneousMedium {
-        sigma_t: Rgb::splat(1e30),
-        sigma_s: Rgb::splat(1e30),
-        phase: risotto::systems::phase::PhaseFunction::Isotropic,
-        scattering: Scattering::Bounce,
-        emission: Rgb::BLACK,
-        albedo_pattern: None,
-        g_pattern: None,
-    });
-    let m = scene.add_material("frozen", 1, mat_in(Surface::Interface, frozen));
-    let ball = Sphere {
-        center: Vec3::ZERO,
-        radius: 1.0,
+    let cam = perspective(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0), 60.0, 4, 4);
+    let mut scene = Scene::new(cam, settings(4, 4, 1, u32::MAX));
+    let white = add_diffuse(&mut scene, "white", 1.0);
+    let (x, y, z) = (Vec3::X * 2.0, Vec3::Y * 2.0, Vec3::Z * 2.0);
+    let c = Vec3::splat(-1.0);
+    let walls = [
+        (c, z, x),
+        (c + y, x, z),
+        (c, x, y),
+        (c + z, y, x),
+        (c, y, z),
+        (c + x, z, y),
+    ];
+    for (k, (corner, e1, e2)) in walls.into_iter().enumerate() {
+        scene.add_shape(&format!("wall{k}"), quad(corner, e1, e2), white, None);
+    }
+    let bulb = LightComponent::Point {
+        position: Vec3::new(0.0, 0.5, 0.0),
+        intensity: Rgb::WHITE,
     };
-    scene.add_shape("ball", ShapeGeometry::Sphere(ball), m, None);
-    environment(&mut scene, Rgb::WHITE);
+    scene.add_light("bulb", bulb);
     let out = render_default(&scene.compile().unwrap());
+    let limited = terminated(&out, Termination::DepthLimit);
+    assert!(limited >= 1, "{}", out.stats);
     assert_eq!(
-        terminated(&out, Termination::DepthLimit),
-        1,
+        limited + terminated(&out, Termination::Escaped),
+        16,
         "{}",
         out.stats
     );
-    // The camera ray and one ray from every vertex but the last (the pass into the ball
-    // continues the camera ray): the path had exactly MAX_PATH_VERTICES vertices.
-    assert_eq!(out.stats.counters.rays, MAX_PATH_VERTICES as u64);
+    // No path took more than MAX_PATH_VERTICES vertices: one ray from each but the last,
+    // plus the camera ray.
+    assert!(out.stats.counters.rays <= 16 * MAX_PATH_VERTICES as u64);
     assert_eq!(out.stats.counters.nan_dropped, 0);
-    assert_finite("frozen walk", &out);
+    assert_finite("closed white room", &out);
     let json: serde_json::Value = serde_json::from_str(&out.stats.to_json()).unwrap();
-    assert_eq!(json["terminated"]["depth_limit"], 1, "{json}");
+    assert_eq!(json["terminated"]["depth_limit"], limited, "{json}");
     let summary = out.stats.to_string();
-    assert!(
-        summary.contains(&format!("warning: 1 paths reached {MAX_PATH_VERTICES}")),
-        "{summary}"
-    );
+    let warning = format!("warning: {limited} paths reached {MAX_PATH_VERTICES}");
+    assert!(summary.contains(&warning), "{summary}");
+}
+
+#[test]
+fn a_walk_frozen_in_a_medium_too_dense_for_its_coordinates_ends_at_once() {
+    // An albedo-1 medium of mean free path 1e-30 in a unit ball: every free flight is far
+    // below the float spacing of the coordinates, so a walk's point can never move and its
+    // throughput stays 1. Each path must end at its first event inside (counted as frozen,
+    // warned about), not walk on in place to the vertex limit, by bounces or by the
+    // integrator's own walk.
+    use risotto::engine::media::{HomogeneousMedium, Scattering};
+    for scattering in [Scattering::Bounce, Scattering::Walk] {
+        let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 0.5, 2, 2);
+        let mut scene = Scene::new(cam, settings(2, 2, 2, u32::MAX));
+        let frozen = Interior::Homogeneous(HomogeneousMedium {
+            sigma_t: Rgb::splat(1e30),
+            sigma_s: Rgb::splat(1e30),
+            phase: risotto::systems::phase::PhaseFunction::Isotropic,
+            scattering,
+            emission: Rgb::BLACK,
+            albedo_pattern: None,
+            g_pattern: None,
+        });
+        let m = scene.add_material("frozen", 1, mat_in(Surface::Interface, frozen));
+        let ball = Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        scene.add_shape("ball", ShapeGeometry::Sphere(ball), m, None);
+        environment(&mut scene, Rgb::WHITE);
+        let out = render_default(&scene.compile().unwrap());
+        let what = format!("{scattering:?}");
+        let c = &out.stats.counters;
+        assert_eq!(
+            terminated(&out, Termination::DepthLimit),
+            0,
+            "{what}: {}",
+            out.stats
+        );
+        assert_eq!(
+            c.volume_events[risotto::engine::stats::VolumeEvent::Frozen as usize],
+            8,
+            "{what}: {}",
+            out.stats
+        );
+        assert_eq!(
+            terminated(&out, Termination::Absorbed),
+            8,
+            "{what}: {}",
+            out.stats
+        );
+        assert_eq!(c.nan_dropped, 0);
+        assert_finite(&what, &out);
+        assert!(
+            out.stats
+                .to_string()
+                .contains("warning: 8 paths ended frozen"),
+            "{what}: {}",
+            out.stats
+        );
+    }
 }

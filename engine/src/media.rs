@@ -58,8 +58,8 @@ use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
 use risotto_systems::medium::{
-    channel_pdf, emitted_radiance, equiangular_pdf, equiangular_sample, free_flight_pdf,
-    sample_free_flight, transmittance,
+    channel_pdf, emitted_radiance, equiangular_pdf, equiangular_sample, flights_frozen,
+    free_flight_pdf, sample_free_flight, transmittance,
 };
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::phase::PhaseFunction;
@@ -316,6 +316,7 @@ impl HomogeneousInterior<'_> {
             *tmax = tmax.min(hit);
         }
         self.emit_along(rays, tmax, samplers, light, ictx.stats, out);
+        let mut frozen = 0;
         let scattered = arena.alloc_slice_fill_copy(n, false);
         let passes = arena.alloc_slice_fill_copy(n, true);
         let t = arena.alloc_slice_fill_copy(n, 0.0f32);
@@ -372,6 +373,11 @@ impl HomogeneousInterior<'_> {
                 None => tmax[i],
             };
             t[i] = f.t.min(scatter_max).max(rays.tmin[i].min(0.5 * tmax[i]));
+            if flights_frozen(m.sigma_t, o + d * t[i]) {
+                // Its walk could not move from here, nor gather anything: it ends.
+                (scattered[i], passes[i]) = (false, false);
+                frozen += 1;
+            }
         }
         let events = scattered.iter().filter(|&&s| s).count();
         if let Some(graph) = &m.albedo_pattern {
@@ -405,7 +411,8 @@ impl HomogeneousInterior<'_> {
         }
         let stats = &mut *ictx.stats;
         stats.volume_event(crate::stats::VolumeEvent::Scatter, events);
-        stats.volume_event(crate::stats::VolumeEvent::Pass, n - events);
+        stats.volume_event(crate::stats::VolumeEvent::Pass, n - events - frozen);
+        stats.volume_event(crate::stats::VolumeEvent::Frozen, frozen);
     }
 
     /// Reports the medium's emission along each ray's segment `[0, tmax[i]]` in

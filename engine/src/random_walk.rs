@@ -94,7 +94,9 @@ use glam::{Vec2, Vec3};
 use risotto_components::{Rays, Rgb, NO_HIT};
 use risotto_systems::clearance::clearance;
 use risotto_systems::intersect::intersect_closest;
-use risotto_systems::medium::{channel_pdf, emitted_radiance, sample_free_flight, FreeFlight};
+use risotto_systems::medium::{
+    channel_pdf, emitted_radiance, flights_frozen, sample_free_flight, FreeFlight,
+};
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::{before_hit, coordinate_epsilon};
 use risotto_systems::sampler::{PathSampler, SplitMix64};
@@ -252,6 +254,7 @@ fn walk_bundle_in<C: Coefficients>(
         max_depth: scene.settings.max_depth,
         albedo: medium.albedo_pattern.as_deref().map(PointPattern::new),
         g: medium.g_pattern.as_deref().map(PointPattern::new),
+        frozen: 0,
     };
     // An emissive medium's exact segment integrals need every step's full segment: each
     // step is traced to the surface ahead, without empty balls (module docs, "Emission").
@@ -443,6 +446,7 @@ fn walk_bundle_in<C: Coefficients>(
     }
     ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
     ictx.stats.volume_event(VolumeEvent::Pass, passes);
+    ictx.stats.volume_event(VolumeEvent::Frozen, walk.frozen);
     let evals =
         walk.albedo.as_ref().map_or(0, |a| a.evals) + walk.g.as_ref().map_or(0, |g| g.evals);
     ictx.stats.pattern_evals += evals;
@@ -511,6 +515,9 @@ struct Walk<'g, C> {
     albedo: Option<PointPattern<'g>>,
     /// The HG `g` pattern, read at each event (`phase` is then HG).
     g: Option<PointPattern<'g>>,
+    /// Walks ended at a point their flights could not move from
+    /// ([`flights_frozen`](risotto_systems::medium::flights_frozen)).
+    frozen: usize,
 }
 
 impl<C: Coefficients> Walk<'_, C> {
@@ -546,6 +553,11 @@ impl<C: Coefficients> Walk<'_, C> {
         // The next segment from this event is segment depth + events + 1 of the path:
         // beyond max_depth nothing it finds counts, so the walk ends here.
         if rays.depth[r] as u32 + events + 1 > self.max_depth || events > MAX_WALK_EVENTS {
+            return false;
+        }
+        if flights_frozen(self.coefficients.at(r).0, p) {
+            // The walk could not move from here, nor gather anything: it ends.
+            self.frozen += 1;
             return false;
         }
         // Russian roulette on the albedo-corrected throughput (module docs). A walk that

@@ -27,6 +27,22 @@
 use crate::distribution::ONE_MINUS_EPSILON;
 use risotto_components::{Rgb, Vec3};
 
+/// Whether free flights from `p` in a medium of extinction `sigma_t` can no longer move the
+/// point. A coordinate `x` changes only by steps of at least half its float spacing
+/// (`|x| f32::EPSILON`, up to a factor 2); against the finest of the three, `sigma_t x spacing
+/// / 2 > 32` in every channel makes a flight that moves the point at all less likely than
+/// `e^-32` (1e-14). A walk there stays at one point for good (with albedo 1 its throughput
+/// never falls, so neither Russian roulette nor anything but the path-vertex limit ends it),
+/// and what it still gathers is nil: the point lies at least a spacing inside the boundary
+/// it entered through (the spawn offset), so a light sample from it leaves through more than
+/// 64 optical depths. Callers end such walks instead of stepping them in place. `false` where
+/// a channel is empty or a coordinate is 0 (its spacing is then the smallest subnormal).
+#[inline]
+pub fn flights_frozen(sigma_t: Rgb, p: Vec3) -> bool {
+    let spacing = p.abs().min_element() * f32::EPSILON;
+    sigma_t.min_channel() * spacing > 64.0
+}
+
 /// An optical depth sampled from the unit exponential, `-ln(1 - u)` for a uniform
 /// `u in [0, 1)` (the inverse CDF of `exp(-tau)`). `1 - u` is exact for the samplers'
 /// multiples of 2^-24 and at least 2^-24 after the clamp (finite), and `ln` costs about half
@@ -432,6 +448,29 @@ pub fn emitted_radiance(sigma_t: Rgb, emission: Rgb, distance: f32) -> Rgb {
             j[c] * distance
         }
     }))
+}
+
+#[cfg(test)]
+mod frozen_tests {
+    use super::*;
+
+    #[test]
+    fn flights_freeze_only_where_no_coordinate_can_move() {
+        let p = Vec3::new(0.5, -0.7, 0.3);
+        // Mean free path 1e-7 at unit coordinates (tests/hard_media.rs): steps of about the
+        // float spacing, the walk moves.
+        assert!(!flights_frozen(Rgb::splat(1e7), p));
+        assert!(!flights_frozen(Rgb::splat(2.0), p));
+        // 1e-30: no coordinate can move; nor at 1e10 (steps a hundredth of the spacing).
+        assert!(flights_frozen(Rgb::splat(1e30), p));
+        assert!(flights_frozen(Rgb::splat(1e10), p));
+        // A coordinate near 0 keeps a fine spacing: a thin dense slab along y still walks.
+        assert!(!flights_frozen(Rgb::splat(1e10), Vec3::new(1.0, 1e-4, 1.0)));
+        assert!(!flights_frozen(Rgb::splat(1e30), Vec3::new(0.5, 0.0, 0.5)));
+        // Every channel must be frozen: an empty or thin one still moves the point.
+        assert!(!flights_frozen(Rgb::new(1e30, 1e30, 0.0), p));
+        assert!(!flights_frozen(Rgb::new(1e30, 2.0, 1e30), p));
+    }
 }
 
 #[cfg(test)]

@@ -134,11 +134,16 @@ pub enum VolumeEvent {
     /// medium, [`crate::volume_lights`]). Zero in scenes without the
     /// `emissive_volume_lights` feature.
     LightSample,
+    /// A scattering event where the medium's free flights can no longer move the point
+    /// ([`flights_frozen`](risotto_systems::medium::flights_frozen): its mean free path is
+    /// far below the float spacing of the coordinates there): the path ended (absorbed),
+    /// and the summary warns.
+    Frozen,
 }
 
 impl VolumeEvent {
     /// Number of kinds.
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = 7;
     /// Every kind, in discriminant order.
     pub const ALL: [VolumeEvent; VolumeEvent::COUNT] = [
         VolumeEvent::Scatter,
@@ -147,6 +152,7 @@ impl VolumeEvent {
         VolumeEvent::Pass,
         VolumeEvent::Emission,
         VolumeEvent::LightSample,
+        VolumeEvent::Frozen,
     ];
     /// The snake_case name used in JSON and in the summary.
     pub const fn name(self) -> &'static str {
@@ -157,6 +163,7 @@ impl VolumeEvent {
             VolumeEvent::Pass => "pass",
             VolumeEvent::Emission => "emission",
             VolumeEvent::LightSample => "light_sample",
+            VolumeEvent::Frozen => "frozen",
         }
     }
 }

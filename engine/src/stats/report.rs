@@ -209,6 +209,16 @@ impl fmt::Display for RenderStats {
                 c.majorant_violations
             )?;
         }
+        let frozen = c.volume_events[VolumeEvent::Frozen as usize];
+        if frozen > 0 {
+            write!(
+                f,
+                "\nwarning: {frozen} paths ended frozen in a medium whose mean free path is far \
+                 below the float spacing of its coordinates (its random walk cannot move \
+                 there): that medium renders darker than it should; scale the scene, or use a \
+                 surface or subsurface material for it"
+            )?;
+        }
         let cut = c.terminated[Termination::DepthLimit as usize];
         if cut > 0 {
             write!(
