@@ -407,20 +407,46 @@ fn free_flights_shorter_than_the_spawn_offset_stay_inside_the_boundary() {
     // ends: the furnace run of 8c744e1 grew its arena until it ran out of memory. Paths end
     // at max_depth here (deep inside, nothing is lit); the counters must stay at zero.
     let interior = medium(Rgb::splat(1e7), 1.0, PhaseFunction::Isotropic);
+    assert_flights_stay_inside("spawn-offset flights", interior);
+}
+
+/// Renders `interior` in the unit ball under a white environment (paths end at max_depth 24)
+/// and checks that no ray crossed its boundary the wrong way or left while inside, and that
+/// the flights scattered.
+fn assert_flights_stay_inside(what: &str, interior: Interior) {
     let mut scene = ball(ortho(2.4, 12), 12, 4, 1.0, Surface::Interface, interior);
     scene.settings.max_depth = 24;
     let out = render_mis(scene);
-    assert_clean("spawn-offset flights", &out);
+    assert_clean(what, &out);
     let c = &out.stats.counters;
     let crossings = |v: &[u64]| v.iter().sum::<u64>();
-    assert_eq!(crossings(&c.entered_twice), 0, "{}", out.stats);
-    assert_eq!(crossings(&c.unmatched_exits), 0, "{}", out.stats);
-    assert_eq!(crossings(&c.escaped_inside), 0, "{}", out.stats);
+    assert_eq!(crossings(&c.entered_twice), 0, "{what}: {}", out.stats);
+    assert_eq!(crossings(&c.unmatched_exits), 0, "{what}: {}", out.stats);
+    assert_eq!(crossings(&c.escaped_inside), 0, "{what}: {}", out.stats);
     assert!(
         c.volume_events[risotto::engine::stats::VolumeEvent::Scatter as usize] > 1000,
-        "the flights scatter: {}",
+        "{what}: the flights scatter: {}",
         out.stats
     );
+}
+
+#[test]
+fn heterogeneous_free_flights_shorter_than_the_spawn_offset_stay_inside_the_boundary() {
+    // The same ball as above as a heterogeneous medium (a constant grid, scale 1e7, the
+    // default majorant grid): delta tracking's collisions within rounding of the boundary
+    // must stay inside it too.
+    use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
+    use risotto::systems::grid::DensityGrid;
+    let m = HeterogeneousMedium::new(
+        DensityGrid::constant([4, 4, 4], 1.0).unwrap(),
+        4,
+        1e7,
+        Rgb::WHITE,
+        PhaseFunction::Isotropic,
+        Tracking::Ratio,
+    );
+    let interior = Interior::Heterogeneous(std::sync::Arc::new(m));
+    assert_flights_stay_inside("heterogeneous spawn-offset flights", interior);
 }
 
 #[test]

@@ -347,32 +347,8 @@ impl HomogeneousInterior<'_> {
             if !f.scattered {
                 continue;
             }
-            // A scattering point within the spawn offset of a boundary could round to its
-            // far side: of the segment's start (a ray past a pass-through starts on the
-            // boundary and skips it with `tmin`) or of its end. The next ray from it
-            // (spawned without an offset) would then cross that boundary again, and the
-            // volume stack would never see the ray leave (an albedo-1 furnace then walks
-            // forever outside). Such points move to `[tmin, scatter_max]`, a shift of
-            // ~1e-6 relative, far below any noise; `scatter_max` is the hit less the hit's
-            // error offset and the point's own rounding along the ray (`before_hit`, the
-            // cosine clamped at 1e-3), needed (and the hit's surface computed) only for
-            // points near the hit. The gate has no surface bound yet: it allows 2000
-            // `coordinate_epsilon`s of `|o| + |t d|` (which bound the point's rounding).
+            t[i] = event_inside(ictx, rays, i, f.t, tmax[i]);
             let (o, d) = (rays.origin[i], rays.direction[i]);
-            let near_hit = tmax[i] < rays.tmax[i]
-                && f.t > tmax[i] - 2000.0 * coordinate_epsilon(o.abs() + (d * tmax[i]).abs());
-            let scatter_max = match near_hit.then(|| ictx.traced_surface(rays, i)).flatten() {
-                Some(surf) => {
-                    let s = before_hit(tmax[i], surf.offset(), surf.ng, o, d);
-                    if s < rays.tmin[i] {
-                        0.5 * (rays.tmin[i] + tmax[i])
-                    } else {
-                        s
-                    }
-                }
-                None => tmax[i],
-            };
-            t[i] = f.t.min(scatter_max).max(rays.tmin[i].min(0.5 * tmax[i]));
             if flights_frozen(m.sigma_t, o + d * t[i]) {
                 // Its walk could not move from here, nor gather anything: it ends.
                 (scattered[i], passes[i]) = (false, false);
@@ -442,6 +418,52 @@ impl HomogeneousInterior<'_> {
         }
         stats.volume_event(crate::stats::VolumeEvent::Emission, tmax.len());
     }
+}
+
+/// Where a scattering event sampled at `t` on ray `i`'s segment `[tmin, tmax]` inside a
+/// volume is kept (`tmax`: the ray's hit in the last [`IntegratorContext::trace`] of `rays`,
+/// or its own `tmax` where it hit nothing).
+///
+/// A scattering point within the spawn offset of a boundary could round to its far side: of
+/// the segment's start (a ray past a pass-through starts on the boundary and skips it with
+/// `tmin`) or of its end. The next ray from it (spawned without an offset) would then cross
+/// that boundary again, and the volume stack would never see the ray leave (an albedo-1
+/// furnace then walks forever outside). Such points move to `[tmin, scatter_max]`, a shift of
+/// ~1e-6 relative, far below any noise; `scatter_max` is the hit less the hit's error offset
+/// and the point's own rounding along the ray (`before_hit`, the cosine clamped at 1e-3),
+/// needed (and the hit's surface computed) only for points near the hit (the origin, for a
+/// ray from an earlier event whose segment is shorter than that). The gate has no
+/// surface bound yet: it allows 2000 `coordinate_epsilon`s of `|o| + |t d|` (which bound
+/// the point's rounding).
+pub(crate) fn event_inside(
+    ictx: &crate::context::IntegratorContext<'_>,
+    rays: &Rays,
+    i: usize,
+    t: f32,
+    tmax: f32,
+) -> f32 {
+    let (o, d, tmin) = (rays.origin[i], rays.direction[i], rays.tmin[i]);
+    let near_hit =
+        tmax < rays.tmax[i] && t > tmax - 2000.0 * coordinate_epsilon(o.abs() + (d * tmax).abs());
+    let scatter_max = match near_hit.then(|| ictx.traced_surface(rays, i)).flatten() {
+        Some(surf) => {
+            let s = before_hit(tmax, surf.offset(), surf.ng, o, d);
+            if s >= tmin {
+                s
+            } else if tmin == 0.0 {
+                // The ray leaves from its origin (an earlier event, itself kept clear of the
+                // boundary) through less than the boundary's error: no point of the segment
+                // is surely inside but the origin. Halfway to the boundary instead, each such
+                // event would halve the clearance, and a walk along the boundary would creep
+                // across it.
+                0.0
+            } else {
+                0.5 * (tmin + tmax)
+            }
+        }
+        None => tmax,
+    };
+    t.min(scatter_max).max(tmin.min(0.5 * tmax))
 }
 
 /// Keeps the points `p0 + i` of `out` with `keep[i]` (the rows this bundle appended),

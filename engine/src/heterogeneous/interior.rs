@@ -370,6 +370,13 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             })
         };
         for i in 0..n {
+            if tmax[i] == f32::INFINITY {
+                // Nothing ahead: the ray has already left the medium's closed boundary, which
+                // it crossed within its `tmin` (a grazing entry). It escapes, as in the
+                // homogeneous medium (`scatter_inside`), rather than scattering in the
+                // empty corners of the grid.
+                continue;
+            }
             let (o, d) = self.to_grid(rays.origin[i], rays.direction[i]);
             let s = &mut samplers[i];
             let start = s.dimension;
@@ -440,7 +447,11 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             nulls += f.nulls as u64;
             violations += f.violations as u64;
             scattered[i] = f.collided;
-            t[i] = f.t;
+            t[i] = match f.collided {
+                // Strictly inside the boundaries (as the homogeneous medium's events).
+                true => crate::media::event_inside(services.ictx, rays, i, f.t, tmax[i]),
+                false => f.t,
+            };
         }
         if chromatic {
             // Passing rays' hits and misses carry the pass weight (the scattering rays'
