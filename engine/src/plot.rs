@@ -85,10 +85,7 @@ where
         .margin(18)
         .x_label_area_size(50)
         .y_label_area_size(80)
-        .build_cartesian_2d(
-            (x0 / 1.4..x1 * 1.4).log_scale(),
-            (y0 / 1.6..y1 * 1.6).log_scale(),
-        )
+        .build_cartesian_2d(log_axis(x0 / 1.4, x1 * 1.4), log_axis(y0 / 1.6, y1 * 1.6))
         .map_err(e)?;
     chart
         .configure_mesh()
@@ -158,6 +155,50 @@ pub fn plot_sweep(sweep: &Sweep, png: &Path, svg: &Path) -> Result<(), String> {
     draw(&root, sweep)
 }
 
+/// A log axis on `[lo, hi]` with its ticks from [`log_ticks`]. plotters' own log key points
+/// put a light point at 10 times each decade's start as well as the next decade's bold
+/// one, a float apart, so that axes spanning about one decade drew the same label twice, on
+/// top of itself.
+fn log_axis(lo: f64, hi: f64) -> plotters::coord::combinators::WithKeyPoints<LogCoord<f64>> {
+    let (labelled, lines) = log_ticks(lo, hi);
+    (lo..hi)
+        .log_scale()
+        .with_key_points(labelled)
+        .with_light_points(lines)
+}
+
+/// The ticks of a log axis on `[lo, hi]` (`0 < lo < hi`): labelled ones at 1, 2 and 5 times
+/// each power of ten, light grid lines at 1 to 9 times each, each value once and in
+/// increasing order. Where fewer than two labelled values fall inside, every grid line is
+/// labelled.
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let (mut labelled, mut lines) = (Vec::new(), Vec::new());
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return (labelled, lines);
+    }
+    for k in lo.log10().floor() as i32..=hi.log10().ceil() as i32 {
+        for m in 1..=9 {
+            // m 10^k rounded once (0.3, not 3 x 0.1).
+            let v = if k < 0 {
+                m as f64 / 10f64.powi(-k)
+            } else {
+                m as f64 * 10f64.powi(k)
+            };
+            if v < lo || v > hi {
+                continue;
+            }
+            lines.push(v);
+            if matches!(m, 1 | 2 | 5) {
+                labelled.push(v);
+            }
+        }
+    }
+    if labelled.len() < 2 {
+        labelled = lines.clone();
+    }
+    (labelled, lines)
+}
+
 /// A time axis label: three decimals with the trailing zeros dropped ("0.25", "6", "10"),
 /// short enough that a log axis's labels between 1 and 10 s do not run into each other.
 fn seconds_label(x: f64) -> String {
@@ -168,6 +209,20 @@ fn seconds_label(x: f64) -> String {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn log_ticks_are_each_value_once_and_labelled_at_one_two_five() {
+        let (labelled, lines) = super::log_ticks(0.007, 0.16);
+        assert_eq!(labelled, [0.01, 0.02, 0.05, 0.1]);
+        assert_eq!(lines.first(), Some(&0.007));
+        assert_eq!(lines.last(), Some(&0.1));
+        assert_eq!(lines.len(), 3 + 9 + 1);
+        assert!(lines.windows(2).all(|w| w[0] < w[1]), "{lines:?}");
+        // Within one decade and short of its 2 and 5: every grid line gets a label.
+        let (labelled, lines) = super::log_ticks(0.3, 0.45);
+        assert_eq!((labelled.clone(), lines), (vec![0.3, 0.4], vec![0.3, 0.4]));
+        assert!(super::log_ticks(0.0, 1.0).0.is_empty());
+    }
+
     #[test]
     fn seconds_labels_drop_trailing_zeros() {
         assert_eq!(super::seconds_label(6.0), "6");
