@@ -59,7 +59,7 @@ use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_systems::lights::Light;
 use risotto_systems::medium::{
     channel_pdf, emitted_radiance, equiangular_pdf, equiangular_sample, flights_frozen,
-    free_flight_pdf, sample_free_flight, transmittance,
+    flights_may_freeze, free_flight_pdf, sample_free_flight, transmittance,
 };
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::phase::PhaseFunction;
@@ -316,6 +316,12 @@ impl HomogeneousInterior<'_> {
             *tmax = tmax.min(hit);
         }
         self.emit_along(rays, tmax, samplers, light, ictx.stats, out);
+        // Only media whose mean free path is below the float spacing of their coordinates
+        // can freeze a walk (`flights_frozen`): the others skip the test per event.
+        let may_freeze = self
+            .ctx
+            .volume_bounds()
+            .is_none_or(|(lo, hi)| flights_may_freeze(m.sigma_t, lo, hi));
         let mut frozen = 0;
         let scattered = arena.alloc_slice_fill_copy(n, false);
         let passes = arena.alloc_slice_fill_copy(n, true);
@@ -349,7 +355,7 @@ impl HomogeneousInterior<'_> {
             }
             t[i] = event_inside(ictx, rays, i, f.t, tmax[i]);
             let (o, d) = (rays.origin[i], rays.direction[i]);
-            if flights_frozen(m.sigma_t, o + d * t[i]) {
+            if may_freeze && flights_frozen(m.sigma_t, o + d * t[i]) {
                 // Its walk could not move from here, nor gather anything: it ends.
                 (scattered[i], passes[i]) = (false, false);
                 frozen += 1;
@@ -435,6 +441,7 @@ impl HomogeneousInterior<'_> {
 /// ray from an earlier event whose segment is shorter than that). The gate has no
 /// surface bound yet: it allows 2000 `coordinate_epsilon`s of `|o| + |t d|` (which bound
 /// the point's rounding).
+#[inline]
 pub(crate) fn event_inside(
     ictx: &crate::context::IntegratorContext<'_>,
     rays: &Rays,

@@ -95,7 +95,8 @@ use risotto_components::{Rays, Rgb, NO_HIT};
 use risotto_systems::clearance::clearance;
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::medium::{
-    channel_pdf, emitted_radiance, flights_frozen, sample_free_flight, FreeFlight,
+    channel_pdf, emitted_radiance, flights_frozen, flights_may_freeze_within, sample_free_flight,
+    FreeFlight,
 };
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::{before_hit, coordinate_epsilon};
@@ -255,6 +256,10 @@ fn walk_bundle_in<C: Coefficients>(
         albedo: medium.albedo_pattern.as_deref().map(PointPattern::new),
         g: medium.g_pattern.as_deref().map(PointPattern::new),
         frozen: 0,
+        largest_coordinate: {
+            let (lo, hi) = scene.geometry.bounds();
+            lo.abs().max(hi.abs()).max_element()
+        },
     };
     // An emissive medium's exact segment integrals need every step's full segment: each
     // step is traced to the surface ahead, without empty balls (module docs, "Emission").
@@ -518,6 +523,9 @@ struct Walk<'g, C> {
     /// Walks ended at a point their flights could not move from
     /// ([`flights_frozen`](risotto_systems::medium::flights_frozen)).
     frozen: usize,
+    /// The largest coordinate magnitude in the scene's bounds, where every walk stays: the
+    /// per-event freezing test runs only for media that may freeze there.
+    largest_coordinate: f32,
 }
 
 impl<C: Coefficients> Walk<'_, C> {
@@ -555,7 +563,9 @@ impl<C: Coefficients> Walk<'_, C> {
         if rays.depth[r] as u32 + events + 1 > self.max_depth || events > MAX_WALK_EVENTS {
             return false;
         }
-        if flights_frozen(self.coefficients.at(r).0, p) {
+        let sigma_t = self.coefficients.at(r).0;
+        if flights_may_freeze_within(sigma_t, self.largest_coordinate) && flights_frozen(sigma_t, p)
+        {
             // The walk could not move from here, nor gather anything: it ends.
             self.frozen += 1;
             return false;

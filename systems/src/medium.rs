@@ -40,7 +40,27 @@ use risotto_components::{Rgb, Vec3};
 #[inline]
 pub fn flights_frozen(sigma_t: Rgb, p: Vec3) -> bool {
     let spacing = p.abs().min_element() * f32::EPSILON;
-    sigma_t.min_channel() * spacing > 64.0
+    sigma_t.min_channel() * spacing > FROZEN_DEPTH
+}
+
+/// The optical depth of a float spacing above which [`flights_frozen`] holds.
+const FROZEN_DEPTH: f32 = 64.0;
+
+/// Whether [`flights_frozen`] can hold anywhere in the box `[lo, hi]` (or within 1 % of its
+/// coordinates around it): false lets a caller skip the per-event test for a whole volume,
+/// as for every medium whose mean free path is above a ten-millionth of its coordinates.
+#[inline]
+pub fn flights_may_freeze(sigma_t: Rgb, lo: Vec3, hi: Vec3) -> bool {
+    flights_may_freeze_within(sigma_t, lo.abs().max(hi.abs()).max_element())
+}
+
+/// [`flights_may_freeze`] for the points whose coordinates are all at most `largest` in
+/// magnitude.
+#[inline]
+pub fn flights_may_freeze_within(sigma_t: Rgb, largest: f32) -> bool {
+    let depth = sigma_t.min_channel() * (largest * 1.01) * f32::EPSILON;
+    // NaN (a malformed medium): test each event.
+    depth > FROZEN_DEPTH || depth.is_nan()
 }
 
 /// An optical depth sampled from the unit exponential, `-ln(1 - u)` for a uniform
@@ -470,6 +490,16 @@ mod frozen_tests {
         // Every channel must be frozen: an empty or thin one still moves the point.
         assert!(!flights_frozen(Rgb::new(1e30, 1e30, 0.0), p));
         assert!(!flights_frozen(Rgb::new(1e30, 2.0, 1e30), p));
+        // The whole-volume test never says no where some point of the box is frozen.
+        let (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        for sigma in [2.0f32, 1e7, 1e9, 1e10, 1e30] {
+            let frozen_somewhere = flights_frozen(Rgb::splat(sigma), hi);
+            assert!(!frozen_somewhere || flights_may_freeze(Rgb::splat(sigma), lo, hi));
+        }
+        assert!(!flights_may_freeze(Rgb::splat(2.0), lo, hi));
+        assert!(!flights_may_freeze(Rgb::splat(1e7), lo, hi));
+        assert!(flights_may_freeze(Rgb::splat(1e10), lo, hi));
+        assert!(flights_may_freeze(Rgb::splat(f32::NAN), lo, hi));
     }
 }
 

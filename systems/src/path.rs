@@ -165,16 +165,19 @@ pub fn continue_paths(
         &incoming.passes[..n],
         &incoming.dimension[..n],
     );
+    let segment_cap = limits.max_depth.min(MAX_PATH_VERTICES);
     let mut count = 0;
     for k in 0..m {
         let r = ray_id[k] as usize;
-        // The next segment must fit in max_depth, and its vertex count in the depth column.
-        if in_depth[r] as u32 + 2 > limits.max_depth {
-            done.max_depth += 1;
-            continue;
-        }
-        if in_depth[r] as u32 + 1 >= MAX_PATH_VERTICES {
-            done.depth_limit += 1;
+        // The next segment must fit in max_depth, and its vertex count in the depth column
+        // (`depth + 1 >= MAX_PATH_VERTICES`, i.e. `depth + 2 > MAX_PATH_VERTICES`): one
+        // test against the smaller bound, then which one it was.
+        if in_depth[r] as u32 + 2 > segment_cap {
+            if in_depth[r] as u32 + 2 > limits.max_depth {
+                done.max_depth += 1;
+            } else {
+                done.depth_limit += 1;
+            }
             continue;
         }
         let pdf = s_pdf[k];
