@@ -208,13 +208,8 @@ fn camera_pairs_form_a_net_for_every_pixel() {
             let n = 1usize << k;
             for j in 0..=k {
                 let (cols, rows) = (1usize << j, 1usize << (k - j));
-                let mut cells = vec![0u32; n];
-                for i in 0..n as u32 {
-                    let v = sample_2d(seed, i, 0);
-                    let c = (v.x * cols as f32) as usize;
-                    let r = (v.y * rows as f32) as usize;
-                    cells[r * cols + c] += 1;
-                }
+                let points = (0..n as u32).map(|i| sample_2d(seed, i, 0).into());
+                let cells = cell_counts(points, cols, rows);
                 assert!(
                     cells.iter().all(|&c| c == 1),
                     "pixel {pixel}, {n} points, {cols}x{rows}: {cells:?}"
@@ -233,13 +228,11 @@ fn every_set_starts_with_a_stratified_2d_pair() {
     let seed = pixel_seed(5, 77);
     for set in [0u32, 1, 2, 3, 37, 1000] {
         for (cols, rows) in [(16usize, 1usize), (8, 2), (4, 4), (2, 8), (1, 16)] {
-            let mut cells = vec![0u32; 16];
-            for i in 0..16 {
+            let points = (0..16).map(|i| {
                 let v = sample_4d(seed, i, set);
-                let c = (v[0] * cols as f32) as usize;
-                let r = (v[1] * rows as f32) as usize;
-                cells[r * cols + c] += 1;
-            }
+                (v[0], v[1])
+            });
+            let cells = cell_counts(points, cols, rows);
             assert!(
                 cells.iter().all(|&c| c == 1),
                 "set {set}, {cols}x{rows}: {cells:?}"
@@ -258,4 +251,13 @@ fn seeds_decorrelate_pixels() {
         .sum::<f32>()
         / 4096.0;
     assert!((mean - 0.5).abs() < 0.02, "mean {mean}");
+}
+
+/// How many of `points` (in `[0, 1)^2`) fall in each cell of a `cols x rows` grid, row by row.
+fn cell_counts(points: impl IntoIterator<Item = (f32, f32)>, cols: usize, rows: usize) -> Vec<u32> {
+    let mut cells = vec![0u32; cols * rows];
+    for (x, y) in points {
+        cells[(y * rows as f32) as usize * cols + (x * cols as f32) as usize] += 1;
+    }
+    cells
 }
