@@ -9,7 +9,7 @@ use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
 use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::output::read_exr_rgb;
 use risotto::engine::render::RenderOptions;
-use risotto::engine::technique::Techniques;
+use risotto::engine::technique::{TechniqueRegistry, Techniques};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -83,14 +83,15 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
     let scene = load_scene_file(&args.scene, &registry)?;
     let mut compiled = compile_scene(scene, &args.scene)?;
+    let registry = TechniqueRegistry::for_scene(&compiled);
     let variants = if args.techniques.trim() == "all" {
-        Techniques::variants(&compiled.features)
+        Techniques::variants(&registry)
     } else {
         let mut v = Vec::new();
         for spec in args.techniques.split(',') {
-            let t = Techniques::parse(spec.trim())
+            let t = Techniques::parse(&registry, spec.trim())
                 .with_context(|| format!("--techniques {}", args.techniques))?;
-            t.check_applicable(&compiled.features)
+            t.check_applicable(&registry)
                 .with_context(|| format!("--techniques {spec} on {}", args.scene.display()))?;
             if !v.contains(&t) {
                 v.push(t);
@@ -120,7 +121,7 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
             }
             let techniques = match &args.reference_technique {
                 Some(spec) => Some(
-                    Techniques::parse(spec)
+                    Techniques::parse(&registry, spec)
                         .with_context(|| format!("--reference-technique {spec}"))?,
                 ),
                 None => None,

@@ -23,7 +23,7 @@ use risotto::engine::render::{
 };
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::technique::{self, Techniques};
+use risotto::engine::technique::{self, TechniqueRegistry, Techniques};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -388,11 +388,12 @@ fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniq
     if let Some(l) = &args.lighting {
         assignments.insert(0, (format!("--lighting {l}"), format!("lighting={l}")));
     }
+    let registry = TechniqueRegistry::for_scene(scene);
     let mut t = Techniques::default();
     let mut given: Vec<(&str, String)> = Vec::new();
     for (flag, a) in &assignments {
-        let tech = t.assign(a).with_context(|| flag.clone())?;
-        let value = t.get(tech.name)?.to_string();
+        let tech = t.assign(&registry, a).with_context(|| flag.clone())?;
+        let value = t.get(&registry, tech.name)?.to_string();
         if let Some((_, v)) = given.iter().find(|(n, v)| *n == tech.name && *v != value) {
             anyhow::bail!(
                 "{flag}: {} was already set to {v} (by --lighting or another --technique)",
@@ -400,7 +401,7 @@ fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniq
             );
         }
         given.push((tech.name, value));
-        if !(tech.applies)(&scene.features) {
+        if !registry.applies(tech) {
             anyhow::bail!(
                 "{flag}: technique {a} does not apply to {} ({} applies to {})",
                 args.scene.display(),
@@ -416,7 +417,10 @@ fn techniques_command(scene_path: &Path) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
     let scene = load_scene_file(scene_path, &registry)?;
     let compiled = compile_scene(scene, scene_path)?;
-    print!("{}", technique::listing(&compiled.features));
+    print!(
+        "{}",
+        technique::listing(&TechniqueRegistry::for_scene(&compiled))
+    );
     Ok(())
 }
 

@@ -389,7 +389,7 @@ fn bad_techniques_and_references_are_named_in_the_error() {
     assert_fails(
         "unknown technique",
         &risotto(&["render", s, "--technique", "shading=fast", "--out", e]),
-        &["shading", "known: lighting, sampler"],
+        &["shading", "known in this scene: lighting, sampler"],
     );
     assert_fails(
         "bad value",

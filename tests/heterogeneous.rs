@@ -215,7 +215,7 @@ fn every_tracking_technique_renders_the_same_medium() {
     // less noisy than the file's delta tracking (0.88-0.90 of its standard error over seeds
     // 1-4 here; 0.95 is five of their spreads away).
     use risotto::engine::heterogeneous::Tracking;
-    use risotto::engine::plugin::VolumeTechniques;
+    use risotto::engine::technique::PluginTechniques;
     let d = scratch_dir("hetero", "trackings");
     let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");
     let interior = format!(
@@ -228,9 +228,11 @@ fn every_tracking_technique_renders_the_same_medium() {
             sphere_scene(&interior, 256, seed, 3.0).replace("radiance = 0.5", "radiance = 0");
         let scene = load(&d, &text).unwrap();
         let options = RenderOptions {
-            volume: VolumeTechniques {
-                tracking,
-                ..VolumeTechniques::default()
+            plugin_techniques: match tracking {
+                Some(t) => PluginTechniques::default()
+                    .with("tracking", t.name())
+                    .unwrap(),
+                None => PluginTechniques::default(),
             },
             ..RenderOptions::default()
         };

@@ -207,7 +207,6 @@ fn volume_hits(
         &mut samplers,
         LobeSampled(0xff),
         VolumeServices {
-            techniques: Default::default(),
             ictx: &mut ictx,
             lighting: None,
             factory,

@@ -222,8 +222,8 @@ fn single_scattering_without_a_delegate_falls_back_to_multiple() {
 /// `scattering = multiple` it is white again.
 #[test]
 fn the_scattering_technique_overrides_the_medium() {
-    use risotto::engine::plugin::VolumeTechniques;
     use risotto::engine::render::{render, RenderOptions};
+    use risotto::engine::technique::PluginTechniques;
     let mut scene = Scene::new(camera(40.0, 4.0, 12, 12), settings(12, 12, 16, u32::MAX));
     let interior = medium(2.0, 1.0, PhaseFunction::Isotropic, Scattering::Multiple);
     let m = scene.add_material("medium", 0, mat_in(Surface::Interface, interior));
@@ -240,9 +240,11 @@ fn the_scattering_technique_overrides_the_medium() {
     let compiled = scene.compile().unwrap();
     let mean = |scattering| {
         let options = RenderOptions {
-            volume: VolumeTechniques {
-                scattering,
-                ..VolumeTechniques::default()
+            plugin_techniques: match scattering {
+                Some(s) => PluginTechniques::default()
+                    .with("scattering", Scattering::name(s))
+                    .unwrap(),
+                None => PluginTechniques::default(),
             },
             ..RenderOptions::default()
         };

@@ -10,11 +10,11 @@ use glam::Vec3;
 use risotto::engine::builtin::{Interior, Surface};
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::media::{HomogeneousMedium, Scattering};
-use risotto::engine::plugin::VolumeTechniques;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};
 use risotto::engine::stats::VolumeEvent;
 use risotto::engine::subsurface::{single_scattering_albedo, spherical_albedo};
+use risotto::engine::technique::PluginTechniques;
 use risotto::systems::geometry::Sphere;
 use risotto::systems::phase::PhaseFunction;
 use risotto_components::Rgb;
@@ -252,10 +252,9 @@ fn walk_and_bounces_render_the_same_image() {
         let compiled = scene.compile().unwrap();
         let run = |scattering| {
             let options = RenderOptions {
-                volume: VolumeTechniques {
-                    scattering: Some(scattering),
-                    ..VolumeTechniques::default()
-                },
+                plugin_techniques: PluginTechniques::default()
+                    .with("scattering", Scattering::name(scattering))
+                    .unwrap(),
                 ..RenderOptions::default()
             };
             render(&compiled, &options, &|_| {}).unwrap()
@@ -544,9 +543,11 @@ fn the_subsurface_technique_overrides_the_mode() {
     let n = 8;
     let with = |mode, technique| {
         let options = RenderOptions {
-            volume: VolumeTechniques {
-                subsurface: technique,
-                ..VolumeTechniques::default()
+            plugin_techniques: match technique {
+                Some(mode) => PluginTechniques::default()
+                    .with("subsurface", SubsurfaceMode::name(mode))
+                    .unwrap(),
+                None => PluginTechniques::default(),
             },
             ..RenderOptions::default()
         };

@@ -3,11 +3,13 @@
 
 use crate::scene::CompiledScene;
 use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
-use crate::stats::{System, SystemStats};
+use crate::stats::{System, SystemStats, VolumeEvent};
+use crate::technique::PluginTechniques;
 use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
 use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
+use risotto_systems::lights::LightSet;
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
 /// the per-bounce path does not allocate.
@@ -27,14 +29,16 @@ pub struct HitScratch {
     whites: Vec<Rgb>,
 }
 
-/// Ray-tracing services bound to one compiled scene and one worker.
+/// Ray-tracing services bound to one compiled scene and one worker: everything a global or
+/// volume integrator gets from the renderer (the seed's `RixIntegratorContext`). Built-in
+/// plug-ins see exactly what a user's plug-in sees: its methods, nothing behind them.
 pub struct IntegratorContext<'s> {
-    /// The scene.
-    pub scene: &'s CompiledScene,
-    /// The worker's statistics.
-    pub stats: &'s mut SystemStats,
+    /// The scene (the engine's own stages read it; plug-ins get its parts through methods).
+    pub(crate) scene: &'s CompiledScene,
+    /// The worker's statistics (plug-ins count through the `count_*` methods).
+    pub(crate) stats: &'s mut SystemStats,
     scratch: HitScratch,
-    volume: crate::plugin::VolumeTechniques,
+    techniques: PluginTechniques,
     /// Whether the caller of a volume's `transmission` uses its `emission` output.
     emission_wanted: bool,
     /// Majorant violations a volume's `transmission` reported (it sees the context shared).
@@ -57,7 +61,7 @@ impl<'s> IntegratorContext<'s> {
             scene,
             stats,
             scratch,
-            volume: crate::plugin::VolumeTechniques::default(),
+            techniques: PluginTechniques::default(),
             emission_wanted: true,
             violations: std::cell::Cell::new(0),
         }
@@ -65,7 +69,7 @@ impl<'s> IntegratorContext<'s> {
 
     /// Records `n` sampled extinctions above their majorant's bound
     /// ([`SystemStats::majorant_violations`]); callable from a volume's `transmission`,
-    /// which sees the context shared. The renderer adds them to the render's stats.
+    /// which sees the context shared. They reach the render's stats when the context ends.
     pub fn count_majorant_violations(&self, n: u64) {
         self.violations.set(self.violations.get() + n);
     }
@@ -75,11 +79,109 @@ impl<'s> IntegratorContext<'s> {
         self.violations.replace(0)
     }
 
-    /// The context with the render's technique choices for volumes (what
-    /// [`VolumeTechniques`](crate::plugin::VolumeTechniques) says over each material), which a
-    /// volume integrator's `transmission` reads through [`Self::volume_techniques`].
-    pub fn with_volume_techniques(mut self, volume: crate::plugin::VolumeTechniques) -> Self {
-        self.volume = volume;
+    /// Counts `n` volume events of kind `event` (the stats' `volume_events`).
+    pub fn count_volume_events(&mut self, event: VolumeEvent, n: usize) {
+        self.stats.volume_event(event, n);
+    }
+
+    /// Counts `n` pattern evaluations a volume made point by point (medium coefficients):
+    /// they add to the stats' `pattern_evals` and, of those, `volume_pattern_evals`.
+    pub fn count_volume_pattern_evals(&mut self, n: u64) {
+        self.stats.pattern_evals += n;
+        self.stats.volume_pattern_evals += n;
+    }
+
+    /// The scene's axis-aligned bounds `(min, max)` over every primitive.
+    pub fn scene_bounds(&self) -> (Vec3, Vec3) {
+        self.scene.geometry.bounds()
+    }
+
+    /// The render's `max_depth`: the most path segments a path may have
+    /// ([`RenderSettings::max_depth`](crate::scene::RenderSettings::max_depth); `u32::MAX`
+    /// for unbounded). A volume integrator that walks many events per call stops its walks
+    /// there, as the global integrator would.
+    pub fn max_depth(&self) -> u32 {
+        self.scene.settings.max_depth
+    }
+
+    /// Every light of the scene, as light sampling without MIS sees them (for in-volume
+    /// light sampling, e.g. equiangular sampling towards point lights).
+    pub fn lights(&self) -> &'s LightSet {
+        &self.scene.lights
+    }
+
+    /// The closest surface hit of each bare ray (`origin`, `direction`, `tmin..tmax`),
+    /// without shading points: for volume integrators that trace their own rays (random
+    /// walks, probe rays). `out` is resized to the rays; a miss has `prim == NO_HIT`. Read
+    /// a hit's surface with [`Self::surface_at`] and its shape with [`Self::shape_of`].
+    /// Counted as closest-hit intersection in the stats.
+    pub fn closest_hits(
+        &mut self,
+        origin: &[Vec3],
+        direction: &[Vec3],
+        tmin: &[f32],
+        tmax: &[f32],
+        out: &mut Hits,
+    ) {
+        let n = origin.len();
+        out.t.resize(n, 0.0);
+        out.prim.resize(n, NO_HIT);
+        out.b1.resize(n, 0.0);
+        out.b2.resize(n, 0.0);
+        if n == 0 {
+            return;
+        }
+        let geometry = &self.scene.geometry;
+        self.stats.time(System::Intersect, n, || {
+            intersect_closest(
+                geometry,
+                origin,
+                direction,
+                tmin,
+                tmax,
+                &mut out.t,
+                &mut out.prim,
+                &mut out.b1,
+                &mut out.b2,
+            )
+        });
+    }
+
+    /// The surface at a hit of [`Self::closest_hits`] (primitive `prim` at distance `t`
+    /// along `origin + t direction`, barycentrics `b1`, `b2`): point, geometric normal,
+    /// error bound.
+    pub fn surface_at(
+        &self,
+        prim: u32,
+        origin: Vec3,
+        direction: Vec3,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> SurfaceSample {
+        self.scene
+            .geometry
+            .surface_at(prim, origin, direction, t, b1, b2)
+    }
+
+    /// The shape primitive `prim` belongs to (what [`ShadingContext::shape`] says of a
+    /// shading point; a volume stack entry's `shape`).
+    ///
+    /// [`ShadingContext::shape`]: crate::shading_context::ShadingContext::shape
+    pub fn shape_of(&self, prim: u32) -> u32 {
+        self.scene.prim_shape[prim as usize]
+    }
+
+    /// The distance from `p` to the nearest surface of the scene, at most `cap` (an empty
+    /// ball around `p`: a walk may take any step shorter than it without tracing a ray).
+    pub fn clearance(&self, p: Vec3, cap: f32) -> f32 {
+        risotto_systems::clearance::clearance(&self.scene.geometry, p, cap)
+    }
+
+    /// The context with the render's choices for plug-in techniques, which plug-ins read
+    /// through [`Self::technique`].
+    pub fn with_techniques(mut self, techniques: PluginTechniques) -> Self {
+        self.techniques = techniques;
         self
     }
 
@@ -98,14 +200,21 @@ impl<'s> IntegratorContext<'s> {
         self.emission_wanted
     }
 
-    /// The render's technique choices for volumes (defaults: as each material says).
-    pub fn volume_techniques(&self) -> crate::plugin::VolumeTechniques {
-        self.volume
+    /// The value this render chose for the plug-in technique `name` (one a material
+    /// declares, [`BxdfFactory::techniques`](crate::plugin::BxdfFactory::techniques));
+    /// `None`: its default, usually "as the material says".
+    pub fn technique(&self, name: &str) -> Option<&'static str> {
+        self.techniques.get(name)
+    }
+
+    /// Every plug-in technique choice of this render.
+    pub fn techniques(&self) -> PluginTechniques {
+        self.techniques
     }
 
     /// Gives the buffers back for the next context.
-    pub fn into_scratch(self) -> HitScratch {
-        self.scratch
+    pub fn into_scratch(mut self) -> HitScratch {
+        std::mem::take(&mut self.scratch)
     }
 
     /// IOR outside `shape` for a ray travelling with `stack`: the IOR of the innermost volume
@@ -271,6 +380,14 @@ impl<'s> IntegratorContext<'s> {
             }
         }
         debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
+    }
+}
+
+/// The majorant violations counted through the shared context and not taken yet go to the
+/// worker's stats when the context ends.
+impl Drop for IntegratorContext<'_> {
+    fn drop(&mut self) {
+        self.stats.majorant_violations += self.violations.replace(0);
     }
 }
 

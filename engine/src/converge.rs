@@ -39,7 +39,7 @@ use crate::compare::{compare, CompareError, DEFAULT_RELMSE_EPS};
 use crate::output::Image;
 use crate::render::{render, RenderError, RenderOptions};
 use crate::scene::CompiledScene;
-use crate::technique::{TechniqueError, Techniques};
+use crate::technique::{TechniqueError, TechniqueRegistry, Techniques};
 use risotto_systems::sampler::MAX_SPP;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -57,6 +57,10 @@ pub enum SppPlan {
 
 /// Where the reference comes from.
 #[derive(Clone, Debug)]
+#[allow(
+    clippy::large_enum_variant,
+    reason = "built once per sweep; the techniques it holds are plain `Copy` data"
+)]
 pub enum Reference {
     /// A given image (its path for the report); taken as exact.
     Image {
@@ -336,8 +340,9 @@ pub fn run(
             "--repeats 0: need at least one".into(),
         ));
     }
+    let registry = TechniqueRegistry::for_scene(scene);
     for v in &options.variants {
-        v.check_applicable(&scene.features)?;
+        v.check_applicable(&registry)?;
     }
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     if let Reference::Image { image, path } = &options.reference {
@@ -353,7 +358,7 @@ pub fn run(
         ..
     } = &options.reference
     {
-        techniques.check_applicable(&scene.features)?;
+        techniques.check_applicable(&registry)?;
     }
     match &options.plan {
         SppPlan::List(spps) => {
@@ -506,7 +511,7 @@ pub fn run(
         for (spp, renders) in points {
             pts.push(point(*spp, renders, &reference, &info)?);
         }
-        curves.push(curve(techniques, pts));
+        curves.push(curve(&registry, techniques, pts));
     }
     Ok(Sweep {
         width: w,
@@ -530,9 +535,10 @@ fn most_efficient_converging(
     extra_seed: u64,
     progress: &Progress,
 ) -> Result<Techniques, ConvergeError> {
+    let registry = TechniqueRegistry::for_scene(scene);
     let mut best: Option<(f64, &Techniques)> = None;
     for (techniques, points) in variants.iter().zip(raw) {
-        if !techniques.converges(&scene.features) {
+        if !techniques.converges(&registry) {
             continue;
         }
         let Some((spp, renders)) = points.last() else {

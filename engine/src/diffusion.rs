@@ -69,12 +69,11 @@
 use crate::plugin::*;
 use crate::random_walk::{answer_exits, Exits};
 use glam::Vec3;
-use risotto_components::{LobeSampled, Rays, Rgb, NO_HIT};
+use risotto_components::{Hits, LobeSampled, Rays, Rgb, NO_HIT};
 use risotto_systems::bssrdf::{
     max_radius, profile, radius_pdf, sample_radius, slab_reflectance_transmittance,
 };
 use risotto_systems::bxdf::Frame;
-use risotto_systems::intersect::intersect_closest;
 use risotto_systems::medium::transmittance;
 use risotto_systems::ray::{coordinate_epsilon, tmin_past_hit};
 use risotto_systems::sampler::PathSampler;
@@ -189,8 +188,6 @@ impl DiffusionInterior {
         if let Some(p) = per_ray {
             assert_eq!(p.len(), n, "one medium per ray");
         }
-        let scene = ictx.scene;
-        let geometry = &scene.geometry;
         let exact_counts = self.medium.exact_counts;
         let medium_of = |i: usize| per_ray.map_or(&self.medium, |p| &p[i]);
         let own: Vec<Option<u32>> = (0..n)
@@ -209,17 +206,15 @@ impl DiffusionInterior {
             fd.push(rays.direction[i]);
             fmax.push(2.0 * h);
         }
-        let (mut t, mut prim, mut b1, mut b2) =
-            (vec![0.0; n], vec![NO_HIT; n], vec![0.0; n], vec![0.0; n]);
         let fmin = vec![0.0f32; n];
-        intersect_closest(
-            geometry, &fo, &fd, &fmin, &fmax, &mut t, &mut prim, &mut b1, &mut b2,
-        );
+        let mut hits = Hits::default();
+        ictx.closest_hits(&fo, &fd, &fmin, &fmax, &mut hits);
+        let (t, prim, b1, b2) = (&hits.t, &hits.prim, &hits.b1, &hits.b2);
         let normals: Vec<Vec3> = (0..n)
             .map(|i| {
                 let dir = rays.direction[i];
                 if prim[i] != NO_HIT {
-                    let s = geometry.surface_at(prim[i], fo[i], fd[i], t[i], b1[i], b2[i]);
+                    let s = ictx.surface_at(prim[i], fo[i], fd[i], t[i], b1[i], b2[i]);
                     if s.ng.dot(dir) < 0.0 {
                         s.ng
                     } else {
@@ -243,7 +238,7 @@ impl DiffusionInterior {
                 )
             })
             .collect();
-        trace_own_hits(scene, &own, &mut feelers, 1);
+        trace_own_hits(ictx, &own, &mut feelers, 1);
         let thickness: Vec<f32> = (0..n)
             .map(|i| match feelers[i].hits.first() {
                 Some(&(p, _)) => (p - rays.origin[i]).dot(-normals[i]).max(0.0),
@@ -289,7 +284,7 @@ impl DiffusionInterior {
             .iter_mut()
             .map(|p| std::mem::replace(&mut p.line, Line::new(Vec3::ZERO, Vec3::Z, 0.0, 0.0)))
             .collect();
-        trace_own_hits(scene, &own, &mut lines, MAX_PROBE_HITS);
+        trace_own_hits(ictx, &own, &mut lines, MAX_PROBE_HITS);
         // 4. and 5.: pick a hit, weigh it, and leave from it.
         let picks: Vec<Option<(Vec3, Vec3, usize)>> = probes
             .iter()
@@ -325,7 +320,7 @@ impl DiffusionInterior {
                     recount_own.push(own[i]);
                 }
             }
-            trace_own_hits(scene, &recount_own, &mut recount, 2 * MAX_PROBE_HITS);
+            trace_own_hits(ictx, &recount_own, &mut recount, 2 * MAX_PROBE_HITS);
         }
         let mut exits = Exits::default();
         for (i, p) in probes.iter().enumerate() {
@@ -410,8 +405,7 @@ impl DiffusionInterior {
             exits.weight.push(weight);
             exits.events.push(1);
         }
-        ictx.stats
-            .volume_event(crate::stats::VolumeEvent::Scatter, exits.ray.len());
+        ictx.count_volume_events(crate::stats::VolumeEvent::Scatter, exits.ray.len());
         answer_exits(rays, &exits, ictx, out);
     }
 }
@@ -441,12 +435,12 @@ impl Line {
 /// Traces every line through whatever it crosses, collecting up to `max_hits` hits on the
 /// boundary of line `i`'s own shape `own[i]` (other shapes' surfaces are passed through).
 fn trace_own_hits(
-    scene: &crate::scene::CompiledScene,
+    ictx: &mut crate::context::IntegratorContext<'_>,
     own: &[Option<u32>],
     lines: &mut [Line],
     max_hits: usize,
 ) {
-    let geometry = &scene.geometry;
+    let mut hits = Hits::default();
     for _ in 0..2 * max_hits.max(MAX_PROBE_HITS) {
         let live: Vec<usize> = (0..lines.len())
             .filter(|&i| lines[i].tmax > lines[i].tmin && lines[i].hits.len() < max_hits)
@@ -458,20 +452,16 @@ fn trace_own_hits(
         let dd: Vec<Vec3> = live.iter().map(|&i| lines[i].direction).collect();
         let lo: Vec<f32> = live.iter().map(|&i| lines[i].tmin).collect();
         let hi: Vec<f32> = live.iter().map(|&i| lines[i].tmax).collect();
-        let k = live.len();
-        let (mut t, mut prim, mut b1, mut b2) =
-            (vec![0.0; k], vec![NO_HIT; k], vec![0.0; k], vec![0.0; k]);
-        intersect_closest(
-            geometry, &o, &dd, &lo, &hi, &mut t, &mut prim, &mut b1, &mut b2,
-        );
+        ictx.closest_hits(&o, &dd, &lo, &hi, &mut hits);
+        let (t, prim, b1, b2) = (&hits.t, &hits.prim, &hits.b1, &hits.b2);
         for (j, &i) in live.iter().enumerate() {
             let p = &mut lines[i];
             if prim[j] == NO_HIT {
                 p.tmax = p.tmin;
                 continue;
             }
-            let s = geometry.surface_at(prim[j], o[j], dd[j], t[j], b1[j], b2[j]);
-            if Some(scene.prim_shape[prim[j] as usize]) == own[i] {
+            let s = ictx.surface_at(prim[j], o[j], dd[j], t[j], b1[j], b2[j]);
+            if Some(ictx.shape_of(prim[j])) == own[i] {
                 p.hits.push((s.p, s.ng));
             }
             // Go on past this surface along the same line.

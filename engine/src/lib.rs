@@ -5,6 +5,7 @@ pub mod builtin;
 pub mod compare;
 pub mod context;
 pub mod converge;
+pub mod diagnostics;
 pub mod diffusion;
 pub mod grid_file;
 pub mod heterogeneous;

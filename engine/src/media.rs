@@ -53,6 +53,7 @@ mod single;
 use crate::homogeneous_emission::emission_along;
 use crate::plugin::*;
 use crate::scatter_patterns::scale_by_albedo;
+use crate::technique;
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
@@ -183,6 +184,68 @@ pub enum Scattering {
     /// Single scattering through the lighting delegate (multiple without one).
     Single,
 }
+
+impl Scattering {
+    /// Every value, in the order of the [`SCATTERING`] technique's values.
+    pub const ALL: [Scattering; 4] = [
+        Scattering::Multiple,
+        Scattering::Walk,
+        Scattering::Bounce,
+        Scattering::Single,
+    ];
+
+    /// The name the scene file and the [`SCATTERING`] technique use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scattering::Multiple => "multiple",
+            Scattering::Walk => "walk",
+            Scattering::Bounce => "bounce",
+            Scattering::Single => "single",
+        }
+    }
+
+    /// The value named `name`.
+    pub fn from_name(name: &str) -> Option<Scattering> {
+        Scattering::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
+/// The `scattering` technique every scattering medium built on [`HomogeneousInterior`]
+/// declares (homogeneous media and the subsurface walk): the render's choice over what each
+/// medium's `scattering` says.
+pub static SCATTERING: Technique = Technique {
+    name: "scattering",
+    summary: "single or multiple scattering in scattering media",
+    values: &[
+        TechniqueValue {
+            name: "scene",
+            summary: "as each medium's `scattering` says",
+            converges: technique::always,
+        },
+        TechniqueValue {
+            name: "multiple",
+            summary: "every order: walk where light sampling cannot help, else bounce",
+            converges: technique::always,
+        },
+        TechniqueValue {
+            name: "walk",
+            summary: "every order, walked inside the volume integrator (exits only)",
+            converges: technique::always,
+        },
+        TechniqueValue {
+            name: "bounce",
+            summary: "every order: each scattering point goes back to the path tracer",
+            converges: technique::always,
+        },
+        TechniqueValue {
+            name: "single",
+            summary: "single scattering through the lighting delegate (biased: no higher orders)",
+            converges: technique::never,
+        },
+    ],
+    default: "scene",
+    applies_to: "scenes with homogeneous scattering media or subsurface materials",
+};
 
 /// A homogeneous scattering medium's parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -315,7 +378,7 @@ impl HomogeneousInterior<'_> {
         for (tmax, &hit) in tmax.iter_mut().zip(ictx.trace(rays)) {
             *tmax = tmax.min(hit);
         }
-        self.emit_along(rays, tmax, samplers, light, ictx.stats, out);
+        self.emit_along(rays, tmax, samplers, light, ictx, out);
         // Only media whose mean free path is below the float spacing of their coordinates
         // can freeze a walk (`flights_frozen`): the others skip the test per event.
         let may_freeze = self
@@ -391,10 +454,9 @@ impl HomogeneousInterior<'_> {
         for k in m0..out.misses.len() {
             out.miss_transmission[k] *= weight[out.misses[k] as usize];
         }
-        let stats = &mut *ictx.stats;
-        stats.volume_event(crate::stats::VolumeEvent::Scatter, events);
-        stats.volume_event(crate::stats::VolumeEvent::Pass, n - events - frozen);
-        stats.volume_event(crate::stats::VolumeEvent::Frozen, frozen);
+        ictx.count_volume_events(crate::stats::VolumeEvent::Scatter, events);
+        ictx.count_volume_events(crate::stats::VolumeEvent::Pass, n - events - frozen);
+        ictx.count_volume_events(crate::stats::VolumeEvent::Frozen, frozen);
     }
 
     /// Reports the medium's emission along each ray's segment `[0, tmax[i]]` in
@@ -411,7 +473,7 @@ impl HomogeneousInterior<'_> {
         tmax: &[f32],
         samplers: &[PathSampler],
         light: Option<&crate::volume_lights::VolumeLightMis<'_>>,
-        stats: &mut crate::stats::SystemStats,
+        ictx: &mut IntegratorContext<'_>,
         out: &mut ShadeGroups,
     ) {
         let m = &self.medium;
@@ -422,7 +484,7 @@ impl HomogeneousInterior<'_> {
             let e = emission_along(m, rays, i, t, light, &samplers[i]);
             out.emitted.push(i as u32, e);
         }
-        stats.volume_event(crate::stats::VolumeEvent::Emission, tmax.len());
+        ictx.count_volume_events(crate::stats::VolumeEvent::Emission, tmax.len());
     }
 }
 
@@ -507,8 +569,9 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         out: &mut ShadeGroups,
     ) {
         let scattering = services
-            .techniques
-            .scattering
+            .ictx
+            .technique(SCATTERING.name)
+            .and_then(Scattering::from_name)
             .unwrap_or(self.medium.scattering);
         let walk = match scattering {
             Scattering::Walk => true,
@@ -533,7 +596,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
                 tmax[r] = tmax[r].min(out.points.vlen[k]);
             }
             let light = services.volume_light.as_ref();
-            self.emit_along(rays, &tmax, samplers, light, services.ictx.stats, out);
+            self.emit_along(rays, &tmax, samplers, light, services.ictx, out);
             self.single_scatter(rays, samplers, u, &tmax, start, services, out);
         } else {
             self.scatter_inside(rays, u, samplers, services, out);

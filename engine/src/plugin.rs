@@ -35,12 +35,13 @@
 //! # let _ = Murky { sigma_a: Rgb::splat(1.0) };
 //! ```
 
-use crate::context::IntegratorContext;
+pub use crate::context::IntegratorContext;
 pub use crate::shade_groups::{EmittedRadiance, ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
 pub use crate::shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling,
 };
+pub use crate::technique::{Technique, TechniqueValue};
 use bumpalo::Bump;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb};
@@ -207,25 +208,10 @@ pub struct VolumeServices<'a, 's> {
     pub factory: &'a dyn BxdfFactory,
     /// The worker's per-batch arena (plain data only: it runs no destructors).
     pub arena: &'a Bump,
-    /// Technique choices of this render that override what the volume's material says
-    /// (the built-in media honour them; a plug-in may).
-    pub techniques: VolumeTechniques,
     /// When the volume's emitter ([`BxdfFactory::volume_emitter`]) is light-sampled: how
     /// to weight the emission gathered along the rays against those light samples
     /// ([`crate::volume_lights`]). `None`: weight 1.
     pub volume_light: Option<crate::volume_lights::VolumeLightMis<'a>>,
-}
-
-/// Technique choices a render makes for every volume (`risotto render --technique`,
-/// `risotto converge`), over what each material says. `None` = as the material says.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct VolumeTechniques {
-    /// Single or multiple scattering for every scattering medium.
-    pub scattering: Option<crate::media::Scattering>,
-    /// Random walk or diffusion for every `subsurface` material.
-    pub subsurface: Option<crate::subsurface::SubsurfaceMode>,
-    /// The free-flight and transmittance estimators of every heterogeneous medium.
-    pub tracking: Option<crate::heterogeneous::Tracking>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).
@@ -324,6 +310,15 @@ pub trait BxdfFactory: Send + Sync {
     ) -> Option<crate::volume_lights::VolumeEmitter> {
         let _ = (bounds, support);
         None
+    }
+
+    /// The techniques this material's closures offer (estimator choices a render may make
+    /// over what the material says), as data: `risotto techniques` lists them for every
+    /// scene with this material, `risotto render --technique NAME=VALUE` and `risotto
+    /// converge` set and sweep them, and the closures read the chosen value through
+    /// [`IntegratorContext::technique`]. Defaults to none.
+    fn techniques(&self) -> &'static [&'static Technique] {
+        &[]
     }
 
     /// Index of refraction of the interior, used as the *outside* IOR of shapes nested in it.

@@ -88,12 +88,10 @@ use crate::homogeneous_emission::emission_along;
 use crate::media::HomogeneousMedium;
 use crate::scatter_patterns::{hg_at, PointPattern};
 use crate::shade_groups::ShadeGroups;
-use crate::stats::{System, VolumeEvent};
+use crate::stats::VolumeEvent;
 use crate::volume_lights::VolumeLightMis;
 use glam::{Vec2, Vec3};
-use risotto_components::{Rays, Rgb, NO_HIT};
-use risotto_systems::clearance::clearance;
-use risotto_systems::intersect::intersect_closest;
+use risotto_components::{Hits, Rays, Rgb, NO_HIT};
 use risotto_systems::medium::{
     channel_pdf, emitted_radiance, flights_frozen, flights_may_freeze_within, sample_free_flight,
     FreeFlight,
@@ -248,16 +246,15 @@ fn walk_bundle_in<C: Coefficients>(
     if n == 0 {
         return;
     }
-    let scene = ictx.scene;
     let mut walk = Walk {
         coefficients,
         phase: medium.phase,
-        max_depth: scene.settings.max_depth,
+        max_depth: ictx.max_depth(),
         albedo: medium.albedo_pattern.as_deref().map(PointPattern::new),
         g: medium.g_pattern.as_deref().map(PointPattern::new),
         frozen: 0,
         largest_coordinate: {
-            let (lo, hi) = scene.geometry.bounds();
+            let (lo, hi) = ictx.scene_bounds();
             lo.abs().max(hi.abs()).max_element()
         },
     };
@@ -281,7 +278,7 @@ fn walk_bundle_in<C: Coefficients>(
         w.radius.push(0.0);
     }
     let mut exits = Exits::default();
-    let (mut t_hit, mut prim, mut b1, mut b2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut hits = Hits::default();
     let (mut flights, mut query) = (Vec::new(), Vec::new());
     let (mut traced, mut free, mut passes) = (0usize, 0usize, 0usize);
     while w.len() > 0 {
@@ -348,23 +345,8 @@ fn walk_bundle_in<C: Coefficients>(
         if m == 0 {
             break;
         }
-        t_hit.resize(m, 0.0);
-        prim.resize(m, NO_HIT);
-        b1.resize(m, 0.0);
-        b2.resize(m, 0.0);
-        ictx.stats.time(System::Intersect, m, || {
-            intersect_closest(
-                &scene.geometry,
-                &w.origin,
-                &w.direction,
-                &w.tmin,
-                &query,
-                &mut t_hit,
-                &mut prim,
-                &mut b1,
-                &mut b2,
-            )
-        });
+        ictx.closest_hits(&w.origin, &w.direction, &w.tmin, &query, &mut hits);
+        let (t_hit, prim, b1, b2) = (&hits.t, &hits.prim, &hits.b1, &hits.b2);
         if emits {
             // The emission of every step's segment, to the surface ahead (nothing for a
             // segment with nothing ahead: it has left the medium), at the walk's weight
@@ -385,7 +367,7 @@ fn walk_bundle_in<C: Coefficients>(
                 };
                 emitted[r] += w.weight[j] * e;
             }
-            ictx.stats.volume_event(VolumeEvent::Emission, m);
+            ictx.count_volume_events(VolumeEvent::Emission, m);
         }
         let mut live = 0;
         for j in 0..m {
@@ -418,7 +400,7 @@ fn walk_bundle_in<C: Coefficients>(
             let mut t = f.t;
             if hit {
                 let seg = t_hit[j];
-                let s = scene.geometry.surface_at(prim[j], o, d, seg, b1[j], b2[j]);
+                let s = ictx.surface_at(prim[j], o, d, seg, b1[j], b2[j]);
                 let end = before_hit(seg, s.offset(), s.ng, o, d);
                 t = t.min(if end < w.tmin[j] {
                     0.5 * (w.tmin[j] + seg)
@@ -438,7 +420,7 @@ fn walk_bundle_in<C: Coefficients>(
             // nearest surface's bound is not known here), so that no free step ends within
             // rounding of a surface.
             if !emits {
-                let c = clearance(&scene.geometry, p, f32::INFINITY);
+                let c = ictx.clearance(p, f32::INFINITY);
                 w.anchor[j] = p;
                 w.radius[j] = (c * (1.0 - 1e-3) - 1000.0 * coordinate_epsilon(p)).max(0.0);
             }
@@ -449,13 +431,12 @@ fn walk_bundle_in<C: Coefficients>(
         }
         w.truncate(live);
     }
-    ictx.stats.volume_event(VolumeEvent::Scatter, traced + free);
-    ictx.stats.volume_event(VolumeEvent::Pass, passes);
-    ictx.stats.volume_event(VolumeEvent::Frozen, walk.frozen);
+    ictx.count_volume_events(VolumeEvent::Scatter, traced + free);
+    ictx.count_volume_events(VolumeEvent::Pass, passes);
+    ictx.count_volume_events(VolumeEvent::Frozen, walk.frozen);
     let evals =
         walk.albedo.as_ref().map_or(0, |a| a.evals) + walk.g.as_ref().map_or(0, |g| g.evals);
-    ictx.stats.pattern_evals += evals;
-    ictx.stats.volume_pattern_evals += evals;
+    ictx.count_volume_pattern_evals(evals);
     for (i, &e) in emitted.iter().enumerate() {
         out.emitted.push(i as u32, e);
     }

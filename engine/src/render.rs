@@ -132,9 +132,10 @@ pub struct RenderOptions {
     pub technique: LightingTechnique,
     /// Sampler (the `sampler` technique). Defaults to Sobol.
     pub sampler: SamplerKind,
-    /// Scattering-media techniques over what each medium says (the `scattering` technique).
-    /// Defaults to none (as the scene says).
-    pub volume: crate::plugin::VolumeTechniques,
+    /// The values chosen for plug-in techniques (those the scene's materials declare, such
+    /// as the built-in media's `scattering`, `subsurface` and `tracking`). Defaults to none:
+    /// every one at its default.
+    pub plugin_techniques: crate::technique::PluginTechniques,
     /// Only this window of the image is rendered (same camera, same per-pixel seeds: its
     /// pixels are the bits of the same pixels of the whole render). Defaults to `None`: the
     /// whole image.
@@ -152,7 +153,7 @@ impl Default for RenderOptions {
             tile_size: 16,
             technique: LightingTechnique::Mis,
             sampler: SamplerKind::Sobol,
-            volume: Default::default(),
+            plugin_techniques: Default::default(),
             crop: None,
             samples: None,
         }
@@ -265,7 +266,7 @@ pub fn render(
 ) -> Result<RenderOutput, RenderError> {
     let tracer = PathTracer {
         technique: options.technique,
-        volume: options.volume,
+        techniques: options.plugin_techniques,
     };
     render_passes(&tracer, scene, options, progress, None)
 }
@@ -282,7 +283,7 @@ pub fn render_checkpointed(
 ) -> Result<RenderOutput, RenderError> {
     let tracer = PathTracer {
         technique: options.technique,
-        volume: options.volume,
+        techniques: options.plugin_techniques,
     };
     render_passes(&tracer, scene, options, progress, Some(checkpoints))
 }

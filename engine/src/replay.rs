@@ -113,7 +113,7 @@ pub fn replay(
     let start = std::time::Instant::now();
     let tracer = PathTracer {
         technique: options.technique,
-        volume: options.volume,
+        techniques: options.plugin_techniques,
     };
     // The one path, with the pixel seed and sample address the render gives it.
     let pixel = y * w + x;

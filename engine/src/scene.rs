@@ -170,7 +170,7 @@ impl Features {
 /// A scene being assembled: the world, the materials, the camera and the settings.
 pub struct Scene {
     /// The files a scene file made it from reads (empty for a scene built in code).
-    pub files: crate::scene_file::ReferencedFiles,
+    pub files: crate::diagnostics::ReferencedFiles,
     /// The entities.
     pub world: hecs::World,
     /// Materials by index.
@@ -185,7 +185,7 @@ pub struct Scene {
     pub camera_volume: Option<Vec<String>>,
     /// Where [`Self::camera_volume`] was written (`camera.inside` in a scene file), so its
     /// errors name the file and line; `None` for scenes built in code.
-    pub camera_volume_at: Option<crate::scene_file::Location>,
+    pub camera_volume_at: Option<crate::diagnostics::Location>,
 }
 
 /// Per-shape data of a compiled scene.
@@ -215,7 +215,7 @@ pub struct MaterialInfo {
 /// The flat, read-only data the renderer works from.
 pub struct CompiledScene {
     /// The files the scene reads besides its own text, sorted
-    /// ([`ReferencedFiles`](crate::scene_file::ReferencedFiles)).
+    /// ([`ReferencedFiles`](crate::diagnostics::ReferencedFiles)).
     pub files: Vec<std::path::PathBuf>,
     /// All primitives and the BVH.
     pub geometry: SceneGeometry,
@@ -283,7 +283,7 @@ pub enum CompileError {
     CameraVolume(String),
     /// An error located in the scene file (`camera.inside`).
     #[error(transparent)]
-    Scene(#[from] crate::scene_file::SceneError),
+    Scene(#[from] crate::diagnostics::SceneError),
     /// A value is invalid.
     #[error("{entity}: {message}")]
     Invalid {

@@ -16,7 +16,6 @@
 //! Conventions: right-handed coordinates, +y up; colours are linear Rec.709 RGB;
 //! transforms apply in the order written (`p_world = T_n ... T_1 p_local`).
 
-mod error;
 mod geometry;
 mod params;
 mod pattern;
@@ -33,39 +32,13 @@ use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::sampler::MAX_SPP;
 
-pub use error::{Location, SceneError, SceneErrorKind};
+pub use crate::diagnostics::{Location, ReferencedFiles, SceneError, SceneErrorKind};
 pub use params::MaterialParams;
 pub use pattern::ColourParam;
 
-use error::Source;
+use crate::diagnostics::Source;
 use params::Reader;
 use raw::{Node, Value};
-
-/// The files a scene reads besides its own text: every path resolved from the scene file
-/// (meshes, grids, environment maps, any path a material factory reads with
-/// [`MaterialParams::path`]) and those factories note with [`MaterialParams::note_file`]. A
-/// shared handle: the description, the [`Scene`](crate::scene::Scene) built from it and the
-/// compiled scene see the same list, which grows while factories parse their parameters.
-/// Split renders hash the files' contents into their scene hash.
-#[derive(Clone, Debug, Default)]
-pub struct ReferencedFiles(Arc<std::sync::Mutex<Vec<PathBuf>>>);
-
-impl ReferencedFiles {
-    /// Adds a path.
-    pub fn add(&self, path: &Path) {
-        let mut files = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        if !files.iter().any(|p| p == path) {
-            files.push(path.to_path_buf());
-        }
-    }
-
-    /// The paths, sorted.
-    pub fn paths(&self) -> Vec<PathBuf> {
-        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner()).clone();
-        v.sort();
-        v
-    }
-}
 
 /// The largest light value a scene file accepts, per channel: shape `emission`, environment
 /// `radiance`, distant `irradiance`, point `intensity`. Paths multiply it by weights that

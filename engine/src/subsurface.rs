@@ -45,7 +45,7 @@
 
 use crate::builtin::{BuiltinMaterial, Interior, Surface};
 use crate::media::{HomogeneousMedium, Scattering};
-use crate::plugin::BxdfFactory;
+use crate::plugin::{BxdfFactory, Technique, TechniqueValue};
 use crate::scene_file::{ColourParam, MaterialParams, SceneError};
 use glam::Vec3;
 use risotto_components::Rgb;
@@ -63,6 +63,49 @@ pub enum SubsurfaceMode {
     /// Christensen-Burley normalized diffusion with probe rays ([`crate::diffusion`]).
     Diffusion,
 }
+
+impl SubsurfaceMode {
+    /// The name the scene file (`mode`) and the [`SUBSURFACE`] technique use.
+    pub fn name(self) -> &'static str {
+        match self {
+            SubsurfaceMode::RandomWalk => "random_walk",
+            SubsurfaceMode::Diffusion => "diffusion",
+        }
+    }
+
+    /// The mode named `name`.
+    pub fn from_name(name: &str) -> Option<SubsurfaceMode> {
+        [SubsurfaceMode::RandomWalk, SubsurfaceMode::Diffusion]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+}
+
+/// The `subsurface` technique the `subsurface` material declares: random walk or diffusion
+/// for every subsurface material, over what each one's `mode` says.
+pub static SUBSURFACE: Technique = Technique {
+    name: "subsurface",
+    summary: "random walk or diffusion in subsurface materials",
+    values: &[
+        TechniqueValue {
+            name: "scene",
+            summary: "as each subsurface material's `mode` says",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "random_walk",
+            summary: "walk every path inside the boundary (exact)",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "diffusion",
+            summary: "normalized diffusion with probe rays (fast, approximate)",
+            converges: crate::technique::never,
+        },
+    ],
+    default: "scene",
+    applies_to: "scenes with subsurface materials",
+};
 
 /// The `subsurface` material's parameters, as the scene file gives them.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -281,7 +324,11 @@ impl crate::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
         services: crate::plugin::VolumeServices<'_, '_>,
         out: &mut crate::plugin::ShadeGroups,
     ) {
-        let mode = services.techniques.subsurface.unwrap_or(self.mode);
+        let mode = services
+            .ictx
+            .technique(SUBSURFACE.name)
+            .and_then(SubsurfaceMode::from_name)
+            .unwrap_or(self.mode);
         if let Some(patterned) = self.patterned {
             // Every ray in the medium of its entry point's values (module docs).
             let (params, evals) = patterned.at(&rays.origin);

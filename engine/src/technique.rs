@@ -1,19 +1,25 @@
-//! The registry of techniques: every estimator choice that trades time for error is a named
-//! technique with its values, its default and the scene features it applies to (DESIGN.md,
-//! "Accuracy and its cost"). `risotto techniques SCENE` lists [`applicable`] ones,
-//! `risotto render --technique NAME=VALUE` sets one, and `risotto converge` sweeps them.
+//! Techniques: every estimator choice that trades time for error is a named technique with
+//! its values, its default and the scenes it applies to (DESIGN.md, "Accuracy and its cost").
+//! `risotto techniques SCENE` lists the ones that apply, `risotto render --technique
+//! NAME=VALUE` sets one, and `risotto converge` sweeps them.
 //!
-//! A new technique is one entry of [`REGISTRY`] (its `get` and `set` read and write a field
-//! of [`Techniques`]) plus that field's use in [`Techniques::render_options`].
+//! Two kinds, listed and swept alike:
+//! - the **global integrator's own** ([`CORE`]: `lighting`, `sampler`), which apply by the
+//!   scene's [`Features`];
+//! - **plug-in techniques**, declared as data by a material's factory
+//!   ([`BxdfFactory::techniques`](crate::plugin::BxdfFactory::techniques)): a plug-in
+//!   technique applies to a scene when one of its materials declares it, and its chosen value
+//!   reaches the plug-in through [`IntegratorContext::technique`]
+//!   (`None`: the default, usually "as the material says"). The contract names no plug-in:
+//!   the built-in media declare `scattering`, `subsurface` and `tracking` exactly as a
+//!   user's plug-in declares its own.
+//!
+//! [`IntegratorContext::technique`]: crate::context::IntegratorContext::technique
 
-use crate::heterogeneous::Tracking;
 use crate::integrator::LightingTechnique;
-use crate::media::Scattering;
 use crate::render::RenderOptions;
-use crate::scene::Features;
-use crate::subsurface::SubsurfaceMode;
+use crate::scene::{CompiledScene, Features};
 use risotto_systems::independent_sampler::SamplerKind;
-use std::fmt;
 
 /// One value a technique can take.
 #[derive(Clone, Copy, Debug)]
@@ -24,16 +30,23 @@ pub struct TechniqueValue {
     pub summary: &'static str,
     /// Whether it converges to the scene's exact image in a scene with these features
     /// (false for an approximation, such as single scattering only): only such values may
-    /// render a reference.
+    /// render a reference. [`always`] for an unbiased estimator, [`never()`] for an
+    /// approximation.
     pub converges: fn(&Features) -> bool,
 }
 
 /// [`TechniqueValue::converges`] of an unbiased estimator.
-fn always(_: &Features) -> bool {
+pub fn always(_: &Features) -> bool {
     true
 }
 
-/// A registered technique.
+/// [`TechniqueValue::converges`] of an approximation.
+pub fn never(_: &Features) -> bool {
+    false
+}
+
+/// A technique: a named choice between estimators, declared as data.
+#[derive(Debug)]
 pub struct Technique {
     /// Its name (`NAME=VALUE`).
     pub name: &'static str,
@@ -41,23 +54,28 @@ pub struct Technique {
     pub summary: &'static str,
     /// Its values.
     pub values: &'static [TechniqueValue],
-    /// The value used unless one is given.
+    /// The value used unless one is given (one of `values`).
     pub default: &'static str,
     /// The scenes it applies to, in words.
     pub applies_to: &'static str,
-    /// Whether it applies to a scene with these features.
-    pub applies: fn(&Features) -> bool,
-    /// The value set in a selection.
-    get: fn(&Techniques) -> &'static str,
-    /// Sets a value (one of `values`).
-    set: fn(&mut Techniques, &str),
 }
 
-impl fmt::Debug for Technique {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Technique")
-            .field("name", &self.name)
-            .finish_non_exhaustive()
+impl Technique {
+    /// The value named `value`, with the error a user sees when there is none.
+    pub fn value(&self, value: &str) -> Result<&'static TechniqueValue, TechniqueError> {
+        self.values
+            .iter()
+            .find(|v| v.name == value)
+            .ok_or_else(|| TechniqueError::BadValue {
+                technique: self.name,
+                value: value.to_string(),
+                expected: self
+                    .values
+                    .iter()
+                    .map(|v| v.name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
     }
 }
 
@@ -66,210 +84,65 @@ fn has_lights(f: &Features) -> bool {
     f.area_lights || f.distant_lights || f.point_lights || f.environment || f.emissive_media
 }
 
-/// Every technique, in listing order.
-pub static REGISTRY: &[Technique] = &[
-    Technique {
-        name: "lighting",
-        summary: "how direct lighting is estimated at surface and volume vertices",
-        values: &[
-            TechniqueValue {
-                name: "mis",
-                summary: "light and Bxdf sampling, power-heuristic MIS (Veach 1997)",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "nee",
-                summary: "light sampling only (next-event estimation)",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "bxdf",
-                summary: "Bxdf sampling only (no shadow rays; Dirac lights are invisible)",
-                converges: |f| !(f.point_lights || f.distant_lights),
-            },
-        ],
-        default: "mis",
-        applies_to: "scenes with lights (emitters, distant, point, environment, emissive media)",
-        applies: has_lights,
-        get: |t| match t.lighting {
-            LightingTechnique::Mis => "mis",
-            LightingTechnique::NeeOnly => "nee",
-            LightingTechnique::BxdfOnly => "bxdf",
+/// `lighting`: how the path tracer estimates direct lighting.
+pub static LIGHTING: Technique = Technique {
+    name: "lighting",
+    summary: "how direct lighting is estimated at surface and volume vertices",
+    values: &[
+        TechniqueValue {
+            name: "mis",
+            summary: "light and Bxdf sampling, power-heuristic MIS (Veach 1997)",
+            converges: always,
         },
-        set: |t, v| {
-            t.lighting = match v {
-                "nee" => LightingTechnique::NeeOnly,
-                "bxdf" => LightingTechnique::BxdfOnly,
-                _ => LightingTechnique::Mis,
-            }
+        TechniqueValue {
+            name: "nee",
+            summary: "light sampling only (next-event estimation)",
+            converges: always,
         },
-    },
-    Technique {
-        name: "sampler",
-        summary: "where each path's random numbers come from",
-        values: &[
-            TechniqueValue {
-                name: "sobol",
-                summary: "padded Owen-scrambled Sobol (Burley 2020), the pixel jitter digitally shifted; stratified",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "independent",
-                summary: "independent uniform random numbers (the baseline)",
-                converges: always,
-            },
-        ],
-        default: "sobol",
-        applies_to: "every scene",
-        applies: |_| true,
-        get: |t| match t.sampler {
-            SamplerKind::Sobol => "sobol",
-            SamplerKind::Independent => "independent",
+        TechniqueValue {
+            name: "bxdf",
+            summary: "Bxdf sampling only (no shadow rays; Dirac lights are invisible)",
+            converges: |f| !(f.point_lights || f.distant_lights),
         },
-        set: |t, v| {
-            t.sampler = match v {
-                "independent" => SamplerKind::Independent,
-                _ => SamplerKind::Sobol,
-            }
+    ],
+    default: "mis",
+    applies_to: "scenes with lights (emitters, distant, point, environment, emissive media)",
+};
+
+/// `sampler`: where each path's random numbers come from.
+pub static SAMPLER: Technique = Technique {
+    name: "sampler",
+    summary: "where each path's random numbers come from",
+    values: &[
+        TechniqueValue {
+            name: "sobol",
+            summary: "padded Owen-scrambled Sobol (Burley 2020), the pixel jitter digitally shifted; stratified",
+            converges: always,
         },
-    },
-    Technique {
-        name: "scattering",
-        summary: "single or multiple scattering in scattering media",
-        values: &[
-            TechniqueValue {
-                name: "scene",
-                summary: "as each medium's `scattering` says",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "multiple",
-                summary: "every order: walk where light sampling cannot help, else bounce",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "walk",
-                summary: "every order, walked inside the volume integrator (exits only)",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "bounce",
-                summary: "every order: each scattering point goes back to the path tracer",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "single",
-                summary:
-                    "single scattering through the lighting delegate (biased: no higher orders)",
-                converges: |_| false,
-            },
-        ],
-        default: "scene",
-        applies_to: "scenes with scattering media",
-        applies: |f| f.scattering_media,
-        get: |t| match t.scattering {
-            None => "scene",
-            Some(Scattering::Multiple) => "multiple",
-            Some(Scattering::Walk) => "walk",
-            Some(Scattering::Bounce) => "bounce",
-            Some(Scattering::Single) => "single",
+        TechniqueValue {
+            name: "independent",
+            summary: "independent uniform random numbers (the baseline)",
+            converges: always,
         },
-        set: |t, v| {
-            t.scattering = match v {
-                "multiple" => Some(Scattering::Multiple),
-                "walk" => Some(Scattering::Walk),
-                "bounce" => Some(Scattering::Bounce),
-                "single" => Some(Scattering::Single),
-                _ => None,
-            }
-        },
-    },
-    Technique {
-        name: "subsurface",
-        summary: "random walk or diffusion in subsurface materials",
-        values: &[
-            TechniqueValue {
-                name: "scene",
-                summary: "as each subsurface material's `mode` says",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "random_walk",
-                summary: "walk every path inside the boundary (exact)",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "diffusion",
-                summary: "normalized diffusion with probe rays (fast, approximate)",
-                converges: |_| false,
-            },
-        ],
-        default: "scene",
-        applies_to: "scenes with subsurface materials",
-        applies: |f| f.subsurface,
-        get: |t| match t.subsurface {
-            None => "scene",
-            Some(SubsurfaceMode::RandomWalk) => "random_walk",
-            Some(SubsurfaceMode::Diffusion) => "diffusion",
-        },
-        set: |t, v| {
-            t.subsurface = match v {
-                "random_walk" => Some(SubsurfaceMode::RandomWalk),
-                "diffusion" => Some(SubsurfaceMode::Diffusion),
-                _ => None,
-            }
-        },
-    },
-    Technique {
-        name: "tracking",
-        summary: "free-flight and transmittance estimators in heterogeneous media",
-        values: &[
-            TechniqueValue {
-                name: "scene",
-                summary: "as each heterogeneous medium's `tracking` says",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "ratio",
-                summary:
-                    "ratio tracking for shadow rays (Novak et al. 2014); delta-tracked flights",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "residual",
-                summary: "residual ratio tracking, each majorant cell's minimum as control",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "delta",
-                summary: "delta tracking for shadow rays too (0 or 1)",
-                converges: always,
-            },
-            TechniqueValue {
-                name: "ray_marching",
-                summary: "fixed-step ray marching of flights and shadow rays (biased)",
-                converges: |_| false,
-            },
-            TechniqueValue {
-                name: "unbiased_ray_marching",
-                summary:
-                    "power series around a marched pivot for shadow rays (Kettunen et al. 2021)",
-                converges: always,
-            },
-        ],
-        default: "scene",
-        applies_to: "scenes with heterogeneous media",
-        applies: |f| f.heterogeneous,
-        get: |t| t.tracking.map_or("scene", Tracking::name),
-        set: |t, v| t.tracking = Tracking::from_name(v),
-    },
-];
+    ],
+    default: "sobol",
+    applies_to: "every scene",
+};
+
+/// Whether a technique of the global integrator applies to a scene with these features.
+pub type Applies = fn(&Features) -> bool;
+
+/// The global integrator's own techniques, in listing order, each with the scenes it
+/// applies to.
+pub static CORE: [(&Technique, Applies); 2] = [(&LIGHTING, has_lights), (&SAMPLER, |_| true)];
 
 /// A bad technique name, value or use.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum TechniqueError {
     /// No technique has this name.
-    #[error("unknown technique \"{name}\" (known: {known})")]
+    #[error(
+        "unknown technique \"{name}\" (known in this scene: {known}; a plug-in technique is known where a material of the scene declares it)"
+    )]
     Unknown {
         /// The name given.
         name: String,
@@ -289,6 +162,9 @@ pub enum TechniqueError {
     /// Not of the form `NAME=VALUE`.
     #[error("\"{0}\": expected NAME=VALUE (e.g. lighting=nee)")]
     Malformed(String),
+    /// More plug-in techniques chosen than [`MAX_PLUGIN_CHOICES`].
+    #[error("at most {MAX_PLUGIN_CHOICES} plug-in techniques can be set at once")]
+    TooMany,
     /// The technique does not apply to the scene.
     #[error(
         "technique {technique}={value} does not apply to this scene: {technique} applies to {applies_to}"
@@ -303,104 +179,248 @@ pub enum TechniqueError {
     },
 }
 
-/// The technique named `name`.
-pub fn find(name: &str) -> Result<&'static Technique, TechniqueError> {
-    REGISTRY
-        .iter()
-        .find(|t| t.name == name)
-        .ok_or_else(|| TechniqueError::Unknown {
-            name: name.to_string(),
-            known: REGISTRY
-                .iter()
-                .map(|t| t.name)
-                .collect::<Vec<_>>()
-                .join(", "),
-        })
+/// The techniques known in one scene: the global integrator's ([`CORE`]) and those its
+/// materials declare.
+#[derive(Clone, Debug)]
+pub struct TechniqueRegistry {
+    features: Features,
+    plugins: Vec<&'static Technique>,
 }
 
-/// The techniques that apply to a scene with `features`.
-pub fn applicable(features: &Features) -> impl Iterator<Item = &'static Technique> + '_ {
-    REGISTRY.iter().filter(move |t| (t.applies)(features))
+impl TechniqueRegistry {
+    /// The techniques of a scene with `features` whose materials declare `plugins` (the
+    /// first declaration of a name counts).
+    pub fn new(
+        features: Features,
+        plugins: impl IntoIterator<Item = &'static Technique>,
+    ) -> TechniqueRegistry {
+        let mut r = TechniqueRegistry {
+            features,
+            plugins: Vec::new(),
+        };
+        for t in plugins {
+            let known = CORE.iter().any(|(c, _)| c.name == t.name)
+                || r.plugins.iter().any(|p| p.name == t.name);
+            if !known {
+                r.plugins.push(t);
+            }
+        }
+        r
+    }
+
+    /// The techniques of `scene`: [`CORE`] and every technique its materials declare
+    /// ([`BxdfFactory::techniques`](crate::plugin::BxdfFactory::techniques)).
+    pub fn for_scene(scene: &CompiledScene) -> TechniqueRegistry {
+        let declared = scene
+            .materials
+            .iter()
+            .flat_map(|m| m.factory.techniques().iter().copied());
+        TechniqueRegistry::new(scene.features, declared)
+    }
+
+    /// The technique named `name`.
+    pub fn find(&self, name: &str) -> Result<&'static Technique, TechniqueError> {
+        self.all()
+            .find(|t| t.name == name)
+            .ok_or_else(|| TechniqueError::Unknown {
+                name: name.to_string(),
+                known: self.all().map(|t| t.name).collect::<Vec<_>>().join(", "),
+            })
+    }
+
+    /// Every technique known here, applicable or not: [`CORE`], then the plug-ins'.
+    fn all(&self) -> impl Iterator<Item = &'static Technique> + '_ {
+        CORE.iter()
+            .map(|(t, _)| *t)
+            .chain(self.plugins.iter().copied())
+    }
+
+    /// Whether `t` applies to the scene (a plug-in technique applies wherever it is
+    /// declared).
+    pub fn applies(&self, t: &Technique) -> bool {
+        match CORE.iter().find(|(c, _)| c.name == t.name) {
+            Some((_, applies)) => applies(&self.features),
+            None => self.plugins.iter().any(|p| p.name == t.name),
+        }
+    }
+
+    /// The techniques that apply to the scene, in listing order.
+    pub fn applicable(&self) -> impl Iterator<Item = &'static Technique> + '_ {
+        self.all().filter(|t| self.applies(t))
+    }
+
+    /// The scene's features.
+    pub fn features(&self) -> &Features {
+        &self.features
+    }
 }
 
-/// A choice of value for every technique.
+/// The most plug-in techniques one render sets to a value other than their default.
+pub const MAX_PLUGIN_CHOICES: usize = 8;
+
+/// The values chosen for plug-in techniques, by name; a technique not listed takes its
+/// default. Plain data (`Copy`), read by plug-ins through
+/// [`IntegratorContext::technique`](crate::context::IntegratorContext::technique).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct PluginTechniques {
+    /// `(technique, value)`, sorted by name, `len` of them used.
+    chosen: [(&'static str, &'static str); MAX_PLUGIN_CHOICES],
+    len: usize,
+}
+
+impl PluginTechniques {
+    /// The value chosen for technique `name`; `None`: its default.
+    pub fn get(&self, name: &str) -> Option<&'static str> {
+        self.iter().find(|(n, _)| *n == name).map(|(_, v)| v)
+    }
+
+    /// The chosen `(technique, value)` pairs, by name.
+    pub fn iter(&self) -> impl Iterator<Item = (&'static str, &'static str)> + '_ {
+        self.chosen[..self.len].iter().copied()
+    }
+
+    /// These choices with technique `name` set to `value` (not checked against any
+    /// declaration: [`Techniques::set`] checks).
+    ///
+    /// # Errors
+    /// When [`MAX_PLUGIN_CHOICES`] other techniques are chosen already.
+    pub fn with(
+        mut self,
+        name: &'static str,
+        value: &'static str,
+    ) -> Result<PluginTechniques, TechniqueError> {
+        self.remove(name);
+        if self.len == MAX_PLUGIN_CHOICES {
+            return Err(TechniqueError::TooMany);
+        }
+        let at = self.chosen[..self.len].partition_point(|(n, _)| *n < name);
+        self.chosen.copy_within(at..self.len, at + 1);
+        self.chosen[at] = (name, value);
+        self.len += 1;
+        Ok(self)
+    }
+
+    /// Drops the choice for `name` (it takes its default).
+    fn remove(&mut self, name: &str) {
+        if let Some(i) = self.chosen[..self.len].iter().position(|(n, _)| *n == name) {
+            self.chosen.copy_within(i + 1..self.len, i);
+            self.len -= 1;
+            self.chosen[self.len] = ("", "");
+        }
+    }
+}
+
+/// A choice of value for every technique of a scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Techniques {
     /// `lighting`.
     pub lighting: LightingTechnique,
     /// `sampler`.
     pub sampler: SamplerKind,
-    /// `scattering` (`None`: as each medium says).
-    pub scattering: Option<Scattering>,
-    /// `subsurface` (`None`: as each material says).
-    pub subsurface: Option<SubsurfaceMode>,
-    /// `tracking` (`None`: as each heterogeneous medium says).
-    pub tracking: Option<Tracking>,
+    /// Every plug-in technique (unlisted: its default).
+    pub plugins: PluginTechniques,
 }
 
 impl Techniques {
-    /// The value of technique `name`.
-    pub fn get(&self, name: &str) -> Result<&'static str, TechniqueError> {
-        Ok((find(name)?.get)(self))
+    /// The value of technique `name` (known in `registry`).
+    pub fn get(
+        &self,
+        registry: &TechniqueRegistry,
+        name: &str,
+    ) -> Result<&'static str, TechniqueError> {
+        let t = registry.find(name)?;
+        Ok(match t.name {
+            "lighting" => match self.lighting {
+                LightingTechnique::Mis => "mis",
+                LightingTechnique::NeeOnly => "nee",
+                LightingTechnique::BxdfOnly => "bxdf",
+            },
+            "sampler" => match self.sampler {
+                SamplerKind::Sobol => "sobol",
+                SamplerKind::Independent => "independent",
+            },
+            _ => self.plugins.get(t.name).unwrap_or(t.default),
+        })
     }
 
-    /// Sets technique `name` to `value`.
-    pub fn set(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let t = find(name)?;
-        if !t.values.iter().any(|v| v.name == value) {
-            return Err(TechniqueError::BadValue {
-                technique: t.name,
-                value: value.to_string(),
-                expected: t
-                    .values
-                    .iter()
-                    .map(|v| v.name)
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            });
+    /// Sets technique `name` (known in `registry`) to `value`.
+    pub fn set(
+        &mut self,
+        registry: &TechniqueRegistry,
+        name: &str,
+        value: &str,
+    ) -> Result<(), TechniqueError> {
+        let t = registry.find(name)?;
+        let v = t.value(value)?;
+        match t.name {
+            "lighting" => {
+                self.lighting = match v.name {
+                    "nee" => LightingTechnique::NeeOnly,
+                    "bxdf" => LightingTechnique::BxdfOnly,
+                    _ => LightingTechnique::Mis,
+                }
+            }
+            "sampler" => {
+                self.sampler = match v.name {
+                    "independent" => SamplerKind::Independent,
+                    _ => SamplerKind::Sobol,
+                }
+            }
+            // A default is no choice: the same selection compares equal however written.
+            _ if v.name == t.default => self.plugins.remove(t.name),
+            _ => self.plugins = self.plugins.with(t.name, v.name)?,
         }
-        (t.set)(self, value);
         Ok(())
     }
 
     /// Applies `NAME=VALUE`, returning the technique.
-    pub fn assign(&mut self, assignment: &str) -> Result<&'static Technique, TechniqueError> {
+    pub fn assign(
+        &mut self,
+        registry: &TechniqueRegistry,
+        assignment: &str,
+    ) -> Result<&'static Technique, TechniqueError> {
         let (name, value) = assignment
             .split_once('=')
             .ok_or_else(|| TechniqueError::Malformed(assignment.to_string()))?;
         let (name, value) = (name.trim(), value.trim());
-        self.set(name, value)?;
-        find(name)
+        self.set(registry, name, value)?;
+        registry.find(name)
     }
 
     /// The defaults with the `+`-separated assignments `spec` applied
     /// (`lighting=nee+sampler=independent`).
-    pub fn parse(spec: &str) -> Result<Self, TechniqueError> {
+    pub fn parse(registry: &TechniqueRegistry, spec: &str) -> Result<Self, TechniqueError> {
         let mut t = Techniques::default();
         for a in spec.split('+') {
-            t.assign(a)?;
+            t.assign(registry, a)?;
         }
         Ok(t)
     }
 
-    /// The `(technique, value)` pairs that differ from the defaults.
+    /// The `(technique, value)` pairs that differ from the defaults: the global
+    /// integrator's, then the plug-ins' by name.
     pub fn non_default(&self) -> Vec<(&'static str, &'static str)> {
-        REGISTRY
+        let core = TechniqueRegistry::new(Features::default(), []);
+        let mut out: Vec<_> = CORE
             .iter()
-            .map(|t| (t.name, (t.get)(self)))
-            .filter(|&(name, v)| find(name).is_ok_and(|t| t.default != v))
-            .collect()
+            .filter_map(|(t, _)| {
+                let v = self.get(&core, t.name).ok()?;
+                (v != t.default).then_some((t.name, v))
+            })
+            .collect();
+        out.extend(self.plugins.iter());
+        out
     }
 
-    /// An error unless every technique whose value is not its default applies to a scene
-    /// with `features` (a default value changes nothing, so it is allowed anywhere).
-    pub fn check_applicable(&self, features: &Features) -> Result<(), TechniqueError> {
-        for t in REGISTRY {
-            let v = (t.get)(self);
-            if v != t.default && !(t.applies)(features) {
+    /// An error unless every technique whose value is not its default applies to the scene
+    /// of `registry` (a default value changes nothing, so it is allowed anywhere).
+    pub fn check_applicable(&self, registry: &TechniqueRegistry) -> Result<(), TechniqueError> {
+        for (name, value) in self.non_default() {
+            let t = registry.find(name)?;
+            if !registry.applies(t) {
                 return Err(TechniqueError::NotApplicable {
                     technique: t.name,
-                    value: v.to_string(),
+                    value: value.to_string(),
                     applies_to: t.applies_to,
                 });
             }
@@ -408,29 +428,25 @@ impl Techniques {
         Ok(())
     }
 
-    /// Whether every chosen value converges to the scene's exact image in a scene with
-    /// `features` ([`TechniqueValue::converges`]).
-    pub fn converges(&self, features: &Features) -> bool {
-        REGISTRY.iter().all(|t| {
-            let v = (t.get)(self);
-            t.values
-                .iter()
-                .find(|x| x.name == v)
-                .is_some_and(|x| (x.converges)(features))
+    /// Whether every chosen value converges to the exact image of the scene of `registry`
+    /// ([`TechniqueValue::converges`]); a choice of a technique the scene does not know
+    /// changes nothing there.
+    pub fn converges(&self, registry: &TechniqueRegistry) -> bool {
+        self.non_default().iter().all(|&(name, value)| {
+            registry
+                .find(name)
+                .ok()
+                .and_then(|t| t.value(value).ok())
+                .is_none_or(|v| (v.converges)(registry.features()))
         })
     }
 
-    /// A short label: the non-default assignments (`lighting=nee`), or every technique's
-    /// default joined by `+` when all are defaults (leaving out defaults that defer to the
-    /// scene, such as `scattering=scene`).
+    /// A short label: the non-default assignments (`lighting=nee`), or the global
+    /// integrator's defaults joined by `+` when all are defaults.
     pub fn label(&self) -> String {
         let pairs = self.non_default();
         let pairs = if pairs.is_empty() {
-            REGISTRY
-                .iter()
-                .filter(|t| t.default != "scene")
-                .map(|t| (t.name, t.default))
-                .collect()
+            CORE.iter().map(|(t, _)| (t.name, t.default)).collect()
         } else {
             pairs
         };
@@ -446,25 +462,22 @@ impl Techniques {
         RenderOptions {
             technique: self.lighting,
             sampler: self.sampler,
-            volume: crate::plugin::VolumeTechniques {
-                scattering: self.scattering,
-                subsurface: self.subsurface,
-                tracking: self.tracking,
-            },
+            plugin_techniques: self.plugins,
             ..base
         }
     }
 
-    /// Every variant a sweep over the techniques that apply to `features` renders: the
-    /// defaults, then each applicable technique's other values one at a time (the others at
-    /// their defaults).
-    pub fn variants(features: &Features) -> Vec<Techniques> {
+    /// Every variant a sweep over the techniques that apply to the scene of `registry`
+    /// renders: the defaults, then each applicable technique's other values one at a time
+    /// (the others at their defaults).
+    pub fn variants(registry: &TechniqueRegistry) -> Vec<Techniques> {
         let mut out = vec![Techniques::default()];
-        for t in applicable(features) {
+        for t in registry.applicable() {
             for v in t.values.iter().filter(|v| v.name != t.default) {
                 let mut x = Techniques::default();
-                (t.set)(&mut x, v.name);
-                out.push(x);
+                if x.set(registry, t.name, v.name).is_ok() {
+                    out.push(x);
+                }
             }
         }
         out
@@ -473,9 +486,9 @@ impl Techniques {
 
 /// The listing `risotto techniques SCENE` prints: each applicable technique with its values
 /// (`*` marks the default) and what it applies to.
-pub fn listing(features: &Features) -> String {
+pub fn listing(registry: &TechniqueRegistry) -> String {
     let mut s = String::new();
-    for t in applicable(features) {
+    for t in registry.applicable() {
         s += &format!("{}: {} (applies to {})\n", t.name, t.summary, t.applies_to);
         let width = t
             .values
@@ -496,76 +509,134 @@ pub fn listing(features: &Features) -> String {
 mod tests {
     use super::*;
 
-    #[test]
-    fn every_registered_value_round_trips_and_defaults_are_values() {
-        for t in REGISTRY {
-            assert!(t.values.iter().any(|v| v.name == t.default), "{}", t.name);
-            for v in t.values {
-                let mut x = Techniques::default();
-                x.set(t.name, v.name).unwrap();
-                assert_eq!(x.get(t.name).unwrap(), v.name);
-            }
-            assert_eq!(Techniques::default().get(t.name).unwrap(), t.default);
+    /// A technique as a plug-in would declare it.
+    static QUALITY: Technique = Technique {
+        name: "quality",
+        summary: "a plug-in's own choice",
+        values: &[
+            TechniqueValue {
+                name: "scene",
+                summary: "as the material says",
+                converges: always,
+            },
+            TechniqueValue {
+                name: "draft",
+                summary: "an approximation",
+                converges: never,
+            },
+        ],
+        default: "scene",
+        applies_to: "scenes with the plug-in's material",
+    };
+
+    fn lit() -> Features {
+        Features {
+            area_lights: true,
+            ..Features::default()
         }
     }
 
     #[test]
+    fn every_value_round_trips_and_defaults_are_values() {
+        let reg = TechniqueRegistry::new(lit(), [&QUALITY]);
+        for t in reg.applicable() {
+            assert!(t.values.iter().any(|v| v.name == t.default), "{}", t.name);
+            for v in t.values {
+                let mut x = Techniques::default();
+                x.set(&reg, t.name, v.name).unwrap();
+                assert_eq!(x.get(&reg, t.name).unwrap(), v.name);
+            }
+            assert_eq!(Techniques::default().get(&reg, t.name).unwrap(), t.default);
+        }
+        // Setting a plug-in technique to its default is no choice at all.
+        let mut x = Techniques::parse(&reg, "quality=draft").unwrap();
+        assert_eq!(x.plugins.get("quality"), Some("draft"));
+        x.set(&reg, "quality", "scene").unwrap();
+        assert_eq!(x, Techniques::default());
+    }
+
+    #[test]
     fn bad_names_values_and_forms_are_named_in_the_error() {
-        let e = Techniques::parse("lighting=nee+shading=fast").unwrap_err();
+        let reg = TechniqueRegistry::new(lit(), []);
+        let e = Techniques::parse(&reg, "lighting=nee+shading=fast").unwrap_err();
         assert!(e.to_string().contains("\"shading\""), "{e}");
-        let e = Techniques::parse("sampler=halton").unwrap_err();
+        let e = Techniques::parse(&reg, "sampler=halton").unwrap_err();
         let msg = e.to_string();
         assert!(
             msg.contains("halton") && msg.contains("sobol, independent"),
             "{msg}"
         );
         assert!(matches!(
-            Techniques::parse("lighting"),
+            Techniques::parse(&reg, "lighting"),
             Err(TechniqueError::Malformed(_))
         ));
+        // A plug-in technique no material of the scene declares is unknown there.
+        let e = Techniques::parse(&reg, "quality=draft").unwrap_err();
+        assert!(matches!(e, TechniqueError::Unknown { .. }), "{e}");
     }
 
     #[test]
-    fn applicability_follows_the_scene_features() {
-        let lit = Features {
-            area_lights: true,
-            ..Features::default()
-        };
-        let dark = Features::default();
-        let names = |f: &Features| applicable(f).map(|t| t.name).collect::<Vec<_>>();
-        assert_eq!(names(&lit), ["lighting", "sampler"]);
+    fn applicability_follows_the_scene_features_and_declarations() {
+        let names = |r: &TechniqueRegistry| r.applicable().map(|t| t.name).collect::<Vec<_>>();
+        let lit = TechniqueRegistry::new(lit(), [&QUALITY, &QUALITY]);
+        let dark = TechniqueRegistry::new(Features::default(), []);
+        assert_eq!(names(&lit), ["lighting", "sampler", "quality"]);
         assert_eq!(names(&dark), ["sampler"]);
-        let nee = Techniques::parse("lighting=nee").unwrap();
+        let nee = Techniques::parse(&lit, "lighting=nee").unwrap();
         assert!(nee.check_applicable(&lit).is_ok());
         let e = nee.check_applicable(&dark).unwrap_err();
         assert!(e.to_string().contains("lighting=nee"), "{e}");
         // The default value applies anywhere.
         assert!(Techniques::default().check_applicable(&dark).is_ok());
+        let draft = Techniques::parse(&lit, "quality=draft").unwrap();
+        assert!(draft.check_applicable(&lit).is_ok());
+        assert!(draft.check_applicable(&dark).is_err());
+        assert!(!draft.converges(&lit) && Techniques::default().converges(&lit));
     }
 
     #[test]
     fn variants_are_the_defaults_and_one_change_at_a_time() {
-        let lit = Features {
+        let env = Features {
             environment: true,
             ..Features::default()
         };
-        let labels: Vec<String> = Techniques::variants(&lit)
-            .iter()
-            .map(|t| t.label())
-            .collect();
+        let labels = |r: &TechniqueRegistry| {
+            Techniques::variants(r)
+                .iter()
+                .map(|t| t.label())
+                .collect::<Vec<_>>()
+        };
         assert_eq!(
-            labels,
+            labels(&TechniqueRegistry::new(env, [&QUALITY])),
             [
                 "lighting=mis+sampler=sobol",
                 "lighting=nee",
                 "lighting=bxdf",
-                "sampler=independent"
+                "sampler=independent",
+                "quality=draft"
             ]
         );
-        let dark: Vec<String> = Techniques::variants(&Features::default())
-            .iter()
-            .map(|t| t.label())
-            .collect();
-        assert_eq!(dark, ["lighting=mis+sampler=sobol", "sampler=independent"]);
+        assert_eq!(
+            labels(&TechniqueRegistry::new(Features::default(), [])),
+            ["lighting=mis+sampler=sobol", "sampler=independent"]
+        );
+    }
+
+    #[test]
+    fn plugin_choices_stay_sorted_and_bounded() {
+        let names = ["h", "b", "f", "a", "g", "c", "e", "d"];
+        let mut p = PluginTechniques::default();
+        for n in names {
+            p = p.with(n, "x").unwrap();
+        }
+        let order: Vec<_> = p.iter().map(|(n, _)| n).collect();
+        assert_eq!(order, ["a", "b", "c", "d", "e", "f", "g", "h"]);
+        // Replacing a value keeps the count; a ninth technique is refused.
+        p = p.with("c", "y").unwrap();
+        assert_eq!(p.get("c"), Some("y"));
+        assert!(matches!(p.with("i", "x"), Err(TechniqueError::TooMany)));
+        p.remove("a");
+        assert_eq!(p.get("a"), None);
+        assert!(p.with("i", "x").is_ok());
     }
 }

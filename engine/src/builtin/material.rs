@@ -196,6 +196,21 @@ impl BxdfFactory for BuiltinMaterial {
         }
     }
 
+    fn techniques(&self) -> &'static [&'static Technique] {
+        use crate::heterogeneous::TRACKING;
+        use crate::media::SCATTERING;
+        use crate::subsurface::SUBSURFACE;
+        static HOMOGENEOUS: [&Technique; 1] = [&SCATTERING];
+        static SUBSURFACE_WALK: [&Technique; 2] = [&SCATTERING, &SUBSURFACE];
+        static HETEROGENEOUS: [&Technique; 1] = [&TRACKING];
+        match &self.interior {
+            Interior::Homogeneous(_) => &HOMOGENEOUS,
+            Interior::Subsurface(_) => &SUBSURFACE_WALK,
+            Interior::Heterogeneous(_) => &HETEROGENEOUS,
+            Interior::None | Interior::Null | Interior::Beer { .. } => &[],
+        }
+    }
+
     fn ior(&self) -> f32 {
         match self.surface {
             Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,

@@ -108,7 +108,11 @@ pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 /// A curve from its points.
-pub(super) fn curve(techniques: &Techniques, points: Vec<Point>) -> Curve {
+pub(super) fn curve(
+    registry: &TechniqueRegistry,
+    techniques: &Techniques,
+    points: Vec<Point>,
+) -> Curve {
     let valid = || points.iter().filter(|p| p.mse > 0.0 && p.seconds > 0.0);
     let mse_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.mse.ln())).collect();
     let rmse_spp: Vec<(f64, f64)> = valid()
@@ -117,10 +121,10 @@ pub(super) fn curve(techniques: &Techniques, points: Vec<Point>) -> Curve {
     let last = points.last();
     Curve {
         label: techniques.label(),
-        techniques: crate::technique::REGISTRY
-            .iter()
+        techniques: registry
+            .applicable()
             .map(|t| {
-                let v = techniques.get(t.name).unwrap_or("?");
+                let v = techniques.get(registry, t.name).unwrap_or("?");
                 (t.name.to_string(), v.to_string())
             })
             .collect(),

@@ -350,7 +350,11 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
         let (mut nulls, mut violations) = (0u64, 0u64);
-        let tracking = services.techniques.tracking.unwrap_or(m.tracking);
+        let tracking = services
+            .ictx
+            .technique(super::TRACKING.name)
+            .and_then(Tracking::from_name)
+            .unwrap_or(m.tracking);
         let step = self.march_step();
         let emits = m.emits();
         let smax = m.max_scale();
@@ -463,17 +467,16 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 out.miss_transmission[k] *= weight[out.misses[k] as usize];
             }
         }
-        let stats = &mut *services.ictx.stats;
-        stats.majorant_violations += violations;
-        stats.pattern_evals += fields.evals();
-        stats.volume_pattern_evals += fields.evals();
+        let ictx = &mut *services.ictx;
+        ictx.count_majorant_violations(violations);
+        ictx.count_volume_pattern_evals(fields.evals());
         if emits {
-            stats.volume_event(VolumeEvent::Emission, n);
+            ictx.count_volume_events(VolumeEvent::Emission, n);
         }
         let events = scattered.iter().filter(|&&s| s).count();
-        stats.volume_event(VolumeEvent::Scatter, events);
-        stats.volume_event(VolumeEvent::Pass, n - events);
-        stats.volume_event(VolumeEvent::Null, nulls as usize);
+        ictx.count_volume_events(VolumeEvent::Scatter, events);
+        ictx.count_volume_events(VolumeEvent::Pass, n - events);
+        ictx.count_volume_events(VolumeEvent::Null, nulls as usize);
         if events == 0 {
             return;
         }
@@ -541,8 +544,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         emission: &mut [Rgb],
     ) {
         let tracking = ictx
-            .volume_techniques()
-            .tracking
+            .technique(super::TRACKING.name)
+            .and_then(Tracking::from_name)
             .unwrap_or(self.medium.tracking);
         let fields = self.fields();
         // Emission nobody uses is not gathered: the plain trackers then estimate the same

@@ -30,7 +30,7 @@
 //!   tracking (default), residual ratio tracking (the majorant grid's per-cell minimum as the
 //!   control), delta tracking (0 or 1), fixed-step ray marching or the unbiased ray-marching
 //!   estimator ([`risotto_systems::ray_marching`]); `ray_marching` also marches the free
-//!   flights. The render's [`VolumeTechniques::tracking`] overrides the medium's choice.
+//!   flights. The render's [`TRACKING`] technique overrides the medium's choice.
 //!
 //! Both draw their random numbers from the samplers they are given, a variable number per
 //! ray (two per tentative collision for delta tracking, one for ratio tracking), rounded up
@@ -98,13 +98,14 @@ pub use interior::HeterogeneousInterior;
 pub(crate) use parse::{homogeneous_with_patterns, parse};
 
 use crate::media::PhaseBxdf;
+use crate::plugin::{Technique, TechniqueValue};
 use risotto_components::Rgb;
 use risotto_systems::grid::{DensityGrid, MajorantGrid};
 use risotto_systems::phase::PhaseFunction;
 use std::sync::Arc;
 #[cfg(doc)]
 use {
-    crate::plugin::{ShadingMode, VolumeIntegrator, VolumeTechniques},
+    crate::plugin::{ShadingMode, VolumeIntegrator},
     crate::stats::VolumeEvent,
     risotto_systems::tracking::{delta_tracking_emitting, ratio_tracking_emitting},
 };
@@ -154,6 +155,47 @@ impl Tracking {
         TRACKINGS.into_iter().find(|t| t.name() == name)
     }
 }
+
+/// The `tracking` technique every heterogeneous medium declares: the free-flight and
+/// transmittance estimators, over what each medium's `tracking` says.
+pub static TRACKING: Technique = Technique {
+    name: "tracking",
+    summary: "free-flight and transmittance estimators in heterogeneous media",
+    values: &[
+        TechniqueValue {
+            name: "scene",
+            summary: "as each heterogeneous medium's `tracking` says",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "ratio",
+            summary: "ratio tracking for shadow rays (Novak et al. 2014); delta-tracked flights",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "residual",
+            summary: "residual ratio tracking, each majorant cell's minimum as control",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "delta",
+            summary: "delta tracking for shadow rays too (0 or 1)",
+            converges: crate::technique::always,
+        },
+        TechniqueValue {
+            name: "ray_marching",
+            summary: "fixed-step ray marching of flights and shadow rays (biased)",
+            converges: crate::technique::never,
+        },
+        TechniqueValue {
+            name: "unbiased_ray_marching",
+            summary: "power series around a marched pivot for shadow rays (Kettunen et al. 2021)",
+            converges: crate::technique::always,
+        },
+    ],
+    default: "scene",
+    applies_to: "scenes with heterogeneous media",
+};
 
 /// Default majorant-grid cells per axis.
 pub const DEFAULT_MAJORANT_CELLS: usize = 16;

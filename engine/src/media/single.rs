@@ -27,10 +27,9 @@ impl HomogeneousInterior<'_> {
             ..
         } = services;
         let lighting = lighting.expect("called with a delegate");
-        let scene = ictx.scene;
         // Point lights for equiangular sampling (chosen uniformly).
-        let point_lights: Vec<Vec3> = scene
-            .lights
+        let point_lights: Vec<Vec3> = ictx
+            .lights()
             .lights()
             .iter()
             .filter_map(|l| match l {
@@ -136,8 +135,7 @@ impl HomogeneousInterior<'_> {
             }
             lighting.perform_direct_lighting(&ctx, bxdf, rays, samplers, &w);
         }
-        ictx.stats
-            .volume_event(crate::stats::VolumeEvent::Scatter, lit);
+        ictx.count_volume_events(crate::stats::VolumeEvent::Scatter, lit);
         // The rays go on to their hits, attenuated exactly.
         for k in start.0..out.points.len() {
             out.points.transmission[k] *= transmittance(m.sigma_t, out.points.vlen[k]);

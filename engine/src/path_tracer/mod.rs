@@ -60,7 +60,7 @@ pub struct PathTracer {
     /// Direct-lighting technique.
     pub technique: LightingTechnique,
     /// Technique choices handed to volume integrators.
-    pub volume: crate::plugin::VolumeTechniques,
+    pub techniques: crate::technique::PluginTechniques,
 }
 
 impl Integrator for PathTracer {
@@ -114,7 +114,7 @@ impl Integrator for PathTracer {
             let shadow_rays = q.shadow.rays.len();
             transmission::shadow_rays(
                 scene,
-                self.volume,
+                self.techniques,
                 &mut q.shadow,
                 &q.hits.incoming,
                 batch,

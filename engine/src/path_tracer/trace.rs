@@ -48,14 +48,14 @@ pub(super) fn nearest_hits(
         // First round (the only one unless there are pass-throughs): answer straight into
         // the groups and move the rays over instead of copying them.
         let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
-            .with_volume_techniques(tracer.volume);
+            .with_techniques(tracer.techniques);
         ictx.nearest_hits(rays, &mut hits.groups);
         t.hits = ictx.into_scratch();
         std::mem::swap(&mut hits.incoming, rays);
     } else {
         t.answers.clear();
         let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
-            .with_volume_techniques(tracer.volume);
+            .with_techniques(tracer.techniques);
         ictx.nearest_hits(rays, &mut t.answers);
         t.hits = ictx.into_scratch();
         append(hits, &mut t.answers, rays);
@@ -183,7 +183,7 @@ fn partitioned(
             None => {
                 let mut ictx =
                     IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
-                        .with_volume_techniques(tracer.volume);
+                        .with_techniques(tracer.techniques);
                 ictx.nearest_hits(&t.bundle, &mut t.answers);
                 t.hits = ictx.into_scratch();
             }
@@ -219,7 +219,7 @@ fn partitioned(
                 };
                 let mut ictx =
                     IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
-                        .with_volume_techniques(tracer.volume);
+                        .with_techniques(tracer.techniques);
                 let start = std::time::Instant::now();
                 integrator.nearest_hits(
                     &t.bundle,
@@ -230,7 +230,6 @@ fn partitioned(
                         lighting,
                         factory,
                         arena,
-                        techniques: tracer.volume,
                         volume_light: scene.volume_light_mis(entry.shape, tracer.technique),
                     },
                     &mut t.answers,

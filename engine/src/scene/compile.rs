@@ -216,7 +216,7 @@ impl Scene {
             Some(names) => {
                 let fail = |message: String| match &camera_volume_at {
                     Some(at) => CompileError::Scene(
-                        at.error(crate::scene_file::SceneErrorKind::InvalidValue, message),
+                        at.error(crate::diagnostics::SceneErrorKind::InvalidValue, message),
                     ),
                     None => CompileError::CameraVolume(message),
                 };

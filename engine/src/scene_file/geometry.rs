@@ -5,9 +5,9 @@ use std::path::Path;
 
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 
-use super::error::{SceneError, SceneErrorKind};
 use super::params::Reader;
 use super::raw::{Node, Value};
+use crate::diagnostics::{SceneError, SceneErrorKind};
 
 /// A triangle `[v0, v1, v2]`; its geometric normal is along `(v1 - v0) x (v2 - v0)`.
 pub(crate) type Triangle = [Vec3; 3];

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use glam::Vec3;
 use risotto_components::Rgb;
 
-use super::error::{SceneError, SceneErrorKind, Source};
 use super::raw::{Key, Node, Value};
+use crate::diagnostics::{SceneError, SceneErrorKind, Source};
 
 /// Reads the fields of one table (one entity) with located errors.
 #[derive(Clone, Copy)]

@@ -1,9 +1,14 @@
-//! [`SceneError`]: a scene-file error located by file, line and column, with a source
-//! excerpt, and the scene text it points into ([`Source`]).
+//! Diagnostics: [`SceneError`], a scene-file error located by file, line and column with a
+//! source excerpt; the scene text it points into ([`Source`]); a value's place in it
+//! ([`Location`]), for checks that run after parsing; and the files a scene reads
+//! ([`ReferencedFiles`]). Any scene-file reader (the TOML loader, a user's own format) builds
+//! its errors with these, and the scene world keeps them to report late errors where the
+//! value was written.
 
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// What went wrong, for callers that react to the category (the message says it all).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -92,7 +97,7 @@ impl SceneError {
     }
 
     /// An error reading the scene file itself.
-    pub(crate) fn io(file: &Path, err: &std::io::Error) -> SceneError {
+    pub fn io(file: &Path, err: &std::io::Error) -> SceneError {
         let message = format!("cannot read scene file: {err}");
         SceneError(Box::new(ErrorData {
             kind: SceneErrorKind::Io,
@@ -108,21 +113,23 @@ impl SceneError {
 
 /// The scene text being read, for turning byte spans into line:column and excerpts.
 #[derive(Debug)]
-pub(crate) struct Source {
+pub struct Source {
     /// The scene file's path as given (used in messages).
-    pub(crate) path: PathBuf,
+    pub path: PathBuf,
     /// The directory relative paths in the scene are resolved against.
-    pub(crate) dir: PathBuf,
-    pub(crate) text: String,
+    pub dir: PathBuf,
+    /// The whole text.
+    pub text: String,
     /// Every file path resolved from the text (and noted by factories).
-    pub(crate) files: super::ReferencedFiles,
+    pub files: ReferencedFiles,
 }
 
 /// Longest excerpt of a value quoted in a message.
 const MAX_QUOTE: usize = 60;
 
 impl Source {
-    pub(crate) fn new(path: &Path, text: &str) -> Source {
+    /// The text `text` of the file `path`.
+    pub fn new(path: &Path, text: &str) -> Source {
         let dir = path
             .parent()
             .map(Path::to_path_buf)
@@ -131,7 +138,7 @@ impl Source {
             path: path.to_path_buf(),
             dir,
             text: text.to_owned(),
-            files: super::ReferencedFiles::default(),
+            files: ReferencedFiles::default(),
         }
     }
 
@@ -145,7 +152,7 @@ impl Source {
     }
 
     /// 1-based line and column (in chars) of a byte offset.
-    pub(crate) fn line_col(&self, offset: usize) -> (usize, usize) {
+    pub fn line_col(&self, offset: usize) -> (usize, usize) {
         let offset = self.clamp(offset);
         let before = &self.text[..offset];
         let line = before.matches('\n').count() + 1;
@@ -155,7 +162,7 @@ impl Source {
     }
 
     /// The source text of a span, shortened for quoting in a message.
-    pub(crate) fn quote(&self, span: &Range<usize>) -> String {
+    pub fn quote(&self, span: &Range<usize>) -> String {
         let (s, e) = (self.clamp(span.start), self.clamp(span.end));
         let text = self.text[s..e.max(s)].trim();
         // A table's span covers whole lines; quote only its first line.
@@ -195,7 +202,7 @@ impl Source {
     }
 
     /// Builds a located error.
-    pub(crate) fn error(
+    pub fn error(
         &self,
         kind: SceneErrorKind,
         span: &Range<usize>,
@@ -244,7 +251,8 @@ pub struct Location {
 }
 
 impl Location {
-    pub(crate) fn new(
+    /// The place `span` (bytes) of `src`, the value of `field` (if any) of `entity`.
+    pub fn new(
         src: &std::sync::Arc<Source>,
         span: Range<usize>,
         entity: &str,
@@ -279,5 +287,30 @@ impl PartialEq for Location {
             && self.span == other.span
             && self.entity == other.entity
             && self.field == other.field
+    }
+}
+
+/// The files a scene reads besides its own text: every path resolved from the scene file
+/// (meshes, grids, environment maps, any path a material factory reads) and those factories
+/// note. A shared handle: the description, the [`Scene`](crate::scene::Scene) built from it
+/// and the compiled scene see the same list, which grows while factories parse their
+/// parameters. Split renders hash the files' contents into their scene hash.
+#[derive(Clone, Debug, Default)]
+pub struct ReferencedFiles(Arc<std::sync::Mutex<Vec<PathBuf>>>);
+
+impl ReferencedFiles {
+    /// Adds a path.
+    pub fn add(&self, path: &Path) {
+        let mut files = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !files.iter().any(|p| p == path) {
+            files.push(path.to_path_buf());
+        }
+    }
+
+    /// The paths, sorted.
+    pub fn paths(&self) -> Vec<PathBuf> {
+        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        v.sort();
+        v
     }
 }
