@@ -21,6 +21,7 @@ pub mod partition;
 pub mod path;
 pub mod pattern;
 pub mod phase;
+mod primitive;
 pub mod ray;
 pub mod ray_marching;
 pub mod sampler;
