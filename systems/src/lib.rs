@@ -29,6 +29,7 @@ mod simd8;
 pub mod spectral_tracking;
 pub mod tracking;
 pub mod volume_lights;
+mod warp;
 
 /// Mean and standard error of `n` estimates `f()` (unit tests of the estimators).
 #[cfg(test)]
