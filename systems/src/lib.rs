@@ -27,6 +27,7 @@ pub mod ray_marching;
 pub mod sampler;
 mod simd8;
 pub mod spectral_tracking;
+mod splitmix;
 pub mod tracking;
 pub mod volume_lights;
 mod warp;
