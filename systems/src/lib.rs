@@ -16,6 +16,7 @@ pub mod grid;
 pub mod independent_sampler;
 pub mod intersect;
 pub mod lights;
+mod march;
 pub mod medium;
 pub mod partition;
 pub mod path;
