@@ -15,7 +15,7 @@ use obvhs::{
     bvh2::{node::Bvh2Node, Bvh2},
 };
 
-use crate::geometry::Sphere;
+use crate::primitive::Sphere;
 use crate::simd8::Row8;
 
 /// Number of children of a node and of triangles in a leaf packet.

@@ -16,7 +16,7 @@
 //! its output `mix64(key + (d + 1) * golden gamma)`. It is deterministic and does not depend
 //! on threads or batches, like the Sobol sampler.
 
-use crate::sampler::{mix64, PathSampler, GOLDEN_GAMMA};
+use crate::splitmix::{mix64, GOLDEN_GAMMA};
 use glam::Vec2;
 use std::ops::Range;
 
@@ -61,14 +61,6 @@ impl SamplerKind {
     }
 }
 
-impl PathSampler {
-    /// The sampler this sampler's sample address selects.
-    #[inline]
-    pub fn kind(&self) -> SamplerKind {
-        SamplerKind::of(self.sample)
-    }
-}
-
 /// The stream of one pixel sample.
 #[inline(always)]
 fn key(seed: u32, sample: u32) -> u64 {
@@ -106,6 +98,7 @@ pub fn sample_4d(seed: u32, sample: u32, set: u32) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampler::PathSampler;
     use crate::sampler::{first_2d_column, next_2d_column, next_4d_column, pixel_seed, SplitMix64};
 
     /// Pearson's chi-square statistic of `counts` against equal expected counts.

@@ -56,6 +56,9 @@ use crate::geometry::SceneGeometry;
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
 use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
+// The kernels' choice is the public name of `crate::simd8`'s backends, defined there so
+// that the geometry, which holds one, does not depend on this module.
+pub use crate::simd8::Kernel;
 
 mod packet;
 mod ray_block;
@@ -70,57 +73,6 @@ pub(crate) use sphere::sphere_root_for_tests;
 use sphere::*;
 use triangle::*;
 pub use triangle::{PackedTriangle, TriangleHit, WatertightRay, FREE_ORIGIN};
-
-/// Which implementation runs the intersection kernels ([`intersect_closest`],
-/// [`intersect_occluded`]). Both traverse the same tree and run the same watertight test
-/// with the same roundings, so they report the same hits; only the node test may differ in
-/// the last bit (fused multiply-add), which its widening covers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kernel {
-    /// Eight lanes as two glam `Vec4` (SSE on x86-64); runs everywhere.
-    Portable,
-    /// Eight lanes in one AVX2 register, with FMA in the node test; x86-64 CPUs with AVX2
-    /// and FMA only.
-    Avx2,
-}
-
-impl Kernel {
-    /// The fastest kernel this CPU runs (what [`SceneGeometry::build`] selects).
-    pub fn best() -> Self {
-        if Self::Avx2.is_supported() {
-            Self::Avx2
-        } else {
-            Self::Portable
-        }
-    }
-
-    /// Whether this CPU runs the kernel.
-    pub fn is_supported(self) -> bool {
-        self.backend().is_some()
-    }
-
-    /// The backend token, if this CPU runs the kernel.
-    pub(crate) fn backend(self) -> Option<Backend> {
-        match self {
-            Kernel::Portable => Some(Backend::Portable),
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => Avx2::detect().map(Backend::Avx2),
-            #[cfg(not(target_arch = "x86_64"))]
-            Kernel::Avx2 => None,
-        }
-    }
-}
-
-impl Backend {
-    /// The public name.
-    pub(crate) fn kernel(self) -> Kernel {
-        match self {
-            Backend::Portable => Kernel::Portable,
-            #[cfg(target_arch = "x86_64")]
-            Backend::Avx2(_) => Kernel::Avx2,
-        }
-    }
-}
 
 /// A stacked child of the closest-hit traversal ([`Node8::child`] encoding) with its entry
 /// distance.

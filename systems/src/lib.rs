@@ -16,18 +16,22 @@ pub mod grid;
 pub mod independent_sampler;
 pub mod intersect;
 pub mod lights;
+mod march;
 pub mod medium;
 pub mod partition;
 pub mod path;
 pub mod pattern;
 pub mod phase;
+mod primitive;
 pub mod ray;
 pub mod ray_marching;
 pub mod sampler;
 mod simd8;
 pub mod spectral_tracking;
+mod splitmix;
 pub mod tracking;
 pub mod volume_lights;
+mod warp;
 
 /// Mean and standard error of `n` estimates `f()` (unit tests of the estimators).
 #[cfg(test)]

@@ -25,7 +25,7 @@
 //! [`crate::medium`]). All functions are frame independent (pass world directions) and
 //! never return NaN for unit `wo` and `u` in `[0, 1]`.
 
-use crate::bxdf::{sample_uniform_sphere, Frame, INV_4PI};
+use crate::warp::{sample_uniform_sphere, Frame, INV_4PI};
 use risotto_components::{Vec2, Vec3};
 use std::f32::consts::PI;
 use std::fmt;

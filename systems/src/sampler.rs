@@ -30,21 +30,13 @@
 
 use crate::independent_sampler::{self as independent, SamplerKind};
 use crate::simd8::{Backend, Kernel8, Simd};
+use crate::splitmix::{mix64, GOLDEN_GAMMA};
+// The generator lives in `crate::splitmix`, below both samplers; this is its public path.
+pub use crate::splitmix::SplitMix64;
 use glam::Vec2;
 
 /// Largest supported samples per pixel (the Sobol tables of `sobol_burley` hold 2^16 points).
 pub const MAX_SPP: u32 = 1 << 16;
-
-/// The SplitMix64 increment (the 64-bit golden ratio).
-pub(crate) const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
-
-/// The SplitMix64 output function (Steele, Lea and Flood 2014): a bijective 64-bit mix.
-#[inline]
-pub(crate) fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
 
 /// Mixes the render seed and a pixel index into a per-pixel scrambling seed.
 pub fn pixel_seed(render_seed: u64, pixel: u32) -> u32 {
@@ -53,32 +45,6 @@ pub fn pixel_seed(render_seed: u64, pixel: u32) -> u32 {
             .wrapping_add(GOLDEN_GAMMA)
             .wrapping_add((pixel as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)),
     ) as u32
-}
-
-/// SplitMix64 (Steele, Lea and Flood 2014, "Fast splittable pseudorandom number
-/// generators"): a tiny deterministic generator for reproducible test inputs and bench data.
-/// Rendering uses the samplers above, except for the tails of random walks inside dense
-/// media (`risotto_engine::random_walk`), where no sampler keeps its stratification.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    /// The next 64 random bits.
-    #[inline]
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(GOLDEN_GAMMA);
-        mix64(self.0)
-    }
-    /// Uniform in `[0, 1)` with 24 random bits (every multiple of 2^-24 is reachable).
-    #[inline]
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    /// Two uniform numbers in `[0, 1)`.
-    #[inline]
-    pub fn vec2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
 }
 
 /// The scrambling seed of the 4-dimension set `set` of a pixel's sequence.
@@ -535,6 +501,11 @@ impl PathSampler {
         } else {
             std::array::from_fn(|k| sample_1d(self.seed, self.sample, d + k as u32))
         }
+    }
+    /// The sampler this sampler's sample address selects.
+    #[inline]
+    pub fn kind(&self) -> SamplerKind {
+        SamplerKind::of(self.sample)
     }
     /// The sampler's dimensions one at a time, each set of four evaluated once
     /// ([`DimensionStream`]).
