@@ -3,9 +3,9 @@
 //! (256x256, 64 spp) is a driver run; see benches/README.md.
 
 use criterion::{criterion_main, Criterion, Throughput};
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions};
-use risotto::engine::scene_file::load_scene;
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::load_scene;
 use std::path::Path;
 
 fn cornell(c: &mut Criterion) {

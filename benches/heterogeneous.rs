@@ -10,7 +10,7 @@
 
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use risotto::components::{Rgb, Vec3};
-use risotto::engine::grid_file::read_grid;
+use risotto::loader::grid_file::read_grid;
 use risotto::systems::bxdf::sample_uniform_sphere;
 use risotto::systems::grid::{DensityGrid, MajorantGrid, MajorantSegment};
 use risotto::systems::ray_marching::{ray_marching_transmittance, unbiased_ray_marching};

@@ -41,13 +41,13 @@
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use risotto::components::{LobeSampled, Rgb};
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, BxdfSamples, InstanceHints, ShadingContext, ShadingMode,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
-use risotto::engine::scene_file::{parse_scene, MaterialParams, SceneError};
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::{parse_scene, MaterialParams, SceneError};
 use risotto::systems::bxdf::Frame;
 use risotto::systems::sampler::PathSampler;
 use std::f32::consts::PI;

@@ -46,17 +46,17 @@
 //! ```
 
 use bumpalo::Bump;
+use risotto::builtins::builtin::DielectricBxdf;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::builtin::DielectricBxdf;
 use risotto::engine::context::IntegratorContext;
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
-use risotto::engine::scene_file::{parse_scene, SceneError};
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::{parse_scene, SceneError};
 use risotto::systems::sampler::PathSampler;
 use std::path::Path;
 
@@ -80,7 +80,7 @@ impl SmokyGlass {
 
     /// The factory for a material table of a scene file (see the module docs for the keys).
     pub fn from_params(
-        p: &risotto::engine::scene_file::MaterialParams,
+        p: &risotto::loader::scene_file::MaterialParams,
     ) -> Result<Self, SceneError> {
         p.deny_unknown(&["ior", "color", "distance", "cheap_shadows"])?;
         let ior = p.f32_where("ior", Some(1.5), "> 0", |v| v > 0.0)?;

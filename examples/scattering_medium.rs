@@ -24,8 +24,8 @@
 
 use bumpalo::Bump;
 use glam::Vec3;
+use risotto::builtins::builtin::{DiffuseBxdf, HenyeyGreensteinPhase, NullBxdf};
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::builtin::{DiffuseBxdf, HenyeyGreensteinPhase, NullBxdf};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{

@@ -5,11 +5,11 @@
 use crate::check_threads;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use risotto::engine::converge::{self, ConvergeOptions, Reference, SppPlan};
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::output::read_exr_rgb;
 use risotto::engine::render::RenderOptions;
 use risotto::engine::technique::{TechniqueRegistry, Techniques};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::tools::converge::{self, ConvergeOptions, Reference, SppPlan};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

@@ -13,9 +13,6 @@ use split::{grid_tile, info_command, merge_command, parse_crop, sample_chunk};
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use risotto::engine::compare::compare;
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
-use risotto::engine::merge::{parse_sample_range, write_partial, Partial};
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
@@ -24,6 +21,9 @@ use risotto::engine::render::{
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::{self, TechniqueRegistry, Techniques};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::tools::compare::compare;
+use risotto::tools::merge::{parse_sample_range, write_partial, Partial};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 

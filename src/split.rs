@@ -4,11 +4,11 @@
 
 use crate::MergeArgs;
 use anyhow::{Context, Result};
-use risotto::engine::merge::{merge, read_partial, scene_hash, write_partial};
 use risotto::engine::output::write_png;
 use risotto::engine::render::{SampleRange, Window};
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::Techniques;
+use risotto::tools::merge::{merge, read_partial, scene_hash, write_partial};
 use std::path::Path;
 
 /// The scene hash of a partial render ([`scene_hash`]): the scene file's bytes, the settings

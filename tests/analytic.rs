@@ -8,7 +8,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::Surface;
+use risotto::builtins::builtin::Surface;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::scene::{LightComponent, Scene};
 use risotto_components::Rgb;

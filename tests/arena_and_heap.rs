@@ -9,13 +9,13 @@
     reason = "a counting global allocator wraps the system allocator"
 )]
 
-use risotto::engine::builtin::{
+use risotto::builtins::builtin::{
     BeerInterior, DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, MirrorBxdf, NullBxdf,
     NullInterior,
 };
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::plugin::{OverlappingVolume, ParamCache, ShadingContext};
 use risotto::engine::render::{render, RenderOptions};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -17,7 +17,7 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{beer, Interior, NullBxdf, Surface};
+use risotto::builtins::builtin::{beer, Interior, NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::Image;
 use risotto::engine::plugin::*;

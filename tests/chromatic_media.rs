@@ -10,12 +10,12 @@ use common::{
     constant_vol, environment, mat_in, ortho_camera, render_default, scratch_dir, settings,
 };
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
-use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
+use risotto::builtins::builtin::{Interior, Surface};
+use risotto::builtins::heterogeneous::{HeterogeneousMedium, Tracking};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{Scene, ShapeGeometry};
-use risotto::engine::scene_file::parse_scene;
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use risotto::systems::geometry::Sphere;
 use risotto::systems::grid::DensityGrid;
 use risotto::systems::phase::PhaseFunction;

@@ -16,7 +16,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{beer, Interior, Surface};
+use risotto::builtins::builtin::{beer, Interior, Surface};
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::engine::stats::{System, Termination};
@@ -575,7 +575,7 @@ fn a_walk_frozen_in_a_medium_too_dense_for_its_coordinates_ends_at_once() {
     // throughput stays 1. Each path must end at its first event inside (counted as frozen,
     // warned about), not walk on in place to the vertex limit, by bounces or by the
     // integrator's own walk.
-    use risotto::engine::media::{HomogeneousMedium, Scattering};
+    use risotto::builtins::media::{HomogeneousMedium, Scattering};
     for scattering in [Scattering::Bounce, Scattering::Walk] {
         let cam = ortho_camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 0.5, 2, 2);
         let mut scene = Scene::new(cam, settings(2, 2, 2, u32::MAX));

@@ -103,7 +103,7 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     let table = String::from_utf8_lossy(&out.stdout);
 
     let (header, rows) = csv_rows(&out_dir);
-    assert_eq!(header, risotto::engine::converge::CSV_COLUMNS);
+    assert_eq!(header, risotto::tools::converge::CSV_COLUMNS);
     // `all` on cornell: the defaults, lighting nee and bxdf, the independent sampler; each at
     // spp 1, 2, 4 in that order.
     let labels = [
@@ -157,7 +157,7 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
-    use risotto::engine::plot::{PLOT_HEIGHT, PLOT_WIDTH};
+    use risotto::tools::plot::{PLOT_HEIGHT, PLOT_WIDTH};
     assert_eq!((info.width, info.height), (PLOT_WIDTH, PLOT_HEIGHT));
     let coloured = buf[..info.buffer_size()]
         .chunks(3)

@@ -8,8 +8,8 @@ mod example;
 
 use common::image_mean;
 use example::{registry, render_text, SmokyGlass, SCENE};
-use risotto::engine::load::scene_from_desc;
-use risotto::engine::scene_file::parse_scene;
+use risotto::loader::load::scene_from_desc;
+use risotto::loader::scene_file::parse_scene;
 use risotto_components::Rgb;
 use std::path::Path;
 

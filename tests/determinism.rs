@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::render::{render, RenderError, RenderOptions, RenderOutput, MAX_THREADS};
 use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};

@@ -19,18 +19,18 @@ mod common;
 use common::scratch_dir;
 use common::*;
 use glam::Vec3;
+use risotto::builtins::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium, Tracking};
+use risotto::builtins::media::{HomogeneousInterior, HomogeneousMedium, Scattering};
 use risotto::engine::context::IntegratorContext;
-use risotto::engine::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium, Tracking};
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::load::{scene_from_desc, LoadError, MaterialRegistry};
-use risotto::engine::media::{HomogeneousInterior, HomogeneousMedium, Scattering};
 use risotto::engine::plugin::{
     InstanceHints, Segments, ShadingContext, ShadingMode, VolumeIntegrator,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::scene_file::parse_scene;
 use risotto::engine::stats::VolumeEvent;
+use risotto::loader::load::{scene_from_desc, LoadError, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use risotto::systems::grid::DensityGrid;
 use risotto::systems::phase::PhaseFunction;
 use risotto::systems::sampler::PathSampler;

@@ -5,8 +5,8 @@
 
 mod common;
 use common::scratch_dir;
-use risotto::engine::load::{load_scene_file, MaterialRegistry};
 use risotto::engine::output::{read_exr_rgb, MAX_IMAGE_PIXELS};
+use risotto::loader::load::{load_scene_file, MaterialRegistry};
 use std::path::{Path, PathBuf};
 
 /// Writes `dir/scene.toml` lit only by the environment map `dir/sky.exr`.

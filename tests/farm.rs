@@ -10,8 +10,8 @@ use std::process::Output;
 
 mod common;
 use common::cli::{assert_fails, risotto, SCENE};
-use risotto::engine::merge::{read_partial, Partial};
 use risotto::engine::output::read_exr_rgb;
+use risotto::tools::merge::{read_partial, Partial};
 
 /// A fresh directory for one test, with `SCENE` in it as `scene.toml`.
 fn setup(test: &str) -> (PathBuf, PathBuf) {

@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::Surface;
+use risotto::builtins::builtin::Surface;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::systems::geometry::Sphere;
 use risotto_components::Rgb;

@@ -5,9 +5,9 @@
 //! `engine/src/scene_file/tests.rs::mutated_scenes_never_panic`. Both run longer, or on
 //! other streams, with `RISOTTO_FUZZ_CASES` and `RISOTTO_FUZZ_SEED` (README, "Testing").
 
-use risotto::engine::load::{compile_scene, scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions};
-use risotto::engine::scene_file::parse_scene;
+use risotto::loader::load::{compile_scene, scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use std::path::{Path, PathBuf};
 
 /// Deterministic choices: the SipHash (fixed keys) of a counter.

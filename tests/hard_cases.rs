@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::systems::geometry::Sphere;
@@ -377,7 +377,7 @@ fn camera_in_slab(surface: Surface, eye: Vec3, dir: Vec3) -> RenderOutput {
         0,
         mat_in(
             surface,
-            risotto::engine::builtin::Interior::Beer {
+            risotto::builtins::builtin::Interior::Beer {
                 sigma_a: Rgb::splat(1.0),
             },
         ),
@@ -615,7 +615,7 @@ fn coincident_glass_balls_render_as_one() {
 /// walk overflowing f32 on its way to the film (two samples dropped as infinite).
 #[test]
 fn light_values_above_the_documented_maximum_are_located_errors() {
-    use risotto::engine::scene_file::parse_scene;
+    use risotto::loader::scene_file::parse_scene;
     let base = |extra: &str| {
         format!(
             "[camera]\nfov = 40\nfrom = [0, 0, 4]\nto = [0, 0, 0]\n\n[materials.m]\ntype = \"diffuse\"\n\n{extra}\n"

@@ -9,9 +9,9 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
+use risotto::builtins::media::{HomogeneousMedium, Scattering};
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::media::{HomogeneousMedium, Scattering};
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::engine::stats::Termination;
@@ -435,7 +435,7 @@ fn heterogeneous_free_flights_shorter_than_the_spawn_offset_stay_inside_the_boun
     // The same ball as above as a heterogeneous medium (a constant grid, scale 1e7, the
     // default majorant grid): delta tracking's collisions within rounding of the boundary
     // must stay inside it too.
-    use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
+    use risotto::builtins::heterogeneous::{HeterogeneousMedium, Tracking};
     use risotto::systems::grid::DensityGrid;
     let m = HeterogeneousMedium::new(
         DensityGrid::constant([4, 4, 4], 1.0).unwrap(),
@@ -487,7 +487,7 @@ fn a_majorant_below_the_density_is_reported_not_hidden() {
     // A heterogeneous ball whose majorant grid bounds half its real density: every estimator
     // samples extinctions above the bound. The stats count them and the summary warns; with
     // the right bounds (what the loader always builds) the count is 0 and shown as 0.
-    use risotto::engine::heterogeneous::{HeterogeneousMedium, Tracking};
+    use risotto::builtins::heterogeneous::{HeterogeneousMedium, Tracking};
     use risotto::systems::grid::{DensityGrid, MajorantGrid};
     use std::sync::Arc;
     let grid = |v: f32| DensityGrid::constant([4, 4, 4], v).unwrap();

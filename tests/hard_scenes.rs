@@ -14,9 +14,9 @@
 
 mod common;
 use common::*;
-use risotto::engine::load::{compile_scene, scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
-use risotto::engine::scene_file::parse_scene;
+use risotto::loader::load::{compile_scene, scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use risotto_components::Rgb;
 use std::path::{Path, PathBuf};
 
@@ -306,7 +306,7 @@ fn every_hard_scene_renders_clean_and_as_stated() {
 #[test]
 fn a_hundred_thousand_shapes_build_and_render() {
     use glam::Vec3;
-    use risotto::engine::builtin::Surface;
+    use risotto::builtins::builtin::Surface;
     use risotto::engine::scene::{Scene, ShapeGeometry};
     use risotto::systems::geometry::Sphere;
     let (w, h) = (24, 16);

@@ -6,11 +6,11 @@ mod common;
 use common::scratch_dir;
 
 use common::constant_vol;
-use risotto::engine::load::{scene_from_desc, LoadError, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::scene_file::parse_scene;
 use risotto::engine::stats::VolumeEvent;
+use risotto::loader::load::{scene_from_desc, LoadError, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use std::path::{Path, PathBuf};
 
 /// The repository's scenes directory (absolute).
@@ -214,7 +214,7 @@ fn every_tracking_technique_renders_the_same_medium() {
     // below the noise here). And the override takes effect: ratio tracking's shadow rays are
     // less noisy than the file's delta tracking (0.88-0.90 of its standard error over seeds
     // 1-4 here; 0.95 is five of their spreads away).
-    use risotto::engine::heterogeneous::Tracking;
+    use risotto::builtins::heterogeneous::Tracking;
     use risotto::engine::technique::PluginTechniques;
     let d = scratch_dir("hetero", "trackings");
     let grid = scenes().join("mitsuba-suite/hetero_grid_density.vol");

@@ -39,7 +39,7 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{HenyeyGreensteinPhase, NullBxdf, Surface};
+use risotto::builtins::builtin::{HenyeyGreensteinPhase, NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::integrator::{Integrator, PathBatch};
 use risotto::engine::plugin::{

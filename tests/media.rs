@@ -6,9 +6,9 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
+use risotto::builtins::media::{HomogeneousMedium, Scattering};
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::media::{HomogeneousMedium, Scattering};
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::systems::phase::PhaseFunction;

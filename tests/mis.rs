@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::Surface;
+use risotto::builtins::builtin::Surface;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};
@@ -183,8 +183,8 @@ const NEAR_LAMP_SIZE: (u32, u32) = (48, 27);
 /// which the single render's sample variance does not show for a stratified sampler),
 /// averaged over the image and the channels, and the image mean of all of them.
 fn near_lamp(technique: LightingTechnique) -> (f64, [f64; 3]) {
-    use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
     use risotto::engine::render::{render, RenderOptions};
+    use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/near-lamp.toml");
     let images: Vec<Vec<Rgb>> = (1..=SEEDS)
         .map(|seed| {

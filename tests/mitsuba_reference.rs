@@ -3,11 +3,11 @@
 //! filter a 64x64 render is exactly the 4x4 block average of the 256x256 one, so the
 //! downsampled reference is the expected image at 64x64.
 
-use risotto::engine::compare::compare;
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::output::read_exr_rgb;
 use risotto::engine::render::{render, RenderOptions};
-use risotto::engine::scene_file::load_scene;
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::load_scene;
+use risotto::tools::compare::compare;
 use std::path::Path;
 
 /// Renders `scene` at 64x64 and checks it against `reference`: per-channel means within

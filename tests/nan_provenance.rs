@@ -5,8 +5,8 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
+use risotto::builtins::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::path_tracer::VertexEvent;
 use risotto::engine::plugin::{

@@ -5,9 +5,9 @@
 
 mod common;
 use common::scratch_dir;
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::plugin::ParamValue;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use std::path::Path;
 
 /// An orthographic 4 x 4 view of a 6 x 6 quad at z = 0.5 (mid-cell of a unit checker), facing the

@@ -6,11 +6,11 @@ mod common;
 use common::cli::{assert_fails, risotto};
 use common::scratch_dir;
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::path_tracer::VertexEvent;
 use risotto::engine::render::{render, RenderOptions, SampleRange, Window};
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::systems::independent_sampler::SamplerKind;
 use std::path::Path;
 

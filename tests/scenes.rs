@@ -3,8 +3,8 @@
 //! (some exactly black, some 1e-30) are checked against their own stated expectations by
 //! `tests/hard_scenes.rs`.
 
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use std::path::{Path, PathBuf};
 
 fn scenes_dir() -> PathBuf {

@@ -16,7 +16,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::{LightComponent, Scene, ShapeGeometry};
 use risotto::engine::stats::{System, Termination};
@@ -88,7 +88,7 @@ fn render_room(extra: impl FnOnce(&mut Scene)) -> RenderOutput {
 }
 
 /// An object in front of the block (left of centre) with the given material.
-fn add_object(scene: &mut Scene, material: Box<risotto::engine::builtin::BuiltinMaterial>) {
+fn add_object(scene: &mut Scene, material: Box<risotto::builtins::builtin::BuiltinMaterial>) {
     let m = scene.add_material("object", 0, material);
     add_box(
         scene,
@@ -220,11 +220,11 @@ fn only_scattering_media_run_the_volume_scatter_stage() {
             s,
             mat_in(
                 Surface::Interface,
-                Interior::Homogeneous(risotto::engine::media::HomogeneousMedium {
+                Interior::Homogeneous(risotto::builtins::media::HomogeneousMedium {
                     sigma_t: Rgb::splat(2.0),
                     sigma_s: Rgb::splat(1.6),
                     phase: risotto::systems::phase::PhaseFunction::Isotropic,
-                    scattering: risotto::engine::media::Scattering::Multiple,
+                    scattering: risotto::builtins::media::Scattering::Multiple,
                     emission: Rgb::BLACK,
                     albedo_pattern: None,
                     g_pattern: None,

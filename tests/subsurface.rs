@@ -7,13 +7,13 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{Interior, Surface};
+use risotto::builtins::builtin::{Interior, Surface};
+use risotto::builtins::media::{HomogeneousMedium, Scattering};
+use risotto::builtins::subsurface::{single_scattering_albedo, spherical_albedo};
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::media::{HomogeneousMedium, Scattering};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};
 use risotto::engine::stats::VolumeEvent;
-use risotto::engine::subsurface::{single_scattering_albedo, spherical_albedo};
 use risotto::engine::technique::PluginTechniques;
 use risotto::systems::geometry::Sphere;
 use risotto::systems::phase::PhaseFunction;
@@ -102,7 +102,7 @@ fn walk_furnace_is_white() {
 /// with radiance scaling both ways) is a white furnace too.
 #[test]
 fn subsurface_material_furnace_is_white() {
-    let params = risotto::engine::subsurface::SubsurfaceParams {
+    let params = risotto::builtins::subsurface::SubsurfaceParams {
         ior: 1.33,
         albedo: Rgb::WHITE,
         mean_free_path: Rgb::new(0.05, 0.1, 0.2),
@@ -458,7 +458,7 @@ fn assert_clean_walk(what: &str, out: &RenderOutput) {
 /// profile reflects A in every direction, unlike the walk's angle-dependent plane albedo.
 #[test]
 fn diffusion_matches_the_walk_on_a_thick_ball() {
-    use risotto::engine::subsurface::SubsurfaceMode;
+    use risotto::builtins::subsurface::SubsurfaceMode;
     let n = 16u32;
     let mut means = Vec::new();
     for mode in [SubsurfaceMode::RandomWalk, SubsurfaceMode::Diffusion] {
@@ -498,8 +498,8 @@ fn diffusion_matches_the_walk_on_a_thick_ball() {
 
 /// The ball of [`diffusion_matches_the_walk_on_a_thick_ball`]: radius 1, 100 mean free
 /// paths, albedo (0.8, 0.6, 0.9), index-matched, under a uniform sky, `n x n` pixels.
-fn thick_ball(mode: risotto::engine::subsurface::SubsurfaceMode, n: u32) -> CompiledScene {
-    let params = risotto::engine::subsurface::SubsurfaceParams {
+fn thick_ball(mode: risotto::builtins::subsurface::SubsurfaceMode, n: u32) -> CompiledScene {
+    let params = risotto::builtins::subsurface::SubsurfaceParams {
         ior: 1.0,
         albedo: Rgb::new(0.8, 0.6, 0.9),
         mean_free_path: Rgb::splat(0.01),
@@ -514,7 +514,7 @@ fn thick_ball(mode: risotto::engine::subsurface::SubsurfaceMode, n: u32) -> Comp
 /// A unit ball of `material` at the origin under a uniform sky of radiance 1, seen by
 /// `cam` (`n x n` pixels, `spp`).
 fn unit_ball(
-    material: risotto::engine::builtin::BuiltinMaterial,
+    material: risotto::builtins::builtin::BuiltinMaterial,
     cam: risotto::systems::camera::Camera,
     n: u32,
     spp: u32,
@@ -539,7 +539,7 @@ fn unit_ball(
 /// for bit (the same sampler dimensions), and the other way round.
 #[test]
 fn the_subsurface_technique_overrides_the_mode() {
-    use risotto::engine::subsurface::SubsurfaceMode;
+    use risotto::builtins::subsurface::SubsurfaceMode;
     let n = 8;
     let with = |mode, technique| {
         let options = RenderOptions {
@@ -566,9 +566,9 @@ fn the_subsurface_technique_overrides_the_mode() {
 
 /// The material of [`thin_slab`].
 fn thin_slab_params(
-    mode: risotto::engine::subsurface::SubsurfaceMode,
-) -> risotto::engine::subsurface::SubsurfaceParams {
-    risotto::engine::subsurface::SubsurfaceParams {
+    mode: risotto::builtins::subsurface::SubsurfaceMode,
+) -> risotto::builtins::subsurface::SubsurfaceParams {
+    risotto::builtins::subsurface::SubsurfaceParams {
         ior: 1.0,
         albedo: Rgb::splat(0.8),
         mean_free_path: Rgb::splat(1.0),
@@ -585,7 +585,7 @@ fn thin_slab_params(
 /// between the slab and the black box, sees its transmission of it. Returns the two
 /// (reflection, transmission), each with its standard error.
 fn thin_slab(
-    mode: risotto::engine::subsurface::SubsurfaceMode,
+    mode: risotto::builtins::subsurface::SubsurfaceMode,
     thickness: f32,
     spp: u32,
 ) -> ((f32, f32), (f32, f32)) {
@@ -645,7 +645,7 @@ fn thin_slab(
 /// 0.49, 0.21: up to 1.67 of the light that came in.
 #[test]
 fn diffusion_attenuates_through_a_thin_slab() {
-    use risotto::engine::subsurface::SubsurfaceMode;
+    use risotto::builtins::subsurface::SubsurfaceMode;
     use risotto::systems::bssrdf::slab_reflectance_transmittance;
     for thickness in [0.1f32, 0.3, 1.0, 3.0] {
         let (rw, tw) = thin_slab(SubsurfaceMode::RandomWalk, thickness, 256);
@@ -681,7 +681,7 @@ fn diffusion_attenuates_through_a_thin_slab() {
 /// small); it is not asserted.
 #[test]
 fn diffusion_mis_counts_every_axis_on_a_small_ball() {
-    use risotto::engine::subsurface::{SubsurfaceMode, SubsurfaceParams};
+    use risotto::builtins::subsurface::{SubsurfaceMode, SubsurfaceParams};
     let albedo = 0.8f32;
     let s = risotto::systems::bssrdf::scaling(albedo);
     let d = 1.5 / 26.7;

@@ -6,9 +6,9 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto::engine::scene::{Scene, ShapeGeometry};
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::systems::geometry::Sphere;
 use risotto_components::Rgb;
 use std::path::{Path, PathBuf};

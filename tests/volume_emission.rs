@@ -7,7 +7,7 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
-use risotto::engine::builtin::{NullBxdf, Surface};
+use risotto::builtins::builtin::{NullBxdf, Surface};
 use risotto::engine::context::IntegratorContext;
 use risotto::engine::plugin::*;
 use risotto::engine::scene::{LightComponent, Scene};

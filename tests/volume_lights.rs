@@ -14,11 +14,11 @@ mod common;
 use common::scratch_dir;
 use common::*;
 use risotto::engine::integrator::LightingTechnique;
-use risotto::engine::load::{scene_from_desc, MaterialRegistry};
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
-use risotto::engine::scene_file::parse_scene;
 use risotto::engine::stats::VolumeEvent;
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use risotto_components::Rgb;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! What the benches share: loading a scene of the repository as the driver does.
 
-use risotto::engine::load::{compile_scene, load_scene_file, MaterialRegistry};
 use risotto::engine::scene::CompiledScene;
+use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
 use std::path::Path;
 
 /// The scene file at `relative` (from the repository root), loaded with the built-in

@@ -4,7 +4,7 @@
 pub mod cli;
 
 use glam::Vec3;
-use risotto::engine::builtin::{BuiltinMaterial, Interior, Surface};
+use risotto::builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene, ShapeGeometry};
@@ -370,9 +370,9 @@ irradiance = {sun}
 pub fn load_scene_text(
     dir: &std::path::Path,
     text: &str,
-) -> Result<CompiledScene, risotto::engine::load::LoadError> {
-    use risotto::engine::load::{scene_from_desc, MaterialRegistry};
-    let desc = risotto::engine::scene_file::parse_scene(text, &dir.join("scene.toml"))?;
+) -> Result<CompiledScene, risotto::loader::load::LoadError> {
+    use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+    let desc = risotto::loader::scene_file::parse_scene(text, &dir.join("scene.toml"))?;
     Ok(scene_from_desc(desc, &MaterialRegistry::with_builtins())?
         .compile()
         .expect("the scene compiles"))

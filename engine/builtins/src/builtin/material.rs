@@ -1,0 +1,312 @@
+//! The built-in material factory: a [`Surface`] and an [`Interior`], building the surface's
+//! Bxdf closure at surface points, the phase closure at volume points, and the interior's
+//! volume integrator.
+
+use super::bxdfs::*;
+use super::interiors::*;
+use crate::media::PhaseBxdf;
+use crate::scatter_patterns::phase_bxdf;
+use bumpalo::Bump;
+use risotto_components::Rgb;
+use risotto_engine::plugin::*;
+use risotto_systems::pattern::{self, PatternGraph};
+use std::sync::Arc;
+
+/// The surface part of a built-in material.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Surface {
+    /// Lambertian.
+    Diffuse {
+        /// Reflectance.
+        reflectance: Rgb,
+    },
+    /// Lambertian with a reflectance pattern (every value in [0, 1] by the graph's bounds,
+    /// which the scene loader checks), evaluated per point through the context's cache
+    /// (parameter `reflectance`).
+    DiffusePattern {
+        /// The reflectance graph.
+        reflectance: Arc<PatternGraph>,
+    },
+    /// Smooth dielectric.
+    Dielectric {
+        /// Interior IOR.
+        ior: f32,
+        /// Refraction tint.
+        tint: Rgb,
+        /// Shadow rays pass (attenuated by `tint`) instead of being blocked: the seed's cheap
+        /// non-refracting glass shadows.
+        cheap_shadows: bool,
+    },
+    /// Smooth dielectric with a tint pattern (every value in [0, 1] by the graph's bounds,
+    /// checked by the scene loader), evaluated per hit through the context's cache
+    /// (parameter `tint`). Shadow rays are blocked (cheap shadows attenuate by one colour).
+    DielectricPattern {
+        /// Interior IOR.
+        ior: f32,
+        /// The tint graph.
+        tint: Arc<PatternGraph>,
+    },
+    /// Perfect mirror / smooth conductor.
+    Mirror {
+        /// Reflectance.
+        reflectance: Rgb,
+    },
+    /// Perfect mirror with a reflectance pattern (every value in [0, 1] by the graph's
+    /// bounds, checked by the scene loader), evaluated per point through the context's cache
+    /// (parameter `reflectance`), as [`Surface::DiffusePattern`].
+    MirrorPattern {
+        /// The reflectance graph.
+        reflectance: Arc<PatternGraph>,
+    },
+    /// Index-matched boundary: rays pass unchanged.
+    Interface,
+}
+
+/// A built-in material: a surface and an optional interior.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuiltinMaterial {
+    /// Surface scattering.
+    pub surface: Surface,
+    /// Interior volume.
+    pub interior: Interior,
+}
+
+impl BxdfFactory for BuiltinMaterial {
+    fn instance_hints(&self) -> InstanceHints {
+        let surface = match &self.surface {
+            Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
+            Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
+                if reflectance.reads_uv() =>
+            {
+                InstanceHints::READS_SURFACE_UV
+            }
+            Surface::DiffusePattern { .. } | Surface::MirrorPattern { .. } => InstanceHints::NONE,
+            Surface::DielectricPattern { tint, .. } if tint.reads_uv() => {
+                InstanceHints::TRANSMITS | InstanceHints::READS_SURFACE_UV
+            }
+            Surface::DielectricPattern { .. } => InstanceHints::TRANSMITS,
+            &Surface::Dielectric { cheap_shadows, .. } => {
+                let h = InstanceHints::TRANSMITS;
+                if cheap_shadows {
+                    h | InstanceHints::TRANSMISSION_SHADOWS
+                } else {
+                    h
+                }
+            }
+            Surface::Interface => {
+                InstanceHints::INDEX_MATCHED
+                    | InstanceHints::TRANSMISSION_SHADOWS
+                    | InstanceHints::TRANSMITS
+            }
+        };
+        surface | self.interior.hints()
+    }
+
+    fn begin_scatter<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        match mode {
+            // A point inside the interior: its phase function (an interior that does not
+            // scatter never returns such points; isotropic and black if asked anyway).
+            ShadingMode::VolumeScatter => {
+                return match &self.interior {
+                    Interior::Subsurface(params) => arena.alloc(PhaseBxdf {
+                        phase: params.walk.phase,
+                        albedo: params.walk.albedo(),
+                    }),
+                    // A `g` pattern is read through the context's cache.
+                    Interior::Homogeneous(m) => {
+                        phase_bxdf(ctx, m.phase, m.g_pattern.as_deref(), m.albedo(), arena)
+                    }
+                    Interior::Heterogeneous(m) => {
+                        phase_bxdf(ctx, m.phase, m.g_pattern.as_deref(), m.albedo, arena)
+                    }
+                    _ => arena.alloc(NullBxdf),
+                };
+            }
+            // Interiors are built by `begin_interior`; a surface closure is never needed for
+            // them.
+            ShadingMode::Interior => return arena.alloc(NullBxdf),
+            ShadingMode::Scatter => {}
+        }
+        match self.surface {
+            Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
+            // Patterns go through the context's cache ([`pattern_column`]).
+            Surface::DiffusePattern { ref reflectance } => arena.alloc(DiffuseBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
+            Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
+            Surface::DielectricPattern { ior, ref tint } => arena.alloc(DielectricBxdf {
+                ior,
+                tint: pattern_column(ctx, "tint", tint, arena),
+            }),
+            Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
+            Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
+            Surface::Interface => arena.alloc(NullBxdf),
+        }
+    }
+
+    fn begin_interior<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        _mode: ShadingMode,
+        arena: &'a Bump,
+    ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
+        let blocks = self.surface != Surface::Interface && self.shadow_transmittance().is_black();
+        self.interior.begin(ctx, arena, blocks)
+    }
+
+    fn shadow_transmittance(&self) -> Rgb {
+        match self.surface {
+            Surface::Interface => Rgb::WHITE,
+            Surface::Dielectric {
+                tint,
+                cheap_shadows: true,
+                ..
+            } => tint,
+            _ => Rgb::BLACK,
+        }
+    }
+
+    fn param(&self, name: &str) -> Option<ParamValue<'_>> {
+        match (&self.surface, name) {
+            (Surface::Diffuse { reflectance } | Surface::Mirror { reflectance }, "reflectance") => {
+                Some(ParamValue::Color(*reflectance))
+            }
+            (
+                Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance },
+                "reflectance",
+            ) => Some(ParamValue::Pattern(reflectance)),
+            (Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. }, "ior") => {
+                Some(ParamValue::Float(*ior))
+            }
+            (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
+            (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
+            (_, crate::scatter_patterns::G_PARAM) => match &self.interior {
+                Interior::Homogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
+                Interior::Heterogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    fn techniques(&self) -> &'static [&'static Technique] {
+        use crate::heterogeneous::TRACKING;
+        use crate::media::SCATTERING;
+        use crate::subsurface::SUBSURFACE;
+        static HOMOGENEOUS: [&Technique; 1] = [&SCATTERING];
+        static SUBSURFACE_WALK: [&Technique; 2] = [&SCATTERING, &SUBSURFACE];
+        static HETEROGENEOUS: [&Technique; 1] = [&TRACKING];
+        match &self.interior {
+            Interior::Homogeneous(_) => &HOMOGENEOUS,
+            Interior::Subsurface(_) => &SUBSURFACE_WALK,
+            Interior::Heterogeneous(_) => &HETEROGENEOUS,
+            Interior::None | Interior::Null | Interior::Beer { .. } => &[],
+        }
+    }
+
+    fn ior(&self) -> f32 {
+        match self.surface {
+            Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,
+            _ => 1.0,
+        }
+    }
+
+    /// A heterogeneous emissive interior behind an index-matched `interface` is a light
+    /// (behind other surfaces path rays do not keep their pdf, `risotto_engine::volume_lights`).
+    fn volume_emitter(
+        &self,
+        bounds: (glam::Vec3, glam::Vec3),
+        support: risotto_engine::volume_lights::EmitterSupport,
+    ) -> Option<risotto_engine::volume_lights::VolumeEmitter> {
+        match (&self.surface, &self.interior) {
+            (Surface::Interface, Interior::Heterogeneous(m)) => m.volume_emitter(bounds, support),
+            (Surface::Interface, Interior::Homogeneous(m)) => m.volume_emitter(bounds, support),
+            _ => None,
+        }
+    }
+}
+
+/// The column of pattern parameter `name` (the material's `graph`) over `ctx`'s points:
+/// through the context's cache, or, for a context without one (a plug-in's own), evaluated
+/// here.
+fn pattern_column<'a>(
+    ctx: &ShadingContext<'a>,
+    name: &str,
+    graph: &PatternGraph,
+    arena: &'a Bump,
+) -> &'a [Rgb] {
+    ctx.eval_param(name)
+        .unwrap_or_else(|| eval_uncached(graph, ctx, arena))
+}
+
+/// `graph` at every point of `ctx`, in the arena (for contexts without a cache).
+pub(crate) fn eval_uncached<'a>(
+    graph: &PatternGraph,
+    ctx: &ShadingContext<'a>,
+    arena: &'a Bump,
+) -> &'a [Rgb] {
+    let n = ctx.num_points();
+    let out = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
+    let scratch = arena.alloc_slice_fill_copy(graph.scratch_len(n), Rgb::BLACK);
+    pattern::eval_with(graph, ctx.p(), ctx.u(), ctx.v(), out, scratch);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use risotto_components::{ShadingPointRow, ShadingPoints};
+
+    #[test]
+    fn a_pattern_parameter_is_evaluated_at_p_once_per_context() {
+        use risotto_systems::pattern::{Axis, Node, PatternGraph};
+        use std::sync::Arc;
+        // reflectance = gradient along x from 0 at x = 0 to 1 at x = 4.
+        let graph = PatternGraph::new(vec![Node::Gradient {
+            axis: Axis::X,
+            from: 0.0,
+            to: 4.0,
+            a: Rgb::BLACK,
+            b: Rgb::WHITE,
+        }])
+        .unwrap();
+        let material = BuiltinMaterial {
+            surface: Surface::DiffusePattern {
+                reflectance: Arc::new(graph),
+            },
+            interior: Interior::None,
+        };
+        let mut t = ShadingPoints::default();
+        for i in 0..3 {
+            let p = Vec3::new(i as f32, 0.0, 0.0);
+            t.push(ShadingPointRow::in_volume(p, Vec3::X, i, 0));
+        }
+        let (arena, counters) = (Bump::new(), PatternCounters::default());
+        let cache = ParamCache::new(&arena, &counters);
+        let ctx = ShadingContext::new(&t, 0..3, ShadingMode::Scatter, 0, &[])
+            .with_factory(&material)
+            .with_cache(&cache);
+        let bxdf = material.begin_scatter(&ctx, ShadingMode::Scatter, &arena);
+        let mut albedo = [Rgb::BLACK; 3];
+        bxdf.albedo(&ctx, &mut albedo);
+        assert_eq!(albedo, [0.0, 0.25, 0.5].map(Rgb::splat));
+        // The Bxdf pulled the column once; another pull on the context is a cache hit.
+        assert_eq!((counters.hits.get(), counters.evals.get()), (0, 1));
+        assert_eq!(ctx.eval_param("reflectance").unwrap(), &albedo[..]);
+        assert_eq!((counters.hits.get(), counters.evals.get()), (1, 1));
+        // Without a cache the Bxdf evaluates the graph itself, to the same values.
+        let bare = ShadingContext::new(&t, 1..3, ShadingMode::Scatter, 0, &[]);
+        let bxdf = material.begin_scatter(&bare, ShadingMode::Scatter, &arena);
+        let mut two = [Rgb::BLACK; 2];
+        bxdf.albedo(&bare, &mut two);
+        assert_eq!(two, albedo[1..]);
+    }
+}

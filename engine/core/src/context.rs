@@ -1,0 +1,574 @@
+//! The integrator context (RIS `RixIntegratorContext`): the renderer's ray-tracing services
+//! for global and volume integrators.
+
+use crate::scene::CompiledScene;
+use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
+use crate::stats::{System, SystemStats, VolumeEvent};
+use crate::technique::PluginTechniques;
+use glam::Vec3;
+use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
+use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
+use risotto_systems::intersect::intersect_closest;
+use risotto_systems::lights::LightSet;
+
+/// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
+/// the per-bounce path does not allocate.
+#[derive(Debug, Default)]
+pub struct HitScratch {
+    hits: Hits,
+    /// Rays that hit a surface of material `m`, in ray order.
+    buckets: Vec<Vec<u32>>,
+    /// Rays that hit nothing.
+    escaped: Vec<u32>,
+    /// The buckets concatenated: the rays of the shading points, in point order.
+    sorted: Vec<u32>,
+    /// At least as many zero vectors and white colours as the largest batch so far: the
+    /// 12-byte columns are sized by copying from these (`Vec::resize` writes 12-byte values
+    /// one at a time; a copy is a memcpy).
+    zeros: Vec<Vec3>,
+    whites: Vec<Rgb>,
+}
+
+/// Ray-tracing services bound to one compiled scene and one worker: everything a global or
+/// volume integrator gets from the renderer (the seed's `RixIntegratorContext`). Built-in
+/// plug-ins see exactly what a user's plug-in sees: its methods, nothing behind them.
+pub struct IntegratorContext<'s> {
+    /// The scene (the engine's own stages read it; plug-ins get its parts through methods).
+    pub(crate) scene: &'s CompiledScene,
+    /// The worker's statistics (plug-ins count through the `count_*` methods).
+    pub(crate) stats: &'s mut SystemStats,
+    scratch: HitScratch,
+    techniques: PluginTechniques,
+    /// Whether the caller of a volume's `transmission` uses its `emission` output.
+    emission_wanted: bool,
+    /// Majorant violations a volume's `transmission` reported (it sees the context shared).
+    violations: std::cell::Cell<u64>,
+}
+
+impl<'s> IntegratorContext<'s> {
+    /// A context for `scene`, recording into `stats`.
+    pub fn new(scene: &'s CompiledScene, stats: &'s mut SystemStats) -> Self {
+        Self::with_scratch(scene, stats, HitScratch::default())
+    }
+
+    /// A context reusing the buffers of an earlier one ([`Self::into_scratch`]).
+    pub fn with_scratch(
+        scene: &'s CompiledScene,
+        stats: &'s mut SystemStats,
+        scratch: HitScratch,
+    ) -> Self {
+        IntegratorContext {
+            scene,
+            stats,
+            scratch,
+            techniques: PluginTechniques::default(),
+            emission_wanted: true,
+            violations: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Records `n` sampled extinctions above their majorant's bound
+    /// ([`SystemStats::majorant_violations`]); callable from a volume's `transmission`,
+    /// which sees the context shared. They reach the render's stats when the context ends.
+    pub fn count_majorant_violations(&self, n: u64) {
+        self.violations.set(self.violations.get() + n);
+    }
+
+    /// The violations [`Self::count_majorant_violations`] recorded so far, reset to 0.
+    pub fn take_majorant_violations(&self) -> u64 {
+        self.violations.replace(0)
+    }
+
+    /// Counts `n` volume events of kind `event` (the stats' `volume_events`).
+    pub fn count_volume_events(&mut self, event: VolumeEvent, n: usize) {
+        self.stats.volume_event(event, n);
+    }
+
+    /// Counts `n` pattern evaluations a volume made point by point (medium coefficients):
+    /// they add to the stats' `pattern_evals` and, of those, `volume_pattern_evals`.
+    pub fn count_volume_pattern_evals(&mut self, n: u64) {
+        self.stats.pattern_evals += n;
+        self.stats.volume_pattern_evals += n;
+    }
+
+    /// The scene's axis-aligned bounds `(min, max)` over every primitive.
+    pub fn scene_bounds(&self) -> (Vec3, Vec3) {
+        self.scene.geometry.bounds()
+    }
+
+    /// The render's `max_depth`: the most path segments a path may have
+    /// ([`RenderSettings::max_depth`](crate::scene::RenderSettings::max_depth); `u32::MAX`
+    /// for unbounded). A volume integrator that walks many events per call stops its walks
+    /// there, as the global integrator would.
+    pub fn max_depth(&self) -> u32 {
+        self.scene.settings.max_depth
+    }
+
+    /// Every light of the scene, as light sampling without MIS sees them (for in-volume
+    /// light sampling, e.g. equiangular sampling towards point lights).
+    pub fn lights(&self) -> &'s LightSet {
+        &self.scene.lights
+    }
+
+    /// The closest surface hit of each bare ray (`origin`, `direction`, `tmin..tmax`),
+    /// without shading points: for volume integrators that trace their own rays (random
+    /// walks, probe rays). `out` is resized to the rays; a miss has `prim == NO_HIT`. Read
+    /// a hit's surface with [`Self::surface_at`] and its shape with [`Self::shape_of`].
+    /// Counted as closest-hit intersection in the stats.
+    pub fn closest_hits(
+        &mut self,
+        origin: &[Vec3],
+        direction: &[Vec3],
+        tmin: &[f32],
+        tmax: &[f32],
+        out: &mut Hits,
+    ) {
+        let n = origin.len();
+        out.t.resize(n, 0.0);
+        out.prim.resize(n, NO_HIT);
+        out.b1.resize(n, 0.0);
+        out.b2.resize(n, 0.0);
+        if n == 0 {
+            return;
+        }
+        let geometry = &self.scene.geometry;
+        self.stats.time(System::Intersect, n, || {
+            intersect_closest(
+                geometry,
+                origin,
+                direction,
+                tmin,
+                tmax,
+                &mut out.t,
+                &mut out.prim,
+                &mut out.b1,
+                &mut out.b2,
+            )
+        });
+    }
+
+    /// The surface at a hit of [`Self::closest_hits`] (primitive `prim` at distance `t`
+    /// along `origin + t direction`, barycentrics `b1`, `b2`): point, geometric normal,
+    /// error bound.
+    pub fn surface_at(
+        &self,
+        prim: u32,
+        origin: Vec3,
+        direction: Vec3,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> SurfaceSample {
+        self.scene
+            .geometry
+            .surface_at(prim, origin, direction, t, b1, b2)
+    }
+
+    /// The shape primitive `prim` belongs to (what [`ShadingContext::shape`] says of a
+    /// shading point; a volume stack entry's `shape`).
+    ///
+    /// [`ShadingContext::shape`]: crate::shading_context::ShadingContext::shape
+    pub fn shape_of(&self, prim: u32) -> u32 {
+        self.scene.prim_shape[prim as usize]
+    }
+
+    /// The distance from `p` to the nearest surface of the scene, at most `cap` (an empty
+    /// ball around `p`: a walk may take any step shorter than it without tracing a ray).
+    pub fn clearance(&self, p: Vec3, cap: f32) -> f32 {
+        risotto_systems::clearance::clearance(&self.scene.geometry, p, cap)
+    }
+
+    /// The context with the render's choices for plug-in techniques, which plug-ins read
+    /// through [`Self::technique`].
+    pub fn with_techniques(mut self, techniques: PluginTechniques) -> Self {
+        self.techniques = techniques;
+        self
+    }
+
+    /// This context, telling volumes' `transmission` whether its `emission` output is used
+    /// (default `true`).
+    pub fn with_emission_wanted(mut self, wanted: bool) -> Self {
+        self.emission_wanted = wanted;
+        self
+    }
+
+    /// Whether the caller of [`VolumeIntegrator::transmission`](crate::plugin::VolumeIntegrator::transmission)
+    /// uses its `emission` output. Where it does not (the path tracer adds a built-in
+    /// medium's emission along its path rays, so it drops what shadow rays gather), an
+    /// integrator may leave `emission` black and run a cheaper transmittance estimator.
+    pub fn emission_wanted(&self) -> bool {
+        self.emission_wanted
+    }
+
+    /// The value this render chose for the plug-in technique `name` (one a material
+    /// declares, [`BxdfFactory::techniques`](crate::plugin::BxdfFactory::techniques));
+    /// `None`: its default, usually "as the material says".
+    pub fn technique(&self, name: &str) -> Option<&'static str> {
+        self.techniques.get(name)
+    }
+
+    /// Every plug-in technique choice of this render.
+    pub fn techniques(&self) -> PluginTechniques {
+        self.techniques
+    }
+
+    /// Gives the buffers back for the next context.
+    pub fn into_scratch(mut self) -> HitScratch {
+        std::mem::take(&mut self.scratch)
+    }
+
+    /// IOR outside `shape` for a ray travelling with `stack`: the IOR of the innermost volume
+    /// that is not `shape`'s own interior (1 in vacuum).
+    pub fn ior_outside(&self, stack: &VolumeStack, shape: u32) -> f32 {
+        ior_outside(self.scene, stack, shape)
+    }
+
+    /// Traces `rays` to their nearest surface hits and appends the hits to `out`, grouped by
+    /// material (each group contiguous), as [`ShadingMode::Scatter`] groups; rays that escape
+    /// are appended to `out.misses`. Points carry `ray_id` = index into `rays` and
+    /// transmission 1.
+    pub fn nearest_hits(&mut self, rays: &Rays, out: &mut ShadeGroups) {
+        self.trace(rays);
+        self.shade_traced(rays, None, out);
+    }
+
+    /// The first half of [`nearest_hits`](Self::nearest_hits): traces `rays` to their
+    /// nearest surface hits and returns each ray's hit distance (`f32::INFINITY` for a
+    /// miss), without building shading points. A volume integrator that decides from the
+    /// distances which rays stop inside (free-flight sampling) then shades only the others
+    /// with [`shade_traced`](Self::shade_traced), instead of building every point and
+    /// dropping most of them.
+    pub fn trace(&mut self, rays: &Rays) -> &[f32] {
+        let n = rays.len();
+        let geometry = &self.scene.geometry;
+        let hits = &mut self.scratch.hits;
+        hits.t.resize(n, 0.0);
+        hits.prim.resize(n, NO_HIT);
+        hits.b1.resize(n, 0.0);
+        hits.b2.resize(n, 0.0);
+        if n > 0 {
+            self.stats.time(System::Intersect, n, || {
+                intersect_closest(
+                    geometry,
+                    &rays.origin,
+                    &rays.direction,
+                    &rays.tmin,
+                    &rays.tmax,
+                    &mut hits.t,
+                    &mut hits.prim,
+                    &mut hits.b1,
+                    &mut hits.b2,
+                )
+            });
+        }
+        let hits = &mut self.scratch.hits;
+        for (t, &prim) in hits.t[..n].iter_mut().zip(&hits.prim[..n]) {
+            if prim == NO_HIT {
+                *t = f32::INFINITY;
+            }
+        }
+        &hits.t[..n]
+    }
+
+    /// Where ray `i` of the last [`trace`](Self::trace) (of `rays`) hits: the point, the
+    /// surface's geometric normal and the point's error bound; `None` for a miss.
+    pub fn traced_surface(&self, rays: &Rays, i: usize) -> Option<SurfaceSample> {
+        let h = &self.scratch.hits;
+        if h.prim[i] == NO_HIT {
+            return None;
+        }
+        let s = self.scene.geometry.surface_at(
+            h.prim[i],
+            rays.origin[i],
+            rays.direction[i],
+            h.t[i],
+            h.b1[i],
+            h.b2[i],
+        );
+        Some(s)
+    }
+
+    /// The second half of [`nearest_hits`](Self::nearest_hits), for the rays of the last
+    /// [`trace`](Self::trace) (which must have been of `rays`): appends the hits and misses
+    /// of the rays `i` with `keep[i]` (every ray for `None`) to `out`, exactly as
+    /// `nearest_hits` would have appended them, in the same order, less the others.
+    ///
+    /// # Panics
+    /// When `keep` or the last trace is not as long as `rays`.
+    pub fn shade_traced(&mut self, rays: &Rays, keep: Option<&[bool]>, out: &mut ShadeGroups) {
+        let n = rays.len();
+        assert_eq!(
+            self.scratch.hits.len(),
+            n,
+            "shade_traced after trace of these rays"
+        );
+        if let Some(keep) = keep {
+            assert_eq!(keep.len(), n, "one flag per ray");
+        }
+        if n == 0 {
+            return;
+        }
+        let scene = self.scene;
+        let geometry = &scene.geometry;
+        let s = &mut self.scratch;
+        let hits = &mut s.hits;
+        // Hit rays are grouped by material (a bucket per material, concatenated in material
+        // order: groups come out contiguous, so each factory runs once per call), escaped
+        // rays go to their own list. Every array is taken as a slice before its loop: stores
+        // into the scratch could otherwise alias the `Vec` headers, and the compiler would
+        // reload pointers and lengths on every iteration.
+        s.buckets.resize_with(scene.materials.len(), Vec::new);
+        group_by_material(scene, &hits.prim[..n], keep, &mut s.buckets, &mut s.escaped);
+        s.sorted.clear();
+        for m in material_order(scene) {
+            s.sorted.extend_from_slice(&s.buckets[m]);
+        }
+        let count = s.sorted.len();
+        if s.zeros.len() < n {
+            s.zeros.resize(n, Vec3::ZERO);
+            s.whites.resize(n, Rgb::WHITE);
+        }
+        out.misses.extend_from_slice(&s.escaped);
+        out.miss_transmission
+            .extend_from_slice(&s.whites[..s.escaped.len()]);
+        // The shading points of all hits, in sorted order. The columns that vary per point are
+        // sized first (12-byte ones by copying from prepared constants: `Vec::resize` writes
+        // 12-byte values one at a time) and then written by index in passes over the sorted
+        // rays; the columns that are constant per group or copies of another column are
+        // filled in bulk afterwards.
+        let base = out.points.len();
+        let pts = &mut out.points;
+        let end = base + count;
+        pts.p.extend_from_slice(&s.zeros[..count]);
+        pts.ng.extend_from_slice(&s.zeros[..count]);
+        pts.p_offset.resize(end, 0.0);
+        pts.vn.extend_from_slice(&s.zeros[..count]);
+        pts.vlen.resize(end, 0.0);
+        pts.u.resize(end, 0.0);
+        pts.v.resize(end, 0.0);
+        pts.shape.resize(end, 0);
+        pts.front_face.resize(end, false);
+        // Vacuum unless the ray travels inside volumes (`write_ray_columns`).
+        pts.ior_outside.resize(end, 1.0);
+        let sorted = &s.sorted[..count];
+        write_surfaces(
+            geometry,
+            scene.features.surface_uv,
+            sorted,
+            hits,
+            rays,
+            pts,
+            base,
+        );
+        write_ray_columns(scene, sorted, hits, rays, pts, base);
+        pts.nn.extend_from_slice(&pts.ng[base..end]);
+        pts.w.resize(end, 0.0);
+        pts.transmission.extend_from_slice(&s.whites[..count]);
+        pts.ray_id.extend_from_slice(&s.sorted[..count]);
+        let mut start = base;
+        for m in material_order(scene) {
+            let b = &s.buckets[m];
+            if !b.is_empty() {
+                let end = start + b.len();
+                pts.material.resize(end, m as u32);
+                out.groups.push(ShadeGroup {
+                    material: m as u32,
+                    mode: ShadingMode::Scatter,
+                    range: start..end,
+                });
+                start = end;
+            }
+        }
+        debug_assert!(pts.is_consistent(), "a shading-point column was not filled");
+    }
+}
+
+/// The majorant violations counted through the shared context and not taken yet go to the
+/// worker's stats when the context ends.
+impl Drop for IntegratorContext<'_> {
+    fn drop(&mut self) {
+        self.stats.majorant_violations += self.violations.replace(0);
+    }
+}
+
+// The passes that write the shading-point columns `base..base + sorted.len()` from the hits
+// of the rays `sorted` (rows of `hits` and `rays`). Each is its own function, and each loop
+// leaves the rare cases (spheres, rays inside volumes) to a second loop: a loop with few
+// pointers and no call inside keeps everything in registers, where one loop inside the big
+// function spilled about a dozen values per point. Every slice is cut to its exact length
+// first, so the compiler drops the bounds checks on the outputs.
+
+/// The order in which hits are grouped by material: index-matched materials last, so that
+/// the points the pass-through stage removes tend to end the hit queue, where removing them
+/// moves no other point (the order of groups is otherwise free).
+fn material_order(scene: &CompiledScene) -> impl Iterator<Item = usize> + '_ {
+    let matched = |m: &usize| {
+        scene.material_info[*m]
+            .hints
+            .contains(crate::plugin::InstanceHints::INDEX_MATCHED)
+    };
+    let n = scene.material_info.len();
+    (0..n)
+        .filter(move |m| !matched(m))
+        .chain((0..n).filter(matched))
+}
+
+/// Clears `buckets` (one per material) and `escaped`, then appends the index of every ray
+/// whose hit is on a surface of material `m` to `buckets[m]` and of every miss to `escaped`.
+/// Its own function for the same reason as the passes below.
+#[inline(never)]
+fn group_by_material(
+    scene: &CompiledScene,
+    prims: &[u32],
+    keep: Option<&[bool]>,
+    buckets: &mut [Vec<u32>],
+    escaped: &mut Vec<u32>,
+) {
+    for b in buckets.iter_mut() {
+        b.clear();
+    }
+    escaped.clear();
+    let prim_material = &scene.prim_material[..];
+    let mut add = |i: usize, prim: u32| {
+        if prim == NO_HIT {
+            escaped.push(i as u32);
+        } else {
+            buckets[prim_material[prim as usize] as usize].push(i as u32);
+        }
+    };
+    match keep {
+        None => prims.iter().enumerate().for_each(|(i, &prim)| add(i, prim)),
+        Some(keep) => {
+            for (i, (&prim, &k)) in prims.iter().zip(keep).enumerate() {
+                if k {
+                    add(i, prim);
+                }
+            }
+        }
+    }
+}
+
+/// Pass 1: `p`, `ng`, `p_offset`, `u`, `v` (on spheres `u = v = 0` unless `sphere_uv`: some material
+/// reads them, [`crate::plugin::InstanceHints::READS_SURFACE_UV`]).
+#[inline(never)]
+fn write_surfaces(
+    geometry: &SceneGeometry,
+    sphere_uv: bool,
+    sorted: &[u32],
+    hits: &Hits,
+    rays: &Rays,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let (n, count) = (hits.len(), sorted.len());
+    let (p, ng) = (&mut pts.p[base..][..count], &mut pts.ng[base..][..count]);
+    let p_offset = &mut pts.p_offset[base..][..count];
+    let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
+    let (prims, b1, b2) = (&hits.prim[..n], &hits.b1[..n], &hits.b2[..n]);
+    let triangles = geometry.triangles();
+    let mut spheres = false;
+    for k in 0..count {
+        let i = sorted[k] as usize;
+        if let Some(surf) = triangles.surface_at(prims[i], b1[i], b2[i]) {
+            p[k] = surf.p;
+            ng[k] = surf.ng;
+            p_offset[k] = surf.offset();
+            u[k] = surf.uv.x;
+            v[k] = surf.uv.y;
+        } else {
+            spheres = true;
+        }
+    }
+    if spheres {
+        for (k, &i) in sorted.iter().enumerate() {
+            let i = i as usize;
+            if triangles.surface_at(prims[i], b1[i], b2[i]).is_none() {
+                let surf = geometry.surface_at(
+                    prims[i],
+                    rays.origin[i],
+                    rays.direction[i],
+                    hits.t[i],
+                    b1[i],
+                    b2[i],
+                );
+                p[k] = surf.p;
+                ng[k] = surf.ng;
+                p_offset[k] = surf.offset();
+                let uv = if sphere_uv {
+                    geometry.surface_uv(
+                        prims[i],
+                        rays.origin[i],
+                        rays.direction[i],
+                        hits.t[i],
+                        b1[i],
+                        b2[i],
+                    )
+                } else {
+                    surf.uv
+                };
+                u[k] = uv.x;
+                v[k] = uv.y;
+            }
+        }
+    }
+}
+
+/// Pass 2 (after [`write_surfaces`], it reads `ng`): `vn`, `vlen`, `front_face`, `shape`,
+/// `ior_outside`.
+#[inline(never)]
+fn write_ray_columns(
+    scene: &CompiledScene,
+    sorted: &[u32],
+    hits: &Hits,
+    rays: &Rays,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let (n, count) = (hits.len(), sorted.len());
+    let (ng, vn, vlen) = (
+        &pts.ng[base..][..count],
+        &mut pts.vn[base..][..count],
+        &mut pts.vlen[base..][..count],
+    );
+    let (shape, front_face, ior) = (
+        &mut pts.shape[base..][..count],
+        &mut pts.front_face[base..][..count],
+        &mut pts.ior_outside[base..][..count],
+    );
+    let (prims, t) = (&hits.prim[..n], &hits.t[..n]);
+    let (direction, stacks) = (&rays.direction[..n], &rays.volume_stack[..n]);
+    let prim_shape = &scene.prim_shape[..];
+    for k in 0..count {
+        let i = sorted[k] as usize;
+        let d = direction[i];
+        vn[k] = -d;
+        vlen[k] = t[i];
+        front_face[k] = d.dot(ng[k]) < 0.0;
+        shape[k] = prim_shape[prims[i] as usize];
+    }
+    // Stacks get entries only in scenes with volumes, transmissive materials or a camera
+    // inside a shape (only such shapes are tracked, `CompiledScene::tracks_interior`);
+    // elsewhere the stack column is not read at all.
+    let features = scene.features;
+    let stacks_possible =
+        features.volumes || features.transmissive || !scene.camera_stack.is_empty();
+    if stacks_possible && sorted.iter().any(|&i| !stacks[i as usize].is_empty()) {
+        for (k, &i) in sorted.iter().enumerate() {
+            let stack = &stacks[i as usize];
+            if !stack.is_empty() {
+                ior[k] = ior_outside(scene, stack, shape[k]);
+            }
+        }
+    }
+}
+
+/// IOR of the innermost volume of `stack` that is not `shape`'s own interior (1 in vacuum).
+fn ior_outside(scene: &CompiledScene, stack: &VolumeStack, shape: u32) -> f32 {
+    let mut best: Option<risotto_components::VolumeEntry> = None;
+    for e in stack.entries() {
+        if e.shape != shape && best.is_none_or(|b| e.priority >= b.priority) {
+            best = Some(*e);
+        }
+    }
+    best.map_or(1.0, |e| scene.material_info[e.material as usize].ior)
+}

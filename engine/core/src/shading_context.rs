@@ -1,0 +1,620 @@
+//! The shading context (RIS `RixShadingContext`): a group of shading points with the builtins
+//! as columns, the parameter cache a Bxdf and a volume integrator bound to the same context
+//! share, and the mutable volume-sampling child context of the seed's "Shading in a Volume"
+//! (`BeginVolumeSampling` / `SetBuiltinVar` / `EndVolumeSampling`).
+//!
+//! # Parameters and the cache
+//!
+//! [`ShadingContext::eval_param`] evaluates a material parameter (what the factory answers
+//! in [`BxdfFactory::param`]) for every point of the context, once: the column is kept in the
+//! context's [`ParamCache`] (keyed by name, its columns in the worker's per-batch arena), so
+//! a Bxdf and a volume integrator pulling the same parameter on one context evaluate it once.
+//! A parameter is a constant or a pattern graph ([`ParamValue::Pattern`], a
+//! [`risotto_systems::pattern::PatternGraph`] the factory owns), evaluated over the context's
+//! `P`, `u` and `v` columns at once. Lookups and evaluations are counted
+//! ([`PatternCounters`], in the stats as `pattern_cache_hits` and `pattern_evals`). Setting a builtin on a volume-sampling context
+//! flushes its cache (patterns may depend on `P`, `u`, `v`, `w`).
+//!
+//! # Shading in a volume
+//!
+//! ```
+//! # use risotto_engine::plugin::*;
+//! # use risotto_components::{ShadingPoints, ShadingPointRow, Rgb};
+//! # use glam::Vec3;
+//! # let mut table = ShadingPoints::default();
+//! # for i in 0..3 { table.push(ShadingPointRow::in_volume(Vec3::ZERO, Vec3::X, i, 0)); }
+//! # let ctx = ShadingContext::new(&table, 0..3, ShadingMode::Interior, 0, &[])
+//! #     .with_volume_bounds(Vec3::splat(-1.0), Vec3::splat(1.0));
+//! // Inside a volume integrator's `nearest_hits`: a child context at points along the rays.
+//! let mut vctx = ctx.begin_volume_sampling();
+//! let p: Vec<Vec3> = (0..3).map(|i| Vec3::new(0.25 * i as f32, 0.0, 0.0)).collect();
+//! vctx.set_builtin(Builtin::P, &p); // also moves u, v, w with P
+//! assert_eq!(vctx.context().u()[2], 0.75); // (0.5 - (-1)) / 2
+//! // Keep the first and the last point as a VolumeScatter group for the path tracer.
+//! let mut out = ShadeGroups::default();
+//! vctx.end_volume_sampling(&[true, false, true], &mut out);
+//! assert_eq!(out.groups[0].mode, ShadingMode::VolumeScatter);
+//! assert_eq!(out.points.len(), 2);
+//! ```
+
+use crate::plugin::{BxdfFactory, VolumeIntegrator};
+use crate::shade_groups::{ShadeGroups, ShadingMode};
+use bumpalo::Bump;
+use glam::Vec3;
+use risotto_components::{Rgb, ShadingPoints, VolumeEntry};
+use risotto_systems::pattern::{self, PatternGraph};
+use std::cell::Cell;
+use std::ops::Range;
+
+/// Another volume overlapping the innermost one, with its own integrator (built by the
+/// renderer through its factory's `begin_interior`).
+pub struct OverlappingVolume<'a> {
+    /// Which volume.
+    pub entry: VolumeEntry,
+    /// Its factory.
+    pub factory: &'a dyn BxdfFactory,
+    /// Its integrator (None when its factory computes no interior).
+    pub integrator: Option<&'a (dyn VolumeIntegrator + 'a)>,
+}
+
+/// A material parameter's value as its factory gives it (RIS: a parameter's connection):
+/// a constant, or a pattern graph borrowed from the factory (a reference, so the value stays
+/// plain `Copy` data that contexts in the arena can hold).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamValue<'a> {
+    /// One number for every point (broadcast to all three channels).
+    Float(f32),
+    /// One colour for every point.
+    Color(Rgb),
+    /// A pattern graph, evaluated at the context's `P`, `u`, `v`.
+    Pattern(&'a PatternGraph),
+}
+
+/// The builtins a pattern reads, one entry per point.
+#[derive(Clone, Copy)]
+struct PatternInputs<'a> {
+    p: &'a [Vec3],
+    u: &'a [f32],
+    v: &'a [f32],
+}
+
+/// Counts of parameter-cache lookups of a worker (plain `Cell`s: contexts and their caches
+/// are arena data without destructors).
+#[derive(Debug, Default)]
+pub struct PatternCounters {
+    /// Lookups answered by the cache.
+    pub hits: Cell<u64>,
+    /// Parameter evaluations (cache misses).
+    pub evals: Cell<u64>,
+    /// Of `evals`, the pattern evaluations of medium coefficients: those volume integrators
+    /// made point by point ([`ShadingContext::count_pattern_evals`]) and the columns
+    /// evaluated for contexts inside a volume (a phase function's `g` pattern).
+    pub volume_evals: Cell<u64>,
+}
+
+/// Entries a [`ParamCache`] holds; a context pulling more distinct parameters re-evaluates
+/// the extra ones (counted as evaluations).
+const CACHE_SLOTS: usize = 8;
+
+/// A cached column: the parameter's name and its values.
+type CachedColumn<'a> = (&'a str, &'a [Rgb]);
+
+/// The parameter cache of one shading context: evaluated columns keyed by parameter name,
+/// allocated in the worker's arena. Plain data (it may itself live in the arena).
+pub struct ParamCache<'a> {
+    arena: &'a Bump,
+    counters: &'a PatternCounters,
+    slots: [Cell<Option<CachedColumn<'a>>>; CACHE_SLOTS],
+}
+
+impl<'a> ParamCache<'a> {
+    /// An empty cache whose columns go to `arena`, counting into `counters`.
+    pub fn new(arena: &'a Bump, counters: &'a PatternCounters) -> Self {
+        ParamCache {
+            arena,
+            counters,
+            slots: Default::default(),
+        }
+    }
+
+    /// Forgets every cached column (the builtins they were evaluated at changed).
+    pub fn flush(&self) {
+        for s in &self.slots {
+            s.set(None);
+        }
+    }
+}
+
+/// A parameter cache as contexts see it (a trait object, so that a context stays covariant
+/// in its lifetime while the cache's `Cell`s are not).
+trait ParamLookup {
+    /// The column of `value` (parameter `name`) at the points of `at`, cached; `in_volume`:
+    /// the points lie inside a volume (a miss counts as a volume evaluation too).
+    fn column(
+        &self,
+        name: &str,
+        value: ParamValue<'_>,
+        at: PatternInputs<'_>,
+        in_volume: bool,
+    ) -> &[Rgb];
+}
+
+impl ParamLookup for ParamCache<'_> {
+    fn column(
+        &self,
+        name: &str,
+        value: ParamValue<'_>,
+        at: PatternInputs<'_>,
+        in_volume: bool,
+    ) -> &[Rgb] {
+        self.get_or_eval(name, at.p.len(), in_volume, |column| match value {
+            ParamValue::Float(f) => column.fill(Rgb::splat(f)),
+            ParamValue::Color(c) => column.fill(c),
+            ParamValue::Pattern(graph) => {
+                // The nodes' block columns live in the arena with the result.
+                let scratch = self
+                    .arena
+                    .alloc_slice_fill_copy(graph.scratch_len(column.len()), Rgb::BLACK);
+                pattern::eval_with(graph, at.p, at.u, at.v, column, scratch);
+            }
+        })
+    }
+}
+
+impl<'a> ParamCache<'a> {
+    /// The column of parameter `name` for `n` points, from the cache or evaluated with
+    /// `eval` (which fills the column) and then cached.
+    fn get_or_eval(
+        &self,
+        name: &str,
+        n: usize,
+        in_volume: bool,
+        eval: impl FnOnce(&mut [Rgb]),
+    ) -> &'a [Rgb] {
+        for s in &self.slots {
+            match s.get() {
+                Some((key, column)) if key == name && column.len() == n => {
+                    self.counters.hits.set(self.counters.hits.get() + 1);
+                    return column;
+                }
+                _ => {}
+            }
+        }
+        self.counters.evals.set(self.counters.evals.get() + 1);
+        if in_volume {
+            let v = &self.counters.volume_evals;
+            v.set(v.get() + 1);
+        }
+        let column = self.arena.alloc_slice_fill_copy(n, Rgb::BLACK);
+        eval(column);
+        let column: &'a [Rgb] = column;
+        if let Some(free) = self.slots.iter().find(|s| s.get().is_none()) {
+            free.set(Some((self.arena.alloc_str(name), column)));
+        }
+        column
+    }
+}
+
+/// A group of shading points that share a material, with the RIS builtins as columns
+/// (`P`, `Ng`, `Nn`, `Vn`, `VLen`, `u`, `v`, `w`, `transmission`, ray id).
+pub struct ShadingContext<'a> {
+    points: &'a ShadingPoints,
+    range: Range<usize>,
+    mode: ShadingMode,
+    material: u32,
+    overlapping: &'a [OverlappingVolume<'a>],
+    factory: Option<&'a dyn BxdfFactory>,
+    cache: Option<&'a dyn ParamLookup>,
+    /// Where the cache's columns go and what it counts into (for child contexts' caches).
+    cache_parts: Option<(&'a Bump, &'a PatternCounters)>,
+    volume_bounds: Option<(Vec3, Vec3)>,
+}
+
+impl<'a> ShadingContext<'a> {
+    /// A context over rows `range` of `points`.
+    pub fn new(
+        points: &'a ShadingPoints,
+        range: Range<usize>,
+        mode: ShadingMode,
+        material: u32,
+        overlapping: &'a [OverlappingVolume<'a>],
+    ) -> Self {
+        ShadingContext {
+            points,
+            range,
+            mode,
+            material,
+            overlapping,
+            factory: None,
+            cache: None,
+            cache_parts: None,
+            volume_bounds: None,
+        }
+    }
+    /// Binds the factory of the context's material: [`eval_param`](Self::eval_param) asks it
+    /// for parameters.
+    pub fn with_factory(mut self, factory: &'a dyn BxdfFactory) -> Self {
+        self.factory = Some(factory);
+        self
+    }
+    /// Binds a parameter cache, where [`eval_param`](Self::eval_param) keeps its columns
+    /// (without one it returns `None`). The renderer binds one to every context it makes.
+    pub fn with_cache<'c: 'a>(mut self, cache: &'a ParamCache<'c>) -> Self {
+        self.cache = Some(cache);
+        self.cache_parts = Some((cache.arena, cache.counters));
+        self
+    }
+    /// Sets the object-space bounds of the volume the context's points are in (the bounds
+    /// of the shape whose interior it is): volume-sampling contexts derive `u, v, w` from
+    /// them.
+    pub fn with_volume_bounds(mut self, min: Vec3, max: Vec3) -> Self {
+        self.volume_bounds = Some((min, max));
+        self
+    }
+    /// Number of points (RIS `numPts`).
+    pub fn num_points(&self) -> usize {
+        self.range.len()
+    }
+    /// The bounds `u, v, w` are measured in ([`with_volume_bounds`](Self::with_volume_bounds)),
+    /// if set.
+    pub fn volume_bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.volume_bounds
+    }
+    /// Why this context exists.
+    pub fn mode(&self) -> ShadingMode {
+        self.mode
+    }
+    /// Material (factory) index of every point.
+    pub fn material(&self) -> u32 {
+        self.material
+    }
+    /// The factory bound to the context, if any.
+    pub fn factory(&self) -> Option<&'a dyn BxdfFactory> {
+        self.factory
+    }
+    /// The table and rows the context's builtins come from.
+    pub fn rows(&self) -> (&'a ShadingPoints, Range<usize>) {
+        (self.points, self.range.clone())
+    }
+    /// Positions `P`.
+    pub fn p(&self) -> &'a [Vec3] {
+        &self.points.p[self.range.clone()]
+    }
+    /// Geometric normals `Ng`.
+    pub fn ng(&self) -> &'a [Vec3] {
+        &self.points.ng[self.range.clone()]
+    }
+    /// Error offsets of the positions along `Ng` (`dot(|Ng|, p_error)`, 0 inside volumes):
+    /// what rays spawned here move off the surface by (`risotto_systems::ray::spawn_origin`).
+    pub fn p_offset(&self) -> &'a [f32] {
+        &self.points.p_offset[self.range.clone()]
+    }
+    /// Shading normals `Nn`.
+    pub fn nn(&self) -> &'a [Vec3] {
+        &self.points.nn[self.range.clone()]
+    }
+    /// Directions towards the viewer `Vn`.
+    pub fn vn(&self) -> &'a [Vec3] {
+        &self.points.vn[self.range.clone()]
+    }
+    /// Incident segment lengths `VLen`.
+    pub fn vlen(&self) -> &'a [f32] {
+        &self.points.vlen[self.range.clone()]
+    }
+    /// Parameters `u`.
+    pub fn u(&self) -> &'a [f32] {
+        &self.points.u[self.range.clone()]
+    }
+    /// Parameters `v`.
+    pub fn v(&self) -> &'a [f32] {
+        &self.points.v[self.range.clone()]
+    }
+    /// Parameters `w`.
+    pub fn w(&self) -> &'a [f32] {
+        &self.points.w[self.range.clone()]
+    }
+    /// Transmission over each point's incident segment.
+    pub fn transmission(&self) -> &'a [Rgb] {
+        &self.points.transmission[self.range.clone()]
+    }
+    /// Index of the ray that produced each point.
+    pub fn ray_id(&self) -> &'a [u32] {
+        &self.points.ray_id[self.range.clone()]
+    }
+    /// Whether each ray arrived on the front face.
+    pub fn front_face(&self) -> &'a [bool] {
+        &self.points.front_face[self.range.clone()]
+    }
+    /// IOR of the medium outside each point's shape (see
+    /// [`ShadingPointRow::ior_outside`](risotto_components::ShadingPointRow::ior_outside)).
+    pub fn ior_outside(&self) -> &'a [f32] {
+        &self.points.ior_outside[self.range.clone()]
+    }
+    /// Shape index of each point (`u32::MAX` inside volumes).
+    pub fn shape(&self) -> &'a [u32] {
+        &self.points.shape[self.range.clone()]
+    }
+    /// The other volumes that overlap this context's volume (RIS `GetOverlappingVolumes`).
+    pub fn overlapping_volumes(&self) -> &'a [OverlappingVolume<'a>] {
+        self.overlapping
+    }
+
+    /// Material parameter `name` at every point (RIS `EvalParam`), evaluated once per context
+    /// and cached (see the module docs). `None` when the context has no factory or cache
+    /// bound, or the factory has no such parameter.
+    pub fn eval_param(&self, name: &str) -> Option<&'a [Rgb]> {
+        let value = self.factory?.param(name)?;
+        let cache = self.cache?;
+        let at = PatternInputs {
+            p: self.p(),
+            u: self.u(),
+            v: self.v(),
+        };
+        let in_volume = self.mode != ShadingMode::Scatter;
+        Some(cache.column(name, value, at, in_volume))
+    }
+
+    /// Counts `n` pattern evaluations made outside [`eval_param`](Self::eval_param) (a
+    /// volume integrator evaluating a pattern coefficient point by point) into the
+    /// context's cache counters (the stats' `pattern_evals` and `volume_pattern_evals`);
+    /// without a cache, nothing.
+    pub fn count_pattern_evals(&self, n: u64) {
+        if let Some((_, counters)) = self.cache_parts {
+            counters.evals.set(counters.evals.get() + n);
+            counters.volume_evals.set(counters.volume_evals.get() + n);
+        }
+    }
+
+    /// Starts shading inside the volume (RIS `BeginVolumeSampling`): a mutable child context
+    /// that inherits this context's builtins, except `u, v, w`, which are the position of `P`
+    /// relative to the volume's bounds ([`with_volume_bounds`](Self::with_volume_bounds); 0
+    /// without bounds). It has its own parameter cache, flushed whenever a builtin is set.
+    pub fn begin_volume_sampling(&self) -> VolumeSampling<'a> {
+        let mut points = ShadingPoints::with_capacity(self.num_points());
+        points.extend_from_range(self.points, self.range.clone());
+        let cache = self
+            .cache_parts
+            .map(|(arena, counters)| ParamCache::new(arena, counters));
+        let mut v = VolumeSampling {
+            points,
+            material: self.material,
+            factory: self.factory,
+            cache,
+            volume_bounds: self.volume_bounds,
+        };
+        v.update_uvw();
+        v
+    }
+}
+
+/// A builtin a volume-sampling context can replace (RIS `SetBuiltinVar`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builtin {
+    /// Position; also moves `u, v, w` (derived from it).
+    P,
+    /// Direction towards the viewer.
+    Vn,
+    /// Volume parameter `u`.
+    U,
+    /// Volume parameter `v`.
+    V,
+    /// Volume parameter `w`.
+    W,
+}
+
+/// The mutable child context of [`ShadingContext::begin_volume_sampling`]: its own copy of
+/// the points (owned: it lives on the volume integrator's stack, not in the arena) and its own
+/// parameter cache. [`context`](Self::context) views it as a [`ShadingMode::VolumeScatter`]
+/// context (for building the phase function, [`ShadingContext::eval_param`], or the lighting
+/// delegate); [`end_volume_sampling`](Self::end_volume_sampling) hands the points that stay
+/// to the global integrator.
+pub struct VolumeSampling<'a> {
+    points: ShadingPoints,
+    material: u32,
+    factory: Option<&'a dyn BxdfFactory>,
+    cache: Option<ParamCache<'a>>,
+    volume_bounds: Option<(Vec3, Vec3)>,
+}
+
+impl<'a> VolumeSampling<'a> {
+    /// Number of points.
+    pub fn num_points(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Replaces builtin `b` with `values` (one per point) and flushes the parameter cache.
+    /// Vector builtins take [`Vec3`]s; `u`, `v`, `w` take their value in `x`.
+    ///
+    /// # Panics
+    /// When `values` has not one entry per point.
+    pub fn set_builtin(&mut self, b: Builtin, values: &[Vec3]) {
+        assert_eq!(values.len(), self.points.len(), "one value per point");
+        match b {
+            Builtin::P => {
+                self.points.p.copy_from_slice(values);
+                self.update_uvw();
+            }
+            Builtin::Vn => {
+                self.points.vn.copy_from_slice(values);
+                // Inside a volume the normals face the viewer (no surface).
+                self.points.nn.copy_from_slice(values);
+                self.points.ng.copy_from_slice(values);
+            }
+            Builtin::U => set_scalar(&mut self.points.u, values),
+            Builtin::V => set_scalar(&mut self.points.v, values),
+            Builtin::W => set_scalar(&mut self.points.w, values),
+        }
+        if let Some(c) = &self.cache {
+            c.flush();
+        }
+    }
+
+    /// Sets the incident segment length of every point (`VLen`: the distance the ray
+    /// travelled to the point inside the volume).
+    pub fn set_vlen(&mut self, vlen: &[f32]) {
+        self.points.vlen.copy_from_slice(vlen);
+    }
+
+    /// Moves every point to distance `t[i]` along ray `i` of `rays` (the rays this context's
+    /// points start on): `P = origin + t direction` and `VLen = t`, where free flights
+    /// stopped.
+    ///
+    /// # Panics
+    /// When `rays` and `t` do not have one entry per point.
+    pub fn set_along_rays(&mut self, rays: &risotto_components::Rays, t: &[f32]) {
+        assert_eq!(rays.len(), t.len(), "one distance per ray");
+        let p: Vec<Vec3> = (0..rays.len())
+            .map(|i| rays.origin[i] + rays.direction[i] * t[i])
+            .collect();
+        self.set_builtin(Builtin::P, &p);
+        self.set_vlen(t);
+    }
+
+    /// Sets the transmission of every point's incident segment (what the global integrator
+    /// multiplies into the path: for a free-flight sample, the estimator's weight).
+    pub fn set_transmission(&mut self, transmission: &[Rgb]) {
+        self.points.transmission.copy_from_slice(transmission);
+    }
+
+    /// The points as a [`ShadingMode::VolumeScatter`] context, sharing this child's cache.
+    pub fn context(&self) -> ShadingContext<'_> {
+        ShadingContext {
+            points: &self.points,
+            range: 0..self.points.len(),
+            mode: ShadingMode::VolumeScatter,
+            material: self.material,
+            overlapping: &[],
+            factory: self.factory,
+            cache: self.cache.as_ref().map(|c| c as &dyn ParamLookup),
+            cache_parts: self.cache.as_ref().map(|c| (c.arena, c.counters)),
+            volume_bounds: self.volume_bounds,
+        }
+    }
+
+    /// Ends volume sampling (RIS `EndVolumeSampling(membership)`): appends the points with
+    /// `membership[i]` to `out` as one [`ShadingMode::VolumeScatter`] group of the volume's
+    /// material (nothing when none is kept). Their `ray_id`s are those of the parent
+    /// context's points.
+    ///
+    /// # Panics
+    /// When `membership` has not one entry per point.
+    pub fn end_volume_sampling(self, membership: &[bool], out: &mut ShadeGroups) {
+        assert_eq!(membership.len(), self.points.len(), "one flag per point");
+        let start = out.points.len();
+        let rows: Vec<u32> = (0..membership.len() as u32)
+            .filter(|&i| membership[i as usize])
+            .collect();
+        out.points.extend_gather(&self.points, &rows);
+        out.close_group(self.material, ShadingMode::VolumeScatter, start);
+    }
+
+    /// `u, v, w` from `P` and the volume bounds (0 without bounds).
+    fn update_uvw(&mut self) {
+        let Some((lo, hi)) = self.volume_bounds else {
+            return;
+        };
+        let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+        for (i, p) in self.points.p.iter().enumerate() {
+            let uvw = (*p - lo) / extent;
+            self.points.u[i] = uvw.x;
+            self.points.v[i] = uvw.y;
+            self.points.w[i] = uvw.z;
+        }
+    }
+}
+
+fn set_scalar(column: &mut [f32], values: &[Vec3]) {
+    for (c, v) in column.iter_mut().zip(values) {
+        *c = v.x;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plugin::{Bxdf, BxdfFactory, InstanceHints};
+    use risotto_components::ShadingPointRow;
+
+    struct Tinted;
+    impl BxdfFactory for Tinted {
+        fn instance_hints(&self) -> InstanceHints {
+            InstanceHints::NONE
+        }
+        fn begin_scatter<'a>(
+            &'a self,
+            _ctx: &'a ShadingContext<'a>,
+            _mode: ShadingMode,
+            arena: &'a Bump,
+        ) -> &'a mut (dyn Bxdf + 'a) {
+            arena.alloc(crate::plugin::NullBxdf)
+        }
+        fn param(&self, name: &str) -> Option<ParamValue<'_>> {
+            (name == "albedo").then_some(ParamValue::Color(Rgb::new(0.1, 0.2, 0.3)))
+        }
+    }
+
+    fn table(n: u32) -> ShadingPoints {
+        let mut t = ShadingPoints::default();
+        for i in 0..n {
+            t.push(ShadingPointRow::in_volume(Vec3::ZERO, Vec3::X, i, 0));
+        }
+        t
+    }
+
+    #[test]
+    fn the_cache_evaluates_once_per_context_and_flushes_on_set_builtin() {
+        let (arena, counters) = (Bump::new(), PatternCounters::default());
+        let cache = ParamCache::new(&arena, &counters);
+        let t = table(4);
+        let ctx = ShadingContext::new(&t, 0..4, ShadingMode::Interior, 0, &[])
+            .with_factory(&Tinted)
+            .with_cache(&cache);
+        let a = ctx.eval_param("albedo").unwrap();
+        let b = ctx.eval_param("albedo").unwrap();
+        assert_eq!(a, &[Rgb::new(0.1, 0.2, 0.3); 4][..]);
+        assert!(std::ptr::eq(a, b), "the second lookup is the cached column");
+        assert_eq!((counters.hits.get(), counters.evals.get()), (1, 1));
+        assert!(ctx.eval_param("missing").is_none());
+        // The child has its own cache; setting a builtin flushes it.
+        let mut v = ctx.begin_volume_sampling();
+        v.context().eval_param("albedo").unwrap();
+        v.context().eval_param("albedo").unwrap();
+        assert_eq!((counters.hits.get(), counters.evals.get()), (2, 2));
+        v.set_builtin(Builtin::P, &[Vec3::ONE; 4]);
+        v.context().eval_param("albedo").unwrap();
+        assert_eq!((counters.hits.get(), counters.evals.get()), (2, 3));
+    }
+
+    #[test]
+    fn volume_sampling_derives_uvw_and_keeps_the_members() {
+        let t = table(3);
+        let ctx = ShadingContext::new(&t, 1..3, ShadingMode::Interior, 7, &[])
+            .with_volume_bounds(Vec3::ZERO, Vec3::new(2.0, 4.0, 8.0));
+        let mut v = ctx.begin_volume_sampling();
+        assert_eq!(v.num_points(), 2);
+        v.set_builtin(
+            Builtin::P,
+            &[Vec3::new(1.0, 1.0, 2.0), Vec3::new(2.0, 4.0, 0.0)],
+        );
+        let c = v.context();
+        assert_eq!((c.u()[0], c.v()[0], c.w()[0]), (0.5, 0.25, 0.25));
+        assert_eq!((c.u()[1], c.v()[1], c.w()[1]), (1.0, 1.0, 0.0));
+        assert_eq!(c.mode(), ShadingMode::VolumeScatter);
+        v.set_builtin(Builtin::Vn, &[Vec3::Y, Vec3::Z]);
+        let mut out = ShadeGroups::default();
+        v.end_volume_sampling(&[false, true], &mut out);
+        assert_eq!(out.groups.len(), 1);
+        let g = &out.groups[0];
+        assert_eq!(
+            (g.material, g.mode, g.range.clone()),
+            (7, ShadingMode::VolumeScatter, 0..1)
+        );
+        assert_eq!(out.points.ray_id[0], 2, "the parent's ray id");
+        assert_eq!(out.points.vn[0], Vec3::Z);
+        assert_eq!(out.points.p[0], Vec3::new(2.0, 4.0, 0.0));
+        // No member: no group.
+        let v = ctx.begin_volume_sampling();
+        v.end_volume_sampling(&[false, false], &mut out);
+        assert_eq!(out.groups.len(), 1);
+    }
+}

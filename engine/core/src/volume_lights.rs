@@ -1,0 +1,160 @@
+//! Emissive volumes as lights (issue 11): the engine's glue around
+//! [`risotto_systems::volume_lights`].
+//!
+//! At scene compilation every shape whose material's interior emits is offered to its
+//! factory ([`BxdfFactory::volume_emitter`]); the emitters returned join the MIS light set
+//! (`CompiledScene::mis_lights`) as [`Light::Volume`],
+//! selected by power with the other lights (their share capped at one half, see
+//! `LightSet`), so under `lighting = mis` every shading vertex (surfaces and volume-scatter
+//! points) samples them in its next-event estimation. Scenes with such an emitter have the
+//! `emissive_volume_lights` feature; others never reach any of this.
+//!
+//! The unidirectional side of the MIS pair is the medium's collision estimator: its volume
+//! integrator multiplies what it gathers at each tentative collision `x` of ray `r` by
+//! [`VolumeLightMis::unidirectional_weight`], `w_U = p_U^2 / (p_U^2 + p_V^2)` with `p_U =
+//! pdf(r) majorant(x) / |x - prev_p(r)|^2` and `p_V` the light-sampling density in volume
+//! measure (the derivation is in [`risotto_systems::volume_lights`]). Camera rays and rays
+//! with a Dirac lobe or no pdf keep weight 1 (no light sample was weighed against them).
+//! A homogeneous medium, whose path rays gather their emission exactly, switches the rays
+//! that are weighed to a point estimator of that density (a randomly offset comb of
+//! `majorant` points per unit length along the segment, the built-ins' `homogeneous_emission`).
+//! Shadow rays end at the sampled point inside the medium, so their transmittance covers the
+//! emitter's own medium up to it; the emitter's emission along them is not added (the
+//! built-in media report emission along path rays,
+//! [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`]).
+//!
+//! Light sampling alone (`lighting = nee`, and the lighting delegate) does not sample volume
+//! lights: the collision estimator keeps weight 1 there. Next-event estimation alone is no
+//! usable estimator of a volume's emission: from a vertex inside the emitter its variance is
+//! infinite (the contribution `f T j / (p_V s^2)` has second moment `int ds / s^2` near the
+//! vertex, which diverges; MIS removes it, as `w_V -> 0` there), and a wide emitter's cells
+//! near a vertex are almost never chosen (a floor under an emissive slab 2000 units wide,
+//! in `tests/emissive_media.rs`, got 23 % too little light at 1024 spp). `lighting = bxdf`
+//! samples no light.
+//!
+//! Only boundaries that shadow rays cross as the path rays do can carry an emitter: the
+//! built-in media offer one behind an index-matched `interface`, whose path rays keep their
+//! direction and pdf. (Behind a dielectric, path rays are refracted, a Dirac event, and keep
+//! weight 1, so an emitter there would count the light twice through cheap shadows or
+//! never through opaque ones.)
+
+use crate::integrator::LightingTechnique;
+use crate::plugin::{BxdfFactory, InstanceHints};
+use crate::scene::CompiledScene;
+use glam::Vec3;
+use risotto_components::Rays;
+use risotto_systems::geometry::SceneGeometry;
+use risotto_systems::lights::{power_heuristic, Light};
+pub use risotto_systems::volume_lights::{EmitterSupport, VolumeEmitter};
+use std::sync::Arc;
+
+/// What a volume integrator needs to weight its collision estimator against light sampling
+/// of its own emitter ([`VolumeServices::volume_light`](crate::plugin::VolumeServices)).
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeLightMis<'a> {
+    /// The emitter (the medium's cells and tracking bounds).
+    pub emitter: &'a VolumeEmitter,
+    /// Its selection probability in the light set the path tracer samples at vertices.
+    pub selection: f32,
+    /// The render's lighting technique.
+    pub technique: LightingTechnique,
+}
+
+impl VolumeLightMis<'_> {
+    /// The weight `w_U` of what the collision estimator gathers at world point `x` on ray `r`
+    /// of `rays` (see the [module docs](self)).
+    #[inline]
+    pub fn unidirectional_weight(&self, rays: &Rays, r: usize, x: Vec3) -> f32 {
+        if !self.weighs(rays, r) {
+            return 1.0;
+        }
+        let s2 = (x - rays.prev_p[r]).length_squared();
+        let p_v = self.selection * self.emitter.pdf(x);
+        let p_u = rays.pdf[r] * self.emitter.mis_majorant(x) / s2;
+        power_heuristic(p_u, p_v)
+    }
+
+    /// Whether ray `r`'s emission is weighed against light samples at all: not for camera
+    /// rays, rays with a Dirac lobe or no pdf, nor under `nee` and `bxdf` (neither samples
+    /// volume lights, module docs); [`Self::unidirectional_weight`] is 1 on those.
+    #[inline]
+    pub fn weighs(&self, rays: &Rays, r: usize) -> bool {
+        let pdf = rays.pdf[r];
+        let plain = rays.depth[r] == 0 || rays.lobe[r].is_specular() || pdf.is_nan() || pdf <= 0.0;
+        !plain && self.technique == LightingTechnique::Mis
+    }
+}
+
+/// Where the medium of `shape` emits, when the shape is one a volume emitter can cover:
+/// a sphere (its ball), or a triangle mesh that is its own bounding box (every triangle on
+/// a face of the box, their areas summing to the box's surface). `None` for other shapes.
+fn support(
+    geometry: &SceneGeometry,
+    prims: &[usize],
+    (lo, hi): (Vec3, Vec3),
+) -> Option<EmitterSupport> {
+    let nt = geometry.num_triangles();
+    if let [p] = prims {
+        if *p >= nt {
+            let s = geometry.sphere(*p - nt);
+            return Some(EmitterSupport::Ball {
+                center: s.center,
+                radius: s.radius,
+            });
+        }
+    }
+    if prims.iter().any(|&p| p >= nt) {
+        return None;
+    }
+    let e = hi - lo;
+    let tol = 1e-5 * e.max_element();
+    let mut area = 0.0f64;
+    for &p in prims {
+        let v = geometry.triangle(p);
+        let on_face = (0..3).any(|a| {
+            [lo[a], hi[a]]
+                .iter()
+                .any(|&f| v.iter().all(|q| (q[a] - f).abs() <= tol))
+        });
+        if !on_face {
+            return None;
+        }
+        area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length() as f64;
+    }
+    let box_area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x) as f64;
+    ((area - box_area).abs() <= 1e-4 * box_area).then_some(EmitterSupport::Box)
+}
+
+/// The emitters of `scene`'s emissive interiors, as `(shape, emitter)`.
+pub(crate) fn collect(scene: &CompiledScene) -> Vec<(u32, Arc<VolumeEmitter>)> {
+    let mut prims: Vec<Vec<usize>> = vec![Vec::new(); scene.shapes.len()];
+    for (p, &s) in scene.prim_shape.iter().enumerate() {
+        prims[s as usize].push(p);
+    }
+    let mut out = Vec::new();
+    for (s, shape) in scene.shapes.iter().enumerate() {
+        let material = &scene.materials[shape.material as usize];
+        let factory: &dyn BxdfFactory = material.factory.as_ref();
+        if !factory
+            .instance_hints()
+            .contains(InstanceHints::INTERIOR_EMITS)
+        {
+            continue;
+        }
+        let bounds = scene.shape_bounds[s];
+        let Some(support) = support(&scene.geometry, &prims[s], bounds) else {
+            continue;
+        };
+        if let Some(e) = factory.volume_emitter(bounds, support) {
+            out.push((s as u32, Arc::new(e)));
+        }
+    }
+    out
+}
+
+/// The light of each emitter.
+pub(crate) fn lights(emitters: &[(u32, Arc<VolumeEmitter>)]) -> impl Iterator<Item = Light> + '_ {
+    emitters
+        .iter()
+        .map(|(_, e)| Light::Volume { emitter: e.clone() })
+}

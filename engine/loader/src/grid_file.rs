@@ -1,0 +1,393 @@
+//! Reading density grids: the reference harness's raw float32 + JSON header, and Mitsuba's
+//! `.vol` (and, through [`read_grid_named`], OpenVDB: [`crate::vdb_file`]). Each gives a
+//! [`DensityGrid`] (x fastest, cell-centred; see [`risotto_systems::grid`]).
+//!
+//! # Formats
+//! - **raw + JSON** (`*.raw`): little-endian float32 values, x fastest
+//!   (`value(ix, iy, iz) = data[ix + nx (iy + ny iz)]`), nothing else in the file. The header
+//!   is a JSON object in a file next to it with the same stem and extension `.json` (or given
+//!   explicitly): `"dims": [nx, ny, nz]` (required, each >= 1); `"dtype"` (optional; when
+//!   given it must name `float32` and `little-endian`). Other keys (`bbox_min`, `min`,
+//!   `sha256`, ...) are informative and ignored: the grid is placed in its shape's bounds.
+//! - **Mitsuba `.vol`** (version 3): bytes `'V' 'O' 'L' 3`; int32 encoding (1 = float32, the
+//!   only one accepted); int32 `nx`, `ny`, `nz`; int32 channels (1 accepted); six float32
+//!   bounding-box values (informative, ignored); then `nx ny nz` float32 values, x fastest.
+//!   Every number little-endian; 48 header bytes.
+//!
+//! Every value must be finite and >= 0. Sizes are checked against the file's length before
+//! anything is allocated; errors name the file and the byte offset (and voxel) of what is
+//! wrong, with the value.
+
+use risotto_systems::grid::{voxel_of, DensityGrid, GridValueError};
+use std::path::{Path, PathBuf};
+
+/// Largest grid accepted (voxels): 2^28, i.e. 1 GiB of float32 (e.g. 640^3).
+pub const MAX_VOXELS: usize = 1 << 28;
+
+/// Bytes before the data of a `.vol` file.
+const VOL_HEADER: u64 = 48;
+
+/// A grid file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum GridFileError {
+    /// The file (or its header) cannot be read.
+    #[error("{}: cannot read: {cause}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Cause (part of the message, so not also `source()`, which would repeat it).
+        cause: std::io::Error,
+    },
+    /// The file's format is not what it should be (magic, version, encoding, header keys).
+    #[error("{}: {message}", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the byte offset or key and the value found.
+        message: String,
+    },
+    /// The file's length does not match its dimensions.
+    #[error("{}: {dims:?} voxels need {expected} bytes, the file has {actual}", path.display())]
+    Size {
+        /// The file.
+        path: PathBuf,
+        /// Dimensions.
+        dims: [usize; 3],
+        /// Expected length.
+        expected: u64,
+        /// Actual length.
+        actual: u64,
+    },
+    /// A voxel is negative or not finite.
+    #[error("{}: byte {offset}: voxel ({}, {}, {}): value {value} is {}", path.display(), voxel[0], voxel[1], voxel[2], if value.is_finite() { "negative (densities must be >= 0)" } else { "not finite" })]
+    Value {
+        /// The file.
+        path: PathBuf,
+        /// Byte offset of the value.
+        offset: u64,
+        /// `(ix, iy, iz)`.
+        voxel: [usize; 3],
+        /// The value.
+        value: f32,
+    },
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> GridFileError + '_ {
+    move |cause| GridFileError::Io {
+        path: path.to_path_buf(),
+        cause,
+    }
+}
+
+/// A [`GridFileError::Format`] of `path`.
+pub(crate) fn format(path: &Path, message: impl Into<String>) -> GridFileError {
+    GridFileError::Format {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+/// Reads a grid by extension: `.vol` as Mitsuba's format, anything else as raw float32 with
+/// `header` (default: the same path with extension `.json`).
+pub fn read_grid(path: &Path, header: Option<&Path>) -> Result<DensityGrid, GridFileError> {
+    read_grid_named(path, header, None)
+}
+
+/// Whether `path` names an OpenVDB file (extension `.vdb`).
+pub fn is_vdb(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
+}
+
+/// [`read_grid`], and `.vdb` files as OpenVDB, reading float grid `name`
+/// ([`crate::vdb_file::read_vdb`]).
+pub fn read_grid_named(
+    path: &Path,
+    header: Option<&Path>,
+    name: Option<&str>,
+) -> Result<DensityGrid, GridFileError> {
+    if is_vdb(path) {
+        read_vdb(path, name)
+    } else if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vol"))
+    {
+        read_vol(path)
+    } else {
+        let default = path.with_extension("json");
+        read_raw(path, header.unwrap_or(&default))
+    }
+}
+
+/// An OpenVDB file's float grid `name` ([`crate::vdb_file::read_vdb`]).
+#[cfg(feature = "vdb")]
+fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFileError> {
+    crate::vdb_file::read_vdb(path, name)
+}
+
+/// Without the `vdb` feature an OpenVDB file is an error that says so.
+#[cfg(not(feature = "vdb"))]
+fn read_vdb(path: &Path, _name: Option<&str>) -> Result<DensityGrid, GridFileError> {
+    Err(format(
+        path,
+        "OpenVDB files are not read by this build (risotto-loader without its `vdb` feature)",
+    ))
+}
+
+/// Voxel count of `dims`, checked against [`MAX_VOXELS`].
+fn voxel_count(path: &Path, what: &str, dims: [usize; 3]) -> Result<usize, GridFileError> {
+    if dims.contains(&0) {
+        return Err(format(
+            path,
+            format!("{what}: dimensions {dims:?} contain 0"),
+        ));
+    }
+    dims.iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| {
+            format(
+                path,
+                format!("{what}: dimensions {dims:?} exceed {MAX_VOXELS} voxels"),
+            )
+        })
+}
+
+/// Checks the file length, then reads `n` float32 values from byte `offset` on.
+fn read_values(path: &Path, dims: [usize; 3], offset: u64) -> Result<DensityGrid, GridFileError> {
+    let n = voxel_count(path, "dims", dims)?;
+    let expected = offset + 4 * n as u64;
+    let actual = std::fs::metadata(path).map_err(io(path))?.len();
+    if actual != expected {
+        return Err(GridFileError::Size {
+            path: path.to_path_buf(),
+            dims,
+            expected,
+            actual,
+        });
+    }
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    if bytes.len() as u64 != expected {
+        return Err(GridFileError::Size {
+            path: path.to_path_buf(),
+            dims,
+            expected,
+            actual: bytes.len() as u64,
+        });
+    }
+    let data: Vec<f32> = bytes[offset as usize..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    DensityGrid::new(dims, data).map_err(|e| match e {
+        GridValueError::Value { index, value, .. } => GridFileError::Value {
+            path: path.to_path_buf(),
+            offset: offset + 4 * index as u64,
+            voxel: voxel_of(dims, index),
+            value,
+        },
+        GridValueError::Size { .. } => format(path, e.to_string()),
+    })
+}
+
+/// Reads a raw float32 grid with its JSON header (see the module docs).
+pub fn read_raw(path: &Path, header: &Path) -> Result<DensityGrid, GridFileError> {
+    let text = std::fs::read_to_string(header).map_err(io(header))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format(header, format!("not JSON: {e}")))?;
+    let dims = json
+        .get("dims")
+        .ok_or_else(|| format(header, "missing \"dims\": [nx, ny, nz]"))?;
+    let parsed: Option<Vec<usize>> = dims.as_array().and_then(|a| {
+        a.iter()
+            .map(|v| v.as_u64().and_then(|u| usize::try_from(u).ok()))
+            .collect()
+    });
+    let dims: [usize; 3] = parsed.and_then(|v| v.try_into().ok()).ok_or_else(|| {
+        format(
+            header,
+            format!("\"dims\" must be three non-negative integers [nx, ny, nz], got {dims}"),
+        )
+    })?;
+    if let Some(dtype) = json.get("dtype") {
+        let ok = dtype
+            .as_str()
+            .is_some_and(|s| s.contains("float32") && s.contains("little"));
+        if !ok {
+            return Err(format(
+                header,
+                format!("\"dtype\" must be float32, little-endian, got {dtype}"),
+            ));
+        }
+    }
+    voxel_count(header, "\"dims\"", dims)?;
+    read_values(path, dims, 0)
+}
+
+/// Reads a Mitsuba `.vol` grid (see the module docs).
+pub fn read_vol(path: &Path) -> Result<DensityGrid, GridFileError> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).map_err(io(path))?;
+    let mut h = [0u8; VOL_HEADER as usize];
+    let len = f.metadata().map_err(io(path))?.len();
+    if len < VOL_HEADER {
+        return Err(format(
+            path,
+            format!("{len} bytes: shorter than the {VOL_HEADER}-byte .vol header"),
+        ));
+    }
+    f.read_exact(&mut h).map_err(io(path))?;
+    if &h[0..3] != b"VOL" {
+        return Err(format(
+            path,
+            format!(
+                "byte 0: magic {:?}, expected \"VOL\" (a Mitsuba .vol file)",
+                String::from_utf8_lossy(&h[0..3])
+            ),
+        ));
+    }
+    if h[3] != 3 {
+        return Err(format(
+            path,
+            format!("byte 3: version {}, expected 3", h[3]),
+        ));
+    }
+    let int = |k: usize| i32::from_le_bytes([h[k], h[k + 1], h[k + 2], h[k + 3]]);
+    let encoding = int(4);
+    if encoding != 1 {
+        return Err(format(
+            path,
+            format!("byte 4: encoding {encoding}, only 1 (float32) is supported"),
+        ));
+    }
+    let mut dims = [0usize; 3];
+    for (a, d) in dims.iter_mut().enumerate() {
+        let v = int(8 + 4 * a);
+        *d = usize::try_from(v).ok().filter(|&d| d > 0).ok_or_else(|| {
+            format(
+                path,
+                format!("byte {}: dimension {} must be >= 1", 8 + 4 * a, v),
+            )
+        })?;
+    }
+    let channels = int(20);
+    if channels != 1 {
+        return Err(format(
+            path,
+            format!("byte 20: {channels} channels, only 1 (a density) is supported"),
+        ));
+    }
+    drop(f);
+    read_values(path, dims, VOL_HEADER)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scratch directory for this test's files, removed when dropped.
+    fn dir(name: &str) -> risotto_engine::scratch_dir::ScratchDir {
+        risotto_engine::scratch_dir::ScratchDir::new(&format!("grid-{name}"))
+    }
+
+    fn floats(v: &[f32]) -> Vec<u8> {
+        v.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    fn vol(dims: [i32; 3], channels: i32, values: &[f32]) -> Vec<u8> {
+        let mut b = b"VOL\x03".to_vec();
+        for v in [1, dims[0], dims[1], dims[2], channels] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend(floats(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0]));
+        b.extend(floats(values));
+        b
+    }
+
+    #[test]
+    fn raw_and_vol_read_the_same_grid() {
+        let d = dir("ok");
+        let values: Vec<f32> = (0..24).map(|i| i as f32 * 0.25).collect();
+        std::fs::write(d.join("g.raw"), floats(&values)).unwrap();
+        std::fs::write(
+            d.join("g.json"),
+            r#"{"dims": [2, 3, 4], "dtype": "float32, little-endian, 1 channel"}"#,
+        )
+        .unwrap();
+        std::fs::write(d.join("g.vol"), vol([2, 3, 4], 1, &values)).unwrap();
+        let a = read_grid(&d.join("g.raw"), None).unwrap();
+        let b = read_grid(&d.join("g.vol"), None).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(a.dims(), [2, 3, 4]);
+        assert_eq!(a.voxel(1, 2, 3), 23.0 * 0.25);
+    }
+
+    #[test]
+    fn bad_files_are_located() {
+        let d = dir("bad");
+        let msg = |r: Result<DensityGrid, GridFileError>| r.unwrap_err().to_string();
+        // Wrong size: named with both lengths.
+        std::fs::write(d.join("short.raw"), floats(&[0.0; 7])).unwrap();
+        std::fs::write(d.join("short.json"), r#"{"dims": [2, 2, 2]}"#).unwrap();
+        let m = msg(read_grid(&d.join("short.raw"), None));
+        assert!(
+            m.contains("short.raw") && m.contains("32 bytes") && m.contains("has 28"),
+            "{m}"
+        );
+        // A negative voxel: byte offset, voxel and value.
+        let mut v = vec![0.5f32; 8];
+        v[5] = -1.25;
+        std::fs::write(d.join("neg.raw"), floats(&v)).unwrap();
+        std::fs::write(d.join("neg.json"), r#"{"dims": [2, 2, 2]}"#).unwrap();
+        let m = msg(read_grid(&d.join("neg.raw"), None));
+        assert!(
+            m.contains("neg.raw")
+                && m.contains("byte 20")
+                && m.contains("voxel (1, 0, 1)")
+                && m.contains("-1.25")
+                && m.contains("negative"),
+            "{m}"
+        );
+        // NaN in a .vol: the offset counts the header.
+        let mut v = vec![0.5f32; 8];
+        v[2] = f32::NAN;
+        std::fs::write(d.join("nan.vol"), vol([2, 2, 2], 1, &v)).unwrap();
+        let m = msg(read_grid(&d.join("nan.vol"), None));
+        assert!(m.contains("byte 56") && m.contains("not finite"), "{m}");
+        // Bad magic, version, channels; a huge size claimed by a tiny file (no allocation).
+        let mut b = vol([2, 2, 2], 1, &[0.0; 8]);
+        b[0] = b'X';
+        std::fs::write(d.join("magic.vol"), &b).unwrap();
+        assert!(msg(read_grid(&d.join("magic.vol"), None)).contains("magic"));
+        let mut b = vol([2, 2, 2], 1, &[0.0; 8]);
+        b[3] = 2;
+        std::fs::write(d.join("version.vol"), &b).unwrap();
+        assert!(msg(read_grid(&d.join("version.vol"), None)).contains("version 2"));
+        std::fs::write(d.join("rgb.vol"), vol([2, 2, 2], 3, &[0.0; 24])).unwrap();
+        assert!(msg(read_grid(&d.join("rgb.vol"), None)).contains("3 channels"));
+        std::fs::write(d.join("huge.vol"), vol([60000, 60000, 60000], 1, &[0.0; 8])).unwrap();
+        let m = msg(read_grid(&d.join("huge.vol"), None));
+        assert!(m.contains("exceed"), "{m}");
+        std::fs::write(d.join("big.vol"), vol([100, 100, 100], 1, &[0.0; 8])).unwrap();
+        let m = msg(read_grid(&d.join("big.vol"), None));
+        assert!(m.contains("4000048 bytes") && m.contains("has 80"), "{m}");
+        std::fs::write(d.join("tiny.vol"), b"VOL").unwrap();
+        assert!(msg(read_grid(&d.join("tiny.vol"), None)).contains("shorter"));
+        // Header problems.
+        std::fs::write(d.join("h.raw"), floats(&[0.0; 8])).unwrap();
+        std::fs::write(d.join("h.json"), r#"{"dims": [2, 2]}"#).unwrap();
+        let m = msg(read_grid(&d.join("h.raw"), None));
+        assert!(m.contains("h.json") && m.contains("[2,2]"), "{m}");
+        std::fs::write(
+            d.join("h.json"),
+            r#"{"dims": [2, 2, 2], "dtype": "float64"}"#,
+        )
+        .unwrap();
+        assert!(msg(read_grid(&d.join("h.raw"), None)).contains("float64"));
+        let m = msg(read_grid(&d.join("missing.raw"), None));
+        assert!(
+            m.contains("missing.json") && m.contains("cannot read"),
+            "{m}"
+        );
+    }
+}

@@ -1,0 +1,13 @@
+//! risotto's scene-file loader: TOML scene files ([`scene_file`]), the material registry by
+//! type name and the conversion of a scene description into a scene world ([`load`]), the
+//! built-in media's parameters ([`media_params`]), and the readers of the files scenes
+//! reference: density grids (`.vol`, and OpenVDB with the default `vdb` feature), image
+//! textures and environment maps.
+
+pub mod grid_file;
+pub mod load;
+pub mod media_params;
+pub mod scene_file;
+pub mod texture_file;
+#[cfg(feature = "vdb")]
+pub mod vdb_file;

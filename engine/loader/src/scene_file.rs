@@ -1,0 +1,770 @@
+//! The scene file format (TOML) and its loader.
+//!
+//! [`load_scene`] / [`parse_scene`] turn a scene file into a validated, resolved
+//! [`SceneDesc`]: every field checked, names resolved to indices, quads, boxes and OBJ
+//! meshes turned into world-space triangles, relative paths resolved against the scene
+//! file. The format is documented field by field in `docs/scene-format.md`.
+//!
+//! Materials are the exception to "validated": users register their own material types,
+//! so a material's `type` and parameters are kept as raw TOML ([`MaterialParams`]) for its
+//! factory to read, with the same located error messages.
+//!
+//! Every error is a [`SceneError`] whose message names the file, line and column, the
+//! entity (`shapes[3] "tall_box"`, `materials.glass`, `camera`), the field and the offending
+//! value. No input makes the loader panic.
+//!
+//! Conventions: right-handed coordinates, +y up; colours are linear Rec.709 RGB;
+//! transforms apply in the order written (`p_world = T_n ... T_1 p_local`).
+
+mod geometry;
+mod params;
+mod pattern;
+mod raw;
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::Vec3;
+use risotto_components::Rgb;
+use risotto_systems::sampler::MAX_SPP;
+
+pub use params::MaterialParams;
+pub use pattern::ColourParam;
+pub use risotto_engine::diagnostics::{Location, ReferencedFiles, SceneError, SceneErrorKind};
+
+use params::Reader;
+use raw::{Node, Value};
+use risotto_engine::diagnostics::Source;
+
+/// The largest light value a scene file accepts, per channel: shape `emission`, environment
+/// `radiance`, distant `irradiance`, point `intensity`. Paths multiply it by weights that
+/// can exceed 1 (MIS, roulette survivors, refraction), and f32 ends at 3.4e38; above this
+/// the loader reports the value (`docs/scene-format.md`).
+pub const MAX_RADIANCE: f32 = 1e30;
+
+/// A loaded scene file: everything the engine needs to build the render world.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The scene file's path as given to the loader.
+    pub path: PathBuf,
+    /// The files the scene reads (see [`ReferencedFiles`]).
+    pub files: ReferencedFiles,
+    /// Image size, sample count, path depth, seed.
+    pub render: RenderSettings,
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Materials in file order; shapes refer to them by index.
+    pub materials: Vec<MaterialDesc>,
+    /// Shapes in file order.
+    pub shapes: Vec<ShapeDesc>,
+    /// Lights other than emissive shapes, in file order (at most one environment).
+    pub lights: Vec<LightDesc>,
+    /// The volume stack at the camera given explicitly (`camera.inside`): names of the
+    /// closed shapes containing the camera, outermost first. `None`: the engine finds it.
+    pub camera_volume: Option<Vec<String>>,
+    /// Where `camera.inside` is written, for the compiler's check of it against the volumes
+    /// the camera is really in (`None` when the key is absent).
+    pub camera_volume_at: Option<Location>,
+}
+
+/// The `[render]` section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Image width in pixels (default 512).
+    pub width: u32,
+    /// Image height in pixels (default 512).
+    pub height: u32,
+    /// Samples per pixel (default 64), at most [`MAX_SPP`] (65536, the driver's `--spp`
+    /// limit too).
+    pub spp: u32,
+    /// Maximum number of path *segments*, Mitsuba's convention: 1 = only directly visible
+    /// emitters, 2 = direct lighting, n = at most n - 1 scattering vertices (default 8).
+    /// `max_depth = -1` in the file (unbounded) is stored as `u32::MAX`.
+    pub max_depth: u32,
+    /// Seed of the random number streams (default 0).
+    pub seed: u64,
+    /// Russian roulette starts after this many scattering vertices (default 5).
+    pub rr_depth: u32,
+}
+
+impl RenderSettings {
+    /// `max_depth` value meaning "unbounded" (`-1` in the file).
+    pub const UNBOUNDED_DEPTH: u32 = u32::MAX;
+    /// Largest `width * height` a scene file may ask for: 2^26 pixels (8192 x 8192), whose
+    /// film and output layers take about 7 GB. Larger resolutions are an error naming the
+    /// key and the value rather than an allocation abort.
+    pub const MAX_PIXELS: u64 = 1 << 26;
+}
+
+impl Default for RenderSettings {
+    /// The engine's defaults ([`risotto_engine::scene::RenderSettings::default`]), stated once.
+    fn default() -> Self {
+        let d = risotto_engine::scene::RenderSettings::default();
+        RenderSettings {
+            width: d.width,
+            height: d.height,
+            spp: d.spp,
+            max_depth: d.max_depth,
+            seed: d.seed,
+            rr_depth: d.rr_depth,
+        }
+    }
+}
+
+/// How the camera maps image positions to rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// A pinhole camera.
+    Perspective {
+        /// Full *horizontal* field of view in degrees, in (0, 180).
+        fov_deg: f32,
+    },
+    /// Parallel rays along the view direction.
+    Orthographic {
+        /// World-space width of the view (the height follows from the aspect ratio).
+        width: f32,
+    },
+}
+
+/// The camera: placed by look-at. Right = `normalize(cross(forward, up))`, image up =
+/// `cross(right, forward)`, pixel (0, 0) is the top-left corner of the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Perspective or orthographic.
+    pub projection: Projection,
+    /// Eye position.
+    pub from: Vec3,
+    /// A point the camera looks at (`to != from`).
+    pub to: Vec3,
+    /// Up hint, not parallel to `to - from` (default +y); need not be unit or orthogonal.
+    pub up: Vec3,
+}
+
+/// A named material: its type (resolved by the engine's material registry), its
+/// priority for nested volumes and its raw parameters.
+#[derive(Clone, Debug)]
+pub struct MaterialDesc {
+    /// The table key in `[materials.NAME]`.
+    pub name: String,
+    /// `type = "..."`: `diffuse`, `dielectric`, `conductor`, `mirror`, `interface`, or any
+    /// type registered by the user (not checked here).
+    pub type_name: String,
+    /// `priority` for nested dielectrics/volumes (default 0; higher wins).
+    pub priority: i32,
+    /// Every other key, for the material's factory.
+    pub params: MaterialParams,
+}
+
+/// A shape with its material and optional area emission.
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    /// `name` (default `shapes[i]`), unique among shapes.
+    pub name: String,
+    /// Index into [`SceneDesc::materials`].
+    pub material: usize,
+    /// Area light: radiance leaving the *front* side (the side the geometric normal points
+    /// to); the back emits nothing. `None` if absent or black.
+    pub emission: Option<Rgb>,
+    /// The geometry in world space.
+    pub geometry: ShapeGeometry,
+}
+
+/// Shape geometry, resolved to world space.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeGeometry {
+    /// A sphere (normal points outwards).
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f32,
+    },
+    /// Triangles in world space; the geometric normal of `[v0, v1, v2]` is along
+    /// `(v1 - v0) x (v2 - v0)`. Boxes and meshes keep their outward orientation under any
+    /// transform; a quad's normal is `normalize(edge1 x edge2)`.
+    Triangles {
+        /// Where they came from: `"quad"` (also `rectangle`), `"box"` or `"mesh"`.
+        kind: &'static str,
+        /// The triangles.
+        triangles: Vec<[Vec3; 3]>,
+    },
+}
+
+/// A light that is not a shape.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightDesc {
+    /// A directional light at infinity (e.g. the sun).
+    Distant {
+        /// `name` (default `lights[i]`).
+        name: String,
+        /// Unit direction the light *travels* (from the light into the scene).
+        direction: Vec3,
+        /// Irradiance on a surface perpendicular to `direction`, W m^-2 per channel.
+        irradiance: Rgb,
+    },
+    /// An isotropic point light.
+    Point {
+        /// `name` (default `lights[i]`).
+        name: String,
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity, W sr^-1 per channel.
+        intensity: Rgb,
+    },
+    /// Radiance arriving from every direction at infinity (seen by every escaping ray).
+    Environment {
+        /// `name` (default `lights[i]`).
+        name: String,
+        /// Constant radiance, or the scale of the map if there is one (default 1).
+        radiance: Rgb,
+        /// An equirectangular EXR map, resolved against the scene file (absolute); the
+        /// engine loads it. The file exists at load time.
+        map: Option<PathBuf>,
+        /// Where `map` is written, for the errors of reading the map (`None` without one).
+        map_at: Option<Location>,
+    },
+}
+
+impl LightDesc {
+    /// The light's name.
+    pub fn name(&self) -> &str {
+        match self {
+            LightDesc::Distant { name, .. }
+            | LightDesc::Point { name, .. }
+            | LightDesc::Environment { name, .. } => name,
+        }
+    }
+}
+
+/// Reads and parses a scene file.
+pub fn load_scene(path: &Path) -> Result<SceneDesc, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(path, &e))?;
+    parse_scene(&text, path)
+}
+
+/// Parses scene text; `path` is used in messages and to resolve relative paths (against
+/// its directory). The file at `path` itself is not read.
+pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
+    let src = Arc::new(Source::new(path, text));
+    let root = raw::parse_document(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        src.error(
+            SceneErrorKind::Syntax,
+            &span,
+            None,
+            None,
+            format!(
+                "TOML syntax error: {}",
+                e.message().trim().lines().collect::<Vec<_>>().join("; ")
+            ),
+        )
+    })?;
+    let top = Reader::new(&src, &root, "scene");
+    top.deny_unknown(&["render", "camera", "materials", "shapes", "lights"])?;
+
+    let render = read_render(&top)?;
+    let materials = read_materials(&top, &src)?;
+    let shapes = read_shapes(&top, &materials)?;
+    let lights = read_lights(&top, &src)?;
+    let (camera, camera_volume, camera_volume_at) = read_camera(&top, &shapes, &src)?;
+    Ok(SceneDesc {
+        path: path.to_path_buf(),
+        files: src.files.clone(),
+        render,
+        camera,
+        materials,
+        shapes,
+        lights,
+        camera_volume,
+        camera_volume_at,
+    })
+}
+
+/// A section table (`[render]`, `[camera]`, ...), type-checked.
+fn section<'a>(top: &Reader<'a>, key: &str) -> Result<Option<&'a Node>, SceneError> {
+    top.table_opt(key)
+}
+
+fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
+    let d = RenderSettings::default();
+    let Some(node) = section(top, "render")? else {
+        return Ok(d);
+    };
+    let r = Reader::new(top.src, node, "render");
+    r.deny_unknown(&["width", "height", "spp", "max_depth", "seed", "rr_depth"])?;
+    // Each side bounded so that width * height stays far from overflow; the product is
+    // bounded below.
+    let max_res = 1 << 16;
+    let u32_max = i64::from(u32::MAX);
+    let max_depth = match r.int_opt("max_depth")? {
+        None => d.max_depth,
+        Some((-1, _)) => RenderSettings::UNBOUNDED_DEPTH,
+        Some((v, _)) if (1..u32_max).contains(&v) => v as u32,
+        Some((_, n)) => {
+            return Err(r.invalid(
+                "max_depth",
+                n,
+                "must be >= 1 (path segments; 1 = directly visible emitters only) or -1 \
+                 (unbounded)",
+            ))
+        }
+    };
+    let width = r.int_in("width", Some(d.width.into()), 1, max_res)? as u32;
+    let height = r.int_in("height", Some(d.height.into()), 1, max_res)? as u32;
+    // The film and the output layers are allocated up front: a bound on the pixel count
+    // turns an allocation abort into an error naming the resolution.
+    if u64::from(width) * u64::from(height) > RenderSettings::MAX_PIXELS {
+        let key = if r.int_opt("height")?.is_some() {
+            "height"
+        } else {
+            "width"
+        };
+        let (_, node) = r.int_opt(key)?.expect("one of width and height is given");
+        return Err(r.invalid(
+            key,
+            node,
+            &format!(
+                "{width} x {height} = {} pixels exceeds the limit of {} (8192 x 8192; the \
+                 film and its layers take about 100 bytes a pixel)",
+                u64::from(width) * u64::from(height),
+                RenderSettings::MAX_PIXELS
+            ),
+        ));
+    }
+    Ok(RenderSettings {
+        width,
+        height,
+        // The one spp limit, shared with the driver's `--spp`: samples past it would repeat
+        // the first ones exactly.
+        spp: r.int_in("spp", Some(d.spp.into()), 1, MAX_SPP.into())? as u32,
+        max_depth,
+        seed: r.int_in("seed", Some(d.seed as i64), 0, i64::MAX)? as u64,
+        rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,
+    })
+}
+
+/// Keys of a material that the scene layer consumes.
+const MATERIAL_HIDDEN: &[&str] = &["type", "priority"];
+
+fn read_materials(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<MaterialDesc>, SceneError> {
+    let Some(node) = section(top, "materials")? else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for (key, value) in node.as_table().unwrap_or(&[]) {
+        let entity = format!("materials.{}", key.name);
+        if value.as_table().is_none() {
+            let r = Reader::new(top.src, node, "materials");
+            return Err(r.wrong_type(
+                &key.name,
+                value,
+                "a table such as `{ type = \"diffuse\", reflectance = 0.5 }`",
+            ));
+        }
+        let r = Reader::new(top.src, value, &entity);
+        let type_name = r.str_req("type")?;
+        if type_name.is_empty() {
+            return Err(r.invalid("type", r.get("type").unwrap_or(value), "must not be empty"));
+        }
+        let priority = r.int_in(
+            "priority",
+            Some(0),
+            i64::from(i32::MIN),
+            i64::from(i32::MAX),
+        )? as i32;
+        out.push(MaterialDesc {
+            name: key.name.clone(),
+            type_name: type_name.to_owned(),
+            priority,
+            params: MaterialParams::new(Arc::clone(src), value.clone(), entity, MATERIAL_HIDDEN),
+        });
+    }
+    Ok(out)
+}
+
+/// Checks name uniqueness within one kind of entity, remembering where each was defined.
+struct Names {
+    what: &'static str,
+    seen: HashMap<String, Range<usize>>,
+}
+
+impl Names {
+    fn new(what: &'static str) -> Names {
+        Names {
+            what,
+            seen: HashMap::new(),
+        }
+    }
+
+    fn insert(&mut self, r: &Reader<'_>, name: &str, at: &Node) -> Result<(), SceneError> {
+        if let Some(first) = self.seen.get(name) {
+            let (line, col) = r.src.line_col(first.start);
+            return Err(r.error(
+                SceneErrorKind::Duplicate,
+                &at.span(),
+                Some("name"),
+                format!(
+                    "duplicate {} name `{name}` (first defined at line {line}, column {col}); \
+                     names must be unique",
+                    self.what
+                ),
+            ));
+        }
+        self.seen.insert(name.to_owned(), at.span());
+        Ok(())
+    }
+}
+
+/// The entity label of an element of `shapes` / `lights`: `shapes[3] "tall_box"`.
+fn element_entity(list: &str, i: usize, name: Option<&str>) -> String {
+    match name {
+        Some(n) => format!("{list}[{i}] \"{n}\""),
+        None => format!("{list}[{i}]"),
+    }
+}
+
+const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh"];
+
+fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<ShapeDesc>, SceneError> {
+    let Some(items) = top.array_opt("shapes")? else {
+        return Ok(Vec::new());
+    };
+    let mut names = Names::new("shape");
+    let mut out = Vec::with_capacity(items.len());
+    for (i, node) in items.iter().enumerate() {
+        if node.as_table().is_none() {
+            return Err(top.wrong_type("shapes", node, "a table (write shapes as [[shapes]])"));
+        }
+        let bare = element_entity("shapes", i, None);
+        let name = Reader::new(top.src, node, &bare).str_opt("name")?;
+        let entity = element_entity("shapes", i, name);
+        let r = Reader::new(top.src, node, &entity);
+        let name = name.map_or_else(|| bare.clone(), str::to_owned);
+        names.insert(&r, &name, r.get("name").unwrap_or(node))?;
+
+        let type_name = r.str_req("type")?;
+        let common = ["type", "name", "material", "emission"];
+        let specific: &[&str] = match type_name {
+            "sphere" => &["center", "radius"],
+            "quad" => &["corner", "edge1", "edge2", "transform"],
+            "rectangle" => &["transform"],
+            "box" => &["min", "max", "transform"],
+            "mesh" => &["path", "transform"],
+            other => {
+                return Err(r.error(
+                    SceneErrorKind::InvalidValue,
+                    &r.get("type").unwrap_or(node).span(),
+                    Some("type"),
+                    format!(
+                        "unknown shape type `{other}`; expected one of {}",
+                        SHAPE_TYPES.join(", ")
+                    ),
+                ))
+            }
+        };
+        let allowed: Vec<&str> = common.iter().chain(specific).copied().collect();
+        r.deny_unknown(&allowed)?;
+
+        let material_name = r.str_req("material")?;
+        let material = materials
+            .iter()
+            .position(|m| m.name == material_name)
+            .ok_or_else(|| {
+                let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                let mut message = format!("unknown material `{material_name}`");
+                if let Some(near) = params::suggestion(material_name, &known) {
+                    message.push_str(&format!(" (did you mean `{near}`?)"));
+                }
+                if known.is_empty() {
+                    message.push_str("; no materials are defined (add a [materials.NAME] table)");
+                } else {
+                    message.push_str(&format!("; defined materials: {}", known.join(", ")));
+                }
+                r.error(
+                    SceneErrorKind::UnknownReference,
+                    &r.get("material").unwrap_or(node).span(),
+                    Some("material"),
+                    message,
+                )
+            })?;
+        let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
+
+        let geometry = match type_name {
+            "sphere" => {
+                let center = r.vec3("center", None)?;
+                let radius = r.f32_where("radius", None, "must be > 0", |v| v > 0.0)?;
+                ShapeGeometry::Sphere { center, radius }
+            }
+            "quad" => ShapeGeometry::Triangles {
+                kind: "quad",
+                triangles: geometry::quad(&r)?,
+            },
+            "rectangle" => ShapeGeometry::Triangles {
+                kind: "quad",
+                triangles: geometry::rectangle(&r)?,
+            },
+            "box" => ShapeGeometry::Triangles {
+                kind: "box",
+                triangles: geometry::cuboid(&r)?,
+            },
+            _ => ShapeGeometry::Triangles {
+                kind: "mesh",
+                triangles: geometry::mesh(&r)?,
+            },
+        };
+        if let ShapeGeometry::Triangles { triangles, .. } = &geometry {
+            if !triangles.iter().flatten().all(|v| v.is_finite()) {
+                let at = r.get("transform").unwrap_or(node);
+                return Err(r.error(
+                    SceneErrorKind::InvalidValue,
+                    &at.span(),
+                    None,
+                    "vertex coordinates overflow f32 (values too large)",
+                ));
+            }
+        }
+        out.push(ShapeDesc {
+            name,
+            material,
+            emission,
+            geometry,
+        });
+    }
+    Ok(out)
+}
+
+const LIGHT_TYPES: &[&str] = &["distant", "point", "environment"];
+
+fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, SceneError> {
+    let Some(items) = top.array_opt("lights")? else {
+        return Ok(Vec::new());
+    };
+    let mut names = Names::new("light");
+    let mut environment_seen: Option<usize> = None;
+    let mut out = Vec::with_capacity(items.len());
+    for (i, node) in items.iter().enumerate() {
+        if node.as_table().is_none() {
+            return Err(top.wrong_type("lights", node, "a table (write lights as [[lights]])"));
+        }
+        let bare = element_entity("lights", i, None);
+        let name = Reader::new(top.src, node, &bare).str_opt("name")?;
+        let entity = element_entity("lights", i, name);
+        let r = Reader::new(top.src, node, &entity);
+        let name = name.map_or_else(|| bare.clone(), str::to_owned);
+        names.insert(&r, &name, r.get("name").unwrap_or(node))?;
+
+        let type_node = r.get("type").unwrap_or(node);
+        let light = match r.str_req("type")? {
+            "distant" => {
+                r.deny_unknown(&["type", "name", "direction", "irradiance"])?;
+                let direction = r.vec3("direction", None)?;
+                let len = direction.length();
+                if !(len > 0.0 && len.is_finite()) {
+                    return Err(r.invalid(
+                        "direction",
+                        r.get("direction").unwrap_or(node),
+                        "must be a non-zero vector (the direction the light travels)",
+                    ));
+                }
+                LightDesc::Distant {
+                    name,
+                    direction: direction / len,
+                    irradiance: r.radiance("irradiance", None)?,
+                }
+            }
+            "point" => {
+                r.deny_unknown(&["type", "name", "position", "intensity"])?;
+                LightDesc::Point {
+                    name,
+                    position: r.vec3("position", None)?,
+                    intensity: r.radiance("intensity", None)?,
+                }
+            }
+            "environment" => {
+                r.deny_unknown(&["type", "name", "radiance", "map"])?;
+                if let Some(first) = environment_seen {
+                    return Err(r.invalid(
+                        "type",
+                        type_node,
+                        &format!(
+                            "at most one environment light is allowed (lights[{first}] is one)"
+                        ),
+                    ));
+                }
+                environment_seen = Some(i);
+                let mut map_at = None;
+                let map = match r.path_opt("map")? {
+                    None => None,
+                    Some((path, map_node)) => {
+                        if !path.is_file() {
+                            return Err(r.error(
+                                SceneErrorKind::ExternalFile,
+                                &map_node.span(),
+                                Some("map"),
+                                format!("environment map `{}` does not exist", path.display()),
+                            ));
+                        }
+                        map_at = Some(Location::new(src, map_node.span(), r.entity, Some("map")));
+                        Some(path)
+                    }
+                };
+                let radiance = if map.is_some() {
+                    r.radiance("radiance", Some(Rgb::WHITE))?
+                } else {
+                    r.radiance("radiance", None)?
+                };
+                LightDesc::Environment {
+                    name,
+                    radiance,
+                    map,
+                    map_at,
+                }
+            }
+            other => {
+                return Err(r.error(
+                    SceneErrorKind::InvalidValue,
+                    &type_node.span(),
+                    Some("type"),
+                    format!(
+                        "unknown light type `{other}`; expected one of {} (area lights are \
+                         shapes with `emission`)",
+                        LIGHT_TYPES.join(", ")
+                    ),
+                ))
+            }
+        };
+        out.push(light);
+    }
+    Ok(out)
+}
+
+type CameraParts = (CameraDesc, Option<Vec<String>>, Option<Location>);
+
+fn read_camera(
+    top: &Reader<'_>,
+    shapes: &[ShapeDesc],
+    src: &Arc<Source>,
+) -> Result<CameraParts, SceneError> {
+    let Some(node) = section(top, "camera")? else {
+        return Err(top.error(
+            SceneErrorKind::MissingField,
+            &(0..0),
+            Some("camera"),
+            "missing required table [camera] (with at least `from`, `to` and `fov`)",
+        ));
+    };
+    let r = Reader::new(top.src, node, "camera");
+    let projection_name = r.str_opt("projection")?.unwrap_or("perspective");
+    let projection = match projection_name {
+        "perspective" => {
+            r.deny_unknown(&["projection", "fov", "from", "to", "up", "inside"])?;
+            Projection::Perspective {
+                fov_deg: r.f32_where(
+                    "fov",
+                    None,
+                    "must be in (0, 180) degrees (full horizontal field of view)",
+                    |v| v > 0.0 && v < 180.0,
+                )?,
+            }
+        }
+        "orthographic" => {
+            r.deny_unknown(&["projection", "width", "from", "to", "up", "inside"])?;
+            Projection::Orthographic {
+                width: r.f32_where("width", None, "must be > 0 (world units)", |v| v > 0.0)?,
+            }
+        }
+        other => {
+            return Err(r.error(
+                SceneErrorKind::InvalidValue,
+                &r.get("projection").unwrap_or(node).span(),
+                Some("projection"),
+                format!("unknown projection `{other}`; expected `perspective` or `orthographic`"),
+            ))
+        }
+    };
+    let from = r.vec3("from", None)?;
+    let to = r.vec3("to", None)?;
+    let up = r.vec3("up", Some(Vec3::Y))?;
+    let forward = to - from;
+    let distance = forward.length();
+    if distance == 0.0 || !distance.is_finite() {
+        return Err(r.invalid(
+            "to",
+            r.get("to").unwrap_or(node),
+            "must differ from `from` (at a distance that fits in f32)",
+        ));
+    }
+    // The image's right axis is normalize(cross(forward, up)); it must exist.
+    let right = (forward / distance).cross(up).length();
+    let up_len = up.length();
+    if up_len == 0.0 || !up_len.is_finite() || right <= 1e-6 * up_len {
+        return Err(r.invalid(
+            "up",
+            r.get("up").unwrap_or(node),
+            "must be non-zero and not parallel to the view direction `to - from`",
+        ));
+    }
+    let inside = match r.array_opt("inside")? {
+        None => None,
+        Some(items) => Some(read_inside(&r, items, shapes)?),
+    };
+    let inside_at = r
+        .get("inside")
+        .map(|node| Location::new(src, node.span(), "camera", Some("inside")));
+    Ok((
+        CameraDesc {
+            projection,
+            from,
+            to,
+            up,
+        },
+        inside,
+        inside_at,
+    ))
+}
+
+/// `camera.inside`: shape names, outermost first, each a closed shape, no repeats.
+fn read_inside(
+    r: &Reader<'_>,
+    items: &[Node],
+    shapes: &[ShapeDesc],
+) -> Result<Vec<String>, SceneError> {
+    let mut out: Vec<String> = Vec::with_capacity(items.len());
+    for item in items {
+        let Value::String(name) = &item.value else {
+            return Err(r.wrong_type("inside", item, "a shape name (string)"));
+        };
+        let Some(shape) = shapes.iter().find(|s| &s.name == name) else {
+            return Err(r.error(
+                SceneErrorKind::UnknownReference,
+                &item.span(),
+                Some("inside"),
+                format!("unknown shape `{name}`"),
+            ));
+        };
+        if matches!(
+            shape.geometry,
+            ShapeGeometry::Triangles { kind: "quad", .. }
+        ) {
+            return Err(r.invalid(
+                "inside",
+                item,
+                &format!("shape `{name}` is a quad, which has no inside"),
+            ));
+        }
+        if out.contains(name) {
+            return Err(r.error(
+                SceneErrorKind::Duplicate,
+                &item.span(),
+                Some("inside"),
+                format!("shape `{name}` is listed twice"),
+            ));
+        }
+        out.push(name.clone());
+    }
+    Ok(out)
+}

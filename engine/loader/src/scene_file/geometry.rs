@@ -1,0 +1,383 @@
+//! Transforms and shape geometry: transform lists, quads, rectangles, boxes and OBJ meshes
+//! resolved to world-space triangles.
+
+use std::path::Path;
+
+use glam::{DAffine3, DMat3, DVec3, Vec3};
+
+use super::params::Reader;
+use super::raw::{Node, Value};
+use risotto_engine::diagnostics::{SceneError, SceneErrorKind};
+
+/// A triangle `[v0, v1, v2]`; its geometric normal is along `(v1 - v0) x (v2 - v0)`.
+pub(crate) type Triangle = [Vec3; 3];
+
+/// Reads the optional `transform` key of an entity: a list of steps applied in order,
+/// `p_world = T_n ... T_2 T_1 p_local` (Mitsuba's `to_world`). Absent = identity.
+/// Singular (non-invertible) results are rejected.
+pub(crate) fn read_transform(r: &Reader<'_>) -> Result<DAffine3, SceneError> {
+    let Some(node) = r.get("transform") else {
+        return Ok(DAffine3::IDENTITY);
+    };
+    let Value::Array(steps) = &node.value else {
+        return Err(r.wrong_type(
+            "transform",
+            node,
+            "an array of steps such as [{ scale = 2 }, { translate = [0, 1, 0] }]",
+        ));
+    };
+    let mut m = DAffine3::IDENTITY;
+    for (i, step) in steps.iter().enumerate() {
+        let entity = format!("{} transform[{i}]", r.entity);
+        let s = Reader::new(r.src, step, &entity);
+        m = read_step(&s, step)? * m;
+    }
+    // Singular is a matter of shape, not size: the determinant relative to the cube of the
+    // longest axis (1 for any uniform scale, whatever its size; ~0 when some axis collapses
+    // or lies in the plane of the others).
+    let det = m.matrix3.determinant();
+    let a = &m.matrix3;
+    let longest = a
+        .x_axis
+        .length()
+        .max(a.y_axis.length())
+        .max(a.z_axis.length());
+    let relative = det.abs() / (longest * longest * longest);
+    if !det.is_finite() || det == 0.0 || relative.is_nan() || relative < 1e-12 {
+        return Err(r.error(
+            SceneErrorKind::InvalidValue,
+            &node.span(),
+            Some("transform"),
+            format!(
+                "the transform is singular (determinant {det:.3e}, {relative:.3e} relative to \
+                 its longest axis cubed); it must be invertible"
+            ),
+        ));
+    }
+    Ok(m)
+}
+
+const STEP_KINDS: &[&str] = &["scale", "rotate", "translate", "matrix", "look_at"];
+
+/// One transform step: a table with exactly one of [`STEP_KINDS`].
+fn read_step(s: &Reader<'_>, step: &Node) -> Result<DAffine3, SceneError> {
+    let expected = "a table with exactly one of `scale`, `rotate`, `translate`, `matrix`, \
+                    `look_at`";
+    let Some(entries) = step.as_table() else {
+        return Err(s.wrong_type("transform", step, expected));
+    };
+    s.deny_unknown(STEP_KINDS)?;
+    if entries.len() != 1 {
+        return Err(s.invalid(
+            "transform",
+            step,
+            &format!(
+                "each step must hold exactly one operation (got {}); write several steps to \
+                 chain them",
+                entries.len()
+            ),
+        ));
+    }
+    let (key, value) = &entries[0];
+    Ok(match key.name.as_str() {
+        "scale" => match value.value {
+            Value::Integer(_) | Value::Float(_) => {
+                DAffine3::from_scale(DVec3::splat(f64::from(s.f32("scale", None)?)))
+            }
+            _ => DAffine3::from_scale(s.vec3("scale", None)?.as_dvec3()),
+        },
+        "translate" => DAffine3::from_translation(s.vec3("translate", None)?.as_dvec3()),
+        "rotate" => {
+            let entity = format!("{} rotate", s.entity);
+            let t = table_reader(s, "rotate", value, &entity)?;
+            t.deny_unknown(&["axis", "angle"])?;
+            let axis = t.vec3("axis", None)?.as_dvec3();
+            let angle = f64::from(t.f32("angle", None)?);
+            if axis.length_squared() == 0.0 {
+                return Err(t.invalid("axis", t.get("axis").unwrap_or(value), "must not be zero"));
+            }
+            // Right-handed rotation by `angle` degrees (Rodrigues' formula in glam).
+            DAffine3::from_axis_angle(axis.normalize(), angle.to_radians())
+        }
+        "look_at" => {
+            let entity = format!("{} look_at", s.entity);
+            let t = table_reader(s, "look_at", value, &entity)?;
+            t.deny_unknown(&["from", "to", "up"])?;
+            let from = t.vec3("from", None)?.as_dvec3();
+            let to = t.vec3("to", None)?.as_dvec3();
+            let up = t.vec3("up", Some(Vec3::Y))?.as_dvec3();
+            look_at(&t, from, to, up)?
+        }
+        _ => read_matrix(s, value)?,
+    })
+}
+
+fn table_reader<'a>(
+    s: &Reader<'a>,
+    key: &str,
+    value: &'a Node,
+    entity: &'a str,
+) -> Result<Reader<'a>, SceneError> {
+    if value.as_table().is_none() {
+        return Err(s.wrong_type(key, value, "a table"));
+    }
+    Ok(Reader::new(s.src, value, entity))
+}
+
+/// Mitsuba's look-at frame for shapes: local +z maps to `normalize(to - from)`, local +x to
+/// `normalize(cross(up, dir))`, local +y to `cross(dir, x)`, the origin to `from`.
+fn look_at(t: &Reader<'_>, from: DVec3, to: DVec3, up: DVec3) -> Result<DAffine3, SceneError> {
+    let dir = to - from;
+    if dir.length_squared() == 0.0 {
+        return Err(t.invalid(
+            "to",
+            t.get("to").unwrap_or(t.node),
+            "must differ from `from`",
+        ));
+    }
+    let dir = dir.normalize();
+    let left = up.cross(dir);
+    if up.length_squared() == 0.0 || left.length_squared() <= 1e-12 * up.length_squared() {
+        return Err(t.invalid(
+            "up",
+            t.get("up").unwrap_or(t.node),
+            "must not be zero or parallel to `to - from`",
+        ));
+    }
+    let left = left.normalize();
+    let new_up = dir.cross(left);
+    Ok(DAffine3::from_mat3_translation(
+        DMat3::from_cols(left, new_up, dir),
+        from,
+    ))
+}
+
+/// `matrix = [[a, b, c, tx], [d, e, f, ty], [g, h, i, tz]]` (rows; an optional fourth row
+/// must be `[0, 0, 0, 1]`).
+fn read_matrix(s: &Reader<'_>, value: &Node) -> Result<DAffine3, SceneError> {
+    let expected = "3 (or 4) rows of 4 numbers, e.g. [[1, 0, 0, tx], [0, 1, 0, ty], [0, 0, 1, tz]]";
+    let Value::Array(rows) = &value.value else {
+        return Err(s.wrong_type("matrix", value, expected));
+    };
+    if rows.len() != 3 && rows.len() != 4 {
+        return Err(s.invalid(
+            "matrix",
+            value,
+            &format!("expected {expected}; got {} rows", rows.len()),
+        ));
+    }
+    let mut m = [[0.0f64; 4]; 4];
+    for (i, row) in rows.iter().enumerate() {
+        let Value::Array(cells) = &row.value else {
+            return Err(s.wrong_type("matrix", row, "a row of 4 numbers"));
+        };
+        if cells.len() != 4 {
+            return Err(s.invalid(
+                "matrix",
+                row,
+                &format!("each row must have 4 numbers, got {}", cells.len()),
+            ));
+        }
+        for (j, cell) in cells.iter().enumerate() {
+            m[i][j] = match cell.value {
+                Value::Integer(v) => v as f64,
+                Value::Float(v) if v.is_finite() => v,
+                Value::Float(_) => return Err(s.invalid("matrix", cell, "must be finite")),
+                _ => return Err(s.wrong_type("matrix", cell, "a number")),
+            };
+        }
+    }
+    if rows.len() == 4 && m[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(s.invalid(
+            "matrix",
+            &rows[3],
+            "the fourth row must be [0, 0, 0, 1] (projective transforms are not supported)",
+        ));
+    }
+    Ok(DAffine3::from_mat3_translation(
+        DMat3::from_cols(
+            DVec3::new(m[0][0], m[1][0], m[2][0]),
+            DVec3::new(m[0][1], m[1][1], m[2][1]),
+            DVec3::new(m[0][2], m[1][2], m[2][2]),
+        ),
+        DVec3::new(m[0][3], m[1][3], m[2][3]),
+    ))
+}
+
+/// The two triangles of the parallelogram `corner, corner + e1, corner + e1 + e2,
+/// corner + e2` (local space), both with normal along `e1 x e2`.
+fn quad_local(corner: DVec3, e1: DVec3, e2: DVec3) -> [[DVec3; 3]; 2] {
+    let (v0, v1, v2, v3) = (corner, corner + e1, corner + e1 + e2, corner + e2);
+    [[v0, v1, v2], [v0, v2, v3]]
+}
+
+/// Transforms local triangles to world space. A mirroring transform (negative
+/// determinant) would turn the winding inside out; normals transform with the inverse
+/// transpose, which keeps the surface's orientation, so the winding is swapped to keep
+/// `(v1 - v0) x (v2 - v0)` along the transformed normal.
+pub(crate) fn to_world(m: &DAffine3, local: impl IntoIterator<Item = [DVec3; 3]>) -> Vec<Triangle> {
+    let flip = m.matrix3.determinant() < 0.0;
+    local
+        .into_iter()
+        .map(|[a, b, c]| {
+            let p = |v: DVec3| m.transform_point3(v).as_vec3();
+            if flip {
+                [p(a), p(c), p(b)]
+            } else {
+                [p(a), p(b), p(c)]
+            }
+        })
+        .collect()
+}
+
+/// Rejects a quad whose (world-space) edges span no area.
+pub(crate) fn check_area(r: &Reader<'_>, tris: &[Triangle], node: &Node) -> Result<(), SceneError> {
+    let area2: f32 = tris
+        .iter()
+        .map(|[a, b, c]| (*b - *a).cross(*c - *a).length())
+        .sum();
+    if !(area2 > 0.0 && area2.is_finite()) {
+        return Err(r.invalid(
+            "edge2",
+            node,
+            "the quad has no area (edges are zero or parallel)",
+        ));
+    }
+    Ok(())
+}
+
+/// `quad`: corner + edge1 + edge2 (+ optional transform).
+pub(crate) fn quad(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+    let corner = r.vec3("corner", None)?.as_dvec3();
+    let e1 = r.vec3("edge1", None)?.as_dvec3();
+    let e2 = r.vec3("edge2", None)?.as_dvec3();
+    let m = read_transform(r)?;
+    let tris = to_world(&m, quad_local(corner, e1, e2));
+    check_area(r, &tris, r.get("edge2").unwrap_or(r.node))?;
+    Ok(tris)
+}
+
+/// `rectangle`: Mitsuba's rectangle, the square [-1, 1]^2 in the local xy plane with
+/// normal +z, placed by `transform`.
+pub(crate) fn rectangle(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+    let m = read_transform(r)?;
+    Ok(to_world(
+        &m,
+        quad_local(
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ),
+    ))
+}
+
+/// The 12 triangles of the axis-aligned box [lo, hi], outward winding.
+pub(crate) fn box_local(lo: DVec3, hi: DVec3) -> Vec<[DVec3; 3]> {
+    let d = hi - lo;
+    let (x, y, z) = (DVec3::X * d.x, DVec3::Y * d.y, DVec3::Z * d.z);
+    // (corner, e1, e2) with e1 x e2 pointing out of the box.
+    let faces = [
+        (lo, z, y),     // -x
+        (lo + x, y, z), // +x
+        (lo, x, z),     // -y
+        (lo + y, z, x), // +y
+        (lo, y, x),     // -z
+        (lo + z, x, y), // +z
+    ];
+    faces
+        .iter()
+        .flat_map(|&(c, e1, e2)| quad_local(c, e1, e2))
+        .collect()
+}
+
+/// `box`: the cube [-1, 1]^3 (or [min, max]) placed by `transform`.
+pub(crate) fn cuboid(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+    let (lo, hi) = match (r.vec3_opt("min")?, r.vec3_opt("max")?) {
+        (None, None) => (DVec3::splat(-1.0), DVec3::splat(1.0)),
+        (Some(lo), Some(hi)) => {
+            if !(lo.cmplt(hi).all()) {
+                return Err(r.invalid(
+                    "max",
+                    r.get("max").unwrap_or(r.node),
+                    "every component of `max` must be greater than `min`'s",
+                ));
+            }
+            (lo.as_dvec3(), hi.as_dvec3())
+        }
+        (Some(_), None) => return Err(r.missing("max", "given together with `min`")),
+        (None, Some(_)) => return Err(r.missing("min", "given together with `max`")),
+    };
+    let m = read_transform(r)?;
+    Ok(to_world(&m, box_local(lo, hi)))
+}
+
+/// `mesh`: the triangles of an OBJ file (every object in it, polygons fan-triangulated by
+/// tobj), placed by `transform`.
+pub(crate) fn mesh(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+    let (path, node) = r
+        .path_opt("path")?
+        .ok_or_else(|| r.missing("path", "an OBJ file path relative to the scene file"))?;
+    let m = read_transform(r)?;
+    let local = load_obj(&path).map_err(|msg| {
+        r.error(
+            SceneErrorKind::ExternalFile,
+            &node.span(),
+            Some("path"),
+            msg,
+        )
+    })?;
+    Ok(to_world(&m, local))
+}
+
+/// Reads an OBJ file's triangles; the error is a complete sentence naming the full path.
+fn load_obj(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
+    let shown = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Materials (`mtllib`) are not used: the scene file assigns the material.
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })
+        .map_err(|e| format!("cannot parse OBJ file `{shown}`: {e}"))?;
+    let mut tris = Vec::new();
+    for model in &models {
+        let mesh = &model.mesh;
+        let n_vertices = mesh.positions.len() / 3;
+        let vertex = |i: u32| -> Result<DVec3, String> {
+            let i = i as usize;
+            if i >= n_vertices {
+                return Err(format!(
+                    "cannot parse OBJ file `{shown}`: object `{}` refers to vertex {} but has {n_vertices}",
+                    model.name,
+                    i + 1
+                ));
+            }
+            let v = DVec3::new(
+                f64::from(mesh.positions[3 * i]),
+                f64::from(mesh.positions[3 * i + 1]),
+                f64::from(mesh.positions[3 * i + 2]),
+            );
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(format!(
+                    "cannot parse OBJ file `{shown}`: vertex {} is not finite",
+                    i + 1
+                ))
+            }
+        };
+        for f in mesh.indices.chunks_exact(3) {
+            tris.push([vertex(f[0])?, vertex(f[1])?, vertex(f[2])?]);
+        }
+    }
+    if tris.is_empty() {
+        return Err(format!("OBJ file `{shown}` contains no faces"));
+    }
+    Ok(tris)
+}

@@ -1,0 +1,159 @@
+//! Reading image textures for the `image` pattern: PNG (8 or 16 bits, grey or RGB, with or
+//! without alpha, palettes expanded; decoded from sRGB to linear; alpha ignored) and OpenEXR
+//! (linear RGB through [`risotto_engine::output::read_exr_rgb`]). Sizes are checked against
+//! [`MAX_TEXTURE_PIXELS`] from the header, before the pixels are allocated.
+
+use risotto_components::Rgb;
+use risotto_engine::output::read_exr_rgb;
+use risotto_systems::pattern::Texture;
+use std::path::Path;
+
+/// The largest texture accepted, in pixels: 2^26 (8192 x 8192; 768 MiB of linear RGB).
+pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
+
+/// Reads a texture by extension (`.png` or `.exr`, any case). Errors name the file and what
+/// is wrong with it.
+pub fn read_texture(path: &Path) -> Result<Texture, String> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let (width, height, texels) = match ext.as_deref() {
+        Some("png") => read_png(path)?,
+        Some("exr") => {
+            let image = read_exr_rgb(path).map_err(|e| e.to_string())?;
+            check_size(path, image.width as u64, image.height as u64)?;
+            (image.width, image.height, image.pixels)
+        }
+        _ => {
+            return Err(format!(
+                "{}: an image texture must be a .png or an .exr file",
+                path.display()
+            ))
+        }
+    };
+    Texture::new(width, height, texels).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn check_size(path: &Path, w: u64, h: u64) -> Result<(), String> {
+    if w.saturating_mul(h) > MAX_TEXTURE_PIXELS {
+        return Err(format!(
+            "{}: {w} x {h} pixels is more than the {MAX_TEXTURE_PIXELS} a texture may have",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1), code value in [0, 1] to linear.
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn read_png(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
+    let fail = |what: &dyn std::fmt::Display| format!("{}: {what}", path.display());
+    let file = std::fs::File::open(path).map_err(|e| fail(&format!("cannot read: {e}")))?;
+    // The decoder's own limit bounds its buffers; the pixel count is checked before the
+    // frame buffer is allocated.
+    let limits = png::Limits {
+        bytes: (MAX_TEXTURE_PIXELS * 8) as usize,
+    };
+    let mut decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(|e| fail(&e))?;
+    let (w, h) = (reader.info().width, reader.info().height);
+    check_size(path, w.into(), h.into())?;
+    let mut buf = vec![0u8; reader.output_buffer_size()];
+    let frame = reader.next_frame(&mut buf).map_err(|e| fail(&e))?;
+    let (colour, depth) = (frame.color_type, frame.bit_depth);
+    let channels = match colour {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => return Err(fail(&"palette not expanded")),
+    };
+    let bytes = match depth {
+        png::BitDepth::Eight => 1,
+        png::BitDepth::Sixteen => 2,
+        other => return Err(fail(&format!("unsupported bit depth {other:?}"))),
+    };
+    let (w, h) = (w as usize, h as usize);
+    let line = frame.line_size;
+    let sample = |row: &[u8], k: usize| -> f32 {
+        if bytes == 1 {
+            f32::from(row[k]) / 255.0
+        } else {
+            f32::from(u16::from_be_bytes([row[2 * k], row[2 * k + 1]])) / 65535.0
+        }
+    };
+    // sRGB decoding of 8-bit values through a table (256 entries, each exact).
+    let table: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+    let linear = |row: &[u8], k: usize| -> f32 {
+        if bytes == 1 {
+            table[row[k] as usize]
+        } else {
+            srgb_to_linear(sample(row, k))
+        }
+    };
+    let mut texels = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let row = buf
+            .get(y * line..(y + 1) * line)
+            .ok_or_else(|| fail(&"truncated frame"))?;
+        for x in 0..w {
+            let k = x * channels;
+            texels.push(if channels < 3 {
+                Rgb::splat(linear(row, k))
+            } else {
+                Rgb::new(linear(row, k), linear(row, k + 1), linear(row, k + 2))
+            });
+        }
+    }
+    Ok((w, h, texels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_png(path: &Path, w: u32, h: u32, colour: png::ColorType, data: &[u8]) {
+        let file = std::fs::File::create(path).unwrap();
+        let mut e = png::Encoder::new(file, w, h);
+        e.set_color(colour);
+        e.set_depth(png::BitDepth::Eight);
+        e.write_header().unwrap().write_image_data(data).unwrap();
+    }
+
+    #[test]
+    fn png_texels_are_decoded_from_srgb_row_by_row_from_the_top() {
+        let dir = std::env::temp_dir().join(format!("risotto-texture-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rgb = dir.join("rgb.png");
+        // 2 x 2: top row red, green; bottom row blue, white.
+        let data = [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+        write_png(&rgb, 2, 2, png::ColorType::Rgb, &data);
+        let t = read_texture(&rgb).unwrap();
+        assert_eq!(t.size(), (2, 2));
+        assert_eq!(t.texel(1, 0), Rgb::new(0.0, 1.0, 0.0));
+        assert_eq!(t.texel(0, 1), Rgb::new(0.0, 0.0, 1.0));
+        // Grey with alpha; sRGB 188 is linear 0.5 (to 3 digits).
+        let grey = dir.join("grey.png");
+        write_png(&grey, 1, 1, png::ColorType::GrayscaleAlpha, &[188, 7]);
+        let g = read_texture(&grey).unwrap().texel(0, 0);
+        assert!((g.r - 0.5029).abs() < 1e-3 && g.r == g.b, "{g:?}");
+        // Errors name the file.
+        let e = read_texture(&dir.join("missing.png")).unwrap_err();
+        assert!(e.contains("missing.png"), "{e}");
+        let bad = dir.join("bad.png");
+        std::fs::write(&bad, b"not a png").unwrap();
+        assert!(read_texture(&bad).unwrap_err().contains("bad.png"));
+        assert!(read_texture(&dir.join("x.jpg"))
+            .unwrap_err()
+            .contains(".png or an .exr"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,313 @@
+//! Reading OpenVDB float grids (`*.vdb`) into a [`DensityGrid`], through the `vdb-rs` crate
+//! (no home-made VDB parser).
+//!
+//! # Convention
+//! OpenVDB stores a sparse tree in **index space**: the value of voxel `(i, j, k)` sits at
+//! the integer index coordinate `(i, j, k)`, its trilinear sampler (`BoxSampler`)
+//! interpolates between those lattice points, and inactive voxels read as the background
+//! (0 for the fog volumes renderers take as density). The reader turns the active voxels and
+//! active tiles (8^3 and 128^3 blocks of one value) into a dense grid over their index
+//! bounding box `[lo, hi]`, padded by one background voxel on every side. With the dense
+//! grid's cell-centred convention ([`risotto_systems::grid`]: clamp to the outermost voxels,
+//! here the zero border) its field at index coordinate `x` is exactly OpenVDB's trilinear
+//! field, background outside. The dense grid spans the index box `[lo - 1.5, hi + 1.5]`,
+//! which is what fills the shape's bounds (as for every grid file): size the box to the
+//! VDB's world bounds, `voxel_size * (hi - lo + 3)`, for undistorted voxels.
+//!
+//! # Limits
+//! The grid must be a float grid (`Tree_float_5_4_3`, half-float storage included), with
+//! finite, non-negative active values and a dense size of at most
+//! [`crate::grid_file::MAX_VOXELS`]. The background value is taken as 0 (the crate does not
+//! expose it); root-level tiles are not read. The crate itself panics on some malformed
+//! files: the panic is caught and reported as a format error naming the file.
+
+use crate::grid_file::{format, GridFileError, MAX_VOXELS};
+use risotto_systems::grid::DensityGrid;
+use std::fs::File;
+use std::io::BufReader;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+/// The grid read when the scene names none and the file has several.
+pub const DEFAULT_GRID: &str = "density";
+
+/// Runs the crate's `f`, turning its errors and panics into format errors.
+fn guarded<T, E: std::fmt::Display>(
+    path: &Path,
+    what: &str,
+    f: impl FnOnce() -> Result<T, E>,
+) -> Result<T, GridFileError> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) => Err(format(path, format!("{what}: {e}"))),
+        Err(panic) => {
+            let msg = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unreadable data");
+            Err(format(
+                path,
+                format!("{what}: not a readable OpenVDB file ({msg})"),
+            ))
+        }
+    }
+}
+
+/// One active value of the tree: a voxel (`size` 1) or a tile of `size^3` voxels.
+struct Active {
+    origin: [i64; 3],
+    size: i64,
+    value: f32,
+}
+
+/// Reads float grid `name` (default: [`DEFAULT_GRID`], or the file's only float grid) of an
+/// OpenVDB file (module docs: convention, limits).
+pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFileError> {
+    let file = File::open(path).map_err(|cause| GridFileError::Io {
+        path: PathBuf::from(path),
+        cause,
+    })?;
+    let mut reader = guarded(path, "header", || {
+        vdb_rs::VdbReader::new(BufReader::new(file))
+    })?;
+    let mut names = reader.available_grids();
+    names.sort();
+    let is_float = |n: &str| {
+        reader
+            .grid_descriptors
+            .get(n)
+            .is_some_and(|d| d.grid_type.starts_with("Tree_float_"))
+    };
+    let floats: Vec<&String> = names.iter().filter(|n| is_float(n)).collect();
+    let chosen = match name {
+        Some(n) => {
+            if !names.iter().any(|x| x == n) {
+                return Err(format(
+                    path,
+                    format!("no grid named \"{n}\" (the file has: {})", names.join(", ")),
+                ));
+            }
+            n.to_string()
+        }
+        None if names.iter().any(|x| x == DEFAULT_GRID) => DEFAULT_GRID.to_string(),
+        None if floats.len() == 1 => floats[0].clone(),
+        None => {
+            return Err(format(
+                path,
+                format!(
+                    "no grid named \"{DEFAULT_GRID}\" and {} float grids: name one with `name = ...` (the file has: {})",
+                    floats.len(),
+                    names.join(", ")
+                ),
+            ))
+        }
+    };
+    let grid_type = reader.grid_descriptors[&chosen].grid_type.clone();
+    if !is_float(&chosen) {
+        return Err(format(
+            path,
+            format!("grid \"{chosen}\" is a {grid_type} grid, not a float grid"),
+        ));
+    }
+    let grid = guarded(path, &format!("grid \"{chosen}\""), || {
+        reader.read_grid::<f32>(&chosen)
+    })?;
+    let active: Vec<Active> = guarded(path, &format!("grid \"{chosen}\""), || {
+        Ok::<_, String>(
+            grid.iter()
+                .map(|(c, value, level)| Active {
+                    origin: [c.x as i64, c.y as i64, c.z as i64],
+                    size: level.scale() as i64,
+                    value,
+                })
+                .collect(),
+        )
+    })?;
+    dense(path, &chosen, &active)
+}
+
+/// The padded dense grid of the active values (module docs).
+fn dense(path: &Path, name: &str, active: &[Active]) -> Result<DensityGrid, GridFileError> {
+    if active.is_empty() {
+        return Err(format(
+            path,
+            format!("grid \"{name}\" has no active voxels"),
+        ));
+    }
+    let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
+    for a in active {
+        if !a.value.is_finite() || a.value < 0.0 {
+            return Err(format(
+                path,
+                format!(
+                    "grid \"{name}\": voxel ({}, {}, {}): value {} is {}",
+                    a.origin[0],
+                    a.origin[1],
+                    a.origin[2],
+                    a.value,
+                    if a.value.is_finite() {
+                        "negative (densities must be >= 0)"
+                    } else {
+                        "not finite"
+                    }
+                ),
+            ));
+        }
+        for k in 0..3 {
+            lo[k] = lo[k].min(a.origin[k]);
+            hi[k] = hi[k].max(a.origin[k] + a.size - 1);
+        }
+    }
+    // One background voxel on each side.
+    let dims = [0, 1, 2].map(|k| (hi[k] - lo[k] + 3) as u64);
+    let count = dims
+        .iter()
+        .try_fold(1u64, |a, &d| a.checked_mul(d))
+        .filter(|&n| n <= MAX_VOXELS as u64)
+        .ok_or_else(|| {
+            format(
+                path,
+                format!(
+                    "grid \"{name}\": active index bounds ({}, {}, {})..({}, {}, {}) make a dense grid of {dims:?} voxels, more than {MAX_VOXELS}",
+                    lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+                ),
+            )
+        })?;
+    let dims = dims.map(|d| d as usize);
+    let mut data = vec![0.0f32; count as usize];
+    for a in active {
+        let base = [0, 1, 2].map(|k| (a.origin[k] - lo[k] + 1) as usize);
+        let s = a.size as usize;
+        for z in base[2]..base[2] + s {
+            for y in base[1]..base[1] + s {
+                let row = dims[0] * (y + dims[1] * z);
+                data[row + base[0]..row + base[0] + s].fill(a.value);
+            }
+        }
+    }
+    DensityGrid::new(dims, data).map_err(|e| format(path, format!("grid \"{name}\": {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn data(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data")
+            .join(name)
+    }
+
+    /// The unit-cube point of index coordinate `x` of a grid read from index bounds `lo` with
+    /// `dims` padded voxels (module docs: `u = (x - lo + 1.5) / dims`).
+    fn unit(x: Vec3, lo: Vec3, dims: [usize; 3]) -> Vec3 {
+        (x - lo + Vec3::splat(1.5)) / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32)
+    }
+
+    #[test]
+    fn a_small_vdb_reads_to_known_values_in_index_space() {
+        // tests/data/make_vdb.py: value 1 + i + 10 j + 100 k at index (i - 2, j + 3, k + 7).
+        let g = read_vdb(&data("small.vdb"), None).unwrap();
+        assert_eq!(g.dims(), [7, 6, 5]);
+        let lo = Vec3::new(-2.0, 3.0, 7.0);
+        for (i, j, k) in [(0, 0, 0), (4, 3, 2), (2, 1, 1), (1, 2, 0)] {
+            let x = lo + Vec3::new(i as f32, j as f32, k as f32);
+            let v = g.lookup(unit(x, lo, g.dims()));
+            let want = 1.0 + i as f32 + 10.0 * j as f32 + 100.0 * k as f32;
+            assert!(
+                (v - want).abs() < 1e-4 * want,
+                "({i}, {j}, {k}): {v} vs {want}"
+            );
+        }
+        // Between lattice points: trilinear (the field is linear in i, j, k inside).
+        let x = lo + Vec3::new(1.5, 0.25, 1.75);
+        let v = g.lookup(unit(x, lo, g.dims()));
+        let want = 1.0 + 1.5 + 2.5 + 175.0;
+        assert!((v - want).abs() < 1e-3, "{v} vs {want}");
+        // Half a voxel outside the last active one: half way to the background 0.
+        let x = lo + Vec3::new(4.5, 0.0, 0.0);
+        let v = g.lookup(unit(x, lo, g.dims()));
+        assert!((v - 2.5).abs() < 1e-4, "{v}");
+        // And the background beyond.
+        assert_eq!(g.lookup(unit(lo - Vec3::splat(1.0), lo, g.dims())), 0.0);
+        let t = read_vdb(&data("small.vdb"), Some("temperature")).unwrap();
+        assert_eq!(t.dims(), [3, 3, 3]);
+        assert_eq!(t.max(), 2.0);
+    }
+
+    #[test]
+    fn tiles_fill_their_blocks() {
+        let g = read_vdb(&data("tile.vdb"), None).unwrap();
+        assert_eq!(g.dims(), [10, 10, 10]);
+        let lo = Vec3::ZERO;
+        for x in [Vec3::ZERO, Vec3::splat(7.0), Vec3::new(3.0, 5.5, 0.5)] {
+            assert_eq!(g.lookup(unit(x, lo, g.dims())), 0.25, "{x}");
+        }
+        assert_eq!(g.lookup(unit(Vec3::splat(8.0), lo, g.dims())), 0.0);
+    }
+
+    #[test]
+    fn bad_vdb_files_and_names_are_reported() {
+        let err = |p: &Path, name: Option<&str>| read_vdb(p, name).unwrap_err().to_string();
+        let small = data("small.vdb");
+        let e = err(&small, Some("smoke"));
+        assert!(
+            e.contains("small.vdb")
+                && e.contains("\"smoke\"")
+                && e.contains("density, temperature, velocity"),
+            "{e}"
+        );
+        let e = err(&small, Some("velocity"));
+        assert!(
+            e.contains("Tree_vec3s") && e.contains("not a float grid"),
+            "{e}"
+        );
+        let dir = risotto_engine::scratch_dir::ScratchDir::new("vdb");
+        // Garbage, and the real file cut short at several places: errors, never a panic
+        // escaping or a wrong grid.
+        let bytes = std::fs::read(&small).unwrap();
+        let garbage = dir.join("garbage.vdb");
+        std::fs::write(&garbage, b"not a vdb file at all, really").unwrap();
+        assert!(err(&garbage, None).contains("garbage.vdb"));
+        let whole = read_vdb(&small, None).unwrap();
+        let mut errors = 0;
+        for cut in (0..bytes.len()).step_by(97) {
+            let p = dir.join(format!("cut{cut}.vdb"));
+            std::fs::write(&p, &bytes[..cut]).unwrap();
+            match read_vdb(&p, None) {
+                // A cut after the density grid's data leaves it whole.
+                Ok(g) => assert_eq!(g, whole, "cut at {cut}"),
+                Err(e) => {
+                    assert!(e.to_string().contains(&format!("cut{cut}.vdb")), "{e}");
+                    errors += 1;
+                }
+            }
+        }
+        assert!(errors > 100, "{errors}");
+        assert!(err(&dir.join("missing.vdb"), None).contains("cannot read"));
+        // Values are checked like every grid's.
+        let negative = [Active {
+            origin: [1, 2, 3],
+            size: 1,
+            value: -1.0,
+        }];
+        let e = dense(&small, "density", &negative).unwrap_err().to_string();
+        assert!(e.contains("(1, 2, 3)") && e.contains("negative"), "{e}");
+        let huge = [
+            Active {
+                origin: [0, 0, 0],
+                size: 1,
+                value: 1.0,
+            },
+            Active {
+                origin: [1 << 20, 1 << 20, 0],
+                size: 1,
+                value: 1.0,
+            },
+        ];
+        let e = dense(&small, "density", &huge).unwrap_err().to_string();
+        assert!(e.contains("more than"), "{e}");
+    }
+}
