@@ -48,8 +48,8 @@
 use bumpalo::Bump;
 use risotto::builtins::builtin::DielectricBxdf;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::{write_exr, write_png};
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
@@ -190,7 +190,7 @@ impl VolumeIntegrator for SmokyInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

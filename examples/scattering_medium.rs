@@ -24,10 +24,11 @@
 
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto::builtins::builtin::{DiffuseBxdf, HenyeyGreensteinPhase, NullBxdf};
+use risotto::builtins::builtin::{DiffuseBxdf, NullBxdf};
+use risotto::builtins::phase::PhaseBxdf;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::{write_exr, write_png};
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::{
     Builtin, Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
@@ -37,6 +38,7 @@ use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scen
 use risotto::systems::camera::{Camera, Projection};
 use risotto::systems::geometry::Sphere;
 use risotto::systems::medium::{channel_pdf, sample_free_flight, transmittance};
+use risotto::systems::phase::PhaseFunction;
 use risotto::systems::sampler::PathSampler;
 
 /// A homogeneous scattering medium behind an index-matched boundary.
@@ -71,10 +73,10 @@ impl BxdfFactory for Smoke {
         match mode {
             // Points inside the volume: the phase function. Albedo 1: the free flight's
             // weight already holds sigma_s (see the module docs).
-            ShadingMode::VolumeScatter => arena.alloc(HenyeyGreensteinPhase {
-                g: self.g,
-                albedo: Rgb::WHITE,
-            }),
+            ShadingMode::VolumeScatter => arena.alloc(PhaseBxdf::weighted(
+                PhaseFunction::HenyeyGreenstein { g: self.g },
+                Rgb::WHITE,
+            )),
             // The index-matched surface is never shaded.
             ShadingMode::Scatter | ShadingMode::Interior => arena.alloc(NullBxdf),
         }
@@ -174,7 +176,7 @@ impl VolumeIntegrator for SmokeInterior<'_> {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

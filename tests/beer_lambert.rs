@@ -18,8 +18,8 @@ use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
 use risotto::builtins::builtin::{beer, Interior, NullBxdf, Surface};
-use risotto::engine::context::IntegratorContext;
 use risotto::engine::output::Image;
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::*;
 use risotto::engine::scene::{CompileError, RenderSettings, Scene, ShapeGeometry};
 use risotto::systems::camera::{Camera, Projection};
@@ -294,7 +294,7 @@ impl VolumeIntegrator for SummingInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

@@ -157,7 +157,7 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
-    use risotto::tools::plot::{PLOT_HEIGHT, PLOT_WIDTH};
+    use risotto::tools::converge::plot::{PLOT_HEIGHT, PLOT_WIDTH};
     assert_eq!((info.width, info.height), (PLOT_WIDTH, PLOT_HEIGHT));
     let coloured = buf[..info.buffer_size()]
         .chunks(3)

@@ -21,7 +21,7 @@ use common::*;
 use glam::Vec3;
 use risotto::builtins::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium, Tracking};
 use risotto::builtins::media::{HomogeneousInterior, HomogeneousMedium, Scattering};
-use risotto::engine::context::IntegratorContext;
+use risotto::engine::context::RenderContext;
 use risotto::engine::integrator::LightingTechnique;
 use risotto::engine::plugin::{
     InstanceHints, Segments, ShadingContext, ShadingMode, VolumeIntegrator,
@@ -502,7 +502,7 @@ fn some_scene() -> CompiledScene {
 fn transmission_returns_the_emission_reaching_the_segment_start() {
     let scene = some_scene();
     let mut stats = risotto::engine::stats::SystemStats::default();
-    let ictx = IntegratorContext::new(&scene, &mut stats);
+    let ictx = RenderContext::new(&scene, &mut stats);
     let (origin, direction, length) = (Vec3::new(-1.0, 0.0, 0.0), Vec3::X, 1.5);
     // Homogeneous: exact, per channel.
     let medium = HomogeneousMedium {

@@ -288,7 +288,7 @@ fn a_march_step_must_be_positive() {
 #[test]
 fn openvdb_grids_load_through_the_scene_file() {
     // tests/data/tile.vdb: one active 8^3 tile of 0.25, read into a 10^3 grid with a zero
-    // border (engine/src/vdb_file.rs); an absorbing-free, albedo-1 medium of it under a white
+    // border (engine/loader/src/grid_file/vdb.rs); an absorbing-free, albedo-1 medium of it under a white
     // environment is a furnace, so the grid was read and tracked (null collisions against the
     // tile's bounds) and every pixel is 1.
     let d = scratch_dir("hetero", "vdb");

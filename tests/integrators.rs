@@ -39,9 +39,11 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
-use risotto::builtins::builtin::{HenyeyGreensteinPhase, NullBxdf, Surface};
-use risotto::engine::context::IntegratorContext;
+use risotto::builtins::builtin::{NullBxdf, Surface};
+use risotto::builtins::phase::PhaseBxdf;
+use risotto::engine::context::RenderContext;
 use risotto::engine::integrator::{Integrator, PathBatch};
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::{
     Builtin, Bxdf, BxdfFactory, InstanceHints, ParamCache, PatternCounters, Segments, ShadeGroups,
     ShadingContext, ShadingMode, VolumeIntegrator, VolumeServices,
@@ -52,6 +54,7 @@ use risotto::engine::stats::SystemStats;
 use risotto::engine::transmission::trace_shadow_rays;
 use risotto::systems::camera::push_camera_rays;
 use risotto::systems::lights::LightSampleColumns;
+use risotto::systems::phase::PhaseFunction;
 use risotto::systems::ray::{shadow_ray, skip_tmin, spawn_origin};
 use risotto::systems::sampler::PathSampler;
 use risotto_components::{
@@ -124,7 +127,7 @@ impl Integrator for DirectOnly {
                         .contains(InstanceHints::COMPUTES_INTERIOR)
                 });
                 match interior {
-                    None => IntegratorContext::new(scene, stats).nearest_hits(&bundle, &mut groups),
+                    None => RenderContext::new(scene, stats).nearest_hits(&bundle, &mut groups),
                     Some(e) => volume_hits(scene, batch, &mut bundle, e, stats, arena, &mut groups),
                 }
                 self.shade(
@@ -201,7 +204,7 @@ fn volume_hits(
             }
         })
         .collect();
-    let mut ictx = IntegratorContext::new(scene, stats);
+    let mut ictx = RenderContext::new(scene, stats);
     integrator.nearest_hits(
         bundle,
         &mut samplers,
@@ -372,10 +375,10 @@ impl BxdfFactory for SlabMedium {
     ) -> &'a mut (dyn Bxdf + 'a) {
         match mode {
             // The phase function of the interior: isotropic, weighted by the albedo.
-            ShadingMode::VolumeScatter => arena.alloc(HenyeyGreensteinPhase {
-                g: 0.0,
-                albedo: Rgb::splat(self.albedo),
-            }),
+            ShadingMode::VolumeScatter => arena.alloc(PhaseBxdf::weighted(
+                PhaseFunction::Isotropic,
+                Rgb::splat(self.albedo),
+            )),
             // The surface is never shaded (index-matched).
             ShadingMode::Scatter | ShadingMode::Interior => arena.alloc(NullBxdf),
         }
@@ -500,7 +503,7 @@ impl VolumeIntegrator for SlabInterior<'_> {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

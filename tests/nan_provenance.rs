@@ -5,10 +5,11 @@ mod common;
 use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
-use risotto::builtins::builtin::{DielectricBxdf, DiffuseBxdf, HenyeyGreensteinPhase, Surface};
+use risotto::builtins::builtin::{DielectricBxdf, DiffuseBxdf, Surface};
+use risotto::builtins::phase::PhaseBxdf;
 use risotto::components::{LobeSampled, Rays, Rgb};
-use risotto::engine::context::IntegratorContext;
 use risotto::engine::path_tracer::VertexEvent;
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, InstanceHints, Segments, ShadeGroups, ShadingContext, ShadingMode,
     VolumeIntegrator, VolumeServices,
@@ -19,6 +20,7 @@ use risotto::engine::scene::{CompiledScene, LightComponent, Scene, ShapeGeometry
 use risotto::engine::stats::{NonFiniteCase, Stage, MAX_NON_FINITE_CASES};
 use risotto::systems::bxdf_samples::BxdfSamples;
 use risotto::systems::geometry::Sphere;
+use risotto::systems::phase::PhaseFunction;
 use risotto::systems::sampler::PathSampler;
 
 /// A white diffuse surface whose sampled weights (`false`) or evaluations towards light
@@ -132,7 +134,7 @@ impl VolumeIntegrator for NanInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
@@ -151,7 +153,7 @@ struct DelegateNanInterior<'a> {
 }
 
 /// An isotropic phase function whose evaluations towards light samples are NaN.
-struct NanPhase(HenyeyGreensteinPhase);
+struct NanPhase(PhaseBxdf<'static>);
 
 impl Bxdf for NanPhase {
     fn lobes(&self) -> LobeSampled {
@@ -190,10 +192,7 @@ impl BxdfFactory for DelegateNanGlass {
         mode: ShadingMode,
         arena: &'a Bump,
     ) -> &'a mut (dyn Bxdf + 'a) {
-        let phase = HenyeyGreensteinPhase {
-            g: 0.0,
-            albedo: Rgb::WHITE,
-        };
+        let phase = PhaseBxdf::weighted(PhaseFunction::Isotropic, Rgb::WHITE);
         match mode {
             ShadingMode::VolumeScatter => arena.alloc(NanPhase(phase)),
             _ => arena.alloc(DielectricBxdf {
@@ -240,7 +239,7 @@ impl VolumeIntegrator for DelegateNanInterior<'_> {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

@@ -6,7 +6,8 @@ use glam::Vec3;
 use risotto::builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto::components::{Hits, Rays, Rgb, VolumeStack, NO_HIT};
 use risotto::components::{RayRow, VolumeEntry};
-use risotto::engine::context::IntegratorContext;
+use risotto::engine::context::RenderContext;
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::scene::{RenderSettings, Scene, ShapeGeometry};
 use risotto::engine::shade_groups::{ShadeGroups, ShadingMode};
 use risotto::engine::stats::SystemStats;
@@ -120,7 +121,7 @@ fn nearest_hits_matches_a_per_ray_reference() {
     }
 
     let mut stats = SystemStats::default();
-    let mut ictx = IntegratorContext::new(&scene, &mut stats);
+    let mut ictx = RenderContext::new(&scene, &mut stats);
     let mut out = ShadeGroups::default();
     let mut bases = Vec::new();
     for rays in &batches {

@@ -8,7 +8,7 @@ use bumpalo::Bump;
 use common::*;
 use glam::Vec3;
 use risotto::builtins::builtin::{NullBxdf, Surface};
-use risotto::engine::context::IntegratorContext;
+use risotto::engine::plugin::IntegratorContext;
 use risotto::engine::plugin::*;
 use risotto::engine::scene::{LightComponent, Scene};
 use risotto::systems::sampler::PathSampler;
@@ -79,7 +79,7 @@ impl VolumeIntegrator for GlowingInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

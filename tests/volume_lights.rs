@@ -195,7 +195,7 @@ fn assert_box_lights_floor(d: &Path, interior: &str, j: f64, sigma_a: f64, ratio
         }
     }
     // MIS light-samples the box (`nee` and `bxdf` do not, crate docs of
-    // risotto_engine::volume_lights): at equal spp it is the more precise.
+    // risotto_engine::plugin::volume_light): at equal spp it is the more precise.
     assert!(
         errors[0] < ratio * errors[2],
         "{interior}: se mis {} vs bxdf {}",
@@ -383,7 +383,7 @@ fn a_scene_without_emissive_media_has_no_volume_lights() {
 
 /// Behind a dielectric, path rays refract (a Dirac event) and shadow rays cannot pass
 /// straight through, so an emissive medium there is no light (module docs of
-/// `risotto_engine::volume_lights`): the scene has no volume light, MIS draws no volume
+/// `risotto_engine::plugin::volume_light`): the scene has no volume light, MIS draws no volume
 /// light sample, and its image agrees with unidirectional estimation.
 #[test]
 fn an_emissive_medium_behind_a_dielectric_is_no_light() {

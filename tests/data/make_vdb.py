@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes tests/data/small.vdb and tests/data/tile.vdb, the OpenVDB files of the grid-reader
-tests (engine/src/vdb_file.rs). Needs OpenVDB's Python module (Debian: python3-openvdb;
+tests (engine/loader/src/grid_file/vdb.rs). Needs OpenVDB's Python module (Debian: python3-openvdb;
 run with /usr/bin/python3). The committed files are what this wrote; CI never runs it.
 
 small.vdb: grids "density" (float), "temperature" (float), "velocity" (vec3s). density has

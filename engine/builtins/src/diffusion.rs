@@ -66,7 +66,6 @@
 //! starts a small inset below `pi` (within a quarter of the thickness) and runs to the
 //! boundary, so that it cannot start within a large triangle's re-hit bound and miss it.
 
-use crate::random_walk::{answer_exits, Exits};
 use glam::Vec3;
 use risotto_components::{Hits, LobeSampled, Rays, Rgb, NO_HIT};
 use risotto_engine::plugin::*;
@@ -158,7 +157,7 @@ impl VolumeIntegrator for DiffusionInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &risotto_engine::context::IntegratorContext<'_>,
+        _ictx: &dyn risotto_engine::plugin::IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
@@ -178,7 +177,7 @@ impl DiffusionInterior {
         per_ray: Option<&[DiffusionMedium]>,
         rays: &Rays,
         samplers: &mut [PathSampler],
-        ictx: &mut risotto_engine::context::IntegratorContext<'_>,
+        ictx: &mut dyn risotto_engine::plugin::IntegratorContext,
         out: &mut ShadeGroups,
     ) {
         let n = rays.len();
@@ -435,7 +434,7 @@ impl Line {
 /// Traces every line through whatever it crosses, collecting up to `max_hits` hits on the
 /// boundary of line `i`'s own shape `own[i]` (other shapes' surfaces are passed through).
 fn trace_own_hits(
-    ictx: &mut risotto_engine::context::IntegratorContext<'_>,
+    ictx: &mut dyn risotto_engine::plugin::IntegratorContext,
     own: &[Option<u32>],
     lines: &mut [Line],
     max_hits: usize,

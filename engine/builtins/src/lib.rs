@@ -8,8 +8,7 @@
 pub mod builtin;
 pub mod diffusion;
 pub mod heterogeneous;
-pub mod homogeneous_emission;
 pub mod media;
-pub mod random_walk;
+pub mod phase;
 pub mod scatter_patterns;
 pub mod subsurface;

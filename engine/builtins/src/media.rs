@@ -36,7 +36,7 @@
 //! `j (1 - exp(-sigma_t t)) / sigma_t` per channel
 //! ([`emitted_radiance`]), in
 //! [`ShadeGroups::emitted`]; the random walk adds the same integral for each of its steps
-//! ([`crate::random_walk`]). The segment's radiance is that emission plus what the free flight
+//! ([`crate::media::random_walk`]). The segment's radiance is that emission plus what the free flight
 //! estimates (the in-scattered light at the event, or the radiance beyond the segment),
 //! so adding the exact part is unbiased, costs no variance and needs no change to the
 //! spectral-MIS weights of the flight. Shadow segments get the same integral from
@@ -48,11 +48,13 @@
 //! This file holds the phase Bxdfs, the medium's parameters and the multiple-scattering
 //! integrator; `media/single.rs` the single-scattering estimator.
 
+pub mod emission;
+pub mod random_walk;
 mod single;
 
-use crate::homogeneous_emission::emission_along;
 use crate::scatter_patterns::scale_by_albedo;
 use bumpalo::Bump;
+use emission::emission_along;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints};
 use risotto_engine::plugin::*;
@@ -65,105 +67,8 @@ use risotto_systems::medium::{
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::phase::PhaseFunction;
 use risotto_systems::ray::{before_hit, coordinate_epsilon};
-use risotto_systems::sampler::{next_2d_column, next_4d_column, PathSampler};
+use risotto_systems::sampler::{next_4d_column, PathSampler};
 use std::sync::Arc;
-
-/// Lobe bits of a phase-function sample.
-pub(crate) const PHASE_LOBE: LobeSampled =
-    LobeSampled(LobeSampled::SCATTER.0 | LobeSampled::DIFFUSE.0);
-
-/// Writes a phase-function sample `(wi, pdf)` into row `i` of `out` (weight 1: exact
-/// sampling), unless its pdf is not positive and finite (the row stays empty).
-#[inline]
-fn write_phase_sample(out: &mut BxdfSamples, i: usize, wi: Vec3, pdf: f32) {
-    if pdf > 0.0 && pdf.is_finite() {
-        out.wi[i] = wi;
-        out.weight[i] = Rgb::WHITE;
-        out.pdf[i] = pdf;
-        out.lobe[i] = PHASE_LOBE;
-        out.eta[i] = 1.0;
-    }
-}
-
-/// A phase function as the Bxdf of [`ShadingMode::VolumeScatter`] contexts (RenderMan's
-/// `PxrDoubleHenyeyGreenstein` and its siblings). Weight 1 per sample (exact sampling), value
-/// and pdf `p`; `albedo` only feeds the albedo AOV.
-#[derive(Clone, Copy, Debug)]
-pub struct PhaseBxdf {
-    /// The phase function.
-    pub phase: PhaseFunction,
-    /// Single-scattering albedo, for the `albedo` AOV.
-    pub albedo: Rgb,
-}
-
-impl Bxdf for PhaseBxdf {
-    fn lobes(&self) -> LobeSampled {
-        PHASE_LOBE
-    }
-    fn generate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        samplers: &mut [PathSampler],
-        out: &mut BxdfSamples,
-    ) {
-        sample_phase(ctx, samplers, out, |_| self.phase);
-    }
-    fn evaluate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        wi: &[Vec3],
-        value: &mut [Rgb],
-        pdf: &mut [f32],
-    ) {
-        evaluate_phase(ctx, wi, value, pdf, |_| self.phase);
-    }
-    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.albedo);
-    }
-}
-
-/// Samples the phase function `phase(i)` of every point `i` of `ctx` (three dimensions per
-/// point: direction and lobe choice) into `out`, weight 1.
-pub(crate) fn sample_phase(
-    ctx: &ShadingContext<'_>,
-    samplers: &mut [PathSampler],
-    out: &mut BxdfSamples,
-    phase: impl Fn(usize) -> PhaseFunction,
-) {
-    // The direction's two dimensions through the column sampler (the same values as each
-    // sampler's `next_2d`, eight lanes at a time), then each point's lobe dimension.
-    const BLOCK: usize = 64;
-    let vn = ctx.vn();
-    let mut u = [glam::Vec2::ZERO; BLOCK];
-    for start in (0..samplers.len()).step_by(BLOCK) {
-        let end = (start + BLOCK).min(samplers.len());
-        let u = &mut u[..end - start];
-        next_2d_column(&mut samplers[start..end], u);
-        for (k, &u) in u.iter().enumerate() {
-            let i = start + k;
-            let u_lobe = samplers[i].next_1d();
-            let (wi, pdf) = phase(i).sample(vn[i], u, u_lobe);
-            write_phase_sample(out, i, wi, pdf);
-        }
-    }
-}
-
-/// The value and pdf (equal) of the phase function `phase(i)` of every point `i` of `ctx`
-/// towards `wi[i]`.
-pub(crate) fn evaluate_phase(
-    ctx: &ShadingContext<'_>,
-    wi: &[Vec3],
-    value: &mut [Rgb],
-    pdf: &mut [f32],
-    phase: impl Fn(usize) -> PhaseFunction,
-) {
-    let vn = ctx.vn();
-    for i in 0..ctx.num_points() {
-        let p = phase(i).eval(vn[i], wi[i]);
-        value[i] = Rgb::splat(p);
-        pdf[i] = p;
-    }
-}
 
 /// How a homogeneous medium scatters (scene files:
 /// `scattering = "multiple" | "walk" | "bounce" | "single"`).
@@ -175,7 +80,7 @@ pub enum Scattering {
     /// lies inside the volume's bounds), else bounces.
     #[default]
     Multiple,
-    /// Every order, walked inside the volume integrator ([`crate::random_walk`]): only the
+    /// Every order, walked inside the volume integrator ([`crate::media::random_walk`]): only the
     /// walks' exits go back to the global integrator; no light sampling at the events.
     Walk,
     /// Every order: each scattering point goes back to the global integrator, which lights
@@ -318,7 +223,7 @@ impl HomogeneousInterior<'_> {
     /// [`Scattering::Multiple`]'s choice: walk when light sampling at the medium's events
     /// cannot find a light (the boundary blocks shadow rays and no point light lies in the
     /// volume's bounds; area lights inside are found by the walk's own rays).
-    fn walks(&self, ictx: &risotto_engine::context::IntegratorContext<'_>) -> bool {
+    fn walks(&self, ictx: &dyn risotto_engine::plugin::IntegratorContext) -> bool {
         if !self.boundary_blocks_shadows {
             return false;
         }
@@ -462,7 +367,7 @@ impl HomogeneousInterior<'_> {
     /// and independent of the free flight sampled on the segment, which estimates the
     /// other terms of the segment's radiance), or, for a ray weighed against light samples
     /// of the medium (`light`), the point estimator of the weighted integral
-    /// ([`crate::homogeneous_emission`]). Segments with nothing ahead (`tmax = inf`, a ray
+    /// ([`crate::media::emission`]). Segments with nothing ahead (`tmax = inf`, a ray
     /// that has already left the medium) emit nothing. No-op for a medium that does not
     /// emit.
     fn emit_along(
@@ -470,8 +375,8 @@ impl HomogeneousInterior<'_> {
         rays: &Rays,
         tmax: &[f32],
         samplers: &[PathSampler],
-        light: Option<&risotto_engine::volume_lights::VolumeLightMis<'_>>,
-        ictx: &mut IntegratorContext<'_>,
+        light: Option<&risotto_engine::plugin::VolumeLightMis<'_>>,
+        ictx: &mut dyn IntegratorContext,
         out: &mut ShadeGroups,
     ) {
         let m = &self.medium;
@@ -502,8 +407,8 @@ impl HomogeneousInterior<'_> {
 /// surface bound yet: it allows 2000 `coordinate_epsilon`s of `|o| + |t d|` (which bound
 /// the point's rounding).
 #[inline]
-pub(crate) fn event_inside(
-    ictx: &risotto_engine::context::IntegratorContext<'_>,
+pub fn event_inside(
+    ictx: &dyn risotto_engine::plugin::IntegratorContext,
     rays: &Rays,
     i: usize,
     t: f32,
@@ -580,7 +485,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         };
         if walk {
             let light = services.volume_light.as_ref();
-            crate::random_walk::walk_bundle(self.medium, light, rays, samplers, services.ictx, out);
+            random_walk::walk_bundle(self.medium, light, rays, samplers, services.ictx, out);
             return;
         }
         let u = Self::draw(samplers, services.arena);
@@ -605,7 +510,7 @@ impl VolumeIntegrator for HomogeneousInterior<'_> {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &risotto_engine::context::IntegratorContext<'_>,
+        _ictx: &dyn risotto_engine::plugin::IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

@@ -19,21 +19,18 @@
 //!   rows that scatter, one column ([`albedo_column`]); in the random walk, at each event
 //!   ([`PointPattern`]). Both count into the stats' `volume_pattern_evals`.
 //! - `g`: by the phase Bxdf the material builds on the `VolumeScatter` context, through the
-//!   context's parameter cache (parameter [`G_PARAM`], [`PhasePatternBxdf`]); in the random
+//!   context's parameter cache (parameter [`G_PARAM`], [`crate::phase::PhaseBxdf`]); in the random
 //!   walk, at each event.
 //!
 //! A medium's patterns see `P` only: `u` and `v` belong to surfaces, and a graph that reads
 //! them is an error at load time, as are values outside the coefficient's range by the
 //! graph's interval bounds over all of space (`albedo` in `[0, 1]`, `g` in `(-1, 1)`).
 
-use crate::builtin::eval_uncached;
-use crate::media::{evaluate_phase, sample_phase, PhaseBxdf, PHASE_LOBE};
 use glam::Vec3;
-use risotto_components::{LobeSampled, Rays, Rgb};
+use risotto_components::{Rays, Rgb};
 use risotto_engine::plugin::*;
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
-use risotto_systems::sampler::PathSampler;
 
 /// The parameter name under which a material exposes a medium's `g` pattern to
 /// [`ShadingContext::eval_param`].
@@ -126,59 +123,15 @@ pub fn hg_at(value: Rgb) -> PhaseFunction {
     PhaseFunction::HenyeyGreenstein { g: g_of(value) }
 }
 
-/// Henyey-Greenstein with `g` per point (the first channel of the `g` column, a grey
-/// pattern evaluated through the context's cache): as [`PhaseBxdf`] at each point.
-#[derive(Clone, Copy, Debug)]
-pub struct PhasePatternBxdf<'a> {
-    /// `g` per point of the context.
-    pub g: &'a [Rgb],
-    /// Single-scattering albedo, for the `albedo` AOV.
-    pub albedo: Rgb,
-}
-
-impl Bxdf for PhasePatternBxdf<'_> {
-    fn lobes(&self) -> LobeSampled {
-        PHASE_LOBE
-    }
-    fn generate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        samplers: &mut [PathSampler],
-        out: &mut BxdfSamples,
-    ) {
-        sample_phase(ctx, samplers, out, |i| hg_at(self.g[i]));
-    }
-    fn evaluate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        wi: &[Vec3],
-        value: &mut [Rgb],
-        pdf: &mut [f32],
-    ) {
-        evaluate_phase(ctx, wi, value, pdf, |i| hg_at(self.g[i]));
-    }
-    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.albedo);
-    }
-}
-
-/// The Bxdf of a medium's scattering points: [`PhaseBxdf`], or with a `g` pattern a
-/// [`PhasePatternBxdf`] over the pattern's column from `ctx`'s cache (evaluated here for a
-/// context without one).
-pub(crate) fn phase_bxdf<'a>(
+/// `graph` at every point of `ctx`, in the arena (for contexts without a cache).
+pub fn eval_uncached<'a>(
+    graph: &PatternGraph,
     ctx: &ShadingContext<'a>,
-    phase: PhaseFunction,
-    g: Option<&PatternGraph>,
-    albedo: Rgb,
     arena: &'a bumpalo::Bump,
-) -> &'a mut (dyn Bxdf + 'a) {
-    match g {
-        None => arena.alloc(PhaseBxdf { phase, albedo }),
-        Some(graph) => {
-            let g = ctx
-                .eval_param(G_PARAM)
-                .unwrap_or_else(|| eval_uncached(graph, ctx, arena));
-            arena.alloc(PhasePatternBxdf { g, albedo })
-        }
-    }
+) -> &'a [Rgb] {
+    let n = ctx.num_points();
+    let out = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
+    let scratch = arena.alloc_slice_fill_copy(graph.scratch_len(n), Rgb::BLACK);
+    pattern::eval_with(graph, ctx.p(), ctx.u(), ctx.v(), out, scratch);
+    out
 }

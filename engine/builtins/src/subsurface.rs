@@ -2,7 +2,7 @@
 //! interior given the way artists give it -- the surface colour (`albedo`, the
 //! multiple-scattering albedo) and how far light travels (`mean_free_path`, per
 //! `unit_length` world units) -- turned into the coefficients of a homogeneous medium that
-//! the random walk ([`crate::random_walk`]) runs in (`mode = "random_walk"`), or into the
+//! the random walk ([`crate::media::random_walk`]) runs in (`mode = "random_walk"`), or into the
 //! normalized diffusion profile of [`crate::diffusion`] (`mode = "diffusion"`).
 //!
 //! # From albedo to single-scattering albedo
@@ -43,7 +43,6 @@
 //! SSDiffusion evaluates its parameters at the entry point's context too). Medium patterns
 //! see `P` only (`u`, `v` belong to surfaces).
 
-use crate::builtin::{BuiltinMaterial, Interior, Surface};
 use crate::media::{HomogeneousMedium, Scattering};
 use glam::Vec3;
 use risotto_components::Rgb;
@@ -56,7 +55,7 @@ use std::sync::Arc;
 /// `mode = "random_walk" | "diffusion"`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SubsurfaceMode {
-    /// A path-traced walk inside the boundary ([`crate::random_walk`]).
+    /// A path-traced walk inside the boundary ([`crate::media::random_walk`]).
     #[default]
     RandomWalk,
     /// Christensen-Burley normalized diffusion with probe rays ([`crate::diffusion`]).
@@ -196,36 +195,6 @@ impl SubsurfaceParams {
         let walk = self.medium();
         walk.sigma_s * (0.75 * (1.0 - self.g))
     }
-
-    /// The material: a smooth dielectric (shadow rays blocked, as a real boundary does)
-    /// over the walked medium.
-    pub fn material(&self) -> BuiltinMaterial {
-        self.material_with(SubsurfacePatterns::default())
-    }
-
-    /// [`Self::material`] with `albedo` and `mean_free_path` from `patterns` where they
-    /// are given (read at each ray's entry point, see the module docs).
-    pub fn material_with(&self, patterns: SubsurfacePatterns) -> BuiltinMaterial {
-        let patterned = (!patterns.is_empty()).then(|| {
-            Arc::new(PatternedSubsurface {
-                params: *self,
-                patterns,
-            })
-        });
-        BuiltinMaterial {
-            surface: Surface::Dielectric {
-                ior: self.ior,
-                tint: Rgb::WHITE,
-                cheap_shadows: false,
-            },
-            interior: Interior::Subsurface(SubsurfaceInteriorParams {
-                walk: self.medium(),
-                diffusion: self.diffusion(),
-                mode: self.mode,
-                patterned,
-            }),
-        }
-    }
 }
 
 /// What a `subsurface` material's interior is built from: both modes' media (the render's
@@ -341,7 +310,7 @@ impl risotto_engine::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
                             (m.sigma_t, m.sigma_s)
                         })
                         .collect();
-                    crate::random_walk::walk_bundle_per_ray(
+                    crate::media::random_walk::walk_bundle_per_ray(
                         self.walk.medium,
                         &per_ray,
                         rays,
@@ -374,7 +343,7 @@ impl risotto_engine::plugin::VolumeIntegrator for SubsurfaceInterior<'_> {
         &self,
         segments: &risotto_engine::plugin::Segments,
         samplers: &mut [risotto_systems::sampler::PathSampler],
-        ictx: &risotto_engine::context::IntegratorContext<'_>,
+        ictx: &dyn risotto_engine::plugin::IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

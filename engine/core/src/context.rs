@@ -1,10 +1,10 @@
 //! The integrator context (RIS `RixIntegratorContext`): the renderer's ray-tracing services
 //! for global and volume integrators.
 
+use crate::plugin::{IntegratorContext, PluginTechniques};
 use crate::scene::CompiledScene;
 use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::stats::{System, SystemStats, VolumeEvent};
-use crate::technique::PluginTechniques;
 use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
 use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
@@ -32,7 +32,7 @@ pub struct HitScratch {
 /// Ray-tracing services bound to one compiled scene and one worker: everything a global or
 /// volume integrator gets from the renderer (the seed's `RixIntegratorContext`). Built-in
 /// plug-ins see exactly what a user's plug-in sees: its methods, nothing behind them.
-pub struct IntegratorContext<'s> {
+pub struct RenderContext<'s> {
     /// The scene (the engine's own stages read it; plug-ins get its parts through methods).
     pub(crate) scene: &'s CompiledScene,
     /// The worker's statistics (plug-ins count through the `count_*` methods).
@@ -45,7 +45,7 @@ pub struct IntegratorContext<'s> {
     violations: std::cell::Cell<u64>,
 }
 
-impl<'s> IntegratorContext<'s> {
+impl<'s> RenderContext<'s> {
     /// A context for `scene`, recording into `stats`.
     pub fn new(scene: &'s CompiledScene, stats: &'s mut SystemStats) -> Self {
         Self::with_scratch(scene, stats, HitScratch::default())
@@ -57,7 +57,7 @@ impl<'s> IntegratorContext<'s> {
         stats: &'s mut SystemStats,
         scratch: HitScratch,
     ) -> Self {
-        IntegratorContext {
+        RenderContext {
             scene,
             stats,
             scratch,
@@ -67,55 +67,58 @@ impl<'s> IntegratorContext<'s> {
         }
     }
 
-    /// Records `n` sampled extinctions above their majorant's bound
-    /// ([`SystemStats::majorant_violations`]); callable from a volume's `transmission`,
-    /// which sees the context shared. They reach the render's stats when the context ends.
-    pub fn count_majorant_violations(&self, n: u64) {
-        self.violations.set(self.violations.get() + n);
-    }
-
     /// The violations [`Self::count_majorant_violations`] recorded so far, reset to 0.
     pub fn take_majorant_violations(&self) -> u64 {
         self.violations.replace(0)
     }
 
-    /// Counts `n` volume events of kind `event` (the stats' `volume_events`).
-    pub fn count_volume_events(&mut self, event: VolumeEvent, n: usize) {
+    /// The context with the render's choices for plug-in techniques, which plug-ins read
+    /// through [`Self::technique`].
+    pub fn with_techniques(mut self, techniques: PluginTechniques) -> Self {
+        self.techniques = techniques;
+        self
+    }
+
+    /// This context, telling volumes' `transmission` whether its `emission` output is used
+    /// (default `true`).
+    pub fn with_emission_wanted(mut self, wanted: bool) -> Self {
+        self.emission_wanted = wanted;
+        self
+    }
+
+    /// Gives the buffers back for the next context.
+    pub fn into_scratch(mut self) -> HitScratch {
+        std::mem::take(&mut self.scratch)
+    }
+}
+
+impl IntegratorContext for RenderContext<'_> {
+    fn count_majorant_violations(&self, n: u64) {
+        self.violations.set(self.violations.get() + n);
+    }
+
+    fn count_volume_events(&mut self, event: VolumeEvent, n: usize) {
         self.stats.volume_event(event, n);
     }
 
-    /// Counts `n` pattern evaluations a volume made point by point (medium coefficients):
-    /// they add to the stats' `pattern_evals` and, of those, `volume_pattern_evals`.
-    pub fn count_volume_pattern_evals(&mut self, n: u64) {
+    fn count_volume_pattern_evals(&mut self, n: u64) {
         self.stats.pattern_evals += n;
         self.stats.volume_pattern_evals += n;
     }
 
-    /// The scene's axis-aligned bounds `(min, max)` over every primitive.
-    pub fn scene_bounds(&self) -> (Vec3, Vec3) {
+    fn scene_bounds(&self) -> (Vec3, Vec3) {
         self.scene.geometry.bounds()
     }
 
-    /// The render's `max_depth`: the most path segments a path may have
-    /// ([`RenderSettings::max_depth`](crate::scene::RenderSettings::max_depth); `u32::MAX`
-    /// for unbounded). A volume integrator that walks many events per call stops its walks
-    /// there, as the global integrator would.
-    pub fn max_depth(&self) -> u32 {
+    fn max_depth(&self) -> u32 {
         self.scene.settings.max_depth
     }
 
-    /// Every light of the scene, as light sampling without MIS sees them (for in-volume
-    /// light sampling, e.g. equiangular sampling towards point lights).
-    pub fn lights(&self) -> &'s LightSet {
+    fn lights(&self) -> &LightSet {
         &self.scene.lights
     }
 
-    /// The closest surface hit of each bare ray (`origin`, `direction`, `tmin..tmax`),
-    /// without shading points: for volume integrators that trace their own rays (random
-    /// walks, probe rays). `out` is resized to the rays; a miss has `prim == NO_HIT`. Read
-    /// a hit's surface with [`Self::surface_at`] and its shape with [`Self::shape_of`].
-    /// Counted as closest-hit intersection in the stats.
-    pub fn closest_hits(
+    fn closest_hits(
         &mut self,
         origin: &[Vec3],
         direction: &[Vec3],
@@ -147,10 +150,7 @@ impl<'s> IntegratorContext<'s> {
         });
     }
 
-    /// The surface at a hit of [`Self::closest_hits`] (primitive `prim` at distance `t`
-    /// along `origin + t direction`, barycentrics `b1`, `b2`): point, geometric normal,
-    /// error bound.
-    pub fn surface_at(
+    fn surface_at(
         &self,
         prim: u32,
         origin: Vec3,
@@ -164,81 +164,36 @@ impl<'s> IntegratorContext<'s> {
             .surface_at(prim, origin, direction, t, b1, b2)
     }
 
-    /// The shape primitive `prim` belongs to (what [`ShadingContext::shape`] says of a
-    /// shading point; a volume stack entry's `shape`).
-    ///
-    /// [`ShadingContext::shape`]: crate::shading_context::ShadingContext::shape
-    pub fn shape_of(&self, prim: u32) -> u32 {
+    fn shape_of(&self, prim: u32) -> u32 {
         self.scene.prim_shape[prim as usize]
     }
 
-    /// The distance from `p` to the nearest surface of the scene, at most `cap` (an empty
-    /// ball around `p`: a walk may take any step shorter than it without tracing a ray).
-    pub fn clearance(&self, p: Vec3, cap: f32) -> f32 {
+    fn clearance(&self, p: Vec3, cap: f32) -> f32 {
         risotto_systems::clearance::clearance(&self.scene.geometry, p, cap)
     }
 
-    /// The context with the render's choices for plug-in techniques, which plug-ins read
-    /// through [`Self::technique`].
-    pub fn with_techniques(mut self, techniques: PluginTechniques) -> Self {
-        self.techniques = techniques;
-        self
-    }
-
-    /// This context, telling volumes' `transmission` whether its `emission` output is used
-    /// (default `true`).
-    pub fn with_emission_wanted(mut self, wanted: bool) -> Self {
-        self.emission_wanted = wanted;
-        self
-    }
-
-    /// Whether the caller of [`VolumeIntegrator::transmission`](crate::plugin::VolumeIntegrator::transmission)
-    /// uses its `emission` output. Where it does not (the path tracer adds a built-in
-    /// medium's emission along its path rays, so it drops what shadow rays gather), an
-    /// integrator may leave `emission` black and run a cheaper transmittance estimator.
-    pub fn emission_wanted(&self) -> bool {
+    fn emission_wanted(&self) -> bool {
         self.emission_wanted
     }
 
-    /// The value this render chose for the plug-in technique `name` (one a material
-    /// declares, [`BxdfFactory::techniques`](crate::plugin::BxdfFactory::techniques));
-    /// `None`: its default, usually "as the material says".
-    pub fn technique(&self, name: &str) -> Option<&'static str> {
+    fn technique(&self, name: &str) -> Option<&'static str> {
         self.techniques.get(name)
     }
 
-    /// Every plug-in technique choice of this render.
-    pub fn techniques(&self) -> PluginTechniques {
+    fn techniques(&self) -> PluginTechniques {
         self.techniques
     }
 
-    /// Gives the buffers back for the next context.
-    pub fn into_scratch(mut self) -> HitScratch {
-        std::mem::take(&mut self.scratch)
-    }
-
-    /// IOR outside `shape` for a ray travelling with `stack`: the IOR of the innermost volume
-    /// that is not `shape`'s own interior (1 in vacuum).
-    pub fn ior_outside(&self, stack: &VolumeStack, shape: u32) -> f32 {
+    fn ior_outside(&self, stack: &VolumeStack, shape: u32) -> f32 {
         ior_outside(self.scene, stack, shape)
     }
 
-    /// Traces `rays` to their nearest surface hits and appends the hits to `out`, grouped by
-    /// material (each group contiguous), as [`ShadingMode::Scatter`] groups; rays that escape
-    /// are appended to `out.misses`. Points carry `ray_id` = index into `rays` and
-    /// transmission 1.
-    pub fn nearest_hits(&mut self, rays: &Rays, out: &mut ShadeGroups) {
+    fn nearest_hits(&mut self, rays: &Rays, out: &mut ShadeGroups) {
         self.trace(rays);
         self.shade_traced(rays, None, out);
     }
 
-    /// The first half of [`nearest_hits`](Self::nearest_hits): traces `rays` to their
-    /// nearest surface hits and returns each ray's hit distance (`f32::INFINITY` for a
-    /// miss), without building shading points. A volume integrator that decides from the
-    /// distances which rays stop inside (free-flight sampling) then shades only the others
-    /// with [`shade_traced`](Self::shade_traced), instead of building every point and
-    /// dropping most of them.
-    pub fn trace(&mut self, rays: &Rays) -> &[f32] {
+    fn trace(&mut self, rays: &Rays) -> &[f32] {
         let n = rays.len();
         let geometry = &self.scene.geometry;
         let hits = &mut self.scratch.hits;
@@ -270,9 +225,7 @@ impl<'s> IntegratorContext<'s> {
         &hits.t[..n]
     }
 
-    /// Where ray `i` of the last [`trace`](Self::trace) (of `rays`) hits: the point, the
-    /// surface's geometric normal and the point's error bound; `None` for a miss.
-    pub fn traced_surface(&self, rays: &Rays, i: usize) -> Option<SurfaceSample> {
+    fn traced_surface(&self, rays: &Rays, i: usize) -> Option<SurfaceSample> {
         let h = &self.scratch.hits;
         if h.prim[i] == NO_HIT {
             return None;
@@ -288,14 +241,7 @@ impl<'s> IntegratorContext<'s> {
         Some(s)
     }
 
-    /// The second half of [`nearest_hits`](Self::nearest_hits), for the rays of the last
-    /// [`trace`](Self::trace) (which must have been of `rays`): appends the hits and misses
-    /// of the rays `i` with `keep[i]` (every ray for `None`) to `out`, exactly as
-    /// `nearest_hits` would have appended them, in the same order, less the others.
-    ///
-    /// # Panics
-    /// When `keep` or the last trace is not as long as `rays`.
-    pub fn shade_traced(&mut self, rays: &Rays, keep: Option<&[bool]>, out: &mut ShadeGroups) {
+    fn shade_traced(&mut self, rays: &Rays, keep: Option<&[bool]>, out: &mut ShadeGroups) {
         let n = rays.len();
         assert_eq!(
             self.scratch.hits.len(),
@@ -385,7 +331,7 @@ impl<'s> IntegratorContext<'s> {
 
 /// The majorant violations counted through the shared context and not taken yet go to the
 /// worker's stats when the context ends.
-impl Drop for IntegratorContext<'_> {
+impl Drop for RenderContext<'_> {
     fn drop(&mut self) {
         self.stats.majorant_violations += self.violations.replace(0);
     }

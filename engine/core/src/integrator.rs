@@ -2,7 +2,7 @@
 //! shares: a tile's samples are cut into batches of paths, the integrator runs each batch to
 //! completion, and the paths' radiance is splatted into the tile's film.
 //!
-//! The path tracer ([`PathTracer`]) is one integrator; an
+//! The path tracer ([`PathTracer`](crate::path_tracer::PathTracer)) is one integrator; an
 //! integrator that offers volume integrators no lighting delegate (as RenderMan's PxrVCM does
 //! not) is another, and volume integrators must work with it (`tests/integrators.rs` has one).
 
@@ -12,8 +12,6 @@ use bumpalo::Bump;
 use risotto_components::Paths;
 use risotto_systems::film::{splat, AovFilm, Film};
 use risotto_systems::sampler::pixel_seed;
-
-pub use crate::path_tracer::PathTracer;
 
 /// How direct lighting is estimated; a named technique so its cost and error can be compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -41,12 +39,12 @@ pub struct PathBatch {
     /// [`PathTrace`](crate::path_tracer::PathTrace) and [`crate::replay`]). Defaults to
     /// `None`: nothing is recorded, and the stage loop pays one test per stage and bounce.
     /// Other integrators may ignore it.
-    pub trace: Option<crate::path_tracer::PathTrace>,
+    pub trace: Option<crate::path_record::PathTrace>,
 }
 
 /// A global integrator (RIS `RixIntegrator`): owns light transport for whole batches of
 /// camera paths. It may hand volumes to their volume integrators through the renderer's
-/// services ([`IntegratorContext`](crate::context::IntegratorContext)) and decides whether
+/// services ([`IntegratorContext`](crate::plugin::IntegratorContext)) and decides whether
 /// to offer them a [`LightingDelegate`](crate::plugin::LightingDelegate).
 pub trait Integrator: Sync {
     /// What a worker thread keeps across batches (queues, tables): created once per worker.

@@ -10,9 +10,11 @@
 
 pub mod context;
 pub mod diagnostics;
+pub mod features;
 pub mod integrator;
 mod interior;
 pub mod output;
+pub mod path_record;
 pub mod path_tracer;
 pub mod plugin;
 pub mod render;
@@ -20,8 +22,6 @@ pub mod replay;
 pub mod scene;
 pub mod scratch_dir;
 pub mod shade_groups;
-pub mod shading_context;
 pub mod stats;
 pub mod technique;
 pub mod transmission;
-pub mod volume_lights;

@@ -35,19 +35,28 @@
 //! # let _ = Murky { sigma_a: Rgb::splat(1.0) };
 //! ```
 
-pub use crate::context::IntegratorContext;
+pub mod context;
+pub mod exits;
+pub mod shading_context;
+pub mod technique;
+pub mod volume_light;
+
 pub use crate::shade_groups::{EmittedRadiance, ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
-pub use crate::shading_context::{
-    Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
-    VolumeSampling,
-};
-pub use crate::technique::{Technique, TechniqueValue};
+pub use crate::stats::VolumeEvent;
 use bumpalo::Bump;
+pub use context::IntegratorContext;
+pub use exits::{answer_exits, Exits};
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb};
 pub use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::sampler::PathSampler;
+pub use shading_context::{
+    Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
+    VolumeSampling,
+};
 use std::any::Any;
+pub use technique::{always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue};
+pub use volume_light::{EmitterSupport, VolumeEmitter, VolumeLightMis};
 
 /// What a factory tells the renderer without being asked to build anything (RIS
 /// `GetInstanceHints`). The scene's feature set, and so the scheduler's stage list, is derived
@@ -230,7 +239,7 @@ impl Segments {
 /// phase functions with `begin_scatter(.., ShadingMode::VolumeScatter, ..)`).
 pub struct VolumeServices<'a, 's> {
     /// The renderer's ray-tracing services.
-    pub ictx: &'a mut IntegratorContext<'s>,
+    pub ictx: &'a mut (dyn IntegratorContext + 's),
     /// Direct lighting at in-volume points, when the global integrator offers it.
     pub lighting: Option<&'a mut dyn LightingDelegate>,
     /// The factory whose `begin_interior` built the integrator.
@@ -239,8 +248,8 @@ pub struct VolumeServices<'a, 's> {
     pub arena: &'a Bump,
     /// When the volume's emitter ([`BxdfFactory::volume_emitter`]) is light-sampled: how
     /// to weight the emission gathered along the rays against those light samples
-    /// ([`crate::volume_lights`]). `None`: weight 1.
-    pub volume_light: Option<crate::volume_lights::VolumeLightMis<'a>>,
+    /// ([`crate::plugin::volume_light`]). `None`: weight 1.
+    pub volume_light: Option<VolumeLightMis<'a>>,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).
@@ -278,7 +287,7 @@ pub trait VolumeIntegrator {
         &self,
         segments: &Segments,
         samplers: &mut [PathSampler],
-        ictx: &IntegratorContext<'_>,
+        ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     );
@@ -328,15 +337,15 @@ pub trait BxdfFactory: Send + Sync {
 
     /// The interior's emission as a light, for a shape with bounds `bounds` where the
     /// interior is `support` (next-event estimation towards emissive media,
-    /// [`crate::volume_lights`]). A factory that returns one promises that its integrator
+    /// [`crate::plugin::volume_light`]). A factory that returns one promises that its integrator
     /// weights the emission it gathers along path rays by
     /// [`VolumeServices::volume_light`] and that shadow rays cross its boundary as its path
     /// rays do. Asked once per emissive shape at scene compilation. Defaults to none.
     fn volume_emitter(
         &self,
         bounds: (Vec3, Vec3),
-        support: crate::volume_lights::EmitterSupport,
-    ) -> Option<crate::volume_lights::VolumeEmitter> {
+        support: EmitterSupport,
+    ) -> Option<VolumeEmitter> {
         let _ = (bounds, support);
         None
     }

@@ -7,10 +7,9 @@
 //! are those of the whole render, so such pieces are independent farm tasks that
 //! `risotto merge` (`risotto-tools`) puts back together.
 
-use crate::integrator::{
-    render_tile, Integrator, LightingTechnique, PathTracer, TileFilm, TileWorker,
-};
+use crate::integrator::{render_tile, Integrator, LightingTechnique, TileFilm, TileWorker};
 use crate::output::Image;
+use crate::path_tracer::PathTracer;
 use crate::scene::CompiledScene;
 use crate::stats::{RenderStats, SystemStats};
 use bumpalo::Bump;
@@ -135,7 +134,7 @@ pub struct RenderOptions {
     /// The values chosen for plug-in techniques (those the scene's materials declare, such
     /// as the built-in media's `scattering`, `subsurface` and `tracking`). Defaults to none:
     /// every one at its default.
-    pub plugin_techniques: crate::technique::PluginTechniques,
+    pub plugin_techniques: crate::plugin::PluginTechniques,
     /// Only this window of the image is rendered (same camera, same per-pixel seeds: its
     /// pixels are the bits of the same pixels of the whole render). Defaults to `None`: the
     /// whole image.

@@ -23,9 +23,10 @@
 //! # }
 //! ```
 
-use crate::integrator::{Integrator, PathBatch, PathTracer};
+use crate::integrator::{Integrator, PathBatch};
+use crate::path_record::{PathTrace, TraceVertex, VertexEvent};
 use crate::path_tracer::queues::Queues;
-use crate::path_tracer::{PathTrace, TraceVertex, VertexEvent};
+use crate::path_tracer::PathTracer;
 use crate::render::{name_non_finite_cases, RenderError, RenderOptions};
 use crate::scene::CompiledScene;
 use crate::stats::{RenderStats, SystemStats};

@@ -6,6 +6,7 @@
 //! one BVH over every primitive, a light set, a per-material table of hints, and the
 //! [`Features`] that decide which stages the scheduler runs.
 
+pub use crate::features::Features;
 use crate::plugin::{BxdfFactory, InstanceHints};
 use glam::Vec3;
 use risotto_components::{Rgb, VolumeStack};
@@ -16,6 +17,7 @@ use risotto_systems::lights::{Light, LightSet};
 use std::sync::Arc;
 
 mod compile;
+mod volume_lights;
 
 /// Name of an entity (shape or light), used in messages and stats.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -110,63 +112,6 @@ impl Default for RenderSettings {
     }
 }
 
-/// What a scene contains, as far as the scheduler cares.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Features {
-    /// Some material computes an interior (volume stages run).
-    pub volumes: bool,
-    /// Some material lets rays cross its surface (partitioning by transmit bit runs).
-    pub transmissive: bool,
-    /// Some interior scatters.
-    pub scattering_media: bool,
-    /// Some interior is heterogeneous.
-    pub heterogeneous: bool,
-    /// Some interior is subsurface.
-    pub subsurface: bool,
-    /// Some interior emits.
-    pub emissive_media: bool,
-    /// Some emissive medium is light-sampled ([`crate::volume_lights`]).
-    pub emissive_volume_lights: bool,
-    /// Some surface passes shadow rays (transmission system must walk through surfaces).
-    pub transmission_shadows: bool,
-    /// Some material reads surface `u`, `v` (sphere hits compute theirs,
-    /// [`InstanceHints::READS_SURFACE_UV`]).
-    pub surface_uv: bool,
-    /// Emissive shapes.
-    pub area_lights: bool,
-    /// Distant lights.
-    pub distant_lights: bool,
-    /// Point lights.
-    pub point_lights: bool,
-    /// An environment.
-    pub environment: bool,
-}
-
-impl Features {
-    /// Feature names for the stats' `features` list.
-    pub fn names(&self) -> Vec<String> {
-        let all = [
-            (self.volumes, "volumes"),
-            (self.transmissive, "transmissive_surfaces"),
-            (self.scattering_media, "scattering_media"),
-            (self.heterogeneous, "heterogeneous_media"),
-            (self.subsurface, "subsurface"),
-            (self.emissive_media, "emissive_media"),
-            (self.emissive_volume_lights, "emissive_volume_lights"),
-            (self.transmission_shadows, "transmission_shadows"),
-            (self.surface_uv, "surface_uv"),
-            (self.area_lights, "area_lights"),
-            (self.distant_lights, "distant_lights"),
-            (self.point_lights, "point_lights"),
-            (self.environment, "environment"),
-        ];
-        all.iter()
-            .filter(|(on, _)| *on)
-            .map(|(_, n)| n.to_string())
-            .collect()
-    }
-}
-
 /// A scene being assembled: the world, the materials, the camera and the settings.
 pub struct Scene {
     /// The files a scene file made it from reads (empty for a scene built in code).
@@ -258,7 +203,7 @@ pub struct CompiledScene {
     /// are relative to.
     pub shape_bounds: Vec<(Vec3, Vec3)>,
     /// Per shape: the index (in `mis_lights`) of the volume light its emissive interior
-    /// offered ([`crate::volume_lights`]), or `u32::MAX`.
+    /// offered ([`crate::plugin::volume_light`]), or `u32::MAX`.
     pub volume_light: Vec<u32>,
     /// What compiling changed about the scene as written that a user should know (shapes
     /// hidden by a coincident shape); every render's stats repeat them.
@@ -353,14 +298,14 @@ impl CompiledScene {
     /// shapes' bounds are known), and records each shape's light.
     fn add_volume_lights(&mut self) {
         self.volume_light = vec![u32::MAX; self.shapes.len()];
-        let emitters = crate::volume_lights::collect(self);
+        let emitters = volume_lights::collect(self);
         if emitters.is_empty() {
             return;
         }
         // Only the MIS set: light sampling alone (`lighting = nee`, the lighting delegate)
-        // leaves emissive media to their collision estimator (crate::volume_lights).
+        // leaves emissive media to their collision estimator (crate::plugin::volume_light).
         let mut lights = self.mis_lights.lights().to_vec();
-        for ((shape, _), light) in emitters.iter().zip(crate::volume_lights::lights(&emitters)) {
+        for ((shape, _), light) in emitters.iter().zip(volume_lights::lights(&emitters)) {
             self.volume_light[*shape as usize] = lights.len() as u32;
             lights.push(light);
         }
@@ -369,23 +314,23 @@ impl CompiledScene {
         self.features.emissive_volume_lights = true;
     }
 
-    /// The MIS data of the volume light of `shape`'s interior under `technique`, if it has one
-    /// that the technique samples (only [`LightingTechnique::Mis`](crate::integrator::LightingTechnique::Mis) does).
+    /// The MIS data of the volume light of `shape`'s interior, if it has one and the render
+    /// samples volume lights under MIS (`mis`: the path tracer's `lighting = mis`; neither
+    /// light nor Bxdf sampling alone weighs path rays against volume light samples).
     pub fn volume_light_mis(
         &self,
         shape: u32,
-        technique: crate::integrator::LightingTechnique,
-    ) -> Option<crate::volume_lights::VolumeLightMis<'_>> {
-        if technique != crate::integrator::LightingTechnique::Mis {
+        mis: bool,
+    ) -> Option<crate::plugin::VolumeLightMis<'_>> {
+        if !mis {
             return None;
         }
         let index = *self.volume_light.get(shape as usize)?;
         let set = &self.mis_lights;
         match set.lights().get(index as usize)? {
-            Light::Volume { emitter } => Some(crate::volume_lights::VolumeLightMis {
+            Light::Volume { emitter } => Some(crate::plugin::VolumeLightMis {
                 emitter,
                 selection: set.selection_pmf(index),
-                technique,
             }),
             _ => None,
         }

@@ -1,6 +1,6 @@
 //! What nearest-hit queries answer: shading points grouped by material and shading mode,
 //! plus the rays that escaped (and, from volume integrators, the rays they walked and what
-//! an emissive medium emitted along the rays). Both the renderer's [`IntegratorContext`](crate::context::IntegratorContext)
+//! an emissive medium emitted along the rays). Both the renderer's [`IntegratorContext`](crate::plugin::IntegratorContext)
 //! and volume integrators write it; the global integrator shades it.
 
 use glam::Vec3;

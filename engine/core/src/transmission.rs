@@ -50,12 +50,12 @@ pub enum ShadowEmission {
 /// Attenuates `contribution[i]` of every shadow ray by the transmittance to its light sample
 /// (0 when blocked), and adds what emissive volumes send along it
 /// ([`ShadowEmission::All`]). `volume` is handed to the volumes' `transmission` (through
-/// [`IntegratorContext::technique`](crate::context::IntegratorContext::technique)).
+/// `IntegratorContext::technique`).
 pub fn trace_shadow_rays(
     scene: &CompiledScene,
     shadow: &ShadowRays,
     batch: &PathBatch,
-    volume: crate::technique::PluginTechniques,
+    volume: crate::plugin::PluginTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -80,7 +80,7 @@ pub fn trace_shadow_rays_with(
     scene: &CompiledScene,
     shadow: &ShadowRays,
     batch: &PathBatch,
-    volume: crate::technique::PluginTechniques,
+    volume: crate::plugin::PluginTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -397,7 +397,7 @@ fn attenuate_in_volumes(
     stacks: &[VolumeStack],
     segs: &[(usize, f32, f32)],
     scratch: &mut VolumeScratch,
-    volume: crate::technique::PluginTechniques,
+    volume: crate::plugin::PluginTechniques,
     contribution: &mut [Rgb],
     stats: &mut SystemStats,
     arena: &Bump,
@@ -477,7 +477,7 @@ fn attenuate_in_volumes(
         refill(trans, m, Rgb::WHITE);
         refill(emission, m, Rgb::BLACK);
         let mut scratch_stats = SystemStats::default();
-        let ictx = crate::context::IntegratorContext::new(scene, &mut scratch_stats)
+        let ictx = crate::context::RenderContext::new(scene, &mut scratch_stats)
             .with_techniques(volume)
             .with_emission_wanted(gathers);
         integrator.transmission(segments, samplers, &ictx, trans, emission);

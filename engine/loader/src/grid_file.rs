@@ -1,5 +1,5 @@
 //! Reading density grids: the reference harness's raw float32 + JSON header, and Mitsuba's
-//! `.vol` (and, through [`read_grid_named`], OpenVDB: [`crate::vdb_file`]). Each gives a
+//! `.vol` (and, through [`read_grid_named`], OpenVDB: [`crate::grid_file::vdb`]). Each gives a
 //! [`DensityGrid`] (x fastest, cell-centred; see [`risotto_systems::grid`]).
 //!
 //! # Formats
@@ -20,6 +20,9 @@
 
 use risotto_systems::grid::{voxel_of, DensityGrid, GridValueError};
 use std::path::{Path, PathBuf};
+
+#[cfg(feature = "vdb")]
+pub mod vdb;
 
 /// Largest grid accepted (voxels): 2^28, i.e. 1 GiB of float32 (e.g. 640^3).
 pub const MAX_VOXELS: usize = 1 << 28;
@@ -100,7 +103,7 @@ pub fn is_vdb(path: &Path) -> bool {
 }
 
 /// [`read_grid`], and `.vdb` files as OpenVDB, reading float grid `name`
-/// ([`crate::vdb_file::read_vdb`]).
+/// ([`crate::grid_file::vdb::read_vdb`]).
 pub fn read_grid_named(
     path: &Path,
     header: Option<&Path>,
@@ -119,10 +122,10 @@ pub fn read_grid_named(
     }
 }
 
-/// An OpenVDB file's float grid `name` ([`crate::vdb_file::read_vdb`]).
+/// An OpenVDB file's float grid `name` ([`crate::grid_file::vdb::read_vdb`]).
 #[cfg(feature = "vdb")]
 fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFileError> {
-    crate::vdb_file::read_vdb(path, name)
+    crate::grid_file::vdb::read_vdb(path, name)
 }
 
 /// Without the `vdb` feature an OpenVDB file is an error that says so.

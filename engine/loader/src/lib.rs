@@ -9,5 +9,3 @@ pub mod load;
 pub mod media_params;
 pub mod scene_file;
 pub mod texture_file;
-#[cfg(feature = "vdb")]
-pub mod vdb_file;

@@ -33,7 +33,6 @@ use risotto_engine::scene::{CompileError, LightComponent, RenderSettings, Scene,
 use risotto_systems::camera::{Camera, Projection};
 use risotto_systems::distribution::EnvironmentMap;
 use risotto_systems::geometry::Sphere;
-use risotto_systems::phase::{PhaseFunction, PhaseFunctionError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -302,36 +301,6 @@ fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
         albedo_pattern,
         g_pattern,
     }))
-}
-
-/// `phase = { type = "isotropic" | "hg" | "double_hg", ... }`.
-pub(crate) fn phase_function(p: &MaterialParams) -> Result<PhaseFunction, SceneError> {
-    let kind = p.string("type", None)?;
-    let checked = |r: Result<PhaseFunction, PhaseFunctionError>| {
-        r.map_err(|e| p.error(Some(e.parameter), e.to_string()))
-    };
-    match kind.as_str() {
-        "isotropic" => {
-            p.deny_unknown(&["type"])?;
-            Ok(PhaseFunction::Isotropic)
-        }
-        "hg" => {
-            p.deny_unknown(&["type", "g"])?;
-            checked(PhaseFunction::henyey_greenstein(p.f32("g", Some(0.0))?))
-        }
-        "double_hg" => {
-            p.deny_unknown(&["type", "g1", "g2", "blend"])?;
-            checked(PhaseFunction::double_henyey_greenstein(
-                p.f32("g1", None)?,
-                p.f32("g2", None)?,
-                p.f32("blend", Some(0.5))?,
-            ))
-        }
-        other => Err(p.error(
-            Some("type"),
-            format!("unknown phase function \"{other}\" (known: isotropic, hg, double_hg)"),
-        )),
-    }
 }
 
 fn builtin(

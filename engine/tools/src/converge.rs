@@ -576,6 +576,8 @@ fn most_efficient_converging(
 }
 
 mod measure;
+#[cfg(feature = "plots")]
+pub mod plot;
 pub use measure::{combine_halves, fit_line};
 use measure::{curve, error_time_model, point};
 mod report;

@@ -5,5 +5,3 @@
 pub mod compare;
 pub mod converge;
 pub mod merge;
-#[cfg(feature = "plots")]
-pub mod plot;

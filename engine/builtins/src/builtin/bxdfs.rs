@@ -226,57 +226,5 @@ impl<R: Reflectance> Bxdf for MirrorBxdf<R> {
     }
 }
 
-/// Henyey-Greenstein phase function as a Bxdf for volume points (`vn` = towards where the ray
-/// came from). `albedo` (single-scattering albedo) weights every sample.
-#[derive(Clone, Copy, Debug)]
-pub struct HenyeyGreensteinPhase {
-    /// Mean cosine, in (-1, 1).
-    pub g: f32,
-    /// Single-scattering albedo `sigma_s / sigma_t`.
-    pub albedo: Rgb,
-}
-
-impl Bxdf for HenyeyGreensteinPhase {
-    fn lobes(&self) -> LobeSampled {
-        LobeSampled::SCATTER | LobeSampled::DIFFUSE
-    }
-    fn generate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        samplers: &mut [PathSampler],
-        out: &mut BxdfSamples,
-    ) {
-        let vn = ctx.vn();
-        for_sample_chunks(samplers, |i, u| {
-            let (wi, pdf) = bxdf::hg_sample(self.g, vn[i], u);
-            if pdf > 0.0 {
-                out.wi[i] = wi;
-                // p / pdf = 1 for exact sampling.
-                out.weight[i] = self.albedo;
-                out.pdf[i] = pdf;
-                out.lobe[i] = LobeSampled::SCATTER | LobeSampled::DIFFUSE;
-                out.eta[i] = 1.0;
-            }
-        });
-    }
-    fn evaluate_samples(
-        &mut self,
-        ctx: &ShadingContext<'_>,
-        wi: &[Vec3],
-        value: &mut [Rgb],
-        pdf: &mut [f32],
-    ) {
-        let vn = ctx.vn();
-        for i in 0..ctx.num_points() {
-            let p = bxdf::hg_eval(self.g, vn[i], wi[i]);
-            value[i] = self.albedo * p;
-            pdf[i] = p;
-        }
-    }
-    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.albedo);
-    }
-}
-
 /// The contract's closure that never scatters, under its old path here.
 pub use risotto_engine::plugin::NullBxdf;

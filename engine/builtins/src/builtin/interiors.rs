@@ -7,7 +7,7 @@ use crate::heterogeneous::{HeterogeneousInterior, HeterogeneousMedium};
 use crate::media::{HomogeneousInterior, HomogeneousMedium};
 use bumpalo::Bump;
 use risotto_components::{LobeSampled, Rays, Rgb};
-use risotto_engine::context::IntegratorContext;
+use risotto_engine::plugin::IntegratorContext;
 use risotto_engine::plugin::*;
 use risotto_systems::sampler::PathSampler;
 use std::sync::Arc;
@@ -31,7 +31,7 @@ impl VolumeIntegrator for NullInterior {
         &self,
         _segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
@@ -79,7 +79,7 @@ impl VolumeIntegrator for BeerInterior {
         &self,
         segments: &Segments,
         _samplers: &mut [PathSampler],
-        _ictx: &IntegratorContext<'_>,
+        _ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
@@ -178,6 +178,43 @@ impl Interior {
             Interior::Heterogeneous(medium) => {
                 Some(arena.alloc(HeterogeneousInterior { medium, ctx }))
             }
+        }
+    }
+}
+
+/// The `subsurface` material as a built-in material (here, beside the interior it builds:
+/// the subsurface module itself knows nothing of the built-in material).
+impl crate::subsurface::SubsurfaceParams {
+    /// The material: a smooth dielectric (shadow rays blocked, as a real boundary does)
+    /// over the walked medium.
+    pub fn material(&self) -> super::BuiltinMaterial {
+        self.material_with(crate::subsurface::SubsurfacePatterns::default())
+    }
+
+    /// [`Self::material`] with `albedo` and `mean_free_path` from `patterns` where they
+    /// are given (read at each ray's entry point, see the module docs).
+    pub fn material_with(
+        &self,
+        patterns: crate::subsurface::SubsurfacePatterns,
+    ) -> super::BuiltinMaterial {
+        let patterned = (!patterns.is_empty()).then(|| {
+            Arc::new(crate::subsurface::PatternedSubsurface {
+                params: *self,
+                patterns,
+            })
+        });
+        super::BuiltinMaterial {
+            surface: super::Surface::Dielectric {
+                ior: self.ior,
+                tint: Rgb::WHITE,
+                cheap_shadows: false,
+            },
+            interior: Interior::Subsurface(crate::subsurface::SubsurfaceInteriorParams {
+                walk: self.medium(),
+                diffusion: self.diffusion(),
+                mode: self.mode,
+                patterned,
+            }),
         }
     }
 }

@@ -4,12 +4,12 @@
 
 use super::bxdfs::*;
 use super::interiors::*;
-use crate::media::PhaseBxdf;
-use crate::scatter_patterns::phase_bxdf;
+use crate::phase::{phase_bxdf, PhaseBxdf};
+use crate::scatter_patterns::eval_uncached;
 use bumpalo::Bump;
 use risotto_components::Rgb;
 use risotto_engine::plugin::*;
-use risotto_systems::pattern::{self, PatternGraph};
+use risotto_systems::pattern::PatternGraph;
 use std::sync::Arc;
 
 /// The surface part of a built-in material.
@@ -113,10 +113,9 @@ impl BxdfFactory for BuiltinMaterial {
             // scatter never returns such points; isotropic and black if asked anyway).
             ShadingMode::VolumeScatter => {
                 return match &self.interior {
-                    Interior::Subsurface(params) => arena.alloc(PhaseBxdf {
-                        phase: params.walk.phase,
-                        albedo: params.walk.albedo(),
-                    }),
+                    Interior::Subsurface(params) => {
+                        arena.alloc(PhaseBxdf::new(params.walk.phase, params.walk.albedo()))
+                    }
                     // A `g` pattern is read through the context's cache.
                     Interior::Homogeneous(m) => {
                         phase_bxdf(ctx, m.phase, m.g_pattern.as_deref(), m.albedo(), arena)
@@ -219,12 +218,12 @@ impl BxdfFactory for BuiltinMaterial {
     }
 
     /// A heterogeneous emissive interior behind an index-matched `interface` is a light
-    /// (behind other surfaces path rays do not keep their pdf, `risotto_engine::volume_lights`).
+    /// (behind other surfaces path rays do not keep their pdf, `risotto_engine::plugin::volume_light`).
     fn volume_emitter(
         &self,
         bounds: (glam::Vec3, glam::Vec3),
-        support: risotto_engine::volume_lights::EmitterSupport,
-    ) -> Option<risotto_engine::volume_lights::VolumeEmitter> {
+        support: risotto_engine::plugin::EmitterSupport,
+    ) -> Option<risotto_engine::plugin::VolumeEmitter> {
         match (&self.surface, &self.interior) {
             (Surface::Interface, Interior::Heterogeneous(m)) => m.volume_emitter(bounds, support),
             (Surface::Interface, Interior::Homogeneous(m)) => m.volume_emitter(bounds, support),
@@ -244,19 +243,6 @@ fn pattern_column<'a>(
 ) -> &'a [Rgb] {
     ctx.eval_param(name)
         .unwrap_or_else(|| eval_uncached(graph, ctx, arena))
-}
-
-/// `graph` at every point of `ctx`, in the arena (for contexts without a cache).
-pub(crate) fn eval_uncached<'a>(
-    graph: &PatternGraph,
-    ctx: &ShadingContext<'a>,
-    arena: &'a Bump,
-) -> &'a [Rgb] {
-    let n = ctx.num_points();
-    let out = arena.alloc_slice_fill_copy(n, Rgb::BLACK);
-    let scratch = arena.alloc_slice_fill_copy(graph.scratch_len(n), Rgb::BLACK);
-    pattern::eval_with(graph, ctx.p(), ctx.u(), ctx.v(), out, scratch);
-    out
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! The heterogeneous medium as a light ([`risotto_engine::volume_lights`]): its majorant cells with
+//! The heterogeneous medium as a light ([`risotto_engine::plugin::volume_light`]): its majorant cells with
 //! their emission bounds and tracking bounds.
 
 use super::{emission_floor, HeterogeneousEmission, HeterogeneousMedium};

@@ -365,7 +365,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
         let fields = self.fields();
         let emission_at = |uvw: Vec3, sigma_t: f32| self.emission_at(uvw, sigma_t, &fields);
-        // MIS against light sampling of this medium's emitter (risotto_engine::volume_lights): the
+        // MIS against light sampling of this medium's emitter (risotto_engine::plugin::volume_light): the
         // collision estimator's weight at the ray's tentative collision at `t`.
         let volume_light = services.volume_light;
         let light_weight = |i: usize, t: f32| {
@@ -539,7 +539,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         &self,
         segments: &Segments,
         samplers: &mut [PathSampler],
-        ictx: &risotto_engine::context::IntegratorContext<'_>,
+        ictx: &dyn risotto_engine::plugin::IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {

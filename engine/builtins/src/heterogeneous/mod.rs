@@ -97,7 +97,7 @@ mod interior;
 pub use field::PatternField;
 pub use interior::HeterogeneousInterior;
 
-use crate::media::PhaseBxdf;
+use crate::phase::PhaseBxdf;
 use risotto_components::Rgb;
 use risotto_engine::plugin::{Technique, TechniqueValue};
 use risotto_systems::grid::{DensityGrid, MajorantGrid};
@@ -269,26 +269,7 @@ pub enum HeterogeneousEmission {
     Pattern(Arc<PatternField>),
 }
 
-/// Tentative collisions per majorant-cell width that a ray gets at least in a cell where
-/// the medium emits (see [`HeterogeneousInterior`]'s emission estimators).
-pub const EMISSION_COLLISIONS_PER_CELL: f32 = 1.0;
-
-/// The tentative-collision rate an emitting cell gets at least: [`EMISSION_COLLISIONS_PER_CELL`]
-/// per width of the widest side of a cell, for the box `(lo, hi)` cut into `res` cells (the
-/// widest, not the narrowest: a flat box would otherwise get a rate that a ray travelling
-/// along it could not get through); 0 for a box without extent.
-pub fn emission_floor((lo, hi): (glam::Vec3, glam::Vec3), res: [usize; 3]) -> f32 {
-    let extent = (hi - lo).to_array();
-    let width = (0..3)
-        .map(|a| extent[a] / res[a].max(1) as f32)
-        .filter(|w| *w > 0.0 && w.is_finite())
-        .fold(0.0f32, f32::max);
-    if width > 0.0 {
-        (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
-    } else {
-        0.0
-    }
-}
+pub use crate::media::emission::{emission_floor, EMISSION_COLLISIONS_PER_CELL};
 
 impl HeterogeneousMedium {
     /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
@@ -417,10 +398,7 @@ impl HeterogeneousMedium {
     }
 
     /// The phase function as the Bxdf of the medium's scattering points.
-    pub fn phase_bxdf(&self) -> PhaseBxdf {
-        PhaseBxdf {
-            phase: self.phase,
-            albedo: self.albedo,
-        }
+    pub fn phase_bxdf(&self) -> PhaseBxdf<'static> {
+        PhaseBxdf::new(self.phase, self.albedo)
     }
 }

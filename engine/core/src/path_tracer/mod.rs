@@ -34,16 +34,16 @@ mod trace;
 mod transmission;
 
 use crate::integrator::{Integrator, LightingTechnique, PathBatch};
+pub use crate::path_record::{
+    BxdfSampleRecord, LightSampleRecord, PathTrace, ShadowRayRecord, TraceSegment, TraceVertex,
+    VertexEvent,
+};
 use crate::scene::CompiledScene;
 use crate::stats::{NonFiniteEvent, Stage, SystemStats};
 use bumpalo::Bump;
 pub use direct_lighting::DirectLighting;
 use queues::*;
 use recorder::Recorder;
-pub use recorder::{
-    BxdfSampleRecord, LightSampleRecord, PathTrace, ShadowRayRecord, TraceSegment, TraceVertex,
-    VertexEvent,
-};
 use risotto_components::Paths;
 use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 
@@ -60,7 +60,7 @@ pub struct PathTracer {
     /// Direct-lighting technique.
     pub technique: LightingTechnique,
     /// Technique choices handed to volume integrators.
-    pub techniques: crate::technique::PluginTechniques,
+    pub techniques: crate::plugin::PluginTechniques,
 }
 
 impl Integrator for PathTracer {

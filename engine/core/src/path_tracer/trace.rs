@@ -8,7 +8,7 @@
 use super::direct_lighting::DirectLighting;
 use super::queues::{EscapedRayQueue, HitQueue, Queues, TraceScratch};
 use super::{non_finite_case, PathTracer};
-use crate::context::IntegratorContext;
+use crate::context::RenderContext;
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::interior::bind_interior;
 use crate::plugin::*;
@@ -47,14 +47,14 @@ pub(super) fn nearest_hits(
     } else if hits.incoming.is_empty() && hits.groups.points.is_empty() {
         // First round (the only one unless there are pass-throughs): answer straight into
         // the groups and move the rays over instead of copying them.
-        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+        let mut ictx = RenderContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
             .with_techniques(tracer.techniques);
         ictx.nearest_hits(rays, &mut hits.groups);
         t.hits = ictx.into_scratch();
         std::mem::swap(&mut hits.incoming, rays);
     } else {
         t.answers.clear();
-        let mut ictx = IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+        let mut ictx = RenderContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
             .with_techniques(tracer.techniques);
         ictx.nearest_hits(rays, &mut t.answers);
         t.hits = ictx.into_scratch();
@@ -182,7 +182,7 @@ fn partitioned(
         match stack.innermost().filter(computes_interior) {
             None => {
                 let mut ictx =
-                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+                    RenderContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
                         .with_techniques(tracer.techniques);
                 ictx.nearest_hits(&t.bundle, &mut t.answers);
                 t.hits = ictx.into_scratch();
@@ -218,7 +218,7 @@ fn partitioned(
                     Some(&mut delegate)
                 };
                 let mut ictx =
-                    IntegratorContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
+                    RenderContext::with_scratch(scene, stats, std::mem::take(&mut t.hits))
                         .with_techniques(tracer.techniques);
                 let start = std::time::Instant::now();
                 integrator.nearest_hits(
@@ -230,7 +230,10 @@ fn partitioned(
                         lighting,
                         factory,
                         arena,
-                        volume_light: scene.volume_light_mis(entry.shape, tracer.technique),
+                        volume_light: scene.volume_light_mis(
+                            entry.shape,
+                            tracer.technique == LightingTechnique::Mis,
+                        ),
                     },
                     &mut t.answers,
                 );

@@ -15,7 +15,7 @@ use risotto_components::Rays;
 /// rays (the hit queue's): non-finite cases take their path's depth from them.
 pub(super) fn shadow_rays(
     scene: &CompiledScene,
-    volume: crate::technique::PluginTechniques,
+    volume: crate::plugin::PluginTechniques,
     shadow: &mut ShadowRayQueue,
     incoming: &Rays,
     batch: &mut PathBatch,

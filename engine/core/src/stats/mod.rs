@@ -131,7 +131,7 @@ pub enum VolumeEvent {
     /// Zero in scenes without emissive media, where that code never runs.
     Emission,
     /// A light sample of a volume emitter (next-event estimation towards an emissive
-    /// medium, [`crate::volume_lights`]). Zero in scenes without the
+    /// medium, [`crate::plugin::volume_light`]). Zero in scenes without the
     /// `emissive_volume_lights` feature.
     LightSample,
     /// A scattering event where the medium's free flights can no longer move the point

@@ -6,7 +6,7 @@ use crate::scene_file::{ColourParam, MaterialParams, SceneError};
 use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::pattern::{self, PatternGraph};
-use risotto_systems::phase::PhaseFunction;
+use risotto_systems::phase::{PhaseFunction, PhaseFunctionError};
 use std::sync::Arc;
 
 /// The error for a medium pattern that reads `u` / `v`.
@@ -44,7 +44,7 @@ pub(crate) fn parse_phase(
                  takes numbers",
             ));
         }
-        return Ok((crate::load::phase_function(&p)?, None));
+        return Ok((phase_function(&p)?, None));
     }
     let kind = p.string("type", None)?;
     if kind != "hg" {
@@ -81,4 +81,34 @@ pub(crate) fn parse_phase(
         PhaseFunction::HenyeyGreenstein { g: 0.0 },
         Some(Arc::new(graph)),
     ))
+}
+
+/// `phase = { type = "isotropic" | "hg" | "double_hg", ... }`.
+pub fn phase_function(p: &MaterialParams) -> Result<PhaseFunction, SceneError> {
+    let kind = p.string("type", None)?;
+    let checked = |r: Result<PhaseFunction, PhaseFunctionError>| {
+        r.map_err(|e| p.error(Some(e.parameter), e.to_string()))
+    };
+    match kind.as_str() {
+        "isotropic" => {
+            p.deny_unknown(&["type"])?;
+            Ok(PhaseFunction::Isotropic)
+        }
+        "hg" => {
+            p.deny_unknown(&["type", "g"])?;
+            checked(PhaseFunction::henyey_greenstein(p.f32("g", Some(0.0))?))
+        }
+        "double_hg" => {
+            p.deny_unknown(&["type", "g1", "g2", "blend"])?;
+            checked(PhaseFunction::double_henyey_greenstein(
+                p.f32("g1", None)?,
+                p.f32("g2", None)?,
+                p.f32("blend", Some(0.5))?,
+            ))
+        }
+        other => Err(p.error(
+            Some("type"),
+            format!("unknown phase function \"{other}\" (known: isotropic, hg, double_hg)"),
+        )),
+    }
 }

@@ -212,7 +212,7 @@ impl Sweep {
     /// The plots `converge.png` and `converge.svg` in `dir`.
     #[cfg(feature = "plots")]
     fn write_plots(&self, dir: &Path) -> Result<(), ConvergeError> {
-        crate::plot::plot_sweep(self, &dir.join("converge.png"), &dir.join("converge.svg")).map_err(
+        super::plot::plot_sweep(self, &dir.join("converge.png"), &dir.join("converge.svg")).map_err(
             |e| ConvergeError::Write {
                 path: dir.join("converge.png").display().to_string(),
                 message: e,

@@ -79,19 +79,16 @@
 //! sampler keeps its stratification) comes from a SplitMix64 stream seeded by the path's
 //! sampler state, deterministic per pixel sample.
 
-use risotto_engine::context::IntegratorContext;
-mod exits;
+use risotto_engine::plugin::{answer_exits, Exits, IntegratorContext};
 
-pub(crate) use exits::{answer_exits, Exits};
-
-use crate::homogeneous_emission::emission_along;
-use crate::media::HomogeneousMedium;
+use super::emission::emission_along;
+use super::HomogeneousMedium;
 use crate::scatter_patterns::{hg_at, PointPattern};
 use glam::{Vec2, Vec3};
 use risotto_components::{Hits, Rays, Rgb, NO_HIT};
+use risotto_engine::plugin::VolumeLightMis;
 use risotto_engine::shade_groups::ShadeGroups;
 use risotto_engine::stats::VolumeEvent;
-use risotto_engine::volume_lights::VolumeLightMis;
 use risotto_systems::medium::{
     channel_pdf, emitted_radiance, flights_frozen, flights_may_freeze_within, sample_free_flight,
     FreeFlight,
@@ -165,7 +162,7 @@ impl Walkers {
 /// A random stream seeded by the path's sampler state without drawing from it, `salt`
 /// telling apart the streams of different uses (0: the walk's). SplitMix64 mixes its state
 /// on every draw, so neighbouring seeds give unrelated streams.
-pub(crate) fn sampler_stream(s: &PathSampler, salt: u64) -> SplitMix64 {
+pub fn sampler_stream(s: &PathSampler, salt: u64) -> SplitMix64 {
     let key = ((s.seed as u64) << 32 | s.sample as u64)
         ^ (s.dimension as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
         ^ salt;
@@ -198,14 +195,14 @@ fn carried(b: Rgb, w: Rgb) -> f32 {
 /// sample source; each advances by four dimensions.
 ///
 /// `light`: the medium as a light, whose samples the first step of each walk is weighed
-/// against ([`crate::homogeneous_emission`]; later steps follow scattering events, which
+/// against ([`crate::media::emission`]; later steps follow scattering events, which
 /// sample no light, and keep the exact emission).
 pub fn walk_bundle(
     medium: &HomogeneousMedium,
     light: Option<&VolumeLightMis<'_>>,
     rays: &Rays,
     samplers: &mut [PathSampler],
-    ictx: &mut IntegratorContext<'_>,
+    ictx: &mut dyn IntegratorContext,
     out: &mut ShadeGroups,
 ) {
     let (sigma_t, sigma_s) = (medium.sigma_t, medium.sigma_s);
@@ -226,7 +223,7 @@ pub fn walk_bundle_per_ray(
     per_ray: &[(Rgb, Rgb)],
     rays: &Rays,
     samplers: &mut [PathSampler],
-    ictx: &mut IntegratorContext<'_>,
+    ictx: &mut dyn IntegratorContext,
     out: &mut ShadeGroups,
 ) {
     assert_eq!(per_ray.len(), rays.len(), "one medium per ray");
@@ -239,7 +236,7 @@ fn walk_bundle_in<C: Coefficients>(
     light: Option<&VolumeLightMis<'_>>,
     rays: &Rays,
     samplers: &mut [PathSampler],
-    ictx: &mut IntegratorContext<'_>,
+    ictx: &mut dyn IntegratorContext,
     out: &mut ShadeGroups,
 ) {
     let n = rays.len();

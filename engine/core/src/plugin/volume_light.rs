@@ -1,9 +1,12 @@
-//! Emissive volumes as lights (issue 11): the engine's glue around
-//! [`risotto_systems::volume_lights`].
+//! Emissive volumes as lights (issue 11): the contract's part. A factory offers its
+//! interior's emission as a light ([`BxdfFactory::volume_emitter`](super::BxdfFactory::volume_emitter)(super::BxdfFactory::volume_emitter)),
+//! and its volume integrator weighs what it gathers along path rays against the light samples
+//! of that emitter ([`VolumeLightMis`]). The emitter itself is
+//! [`risotto_systems::volume_lights`]'s; the scene's glue is in `scene/volume_lights.rs`.
 //!
 //! At scene compilation every shape whose material's interior emits is offered to its
-//! factory ([`BxdfFactory::volume_emitter`]); the emitters returned join the MIS light set
-//! (`CompiledScene::mis_lights`) as [`Light::Volume`],
+//! factory ([`BxdfFactory::volume_emitter`](super::BxdfFactory::volume_emitter)); the emitters returned join the MIS light set
+//! (`CompiledScene::mis_lights`) as `Light::Volume`,
 //! selected by power with the other lights (their share capped at one half, see
 //! `LightSet`), so under `lighting = mis` every shading vertex (surfaces and volume-scatter
 //! points) samples them in its next-event estimation. Scenes with such an emitter have the
@@ -21,7 +24,7 @@
 //! Shadow rays end at the sampled point inside the medium, so their transmittance covers the
 //! emitter's own medium up to it; the emitter's emission along them is not added (the
 //! built-in media report emission along path rays,
-//! [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`]).
+//! [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`](super::InstanceHints::INTERIOR_EMITS_ALONG_PATHS)).
 //!
 //! Light sampling alone (`lighting = nee`, and the lighting delegate) does not sample volume
 //! lights: the collision estimator keeps weight 1 there. Next-event estimation alone is no
@@ -38,15 +41,10 @@
 //! weight 1, so an emitter there would count the light twice through cheap shadows or
 //! never through opaque ones.)
 
-use crate::integrator::LightingTechnique;
-use crate::plugin::{BxdfFactory, InstanceHints};
-use crate::scene::CompiledScene;
 use glam::Vec3;
 use risotto_components::Rays;
-use risotto_systems::geometry::SceneGeometry;
-use risotto_systems::lights::{power_heuristic, Light};
+use risotto_systems::lights::power_heuristic;
 pub use risotto_systems::volume_lights::{EmitterSupport, VolumeEmitter};
-use std::sync::Arc;
 
 /// What a volume integrator needs to weight its collision estimator against light sampling
 /// of its own emitter ([`VolumeServices::volume_light`](crate::plugin::VolumeServices)).
@@ -56,8 +54,6 @@ pub struct VolumeLightMis<'a> {
     pub emitter: &'a VolumeEmitter,
     /// Its selection probability in the light set the path tracer samples at vertices.
     pub selection: f32,
-    /// The render's lighting technique.
-    pub technique: LightingTechnique,
 }
 
 impl VolumeLightMis<'_> {
@@ -75,86 +71,13 @@ impl VolumeLightMis<'_> {
     }
 
     /// Whether ray `r`'s emission is weighed against light samples at all: not for camera
-    /// rays, rays with a Dirac lobe or no pdf, nor under `nee` and `bxdf` (neither samples
-    /// volume lights, module docs); [`Self::unidirectional_weight`] is 1 on those.
+    /// rays, rays with a Dirac lobe or no pdf; [`Self::unidirectional_weight`] is 1 on those.
+    /// (Under `nee` and `bxdf`, which sample no volume light, an integrator gets no
+    /// `VolumeLightMis` at all.)
     #[inline]
     pub fn weighs(&self, rays: &Rays, r: usize) -> bool {
         let pdf = rays.pdf[r];
         let plain = rays.depth[r] == 0 || rays.lobe[r].is_specular() || pdf.is_nan() || pdf <= 0.0;
-        !plain && self.technique == LightingTechnique::Mis
+        !plain
     }
-}
-
-/// Where the medium of `shape` emits, when the shape is one a volume emitter can cover:
-/// a sphere (its ball), or a triangle mesh that is its own bounding box (every triangle on
-/// a face of the box, their areas summing to the box's surface). `None` for other shapes.
-fn support(
-    geometry: &SceneGeometry,
-    prims: &[usize],
-    (lo, hi): (Vec3, Vec3),
-) -> Option<EmitterSupport> {
-    let nt = geometry.num_triangles();
-    if let [p] = prims {
-        if *p >= nt {
-            let s = geometry.sphere(*p - nt);
-            return Some(EmitterSupport::Ball {
-                center: s.center,
-                radius: s.radius,
-            });
-        }
-    }
-    if prims.iter().any(|&p| p >= nt) {
-        return None;
-    }
-    let e = hi - lo;
-    let tol = 1e-5 * e.max_element();
-    let mut area = 0.0f64;
-    for &p in prims {
-        let v = geometry.triangle(p);
-        let on_face = (0..3).any(|a| {
-            [lo[a], hi[a]]
-                .iter()
-                .any(|&f| v.iter().all(|q| (q[a] - f).abs() <= tol))
-        });
-        if !on_face {
-            return None;
-        }
-        area += 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length() as f64;
-    }
-    let box_area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x) as f64;
-    ((area - box_area).abs() <= 1e-4 * box_area).then_some(EmitterSupport::Box)
-}
-
-/// The emitters of `scene`'s emissive interiors, as `(shape, emitter)`.
-pub(crate) fn collect(scene: &CompiledScene) -> Vec<(u32, Arc<VolumeEmitter>)> {
-    let mut prims: Vec<Vec<usize>> = vec![Vec::new(); scene.shapes.len()];
-    for (p, &s) in scene.prim_shape.iter().enumerate() {
-        prims[s as usize].push(p);
-    }
-    let mut out = Vec::new();
-    for (s, shape) in scene.shapes.iter().enumerate() {
-        let material = &scene.materials[shape.material as usize];
-        let factory: &dyn BxdfFactory = material.factory.as_ref();
-        if !factory
-            .instance_hints()
-            .contains(InstanceHints::INTERIOR_EMITS)
-        {
-            continue;
-        }
-        let bounds = scene.shape_bounds[s];
-        let Some(support) = support(&scene.geometry, &prims[s], bounds) else {
-            continue;
-        };
-        if let Some(e) = factory.volume_emitter(bounds, support) {
-            out.push((s as u32, Arc::new(e)));
-        }
-    }
-    out
-}
-
-/// The light of each emitter.
-pub(crate) fn lights(emitters: &[(u32, Arc<VolumeEmitter>)]) -> impl Iterator<Item = Light> + '_ {
-    emitters
-        .iter()
-        .map(|(_, e)| Light::Volume { emitter: e.clone() })
 }

@@ -1,5 +1,5 @@
 //! A homogeneous medium's emission along path rays, and the medium as a light
-//! ([`risotto_engine::volume_lights`]).
+//! ([`risotto_engine::plugin::volume_light`]).
 //!
 //! # Along path rays
 //! A ray crossing the medium on `[0, d]` gathers `int_0^d T(s) j ds` with
@@ -39,12 +39,11 @@
 //! (a light sample from the vertex the ray left estimates the unscattered emission only)
 //! and keep the exact integral.
 
-use crate::heterogeneous::emission_floor;
-use crate::media::HomogeneousMedium;
-use crate::random_walk::sampler_stream;
+use super::random_walk::sampler_stream;
+use super::HomogeneousMedium;
 use glam::Vec3;
 use risotto_components::{Rays, Rgb};
-use risotto_engine::volume_lights::{EmitterSupport, VolumeEmitter, VolumeLightMis};
+use risotto_engine::plugin::{EmitterSupport, VolumeEmitter, VolumeLightMis};
 use risotto_systems::grid::DensityGrid;
 use risotto_systems::medium::{emitted_radiance, transmittance};
 use risotto_systems::sampler::PathSampler;
@@ -134,4 +133,25 @@ pub(crate) fn emission_along(
         sum += t * light.unidirectional_weight(rays, i, o + dir * s);
     }
     m.emission * sum * (1.0 / rate)
+}
+
+/// Tentative collisions per majorant-cell width that a ray gets at least in a cell where
+/// the medium emits (see [`HeterogeneousInterior`](crate::heterogeneous::HeterogeneousInterior)'s emission estimators).
+pub const EMISSION_COLLISIONS_PER_CELL: f32 = 1.0;
+
+/// The tentative-collision rate an emitting cell gets at least: [`EMISSION_COLLISIONS_PER_CELL`]
+/// per width of the widest side of a cell, for the box `(lo, hi)` cut into `res` cells (the
+/// widest, not the narrowest: a flat box would otherwise get a rate that a ray travelling
+/// along it could not get through); 0 for a box without extent.
+pub fn emission_floor((lo, hi): (glam::Vec3, glam::Vec3), res: [usize; 3]) -> f32 {
+    let extent = (hi - lo).to_array();
+    let width = (0..3)
+        .map(|a| extent[a] / res[a].max(1) as f32)
+        .filter(|w| *w > 0.0 && w.is_finite())
+        .fold(0.0f32, f32::max);
+    if width > 0.0 {
+        (EMISSION_COLLISIONS_PER_CELL / width).min(f32::MAX)
+    } else {
+        0.0
+    }
 }

@@ -1,31 +1,41 @@
-//! The exits of transport run inside a volume integrator (the random walk, diffusion): the
+//! The exits of transport a volume integrator runs itself (a random walk, diffusion): the
 //! walkers that reached a surface, and their answer to the global integrator as ordinary
-//! hits.
+//! hits, weighted by the walk, with the walk's scattering events reported so that they count
+//! as bounces ([`ShadeGroups::walked`]). A service of the contract: every integrator that
+//! walks its own rays answers them this way.
 
+use super::IntegratorContext;
+use crate::shade_groups::ShadeGroups;
 use glam::Vec3;
 use risotto_components::{Rays, Rgb};
-use risotto_engine::context::IntegratorContext;
-use risotto_engine::shade_groups::ShadeGroups;
 
 /// Walkers that reached a surface (or left the scene): each one's ray id in the bundle,
 /// last segment, weight and scattering events (0: the ray passed unscattered).
-#[derive(Default)]
-pub(crate) struct Exits {
-    pub(crate) ray: Vec<u32>,
-    pub(crate) origin: Vec<Vec3>,
-    pub(crate) direction: Vec<Vec3>,
-    pub(crate) tmin: Vec<f32>,
-    pub(crate) tmax: Vec<f32>,
-    pub(crate) weight: Vec<Rgb>,
-    pub(crate) events: Vec<u32>,
+#[derive(Clone, Debug, Default)]
+pub struct Exits {
+    /// The walker's ray: an index into the bundle the integrator answers.
+    pub ray: Vec<u32>,
+    /// Start of the walk's last segment (the last event, or the ray's origin).
+    pub origin: Vec<Vec3>,
+    /// Direction of the last segment.
+    pub direction: Vec<Vec3>,
+    /// Where the last segment starts along `direction` (0 from an event).
+    pub tmin: Vec<f32>,
+    /// Where it ends at the most.
+    pub tmax: Vec<f32>,
+    /// The walk's weight (everything inside the volume; not the ray's throughput).
+    pub weight: Vec<Rgb>,
+    /// Scattering events of the walk (0: the ray passed unscattered).
+    pub events: Vec<u32>,
 }
 
 /// Traces the exits' last segments again (one ray per walk, against hundreds traced by the
-/// walk itself) and appends their hits and misses to `out` as the rays' answers.
-pub(crate) fn answer_exits(
+/// walk itself) and appends their hits and misses to `out` as the answers of the rays of
+/// `rays` they belong to, the walk's weight multiplied into their `transmission`.
+pub fn answer_exits(
     rays: &Rays,
     exits: &Exits,
-    ictx: &mut IntegratorContext<'_>,
+    ictx: &mut dyn IntegratorContext,
     out: &mut ShadeGroups,
 ) {
     if exits.ray.is_empty() {
