@@ -2,7 +2,7 @@
 //! each mutated file either fails with an error that names the file, or loads, compiles and
 //! renders (shrunk to 6 x 6 pixels, 1 spp, depth <= 6) to a finite image with nothing dropped.
 //! Never a panic. The parser-only fuzzer with more cases is
-//! `engine/src/scene_file/tests.rs::mutated_scenes_never_panic`. Both run longer, or on
+//! `engine/loader/src/scene_file/tests.rs::mutated_scenes_never_panic`. Both run longer, or on
 //! other streams, with `RISOTTO_FUZZ_CASES` and `RISOTTO_FUZZ_SEED` (README, "Testing").
 
 use risotto::engine::render::{render, RenderOptions};

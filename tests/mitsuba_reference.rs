@@ -169,7 +169,7 @@ fn subsurface_like_matches_mitsuba() {
     // sphere (ior 1.33), no Russian roulette: hundreds of scattering events per path, every
     // exit through the Fresnel boundary. The reference is the noisiest of the suite (896
     // spp, noise 0.0214 per 256x256 pixel, so 0.0054 per 4x4 block). The interior walks
-    // inside its volume integrator (engine/src/random_walk.rs). Measured (64x64, 64 spp):
+    // inside its volume integrator (engine/builtins/src/media/random_walk.rs). Measured (64x64, 64 spp):
     // means within 0.11 %, rmse 0.081 against an iid prediction of 0.083 (per-event
     // bounces, before the walk: 0.075 and 0.076 at 7x the time).
     check_noisy(

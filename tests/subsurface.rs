@@ -1,5 +1,5 @@
-//! The random walk inside a volume (`engine/src/random_walk.rs`) and the `subsurface`
-//! material (`engine/src/subsurface.rs`) against results that are not the walk itself:
+//! The random walk inside a volume (`engine/builtins/src/media/random_walk.rs`) and the `subsurface`
+//! material (`engine/builtins/src/subsurface.rs`) against results that are not the walk itself:
 //! white furnaces, Chandrasekhar's exact diffuse reflection of a semi-infinite isotropic
 //! half-space, the per-event global bounces of the homogeneous interior, and the albedo
 //! inversion against the exact spherical albedo.
@@ -634,7 +634,7 @@ fn thin_slab(
 
 /// The diffusion mode's feeler depth logic on slabs 0.11 to 3.3 profile shapes `d` thick
 /// (0.1 to 3 mean free paths): the far side found within the profile's reach splits the
-/// energy by Kubelka-Munk (`engine/src/diffusion.rs`), so that diffusion reflects and
+/// energy by Kubelka-Munk (`engine/builtins/src/diffusion.rs`), so that diffusion reflects and
 /// transmits what its closed form says (within 3 standard errors + 0.005), conserves energy
 /// (`R + T <= 1`), and is within 0.1 of the random walk in both reflection and transmission
 /// (walk: R 0.047, 0.129, 0.330, 0.588 and T 0.953, 0.867, 0.654, 0.357; diffusion: R 0.068,

@@ -241,7 +241,7 @@ fn pattern_emitters_light_a_floor_as_the_brute_force_integral_says() {
 
 /// A homogeneous emissive box (constant coefficients) is a light too: its path rays that
 /// compete with light samples gather the point estimator of the weighted emission
-/// (`engine/src/homogeneous_emission.rs`), camera rays the exact integral. Its
+/// (`engine/builtins/src/media/emission.rs`), camera rays the exact integral. Its
 /// unidirectional estimate is exact along each segment, so MIS's margin is smaller than
 /// for the heterogeneous media's collision estimator (0.66 of its error here).
 #[test]

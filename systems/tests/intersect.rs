@@ -1473,7 +1473,7 @@ fn exit_hit_far_from_the_origin_just_beyond_tmin_is_found() {
 
 /// Rays on the liquid-in-glass meshes whose origin lies 1 to 40 units back along the line
 /// and whose `tmin` stops 1e-3 to 0.1 short of a surface point (the walk of a shadow ray
-/// through boundaries, `engine/src/transmission.rs`): against brute force, and against an
+/// through boundaries, `engine/core/src/transmission.rs`): against brute force, and against an
 /// independent double-precision reference wherever that is unambiguous, every hit is found
 /// at its distance (also on grazing walls, where the former bound rejected them).
 #[test]

@@ -334,7 +334,7 @@ pub(super) fn max_abs3(v: Vec4) -> f32 {
 /// pbrt-v4's bound (sec. 6.8.7) with two of its worst cases replaced by the actual values,
 /// because it grows with the distance from the origin to the triangle (`max|z|`) where the
 /// error does not: a walk that keeps its origin and advances `tmin` past each hit (shadow
-/// rays through boundaries, `engine/src/transmission.rs`) had exit hits 0.03 beyond `tmin`
+/// rays through boundaries, `engine/core/src/transmission.rs`) had exit hits 0.03 beyond `tmin`
 /// rejected 19 units from its origin on a grazing tumbler wall (bound 0.09).
 /// - The sheared `x' = x - Sx z` is rounded by `gamma(5) (|x'| + |Sx z|)`; pbrt takes
 ///   `|Sx| <= 1`, but `Sx z = d[kx] z'` with the scaled `z' = z / d[kz]`, so
