@@ -30,6 +30,7 @@ mod pass_through;
 pub mod queues;
 mod recorder;
 mod shade;
+mod surface_caches;
 mod trace;
 mod transmission;
 
@@ -38,6 +39,7 @@ pub use crate::path_record::{
     BxdfSampleRecord, LightSampleRecord, PathTrace, ShadowRayRecord, TraceSegment, TraceVertex,
     VertexEvent,
 };
+use crate::plugin::PatternCounters;
 use crate::scene::CompiledScene;
 use crate::stats::{NonFiniteEvent, Stage, SystemStats};
 use bumpalo::Bump;
@@ -46,6 +48,7 @@ use queues::*;
 use recorder::Recorder;
 use risotto_components::Paths;
 use risotto_systems::independent_sampler::INDEPENDENT_BIT;
+use surface_caches::SurfaceCaches;
 
 /// Sampler dimensions each scattering vertex reserves: light position (0, 1), light selection
 /// (2), Russian roulette (3), Bxdf (4..8). Paths start at a multiple of 4, so each group of
@@ -84,6 +87,10 @@ impl Integrator for PathTracer {
             q.emissive_material[shape.material as usize] = true;
         }
         let mut first_bounce = true;
+        // The batch's pattern counters and the last shade stage's surface caches live in the
+        // arena, so the caches can outlive the stage that filled them (`surface_caches`).
+        let counters: &PatternCounters = arena.alloc(PatternCounters::default());
+        let mut surfaces = SurfaceCaches::default();
         while !q.rays.rays.is_empty() {
             // The last bounce's arrived rays are dead: their rows become the storage the
             // continue stage overwrites with the next rays.
@@ -92,7 +99,9 @@ impl Integrator for PathTracer {
                 r.begin_bounce(batch, stats);
             }
             while !q.rays.rays.is_empty() {
-                trace::nearest_hits(self, scene, batch, q, stats, arena);
+                trace::nearest_hits(self, scene, batch, q, stats, arena, counters, &surfaces);
+                // Later rounds trace rays past boundaries, which left no shaded point.
+                surfaces.clear();
                 if let Some(r) = &mut rec {
                     r.traced(scene, q);
                 }
@@ -107,7 +116,17 @@ impl Integrator for PathTracer {
             if let Some(r) = &mut rec {
                 r.before_shade(q);
             }
-            shade::shade_groups(self, scene, batch, q, stats, arena, first_bounce);
+            shade::shade_groups(
+                self,
+                scene,
+                batch,
+                q,
+                stats,
+                arena,
+                counters,
+                &mut surfaces,
+                first_bounce,
+            );
             if let Some(r) = &mut rec {
                 r.shaded(q);
             }
@@ -129,9 +148,10 @@ impl Integrator for PathTracer {
             stats.add_rays(q.rays.rays.len());
             first_bounce = false;
         }
-        stats.pattern_cache_hits += q.counters.hits.take();
-        stats.pattern_evals += q.counters.evals.take();
-        stats.volume_pattern_evals += q.counters.volume_evals.take();
+        stats.pattern_cache_hits += counters.hits.get();
+        stats.pattern_cache_shared += counters.shared.get();
+        stats.pattern_evals += counters.evals.get();
+        stats.volume_pattern_evals += counters.volume_evals.get();
         batch.trace = rec.map(|r| r.trace);
     }
 }

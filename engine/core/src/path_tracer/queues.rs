@@ -165,9 +165,6 @@ pub struct Queues {
     pub group: GroupScratch,
     /// Trace-stage buffers.
     pub trace: TraceScratch,
-    /// Parameter-cache counts of the contexts this worker made (folded into the stats after
-    /// each batch).
-    pub counters: crate::plugin::PatternCounters,
     /// Whether some emissive shape has the material (per material index): the shade stage
     /// looks for emitters only in the groups of those materials.
     pub emissive_material: Vec<bool>,

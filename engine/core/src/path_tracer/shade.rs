@@ -6,9 +6,10 @@
 use super::continuation::continue_group;
 use super::direct_lighting::{sample_lights, LitGroup};
 use super::queues::{scratch, GroupScratch, Queues};
+use super::surface_caches::SurfaceCaches;
 use super::{non_finite_case, PathTracer};
 use crate::integrator::{LightingTechnique, PathBatch};
-use crate::plugin::{ParamCache, ShadingContext};
+use crate::plugin::{InstanceHints, ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
 use crate::stats::{Stage, System, SystemStats};
@@ -26,13 +27,22 @@ use risotto_systems::sampler::{next_4d_column, sample_1d, PathSampler};
 /// The next rays and the shadow rays go into rows made up front for all groups
 /// (`reuse_rows`) and truncated to the rows written after the last group, instead of pushing
 /// row by row: a push checks capacity and stores the length of each of the 15 columns.
-pub(super) fn shade_groups(
+///
+/// The parameter caches of groups whose material computes an interior go to `surfaces`,
+/// for the interiors their rays enter next (`surface_caches`).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the stage's inputs, each named; grouping them would hide which it reads"
+)]
+pub(super) fn shade_groups<'a>(
     tracer: &PathTracer,
     scene: &CompiledScene,
     batch: &mut PathBatch,
     q: &mut Queues,
     stats: &mut SystemStats,
-    arena: &Bump,
+    arena: &'a Bump,
+    counters: &'a PatternCounters,
+    surfaces: &mut SurfaceCaches<'a>,
     first_bounce: bool,
 ) {
     let settings = scene.settings;
@@ -43,7 +53,6 @@ pub(super) fn shade_groups(
         shadow,
         group,
         emissive_material,
-        counters,
         ..
     } = q;
     let GroupScratch {
@@ -217,7 +226,7 @@ pub(super) fn shade_groups(
             _ => System::Bxdf,
         };
         stats.record(system, m, bxdf_start.elapsed().as_secs_f64());
-        next_len += continue_group(
+        let written = continue_group(
             scene,
             paths,
             vertices,
@@ -228,6 +237,14 @@ pub(super) fn shade_groups(
             next_len,
             stats,
         );
+        if grp.mode == ShadingMode::Scatter
+            && scene.material_info[grp.material as usize]
+                .hints
+                .contains(InstanceHints::COMPUTES_INTERIOR)
+        {
+            surfaces.push(next_len..next_len + written, grp.material, cache);
+        }
+        next_len += written;
     }
     next.rays.truncate(next_len);
     // The shadow rays go after those volume integrators queued during the trace stage.

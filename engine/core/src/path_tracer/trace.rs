@@ -7,6 +7,7 @@
 
 use super::direct_lighting::DirectLighting;
 use super::queues::{EscapedRayQueue, HitQueue, Queues, TraceScratch};
+use super::surface_caches::SurfaceCaches;
 use super::{non_finite_case, PathTracer};
 use crate::context::RenderContext;
 use crate::integrator::{LightingTechnique, PathBatch};
@@ -21,13 +22,20 @@ use risotto_systems::sampler::PathSampler;
 
 /// Traces every ray of `q.rays` (leaving it empty), appending the rays to `q.hits.incoming`,
 /// their points to `q.hits.groups` and the escaped ones to `q.escaped`.
-pub(super) fn nearest_hits(
+/// Interiors whose rays all left one group of `surfaces` share that group's parameter cache.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the stage's inputs, each named; grouping them would hide which it reads"
+)]
+pub(super) fn nearest_hits<'a>(
     tracer: &PathTracer,
     scene: &CompiledScene,
     batch: &mut PathBatch,
     q: &mut Queues,
     stats: &mut SystemStats,
-    arena: &Bump,
+    arena: &'a Bump,
+    counters: &'a PatternCounters,
+    surfaces: &SurfaceCaches<'a>,
 ) {
     let (rays, hits, t) = (&mut q.rays.rays, &mut q.hits, &mut q.trace);
     if scene.features.volumes {
@@ -40,7 +48,8 @@ pub(super) fn nearest_hits(
             &mut q.shadow.rays,
             &mut q.group,
             t,
-            &q.counters,
+            counters,
+            surfaces,
             stats,
             arena,
         );
@@ -124,7 +133,7 @@ fn add_emitted(
     clippy::too_many_arguments,
     reason = "the queues it reads and writes, named"
 )]
-fn partitioned(
+fn partitioned<'a>(
     tracer: &PathTracer,
     scene: &CompiledScene,
     batch: &mut PathBatch,
@@ -133,9 +142,10 @@ fn partitioned(
     shadow: &mut risotto_components::ShadowRays,
     group: &mut super::queues::GroupScratch,
     t: &mut TraceScratch,
-    counters: &PatternCounters,
+    counters: &'a PatternCounters,
+    surfaces: &SurfaceCaches<'a>,
     stats: &mut SystemStats,
-    arena: &Bump,
+    arena: &'a Bump,
 ) {
     let n = rays.len();
     // Distinct stacks of this round (few: rays in one scene share a handful of states).
@@ -168,13 +178,27 @@ fn partitioned(
     for (key, range) in &runs {
         let stack = &stacks[(*key / 2) as usize];
         t.bundle.clear();
-        if runs.len() == 1 {
+        let whole = runs.len() == 1;
+        if whole {
             // One bundle holds every ray, in order (the partition is stable): take the
             // table instead of copying it (the caller clears `rays` after the round).
             std::mem::swap(&mut t.bundle, rays);
         } else {
             t.bundle.extend_gather(rays, &t.order[range.clone()]);
         }
+        // Rays that all left one shaded group of the interior's material share its cache,
+        // point `shading_ctx_index` of its context each (module docs of `surface_caches`).
+        let shared = stack
+            .innermost()
+            .filter(computes_interior)
+            .and_then(|e| match whole {
+                true => surfaces.common(0..t.bundle.len(), e.material),
+                false => surfaces.common(
+                    t.order[range.clone()].iter().map(|&r| r as usize),
+                    e.material,
+                ),
+            })
+            .map(|cache| (cache, &*arena.alloc_slice_copy(&t.bundle.shading_ctx_index)));
         for (k, s) in t.bundle.shading_ctx_index.iter_mut().enumerate() {
             *s = k as u32;
         }
@@ -197,7 +221,10 @@ fn partitioned(
                     &t.bundle.direction,
                     entry.material,
                 );
-                let cache = arena.alloc(ParamCache::new(arena, counters));
+                let cache = arena.alloc(match shared {
+                    Some((surface, rows)) => ParamCache::sharing(arena, counters, surface, rows),
+                    None => ParamCache::new(arena, counters),
+                });
                 let (factory, integrator) =
                     bind_interior(scene, stack, entry, &t.bundle_points, cache, arena)
                         .expect("hint COMPUTES_INTERIOR promised an interior");

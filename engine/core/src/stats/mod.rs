@@ -270,6 +270,10 @@ pub struct SystemStats {
     pub volume_events: [u64; VolumeEvent::COUNT],
     /// Pattern-cache lookups answered from a shading context's cache.
     pub pattern_cache_hits: u64,
+    /// Parameter columns an interior's context took from the cache of the surface its rays
+    /// left from (the seed's shared pattern cache: not evaluated again); not in
+    /// `pattern_evals`.
+    pub pattern_cache_shared: u64,
     /// Parameter evaluations (pattern-cache misses).
     pub pattern_evals: u64,
     /// Of `pattern_evals`, the patterns volumes evaluated (medium coefficients, point by
@@ -437,6 +441,7 @@ impl SystemStats {
             *a += b;
         }
         self.pattern_cache_hits += other.pattern_cache_hits;
+        self.pattern_cache_shared += other.pattern_cache_shared;
         self.pattern_evals += other.pattern_evals;
         self.volume_pattern_evals += other.volume_pattern_evals;
     }

@@ -125,6 +125,7 @@ impl Serialize for RenderStats {
         }
         if c.pattern_cache_hits + c.pattern_evals > 0 {
             m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
+            m.serialize_entry("pattern_cache_shared", &c.pattern_cache_shared)?;
             m.serialize_entry("pattern_evals", &c.pattern_evals)?;
             m.serialize_entry("volume_pattern_evals", &c.volume_pattern_evals)?;
         }
