@@ -14,6 +14,7 @@ mod common;
 use bumpalo::Bump;
 use common::{camera, environment, settings};
 use glam::Vec3;
+use risotto::builtins::builtin::BeerInterior;
 use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::plugin::*;
 use risotto::engine::render::{render, RenderOptions};
@@ -58,34 +59,32 @@ fn sigma_a(ictx: &dyn IntegratorContext) -> f32 {
     }
 }
 
+/// Beer-Lambert absorption (the built-in `beer` interior) with the coefficient the render's
+/// choice of `absorption` gives, read through the context on every call.
 struct SmokeInterior;
 
 impl VolumeIntegrator for SmokeInterior {
     fn nearest_hits(
         &mut self,
         rays: &Rays,
-        _samplers: &mut [PathSampler],
-        _lobes_wanted: LobeSampled,
+        samplers: &mut [PathSampler],
+        lobes_wanted: LobeSampled,
         services: VolumeServices<'_, '_>,
         out: &mut ShadeGroups,
     ) {
-        let s = sigma_a(services.ictx);
-        services.ictx.nearest_hits(rays, out);
-        out.attenuate_segments(rays, |d| Rgb::splat((-s * d).exp()));
+        let sigma_a = Rgb::splat(sigma_a(services.ictx));
+        BeerInterior { sigma_a }.nearest_hits(rays, samplers, lobes_wanted, services, out);
     }
     fn transmission(
         &self,
         segments: &Segments,
-        _samplers: &mut [PathSampler],
+        samplers: &mut [PathSampler],
         ictx: &dyn IntegratorContext,
         trans: &mut [Rgb],
         emission: &mut [Rgb],
     ) {
-        let s = sigma_a(ictx);
-        for (t, &d) in trans.iter_mut().zip(&segments.length) {
-            *t = Rgb::splat((-s * d).exp());
-        }
-        emission.fill(Rgb::BLACK);
+        let sigma_a = Rgb::splat(sigma_a(ictx));
+        BeerInterior { sigma_a }.transmission(segments, samplers, ictx, trans, emission);
     }
 }
 

@@ -15,14 +15,13 @@ mod common;
 use bumpalo::Bump;
 use common::{camera, environment, settings};
 use glam::Vec3;
-use risotto::builtins::builtin::DielectricBxdf;
-use risotto::components::{LobeSampled, Rays, Rgb};
+use risotto::builtins::builtin::{BeerInterior, DielectricBxdf};
+use risotto::components::Rgb;
 use risotto::engine::plugin::*;
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{Scene, ShapeGeometry};
 use risotto::systems::geometry::Sphere;
 use risotto::systems::pattern::{Axis, Node, PatternGraph};
-use risotto::systems::sampler::PathSampler;
 
 /// Which closures pull `sigma`.
 #[derive(Clone, Copy, PartialEq)]
@@ -39,44 +38,6 @@ struct Glass {
 
 /// The absorption coefficient every point of the pattern has.
 const SIGMA: f32 = 0.7;
-
-/// Beer-Lambert absorption with the coefficient its context gave at `begin_interior`.
-struct Absorbing {
-    sigma: f32,
-}
-
-impl Absorbing {
-    fn transmittance(&self, d: f32) -> Rgb {
-        Rgb::splat((-self.sigma * d).exp())
-    }
-}
-
-impl VolumeIntegrator for Absorbing {
-    fn nearest_hits(
-        &mut self,
-        rays: &Rays,
-        _samplers: &mut [PathSampler],
-        _lobes_wanted: LobeSampled,
-        services: VolumeServices<'_, '_>,
-        out: &mut ShadeGroups,
-    ) {
-        services.ictx.nearest_hits(rays, out);
-        out.attenuate_segments(rays, |d| self.transmittance(d));
-    }
-    fn transmission(
-        &self,
-        segments: &Segments,
-        _samplers: &mut [PathSampler],
-        _ictx: &dyn IntegratorContext,
-        trans: &mut [Rgb],
-        emission: &mut [Rgb],
-    ) {
-        for (t, &d) in trans.iter_mut().zip(&segments.length) {
-            *t = self.transmittance(d);
-        }
-        emission.fill(Rgb::BLACK);
-    }
-}
 
 impl BxdfFactory for Glass {
     fn instance_hints(&self) -> InstanceHints {
@@ -109,7 +70,9 @@ impl BxdfFactory for Glass {
             Pulls::BxdfOnly => SIGMA,
             _ => ctx.eval_param("sigma").map_or(SIGMA, |column| column[0].g),
         };
-        Some(arena.alloc(Absorbing { sigma }))
+        Some(arena.alloc(BeerInterior {
+            sigma_a: Rgb::splat(sigma),
+        }))
     }
     fn param(&self, name: &str) -> Option<ParamValue<'_>> {
         (name == "sigma").then_some(ParamValue::Pattern(&self.sigma))
