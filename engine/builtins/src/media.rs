@@ -227,7 +227,7 @@ impl HomogeneousInterior<'_> {
         if !self.boundary_blocks_shadows {
             return false;
         }
-        let bounds = self.ctx.volume_bounds();
+        let bounds = self.ctx.volume_space().map(|s| s.world_bounds);
         !ictx.lights().lights().iter().any(|l| match (l, bounds) {
             (Light::Point { position, .. }, Some((lo, hi))) => {
                 position.cmpge(lo).all() && position.cmple(hi).all()
@@ -283,8 +283,8 @@ impl HomogeneousInterior<'_> {
         // can freeze a walk (`flights_frozen`): the others skip the test per event.
         let may_freeze = self
             .ctx
-            .volume_bounds()
-            .is_none_or(|(lo, hi)| flights_may_freeze(m.sigma_t, lo, hi));
+            .volume_space()
+            .is_none_or(|s| flights_may_freeze(m.sigma_t, s.world_bounds.0, s.world_bounds.1));
         let mut frozen = 0;
         let scattered = arena.alloc_slice_fill_copy(n, false);
         let passes = arena.alloc_slice_fill_copy(n, true);

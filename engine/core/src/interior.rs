@@ -11,7 +11,7 @@ use smallvec::SmallVec;
 /// The interior of `stack`'s innermost volume `entry`, bound to a context over all of
 /// `points` (one per ray or segment, at its start) that sees the stack's other interiors as
 /// overlapping volumes; `None` when its factory builds no interior. Contexts carry the
-/// factory, the parameter cache and the volume's bounds; everything goes to the arena, which
+/// factory, the parameter cache and the volume's object space and bounds; everything goes to the arena, which
 /// holds only plain data here (the points stay with the caller).
 pub(crate) fn bind_interior<'a>(
     scene: &'a CompiledScene,
@@ -28,12 +28,12 @@ pub(crate) fn bind_interior<'a>(
             .contains(InstanceHints::COMPUTES_INTERIOR)
     };
     let context = |e: VolumeEntry, overlapping: &'a [OverlappingVolume<'a>]| {
-        let (lo, hi) = scene.shape_bounds[e.shape as usize];
+        let space = scene.shape_space[e.shape as usize];
         let factory = scene.materials[e.material as usize].factory.as_ref();
         ShadingContext::new(points, 0..m, ShadingMode::Interior, e.material, overlapping)
             .with_factory(factory)
             .with_cache(cache)
-            .with_volume_bounds(lo, hi)
+            .with_volume_space(space)
     };
     // The other volumes' integrators are bound to contexts without overlaps.
     let others: SmallVec<[VolumeEntry; 4]> =

@@ -52,7 +52,7 @@ pub use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::sampler::PathSampler;
 pub use shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
-    VolumeSampling,
+    VolumeSampling, VolumeSpace,
 };
 use std::any::Any;
 pub use technique::{always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue};

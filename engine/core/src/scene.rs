@@ -1,14 +1,14 @@
 //! The scene world (hecs) and its compilation into the flat data the systems read.
 //!
 //! A scene is an [`hecs::World`] of entities: shapes ([`ShapeGeometry`] + [`MaterialRef`],
-//! optionally [`Emission`]) and lights ([`LightComponent`]), each with a [`Name`]. Materials
+//! optionally [`Emission`] and an [`ObjectTransform`]) and lights ([`LightComponent`]), each with a [`Name`]. Materials
 //! are factories registered in the [`Scene`] by name. [`Scene::compile`] flattens the world:
 //! one BVH over every primitive, a light set, a per-material table of hints, and the
 //! [`Features`] that decide which stages the scheduler runs.
 
 pub use crate::features::Features;
 use crate::plugin::{BxdfFactory, InstanceHints};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
 use risotto_systems::distribution::EnvironmentMap;
@@ -32,6 +32,14 @@ pub enum ShapeGeometry {
     /// (front) normal.
     Triangles(Vec<[Vec3; 3]>),
 }
+
+/// The object-to-world transform of a shape entity: its geometry (always stored in world
+/// space) was written in an object space that this maps to the world (a scene file's
+/// `transform`). A volume's `u, v, w` and grids are measured in object space
+/// ([`crate::plugin::VolumeSpace`]). A shape without this component is written in world
+/// coordinates (the identity).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectTransform(pub Affine3A);
 
 /// The material (index into [`Scene::materials`]) of a shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -199,9 +207,11 @@ pub struct CompiledScene {
     pub shape_tracked: Vec<bool>,
     /// Per shape: its volume-stack entry ([`Self::volume_entry`]).
     pub shape_entry: Vec<risotto_components::VolumeEntry>,
-    /// Per shape: its world-space bounding box `(min, max)`, the bounds a volume's `u, v, w`
-    /// are relative to.
+    /// Per shape: its world-space bounding box `(min, max)`.
     pub shape_bounds: Vec<(Vec3, Vec3)>,
+    /// Per shape: its object space ([`ObjectTransform`]) and its bounds there, what a
+    /// volume's `u, v, w` and grids are measured in.
+    pub shape_space: Vec<crate::plugin::VolumeSpace>,
     /// Per shape: the index (in `mis_lights`) of the volume light its emissive interior
     /// offered ([`crate::plugin::volume_light`]), or `u32::MAX`.
     pub volume_light: Vec<u32>,
@@ -268,7 +278,7 @@ impl Scene {
         (self.materials.len() - 1) as u32
     }
 
-    /// Adds a shape entity.
+    /// Adds a shape entity written in world coordinates (no [`ObjectTransform`]).
     pub fn add_shape(
         &mut self,
         name: &str,
@@ -282,6 +292,26 @@ impl Scene {
         if let Some(l) = emission {
             self.world
                 .insert_one(e, Emission(l))
+                .expect("entity was just spawned");
+        }
+        e
+    }
+
+    /// Adds a shape entity whose world-space `geometry` was written in an object space that
+    /// `object_to_world` maps to the world ([`ObjectTransform`]; the identity is the same as
+    /// [`add_shape`](Self::add_shape)).
+    pub fn add_shape_with_transform(
+        &mut self,
+        name: &str,
+        geometry: ShapeGeometry,
+        material: u32,
+        emission: Option<Rgb>,
+        object_to_world: Affine3A,
+    ) -> hecs::Entity {
+        let e = self.add_shape(name, geometry, material, emission);
+        if object_to_world != Affine3A::IDENTITY {
+            self.world
+                .insert_one(e, ObjectTransform(object_to_world))
                 .expect("entity was just spawned");
         }
         e

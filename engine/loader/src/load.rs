@@ -372,7 +372,13 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             }
             DescGeometry::Triangles { triangles, .. } => ShapeGeometry::Triangles(triangles),
         };
-        scene.add_shape(&s.name, geometry, s.material as u32, s.emission);
+        scene.add_shape_with_transform(
+            &s.name,
+            geometry,
+            s.material as u32,
+            s.emission,
+            s.transform,
+        );
     }
     for l in desc.lights {
         let name = l.name().to_string();

@@ -28,7 +28,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
 use risotto_systems::sampler::MAX_SPP;
 
@@ -171,6 +171,11 @@ pub struct ShapeDesc {
     pub emission: Option<Rgb>,
     /// The geometry in world space.
     pub geometry: ShapeGeometry,
+    /// The shape's object-to-world transform: its `transform` (a `quad`, `rectangle`, `box`
+    /// or `mesh`; the object space is the one its corner and edges, `min` / `max`, unit
+    /// square or file were written in), the identity for a `sphere` and for shapes without
+    /// one. A volume's `u, v, w` and grids are measured in object space.
+    pub transform: Affine3A,
 }
 
 /// Shape geometry, resolved to world space.
@@ -493,6 +498,11 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             })?;
         let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
 
+        let mut transform = glam::DAffine3::IDENTITY;
+        let mut triangles_of = |(triangles, m): (Vec<[Vec3; 3]>, glam::DAffine3)| {
+            transform = m;
+            triangles
+        };
         let geometry = match type_name {
             "sphere" => {
                 let center = r.vec3("center", None)?;
@@ -501,21 +511,25 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             }
             "quad" => ShapeGeometry::Triangles {
                 kind: "quad",
-                triangles: geometry::quad(&r)?,
+                triangles: triangles_of(geometry::quad(&r)?),
             },
             "rectangle" => ShapeGeometry::Triangles {
                 kind: "quad",
-                triangles: geometry::rectangle(&r)?,
+                triangles: triangles_of(geometry::rectangle(&r)?),
             },
             "box" => ShapeGeometry::Triangles {
                 kind: "box",
-                triangles: geometry::cuboid(&r)?,
+                triangles: triangles_of(geometry::cuboid(&r)?),
             },
             _ => ShapeGeometry::Triangles {
                 kind: "mesh",
-                triangles: geometry::mesh(&r)?,
+                triangles: triangles_of(geometry::mesh(&r)?),
             },
         };
+        let transform = Affine3A::from_mat3_translation(
+            transform.matrix3.as_mat3(),
+            transform.translation.as_vec3(),
+        );
         if let ShapeGeometry::Triangles { triangles, .. } = &geometry {
             if !triangles.iter().flatten().all(|v| v.is_finite()) {
                 let at = r.get("transform").unwrap_or(node);
@@ -532,6 +546,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             material,
             emission,
             geometry,
+            transform,
         });
     }
     Ok(out)

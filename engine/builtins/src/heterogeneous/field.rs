@@ -2,7 +2,7 @@
 //! as the density or the emission, its majorant grids from the graph's interval bounds, and
 //! its evaluation one point at a time along a ray.
 
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
 use risotto_systems::grid::{DensityGrid, MajorantGrid};
 use risotto_systems::pattern::{self, PatternGraph};
@@ -11,18 +11,21 @@ use std::sync::{Arc, RwLock};
 
 /// A medium coefficient given by a pattern graph of the world position `P` (the same `P`
 /// surface patterns see; `u`, `v` are not defined inside a medium, and graphs that read them
-/// are refused when the scene is read). Its majorant grid is made per world box (the
-/// shape's bounds, known only once the scene is compiled, and one material may fill several
-/// shapes), on first use, and kept.
+/// are refused when the scene is read). Its majorant grid is made per box (the shape's
+/// object-space bounds and transform, known only once the scene is compiled, and one
+/// material may fill several shapes), on first use, and kept.
 #[derive(Debug)]
 pub struct PatternField {
     /// The graph (shared with the medium's volume emitter).
     pub graph: Arc<PatternGraph>,
     /// Majorant cells per axis.
     pub res: [usize; 3],
-    /// Majorant grids made so far, by world box.
-    grids: RwLock<Vec<(Vec3, Vec3, Arc<MajorantGrid>)>>,
+    /// Majorant grids made so far, by object box and object-to-world transform.
+    grids: RwLock<Vec<GridKey>>,
 }
+
+/// A majorant grid of a [`PatternField`] and the box and transform it was made for.
+type GridKey = (Vec3, Vec3, Option<Affine3A>, Arc<MajorantGrid>);
 
 impl Clone for PatternField {
     fn clone(&self) -> Self {
@@ -57,8 +60,24 @@ impl PatternField {
     /// interval bounds ([`pattern::bounds`]) over the cell's world box, the lowest channel's
     /// low end (at least 0) and the highest channel's high end.
     pub fn majorants(&self, lo: Vec3, hi: Vec3) -> Arc<MajorantGrid> {
+        self.majorants_in(lo, hi, None)
+    }
+
+    /// The majorant grid of the field over the object box `[lo, hi]` of a shape whose
+    /// object space maps to the world by `to_world` (`None`: the identity, as
+    /// [`Self::majorants`]): cell `c` holds the graph's bounds over the world bounding box
+    /// of the cell's object box (the graph reads world `P`).
+    pub fn majorants_in(
+        &self,
+        lo: Vec3,
+        hi: Vec3,
+        to_world: Option<Affine3A>,
+    ) -> Arc<MajorantGrid> {
         let read = self.grids.read().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, _, g)) = read.iter().find(|(l, h, _)| *l == lo && *h == hi) {
+        if let Some((_, _, _, g)) = read
+            .iter()
+            .find(|(l, h, m, _)| *l == lo && *h == hi && *m == to_world)
+        {
             return g.clone();
         }
         drop(read);
@@ -71,17 +90,38 @@ impl PatternField {
             // unit cube and back, and the rounded point may land just outside the cell.
             let (a, b) = (lo + extent * (c / cells), lo + extent * ((c + 1.0) / cells));
             let pad = (a.abs().max(b.abs()) + extent.abs()) * (8.0 * f32::EPSILON);
-            let (l, h) = pattern::bounds(&self.graph, a - pad, b + pad);
+            let (a, b) = match to_world {
+                None => (a - pad, b + pad),
+                Some(m) => {
+                    // The padded cell's corners in the world, their box padded again for
+                    // the rounding of the mapping.
+                    let (a, b) = (a - pad, b + pad);
+                    let (mut wa, mut wb) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+                    for k in 0..8 {
+                        let corner = Vec3::select(
+                            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                            b,
+                            a,
+                        );
+                        let w = m.transform_point3(corner);
+                        (wa, wb) = (wa.min(w), wb.max(w));
+                    }
+                    let pad = (wa.abs().max(wb.abs()) + (wb - wa)) * (8.0 * f32::EPSILON);
+                    (wa - pad, wb + pad)
+                }
+            };
+            let (l, h) = pattern::bounds(&self.graph, a, b);
             (l.min_channel().max(0.0), h.max_channel())
         }));
         let mut write = self.grids.write().unwrap_or_else(|e| e.into_inner());
-        write.push((lo, hi, grid.clone()));
+        write.push((lo, hi, to_world, grid.clone()));
         grid
     }
 }
 
 /// A coefficient field as one integrator call evaluates it: a density grid over the unit
-/// cube, or a pattern of the world point `lo + uvw (hi - lo)` evaluated one point at a time
+/// cube, or a pattern of the world point of object point `lo + uvw (hi - lo)` (the same
+/// point without a transform) evaluated one point at a time
 /// (the trackers ask for one point per tentative collision), with its scratch columns and an
 /// evaluation count.
 pub(super) enum Field<'a> {
@@ -92,18 +132,26 @@ pub(super) enum Field<'a> {
         graph: &'a PatternGraph,
         lo: Vec3,
         extent: Vec3,
+        to_world: Option<Affine3A>,
         scratch: RefCell<Vec<Rgb>>,
         evals: Cell<u64>,
     },
 }
 
 impl<'a> Field<'a> {
-    /// The pattern `graph` over the world box `[lo, hi]`.
-    pub(super) fn pattern(graph: &'a PatternGraph, lo: Vec3, hi: Vec3) -> Self {
+    /// The pattern `graph` over the object box `[lo, hi]`, whose object space maps to the
+    /// world by `to_world` (`None`: the identity).
+    pub(super) fn pattern(
+        graph: &'a PatternGraph,
+        lo: Vec3,
+        hi: Vec3,
+        to_world: Option<Affine3A>,
+    ) -> Self {
         Field::Pattern {
             graph,
             lo,
             extent: hi - lo,
+            to_world,
             scratch: RefCell::new(vec![Rgb::BLACK; graph.scratch_len(1)]),
             evals: Cell::new(0),
         }
@@ -118,11 +166,15 @@ impl<'a> Field<'a> {
                 graph,
                 lo,
                 extent,
+                to_world,
                 scratch,
                 evals,
             } => {
                 evals.set(evals.get() + 1);
-                let p = *lo + uvw * *extent;
+                let mut p = *lo + uvw * *extent;
+                if let Some(m) = to_world {
+                    p = m.transform_point3(p);
+                }
                 let mut out = [Rgb::BLACK];
                 let mut scratch = scratch.borrow_mut();
                 pattern::eval_with(graph, &[p], &[0.0], &[0.0], &mut out, &mut scratch);

@@ -5,7 +5,7 @@ use super::field::Field;
 use super::{emission_floor, HeterogeneousEmission, HeterogeneousMedium, Tracking};
 use crate::media::retain_points;
 use crate::scatter_patterns::scale_by_albedo;
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
 use risotto_engine::plugin::*;
 use risotto_engine::stats::VolumeEvent;
@@ -27,7 +27,8 @@ use risotto_systems::tracking::{
 use std::sync::Arc;
 
 /// The heterogeneous medium's volume integrator, bound to the bundle's shading context (which
-/// carries the shape's bounds, where the grid is placed).
+/// carries the shape's object space and bounds, where the grid is placed: rays are mapped
+/// into object space, with the same parameter `t`, and the grid turns with its shape).
 pub struct HeterogeneousInterior<'a> {
     /// The medium.
     pub medium: &'a HeterogeneousMedium,
@@ -99,9 +100,18 @@ impl HeterogeneousInterior<'_> {
         }
     }
 
-    /// The world box the grid's unit cube is placed in (the shape's bounds).
+    /// The object box the grid's unit cube is placed in (the shape's object-space bounds).
     fn bounds(&self) -> (Vec3, Vec3) {
         self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE))
+    }
+
+    /// The shape's object-to-world transform, `None` for the identity (no mapping at all,
+    /// so shapes without a transform render exactly as before transforms existed).
+    fn to_world(&self) -> Option<Affine3A> {
+        self.ctx
+            .volume_space()
+            .filter(|s| !s.is_identity())
+            .map(|s| s.object_to_world)
     }
 
     /// The fields and majorant grids of one integrator call over the shape's bounds: the
@@ -111,12 +121,15 @@ impl HeterogeneousInterior<'_> {
     fn fields(&self) -> Fields<'_> {
         let m = self.medium;
         let (lo, hi) = self.bounds();
+        let to_world = self.to_world();
         let density = match &m.density_pattern {
-            Some(p) => Field::pattern(&p.graph, lo, hi),
+            Some(p) => Field::pattern(&p.graph, lo, hi, to_world),
             None => Field::Grid(&m.density),
         };
         let emission = match &m.emission {
-            Some(HeterogeneousEmission::Pattern(p)) => Some(Field::pattern(&p.graph, lo, hi)),
+            Some(HeterogeneousEmission::Pattern(p)) => {
+                Some(Field::pattern(&p.graph, lo, hi, to_world))
+            }
             _ => None,
         };
         Fields {
@@ -126,16 +139,17 @@ impl HeterogeneousInterior<'_> {
         }
     }
 
-    /// The majorant grids over the world box `[lo, hi]` ([`Self::fields`]).
+    /// The majorant grids over the object box `[lo, hi]` ([`Self::fields`]).
     fn majorants(&self, lo: Vec3, hi: Vec3) -> Majorants {
         let m = self.medium;
+        let to_world = self.to_world();
         let density = match &m.density_pattern {
-            Some(p) => p.majorants(lo, hi),
+            Some(p) => p.majorants_in(lo, hi, to_world),
             None => m.majorants.clone(),
         };
         let emission = match &m.emission {
             Some(HeterogeneousEmission::Grid { majorants, .. }) => Some(majorants.clone()),
-            Some(HeterogeneousEmission::Pattern(p)) => Some(p.majorants(lo, hi)),
+            Some(HeterogeneousEmission::Pattern(p)) => Some(p.majorants_in(lo, hi, to_world)),
             _ => None,
         };
         Majorants { density, emission }
@@ -213,15 +227,22 @@ impl HeterogeneousInterior<'_> {
         r
     }
 
-    /// `(origin, direction)` of a world-space ray in the grid's unit cube (the same `t`).
+    /// `(origin, direction)` of a world-space ray in the grid's unit cube (the same `t`):
+    /// mapped to the shape's object space (the direction not renormalised, so `t`, and with
+    /// it distances and extinctions per world unit, stay those of the world ray), then to the
+    /// unit cube over the object-space bounds.
     fn to_grid(&self, o: Vec3, d: Vec3) -> (Vec3, Vec3) {
-        let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+        let (o, d) = match self.ctx.volume_space() {
+            Some(s) => (s.point_to_object(o), s.vector_to_object(d)),
+            None => (o, d),
+        };
+        let (lo, hi) = self.bounds();
         let inv = 1.0 / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
         ((o - lo) * inv, d * inv)
     }
 
     /// The ray-marching step in world units: the medium's `march_step`, or the smallest
-    /// voxel extent in the shape's bounds.
+    /// voxel extent in the shape's bounds (in world units, for a shape with a transform).
     fn march_step(&self) -> f32 {
         self.medium.march_step.unwrap_or_else(|| {
             let (lo, hi) = self.ctx.volume_bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
@@ -230,7 +251,15 @@ impl HeterogeneousInterior<'_> {
                 Some(p) => p.res.map(|r| r.saturating_mul(4)),
                 None => self.medium.density.dims(),
             };
-            let voxel = (hi - lo) / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+            let mut voxel = (hi - lo) / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+            if let Some(m) = self.to_world() {
+                // The voxel's edges in world units (the step is a distance along world rays).
+                voxel = Vec3::new(
+                    m.transform_vector3(Vec3::X * voxel.x).length(),
+                    m.transform_vector3(Vec3::Y * voxel.y).length(),
+                    m.transform_vector3(Vec3::Z * voxel.z).length(),
+                );
+            }
             let v = voxel.min_element();
             // A flat box (zero extent on an axis) marches by its other voxels.
             if v > 0.0 {
@@ -513,8 +542,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         });
         let own_ctx = own.as_ref().map(|pts| {
             let c = ShadingContext::new(pts, 0..n, ShadingMode::Interior, self.ctx.material(), &[]);
-            match self.ctx.volume_bounds() {
-                Some((lo, hi)) => c.with_volume_bounds(lo, hi),
+            match self.ctx.volume_space() {
+                Some(space) => c.with_volume_space(space),
                 None => c,
             }
         });

@@ -40,11 +40,106 @@
 use crate::plugin::{BxdfFactory, VolumeIntegrator};
 use crate::shade_groups::{ShadeGroups, ShadingMode};
 use bumpalo::Bump;
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use risotto_components::{Rgb, ShadingPoints, VolumeEntry};
 use risotto_systems::pattern::{self, PatternGraph};
 use std::cell::Cell;
 use std::ops::Range;
+
+/// The space a volume's `u, v, w` and grids are measured in: its shape's object space (the
+/// space its geometry was written in, before the scene file's `transform`), with the
+/// shape's bounds there. `u, v, w` of a world point `P` are
+/// `(world_to_object(P) - min) / (max - min)`, so a volume's grid turns, moves and scales
+/// with its shape. For a shape written directly in world coordinates (a `sphere`, or any
+/// shape without a `transform`) the transforms are the identity, and the object-space
+/// bounds are the world-space ones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeSpace {
+    /// The object-space bounds `(min, max)` of the shape: `u, v, w` are 0 at `min` and 1
+    /// at `max`.
+    pub bounds: (Vec3, Vec3),
+    /// The world-space bounding box `(min, max)` of the shape's geometry.
+    pub world_bounds: (Vec3, Vec3),
+    /// From world to object space.
+    pub world_to_object: Affine3A,
+    /// From object to world space (the shape's transform).
+    pub object_to_world: Affine3A,
+}
+
+impl VolumeSpace {
+    /// The space of a shape written in world coordinates: identity transforms, the same
+    /// bounds `(min, max)` in both spaces.
+    pub fn world(min: Vec3, max: Vec3) -> Self {
+        VolumeSpace {
+            bounds: (min, max),
+            world_bounds: (min, max),
+            world_to_object: Affine3A::IDENTITY,
+            object_to_world: Affine3A::IDENTITY,
+        }
+    }
+
+    /// The space of a shape whose object space maps to the world by `object_to_world`,
+    /// with object-space bounds `bounds` and world-space bounds `world_bounds`.
+    pub fn new(
+        bounds: (Vec3, Vec3),
+        world_bounds: (Vec3, Vec3),
+        object_to_world: Affine3A,
+    ) -> Self {
+        VolumeSpace {
+            bounds,
+            world_bounds,
+            world_to_object: object_to_world.inverse(),
+            object_to_world,
+        }
+    }
+
+    /// True when object space is world space (no transform): users may then skip the
+    /// mapping (the built-ins do, so such scenes render exactly as without transforms).
+    #[inline]
+    pub fn is_identity(&self) -> bool {
+        self.object_to_world == Affine3A::IDENTITY
+    }
+
+    /// True when object space is the world box up to a positive scale per axis and a
+    /// translation (no turn, no mirror): `u, v, w` are then the world point's position in
+    /// [`world_bounds`](Self::world_bounds), up to rounding.
+    pub fn is_axis_aligned(&self) -> bool {
+        let m = glam::Mat3::from(self.object_to_world.matrix3);
+        let d = Vec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
+        d.cmpgt(Vec3::ZERO).all() && m == glam::Mat3::from_diagonal(d)
+    }
+
+    /// World point `p` in object space.
+    #[inline]
+    pub fn point_to_object(&self, p: Vec3) -> Vec3 {
+        if self.is_identity() {
+            p
+        } else {
+            self.world_to_object.transform_point3(p)
+        }
+    }
+
+    /// World direction `d` in object space (not renormalised: a ray's parameter `t` is the
+    /// same in both spaces).
+    #[inline]
+    pub fn vector_to_object(&self, d: Vec3) -> Vec3 {
+        if self.is_identity() {
+            d
+        } else {
+            self.world_to_object.transform_vector3(d)
+        }
+    }
+
+    /// `u, v, w` of world point `p`: its object-space position relative to
+    /// [`bounds`](Self::bounds) (an axis without extent divides by the smallest normal
+    /// float).
+    #[inline]
+    pub fn uvw(&self, p: Vec3) -> Vec3 {
+        let (lo, hi) = self.bounds;
+        let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+        (self.point_to_object(p) - lo) / extent
+    }
+}
 
 /// Another volume overlapping the innermost one, with its own integrator (built by the
 /// renderer through its factory's `begin_interior`).
@@ -276,7 +371,7 @@ pub struct ShadingContext<'a> {
     cache: Option<&'a dyn ParamLookup>,
     /// Where the cache's columns go and what it counts into (for child contexts' caches).
     cache_parts: Option<(&'a Bump, &'a PatternCounters)>,
-    volume_bounds: Option<(Vec3, Vec3)>,
+    volume_space: Option<VolumeSpace>,
 }
 
 impl<'a> ShadingContext<'a> {
@@ -297,7 +392,7 @@ impl<'a> ShadingContext<'a> {
             factory: None,
             cache: None,
             cache_parts: None,
-            volume_bounds: None,
+            volume_space: None,
         }
     }
     /// Binds the factory of the context's material: [`eval_param`](Self::eval_param) asks it
@@ -313,21 +408,34 @@ impl<'a> ShadingContext<'a> {
         self.cache_parts = Some((cache.arena, cache.counters));
         self
     }
-    /// Sets the object-space bounds of the volume the context's points are in (the bounds
-    /// of the shape whose interior it is): volume-sampling contexts derive `u, v, w` from
-    /// them.
-    pub fn with_volume_bounds(mut self, min: Vec3, max: Vec3) -> Self {
-        self.volume_bounds = Some((min, max));
+    /// Sets the bounds of the volume the context's points are in, for a shape written in
+    /// world coordinates (object space = world space; [`VolumeSpace::world`]):
+    /// volume-sampling contexts derive `u, v, w` from them.
+    pub fn with_volume_bounds(self, min: Vec3, max: Vec3) -> Self {
+        self.with_volume_space(VolumeSpace::world(min, max))
+    }
+    /// Sets the object space of the volume the context's points are in (its shape's
+    /// transform and object-space bounds): volume-sampling contexts derive `u, v, w` from
+    /// it. The renderer binds the space of the shape whose interior it is.
+    pub fn with_volume_space(mut self, space: VolumeSpace) -> Self {
+        self.volume_space = Some(space);
         self
     }
     /// Number of points (RIS `numPts`).
     pub fn num_points(&self) -> usize {
         self.range.len()
     }
-    /// The bounds `u, v, w` are measured in ([`with_volume_bounds`](Self::with_volume_bounds)),
-    /// if set.
+    /// The bounds `u, v, w` are measured in, in the volume's object space
+    /// ([`VolumeSpace::bounds`]), if set; for the world-space box use
+    /// [`volume_space`](Self::volume_space)'s `world_bounds`.
     pub fn volume_bounds(&self) -> Option<(Vec3, Vec3)> {
-        self.volume_bounds
+        self.volume_space.map(|s| s.bounds)
+    }
+    /// The object space of the volume ([`with_volume_space`](Self::with_volume_space)): its
+    /// bounds and transforms, what `u, v, w` and a medium's grids are measured in; `None`
+    /// when not set.
+    pub fn volume_space(&self) -> Option<VolumeSpace> {
+        self.volume_space
     }
     /// Why this context exists.
     pub fn mode(&self) -> ShadingMode {
@@ -436,8 +544,8 @@ impl<'a> ShadingContext<'a> {
 
     /// Starts shading inside the volume (RIS `BeginVolumeSampling`): a mutable child context
     /// that inherits this context's builtins, except `u, v, w`, which are the position of `P`
-    /// relative to the volume's bounds ([`with_volume_bounds`](Self::with_volume_bounds); 0
-    /// without bounds). It has its own parameter cache, flushed whenever a builtin is set.
+    /// in the volume's object space relative to its bounds
+    /// ([`with_volume_space`](Self::with_volume_space); 0 without one). It has its own parameter cache, flushed whenever a builtin is set.
     pub fn begin_volume_sampling(&self) -> VolumeSampling<'a> {
         let mut points = ShadingPoints::with_capacity(self.num_points());
         points.extend_from_range(self.points, self.range.clone());
@@ -449,7 +557,7 @@ impl<'a> ShadingContext<'a> {
             material: self.material,
             factory: self.factory,
             cache,
-            volume_bounds: self.volume_bounds,
+            volume_space: self.volume_space,
         };
         v.update_uvw();
         v
@@ -482,7 +590,7 @@ pub struct VolumeSampling<'a> {
     material: u32,
     factory: Option<&'a dyn BxdfFactory>,
     cache: Option<ParamCache<'a>>,
-    volume_bounds: Option<(Vec3, Vec3)>,
+    volume_space: Option<VolumeSpace>,
 }
 
 impl<'a> VolumeSampling<'a> {
@@ -556,7 +664,7 @@ impl<'a> VolumeSampling<'a> {
             factory: self.factory,
             cache: self.cache.as_ref().map(|c| c as &dyn ParamLookup),
             cache_parts: self.cache.as_ref().map(|c| (c.arena, c.counters)),
-            volume_bounds: self.volume_bounds,
+            volume_space: self.volume_space,
         }
     }
 
@@ -577,14 +685,13 @@ impl<'a> VolumeSampling<'a> {
         out.close_group(self.material, ShadingMode::VolumeScatter, start);
     }
 
-    /// `u, v, w` from `P` and the volume bounds (0 without bounds).
+    /// `u, v, w` from `P` and the volume's space ([`VolumeSpace::uvw`]; 0 without one).
     fn update_uvw(&mut self) {
-        let Some((lo, hi)) = self.volume_bounds else {
+        let Some(space) = self.volume_space else {
             return;
         };
-        let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
         for (i, p) in self.points.p.iter().enumerate() {
-            let uvw = (*p - lo) / extent;
+            let uvw = space.uvw(*p);
             self.points.u[i] = uvw.x;
             self.points.v[i] = uvw.y;
             self.points.w[i] = uvw.z;
@@ -652,6 +759,61 @@ mod tests {
         v.set_builtin(Builtin::P, &[Vec3::ONE; 4]);
         v.context().eval_param("albedo").unwrap();
         assert_eq!((counters.hits.get(), counters.evals.get()), (2, 3));
+    }
+
+    #[test]
+    fn uvw_are_measured_in_the_volumes_object_space() {
+        // Object box [0, 2] x [0, 1] x [0, 1], turned 90 degrees about y (x -> -z) and moved
+        // by (5, 0, 0): world bounds x in [5, 6], y in [0, 1], z in [-2, 0].
+        let to_world = Affine3A::from_translation(Vec3::new(5.0, 0.0, 0.0))
+            * Affine3A::from_rotation_y(std::f32::consts::FRAC_PI_2);
+        let space = VolumeSpace::new(
+            (Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)),
+            (Vec3::new(5.0, 0.0, -2.0), Vec3::new(6.0, 1.0, 0.0)),
+            to_world,
+        );
+        assert!(!space.is_identity() && !space.is_axis_aligned());
+        let moved = VolumeSpace::new(
+            space.bounds,
+            space.bounds,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(2.0),
+                Default::default(),
+                Vec3::X,
+            ),
+        );
+        assert!(moved.is_axis_aligned() && !moved.is_identity());
+        let t = table(3);
+        let ctx =
+            ShadingContext::new(&t, 0..3, ShadingMode::Interior, 0, &[]).with_volume_space(space);
+        assert_eq!(ctx.volume_space(), Some(space));
+        assert_eq!(ctx.volume_bounds(), Some(space.bounds));
+        let mut v = ctx.begin_volume_sampling();
+        // World points of object points (2, 0.5, 0.5), (0, 0, 0) and (1, 1, 1).
+        let world = [
+            Vec3::new(5.5, 0.5, -2.0),
+            Vec3::new(5.0, 0.0, 0.0),
+            Vec3::new(6.0, 1.0, -1.0),
+        ];
+        v.set_builtin(Builtin::P, &world);
+        let c = v.context();
+        let expected = [
+            Vec3::new(1.0, 0.5, 0.5),
+            Vec3::ZERO,
+            Vec3::new(0.5, 1.0, 1.0),
+        ];
+        for (i, e) in expected.iter().enumerate() {
+            let got = Vec3::new(c.u()[i], c.v()[i], c.w()[i]);
+            assert!(got.abs_diff_eq(*e, 1e-6), "point {i}: {got} != {e}");
+        }
+        // The world-space box would have given (0.5, 0.5, 0) for the first point.
+        let flat = VolumeSpace::world(space.world_bounds.0, space.world_bounds.1);
+        assert!(flat.is_identity());
+        assert_eq!(flat.uvw(world[0]), Vec3::new(0.5, 0.5, 0.0));
+        // Directions map without renormalising (world z is object -x).
+        assert!(space
+            .vector_to_object(Vec3::Z * 2.0)
+            .abs_diff_eq(Vec3::NEG_X * 2.0, 1e-6));
     }
 
     #[test]

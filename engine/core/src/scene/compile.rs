@@ -27,6 +27,10 @@ impl Scene {
             shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
         }
         shape_entities.sort_by_key(|s| s.0.id());
+        let transforms: Vec<Option<glam::Affine3A>> = shape_entities
+            .iter()
+            .map(|s| world.get::<&ObjectTransform>(s.0).ok().map(|t| t.0))
+            .collect();
         let mut warnings = Vec::new();
         let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
 
@@ -181,28 +185,68 @@ impl Scene {
             shape_tracked: Vec::new(),
             shape_entry: Vec::new(),
             shape_bounds: Vec::new(),
+            shape_space: Vec::new(),
             volume_light: Vec::new(),
             warnings,
         };
-        let mut bounds = vec![
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            compiled.shapes.len()
-        ];
+        let empty = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let mut bounds = vec![empty; compiled.shapes.len()];
+        let mut object_bounds = bounds.clone();
+        // The inverse transforms in double precision: object bounds as exact as the f32
+        // vertices allow (a unit box turned 90 degrees maps back to [0, 1], not 0.99999994).
+        let inverses: Vec<Option<glam::DAffine3>> = transforms
+            .iter()
+            .map(|t| t.map(|t| to_daffine(t).inverse()))
+            .collect();
         let g = &compiled.geometry;
         for (p, &shape) in compiled.prim_shape.iter().enumerate() {
-            let (lo, hi) = if p < g.num_triangles() {
+            let inverse = inverses[shape as usize].as_ref();
+            let ((lo, hi), (olo, ohi)) = if p < g.num_triangles() {
                 let v = g.triangle(p);
-                (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]))
+                let world = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+                let object = match inverse {
+                    None => world,
+                    Some(m) => {
+                        let o = v.map(|q| m.transform_point3(q.as_dvec3()));
+                        let (a, b) = (o[0].min(o[1]).min(o[2]), o[0].max(o[1]).max(o[2]));
+                        (a.as_vec3(), b.as_vec3())
+                    }
+                };
+                (world, object)
             } else {
                 let s = g.sphere(p - g.num_triangles());
-                (
+                let world = (
                     s.center - Vec3::splat(s.radius),
                     s.center + Vec3::splat(s.radius),
-                )
+                );
+                let object = match inverse {
+                    None => world,
+                    Some(m) => {
+                        // The ball maps to an ellipsoid, whose half extent along object
+                        // axis i is the radius times the length of row i of the linear part.
+                        let c = m.transform_point3(s.center.as_dvec3());
+                        let rows = m.matrix3.transpose();
+                        let half = glam::DVec3::new(
+                            rows.x_axis.length(),
+                            rows.y_axis.length(),
+                            rows.z_axis.length(),
+                        ) * f64::from(s.radius);
+                        ((c - half).as_vec3(), (c + half).as_vec3())
+                    }
+                };
+                (world, object)
             };
             let b = &mut bounds[shape as usize];
             *b = (b.0.min(lo), b.1.max(hi));
+            let b = &mut object_bounds[shape as usize];
+            *b = (b.0.min(olo), b.1.max(ohi));
         }
+        compiled.shape_space = (0..bounds.len())
+            .map(|s| match transforms[s] {
+                None => crate::plugin::VolumeSpace::world(bounds[s].0, bounds[s].1),
+                Some(t) => crate::plugin::VolumeSpace::new(object_bounds[s], bounds[s], t),
+            })
+            .collect();
         compiled.shape_bounds = bounds;
         compiled.add_volume_lights();
         let shapes = 0..compiled.shapes.len() as u32;
@@ -250,6 +294,14 @@ impl Scene {
         };
         Ok(compiled)
     }
+}
+
+/// `t` in double precision.
+fn to_daffine(t: glam::Affine3A) -> glam::DAffine3 {
+    glam::DAffine3::from_mat3_translation(
+        glam::Mat3::from(t.matrix3).as_dmat3(),
+        glam::Vec3::from(t.translation).as_dvec3(),
+    )
 }
 
 /// A point or direction for messages: `(x, y, z)` with the shortest exact digits.

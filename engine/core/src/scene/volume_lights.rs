@@ -64,6 +64,13 @@ pub(super) fn collect(scene: &CompiledScene) -> Vec<(u32, Arc<VolumeEmitter>)> {
         {
             continue;
         }
+        // The emitters place their fields in the world box: a shape whose transform turns
+        // or mirrors it (its medium's grid is in object space, which the world box is not)
+        // offers none, and its emission is gathered by the interior's collision estimator
+        // alone.
+        if !scene.shape_space[s].is_axis_aligned() {
+            continue;
+        }
         let bounds = scene.shape_bounds[s];
         let Some(support) = support(&scene.geometry, &prims[s], bounds) else {
             continue;

@@ -247,28 +247,29 @@ pub(crate) fn check_area(r: &Reader<'_>, tris: &[Triangle], node: &Node) -> Resu
 }
 
 /// `quad`: corner + edge1 + edge2 (+ optional transform).
-pub(crate) fn quad(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+pub(crate) fn quad(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
     let corner = r.vec3("corner", None)?.as_dvec3();
     let e1 = r.vec3("edge1", None)?.as_dvec3();
     let e2 = r.vec3("edge2", None)?.as_dvec3();
     let m = read_transform(r)?;
     let tris = to_world(&m, quad_local(corner, e1, e2));
     check_area(r, &tris, r.get("edge2").unwrap_or(r.node))?;
-    Ok(tris)
+    Ok((tris, m))
 }
 
 /// `rectangle`: Mitsuba's rectangle, the square [-1, 1]^2 in the local xy plane with
 /// normal +z, placed by `transform`.
-pub(crate) fn rectangle(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+pub(crate) fn rectangle(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
     let m = read_transform(r)?;
-    Ok(to_world(
+    let tris = to_world(
         &m,
         quad_local(
             DVec3::new(-1.0, -1.0, 0.0),
             DVec3::new(2.0, 0.0, 0.0),
             DVec3::new(0.0, 2.0, 0.0),
         ),
-    ))
+    );
+    Ok((tris, m))
 }
 
 /// The 12 triangles of the axis-aligned box [lo, hi], outward winding.
@@ -291,7 +292,7 @@ pub(crate) fn box_local(lo: DVec3, hi: DVec3) -> Vec<[DVec3; 3]> {
 }
 
 /// `box`: the cube [-1, 1]^3 (or [min, max]) placed by `transform`.
-pub(crate) fn cuboid(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
     let (lo, hi) = match (r.vec3_opt("min")?, r.vec3_opt("max")?) {
         (None, None) => (DVec3::splat(-1.0), DVec3::splat(1.0)),
         (Some(lo), Some(hi)) => {
@@ -308,12 +309,12 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
         (None, Some(_)) => return Err(r.missing("min", "given together with `max`")),
     };
     let m = read_transform(r)?;
-    Ok(to_world(&m, box_local(lo, hi)))
+    Ok((to_world(&m, box_local(lo, hi)), m))
 }
 
 /// `mesh`: the triangles of an OBJ file (every object in it, polygons fan-triangulated by
 /// tobj), placed by `transform`.
-pub(crate) fn mesh(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
+pub(crate) fn mesh(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
     let (path, node) = r
         .path_opt("path")?
         .ok_or_else(|| r.missing("path", "an OBJ file path relative to the scene file"))?;
@@ -326,7 +327,7 @@ pub(crate) fn mesh(r: &Reader<'_>) -> Result<Vec<Triangle>, SceneError> {
             msg,
         )
     })?;
-    Ok(to_world(&m, local))
+    Ok((to_world(&m, local), m))
 }
 
 /// Reads an OBJ file's triangles; the error is a complete sentence naming the full path.
