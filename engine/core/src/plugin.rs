@@ -37,9 +37,11 @@
 
 pub mod context;
 pub mod exits;
+pub mod param_cache;
 pub mod shading_context;
 pub mod technique;
 pub mod volume_light;
+pub mod volume_space;
 
 pub use crate::shade_groups::{EmittedRadiance, ShadeGroup, ShadeGroups, ShadingMode, WalkedRays};
 pub use crate::stats::VolumeEvent;

@@ -7,13 +7,16 @@
 //!
 //! [`ShadingContext::eval_param`] evaluates a material parameter (what the factory answers
 //! in [`BxdfFactory::param`]) for every point of the context, once: the column is kept in the
-//! context's [`ParamCache`] (keyed by name, its columns in the worker's per-batch arena), so
-//! a Bxdf and a volume integrator pulling the same parameter on one context evaluate it once.
+//! context's [`ParamCache`] (keyed by material and name, its columns in the worker's
+//! per-batch arena), so a Bxdf and a volume integrator pulling the same parameter on one
+//! context evaluate it once; an interior entered from a shaded surface shares that
+//! surface's cache ([`ParamCache::sharing`]).
 //! A parameter is a constant or a pattern graph ([`ParamValue::Pattern`], a
 //! [`risotto_systems::pattern::PatternGraph`] the factory owns), evaluated over the context's
 //! `P`, `u` and `v` columns at once. Lookups and evaluations are counted
-//! ([`PatternCounters`], in the stats as `pattern_cache_hits` and `pattern_evals`). Setting a builtin on a volume-sampling context
-//! flushes its cache (patterns may depend on `P`, `u`, `v`, `w`).
+//! ([`PatternCounters`], in the stats as `pattern_cache_hits`, `pattern_cache_shared` and
+//! `pattern_evals`). Setting a builtin on a volume-sampling context flushes its cache
+//! (patterns may depend on `P`, `u`, `v`, `w`).
 //!
 //! # Shading in a volume
 //!
@@ -37,109 +40,16 @@
 //! assert_eq!(out.points.len(), 2);
 //! ```
 
+pub use super::param_cache::{ParamCache, PatternCounters};
+use super::param_cache::{ParamLookup, PatternInputs};
+pub use super::volume_space::VolumeSpace;
 use crate::plugin::{BxdfFactory, VolumeIntegrator};
 use crate::shade_groups::{ShadeGroups, ShadingMode};
 use bumpalo::Bump;
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 use risotto_components::{Rgb, ShadingPoints, VolumeEntry};
-use risotto_systems::pattern::{self, PatternGraph};
-use std::cell::Cell;
+use risotto_systems::pattern::PatternGraph;
 use std::ops::Range;
-
-/// The space a volume's `u, v, w` and grids are measured in: its shape's object space (the
-/// space its geometry was written in, before the scene file's `transform`), with the
-/// shape's bounds there. `u, v, w` of a world point `P` are
-/// `(world_to_object(P) - min) / (max - min)`, so a volume's grid turns, moves and scales
-/// with its shape. For a shape written directly in world coordinates (a `sphere`, or any
-/// shape without a `transform`) the transforms are the identity, and the object-space
-/// bounds are the world-space ones.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct VolumeSpace {
-    /// The object-space bounds `(min, max)` of the shape: `u, v, w` are 0 at `min` and 1
-    /// at `max`.
-    pub bounds: (Vec3, Vec3),
-    /// The world-space bounding box `(min, max)` of the shape's geometry.
-    pub world_bounds: (Vec3, Vec3),
-    /// From world to object space.
-    pub world_to_object: Affine3A,
-    /// From object to world space (the shape's transform).
-    pub object_to_world: Affine3A,
-}
-
-impl VolumeSpace {
-    /// The space of a shape written in world coordinates: identity transforms, the same
-    /// bounds `(min, max)` in both spaces.
-    pub fn world(min: Vec3, max: Vec3) -> Self {
-        VolumeSpace {
-            bounds: (min, max),
-            world_bounds: (min, max),
-            world_to_object: Affine3A::IDENTITY,
-            object_to_world: Affine3A::IDENTITY,
-        }
-    }
-
-    /// The space of a shape whose object space maps to the world by `object_to_world`,
-    /// with object-space bounds `bounds` and world-space bounds `world_bounds`.
-    pub fn new(
-        bounds: (Vec3, Vec3),
-        world_bounds: (Vec3, Vec3),
-        object_to_world: Affine3A,
-    ) -> Self {
-        VolumeSpace {
-            bounds,
-            world_bounds,
-            world_to_object: object_to_world.inverse(),
-            object_to_world,
-        }
-    }
-
-    /// True when object space is world space (no transform): users may then skip the
-    /// mapping (the built-ins do, so such scenes render exactly as without transforms).
-    #[inline]
-    pub fn is_identity(&self) -> bool {
-        self.object_to_world == Affine3A::IDENTITY
-    }
-
-    /// True when object space is the world box up to a positive scale per axis and a
-    /// translation (no turn, no mirror): `u, v, w` are then the world point's position in
-    /// [`world_bounds`](Self::world_bounds), up to rounding.
-    pub fn is_axis_aligned(&self) -> bool {
-        let m = glam::Mat3::from(self.object_to_world.matrix3);
-        let d = Vec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
-        d.cmpgt(Vec3::ZERO).all() && m == glam::Mat3::from_diagonal(d)
-    }
-
-    /// World point `p` in object space.
-    #[inline]
-    pub fn point_to_object(&self, p: Vec3) -> Vec3 {
-        if self.is_identity() {
-            p
-        } else {
-            self.world_to_object.transform_point3(p)
-        }
-    }
-
-    /// World direction `d` in object space (not renormalised: a ray's parameter `t` is the
-    /// same in both spaces).
-    #[inline]
-    pub fn vector_to_object(&self, d: Vec3) -> Vec3 {
-        if self.is_identity() {
-            d
-        } else {
-            self.world_to_object.transform_vector3(d)
-        }
-    }
-
-    /// `u, v, w` of world point `p`: its object-space position relative to
-    /// [`bounds`](Self::bounds) (an axis without extent divides by the smallest normal
-    /// float).
-    #[inline]
-    pub fn uvw(&self, p: Vec3) -> Vec3 {
-        let (lo, hi) = self.bounds;
-        let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
-        (self.point_to_object(p) - lo) / extent
-    }
-}
 
 /// Another volume overlapping the innermost one, with its own integrator (built by the
 /// renderer through its factory's `begin_interior`).
@@ -163,200 +73,6 @@ pub enum ParamValue<'a> {
     Color(Rgb),
     /// A pattern graph, evaluated at the context's `P`, `u`, `v`.
     Pattern(&'a PatternGraph),
-}
-
-/// The builtins a pattern reads, one entry per point.
-#[derive(Clone, Copy)]
-struct PatternInputs<'a> {
-    p: &'a [Vec3],
-    u: &'a [f32],
-    v: &'a [f32],
-}
-
-/// Counts of parameter-cache lookups of a worker (plain `Cell`s: contexts and their caches
-/// are arena data without destructors).
-#[derive(Debug, Default)]
-pub struct PatternCounters {
-    /// Lookups answered by the cache.
-    pub hits: Cell<u64>,
-    /// Parameter evaluations (cache misses).
-    pub evals: Cell<u64>,
-    /// Of `evals`, the pattern evaluations of medium coefficients: those volume integrators
-    /// made point by point ([`ShadingContext::count_pattern_evals`]) and the columns
-    /// evaluated for contexts inside a volume (a phase function's `g` pattern).
-    pub volume_evals: Cell<u64>,
-    /// Lookups of an interior's context answered from the cache of the surface context its
-    /// rays left from ([`ParamCache::sharing`]): columns not evaluated again.
-    pub shared: Cell<u64>,
-}
-
-/// Entries a [`ParamCache`] holds; a context pulling more distinct parameters re-evaluates
-/// the extra ones (counted as evaluations).
-const CACHE_SLOTS: usize = 8;
-
-/// A cached column: the material, the parameter's name and its values (a cache may serve
-/// contexts of several materials: a volume's and those of the volumes overlapping it).
-type CachedColumn<'a> = (u32, &'a str, &'a [Rgb]);
-
-/// The parameter cache of one shading context: evaluated columns keyed by material and
-/// parameter name, allocated in the worker's arena. Plain data (it may itself live in the
-/// arena).
-///
-/// A cache may share the columns of another (the seed: when the renderer binds the same
-/// shading context to a surface's Bxdf and to the interior its rays enter, "both plugins
-/// share the same pattern cache; a shared subgraph executes once"): a column its context
-/// asks for that the other holds for the same material is gathered from it, row `rows[i]`
-/// for point `i`, instead of being evaluated ([`ParamCache::sharing`]).
-pub struct ParamCache<'a> {
-    arena: &'a Bump,
-    counters: &'a PatternCounters,
-    slots: [Cell<Option<CachedColumn<'a>>>; CACHE_SLOTS],
-    shares: Option<(&'a dyn HeldColumns, &'a [u32])>,
-}
-
-/// The columns a cache holds, looked up without evaluating (a trait object, so that a cache
-/// can share one that lives longer).
-trait HeldColumns {
-    /// The column held for `material`'s parameter `name`.
-    fn held(&self, material: u32, name: &str) -> Option<&[Rgb]>;
-}
-
-impl HeldColumns for ParamCache<'_> {
-    fn held(&self, material: u32, name: &str) -> Option<&[Rgb]> {
-        self.slots.iter().find_map(|s| match s.get() {
-            Some((m, key, column)) if m == material && key == name => Some(column),
-            _ => None,
-        })
-    }
-}
-
-impl<'a> ParamCache<'a> {
-    /// An empty cache whose columns go to `arena`, counting into `counters`.
-    pub fn new(arena: &'a Bump, counters: &'a PatternCounters) -> Self {
-        ParamCache {
-            arena,
-            counters,
-            slots: Default::default(),
-            shares: None,
-        }
-    }
-
-    /// An empty cache that answers from `other` what `other` holds: its context's point `i`
-    /// is point `rows[i]` of `other`'s context (RIS `shadingCtxIndex`), with the same
-    /// builtins. Counted as [`PatternCounters::shared`].
-    pub fn sharing<'o: 'a>(
-        arena: &'a Bump,
-        counters: &'a PatternCounters,
-        other: &'a ParamCache<'o>,
-        rows: &'a [u32],
-    ) -> Self {
-        ParamCache {
-            shares: Some((other, rows)),
-            ..ParamCache::new(arena, counters)
-        }
-    }
-
-    /// Forgets every cached column (the builtins they were evaluated at changed).
-    pub fn flush(&self) {
-        for s in &self.slots {
-            s.set(None);
-        }
-    }
-}
-
-/// A parameter cache as contexts see it (a trait object, so that a context stays covariant
-/// in its lifetime while the cache's `Cell`s are not).
-trait ParamLookup {
-    /// The column of `value` (parameter `name` of `material`) at the points of `at`, cached;
-    /// `in_volume`: the points lie inside a volume (a miss counts as a volume evaluation
-    /// too).
-    fn column(
-        &self,
-        material: u32,
-        name: &str,
-        value: ParamValue<'_>,
-        at: PatternInputs<'_>,
-        in_volume: bool,
-    ) -> &[Rgb];
-}
-
-impl ParamLookup for ParamCache<'_> {
-    fn column(
-        &self,
-        material: u32,
-        name: &str,
-        value: ParamValue<'_>,
-        at: PatternInputs<'_>,
-        in_volume: bool,
-    ) -> &[Rgb] {
-        self.get_or_eval(
-            material,
-            name,
-            at.p.len(),
-            in_volume,
-            |column| match value {
-                ParamValue::Float(f) => column.fill(Rgb::splat(f)),
-                ParamValue::Color(c) => column.fill(c),
-                ParamValue::Pattern(graph) => {
-                    // The nodes' block columns live in the arena with the result.
-                    let scratch = self
-                        .arena
-                        .alloc_slice_fill_copy(graph.scratch_len(column.len()), Rgb::BLACK);
-                    pattern::eval_with(graph, at.p, at.u, at.v, column, scratch);
-                }
-            },
-        )
-    }
-}
-
-impl<'a> ParamCache<'a> {
-    /// The column of `material`'s parameter `name` for `n` points: from the cache, gathered
-    /// from the cache it shares, or evaluated with `eval` (which fills the column); then
-    /// cached.
-    fn get_or_eval(
-        &self,
-        material: u32,
-        name: &str,
-        n: usize,
-        in_volume: bool,
-        eval: impl FnOnce(&mut [Rgb]),
-    ) -> &'a [Rgb] {
-        for s in &self.slots {
-            match s.get() {
-                Some((m, key, column)) if m == material && key == name && column.len() == n => {
-                    self.counters.hits.set(self.counters.hits.get() + 1);
-                    return column;
-                }
-                _ => {}
-            }
-        }
-        let shared = self
-            .shares
-            .filter(|(_, rows)| rows.len() == n)
-            .and_then(|(other, rows)| Some((other.held(material, name)?, rows)));
-        let column = self.arena.alloc_slice_fill_copy(n, Rgb::BLACK);
-        match shared {
-            Some((held, rows)) if rows.iter().all(|&r| (r as usize) < held.len()) => {
-                for (c, &r) in column.iter_mut().zip(rows) {
-                    *c = held[r as usize];
-                }
-                self.counters.shared.set(self.counters.shared.get() + 1);
-            }
-            _ => {
-                self.counters.evals.set(self.counters.evals.get() + 1);
-                if in_volume {
-                    let v = &self.counters.volume_evals;
-                    v.set(v.get() + 1);
-                }
-                eval(column);
-            }
-        }
-        let column: &'a [Rgb] = column;
-        if let Some(free) = self.slots.iter().find(|s| s.get().is_none()) {
-            free.set(Some((material, self.arena.alloc_str(name), column)));
-        }
-        column
-    }
 }
 
 /// A group of shading points that share a material, with the RIS builtins as columns
@@ -709,6 +425,7 @@ fn set_scalar(column: &mut [f32], values: &[Vec3]) {
 mod tests {
     use super::*;
     use crate::plugin::{Bxdf, BxdfFactory, InstanceHints};
+    use glam::Affine3A;
     use risotto_components::ShadingPointRow;
 
     struct Tinted;
