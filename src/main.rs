@@ -283,8 +283,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
         (None, Some(n), Some(j)) => Some(sample_chunk(n, j, compiled.settings.spp)?),
         _ => None,
     };
+    // `try_from`: an interval past `Duration`'s range (about 5.8e11 years) is an error, not
+    // the panic `from_secs_f64` gives.
     let checkpoint = match args.checkpoint {
-        Some(t) if t.is_finite() && t > 0.0 => Some(std::time::Duration::from_secs_f64(t)),
+        Some(t) if t.is_finite() && t > 0.0 => match std::time::Duration::try_from_secs_f64(t) {
+            Ok(d) => Some(d),
+            Err(_) => anyhow::bail!(
+                "--checkpoint {t:e}: too long (at most {:e} seconds)",
+                u64::MAX as f64
+            ),
+        },
         Some(t) => anyhow::bail!("--checkpoint {t}: must be a positive number of seconds"),
         None => None,
     };

@@ -508,6 +508,11 @@ fn bad_crop_and_sample_ranges_are_named() {
         ("--samples", "4", vec!["--samples", "START..END"]),
         ("--samples", "a..4", vec!["--samples", "\"a\""]),
         ("--checkpoint", "0", vec!["--checkpoint 0", "positive"]),
+        (
+            "--checkpoint",
+            "1e300",
+            vec!["--checkpoint 1e300", "too long"],
+        ),
     ] {
         let r = risotto(&["render", s, "--out", o, "--quiet", flag, value]);
         assert_fails(&format!("{flag} {value}"), &r, &needles);
