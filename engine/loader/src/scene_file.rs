@@ -94,10 +94,10 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// `max_depth` value meaning "unbounded" (`-1` in the file).
     pub const UNBOUNDED_DEPTH: u32 = u32::MAX;
-    /// Largest `width * height` a scene file may ask for: 2^26 pixels (8192 x 8192), whose
-    /// film and output layers take about 7 GB. Larger resolutions are an error naming the
-    /// key and the value rather than an allocation abort.
-    pub const MAX_PIXELS: u64 = 1 << 26;
+    /// Largest `width * height` a scene file may ask for
+    /// ([`MAX_FILM_PIXELS`](risotto_engine::render::MAX_FILM_PIXELS)). Larger resolutions
+    /// are an error naming the key and the value rather than an allocation abort.
+    pub const MAX_PIXELS: u64 = risotto_engine::render::MAX_FILM_PIXELS;
 }
 
 impl Default for RenderSettings {

@@ -30,7 +30,7 @@ use super::{MergeError, Partial, PartialHeader, MERGE_PART};
 use risotto_engine::output::{
     read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, OutputError, Placement,
 };
-use risotto_engine::render::{SampleRange, Window};
+use risotto_engine::render::{SampleRange, Window, MAX_FILM_PIXELS};
 
 const SAMPLES: &str = "risotto.samples";
 const SPP: &str = "risotto.spp";
@@ -201,7 +201,15 @@ pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
 
     let display = image.attributes.display_window;
     let (pos, size) = (layer.attributes.layer_position, layer.size);
-    let resolution = (display.size.width() as u32, display.size.height() as u32);
+    // A part's header is not trusted with the merged image's size: the display window is
+    // checked against the renderer's own limit before anything is allocated for it.
+    let (dw, dh) = (display.size.width() as u64, display.size.height() as u64);
+    if dw.saturating_mul(dh) > MAX_FILM_PIXELS || dw > u32::MAX as u64 || dh > u32::MAX as u64 {
+        return Err(not(format!(
+            "display window {dw}x{dh} is more than the {MAX_FILM_PIXELS} pixels a render may have"
+        )));
+    }
+    let resolution = (dw as u32, dh as u32);
     let inside = display.position.x() == 0
         && display.position.y() == 0
         && pos.x() >= 0
@@ -265,6 +273,20 @@ pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
         }
     }
     film.count = channel("count")?.to_vec();
+    // Every pixel of a part holds every sample of its range (a sample whose radiance was not
+    // finite is counted and dropped from the sums): a part whose counts disagree with its
+    // declared range was relabelled or damaged, and merging it would make a wrong image.
+    let per_pixel = u64::from(samples.end - samples.start);
+    if let Some(i) = film.count.iter().position(|&c| u64::from(c) != per_pixel) {
+        let (x, y) = (
+            window.x0 as usize + i % w as usize,
+            window.y0 as usize + i / w as usize,
+        );
+        return Err(not(format!(
+            "pixel ({x}, {y}) holds {} samples, but the part declares {SAMPLES} = {samples}              ({per_pixel} per pixel)",
+            film.count[i]
+        )));
+    }
     // AOV sums: any of their channels means all of them must be there.
     let has_aovs = layer.channel_data.list.iter().any(|c| {
         let name = c.name.to_string();
@@ -321,6 +343,41 @@ pub fn parse_sample_range(s: &str) -> Result<SampleRange, String> {
 mod tests {
     use super::*;
     use crate::merge::tests::{part, part_with_aovs};
+
+    /// A part whose header was edited is refused before its lie is used: relabelled sample
+    /// ranges (the counts give it away), and a display window past the renderer's limit
+    /// (which `merge` would allocate).
+    #[test]
+    fn a_part_with_a_lying_header_is_refused() {
+        let dir = risotto_engine::scratch_dir::ScratchDir::new("merge-lies");
+        let window = Window::full(4, 2);
+        // Counts of samples 0..4, declared as 2..4.
+        let mut relabelled = part(window, SampleRange { start: 0, end: 4 }, 0.5);
+        relabelled.header.samples = SampleRange { start: 2, end: 4 };
+        let path = dir.join("relabelled.exr");
+        write_partial(&path, &relabelled).unwrap();
+        let e = read_partial(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("relabelled.exr")
+                && e.contains("pixel (0, 0) holds 4 samples")
+                && e.contains("risotto.samples = 2..4"),
+            "{e}"
+        );
+        // The same part honestly labelled reads.
+        relabelled.header.samples = SampleRange { start: 0, end: 4 };
+        write_partial(&path, &relabelled).unwrap();
+        assert!(read_partial(&path).is_ok());
+        // A 4x2 piece of a 65536 x 65536 image.
+        let mut huge = part(window, SampleRange { start: 0, end: 2 }, 0.5);
+        huge.header.resolution = (65536, 65536);
+        let path = dir.join("huge.exr");
+        write_partial(&path, &huge).unwrap();
+        let e = read_partial(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("huge.exr") && e.contains("display window 65536x65536"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn partial_round_trip_is_bit_exact() {
