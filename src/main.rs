@@ -202,10 +202,33 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", printable(&format!("{e:#}")));
             ExitCode::FAILURE
         }
     }
+}
+
+/// Longest line of an error message printed, in characters.
+const MAX_MESSAGE_LINE: usize = 1000;
+
+/// An error message as printed: control characters escaped (a file name can carry terminal
+/// escape sequences) and every line cut at [`MAX_MESSAGE_LINE`] characters, saying how much
+/// was left out (a message can quote a hostile file's megabyte-long line).
+fn printable(message: &str) -> String {
+    message
+        .lines()
+        .map(|line| {
+            let line = risotto::engine::diagnostics::terminal_safe(line);
+            match line.char_indices().nth(MAX_MESSAGE_LINE) {
+                Some((cut, _)) => {
+                    let rest = line[cut..].chars().count();
+                    format!("{} ... ({rest} more characters)", &line[..cut])
+                }
+                None => line,
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {

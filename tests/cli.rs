@@ -137,6 +137,31 @@ fn malformed_toml_reports_line_and_column() {
     assert_fails("malformed TOML", &out, &["broken.toml:4:7"]);
 }
 
+/// A message stays printable: a terminal escape sequence in a file name is shown escaped,
+/// not obeyed, and a hostile file's 100 000-character line is quoted as a window around the
+/// error, not in full.
+#[test]
+fn messages_escape_control_characters_and_cut_long_lines() {
+    let dir = scratch_dir("cli", "printable");
+    let (out, _) = render(&dir, "a\u{1b}[31mred.toml", "x", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        !stderr.contains('\u{1b}') && stderr.contains("a\\u{1b}[31mred.toml"),
+        "{stderr:?}"
+    );
+    let deep = format!("x = {}\n", "[".repeat(100_000));
+    let (out, _) = render(&dir, "deep.toml", &deep, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_fails("deep nesting", &out, &["deep.toml:1:", "^"]);
+    assert!(
+        stderr.len() < 2000 && stderr.lines().all(|l| l.chars().count() <= 1100),
+        "{} bytes: {}",
+        stderr.len(),
+        &stderr[..stderr.len().min(300)]
+    );
+}
+
 #[test]
 fn missing_obj_names_the_path_tried() {
     let dir = scratch_dir("cli", "missing_obj");

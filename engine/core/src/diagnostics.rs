@@ -124,6 +124,24 @@ pub struct Source {
     pub files: ReferencedFiles,
 }
 
+/// Characters of a source line shown on each side of an error's caret.
+const EXCERPT_CONTEXT: usize = 60;
+
+/// `text` safe to print on a terminal: control characters (an escape sequence in a file
+/// name or a scene, which a terminal would obey) shown escaped as `\u{1b}`, except line
+/// breaks and tabs.
+pub fn terminal_safe(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && c != '\n' && c != '\t' {
+            out.extend(c.escape_unicode());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
 /// Longest excerpt of a value quoted in a message.
 const MAX_QUOTE: usize = 60;
 
@@ -187,16 +205,31 @@ impl Source {
         let line_text = self.text[line_start..line_end].trim_end_matches('\r');
         let (line, col) = self.line_col(start);
         let width = self.text[start..end.min(line_end)].chars().count().max(1);
+        // A long line (a minified file, a hostile one: 100 000 brackets) is shown as a
+        // window around the caret, each cut marked, so a message stays a few lines long.
+        let chars: Vec<char> = line_text.chars().collect();
+        let first = (col - 1).saturating_sub(EXCERPT_CONTEXT);
+        let last = (col - 1 + width.min(EXCERPT_CONTEXT) + EXCERPT_CONTEXT).min(chars.len());
+        let mut shown: String =
+            terminal_safe(&chars[first..last.max(first)].iter().collect::<String>());
+        let mut caret_col = col - 1 - first;
+        if first > 0 {
+            shown.insert_str(0, "... ");
+            caret_col += 4;
+        }
+        if last < chars.len() {
+            shown.push_str(" ...");
+        }
         let gutter = line.to_string().len();
         let mut out = String::new();
         let _ = writeln!(out, "{:gutter$} |", "");
-        let _ = writeln!(out, "{line} | {line_text}");
+        let _ = writeln!(out, "{line} | {shown}");
         let _ = write!(
             out,
             "{:gutter$} | {}{}",
             "",
-            " ".repeat(col - 1),
-            "^".repeat(width)
+            " ".repeat(caret_col),
+            "^".repeat(width.min(EXCERPT_CONTEXT))
         );
         out
     }
