@@ -360,6 +360,27 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// tiles and multi-part files).
 const MIN_BYTES_PER_CHUNK: u64 = 16;
 
+/// The names of the parts (layers) of the EXR at `path`, from its headers alone: no pixel is
+/// read, so a caller can refuse a file without the part it needs before decoding it.
+pub fn exr_part_names(path: &Path) -> Result<Vec<String>, OutputError> {
+    let file = File::open(path).map_err(|cause| OutputError::Io {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let meta = exr::meta::MetaData::read_from_unbuffered(file, false)
+        .map_err(|source| exr_error(path, source))?;
+    Ok(meta
+        .headers
+        .iter()
+        .map(|h| {
+            h.own_attributes
+                .layer_name
+                .as_ref()
+                .map_or_else(String::new, |n| n.to_string())
+        })
+        .collect())
+}
+
 /// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`]).
 fn check_exr_header(path: &Path) -> Result<(), OutputError> {
     let file = File::open(path).map_err(|cause| OutputError::Io {

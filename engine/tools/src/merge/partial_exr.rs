@@ -28,7 +28,8 @@ use serde_json::Value;
 
 use super::{MergeError, Partial, PartialHeader, MERGE_PART};
 use risotto_engine::output::{
-    read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, OutputError, Placement,
+    exr_part_names, read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, OutputError,
+    Placement,
 };
 use risotto_engine::render::{SampleRange, Window, MAX_FILM_PIXELS};
 
@@ -167,6 +168,14 @@ pub fn read_partial(path: &Path) -> Result<Partial, MergeError> {
         path: path.to_path_buf(),
         reason,
     };
+    // Whether the file is a partial at all is read from its headers: a large image that is
+    // not one is refused without decoding its pixels.
+    if !exr_part_names(path)?.iter().any(|n| n == MERGE_PART) {
+        return Err(not(format!(
+            "no \"{MERGE_PART}\" part (render with --crop, --samples, --checkpoint or \
+             --partial to write one)"
+        )));
+    }
     let image = read_exr_all(path)?;
     let layer = image
         .layer_data
@@ -343,6 +352,23 @@ pub fn parse_sample_range(s: &str) -> Result<SampleRange, String> {
 mod tests {
     use super::*;
     use crate::merge::tests::{part, part_with_aovs};
+
+    /// An EXR that is not a partial render is refused from its headers, before its pixels
+    /// are decoded (`risotto info` on a large render decoded gigabytes to say so): here a
+    /// plain image whose pixel data is cut off, which decoding would fail on first.
+    #[test]
+    fn a_plain_image_is_refused_from_its_headers() {
+        let dir = risotto_engine::scratch_dir::ScratchDir::new("merge-plain");
+        let path = dir.join("plain.exr");
+        x::write_rgb_file(&path, 64, 64, |_, _| (0.5f32, 0.25f32, 0.125f32)).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..1000]).unwrap();
+        let e = read_partial(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("plain.exr") && e.contains("no \"merge\" part"),
+            "{e}"
+        );
+    }
 
     /// A part whose header was edited is refused before its lie is used: relabelled sample
     /// ranges (the counts give it away), and a display window past the renderer's limit
