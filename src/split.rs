@@ -145,7 +145,7 @@ pub(crate) fn merge_command(args: MergeArgs) -> Result<()> {
     write_png(&png, &merged.beauty(), args.exposure)?;
     let mut text = serde_json::to_string_pretty(&merged.header.stats)?;
     text.push('\n');
-    std::fs::write(&stats, text)
+    risotto::engine::output::write_file_atomically(&stats, text.as_bytes())
         .with_context(|| format!("cannot write stats to {}", stats.display()))?;
     eprintln!(
         "merged {} parts into {}, {} and {}",

@@ -203,6 +203,17 @@ pub fn write_exr_placed(
     placement: Option<Placement>,
     extra: Option<ExtraPart>,
 ) -> Result<(), OutputError> {
+    write_atomically(path, |tmp| exr_to(tmp, path, out, placement, extra))
+}
+
+/// [`write_exr_placed`] into the file `tmp`, errors naming `path`.
+fn exr_to(
+    tmp: &Path,
+    path: &Path,
+    out: &FilmOutput,
+    placement: Option<Placement>,
+    extra: Option<ExtraPart>,
+) -> Result<(), OutputError> {
     let (w, h) = (out.beauty.width, out.beauty.height);
     if w == 0 || h == 0 {
         return Err(invalid(
@@ -301,7 +312,7 @@ pub fn write_exr_placed(
     let attributes = x::ImageAttributes::new(x::IntegerBounds::from_dimensions(placement.full));
     x::Image::from_layers(attributes, layers)
         .write()
-        .to_file(path)
+        .to_file(tmp)
         .map_err(|source| exr_error(path, source))
 }
 
@@ -576,21 +587,65 @@ pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), Ou
             bytes.push(srgb_encode_u8(c * scale));
         }
     }
-    let file = File::create(path).map_err(|cause| OutputError::Io {
-        path: path.to_path_buf(),
-        cause,
-    })?;
-    let png_err = |cause| OutputError::Png {
+    write_atomically(path, |tmp| {
+        let file = File::create(tmp).map_err(|cause| OutputError::Io {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        let png_err = |cause| OutputError::Png {
+            path: path.to_path_buf(),
+            cause,
+        };
+        let mut encoder = png::Encoder::new(BufWriter::new(file), w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = encoder.write_header().map_err(png_err)?;
+        writer.write_image_data(&bytes).map_err(png_err)?;
+        writer.finish().map_err(png_err)
+    })
+}
+
+/// `bytes` as the file `path`, written as a whole or not at all ([`write_atomically`]).
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|cause| OutputError::Io {
+            path: path.to_path_buf(),
+            cause,
+        })
+    })
+}
+
+/// Writes `path` as a whole or not at all: `write` fills a temporary file beside it
+/// (`.NAME.PID.tmp`, same directory, so the rename cannot cross file systems), which is
+/// flushed to disk (`fsync`) and then renamed over `path`. A process stopped during the
+/// write leaves `path` as it was (and at most the temporary); a failed write removes the
+/// temporary. Readers never see a half-written image under the final name.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let name = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let io = |cause| OutputError::Io {
         path: path.to_path_buf(),
         cause,
     };
-    let mut encoder = png::Encoder::new(BufWriter::new(file), w, h);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    let mut writer = encoder.write_header().map_err(png_err)?;
-    writer.write_image_data(&bytes).map_err(png_err)?;
-    writer.finish().map_err(png_err)
+    let result = write(&tmp)
+        .and_then(|()| File::open(&tmp).and_then(|f| f.sync_all()).map_err(io))
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(io));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    } else if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        // The rename itself is durable once the directory is (best effort: not every
+        // platform can open a directory).
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    result
 }
 
 #[cfg(test)]

@@ -313,3 +313,27 @@ fn decode_png(path: &Path) -> Vec<u8> {
     buf.truncate(info.buffer_size());
     buf
 }
+
+/// An output is replaced whole or not at all: a write that fails halfway leaves the old file
+/// as it was and no temporary behind; one that succeeds replaces it.
+#[test]
+fn outputs_are_written_atomically() {
+    let (_dir, path) = scratch("atomic");
+    std::fs::write(&path, b"old").unwrap();
+    let failed = write_atomically(&path, |tmp| {
+        std::fs::write(tmp, b"half of the ne").unwrap();
+        Err(invalid(tmp, "the disk filled up"))
+    });
+    assert!(failed.is_err());
+    assert_eq!(std::fs::read(&path).unwrap(), b"old");
+    let names = || -> Vec<String> {
+        std::fs::read_dir(path.parent().unwrap())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert_eq!(names().len(), 1, "{:?}", names());
+    write_file_atomically(&path, b"new").unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"new");
+    assert_eq!(names().len(), 1, "{:?}", names());
+}

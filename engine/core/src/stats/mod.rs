@@ -495,10 +495,11 @@ impl RenderStats {
     }
 
     /// Writes [`to_json`](Self::to_json) (plus a trailing newline) to `path`.
-    pub fn write_json(&self, path: &Path) -> std::io::Result<()> {
+    /// Written as a whole or not at all ([`crate::output::write_atomically`]).
+    pub fn write_json(&self, path: &Path) -> Result<(), crate::output::OutputError> {
         let mut s = self.to_json();
         s.push('\n');
-        std::fs::write(path, s)
+        crate::output::write_file_atomically(path, s.as_bytes())
     }
 }
 

@@ -28,8 +28,7 @@ use serde_json::Value;
 
 use super::{MergeError, Partial, PartialHeader, MERGE_PART};
 use risotto_engine::output::{
-    exr_part_names, read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, OutputError,
-    Placement,
+    exr_part_names, read_exr_all, write_exr_placed, ExtraPart, FilmOutput, Image, Placement,
 };
 use risotto_engine::render::{SampleRange, Window, MAX_FILM_PIXELS};
 
@@ -146,20 +145,9 @@ pub fn write_partial(path: &Path, partial: &Partial) -> Result<(), MergeError> {
         full: (h.resolution.0 as usize, h.resolution.1 as usize),
         origin: (h.window.x0 as usize, h.window.y0 as usize),
     };
-    let name = path.file_name().map_or_else(
-        || "partial.exr".into(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    write_exr_placed(&tmp, &film, Some(placement), Some(extra))?;
-    std::fs::rename(&tmp, path).map_err(|cause| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Io {
-            path: path.to_path_buf(),
-            cause,
-        }
-    })?;
-    Ok(())
+    // Atomic (a temporary beside it, fsynced, renamed): a checkpoint killed mid-write
+    // leaves the previous one.
+    Ok(write_exr_placed(path, &film, Some(placement), Some(extra))?)
 }
 
 /// Reads a partial EXR written by [`write_partial`] (or by `risotto merge`).
