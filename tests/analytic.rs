@@ -268,3 +268,91 @@ fn square_area_light_over_plane_matches_form_factor() {
         }
     }
 }
+
+/// Mitsuba 3's spot falloff (`src/emitters/spot.cpp`, `falloff_curve`), written
+/// independently of the renderer's: 1 within `beam`, linear in the angle to 0 at `cutoff`.
+fn spot_falloff(theta: f64, cutoff: f64, beam: f64) -> f64 {
+    if theta <= beam {
+        1.0
+    } else if theta < cutoff {
+        (cutoff - theta) / (cutoff - beam)
+    } else {
+        0.0
+    }
+}
+
+#[test]
+fn spot_light_above_plane_follows_its_falloff() {
+    // A spot at height h pointing straight down: the point at distance r from the foot is
+    // at theta = atan(r / h) from the axis and receives E = I f(theta) cos(theta) / d^2.
+    let rho = Rgb::new(0.9, 0.6, 0.3);
+    let intensity = Rgb::new(5.0, 6.0, 7.0);
+    let (h, cutoff_deg, beam_deg) = (2.0f64, 30.0f64, 20.0f64);
+    let (cutoff, beam) = (cutoff_deg.to_radians(), beam_deg.to_radians());
+    let e = |i: f64, r: f64| {
+        let d2 = h * h + r * r;
+        i * spot_falloff((r / h).atan(), cutoff, beam) * (h / d2.sqrt()) / d2
+    };
+    // One row of 150 pixels of 0.01 x 0.01 covering x in [0, 1.5] on the line y = 0:
+    // inside the beam (r < h tan 20 = 0.728), the ramp (to h tan 30 = 1.155) and beyond.
+    let (n, view) = (150u32, 1.5f32);
+    let cam = ortho_camera(
+        Vec3::new(0.75, 0.0, 10.0),
+        Vec3::new(0.75, 0.0, 0.0),
+        Vec3::Y,
+        view,
+        n,
+        1,
+    );
+    let mut scene = plane_scene(cam, 16, rho);
+    scene.add_light(
+        "spot",
+        LightComponent::Spot {
+            position: Vec3::new(0.0, 0.0, h as f32),
+            direction: Vec3::NEG_Z,
+            intensity,
+            cutoff_angle: cutoff_deg as f32,
+            beam_width: beam_deg as f32,
+        },
+    );
+    let out = render_default(&scene.compile().unwrap());
+    // E decreases with r (every factor does), so a pixel's mean lies between E at the
+    // farthest and at the nearest point of its square, whatever its samples.
+    let s = view as f64 / n as f64;
+    let (mut inside, mut ramp, mut dark) = (0, 0, 0);
+    for x in 0..n as usize {
+        let x0 = x as f64 * s;
+        let r_min = x0;
+        let r_max = (x0 + s).hypot(s / 2.0);
+        let got = out.beauty.get(x, 0).to_array();
+        let channels = rho.to_array().into_iter().zip(intensity.to_array());
+        for (c, (g, (r, i))) in got.into_iter().zip(channels).enumerate() {
+            let k = r as f64 / PI;
+            let (lo, hi) = (k * e(i as f64, r_max), k * e(i as f64, r_min));
+            let g = g as f64;
+            assert!(
+                g >= lo * (1.0 - 1e-5) && g <= hi * (1.0 + 1e-5) + 1e-9,
+                "pixel {x} (r in [{r_min:.3}, {r_max:.3}]) channel {c}: {g} not in [{lo}, {hi}]"
+            );
+        }
+        let theta = (r_max / h).atan();
+        if theta < beam {
+            inside += 1;
+        } else if (r_min / h).atan() > cutoff {
+            dark += 1;
+            assert_eq!(got, [0.0; 3], "pixel {x} is outside the cone");
+        } else if (r_min / h).atan() > beam && theta < cutoff {
+            ramp += 1;
+        }
+    }
+    assert!(
+        inside > 50 && ramp > 30 && dark > 20,
+        "{inside} {ramp} {dark}"
+    );
+    // Mid-ramp, the linear ramp in angle and a smoothstep on the cosines differ by far
+    // more than the pixel's bounds: theta = 25 deg (r = h tan 25 = 0.9326) has f = 1/2.
+    let x = (h * 25f64.to_radians().tan() / s) as usize;
+    let got = out.beauty.get(x, 0).r as f64;
+    let want = rho.r as f64 / PI * e(intensity.r as f64, (x as f64 + 0.5) * s);
+    assert!((got - want).abs() < 0.02 * want, "{got} vs {want}");
+}

@@ -2,10 +2,11 @@
 //!
 //! Lights: area lights (emissive primitives, one-sided: they emit on the side their geometric
 //! normal points to), distant lights (irradiance `E` on a surface facing them), point lights
-//! (intensity `I`, W/sr) and an environment (constant radiance, optionally an equirectangular
+//! (intensity `I`, W/sr), spot lights (a point light whose intensity falls off away from an
+//! axis, [`SpotFalloff`]) and an environment (constant radiance, optionally an equirectangular
 //! map, importance sampled). One light is chosen per sample in proportion to an estimate of
 //! its power; the returned pdf includes that choice. Pdfs are per unit solid angle at the
-//! shading point, Dirac lights (distant, point) report `delta = true` and pdf 1 x selection.
+//! shading point, Dirac lights (distant, point, spot) report `delta = true` and pdf 1 x selection.
 
 use crate::distribution::{Distribution1D, EnvironmentMap, ONE_MINUS_EPSILON};
 use crate::geometry::{gamma, SceneGeometry, UNDERFLOW};
@@ -18,6 +19,9 @@ use std::sync::Arc;
 
 mod build;
 mod column;
+mod spot;
+
+pub use spot::SpotFalloff;
 
 /// One light.
 #[derive(Clone, Debug)]
@@ -42,6 +46,18 @@ pub enum Light {
         position: Vec3,
         /// Radiant intensity (W/sr per channel).
         intensity: Rgb,
+    },
+    /// A spot light (Mitsuba 3's `spot`): a point light emitting `intensity * f(theta)`
+    /// towards directions at angle `theta` from `direction` ([`SpotFalloff`]).
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Unit direction of the axis (where the light points).
+        direction: Vec3,
+        /// Radiant intensity on the axis (W/sr per channel).
+        intensity: Rgb,
+        /// The angular falloff.
+        falloff: SpotFalloff,
     },
     /// Radiance arriving from every direction at infinity.
     Environment {
@@ -389,20 +405,19 @@ impl LightSet {
             Light::Point {
                 position,
                 intensity,
+            } => point_light_sample(*position, *intensity, p, pmf),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                falloff,
             } => {
-                let d = *position - p;
-                let dist2 = d.length_squared();
-                if dist2 <= 0.0 {
-                    return None;
-                }
-                let dist = dist2.sqrt();
-                Some(LightSample {
-                    wi: d / dist,
-                    distance: dist,
-                    radiance: *intensity / dist2,
-                    pdf: pmf,
-                    delta: true,
-                    margin: 0.0,
+                let s = point_light_sample(*position, *intensity, p, pmf)?;
+                // The light emits towards -wi, at angle theta from its axis.
+                let f = falloff.eval(-s.wi.dot(*direction));
+                (f > 0.0).then(|| LightSample {
+                    radiance: s.radiance * f,
+                    ..s
                 })
             }
             Light::Volume { emitter } => {
@@ -464,6 +479,26 @@ impl LightSet {
             }
         }
     }
+}
+
+/// The sample of an isotropic point light of `intensity` at `position` seen from `p`
+/// (`I / d^2`, Dirac: pdf = the selection probability `pmf`); `None` at the light itself.
+#[inline]
+fn point_light_sample(position: Vec3, intensity: Rgb, p: Vec3, pmf: f32) -> Option<LightSample> {
+    let d = position - p;
+    let dist2 = d.length_squared();
+    if dist2 <= 0.0 {
+        return None;
+    }
+    let dist = dist2.sqrt();
+    Some(LightSample {
+        wi: d / dist,
+        distance: dist,
+        radiance: intensity / dist2,
+        pdf: pmf,
+        delta: true,
+        margin: 0.0,
+    })
 }
 
 /// The light-sampling system: one light sample per point.

@@ -21,7 +21,7 @@
 //! # Single scattering
 //! With a lighting delegate, each ray's in-scattered light on its segment `[0, tmax]` is
 //! estimated at two points, one per technique: a free-flight distance and, where the scene has
-//! point lights, an equiangular sample towards one of them (Kulla and Fajardo 2012), each
+//! point or spot lights, an equiangular sample towards one of them (Kulla and Fajardo 2012), each
 //! weighted by the balance heuristic over both (Veach 1997, eq. 9.10 with one sample per
 //! technique: `f(t) / (pdf_distance(t) + pdf_equiangular(t))`). The delegate lights them; the
 //! ray goes on to its hit with the exact transmittance. Without a delegate (an integrator
@@ -221,7 +221,7 @@ const DIMS_PER_SEGMENT: usize = 4;
 
 impl HomogeneousInterior<'_> {
     /// [`Scattering::Multiple`]'s choice: walk when light sampling at the medium's events
-    /// cannot find a light (the boundary blocks shadow rays and no point light lies in the
+    /// cannot find a light (the boundary blocks shadow rays and no point or spot light lies in the
     /// volume's bounds; area lights inside are found by the walk's own rays).
     fn walks(&self, ictx: &dyn risotto_engine::plugin::IntegratorContext) -> bool {
         if !self.boundary_blocks_shadows {
@@ -229,10 +229,10 @@ impl HomogeneousInterior<'_> {
         }
         let bounds = self.ctx.volume_space().map(|s| s.world_bounds);
         !ictx.lights().lights().iter().any(|l| match (l, bounds) {
-            (Light::Point { position, .. }, Some((lo, hi))) => {
+            (Light::Point { position, .. } | Light::Spot { position, .. }, Some((lo, hi))) => {
                 position.cmpge(lo).all() && position.cmple(hi).all()
             }
-            (Light::Point { .. }, None) => true,
+            (Light::Point { .. } | Light::Spot { .. }, None) => true,
             _ => false,
         })
     }

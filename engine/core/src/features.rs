@@ -29,6 +29,8 @@ pub struct Features {
     pub distant_lights: bool,
     /// Point lights.
     pub point_lights: bool,
+    /// Spot lights.
+    pub spot_lights: bool,
     /// An environment.
     pub environment: bool,
 }
@@ -49,6 +51,7 @@ impl Features {
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),
+            (self.spot_lights, "spot_lights"),
             (self.environment, "environment"),
         ];
         all.iter()

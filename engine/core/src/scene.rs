@@ -13,7 +13,7 @@ use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
 use risotto_systems::distribution::EnvironmentMap;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
-use risotto_systems::lights::{Light, LightSet};
+use risotto_systems::lights::{Light, LightSet, SpotFalloff};
 use std::sync::Arc;
 
 mod compile;
@@ -65,6 +65,21 @@ pub enum LightComponent {
         position: Vec3,
         /// Intensity.
         intensity: Rgb,
+    },
+    /// Spot light (Mitsuba 3's `spot`): a point light whose intensity falls off away from
+    /// its axis, linearly in the angle from `beam_width` to `cutoff_angle`
+    /// ([`SpotFalloff`]).
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Unit direction of the axis (where the light points).
+        direction: Vec3,
+        /// Intensity on the axis (W/sr per channel).
+        intensity: Rgb,
+        /// Half-angle of the lit cone, degrees, in `(0, 90]`.
+        cutoff_angle: f32,
+        /// Half-angle of the fully lit beam, degrees, in `(0, cutoff_angle]`.
+        beam_width: f32,
     },
     /// Environment.
     Environment {

@@ -26,7 +26,12 @@ use risotto_systems::independent_sampler::SamplerKind;
 
 /// Whether some light (an emitter the lighting techniques estimate) is in the scene.
 fn has_lights(f: &Features) -> bool {
-    f.area_lights || f.distant_lights || f.point_lights || f.environment || f.emissive_media
+    f.area_lights
+        || f.distant_lights
+        || f.point_lights
+        || f.spot_lights
+        || f.environment
+        || f.emissive_media
 }
 
 /// `lighting`: how the path tracer estimates direct lighting.
@@ -47,11 +52,11 @@ pub static LIGHTING: Technique = Technique {
         TechniqueValue {
             name: "bxdf",
             summary: "Bxdf sampling only (no shadow rays; Dirac lights are invisible)",
-            converges: |f| !(f.point_lights || f.distant_lights),
+            converges: |f| !(f.point_lights || f.spot_lights || f.distant_lights),
         },
     ],
     default: "mis",
-    applies_to: "scenes with lights (emitters, distant, point, environment, emissive media)",
+    applies_to: "scenes with lights (emitters, distant, point, spot, environment, emissive media)",
 };
 
 /// `sampler`: where each path's random numbers come from.

@@ -399,6 +399,20 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 position,
                 intensity,
             },
+            LightDesc::Spot {
+                position,
+                direction,
+                intensity,
+                cutoff_angle,
+                beam_width,
+                ..
+            } => LightComponent::Spot {
+                position,
+                direction,
+                intensity,
+                cutoff_angle,
+                beam_width,
+            },
             LightDesc::Environment {
                 radiance,
                 map,

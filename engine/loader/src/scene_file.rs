@@ -220,6 +220,23 @@ pub enum LightDesc {
         /// Radiant intensity, W sr^-1 per channel.
         intensity: Rgb,
     },
+    /// A spot light (Mitsuba 3's `spot`): a point light whose intensity falls off away from
+    /// its axis, linearly in the angle from `beam_width` to `cutoff_angle`.
+    Spot {
+        /// `name` (default `lights[i]`).
+        name: String,
+        /// Position.
+        position: Vec3,
+        /// Unit direction of the axis (`direction`, or `to - position`).
+        direction: Vec3,
+        /// Radiant intensity on the axis, W sr^-1 per channel.
+        intensity: Rgb,
+        /// Half-angle of the lit cone, degrees, in `(0, 90]` (default 20).
+        cutoff_angle: f32,
+        /// Half-angle of the fully lit beam, degrees, in `(0, cutoff_angle]` (default
+        /// `3/4 cutoff_angle`).
+        beam_width: f32,
+    },
     /// Radiance arriving from every direction at infinity (seen by every escaping ray).
     Environment {
         /// `name` (default `lights[i]`).
@@ -240,6 +257,7 @@ impl LightDesc {
         match self {
             LightDesc::Distant { name, .. }
             | LightDesc::Point { name, .. }
+            | LightDesc::Spot { name, .. }
             | LightDesc::Environment { name, .. } => name,
         }
     }
@@ -552,7 +570,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
     Ok(out)
 }
 
-const LIGHT_TYPES: &[&str] = &["distant", "point", "environment"];
+const LIGHT_TYPES: &[&str] = &["distant", "point", "spot", "environment"];
 
 fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, SceneError> {
     let Some(items) = top.array_opt("lights")? else {
@@ -599,6 +617,7 @@ fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, Sc
                     intensity: r.radiance("intensity", None)?,
                 }
             }
+            "spot" => read_spot(&r, node, name)?,
             "environment" => {
                 r.deny_unknown(&["type", "name", "radiance", "map"])?;
                 if let Some(first) = environment_seen {
@@ -655,6 +674,69 @@ fn read_lights(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<LightDesc>, Sc
         out.push(light);
     }
     Ok(out)
+}
+
+/// A `spot` light's keys: `position`, the axis as `direction` or as a target point `to`
+/// (exactly one), `intensity`, `cutoff_angle` and `beam_width` (degrees, Mitsuba 3's
+/// defaults and ranges).
+fn read_spot(r: &Reader<'_>, node: &Node, name: String) -> Result<LightDesc, SceneError> {
+    r.deny_unknown(&[
+        "type",
+        "name",
+        "position",
+        "direction",
+        "to",
+        "intensity",
+        "cutoff_angle",
+        "beam_width",
+    ])?;
+    let position = r.vec3("position", None)?;
+    let (key, axis) = match (r.vec3_opt("direction")?, r.vec3_opt("to")?) {
+        (Some(d), None) => ("direction", d),
+        (None, Some(to)) => ("to", to - position),
+        (Some(_), Some(_)) => {
+            return Err(r.invalid(
+                "to",
+                r.get("to").unwrap_or(node),
+                "give the axis as `direction` or as `to`, not both",
+            ))
+        }
+        (None, None) => {
+            return Err(r.missing(
+                "direction",
+                "a direction [x, y, z] (or a target point `to`)",
+            ))
+        }
+    };
+    let len = axis.length();
+    if !(len > 0.0 && len.is_finite()) {
+        let requirement = if key == "to" {
+            "must differ from `position` (the light points from `position` to `to`)"
+        } else {
+            "must be a non-zero vector (the direction the spot points to)"
+        };
+        return Err(r.invalid(key, r.get(key).unwrap_or(node), requirement));
+    }
+    let cutoff_angle = r.f32_where(
+        "cutoff_angle",
+        Some(20.0),
+        "must be in (0, 90] degrees",
+        |v| v > 0.0 && v <= 90.0,
+    )?;
+    let beam_width = r.f32_where(
+        "beam_width",
+        Some(0.75 * cutoff_angle),
+        &format!("must be in (0, cutoff_angle] = (0, {cutoff_angle}] degrees"),
+        |v| v > 0.0 && v <= cutoff_angle,
+    )?;
+    Ok(LightDesc::Spot {
+        name,
+        position,
+        direction: axis / len,
+        intensity: r.radiance("intensity", None)?,
+        cutoff_angle,
+        beam_width,
+    })
 }
 
 type CameraParts = (CameraDesc, Option<Vec<String>>, Option<Location>);

@@ -38,6 +38,10 @@ impl LightSet {
                 }
                 Light::Distant { irradiance, .. } => irradiance.average() * PI * r2,
                 Light::Point { intensity, .. } => 4.0 * PI * intensity.average(),
+                // Intensity times the falloff's integral over the sphere (not 4 pi).
+                Light::Spot {
+                    intensity, falloff, ..
+                } => falloff.solid_angle() * intensity.average(),
                 // As an area light's `L pi A`: radiance per length times volume, times pi.
                 Light::Volume { emitter } => emitter.power() * PI,
                 Light::Environment {

@@ -175,6 +175,12 @@ fn column_sampling_equals_per_point_sampling() {
         direction: -Vec3::Y,
         irradiance: Rgb::splat(0.5),
     });
+    lights.push(Light::Spot {
+        position: Vec3::new(0.3, 2.0, 0.1),
+        direction: -Vec3::Y,
+        intensity: Rgb::splat(8.0),
+        falloff: SpotFalloff::from_degrees(60.0, 40.0),
+    });
     lights.push(Light::Environment {
         radiance: Rgb::splat(0.1),
         map: None,
@@ -240,4 +246,122 @@ fn triangle_light_samples_match_area_pdf_and_emitter() {
         assert!((s.pdf - want).abs() <= 1e-3 * want, "{} vs {want}", s.pdf);
     }
     assert!(found > n / 4, "only {found} samples");
+}
+
+/// `2 pi int_0^pi f(theta) sin theta dtheta` by the midpoint rule in f64 on `f.eval`.
+fn integrate_falloff(f: &SpotFalloff) -> f64 {
+    let n = 200_000;
+    let h = std::f64::consts::PI / n as f64;
+    let sum: f64 = (0..n)
+        .map(|k| {
+            let t = (k as f64 + 0.5) * h;
+            f.eval(t.cos() as f32) as f64 * t.sin()
+        })
+        .sum();
+    2.0 * std::f64::consts::PI * sum * h
+}
+
+#[test]
+fn spot_falloff_is_mitsubas_linear_ramp_in_angle() {
+    let f = SpotFalloff::from_degrees(20.0, 15.0);
+    let at = |deg: f32| f.eval(deg.to_radians().cos());
+    assert_eq!(at(0.0), 1.0);
+    assert_eq!(at(14.9), 1.0);
+    // Linear in the angle: (20 - theta) / (20 - 15).
+    for deg in [15.5f32, 16.0, 17.5, 19.0, 19.9] {
+        let want = (20.0 - deg) / 5.0;
+        assert!(
+            (at(deg) - want).abs() < 2e-3,
+            "{deg}: {} vs {want}",
+            at(deg)
+        );
+    }
+    assert_eq!(at(20.1), 0.0);
+    assert_eq!(at(90.0), 0.0);
+    assert_eq!(at(180.0), 0.0);
+    // beam = cutoff: a hard edge.
+    let hard = SpotFalloff::from_degrees(30.0, 30.0);
+    assert_eq!(hard.eval(29.9f32.to_radians().cos()), 1.0);
+    assert_eq!(hard.eval(30.1f32.to_radians().cos()), 0.0);
+}
+
+#[test]
+fn spot_power_is_the_integrated_falloff() {
+    for (c, b) in [
+        (20.0, 15.0),
+        (90.0, 67.5),
+        (90.0, 1.0),
+        (45.0, 45.0),
+        (30.0, 29.999),
+        (5.0, 0.5),
+    ] {
+        let f = SpotFalloff::from_degrees(c, b);
+        let num = integrate_falloff(&f);
+        let closed = f.solid_angle() as f64;
+        assert!(
+            (closed - num).abs() <= 1e-4 * num,
+            "cutoff {c} beam {b}: closed {closed} vs integrated {num}"
+        );
+    }
+    // The selection power uses it: a spot and a point light of equal intensity are
+    // selected in the ratio of the solid angle to 4 pi.
+    let geometry = SceneGeometry::build(Vec::new(), Vec::new());
+    let f = SpotFalloff::from_degrees(40.0, 30.0);
+    let lights = vec![
+        Light::Spot {
+            position: Vec3::ZERO,
+            direction: Vec3::Y,
+            intensity: Rgb::new(1.0, 2.0, 3.0),
+            falloff: f,
+        },
+        Light::Point {
+            position: Vec3::ZERO,
+            intensity: Rgb::new(1.0, 2.0, 3.0),
+        },
+    ];
+    let set = LightSet::new(lights, &geometry, 1.0);
+    let ratio = set.selection_pmf(0) / set.selection_pmf(1);
+    let want = integrate_falloff(&f) / (4.0 * std::f64::consts::PI);
+    assert!(
+        (ratio as f64 - want).abs() < 1e-4 * want,
+        "{ratio} vs {want}"
+    );
+}
+
+#[test]
+fn spot_sample_is_intensity_falloff_over_distance_squared() {
+    let geometry = SceneGeometry::build(Vec::new(), Vec::new());
+    let f = SpotFalloff::from_degrees(30.0, 20.0);
+    let set = LightSet::new(
+        vec![Light::Spot {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            direction: Vec3::NEG_Y,
+            intensity: Rgb::new(4.0, 2.0, 1.0),
+            falloff: f,
+        }],
+        &geometry,
+        1.0,
+    );
+    for x in [0.0f32, 0.5, 0.8, 1.0, 1.1, 1.5] {
+        let p = Vec3::new(x, 0.0, 0.0);
+        let theta = (x / 2.0).atan().to_degrees();
+        let want = if theta <= 20.0 {
+            1.0
+        } else if theta < 30.0 {
+            (30.0 - theta) / 10.0
+        } else {
+            0.0
+        };
+        let s = set.sample(&geometry, p, 0.5, Vec2::splat(0.5));
+        match s {
+            None => assert_eq!(want, 0.0, "x {x}"),
+            Some(s) => {
+                let d2 = 4.0 + x * x;
+                let got = s.radiance.r * d2 / 4.0;
+                assert!((got - want).abs() < 1e-3, "x {x}: {got} vs {want}");
+                assert!(s.delta && s.pdf == 1.0);
+                assert!((s.distance - d2.sqrt()).abs() < 1e-5);
+            }
+        }
+    }
 }

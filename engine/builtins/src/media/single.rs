@@ -27,13 +27,13 @@ impl HomogeneousInterior<'_> {
             ..
         } = services;
         let lighting = lighting.expect("called with a delegate");
-        // Point lights for equiangular sampling (chosen uniformly).
+        // Point and spot lights for equiangular sampling (chosen uniformly).
         let point_lights: Vec<Vec3> = ictx
             .lights()
             .lights()
             .iter()
             .filter_map(|l| match l {
-                Light::Point { position, .. } => Some(*position),
+                Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
                 _ => None,
             })
             .collect();

@@ -122,6 +122,21 @@ impl Scene {
                         intensity,
                     }
                 }
+                LightComponent::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                } => {
+                    features.spot_lights = true;
+                    Light::Spot {
+                        position,
+                        direction: direction.normalize(),
+                        intensity,
+                        falloff: SpotFalloff::from_degrees(cutoff_angle, beam_width),
+                    }
+                }
                 LightComponent::Environment { radiance, map } => {
                     features.environment = true;
                     Light::Environment {

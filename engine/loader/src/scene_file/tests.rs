@@ -674,12 +674,12 @@ fn unknown_shape_and_light_types() {
         line_of(&text, "cone"),
         &["shapes[0] \"ball\"", "`cone`", "sphere, quad"],
     );
-    let text = base_with("type = \"point\"", "type = \"spot\"");
+    let text = base_with("type = \"point\"", "type = \"laser\"");
     let e = parse_err(&text);
     assert_message(
         &e,
-        line_of(&text, "spot"),
-        &["lights[1] \"bulb\"", "`spot`"],
+        line_of(&text, "laser"),
+        &["lights[1] \"bulb\"", "`laser`", "point, spot, environment"],
     );
     // Array-of-tables headers are absolute: this is lights[3], a second environment.
     let text = format!("{BASE}\n[[lights]]\ntype = \"environment\"\nradiance = 1\n");
@@ -1607,4 +1607,130 @@ fn resolution_past_the_film_bound_is_rejected() {
     let text = base_with("width = 64\nheight = 48", "height = 2048\nwidth = 65536");
     let e = parse_err(&text);
     assert_message(&e, line_of(&text, "height ="), &["height", "65536 x 2048"]);
+}
+
+/// `BASE` with a spot light `lamp` (lights[3]) whose body is `body`.
+fn with_spot(body: &str) -> String {
+    format!("{BASE}\n[[lights]]\nname = \"lamp\"\ntype = \"spot\"\n{body}\n")
+}
+
+#[test]
+fn spot_light_parses_with_mitsubas_defaults() {
+    let s = parse(&with_spot(
+        "position = [0, 4, 0]\ndirection = [0, -3, 0]\nintensity = 5",
+    ))
+    .unwrap();
+    assert_eq!(
+        s.lights[3],
+        LightDesc::Spot {
+            name: "lamp".into(),
+            position: Vec3::new(0.0, 4.0, 0.0),
+            direction: Vec3::NEG_Y,
+            intensity: Rgb::splat(5.0),
+            cutoff_angle: 20.0,
+            beam_width: 15.0,
+        }
+    );
+    // The axis as a target point; explicit angles (beam = cutoff allowed).
+    let s = parse(&with_spot(
+        "position = [1, 2, 3]\nto = [1, 2, 5]\nintensity = [1, 2, 3]\ncutoff_angle = 90\nbeam_width = 90",
+    ))
+    .unwrap();
+    assert_eq!(
+        s.lights[3],
+        LightDesc::Spot {
+            name: "lamp".into(),
+            position: Vec3::new(1.0, 2.0, 3.0),
+            direction: Vec3::Z,
+            intensity: Rgb::new(1.0, 2.0, 3.0),
+            cutoff_angle: 90.0,
+            beam_width: 90.0,
+        }
+    );
+    assert_eq!(s.lights[3].name(), "lamp");
+}
+
+#[test]
+fn spot_light_errors_name_file_entity_and_value() {
+    let ok = "position = [0, 4, 0]\ndirection = [0, -1, 0]\nintensity = 5";
+    // (replacement of one line of `ok` or an added line, the line's key, fragments)
+    let cases: &[(&str, &str, &str, &[&str])] = &[
+        ("", "cutoff_angle = 0", "cutoff_angle", &["`0`", "(0, 90]"]),
+        (
+            "",
+            "cutoff_angle = 90.5",
+            "cutoff_angle",
+            &["`90.5`", "(0, 90]"],
+        ),
+        (
+            "",
+            "cutoff_angle = -10",
+            "cutoff_angle",
+            &["`-10`", "(0, 90]"],
+        ),
+        ("", "beam_width = 0", "beam_width", &["`0`", "(0, 20]"]),
+        ("", "beam_width = 25", "beam_width", &["`25`", "(0, 20]"]),
+        (
+            "",
+            "cutoff_angle = 40\nbeam_width = 41",
+            "beam_width",
+            &["`41`", "(0, 40]"],
+        ),
+        (
+            "direction = [0, -1, 0]",
+            "direction = [0, 0, 0]",
+            "direction",
+            &["[0, 0, 0]", "non-zero"],
+        ),
+        (
+            "direction = [0, -1, 0]",
+            "to = [0, 4, 0]",
+            "to",
+            &["[0, 4, 0]", "differ from `position`"],
+        ),
+        ("", "to = [0, 0, 0]", "to", &["not both"]),
+        (
+            "intensity = 5",
+            "intensity = [1, -1, 1]",
+            "intensity",
+            &["[1, -1, 1]", ">= 0"],
+        ),
+        (
+            "intensity = 5",
+            "intensity = nan",
+            "intensity",
+            &["`nan`", "finite"],
+        ),
+        (
+            "intensity = 5",
+            "intensity = inf",
+            "intensity",
+            &["`inf`", "finite"],
+        ),
+        (
+            "intensity = 5",
+            "intensity = 2e30",
+            "intensity",
+            &["`2e30`", "at most 1e30"],
+        ),
+    ];
+    for (from, to, key, fragments) in cases {
+        let body = if from.is_empty() {
+            format!("{ok}\n{to}")
+        } else {
+            ok.replace(from, to)
+        };
+        let text = with_spot(&body);
+        let e = parse_err(&text);
+        assert_eq!(e.kind(), SceneErrorKind::InvalidValue, "{e}");
+        let at = text.rfind(&format!("{key} =")).unwrap();
+        let line = text[..at].matches('\n').count() + 1;
+        let mut all = vec!["lights[3] \"lamp\"", key];
+        all.extend_from_slice(fragments);
+        assert_message(&e, line, &all);
+    }
+    // No axis at all.
+    let e = parse_err(&with_spot("position = [0, 4, 0]\nintensity = 5"));
+    assert_eq!(e.kind(), SceneErrorKind::MissingField);
+    assert!(e.to_string().contains("`direction`"), "{e}");
 }
