@@ -3,9 +3,22 @@
 //! Conventions: image (0,0) is the top-left pixel; `right = normalize(cross(forward, up))`,
 //! `image up = cross(right, forward)`. The perspective field of view is the full *horizontal*
 //! angle. Samples are uniform over each pixel's square (a box pixel filter).
+//!
+//! The thin-lens camera ([`Projection::ThinLens`]) follows Mitsuba 3's `thinlens` sensor
+//! (`src/sensors/thinlens.cpp`, `ThinLensCamera::sample_ray`) and pbrt-v4's
+//! `PerspectiveCamera::GenerateRay` (Pharr, Jakob, Humphreys, *Physically Based Rendering*,
+//! 4th ed., sec. 5.2.3): the pinhole ray of the film position meets the focal plane, the
+//! plane at `focus_distance` along the view direction (a plane, not a sphere: Mitsuba scales
+//! the near-plane point by `focus_distance / z`), and the ray starts on a point of the lens
+//! disk (radius `aperture_radius`, spanned by the image right and up axes, sampled with the
+//! concentric map) and goes through that focal-plane point. Lens samples are sampler
+//! dimensions 2 and 3, reserved for them ([`FIRST_PATH_DIMENSION`]), so a lens shifts no
+//! other dimension; with `aperture_radius = 0` they are not drawn and the rays are the
+//! pinhole camera's, bit for bit.
 
 use crate::sampler::{first_2d_column, sample_2d, PathSampler};
 use crate::simd8::{Backend, Kernel8, Lanes8, Row8, Simd};
+use crate::warp::sample_concentric_disk;
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, VolumeStack};
 
@@ -22,6 +35,35 @@ pub enum Projection {
         /// Width of the view in world units.
         width: f32,
     },
+    /// Perspective through a thin lens (depth of field), as Mitsuba 3's `thinlens` sensor:
+    /// rays start on the lens disk and meet the pinhole ray of their film position on the
+    /// focal plane. `aperture_radius = 0` is exactly [`Projection::Perspective`].
+    ThinLens {
+        /// Full horizontal field of view in degrees, in (0, 180).
+        fov_deg: f32,
+        /// Radius of the lens disk in world units, finite and >= 0.
+        aperture_radius: f32,
+        /// Distance from the lens to the plane in focus, along the view direction, in world
+        /// units, finite and > 0.
+        focus_distance: f32,
+    },
+}
+
+impl Projection {
+    /// The lens of a thin-lens projection with a positive aperture: `(aperture_radius,
+    /// focus_distance)`; `None` for every camera whose rays start at one point or are
+    /// parallel (pinhole, orthographic, thin lens of radius 0).
+    #[inline]
+    pub fn lens(&self) -> Option<(f32, f32)> {
+        match *self {
+            Projection::ThinLens {
+                aperture_radius,
+                focus_distance,
+                ..
+            } if aperture_radius > 0.0 => Some((aperture_radius, focus_distance)),
+            _ => None,
+        }
+    }
 }
 
 /// A camera placed by look-at, with an image size.
@@ -68,17 +110,28 @@ impl Camera {
         })
     }
 
-    /// The ray through film position `film` (in pixels, (0,0) = top-left corner of the image).
+    /// The ray through film position `film` (in pixels, (0,0) = top-left corner of the image);
+    /// for a thin lens, the ray through the lens centre (the pinhole ray).
     #[inline]
     pub fn ray(&self, film: Vec2) -> (Vec3, Vec3) {
         self.ray_generator().ray(film)
+    }
+
+    /// The ray through film position `film` and lens sample `lens` in `[0, 1)^2` (mapped to
+    /// the lens disk by the concentric map). Cameras without a lens ([`Projection::lens`] is
+    /// `None`) ignore `lens`: the result is [`Self::ray`], bit for bit.
+    #[inline]
+    pub fn ray_through_lens(&self, film: Vec2, lens: Vec2) -> (Vec3, Vec3) {
+        self.ray_generator().ray_through_lens(film, lens)
     }
 
     /// The per-camera constants of [`Self::ray`], computed once for a batch of rays.
     #[inline]
     fn ray_generator(&self) -> RayGenerator {
         let scale = match self.projection {
-            Projection::Perspective { fov_deg } => (0.5 * fov_deg.to_radians()).tan(),
+            Projection::Perspective { fov_deg } | Projection::ThinLens { fov_deg, .. } => {
+                (0.5 * fov_deg.to_radians()).tan()
+            }
             Projection::Orthographic { width } => 0.5 * width,
         };
         RayGenerator {
@@ -131,9 +184,35 @@ impl RayGenerator {
     #[inline(always)]
     fn ray(&self, film: Vec2) -> (Vec3, Vec3) {
         match self.camera.projection {
-            Projection::Perspective { .. } => (self.camera.from, self.perspective(film)),
+            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
+                (self.camera.from, self.perspective(film))
+            }
             Projection::Orthographic { .. } => (self.orthographic(film), self.camera.forward),
         }
+    }
+
+    /// [`Self::ray`] through lens sample `lens` when the camera has a lens.
+    #[inline(always)]
+    fn ray_through_lens(&self, film: Vec2, lens: Vec2) -> (Vec3, Vec3) {
+        match self.camera.projection.lens() {
+            Some((radius, focus)) => self.thin_lens(film, lens, radius, focus),
+            None => self.ray(film),
+        }
+    }
+
+    /// The thin-lens ray of film position `film` and lens sample `u`: with the pinhole
+    /// direction `d = forward + right a + up b` (its component along `forward` is 1), the
+    /// focal-plane point is `from + focus d` and the lens point `from + radius (right x + up
+    /// y)`, `(x, y)` the concentric disk point of `u`; the ray goes from the lens point to the
+    /// focal-plane point.
+    #[inline(always)]
+    fn thin_lens(&self, film: Vec2, u: Vec2, radius: f32, focus: f32) -> (Vec3, Vec3) {
+        let (sx, sy) = self.screen(film);
+        let c = &self.camera;
+        let d = c.forward + c.right * (sx * self.scale) + c.up * (sy * self.scale);
+        let disk = sample_concentric_disk(u) * radius;
+        let offset = c.right * disk.x + c.up * disk.y;
+        (c.from + offset, (d * focus - offset).normalize())
     }
 }
 
@@ -147,8 +226,11 @@ fn film_position(width: u32, pixel: u32, sample: u32, seed: u32) -> Vec2 {
     Vec2::new(px as f32 + jitter.x, py as f32 + jitter.y)
 }
 
+/// The sampler dimension of the lens sample (2 and 3; the pixel jitter is 0 and 1).
+pub const LENS_DIMENSION: u32 = 2;
+
 /// Generates one camera ray per `(pixel, sample)` entry. Pixel jitter consumes sampler
-/// dimensions 0 and 1 (paths continue at [`FIRST_PATH_DIMENSION`]).
+/// dimensions 0 and 1, a thin lens 2 and 3 (paths continue at [`FIRST_PATH_DIMENSION`]).
 ///
 /// Inputs: `pixel`, `sample`, `seed` (per-pixel scrambling seed). Outputs: `origin`,
 /// `direction`.
@@ -164,9 +246,16 @@ pub fn generate_camera_rays(
     let n = pixel.len();
     let (sample, seed) = (&sample[..n], &seed[..n]);
     let (origin, direction) = (&mut origin[..n], &mut direction[..n]);
+    let lens = camera.projection.lens();
     for i in 0..n {
         let film = film_position(camera.width, pixel[i], sample[i], seed[i]);
-        (origin[i], direction[i]) = gen.ray(film);
+        (origin[i], direction[i]) = match lens {
+            Some((radius, focus)) => {
+                let u = sample_2d(seed[i], sample[i], LENS_DIMENSION);
+                gen.thin_lens(film, u, radius, focus)
+            }
+            None => gen.ray(film),
+        };
     }
 }
 
@@ -207,15 +296,28 @@ pub fn push_camera_rays(
         };
         Vec2::new(x + j.x, y + j.y)
     });
-    match camera.projection {
-        Projection::Perspective { .. } => {
-            rays.origin.resize(end, camera.from);
-            let films: Vec<Vec2> = films.collect();
-            extend_perspective(Backend::best(), &gen, &films, &mut rays.direction);
+    if let Some((radius, focus)) = camera.projection.lens() {
+        // Lens samples (dimensions 2 and 3) one ray at a time: a lens is rare and its rays
+        // cost little beside their paths.
+        rays.origin.reserve(n);
+        rays.direction.reserve(n);
+        for ((film, &seed), &sample) in films.zip(&seed[..n]).zip(&sample[..n]) {
+            let u = sample_2d(seed, sample, LENS_DIMENSION);
+            let (o, d) = gen.thin_lens(film, u, radius, focus);
+            rays.origin.push(o);
+            rays.direction.push(d);
         }
-        Projection::Orthographic { .. } => {
-            rays.origin.extend(films.map(|film| gen.orthographic(film)));
-            rays.direction.resize(end, camera.forward);
+    } else {
+        match camera.projection {
+            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
+                rays.origin.resize(end, camera.from);
+                let films: Vec<Vec2> = films.collect();
+                extend_perspective(Backend::best(), &gen, &films, &mut rays.direction);
+            }
+            Projection::Orthographic { .. } => {
+                rays.origin.extend(films.map(|film| gen.orthographic(film)));
+                rays.direction.resize(end, camera.forward);
+            }
         }
     }
     rays.prev_p.extend_from_slice(&rays.origin[base..end]);
@@ -390,6 +492,11 @@ mod tests {
         let projections = [
             Projection::Perspective { fov_deg: 35.0 },
             Projection::Orthographic { width: 3.0 },
+            Projection::ThinLens {
+                fov_deg: 35.0,
+                aperture_radius: 0.2,
+                focus_distance: 3.0,
+            },
         ];
         for projection in projections {
             let (w, h) = (7, 5);
@@ -429,7 +536,8 @@ mod tests {
                     (pixel[i] % w) as f32 + jitter.x,
                     (pixel[i] / w) as f32 + jitter.y,
                 );
-                let (o, d) = cam.ray(film);
+                let lens = sample_2d(seed[i], sample[i], LENS_DIMENSION);
+                let (o, d) = cam.ray_through_lens(film, lens);
                 assert_eq!((r.origin, r.direction), (o, d));
                 assert_eq!((o2[i], d2[i]), (o, d));
                 assert!((d.length() - 1.0).abs() < 1e-6);
@@ -446,6 +554,128 @@ mod tests {
                 assert_eq!(r.volume_stack, stack);
             }
         }
+    }
+
+    fn thin_lens_camera(aperture_radius: f32, focus_distance: f32) -> Camera {
+        Camera::look_at(
+            Projection::ThinLens {
+                fov_deg: 40.0,
+                aperture_radius,
+                focus_distance,
+            },
+            Vec3::new(1.0, 2.0, 6.0),
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::Y,
+            64,
+            48,
+        )
+        .unwrap()
+    }
+
+    /// Every thin-lens ray of a film position crosses the focal plane (at `focus_distance`
+    /// along the view direction) where the pinhole ray of that film position does, and
+    /// starts on the lens disk (in the plane through `from` spanned by right and up).
+    #[test]
+    fn thin_lens_rays_meet_the_pinhole_ray_on_the_focal_plane() {
+        let (radius, focus) = (0.3, 4.5);
+        let cam = thin_lens_camera(radius, focus);
+        let mut rng = crate::sampler::SplitMix64(11);
+        let mut worst: f32 = 0.0;
+        for _ in 0..200 {
+            let film = rng.vec2() * Vec2::new(64.0, 48.0);
+            let (o0, d0) = cam.ray(film);
+            assert_eq!(o0, cam.from);
+            // The pinhole ray's focal-plane point.
+            let focal = o0 + d0 * (focus / d0.dot(cam.forward));
+            for _ in 0..50 {
+                let (o, d) = cam.ray_through_lens(film, rng.vec2());
+                let rel = o - cam.from;
+                assert!(
+                    rel.dot(cam.forward).abs() < 1e-5,
+                    "origin off the lens plane"
+                );
+                assert!(
+                    rel.length() <= radius * (1.0 + 1e-5),
+                    "origin off the lens disk"
+                );
+                assert!((d.length() - 1.0).abs() < 1e-5);
+                let t = (focus - rel.dot(cam.forward)) / d.dot(cam.forward);
+                worst = worst.max((o + d * t - focal).length());
+            }
+        }
+        // Distances of about 5 world units: f32 rounding only.
+        assert!(worst < 2e-5, "focal-plane miss {worst}");
+    }
+
+    /// The lens points are uniform over the disk: a chi-square test over 16 equal-area
+    /// cells (4 rings of equal area x 4 quadrants) and the moments E[r^2] = R^2 / 2,
+    /// E[x] = E[y] = 0, with the camera's own lens dimensions (the Sobol sampler's
+    /// dimensions 2 and 3 across pixels and samples).
+    #[test]
+    fn thin_lens_origins_are_uniform_over_the_disk() {
+        let radius = 0.5;
+        let cam = thin_lens_camera(radius, 3.0);
+        let (w, h) = (cam.width, cam.height);
+        let pixel: Vec<u32> = (0..w * h).flat_map(|p| [p; 8]).collect();
+        let sample: Vec<u32> = (0..pixel.len() as u32).map(|i| i % 8).collect();
+        let seed: Vec<u32> = pixel
+            .iter()
+            .map(|&p| crate::sampler::pixel_seed(7, p))
+            .collect();
+        let mut rays = Rays::default();
+        push_camera_rays(&cam, &pixel, &sample, &seed, &VolumeStack::new(), &mut rays);
+        let n = rays.len();
+        let mut counts = [0u32; 16];
+        let (mut r2, mut mx, mut my) = (0.0f64, 0.0f64, 0.0f64);
+        for o in &rays.origin {
+            let rel = *o - cam.from;
+            let (x, y) = (rel.dot(cam.right) / radius, rel.dot(cam.up) / radius);
+            let q = x.powi(2) + y.powi(2);
+            assert!(q <= 1.0 + 1e-5);
+            let ring = ((q * 4.0) as usize).min(3);
+            let quadrant = usize::from(x < 0.0) * 2 + usize::from(y < 0.0);
+            counts[ring * 4 + quadrant] += 1;
+            (r2, mx, my) = (r2 + q as f64, mx + x as f64, my + y as f64);
+        }
+        let expected = n as f64 / 16.0;
+        let chi2: f64 = counts
+            .iter()
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum();
+        // 15 degrees of freedom: P(chi2 > 37.7) = 0.001.
+        assert!(chi2 < 37.7, "chi2 {chi2}, counts {counts:?}");
+        let n = n as f64;
+        assert!((r2 / n - 0.5).abs() < 0.005, "E[r^2] {}", r2 / n);
+        assert!((mx / n).abs() < 0.005 && (my / n).abs() < 0.005);
+        // And the lens points are no constant: they differ between samples of a pixel.
+        assert_ne!(rays.origin[0], rays.origin[1]);
+    }
+
+    /// `aperture_radius = 0` is the pinhole camera bit for bit (no lens dimension drawn).
+    #[test]
+    fn thin_lens_of_radius_zero_is_the_pinhole_camera() {
+        let lens = thin_lens_camera(0.0, 2.0);
+        let pinhole = Camera {
+            projection: Projection::Perspective { fov_deg: 40.0 },
+            ..lens
+        };
+        let pixel: Vec<u32> = (0..64 * 48).chain(0..37).collect();
+        let sample: Vec<u32> = (0..pixel.len() as u32).map(|i| i % 3).collect();
+        let seed: Vec<u32> = pixel.iter().map(|&p| p.wrapping_mul(0x9e37_79b9)).collect();
+        let bits = |cam: &Camera| {
+            let mut rays = Rays::default();
+            push_camera_rays(cam, &pixel, &sample, &seed, &VolumeStack::new(), &mut rays);
+            let (mut o, mut d) = (vec![Vec3::ZERO; pixel.len()], vec![Vec3::ZERO; pixel.len()]);
+            generate_camera_rays(cam, &pixel, &sample, &seed, &mut o, &mut d);
+            assert_eq!((&o, &d), (&rays.origin, &rays.direction));
+            let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+                v.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+            };
+            (bits(&rays.origin), bits(&rays.direction))
+        };
+        assert_eq!(bits(&lens), bits(&pinhole));
+        assert!(lens.projection.lens().is_none());
+        assert!(thin_lens_camera(1e-6, 2.0).projection.lens().is_some());
     }
 
     #[test]

@@ -339,6 +339,15 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
     let projection = match c.projection {
         DescProjection::Perspective { fov_deg } => Projection::Perspective { fov_deg },
         DescProjection::Orthographic { width } => Projection::Orthographic { width },
+        DescProjection::ThinLens {
+            fov_deg,
+            aperture_radius,
+            focus_distance,
+        } => Projection::ThinLens {
+            fov_deg,
+            aperture_radius,
+            focus_distance,
+        },
     };
     let camera =
         Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height).ok_or_else(|| {

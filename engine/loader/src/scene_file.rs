@@ -128,6 +128,17 @@ pub enum Projection {
         /// World-space width of the view (the height follows from the aspect ratio).
         width: f32,
     },
+    /// A perspective camera with a thin lens (depth of field), as Mitsuba 3's `thinlens`
+    /// sensor: `projection = "thin_lens"`.
+    ThinLens {
+        /// Full *horizontal* field of view in degrees, in (0, 180).
+        fov_deg: f32,
+        /// Radius of the lens in world units, finite and >= 0 (0 = the pinhole camera).
+        aperture_radius: f32,
+        /// Distance of the plane in focus from the lens, along the view direction, in world
+        /// units, finite and > 0 (default: the distance from `from` to `to`).
+        focus_distance: f32,
+    },
 }
 
 /// The camera: placed by look-at. Right = `normalize(cross(forward, up))`, image up =
@@ -755,23 +766,50 @@ fn read_camera(
         ));
     };
     let r = Reader::new(top.src, node, "camera");
+    let from = r.vec3("from", None)?;
+    let to = r.vec3("to", None)?;
+    let up = r.vec3("up", Some(Vec3::Y))?;
+    let forward = to - from;
+    let distance = forward.length();
     let projection_name = r.str_opt("projection")?.unwrap_or("perspective");
+    const COMMON: [&str; 4] = ["from", "to", "up", "inside"];
+    let fov = || {
+        r.f32_where(
+            "fov",
+            None,
+            "must be in (0, 180) degrees (full horizontal field of view)",
+            |v| v > 0.0 && v < 180.0,
+        )
+    };
     let projection = match projection_name {
         "perspective" => {
-            r.deny_unknown(&["projection", "fov", "from", "to", "up", "inside"])?;
-            Projection::Perspective {
-                fov_deg: r.f32_where(
-                    "fov",
-                    None,
-                    "must be in (0, 180) degrees (full horizontal field of view)",
-                    |v| v > 0.0 && v < 180.0,
-                )?,
-            }
+            r.deny_unknown(&[&["projection", "fov"][..], &COMMON].concat())?;
+            Projection::Perspective { fov_deg: fov()? }
         }
         "orthographic" => {
-            r.deny_unknown(&["projection", "width", "from", "to", "up", "inside"])?;
+            r.deny_unknown(&[&["projection", "width"][..], &COMMON].concat())?;
             Projection::Orthographic {
                 width: r.f32_where("width", None, "must be > 0 (world units)", |v| v > 0.0)?,
+            }
+        }
+        "thin_lens" => {
+            let keys = ["projection", "fov", "aperture_radius", "focus_distance"];
+            r.deny_unknown(&[&keys[..], &COMMON].concat())?;
+            Projection::ThinLens {
+                fov_deg: fov()?,
+                aperture_radius: r.f32_where(
+                    "aperture_radius",
+                    None,
+                    "must be finite and >= 0 (world units; 0 = pinhole)",
+                    |v| v.is_finite() && v >= 0.0,
+                )?,
+                // The default puts `to` in focus (checked finite and > 0 below).
+                focus_distance: r.f32_where(
+                    "focus_distance",
+                    Some(distance),
+                    "must be finite and > 0 (world units, along the view direction)",
+                    |v| v.is_finite() && v > 0.0,
+                )?,
             }
         }
         other => {
@@ -779,15 +817,13 @@ fn read_camera(
                 SceneErrorKind::InvalidValue,
                 &r.get("projection").unwrap_or(node).span(),
                 Some("projection"),
-                format!("unknown projection `{other}`; expected `perspective` or `orthographic`"),
+                format!(
+                    "unknown projection `{other}`; expected `perspective`, `orthographic` or \
+                     `thin_lens`"
+                ),
             ))
         }
     };
-    let from = r.vec3("from", None)?;
-    let to = r.vec3("to", None)?;
-    let up = r.vec3("up", Some(Vec3::Y))?;
-    let forward = to - from;
-    let distance = forward.length();
     if distance == 0.0 || !distance.is_finite() {
         return Err(r.invalid(
             "to",

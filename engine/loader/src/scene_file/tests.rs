@@ -642,6 +642,62 @@ fn camera_geometry_errors() {
 }
 
 #[test]
+fn thin_lens_camera_keys_defaults_and_errors() {
+    let lens = "projection = \"thin_lens\"\nfov = 40\naperture_radius = 0.25";
+    let s = parse(&base_with("fov = 40", lens)).unwrap();
+    // Default focus distance: |to - from| = |(0, -1.5, -6)|, so `to` is in focus.
+    assert_eq!(
+        s.camera.projection,
+        Projection::ThinLens {
+            fov_deg: 40.0,
+            aperture_radius: 0.25,
+            focus_distance: 38.25f32.sqrt(),
+        }
+    );
+    let s = parse(&base_with(
+        "fov = 40",
+        &format!("{lens}\nfocus_distance = 2"),
+    ))
+    .unwrap();
+    assert!(matches!(
+        s.camera.projection,
+        Projection::ThinLens { focus_distance, .. } if focus_distance == 2.0
+    ));
+    // Located errors: file, line, key, value.
+    for (bad, key, value) in [
+        ("aperture_radius = -0.1", "`aperture_radius`", "-0.1"),
+        ("aperture_radius = inf", "`aperture_radius`", "inf"),
+        ("aperture_radius = nan", "`aperture_radius`", "nan"),
+    ] {
+        let text = base_with(
+            "fov = 40",
+            &format!("projection = \"thin_lens\"\nfov = 40\n{bad}"),
+        );
+        let e = parse_err(&text);
+        assert_message(&e, line_of(&text, bad), &["camera", key, value]);
+    }
+    for (bad, value) in [
+        ("focus_distance = 0", "0"),
+        ("focus_distance = -3", "-3"),
+        ("focus_distance = inf", "inf"),
+    ] {
+        let text = base_with("fov = 40", &format!("{lens}\n{bad}"));
+        let e = parse_err(&text);
+        assert_message(
+            &e,
+            line_of(&text, bad),
+            &["camera", "`focus_distance`", value],
+        );
+    }
+    // The aperture is required; lens keys belong to the thin lens only.
+    let text = base_with("fov = 40", "projection = \"thin_lens\"\nfov = 40");
+    assert!(parse_err(&text).to_string().contains("aperture_radius"));
+    let text = base_with("fov = 40", "fov = 40\naperture_radius = 0.1");
+    let e = parse_err(&text);
+    assert_message(&e, line_of(&text, "aperture_radius"), &["aperture_radius"]);
+}
+
+#[test]
 fn camera_inside_resolves_closed_shapes() {
     let s = parse(&base_with(
         "fov = 40",
