@@ -14,15 +14,33 @@ use risotto_components::Rgb;
 const N: usize = 4096;
 
 fn camera(c: &mut Criterion) {
-    let cam = Camera::look_at(
-        Projection::Perspective { fov_deg: 40.0 },
-        Vec3::new(0.0, 0.0, 3.9),
-        Vec3::ZERO,
-        Vec3::Y,
-        256,
-        256,
-    )
-    .unwrap();
+    let look = |projection| {
+        Camera::look_at(
+            projection,
+            Vec3::new(0.0, 0.0, 3.9),
+            Vec3::ZERO,
+            Vec3::Y,
+            256,
+            256,
+        )
+        .unwrap()
+    };
+    // The pinhole's SIMD kernel, and the thin lens (rays one at a time, two more sampler
+    // dimensions per ray for the lens point).
+    let cameras = [
+        (
+            "perspective_4096",
+            look(Projection::Perspective { fov_deg: 40.0 }),
+        ),
+        (
+            "thin_lens_4096",
+            look(Projection::ThinLens {
+                fov_deg: 40.0,
+                aperture_radius: 0.1,
+                focus_distance: 3.9,
+            }),
+        ),
+    ];
     let pixel: Vec<u32> = (0..N as u32).map(|i| (i / 16) % (256 * 256)).collect();
     let sample: Vec<u32> = (0..N as u32).map(|i| i % 16).collect();
     let seed: Vec<u32> = pixel.iter().map(|&p| pixel_seed(0, p)).collect();
@@ -30,19 +48,21 @@ fn camera(c: &mut Criterion) {
     let mut direction = vec![Vec3::ZERO; N];
     let mut g = c.benchmark_group("camera");
     g.throughput(Throughput::Elements(N as u64));
-    g.bench_function("perspective_4096", |b| {
-        b.iter(|| {
-            generate_camera_rays(
-                black_box(&cam),
-                black_box(&pixel),
-                black_box(&sample),
-                black_box(&seed),
-                &mut origin,
-                &mut direction,
-            );
-            black_box(&direction);
-        })
-    });
+    for (name, cam) in &cameras {
+        g.bench_function(*name, |b| {
+            b.iter(|| {
+                generate_camera_rays(
+                    black_box(cam),
+                    black_box(&pixel),
+                    black_box(&sample),
+                    black_box(&seed),
+                    &mut origin,
+                    &mut direction,
+                );
+                black_box(&direction);
+            })
+        });
+    }
     g.finish();
 }
 
