@@ -365,10 +365,19 @@ fn render_command(args: RenderArgs) -> Result<()> {
             j.inc(n);
         }
     };
+    // A checkpoint that cannot be written (a full disk, a vanished directory) costs only the
+    // protection it would have given: the render goes on, and the failure is a warning.
+    let mut failed_checkpoints = 0u32;
     let mut result = match checkpoint {
         Some(every) => {
-            let mut write =
-                |r: &RenderOutput| write_partial(&out, &to_partial(r)).map_err(|e| e.to_string());
+            let mut write = |r: &RenderOutput| {
+                if let Err(e) = write_partial(&out, &to_partial(r)) {
+                    failed_checkpoints += 1;
+                    let e = printable(&e.to_string());
+                    bar.suspend(|| eprintln!("warning: checkpoint not written, rendering on: {e}"));
+                }
+                Ok(())
+            };
             render_checkpointed(
                 &compiled,
                 &options,
@@ -384,6 +393,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     if let Some(j) = &json {
         j.finish();
+    }
+    if failed_checkpoints > 0 {
+        eprintln!(
+            "warning: {failed_checkpoints} checkpoint(s) could not be written to {}",
+            printable(&out.display().to_string())
+        );
     }
     result.stats.render_command = Some(replay_base_command(&args));
 

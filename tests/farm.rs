@@ -796,3 +796,60 @@ radiance = 1
     );
     assert!(!path.exists());
 }
+
+/// A checkpoint that cannot be written costs only its protection: the render warns and goes
+/// on to the end. Here the first checkpoint is replaced by a directory of the same name, so
+/// every later checkpoint's rename fails; the render still finishes every sample and only
+/// then fails, writing its final image onto that directory.
+#[test]
+fn a_checkpoint_that_cannot_be_written_is_a_warning() {
+    let (dir, scene) = setup("checkpoint_fails");
+    let out = dir.join("job.exr");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_risotto"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--spp",
+            // About 3 s of rendering: far past the first checkpoint, whatever the load.
+            "65536",
+            "--threads",
+            "1",
+            "--checkpoint",
+            "0.05",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    // The first checkpoint becomes a directory (a later one may land in between: retry).
+    loop {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "no checkpoint after a minute"
+        );
+        if out.is_file() {
+            let _ = std::fs::remove_file(&out);
+            if std::fs::create_dir(&out).is_ok() {
+                break;
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: checkpoint not written, rendering on")
+            && stderr.contains("checkpoint(s) could not be written to"),
+        "{stderr}"
+    );
+    // The render ran to its end: the failure is the final image's, not a checkpoint's.
+    let last = stderr.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("error:") && last.contains("job.exr"),
+        "{stderr}"
+    );
+}
