@@ -334,6 +334,11 @@ pub(crate) fn mesh(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneErr
 fn load_obj(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
     let shown = path.display();
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
+    // Files written on Windows may start with a UTF-8 byte-order mark, and comments in
+    // Latin-1 are common: the mark is dropped and bytes that are not UTF-8 become U+FFFD,
+    // harmless in a comment and still an error in a number.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
+    let bytes = String::from_utf8_lossy(bytes).into_owned().into_bytes();
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
