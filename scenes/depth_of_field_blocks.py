@@ -3,8 +3,10 @@ mitsuba_seed0.exr mitsuba_seed100.exr [BLOCK_PX]
 
 Block check: risotto (two seeds) vs Mitsuba (two seeds); per-pixel variance of each
 renderer's 1-render mean estimated from its two seeds, (a - b)^2 / 2, summed per block."""
+import os
 import sys
-sys.path.insert(0, "/work/shared/refs/mitsuba")
+# The harness beside the repository: ../shared/refs/mitsuba from its root.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "refs", "mitsuba"))
 from rmse import load_rgb
 import numpy as np
 r1, r2, m1, m2 = (load_rgb(p).astype(np.float64) for p in sys.argv[1:5])

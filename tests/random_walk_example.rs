@@ -284,17 +284,18 @@ fn walk_events_count_towards_max_depth_as_in_the_builtin_walk() {
     assert!(a.chi2_per_dof < 1.3, "{}", a.summary());
 }
 
+/// How fine the comparison is: an albedo 1 % off (0.98 instead of 0.99; measured z = 25 on
+/// the image means) is outside the noise, so agreement above means agreement to better
+/// than that.
 #[test]
-#[ignore = "exploratory: how small an albedo error the comparison sees"]
-fn sensitivity() {
+fn a_one_percent_albedo_error_is_seen() {
     let builtin_text = resized(SUBSURFACE_LIKE, SIZE, SPP);
-    for albedo in [0.98, 0.985, 0.995] {
-        compare(
-            &builtin_text,
-            &walked_glass_scene(&builtin_text, albedo),
-            &format!("albedo {albedo}"),
-        );
-    }
+    let a = compare(
+        &builtin_text,
+        &walked_glass_scene(&builtin_text, 0.98),
+        "albedo 0.98",
+    );
+    assert!(!a.within_noise(), "{}", a.summary());
 }
 
 #[test]

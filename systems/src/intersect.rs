@@ -617,4 +617,6 @@ mod all_hits;
 pub use all_hits::{intersect_all, NextHit, RayHits, MAX_HITS};
 
 #[cfg(test)]
+mod surface_tests;
+#[cfg(test)]
 mod tests;

@@ -556,4 +556,6 @@ impl DimensionStream<'_> {
 }
 
 #[cfg(test)]
+mod independent_tests;
+#[cfg(test)]
 mod tests;

@@ -365,3 +365,44 @@ fn spot_sample_is_intensity_falloff_over_distance_squared() {
         }
     }
 }
+
+#[test]
+fn a_light_set_samples_a_volume_light_at_its_volume_pdf_and_caps_its_share() {
+    use crate::geometry::SceneGeometry;
+    use glam::Vec2;
+    let geometry = SceneGeometry::build(Vec::new(), Vec::new());
+    let e = Arc::new(crate::volume_lights::tests::emitter());
+    let point = Light::Point {
+        position: Vec3::splat(5.0),
+        intensity: Rgb::splat(1e-3),
+    };
+    let volume = Light::Volume { emitter: e.clone() };
+    let set = LightSet::new(vec![point, volume], &geometry, 10.0);
+    // The volume light's power (216) is far above the point light's (0.013): capped
+    // at one half.
+    assert!((set.selection_pmf(1) - 0.5).abs() < 1e-6);
+    let p = Vec3::new(0.0, -1.0, 0.0);
+    let mut r = crate::volume_lights::tests::rng(3);
+    let mut volume_samples = 0;
+    for _ in 0..2000 {
+        let u = [r(), r(), r()];
+        let s = set.sample(&geometry, p, u[2], Vec2::new(u[0], u[1]));
+        assert_eq!(
+            s.is_some_and(|s| !s.delta),
+            set.selects_volume(u[2]),
+            "a non-Dirac sample is the volume light's"
+        );
+        let Some(s) = s.filter(|s| !s.delta) else {
+            continue;
+        };
+        volume_samples += 1;
+        let x = p + s.wi * s.distance;
+        let maj = e.mis_majorant(x);
+        // pdf = P(light) p_V s^2 / majorant, radiance = j / majorant.
+        let want = set.volume_pdf(1, x) * s.distance * s.distance / maj;
+        assert!((s.pdf - want).abs() <= 1e-3 * want, "{} vs {want}", s.pdf);
+        let j = e.emission(x) * (1.0 / maj);
+        assert!((s.radiance.r - j.r).abs() <= 1e-5 * j.r);
+    }
+    assert!((800..1200).contains(&volume_samples), "{volume_samples}");
+}

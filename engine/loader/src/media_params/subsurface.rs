@@ -136,3 +136,49 @@ pub fn construct(p: &MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError>
     let (params, patterns) = parse_with_patterns(p)?;
     Ok(Box::new(params.material_with(patterns)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene_file::load_scene;
+    use std::path::{Path, PathBuf};
+
+    /// Every `.toml` file below `dir`.
+    fn scene_files(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                scene_files(&path, out);
+            } else if path.extension().is_some_and(|e| e == "toml") {
+                out.push(path);
+            }
+        }
+    }
+
+    #[test]
+    fn every_shipped_subsurface_material_parses() {
+        let mut files = Vec::new();
+        scene_files(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
+            &mut files,
+        );
+        let mut parsed = 0;
+        for file in &files {
+            let desc = load_scene(file).unwrap();
+            for m in desc
+                .materials
+                .iter()
+                .filter(|m| m.type_name == "subsurface")
+            {
+                parse_with_patterns(&m.params)
+                    .unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+                parsed += 1;
+            }
+        }
+        assert!(
+            parsed > 0,
+            "no subsurface material among {} scenes",
+            files.len()
+        );
+    }
+}
