@@ -3,19 +3,23 @@
 //! work; this is its command line).
 
 use crate::check_threads;
+use crate::scene_input::SceneInput;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use risotto::engine::output::read_exr_rgb;
 use risotto::engine::render::RenderOptions;
 use risotto::engine::technique::{TechniqueRegistry, Techniques};
-use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::loader::load::{compile_scene, MaterialRegistry};
 use risotto::tools::converge::{self, ConvergeOptions, Reference, SppPlan};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub(crate) struct ConvergeArgs {
-    /// The scene file.
+    /// The scene file, or `-` to read it from standard input.
     scene: PathBuf,
+    /// Override a scene value by its TOML path (repeatable), as for `render`.
+    #[arg(short = 'D', long = "define", value_name = "KEY.PATH=VALUE")]
+    defines: Vec<String>,
     /// Reference image (EXR of the scene's size), taken as exact. Without it the reference
     /// is rendered (see --reference-spp).
     #[arg(long, conflicts_with = "reference_spp")]
@@ -81,8 +85,8 @@ fn parse_spp_list(s: &str) -> Result<Vec<u32>> {
 
 pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
-    let scene = load_scene_file(&args.scene, &registry)?;
-    let mut compiled = compile_scene(scene, &args.scene)?;
+    let input = SceneInput::read(&args.scene, &args.defines, None)?;
+    let mut compiled = compile_scene(input.load(&registry)?, &input.path)?;
     let registry = TechniqueRegistry::for_scene(&compiled);
     let variants = if args.techniques.trim() == "all" {
         Techniques::variants(&registry)

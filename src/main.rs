@@ -5,14 +5,16 @@
 mod converge_command;
 mod progress;
 mod replay_args;
+mod scene_input;
 mod split;
 use converge_command::{converge_command, ConvergeArgs};
 use replay_args::{parse_replay, replay_base_command};
+use scene_input::{SceneInput, STDIN_NAME};
 use split::{grid_tile, info_command, merge_command, parse_crop, sample_chunk};
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
@@ -21,7 +23,7 @@ use risotto::engine::render::{
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::technique::{self, TechniqueRegistry, Techniques};
-use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
+use risotto::loader::load::{compile_scene, MaterialRegistry};
 use risotto::tools::compare::compare;
 use risotto::tools::merge::{parse_sample_range, write_partial, Partial};
 use std::path::{Path, PathBuf};
@@ -53,8 +55,11 @@ enum Command {
     /// List the techniques (estimator choices that trade time for error) that apply to a
     /// scene, with their values; `*` marks the default.
     Techniques {
-        /// The scene file.
+        /// The scene file, or `-` to read it from standard input.
         scene: PathBuf,
+        /// Override a scene value by its TOML path (repeatable), as for `render`.
+        #[arg(short = 'D', long = "define", value_name = "KEY.PATH=VALUE")]
+        defines: Vec<String>,
     },
     /// Render each technique at increasing spp and measure error against a reference and
     /// render time: writes DIR/converge.csv, .json, .png and .svg and prints a table of
@@ -90,20 +95,33 @@ struct MergeArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// The scene file (TOML, see docs/scene-format.md).
+    /// The scene file (TOML, see docs/scene-format.md), or `-` to read it from standard input
+    /// (relative paths in it then resolve against the current directory).
     scene: PathBuf,
+    /// Override a scene value by its TOML path, KEY.PATH=VALUE (repeatable; the later wins):
+    /// `-D render.spp=16`, `-D materials.glass.ior=1.33`, `-D shapes.0.radius=2`; arrays of
+    /// tables are indexed from 0, values are TOML (a bare word is a string). See
+    /// docs/scene-format.md, "Overrides".
+    #[arg(short = 'D', long = "define", value_name = "KEY.PATH=VALUE")]
+    defines: Vec<String>,
     /// Samples per pixel (overrides the scene).
     #[arg(long)]
     spp: Option<u32>,
+    /// Image size WIDTHxHEIGHT (overrides the scene's `render.width` and `render.height`).
+    #[arg(long, value_name = "WxH")]
+    size: Option<String>,
     /// Output EXR; the PNG preview is written beside it. Defaults to SCENE_STEM.exr in the
-    /// current directory.
-    #[arg(long)]
+    /// current directory (render.exr for a scene from standard input).
+    #[arg(short = 'o', long)]
     out: Option<PathBuf>,
+    /// Do not write the PNG preview.
+    #[arg(long)]
+    no_preview: bool,
     /// Write render statistics as JSON to this file.
     #[arg(long)]
     stats: Option<PathBuf>,
     /// Worker threads (defaults to all cores).
-    #[arg(long)]
+    #[arg(short = 't', long)]
     threads: Option<usize>,
     /// Sampler seed (overrides the scene).
     #[arg(long)]
@@ -153,7 +171,7 @@ struct RenderArgs {
     #[arg(long, value_name = "START..END")]
     samples: Option<String>,
     /// Write the partial EXR to --out about every SECONDS while rendering (atomically), so
-    /// a killed render loses at most about that much work; see README "Resume".
+    /// a killed render loses at most about that much work; see README, "Splitting, merging and resuming".
     #[arg(long, value_name = "SECONDS")]
     checkpoint: Option<f64>,
     /// Write the merge data (a partial EXR) even for a whole render.
@@ -163,7 +181,7 @@ struct RenderArgs {
     #[arg(long)]
     quiet: bool,
     /// How progress is shown: `bar` (on stderr), `json` (one JSON object per line on stdout,
-    /// at most one a second, for farm managers; see README "Farm"), or `none`.
+    /// at most one a second, for farm managers; see README, "Splitting, merging and resuming"), or `none`.
     #[arg(long, value_enum, default_value_t = ProgressMode::Bar)]
     progress: ProgressMode,
     /// Re-run only sample SAMPLE of pixel X,Y (column, row from the top left), alone and
@@ -194,7 +212,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_command(args),
         Command::Compare { test, reference } => compare_command(&test, &reference),
-        Command::Techniques { scene } => techniques_command(&scene),
+        Command::Techniques { scene, defines } => techniques_command(&scene, &defines),
         Command::Converge(args) => converge_command(args),
         Command::Merge(args) => merge_command(args),
         Command::Info { part } => info_command(&part),
@@ -233,15 +251,19 @@ fn printable(message: &str) -> String {
 
 fn render_command(args: RenderArgs) -> Result<()> {
     check_exposure(args.exposure)?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_output(&args.scene));
+    check_threads(args.threads)?;
+    let input = SceneInput::read(&args.scene, &args.defines, args.size.as_deref())?;
+    let out = args.out.clone().unwrap_or_else(|| input.default_output());
     if args.replay.is_none() {
-        check_outputs(&[("the scene", &args.scene)], &out, args.stats.as_deref())?;
+        let scene_file: &[(&str, &Path)] = if input.path == Path::new(STDIN_NAME) {
+            &[]
+        } else {
+            &[("the scene", &args.scene)]
+        };
+        check_outputs(scene_file, &out, args.stats.as_deref(), !args.no_preview)?;
     }
     let registry = MaterialRegistry::with_builtins();
-    let mut scene = load_scene_file(&args.scene, &registry)?;
+    let mut scene = input.load(&registry)?;
     if let Some(spp) = args.spp {
         anyhow::ensure!(
             (1..=risotto::systems::sampler::MAX_SPP).contains(&spp),
@@ -260,7 +282,6 @@ fn render_command(args: RenderArgs) -> Result<()> {
             d => anyhow::bail!("--max-depth {d}: must be -1 (unbounded) or at least 1"),
         };
     }
-    check_threads(args.threads)?;
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"
@@ -271,7 +292,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         "--batch-size {}: must be at most {MAX_BATCH_SIZE} paths",
         args.batch_size
     );
-    let compiled = compile_scene(scene, &args.scene)?;
+    let compiled = compile_scene(scene, &input.path)?;
     let techniques = render_techniques(&args, &compiled)?;
     if let Some(spec) = &args.replay {
         let (x, y, sample) = parse_replay(spec)?;
@@ -289,10 +310,6 @@ fn render_command(args: RenderArgs) -> Result<()> {
             _ => Ok(()),
         };
     }
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_output(&args.scene));
     let (width, height) = (compiled.camera.width, compiled.camera.height);
     let crop = match (&args.crop, &args.grid, &args.tile) {
         (Some(c), _, _) => Some(parse_crop(c)?),
@@ -328,7 +345,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
         ..RenderOptions::default()
     });
     let (window, range) = checked_extent(&compiled, &options).map_err(|e| match e {
-        RenderError::Crop { window, reason } => anyhow::anyhow!("--crop {window}: {reason}"),
+        // pbrt users type x0,x1,y0,y1: say which order this is.
+        RenderError::Crop { window, reason } => anyhow::anyhow!(
+            "--crop {window}: {reason}; --crop takes X0,Y0,X1,Y1 (columns X0..X1, rows \
+             Y0..Y1, half-open, of the {width}x{height} image), not pbrt's x0,x1,y0,y1"
+        ),
         RenderError::Samples { samples, reason } => {
             anyhow::anyhow!("--samples {samples}: {reason}")
         }
@@ -341,18 +362,13 @@ fn render_command(args: RenderArgs) -> Result<()> {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(total);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {per_sec} samples, {eta} left",
-            )
-            .expect("static template is valid"),
-        );
+        b.set_style(progress::bar_style());
         b
     };
     let settings = &compiled.settings;
     let resolution = (compiled.camera.width, compiled.camera.height);
     let hash = if partial {
-        split::partial_scene_hash(&args.scene, &compiled, &techniques)?
+        split::partial_scene_hash(&input, &compiled, &techniques)?
     } else {
         String::new()
     };
@@ -407,8 +423,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
     } else {
         write_exr(&out, &result.film_output(args.aovs))?;
     }
-    let png = out.with_extension("png");
-    write_png(&png, &result.beauty, args.exposure)?;
+    let png = (!args.no_preview).then(|| out.with_extension("png"));
+    if let Some(png) = &png {
+        write_png(png, &result.beauty, args.exposure)?;
+    }
     if let Some(path) = &args.stats {
         result
             .stats
@@ -417,7 +435,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     if !args.quiet {
         eprintln!("{}", result.stats);
-        eprintln!("wrote {} and {}", out.display(), png.display());
+        match &png {
+            Some(png) => eprintln!("wrote {} and {}", out.display(), png.display()),
+            None => eprintln!("wrote {}", out.display()),
+        }
     }
     Ok(())
 }
@@ -459,10 +480,10 @@ fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniq
     Ok(t)
 }
 
-fn techniques_command(scene_path: &Path) -> Result<()> {
+fn techniques_command(scene_path: &Path, defines: &[String]) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
-    let scene = load_scene_file(scene_path, &registry)?;
-    let compiled = compile_scene(scene, scene_path)?;
+    let input = SceneInput::read(scene_path, defines, None)?;
+    let compiled = compile_scene(input.load(&registry)?, &input.path)?;
     print!(
         "{}",
         technique::listing(&TechniqueRegistry::for_scene(&compiled))
@@ -492,14 +513,15 @@ fn compare_command(test: &Path, reference: &Path) -> Result<()> {
 }
 
 /// Checks the outputs of `risotto render` and `risotto merge` before any work: `out` is an
-/// EXR, the PNG preview beside it and the stats file are distinct from it, from each other
-/// and from the command's `inputs` (the scene, or the parts merged: `(what, path)`), and
-/// each can be written (its directory exists, it is not a directory, and it can be opened
-/// for writing). Nothing is created or truncated here.
+/// EXR, the PNG preview beside it (when `preview`) and the stats file are distinct from it,
+/// from each other and from the command's `inputs` (the scene, or the parts merged:
+/// `(what, path)`), and each can be written (its directory exists, it is not a directory,
+/// and it can be opened for writing). Nothing is created or truncated here.
 pub(crate) fn check_outputs(
     inputs: &[(&str, &Path)],
     out: &Path,
     stats: Option<&Path>,
+    preview: bool,
 ) -> Result<()> {
     let is_exr = out
         .extension()
@@ -516,7 +538,9 @@ pub(crate) fn check_outputs(
         .map(|&(what, p)| (what, p.to_path_buf()))
         .collect();
     named.push(("--out", out.to_path_buf()));
-    named.push(("the PNG preview", png.clone()));
+    if preview {
+        named.push(("the PNG preview", png));
+    }
     if let Some(stats) = stats {
         named.push(("--stats", stats.to_path_buf()));
     }
@@ -586,11 +610,4 @@ fn check_writable(path: &Path) -> Result<()> {
         .context("cannot be written")?;
     std::fs::remove_file(path).context("cannot be written")?;
     Ok(())
-}
-
-fn default_output(scene: &Path) -> PathBuf {
-    let stem = scene
-        .file_stem()
-        .map_or_else(|| "render".into(), |s| s.to_os_string());
-    PathBuf::from(stem).with_extension("exr")
 }

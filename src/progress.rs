@@ -11,6 +11,40 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+/// A rate for the progress bar, three significant digits with an SI prefix:
+/// `2.59 M samples/s` rather than indicatif's `2,590,365.4194/s`.
+pub fn human_rate(per_second: f64) -> String {
+    if !per_second.is_finite() || per_second <= 0.0 {
+        return "- samples/s".into();
+    }
+    let (value, prefix) = [(1e9, " G "), (1e6, " M "), (1e3, " k ")]
+        .into_iter()
+        .find(|&(scale, _)| per_second >= scale)
+        .map_or((per_second, " "), |(scale, p)| (per_second / scale, p));
+    let decimals = if value >= 100.0 {
+        0
+    } else if value >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{value:.decimals$}{prefix}samples/s")
+}
+
+/// The progress bar's style: elapsed time, bar, percentage, [`human_rate`], time left.
+pub fn bar_style() -> indicatif::ProgressStyle {
+    indicatif::ProgressStyle::with_template(
+        "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {rate}, {eta} left",
+    )
+    .expect("static template is valid")
+    .with_key(
+        "rate",
+        |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = w.write_str(&human_rate(state.per_sec()));
+        },
+    )
+}
+
 /// Counts samples from the render's workers and prints a line when one is due.
 pub struct JsonProgress {
     total: u64,
@@ -89,6 +123,16 @@ impl JsonProgress {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rates_read_like_numbers() {
+        assert_eq!(human_rate(2_590_365.419_4), "2.59 M samples/s");
+        assert_eq!(human_rate(15_300.0), "15.3 k samples/s");
+        assert_eq!(human_rate(999.0), "999 samples/s");
+        assert_eq!(human_rate(4.5), "4.50 samples/s");
+        assert_eq!(human_rate(3.2e9), "3.20 G samples/s");
+        assert_eq!(human_rate(f64::NAN), "- samples/s");
+    }
 
     #[test]
     fn lines_are_json_with_the_counts() {

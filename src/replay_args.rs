@@ -34,6 +34,12 @@ pub(crate) fn replay_base_command(args: &RenderArgs) -> String {
         }
     }
     let mut cmd = format!("risotto render {}", quoted(&args.scene.to_string_lossy()));
+    for d in &args.defines {
+        cmd += &format!(" -D {}", quoted(d));
+    }
+    if let Some(size) = &args.size {
+        cmd += &format!(" --size {}", quoted(size));
+    }
     if let Some(spp) = args.spp {
         cmd += &format!(" --spp {spp}");
     }

@@ -2,6 +2,7 @@
 //! `--grid/--tile` and `--chunks/--chunk` arguments, the scene hash partial renders carry,
 //! and the `merge` and `info` commands (`engine::merge` does the work).
 
+use crate::scene_input::SceneInput;
 use crate::MergeArgs;
 use anyhow::{Context, Result};
 use risotto::engine::output::write_png;
@@ -16,13 +17,14 @@ use std::path::Path;
 /// reads (meshes, grids, environment maps), so that a task that saw a different mesh is
 /// refused at merge time.
 pub(crate) fn partial_scene_hash(
-    scene: &Path,
+    input: &SceneInput,
     compiled: &CompiledScene,
     techniques: &Techniques,
 ) -> Result<String> {
     let settings = &compiled.settings;
     let resolution = (compiled.camera.width, compiled.camera.height);
-    let text = std::fs::read(scene).with_context(|| format!("cannot read {}", scene.display()))?;
+    let scene = &input.path;
+    let text = input.hashed_text();
     let effective = format!(
         "{}x{} max_depth={} rr_depth={} max_passes={} techniques={}",
         resolution.0,
@@ -134,7 +136,7 @@ pub(crate) fn merge_command(args: MergeArgs) -> Result<()> {
         .stats
         .clone()
         .unwrap_or_else(|| args.out.with_extension("stats.json"));
-    crate::check_outputs(&inputs, &args.out, Some(&stats))?;
+    crate::check_outputs(&inputs, &args.out, Some(&stats), true)?;
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
         parts.push((path.clone(), read_partial(path)?));

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::cli::{assert_fails, risotto, SCENE};
+use common::cli::{assert_fails, ok, risotto, SCENE};
 use risotto::engine::output::read_exr_rgb;
 use risotto::tools::merge::{read_partial, Partial};
 
@@ -22,15 +22,6 @@ fn setup(test: &str) -> (PathBuf, PathBuf) {
     // The shared CLI scene at 8 spp.
     std::fs::write(&scene, SCENE.replace("spp = 4", "spp = 8")).unwrap();
     (dir, scene)
-}
-
-fn ok(what: &str, out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "{what}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 /// `risotto render SCENE --out DIR/NAME --quiet EXTRA...`; returns the output path.

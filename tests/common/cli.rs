@@ -10,6 +10,16 @@ pub fn risotto(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// Asserts `out` succeeded (showing its stderr if not) and returns it.
+pub fn ok(what: &str, out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Asserts a clean failure: non-zero exit, no panic, and every `needle` in stderr.
 pub fn assert_fails(what: &str, out: &Output, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);

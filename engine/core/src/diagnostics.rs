@@ -122,6 +122,10 @@ pub struct Source {
     pub text: String,
     /// Every file path resolved from the text (and noted by factories).
     pub files: ReferencedFiles,
+    /// Where the command-line overrides begin in `text`, if there are any
+    /// ([`Source::with_overrides`]): errors in them name the `-D` argument, not a line of the
+    /// file.
+    overrides_at: Option<usize>,
 }
 
 /// Characters of a source line shown on each side of an error's caret.
@@ -157,7 +161,40 @@ impl Source {
             dir,
             text: text.to_owned(),
             files: ReferencedFiles::default(),
+            overrides_at: None,
         }
+    }
+
+    /// The text `text` of the file `path` followed by command-line overrides (`-D KEY=VALUE`),
+    /// one per line after the file's text, so that values parsed from them carry spans into
+    /// this text and their errors quote the argument. Returns the source and the byte offset
+    /// of each override's line (it starts with `-D `).
+    pub fn with_overrides(path: &Path, text: &str, overrides: &[String]) -> (Source, Vec<usize>) {
+        let mut src = Source::new(path, text);
+        if overrides.is_empty() {
+            return (src, Vec::new());
+        }
+        if !src.text.ends_with('\n') {
+            src.text.push('\n');
+        }
+        src.overrides_at = Some(src.text.len());
+        let starts = overrides
+            .iter()
+            .map(|o| {
+                let start = src.text.len();
+                // One line each: a line break inside an argument would split it.
+                src.text.push_str("-D ");
+                src.text.push_str(&o.replace(['\n', '\r'], " "));
+                src.text.push('\n');
+                start
+            })
+            .collect();
+        (src, starts)
+    }
+
+    /// Whether a byte offset lies in the command-line overrides.
+    fn in_overrides(&self, offset: usize) -> bool {
+        self.overrides_at.is_some_and(|at| offset >= at)
     }
 
     /// Clamps a byte offset into the text, onto a char boundary.
@@ -204,6 +241,12 @@ impl Source {
             .map_or(self.text.len(), |i| start + i);
         let line_text = self.text[line_start..line_end].trim_end_matches('\r');
         let (line, col) = self.line_col(start);
+        // A command-line override is labelled `-D`, not with a line number past the file's end.
+        let label = if self.in_overrides(start) {
+            "-D".to_string()
+        } else {
+            line.to_string()
+        };
         let width = self.text[start..end.min(line_end)].chars().count().max(1);
         // A long line (a minified file, a hostile one: 100 000 brackets) is shown as a
         // window around the caret, each cut marked, so a message stays a few lines long.
@@ -220,10 +263,10 @@ impl Source {
         if last < chars.len() {
             shown.push_str(" ...");
         }
-        let gutter = line.to_string().len();
+        let gutter = label.len();
         let mut out = String::new();
         let _ = writeln!(out, "{:gutter$} |", "");
-        let _ = writeln!(out, "{line} | {shown}");
+        let _ = writeln!(out, "{label} | {shown}");
         let _ = write!(
             out,
             "{:gutter$} | {}{}",
@@ -245,7 +288,24 @@ impl Source {
     ) -> SceneError {
         let message = message.into();
         let (line, col) = self.line_col(span.start);
-        let mut head = format!("{}:{line}:{col}: ", self.path.display());
+        let mut head = if self.in_overrides(span.start) {
+            let start = self.clamp(span.start);
+            let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
+            let line_end = self.text[start..]
+                .find('\n')
+                .map_or(self.text.len(), |i| start + i);
+            let arg: String = self.text[line_start..line_end]
+                .chars()
+                .take(MAX_QUOTE)
+                .collect();
+            format!(
+                "{}: command-line override `{}`: ",
+                self.path.display(),
+                terminal_safe(&arg)
+            )
+        } else {
+            format!("{}:{line}:{col}: ", self.path.display())
+        };
         match (entity, field) {
             (Some(e), Some(f)) => {
                 let _ = write!(head, "{e}, field `{f}`: ");
@@ -262,7 +322,7 @@ impl Source {
         SceneError(Box::new(ErrorData {
             kind,
             file: self.path.clone(),
-            line_col: Some((line, col)),
+            line_col: (!self.in_overrides(span.start)).then_some((line, col)),
             entity: entity.map(str::to_owned),
             field: field.map(str::to_owned),
             message,

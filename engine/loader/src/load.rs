@@ -21,8 +21,9 @@
 //! ```
 
 use crate::scene_file::{
-    load_scene, ColourParam, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc,
-    SceneError, SceneErrorKind, ShapeGeometry as DescGeometry,
+    load_scene, load_scene_with, ColourParam, LightDesc, MaterialParams,
+    Projection as DescProjection, SceneDesc, SceneError, SceneErrorKind,
+    ShapeGeometry as DescGeometry,
 };
 use risotto_builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto_builtins::media::{HomogeneousMedium, Scattering};
@@ -320,6 +321,17 @@ fn builtin(
 /// Loads a scene file and builds its world with the materials of `registry`.
 pub fn load_scene_file(path: &Path, registry: &MaterialRegistry) -> Result<Scene, LoadError> {
     let desc = load_scene(path)?;
+    scene_from_desc(desc, registry)
+}
+
+/// [`load_scene_file`] with command-line overrides `KEY.PATH=VALUE` applied to the file's
+/// values before they are read ([`crate::scene_file::parse_scene_with`]).
+pub fn load_scene_file_with(
+    path: &Path,
+    overrides: &[String],
+    registry: &MaterialRegistry,
+) -> Result<Scene, LoadError> {
+    let desc = load_scene_with(path, overrides)?;
     scene_from_desc(desc, registry)
 }
 

@@ -18,6 +18,7 @@
 
 mod geometry;
 mod lights;
+mod overrides;
 mod params;
 mod pattern;
 mod raw;
@@ -215,15 +216,35 @@ pub enum ShapeGeometry {
 
 /// Reads and parses a scene file.
 pub fn load_scene(path: &Path) -> Result<SceneDesc, SceneError> {
+    load_scene_with(path, &[])
+}
+
+/// Reads and parses a scene file with command-line overrides `KEY.PATH=VALUE` (the
+/// driver's `-D`; see [`parse_scene_with`]).
+pub fn load_scene_with(path: &Path, overrides: &[String]) -> Result<SceneDesc, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(path, &e))?;
-    parse_scene(&text, path)
+    parse_scene_with(&text, path, overrides)
 }
 
 /// Parses scene text; `path` is used in messages and to resolve relative paths (against
 /// its directory). The file at `path` itself is not read.
 pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
-    let src = Arc::new(Source::new(path, text));
-    let root = raw::parse_document(text).map_err(|e| {
+    parse_scene_with(text, path, &[])
+}
+
+/// [`parse_scene`] with overrides: each `KEY.PATH=VALUE` replaces (or adds) the value at
+/// that TOML path before anything is read, so it is checked as if the file said it, and an
+/// error in it quotes the argument. Paths are dot-separated keys, arrays of tables indexed
+/// from 0 (`shapes.2.radius=0.5`); values are TOML, a bare word a string
+/// (`materials.glass.type=dielectric`). Documented in `docs/scene-format.md`, "Overrides".
+pub fn parse_scene_with(
+    text: &str,
+    path: &Path,
+    overrides: &[String],
+) -> Result<SceneDesc, SceneError> {
+    let (src, override_lines) = Source::with_overrides(path, text, overrides);
+    let src = Arc::new(src);
+    let mut root = raw::parse_document(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         src.error(
             SceneErrorKind::Syntax,
@@ -236,6 +257,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
             ),
         )
     })?;
+    overrides::apply_overrides(&src, &mut root, overrides, &override_lines)?;
     let top = Reader::new(&src, &root, "scene");
     top.deny_unknown(&["render", "camera", "materials", "shapes", "lights"])?;
 
