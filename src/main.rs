@@ -3,6 +3,7 @@
 //! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
 mod converge_command;
+mod interrupt;
 mod progress;
 mod replay_args;
 mod scene_input;
@@ -219,6 +220,11 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // 128 + SIGINT, the shell's status for a command ended by Ctrl-C.
+        Err(e) if e.is::<interrupt::Interrupted>() => {
+            eprintln!("{}", printable(&format!("{e:#}")));
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {}", printable(&format!("{e:#}")));
             ExitCode::FAILURE
@@ -342,6 +348,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         batch_size: args.batch_size,
         crop,
         samples,
+        interrupt: Some(interrupt::install()?),
         ..RenderOptions::default()
     });
     let (window, range) = checked_extent(&compiled, &options).map_err(|e| match e {
@@ -375,7 +382,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let (spp, seed) = (settings.spp, settings.seed);
     let to_partial =
         |r: &RenderOutput| Partial::of_render(r, resolution, spp, seed, hash.clone(), args.aovs);
+    let announced = std::sync::atomic::AtomicBool::new(false);
     let tick = |n: u64| {
+        if interrupt::requested() && !announced.swap(true, std::sync::atomic::Ordering::Relaxed) {
+            bar.suspend(|| {
+                eprintln!(
+                    "interrupted: finishing the samples in flight, then writing what is done \
+                     (interrupt again to quit at once)"
+                )
+            });
+        }
         bar.inc(n);
         if let Some(j) = &json {
             j.inc(n);
@@ -418,7 +434,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     result.stats.render_command = Some(replay_base_command(&args));
 
-    if partial {
+    // Interrupted: the passes done are written as a partial render that `merge` finishes.
+    let interrupted = result.samples.end < range.end;
+    if interrupted {
+        let hash = match partial {
+            true => hash.clone(),
+            false => split::partial_scene_hash(&input, &compiled, &techniques)?,
+        };
+        let part = Partial::of_render(&result, resolution, spp, seed, hash, args.aovs);
+        write_partial(&out, &part)?;
+    } else if partial {
         write_partial(&out, &to_partial(&result))?;
     } else {
         write_exr(&out, &result.film_output(args.aovs))?;
@@ -440,7 +465,46 @@ fn render_command(args: RenderArgs) -> Result<()> {
             None => eprintln!("wrote {}", out.display()),
         }
     }
+    if interrupted {
+        let (done, want) = (result.samples, range);
+        let rest = out.with_file_name("rest.exr");
+        return Err(interrupt::Interrupted(format!(
+            "interrupted: {} holds samples {}..{} of {}..{} (a partial render); to finish:\n  \
+             {} --samples {}..{} --out {}\n  risotto merge {} {} --out FINAL.exr",
+            out.display(),
+            done.start,
+            done.end,
+            want.start,
+            want.end,
+            finish_command(&args),
+            done.end,
+            want.end,
+            rest.display(),
+            out.display(),
+            rest.display(),
+        ))
+        .into());
+    }
     Ok(())
+}
+
+/// The command that renders what an interrupted render left: the options that decide a
+/// path and those a merge requires to match (window, AOVs).
+fn finish_command(args: &RenderArgs) -> String {
+    let mut cmd = replay_base_command(args);
+    for (flag, value) in [
+        ("--crop", &args.crop),
+        ("--grid", &args.grid),
+        ("--tile", &args.tile),
+    ] {
+        if let Some(v) = value {
+            cmd += &format!(" {flag} {v}");
+        }
+    }
+    if args.aovs {
+        cmd += " --aovs";
+    }
+    cmd
 }
 
 /// The techniques of `risotto render`: `--lighting` (an alias) and every `--technique`,

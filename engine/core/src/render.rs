@@ -147,7 +147,19 @@ pub struct RenderOptions {
     /// Only these sample indices of each pixel are rendered. Defaults to `None`: all of
     /// `0..spp`.
     pub samples: Option<SampleRange>,
+    /// A flag that, once set (by a signal handler, another thread), ends the render after
+    /// the pass in flight: the render then runs in passes over every pixel of about
+    /// [`INTERRUPTIBLE_PASS`] each (or the checkpoint interval), and the output holds the
+    /// samples of the passes done ([`RenderOutput::samples`] says which; the same bits those
+    /// samples have in the whole render). Defaults to `None`: one pass, not interruptible.
+    pub interrupt: Option<&'static std::sync::atomic::AtomicBool>,
 }
+
+/// How long each pass of an interruptible render ([`RenderOptions::interrupt`]) without
+/// checkpoints is sized to take: the longest an interrupt waits for the passes in flight
+/// (after the first pass, one sample per pixel). Passes cost one barrier each, negligible
+/// at this length.
+pub const INTERRUPTIBLE_PASS: std::time::Duration = std::time::Duration::from_secs(2);
 
 impl Default for RenderOptions {
     fn default() -> Self {
@@ -160,6 +172,7 @@ impl Default for RenderOptions {
             plugin_techniques: Default::default(),
             crop: None,
             samples: None,
+            interrupt: None,
         }
     }
 }
@@ -394,12 +407,22 @@ fn render_passes<I: Integrator>(
         }
     };
     let mut done = samples.start;
-    match &mut checkpoints {
+    let interrupted = || {
+        options
+            .interrupt
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+    };
+    let every = match (&checkpoints, options.interrupt) {
+        (Some(cp), _) => Some(cp.every),
+        (None, Some(_)) => Some(INTERRUPTIBLE_PASS),
+        (None, None) => None,
+    };
+    match every {
         None => {
             pass(&mut tiles, samples.start..samples.end);
             done = samples.end;
         }
-        Some(cp) => {
+        Some(every) => {
             // The first pass takes one sample per pixel and measures the speed; each later
             // pass is sized to take about `every` at the speed of the one before.
             let mut chunk = 1u32;
@@ -409,11 +432,14 @@ fn render_passes<I: Integrator>(
                 pass(&mut tiles, done..next);
                 let per_sample = t.elapsed().as_secs_f64() / (next - done) as f64;
                 done = next;
-                if done < samples.end {
+                if interrupted() {
+                    break;
+                }
+                if let (Some(cp), true) = (&mut checkpoints, done < samples.end) {
                     let so_far = gather(scene, window, samples.start..done, &tiles, start);
                     (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
                 }
-                let want = cp.every.as_secs_f64() / per_sample.max(1e-9);
+                let want = every.as_secs_f64() / per_sample.max(1e-9);
                 chunk = want.clamp(1.0, u32::MAX as f64) as u32;
             }
         }
