@@ -6,6 +6,7 @@ mod converge_command;
 mod interrupt;
 mod progress;
 mod replay_args;
+mod run_info;
 mod scene_input;
 mod split;
 use converge_command::{converge_command, ConvergeArgs};
@@ -269,7 +270,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         check_outputs(scene_file, &out, args.stats.as_deref(), !args.no_preview)?;
     }
     let registry = MaterialRegistry::with_builtins();
+    let load_start = std::time::Instant::now();
     let mut scene = input.load(&registry)?;
+    let load_seconds = load_start.elapsed().as_secs_f64();
     if let Some(spp) = args.spp {
         anyhow::ensure!(
             (1..=risotto::systems::sampler::MAX_SPP).contains(&spp),
@@ -298,7 +301,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         "--batch-size {}: must be at most {MAX_BATCH_SIZE} paths",
         args.batch_size
     );
+    let build_start = std::time::Instant::now();
     let compiled = compile_scene(scene, &input.path)?;
+    let build_seconds = build_start.elapsed().as_secs_f64();
     let techniques = render_techniques(&args, &compiled)?;
     if let Some(spec) = &args.replay {
         let (x, y, sample) = parse_replay(spec)?;
@@ -433,6 +438,15 @@ fn render_command(args: RenderArgs) -> Result<()> {
         );
     }
     result.stats.render_command = Some(replay_base_command(&args));
+    // Without --threads the render ran on rayon's global pool.
+    let threads = args.threads.unwrap_or_else(rayon::current_num_threads);
+    result.stats.run = Some(run_info::run_info(
+        &compiled,
+        &result,
+        threads,
+        load_seconds,
+        build_seconds,
+    ));
 
     // Interrupted: the passes done are written as a partial render that `merge` finishes.
     let interrupted = result.samples.end < range.end;

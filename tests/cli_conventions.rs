@@ -201,3 +201,49 @@ fn bad_overrides_and_crops_say_what_is_expected() {
     );
     assert!(String::from_utf8_lossy(&t.stdout).contains("lighting"));
 }
+
+#[test]
+fn stats_say_which_build_image_threads_and_where_the_time_went() {
+    let (dir, scene) = setup("stats");
+    let (out, stats) = (dir.join("s.exr"), dir.join("s.json"));
+    ok(
+        "--stats",
+        render(
+            &scene,
+            &out,
+            &[
+                "--stats",
+                stats.to_str().unwrap(),
+                "--crop",
+                "2,1,10,7",
+                "--samples",
+                "1..3",
+            ],
+        ),
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let run = &v["run"];
+    assert_eq!(run["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(run["resolution"], serde_json::json!([16, 12]));
+    assert_eq!(run["window"], serde_json::json!([2, 1, 10, 7]));
+    assert_eq!(
+        (run["spp"].as_u64(), run["threads"].as_u64()),
+        (Some(4), Some(1))
+    );
+    assert_eq!(run["samples"], serde_json::json!([1, 3]));
+    for key in ["load_seconds", "build_seconds", "render_seconds"] {
+        let t = run[key].as_f64().unwrap_or(-1.0);
+        assert!((0.0..60.0).contains(&t), "{key}: {t}");
+    }
+    assert_eq!(run["render_seconds"], v["wall_seconds"]);
+    if cfg!(target_os = "linux") {
+        assert!(run["peak_resident_bytes"].as_u64().unwrap() > 1 << 20);
+    }
+    if let Some(c) = run["commit"].as_str() {
+        assert!(
+            c.len() == 40 && c.chars().all(|c| c.is_ascii_hexdigit()),
+            "{c}"
+        );
+    }
+}

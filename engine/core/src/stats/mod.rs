@@ -12,7 +12,9 @@
 //! ```
 //!
 //! Systems that never ran (zero calls) and termination reasons with a zero count are left
-//! out; a `"warnings": [...]` array is appended only when there are warnings.
+//! out; a `"warnings": [...]` array is appended only when there are warnings, and a
+//! `"run": {...}` object ([`RunInfo`]: version, commit, resolution, window, spp, samples,
+//! threads, load / build / render seconds, peak resident bytes) when the driver set it.
 //!
 //! NaN provenance: each stage checks the values it produced (one pass over a column it has
 //! just written) and counts the non-finite ones by [`Stage`]; values that are non-finite
@@ -466,6 +468,39 @@ pub struct RenderStats {
     /// [`replay_arg`](NonFiniteCase::replay_arg) is appended in the JSON and the summary.
     /// Defaults to `None`: `risotto render SCENE`.
     pub render_command: Option<String>,
+    /// Facts about the run for benchmarkers (version, image, threads, phase times, peak
+    /// memory), set by the program that ran the render; serialised as `"run"` when set.
+    pub run: Option<RunInfo>,
+}
+
+/// What a benchmark needs to know about a run besides the counters: which build, which
+/// image and samples, how many threads, where the time went and the peak memory. The
+/// driver fills it (`--stats`); an embedder may.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RunInfo {
+    /// The renderer's version (`CARGO_PKG_VERSION`).
+    pub version: String,
+    /// The source commit it was built from, when known (`git rev-parse` at build time).
+    pub commit: Option<String>,
+    /// The whole image, `[width, height]`.
+    pub resolution: [u32; 2],
+    /// The rendered window `[x0, y0, x1, y1]` (half-open).
+    pub window: [u32; 4],
+    /// The scene's samples per pixel.
+    pub spp: u32,
+    /// The sample indices rendered, `[start, end)`.
+    pub samples: [u32; 2],
+    /// Worker threads.
+    pub threads: usize,
+    /// Reading and parsing the scene and the files it references, in seconds.
+    pub load_seconds: f64,
+    /// Compiling the scene: flattening and the BVH build, in seconds.
+    pub build_seconds: f64,
+    /// The render itself (`wall_seconds`), in seconds.
+    pub render_seconds: f64,
+    /// Peak resident memory of the process in bytes (Linux `VmHWM`), when the platform
+    /// reports it.
+    pub peak_resident_bytes: Option<u64>,
 }
 
 impl RenderStats {

@@ -105,6 +105,9 @@ impl Serialize for RenderStats {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let c = &self.counters;
         let mut m = s.serialize_map(None)?;
+        if let Some(run) = &self.run {
+            m.serialize_entry("run", run)?;
+        }
         m.serialize_entry("systems", &SystemsJson(&c.systems))?;
         m.serialize_entry("rays", &c.rays)?;
         m.serialize_entry("samples", &c.samples)?;
@@ -201,6 +204,21 @@ impl fmt::Display for RenderStats {
             }
         }
         writeln!(f)?;
+        if let Some(run) = &self.run {
+            write!(
+                f,
+                "load {:.3} s, build {:.3} s, render {:.3} s on {} threads",
+                run.load_seconds, run.build_seconds, run.render_seconds, run.threads
+            )?;
+            if let Some(bytes) = run.peak_resident_bytes {
+                write!(
+                    f,
+                    ", peak memory {:.1} MiB",
+                    bytes as f64 / (1u64 << 20) as f64
+                )?;
+            }
+            writeln!(f)?;
+        }
         write!(f, "nan dropped: {}", c.nan_dropped)?;
         if c.majorant_violations > 0 {
             write!(
