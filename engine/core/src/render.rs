@@ -104,10 +104,11 @@ impl std::fmt::Display for SampleRange {
     }
 }
 
-/// Largest `width * height` of a render's image: 2^26 pixels (8192 x 8192), whose film and
-/// output layers take about 7 GB. Scene files and partial renders asking for more are an
-/// error naming the value rather than an allocation abort.
-pub const MAX_FILM_PIXELS: u64 = 1 << 26;
+/// Largest `width * height` of a render's image ([`risotto_systems::film::MAX_PIXELS`]:
+/// 2^26 pixels, 8192 x 8192, whose film and output layers take about 7 GB). Scene files,
+/// scenes built in code and partial renders asking for more are an error naming the value
+/// rather than an allocation abort.
+pub const MAX_FILM_PIXELS: u64 = risotto_systems::film::MAX_PIXELS;
 
 /// The most worker threads a render starts. Far above any core count a render uses; a
 /// larger request is a typo, and honouring it aborts the process when the operating system

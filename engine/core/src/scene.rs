@@ -135,6 +135,43 @@ impl Default for RenderSettings {
     }
 }
 
+impl RenderSettings {
+    /// Checks the settings of a scene built in code as the scene file's are checked: the
+    /// image size agrees with `camera`'s (the camera, which makes the rays, holds the size
+    /// too: a `settings.width` changed alone would be ignored), each side at least 1, the
+    /// pixel count at most [`MAX_PIXELS`](risotto_systems::film::MAX_PIXELS), and `spp` from
+    /// 1 to [`MAX_SPP`](risotto_systems::sampler::MAX_SPP). [`Scene::compile`] calls it.
+    pub fn check(&self, camera: &Camera) -> Result<(), CompileError> {
+        let invalid = |message: String| CompileError::Invalid {
+            entity: "settings".into(),
+            message,
+        };
+        let (w, h) = (self.width, self.height);
+        if (camera.width, camera.height) != (w, h) {
+            return Err(invalid(format!(
+                "image size {w}x{h} differs from the camera's {}x{}: set both (the camera's \
+                 is the size given to Camera::look_at)",
+                camera.width, camera.height
+            )));
+        }
+        if w == 0 || h == 0 || u64::from(w) * u64::from(h) > risotto_systems::film::MAX_PIXELS {
+            return Err(invalid(format!(
+                "image size {w}x{h}: each side must be at least 1 and the image at most {} \
+                 pixels",
+                risotto_systems::film::MAX_PIXELS
+            )));
+        }
+        let max_spp = risotto_systems::sampler::MAX_SPP;
+        if !(1..=max_spp).contains(&self.spp) {
+            return Err(invalid(format!(
+                "spp {}: must be from 1 to {max_spp}",
+                self.spp
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// A scene being assembled: the world, the materials, the camera and the settings.
 pub struct Scene {
     /// The files a scene file made it from reads (empty for a scene built in code).
@@ -265,8 +302,12 @@ pub enum CompileError {
 }
 
 impl Scene {
-    /// An empty scene with the given camera and settings.
-    pub fn new(camera: Camera, settings: RenderSettings) -> Self {
+    /// An empty scene with the given camera and settings. The image size is the camera's
+    /// (it makes the rays): `settings.width` and `settings.height` are set to it here, and
+    /// [`compile`](Self::compile) refuses a scene whose two sizes were changed apart later
+    /// ([`RenderSettings::check`]).
+    pub fn new(camera: Camera, mut settings: RenderSettings) -> Self {
+        (settings.width, settings.height) = (camera.width, camera.height);
         Scene {
             files: Default::default(),
             world: hecs::World::new(),

@@ -6,6 +6,7 @@ use super::*;
 impl Scene {
     /// Flattens the world into a [`CompiledScene`].
     pub fn compile(self) -> Result<CompiledScene, CompileError> {
+        self.settings.check(&self.camera)?;
         let Scene {
             files,
             world,
