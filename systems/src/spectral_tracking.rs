@@ -322,10 +322,22 @@ pub fn delta_tracking_emitting_rgb(
 }
 
 fn pass_value(f: SpectralFlight) -> RgbTransmittance {
-    RgbTransmittance {
-        value: if f.collided { Rgb::BLACK } else { f.weight },
-        nulls: f.nulls + f.collided as u32,
-        violations: f.violations,
+    f.pass_value()
+}
+
+impl SpectralFlight {
+    /// The flight as a delta-tracking transmittance estimate: its weight if it passed, 0 if
+    /// it collided (its tentative collisions, the real one included, counted).
+    pub fn pass_value(self) -> RgbTransmittance {
+        RgbTransmittance {
+            value: if self.collided {
+                Rgb::BLACK
+            } else {
+                self.weight
+            },
+            nulls: self.nulls + self.collided as u32,
+            violations: self.violations,
+        }
     }
 }
 
