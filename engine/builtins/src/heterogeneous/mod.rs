@@ -84,6 +84,19 @@
 //!   channel. A grey scale keeps exactly the grey estimators (the same random numbers and
 //!   images).
 //!
+//! # Per-channel density
+//! A 3-channel density grid ([`DensityChannels`], `density_channels`) gives
+//! `sigma_t,c(p) = scale_c density_c(p)`: the channels' ratios vary in space, so the medium
+//! is tracked as chromatic whatever its scale, by the same spectral estimators written
+//! against a per-point split ([`risotto_systems::spectral_tracking::PerChannel`]:
+//! `sigma = max_c sigma_t,c`, `k(t) = sigma_t(t) / sigma`). The existing trackers expect
+//! one grey majorant per segment, so the majorant grid holds, per cell, the largest
+//! channel's **extinction** bound (scale included; [`DensityChannels::majorants`]) and the
+//! smallest channel's lower bound, which is then every channel's residual-tracking control
+//! (a per-channel majorant would need three sequences of tentative collisions, and lose
+//! the shared one spectral MIS is built on). A medium with one density channel never enters
+//! these paths.
+//!
 //! # Files
 //! `interior.rs` is the volume integrator (free flights, transmittance, emission), `field.rs`
 //! the density and emission fields, `emitter.rs` the medium as a light; this file holds the
