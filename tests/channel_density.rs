@@ -101,7 +101,7 @@ fn three_channel_grids_transmit_beer_lamberts_closed_form() {
     write_vol(&d.join("rgb.vol"), [8, 8, 8], 3, |_| [0.25, 0.5, 1.0]);
     write_vol(&d.join("split.vol"), [8, 8, 8], 3, |_| [0.25, 1.0, 4.0]);
     let cases = [
-        (r#"grid = "grey.vol" }, scale = 2"#, [1.0, 1.0, 1.0]),
+        (r#"grid = "grey.vol" }, scale = 2"#, [1.0f64, 1.0, 1.0]),
         (r#"grid = "rgb.vol" }, scale = 2"#, [0.5, 1.0, 2.0]),
         (
             r#"grid = "split.vol" }, scale = [2, 1, 0.5]"#,
@@ -115,7 +115,7 @@ fn three_channel_grids_transmit_beer_lamberts_closed_form() {
         let out = render_text(&d, &slab_scene(&interior, 128, 1 + k as u64));
         let means = channel_means(&out);
         for c in 0..3 {
-            let exact = (-2.0 * sigma[c] as f64).exp();
+            let exact: f64 = (-2.0 * sigma[c]).exp();
             let (m, se) = means[c];
             eprintln!("{density}, channel {c}: {m:.5} +- {se:.5} vs {exact:.5}");
             assert!(
