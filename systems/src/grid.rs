@@ -24,6 +24,9 @@
 
 use glam::Vec3;
 
+mod channels;
+pub use channels::DensityChannels;
+
 /// A value [`DensityGrid::new`] rejects.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum GridValueError {

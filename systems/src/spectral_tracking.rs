@@ -53,12 +53,77 @@ use crate::march::{march, unbiased_march_rgb};
 use crate::medium::channel_pdf;
 use crate::tracking::{control_extinction, roulette, roulette_limit, tentative, DepthToNext};
 use risotto_components::Rgb;
+use std::cell::Cell;
 
 /// Whether every channel of `k` is the same (a grey medium: the spectral estimators reduce
 /// to the grey ones, and skip their per-channel weight updates).
 #[inline]
 fn grey(k: Rgb) -> bool {
     k.r == k.g && k.g == k.b
+}
+
+/// The extinction of every channel along a ray, in the form the trackers use: at ray
+/// parameter `t`, `sigma_t,c(t) = k_c(t) sigma(t)` with `sigma(t)` the densest channel's
+/// extinction (bounded by the segments' grey majorant) and every `k_c(t)` in `[0, 1]`.
+///
+/// Two forms: [`Proportional`] (a chromatic `scale` times one density: `k` constant), and
+/// [`PerChannel`] (a density per channel, e.g. a 3-channel grid: `k(t) = sigma_t(t) /
+/// max_c sigma_t,c(t)`, varying along the ray). Every estimator here is written against
+/// `k(t)`; with a constant `k` it computes exactly what it did with `k` fixed.
+pub trait ChannelExtinction {
+    /// `(sigma(t), k(t))`.
+    fn at(&mut self, t: f32) -> (f32, Rgb);
+    /// The factors of residual ratio tracking's per-channel controls: channel `c`'s control
+    /// on a segment is `control_ratio_c` times the segment's minorant. [`Proportional`]:
+    /// `k` (the minorant bounds the densest channel); [`PerChannel`]: 1 (the minorant
+    /// bounds every channel from below, [`crate::grid::DensityChannels::majorants`]).
+    fn control_ratios(&self) -> Rgb;
+}
+
+/// `sigma_t,c(t) = k_c sigma(t)`: a density times a chromatic scale (`k = scale /
+/// max(scale)`).
+#[derive(Clone, Copy, Debug)]
+pub struct Proportional<F> {
+    /// `sigma(t)`, the densest channel's extinction.
+    pub sigma: F,
+    /// `k`, every channel in `[0, 1]`.
+    pub k: Rgb,
+}
+
+impl<F: FnMut(f32) -> f32> ChannelExtinction for Proportional<F> {
+    #[inline]
+    fn at(&mut self, t: f32) -> (f32, Rgb) {
+        ((self.sigma)(t), self.k)
+    }
+    #[inline]
+    fn control_ratios(&self) -> Rgb {
+        self.k
+    }
+}
+
+/// Each channel's extinction given at every point (`sigma_t(t)` per channel, each >= 0),
+/// e.g. `scale_c density_c` of a 3-channel grid: split as `sigma = max_c sigma_t,c`, `k =
+/// sigma_t / sigma` (`(1, 1, 1)` where every channel is 0).
+#[derive(Clone, Copy, Debug)]
+pub struct PerChannel<F>(pub F);
+
+impl<F: FnMut(f32) -> Rgb> ChannelExtinction for PerChannel<F> {
+    #[inline]
+    fn at(&mut self, t: f32) -> (f32, Rgb) {
+        let s = (self.0)(t);
+        let m = s.max_channel();
+        if m > 0.0 {
+            // The densest channel's ratio is exactly 1 (x / x), so its factors match the
+            // grey tracker's.
+            (m, s.map(|c| c / m))
+        } else {
+            (0.0, Rgb::WHITE)
+        }
+    }
+    #[inline]
+    fn control_ratios(&self) -> Rgb {
+        Rgb::WHITE
+    }
 }
 
 /// The outcome of [`spectral_tracking`].
@@ -90,8 +155,7 @@ pub fn spectral_tracking(
 ) -> SpectralFlight {
     track(
         segments,
-        sigma,
-        k,
+        Proportional { sigma, k },
         channel_pdf,
         None::<fn(f32, f32) -> Rgb>,
         rand,
@@ -116,19 +180,45 @@ pub fn spectral_tracking_emitting(
     emission: impl FnMut(f32, f32) -> Rgb,
     rand: impl FnMut() -> f32,
 ) -> (SpectralFlight, Rgb) {
-    track(segments, sigma, k, channel_pdf, Some(emission), rand)
+    track(
+        segments,
+        Proportional { sigma, k },
+        channel_pdf,
+        Some(emission),
+        rand,
+    )
+}
+
+/// [`spectral_tracking_emitting`] for any [`ChannelExtinction`] (e.g. [`PerChannel`], a
+/// density per channel: the ratios `k(t)` then vary along the ray and enter each collision's
+/// real probability and weight update as they are there; the module docs' derivation holds
+/// point by point). `emission(t, sigma)` gets the densest channel's extinction. With
+/// [`Proportional`] it is [`spectral_tracking_emitting`].
+pub fn spectral_tracking_channels(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma: impl ChannelExtinction,
+    channel_pdf: [f32; 3],
+    emission: impl FnMut(f32, f32) -> Rgb,
+    rand: impl FnMut() -> f32,
+) -> (SpectralFlight, Rgb) {
+    track(segments, sigma, channel_pdf, Some(emission), rand)
 }
 
 fn track(
     segments: impl IntoIterator<Item = MajorantSegment>,
-    mut sigma: impl FnMut(f32) -> f32,
-    k: Rgb,
+    mut extinction: impl ChannelExtinction,
     p0: [f32; 3],
     mut emission: Option<impl FnMut(f32, f32) -> Rgb>,
     mut rand: impl FnMut() -> f32,
 ) -> (SpectralFlight, Rgb) {
     let p0 = Rgb::from_array(channel_pdf(Rgb::from_array(p0)));
-    let is_grey = grey(k);
+    // k at the last lookup (tentative() asks for sigma, then visits the same point).
+    let k_at = Cell::new(Rgb::WHITE);
+    let mut sigma = |t: f32| {
+        let (s, k) = extinction.at(t);
+        k_at.set(k);
+        s
+    };
     let mut out = SpectralFlight {
         weight: Rgb::WHITE,
         ..SpectralFlight::default()
@@ -149,6 +239,8 @@ fn track(
             &mut out.violations,
             &mut depth,
             |t, s, rand| {
+                let k = k_at.get();
+                let is_grey = grey(k);
                 if let Some(e) = &mut emission {
                     gathered += e(t, s) * w * inv;
                 }
@@ -230,10 +322,22 @@ pub fn delta_tracking_emitting_rgb(
 }
 
 fn pass_value(f: SpectralFlight) -> RgbTransmittance {
-    RgbTransmittance {
-        value: if f.collided { Rgb::BLACK } else { f.weight },
-        nulls: f.nulls + f.collided as u32,
-        violations: f.violations,
+    f.pass_value()
+}
+
+impl SpectralFlight {
+    /// The flight as a delta-tracking transmittance estimate: its weight if it passed, 0 if
+    /// it collided (its tentative collisions, the real one included, counted).
+    pub fn pass_value(self) -> RgbTransmittance {
+        RgbTransmittance {
+            value: if self.collided {
+                Rgb::BLACK
+            } else {
+                self.weight
+            },
+            nulls: self.nulls + self.collided as u32,
+            violations: self.violations,
+        }
     }
 }
 
@@ -257,8 +361,7 @@ pub fn ratio_tracking_rgb(
 ) -> RgbTransmittance {
     ratio_rgb(
         segments,
-        sigma,
-        k,
+        Proportional { sigma, k },
         None::<fn(f32, f32) -> Rgb>,
         rand,
         residual,
@@ -279,17 +382,45 @@ pub fn ratio_tracking_emitting_rgb(
     rand: impl FnMut() -> f32,
     residual: bool,
 ) -> (RgbTransmittance, Rgb) {
-    ratio_rgb(segments, sigma, k, Some(emission), rand, residual)
+    ratio_rgb(
+        segments,
+        Proportional { sigma, k },
+        Some(emission),
+        rand,
+        residual,
+    )
+}
+
+/// [`ratio_tracking_rgb`] (or, with `emission`, [`ratio_tracking_emitting_rgb`]) for any
+/// [`ChannelExtinction`]: each collision multiplies `T_c` by `1 - (k_c(t) sigma(t) -
+/// control_c) / bound`, channel `c`'s control `control_c` being the segment's minorant times
+/// [`ChannelExtinction::control_ratios`]. With [`PerChannel`] the minorant must bound every
+/// channel from below (as [`crate::grid::DensityChannels::majorants`]' does), so every
+/// residual lies in `[0, bound]`. Returns the emission gathered (black without `emission`).
+pub fn ratio_tracking_channels(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma: impl ChannelExtinction,
+    emission: Option<impl FnMut(f32, f32) -> Rgb>,
+    rand: impl FnMut() -> f32,
+    residual: bool,
+) -> (RgbTransmittance, Rgb) {
+    ratio_rgb(segments, sigma, emission, rand, residual)
 }
 
 fn ratio_rgb(
     segments: impl IntoIterator<Item = MajorantSegment>,
-    mut sigma: impl FnMut(f32) -> f32,
-    k: Rgb,
+    mut extinction: impl ChannelExtinction,
     mut emission: Option<impl FnMut(f32, f32) -> Rgb>,
     mut rand: impl FnMut() -> f32,
     residual: bool,
 ) -> (RgbTransmittance, Rgb) {
+    let control_k = extinction.control_ratios();
+    let k_at = Cell::new(Rgb::WHITE);
+    let mut sigma = |t: f32| {
+        let (s, k) = extinction.at(t);
+        k_at.set(k);
+        s
+    };
     let mut out = RgbTransmittance {
         value: Rgb::WHITE,
         ..RgbTransmittance::default()
@@ -302,7 +433,7 @@ fn ratio_rgb(
         let control = control_extinction(&seg, residual);
         let bound = seg.majorant - control;
         let inv = 1.0 / bound;
-        let control_c = k * control;
+        let control_c = control_k * control;
         let depth0 = control_depth;
         let (mut value, mut nulls) = (out.value, 0);
         // Every channel's full estimate below the roulette's bound.
@@ -320,6 +451,7 @@ fn ratio_rgb(
                     let depth = depth0 + control_c * (t - seg.t0);
                     gathered += e(t, s) * value * depth.map(|x| (-x).exp()) * inv;
                 }
+                let k = k_at.get();
                 value = Rgb::new(
                     value.r * (1.0 - (k.r * s - control_c.r) / bound),
                     value.g * (1.0 - (k.g * s - control_c.g) / bound),

@@ -7,18 +7,24 @@
 //!   (`value(ix, iy, iz) = data[ix + nx (iy + ny iz)]`), nothing else in the file. The header
 //!   is a JSON object in a file next to it with the same stem and extension `.json` (or given
 //!   explicitly): `"dims": [nx, ny, nz]` (required, each >= 1); `"dtype"` (optional; when
-//!   given it must name `float32` and `little-endian`). Other keys (`bbox_min`, `min`,
+//!   given it must name `float32` and `little-endian`); `"channels"` (optional, 1 or 3,
+//!   default 1: with 3 the values are RGB interleaved per voxel, `3 (ix + nx (iy + ny iz))
+//!   + c`, as in a 3-channel `.vol`). Other keys (`bbox_min`, `min`,
 //!   `sha256`, ...) are informative and ignored: the grid is placed in its shape's bounds.
 //! - **Mitsuba `.vol`** (version 3): bytes `'V' 'O' 'L' 3`; int32 encoding (1 = float32, the
-//!   only one accepted); int32 `nx`, `ny`, `nz`; int32 channels (1 accepted); six float32
-//!   bounding-box values (informative, ignored); then `nx ny nz` float32 values, x fastest.
-//!   Every number little-endian; 48 header bytes.
+//!   only one accepted); int32 `nx`, `ny`, `nz`; int32 channels (1, or 3 for a density per
+//!   RGB channel); six float32 bounding-box values (informative, ignored); then `nx ny nz
+//!   channels` float32 values, x fastest and the channel fastest of all. Every number
+//!   little-endian; 48 header bytes.
+//!
+//! A 3-channel grid is read by [`read_grid_channels`] as [`DensityChannels`] (a
+//! heterogeneous medium's per-channel density); the readers of one density refuse it.
 //!
 //! Every value must be finite and >= 0. Sizes are checked against the file's length before
 //! anything is allocated; errors name the file and the byte offset (and voxel) of what is
 //! wrong, with the value.
 
-use risotto_systems::grid::{voxel_of, DensityGrid, GridValueError};
+use risotto_systems::grid::{voxel_of, DensityChannels, DensityGrid, GridValueError};
 use std::path::{Path, PathBuf};
 
 #[cfg(feature = "vdb")]
@@ -49,20 +55,22 @@ pub enum GridFileError {
         /// What is wrong, with the byte offset or key and the value found.
         message: String,
     },
-    /// The file's length does not match its dimensions.
-    #[error("{}: {dims:?} voxels need {expected} bytes, the file has {actual}", path.display())]
+    /// The file's length does not match its dimensions and channel count.
+    #[error("{}: {dims:?} voxels of {channels} channel(s) need {expected} bytes, the file has {actual}", path.display())]
     Size {
         /// The file.
         path: PathBuf,
         /// Dimensions.
         dims: [usize; 3],
+        /// Values per voxel (1 or 3).
+        channels: usize,
         /// Expected length.
         expected: u64,
         /// Actual length.
         actual: u64,
     },
     /// A voxel is negative or not finite.
-    #[error("{}: byte {offset}: voxel ({}, {}, {}): value {value} is {}", path.display(), voxel[0], voxel[1], voxel[2], if value.is_finite() { "negative (densities must be >= 0)" } else { "not finite" })]
+    #[error("{}: byte {offset}: voxel ({}, {}, {}){}: value {value} is {}", path.display(), voxel[0], voxel[1], voxel[2], channel.map(|c| format!(" channel {c}")).unwrap_or_default(), if value.is_finite() { "negative (densities must be >= 0)" } else { "not finite" })]
     Value {
         /// The file.
         path: PathBuf,
@@ -70,6 +78,8 @@ pub enum GridFileError {
         offset: u64,
         /// `(ix, iy, iz)`.
         voxel: [usize; 3],
+        /// The channel (0 red, 1 green, 2 blue) of a 3-channel grid; `None` for one channel.
+        channel: Option<usize>,
         /// The value.
         value: f32,
     },
@@ -103,22 +113,49 @@ pub fn is_vdb(path: &Path) -> bool {
 }
 
 /// [`read_grid`], and `.vdb` files as OpenVDB, reading float grid `name`
-/// ([`crate::grid_file::vdb::read_vdb`]).
+/// ([`crate::grid_file::vdb::read_vdb`]). One channel only: a 3-channel file is an error
+/// (it is read by [`read_grid_channels`] where a density per channel is allowed).
 pub fn read_grid_named(
     path: &Path,
     header: Option<&Path>,
     name: Option<&str>,
 ) -> Result<DensityGrid, GridFileError> {
+    match read_grid_channels(path, header, name)? {
+        GridChannels::One(g) => Ok(g),
+        GridChannels::Three(_) => Err(format(
+            path,
+            "3 channels: a density per RGB channel is read only as a heterogeneous \
+             medium's `density` (here one value per voxel is needed)",
+        )),
+    }
+}
+
+/// A grid file's values: one density, or one per RGB channel.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GridChannels {
+    /// One value per voxel.
+    One(DensityGrid),
+    /// Three values per voxel (`.vol` with 3 channels, raw with `"channels": 3`).
+    Three(DensityChannels),
+}
+
+/// [`read_grid_named`], accepting 3-channel `.vol` and raw files as well (OpenVDB files: one
+/// float grid).
+pub fn read_grid_channels(
+    path: &Path,
+    header: Option<&Path>,
+    name: Option<&str>,
+) -> Result<GridChannels, GridFileError> {
     if is_vdb(path) {
-        read_vdb(path, name)
+        read_vdb(path, name).map(GridChannels::One)
     } else if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("vol"))
     {
-        read_vol(path)
+        read_vol_channels(path)
     } else {
         let default = path.with_extension("json");
-        read_raw(path, header.unwrap_or(&default))
+        read_raw_channels(path, header.unwrap_or(&default))
     }
 }
 
@@ -156,45 +193,95 @@ fn voxel_count(path: &Path, what: &str, dims: [usize; 3]) -> Result<usize, GridF
         })
 }
 
-/// Checks the file length, then reads `n` float32 values from byte `offset` on.
-fn read_values(path: &Path, dims: [usize; 3], offset: u64) -> Result<DensityGrid, GridFileError> {
+/// Checks the file length against `dims` voxels of `channels` (1 or 3) values, then reads
+/// them as float32 from byte `offset` on (nothing is allocated before the length matches).
+fn read_values(
+    path: &Path,
+    dims: [usize; 3],
+    channels: usize,
+    offset: u64,
+) -> Result<GridChannels, GridFileError> {
     let n = voxel_count(path, "dims", dims)?;
-    let expected = offset + 4 * n as u64;
+    let size_error = |actual| GridFileError::Size {
+        path: path.to_path_buf(),
+        dims,
+        channels,
+        expected: offset + 4 * (n * channels) as u64,
+        actual,
+    };
+    if n.checked_mul(channels).is_none_or(|v| v > MAX_VOXELS) {
+        return Err(format(
+            path,
+            format!("dims: {dims:?} voxels of {channels} channels exceed {MAX_VOXELS} values"),
+        ));
+    }
+    let expected = offset + 4 * (n * channels) as u64;
     let actual = std::fs::metadata(path).map_err(io(path))?.len();
     if actual != expected {
-        return Err(GridFileError::Size {
-            path: path.to_path_buf(),
-            dims,
-            expected,
-            actual,
-        });
+        return Err(size_error(actual));
     }
     let bytes = std::fs::read(path).map_err(io(path))?;
     if bytes.len() as u64 != expected {
-        return Err(GridFileError::Size {
-            path: path.to_path_buf(),
-            dims,
-            expected,
-            actual: bytes.len() as u64,
-        });
+        return Err(size_error(bytes.len() as u64));
     }
     let data: Vec<f32> = bytes[offset as usize..]
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
-    DensityGrid::new(dims, data).map_err(|e| match e {
+    let located = |e: GridValueError| match e {
         GridValueError::Value { index, value, .. } => GridFileError::Value {
             path: path.to_path_buf(),
             offset: offset + 4 * index as u64,
-            voxel: voxel_of(dims, index),
+            voxel: voxel_of(dims, index / channels),
+            channel: (channels > 1).then_some(index % channels),
             value,
         },
         GridValueError::Size { .. } => format(path, e.to_string()),
-    })
+    };
+    if channels == 3 {
+        DensityChannels::new(dims, &data)
+            .map(GridChannels::Three)
+            .map_err(located)
+    } else {
+        DensityGrid::new(dims, data)
+            .map(GridChannels::One)
+            .map_err(located)
+    }
 }
 
-/// Reads a raw float32 grid with its JSON header (see the module docs).
+/// Channels other than 1 or 3, as an error at `what` (a byte offset or header key).
+fn channel_count(path: &Path, what: &str, channels: i64) -> Result<usize, GridFileError> {
+    match channels {
+        1 => Ok(1),
+        3 => Ok(3),
+        _ => Err(format(
+            path,
+            format!(
+                "{what}: {channels} channels, expected 1 (a density) or 3 (a density per RGB \
+                 channel)"
+            ),
+        )),
+    }
+}
+
+/// [`GridChannels::One`]'s grid, or an error naming the channels found.
+fn one(path: &Path, g: GridChannels) -> Result<DensityGrid, GridFileError> {
+    match g {
+        GridChannels::One(g) => Ok(g),
+        GridChannels::Three(_) => Err(format(
+            path,
+            "3 channels: a density per RGB channel is read with `read_grid_channels`",
+        )),
+    }
+}
+
+/// Reads a one-channel raw float32 grid with its JSON header (see the module docs).
 pub fn read_raw(path: &Path, header: &Path) -> Result<DensityGrid, GridFileError> {
+    one(path, read_raw_channels(path, header)?)
+}
+
+/// Reads a raw float32 grid of 1 or 3 channels with its JSON header (see the module docs).
+pub fn read_raw_channels(path: &Path, header: &Path) -> Result<GridChannels, GridFileError> {
     let text = std::fs::read_to_string(header).map_err(io(header))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format(header, format!("not JSON: {e}")))?;
@@ -224,11 +311,28 @@ pub fn read_raw(path: &Path, header: &Path) -> Result<DensityGrid, GridFileError
         }
     }
     voxel_count(header, "\"dims\"", dims)?;
-    read_values(path, dims, 0)
+    let channels = match json.get("channels") {
+        None => 1,
+        Some(c) => match c.as_i64() {
+            Some(c) => channel_count(header, "\"channels\"", c)?,
+            None => {
+                return Err(format(
+                    header,
+                    format!("\"channels\" must be 1 or 3, got {c}"),
+                ))
+            }
+        },
+    };
+    read_values(path, dims, channels, 0)
 }
 
-/// Reads a Mitsuba `.vol` grid (see the module docs).
+/// Reads a one-channel Mitsuba `.vol` grid (see the module docs).
 pub fn read_vol(path: &Path) -> Result<DensityGrid, GridFileError> {
+    one(path, read_vol_channels(path)?)
+}
+
+/// Reads a Mitsuba `.vol` grid of 1 or 3 channels (see the module docs).
+pub fn read_vol_channels(path: &Path) -> Result<GridChannels, GridFileError> {
     use std::io::Read;
     let mut f = std::fs::File::open(path).map_err(io(path))?;
     let mut h = [0u8; VOL_HEADER as usize];
@@ -273,15 +377,9 @@ pub fn read_vol(path: &Path) -> Result<DensityGrid, GridFileError> {
             )
         })?;
     }
-    let channels = int(20);
-    if channels != 1 {
-        return Err(format(
-            path,
-            format!("byte 20: {channels} channels, only 1 (a density) is supported"),
-        ));
-    }
+    let channels = channel_count(path, "byte 20", int(20).into())?;
     drop(f);
-    read_values(path, dims, VOL_HEADER)
+    read_values(path, dims, channels, VOL_HEADER)
 }
 
 #[cfg(test)]
@@ -392,5 +490,82 @@ mod tests {
             m.contains("missing.json") && m.contains("cannot read"),
             "{m}"
         );
+    }
+
+    #[test]
+    fn three_channel_vol_and_raw_read_the_same_channels() {
+        let d = dir("rgb");
+        // 2 x 3 x 4 voxels, RGB interleaved.
+        let values: Vec<f32> = (0..72).map(|i| i as f32 * 0.125).collect();
+        std::fs::write(d.join("c.vol"), vol([2, 3, 4], 3, &values)).unwrap();
+        std::fs::write(d.join("c.raw"), floats(&values)).unwrap();
+        std::fs::write(d.join("c.json"), r#"{"dims": [2, 3, 4], "channels": 3}"#).unwrap();
+        let a = read_grid_channels(&d.join("c.vol"), None, None).unwrap();
+        let b = read_grid_channels(&d.join("c.raw"), None, None).unwrap();
+        assert_eq!(a, b);
+        let GridChannels::Three(g) = a else {
+            panic!("3 channels read as one")
+        };
+        // Voxel (1, 2, 3) = index 23: values 69, 70, 71 (x 0.125), one per channel.
+        for c in 0..3 {
+            assert_eq!(g.channel(c).voxel(1, 2, 3), (69 + c) as f32 * 0.125);
+        }
+        // One channel reads as before through the same entry point.
+        std::fs::write(d.join("one.vol"), vol([2, 3, 4], 1, &values[..24])).unwrap();
+        let one = read_grid_channels(&d.join("one.vol"), None, None).unwrap();
+        assert_eq!(
+            one,
+            GridChannels::One(read_vol(&d.join("one.vol")).unwrap())
+        );
+    }
+
+    #[test]
+    fn bad_channel_counts_and_values_are_located() {
+        let d = dir("rgb-bad");
+        let msg = |r: Result<GridChannels, GridFileError>| r.unwrap_err().to_string();
+        // A channel count other than 1 or 3, in a .vol and in a raw header.
+        for channels in [0, 2, 4, -1] {
+            std::fs::write(d.join("c.vol"), vol([2, 2, 2], channels, &[0.0; 16])).unwrap();
+            let m = msg(read_grid_channels(&d.join("c.vol"), None, None));
+            assert!(
+                m.contains("c.vol")
+                    && m.contains("byte 20")
+                    && m.contains(&format!("{channels} channels")),
+                "{m}"
+            );
+        }
+        std::fs::write(d.join("r.raw"), floats(&[0.0; 16])).unwrap();
+        std::fs::write(d.join("r.json"), r#"{"dims": [2, 2, 2], "channels": 2}"#).unwrap();
+        let m = msg(read_grid_channels(&d.join("r.raw"), None, None));
+        assert!(m.contains("r.json") && m.contains("2 channels"), "{m}");
+        // A header count that disagrees with the file's length (one channel's worth of
+        // data under a 3-channel header, and a huge claim): the size error, nothing read.
+        std::fs::write(d.join("short.vol"), vol([2, 2, 2], 3, &[0.0; 8])).unwrap();
+        let m = msg(read_grid_channels(&d.join("short.vol"), None, None));
+        assert!(
+            m.contains("3 channel(s) need 144 bytes") && m.contains("has 80"),
+            "{m}"
+        );
+        std::fs::write(d.join("huge.vol"), vol([1000, 1000, 100], 3, &[0.0; 8])).unwrap();
+        let m = msg(read_grid_channels(&d.join("huge.vol"), None, None));
+        assert!(m.contains("exceed"), "{m}");
+        // A negative and a NaN value: byte offset, voxel and channel.
+        let mut v = vec![0.5f32; 24];
+        v[7] = -3.0; // voxel 2 = (0, 1, 0), green
+        std::fs::write(d.join("neg.vol"), vol([2, 2, 2], 3, &v)).unwrap();
+        let m = msg(read_grid_channels(&d.join("neg.vol"), None, None));
+        assert!(
+            m.contains("byte 76") && m.contains("voxel (0, 1, 0) channel 1") && m.contains("-3"),
+            "{m}"
+        );
+        v[7] = 0.5;
+        v[23] = f32::NAN;
+        std::fs::write(d.join("nan.vol"), vol([2, 2, 2], 3, &v)).unwrap();
+        let m = msg(read_grid_channels(&d.join("nan.vol"), None, None));
+        assert!(m.contains("channel 2") && m.contains("not finite"), "{m}");
+        // The one-density readers refuse a 3-channel file by name.
+        std::fs::write(d.join("ok.vol"), vol([2, 2, 2], 3, &[0.5; 24])).unwrap();
+        let m = read_grid(&d.join("ok.vol"), None).unwrap_err().to_string();
+        assert!(m.contains("ok.vol") && m.contains("3 channels"), "{m}");
     }
 }

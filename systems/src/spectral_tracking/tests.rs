@@ -336,3 +336,130 @@ fn a_grey_k_reproduces_the_grey_estimators_bit_for_bit() {
         assert_eq!(new.value, Rgb::splat(old.value));
     });
 }
+
+/// A density per channel along `[0, 1]` whose channels do not stay in proportion (a
+/// 3-channel grid's extinction): red `0.5 + 2 t`, green `0.8`, blue `3 (1 - t)^2`; the
+/// densest channel changes along the ray (blue, then green, then red).
+fn per_channel_sigma(t: f32) -> Rgb {
+    Rgb::new(0.5 + 2.0 * t, 0.8, 3.0 * (1.0 - t) * (1.0 - t))
+}
+
+/// Optical depths of [`per_channel_sigma`] on `[0, t]` in closed form.
+fn per_channel_tau(t: f64) -> [f64; 3] {
+    [0.5 * t + t * t, 0.8 * t, 1.0 - (1.0 - t).powi(3)]
+}
+
+/// Segments bounding every channel of [`per_channel_sigma`]: the max over channels above,
+/// the min over channels below (as `DensityChannels::majorants` builds them).
+fn per_channel_segments() -> Vec<MajorantSegment> {
+    vec![seg(0.0, 0.5, 3.0, 0.5), seg(0.5, 1.0, 3.0, 0.0)]
+}
+
+#[test]
+fn per_channel_transmittance_is_unbiased_where_the_channels_are_not_proportional() {
+    let exact = per_channel_tau(1.0).map(|x| (-x).exp());
+    let mut rng = SplitMix64(77);
+    let n = 80_000;
+    for est in ["ratio", "residual", "delta"] {
+        let means = channel_means(n, || {
+            let r = || rng.f32();
+            let sigma = PerChannel(per_channel_sigma);
+            let t = match est {
+                "ratio" | "residual" => {
+                    let none = None::<fn(f32, f32) -> Rgb>;
+                    ratio_tracking_channels(
+                        per_channel_segments(),
+                        sigma,
+                        none,
+                        r,
+                        est == "residual",
+                    )
+                    .0
+                }
+                _ => {
+                    let f = spectral_tracking_channels(
+                        per_channel_segments(),
+                        sigma,
+                        [1.0; 3],
+                        |_, _| Rgb::BLACK,
+                        r,
+                    )
+                    .0;
+                    pass_value(f)
+                }
+            };
+            assert_eq!(t.violations, 0);
+            t.value
+        });
+        eprintln!("per-channel {est}: {means:?} vs {exact:?}");
+        within(&format!("per-channel {est}"), means, exact);
+    }
+    // A proportional extinction through the per-channel form gives the proportional
+    // estimate (the same random numbers; up to the rounding of k sigma / max).
+    let mut a = SplitMix64(5);
+    let mut b = SplitMix64(5);
+    for _ in 0..200 {
+        let (s, segs) = (fields()[1].1, fields()[1].2);
+        let p = ratio_tracking_rgb(segs(), s, K, || a.f32(), false);
+        let q = ratio_tracking_channels(
+            segs(),
+            PerChannel(|t| K * s(t)),
+            None::<fn(f32, f32) -> Rgb>,
+            || b.f32(),
+            false,
+        )
+        .0;
+        for c in 0..3 {
+            let (x, y) = (p.value.to_array()[c], q.value.to_array()[c]);
+            assert!((x - y).abs() <= 1e-5 * x.abs().max(1.0), "{p:?} {q:?}");
+        }
+    }
+}
+
+#[test]
+fn per_channel_free_flights_have_each_channels_collision_and_pass_probability() {
+    // With spectral MIS over an uneven channel pdf: E[w_c 1{pass}] = T_c(1), and
+    // E[w_c 1{collided before 0.5}] = 1 - T_c(0.5), per channel.
+    let pass = per_channel_tau(1.0).map(|x| (-x).exp());
+    let early = per_channel_tau(0.5).map(|x| 1.0 - (-x).exp());
+    let mut rng = SplitMix64(91);
+    let n = 100_000;
+    let flights: Vec<SpectralFlight> = (0..n)
+        .map(|_| {
+            spectral_tracking_channels(
+                per_channel_segments(),
+                PerChannel(per_channel_sigma),
+                [0.2, 0.3, 0.5],
+                |_, _| Rgb::BLACK,
+                || rng.f32(),
+            )
+            .0
+        })
+        .collect();
+    let mut it = flights.iter();
+    let means = channel_means(n, || {
+        let f = it.next().unwrap();
+        if f.collided {
+            Rgb::BLACK
+        } else {
+            f.weight
+        }
+    });
+    within("per-channel pass", means, pass);
+    let mut it = flights.iter();
+    let means = channel_means(n, || {
+        let f = it.next().unwrap();
+        if f.collided && f.t < 0.5 {
+            f.weight
+        } else {
+            Rgb::BLACK
+        }
+    });
+    within("per-channel early collision", means, early);
+    // Bounded: w_c <= 1 / p_c.
+    for f in &flights {
+        assert!(
+            f.weight.r <= 5.0 + 1e-3 && f.weight.g <= 1.0 / 0.3 + 1e-3 && f.weight.b <= 2.0 + 1e-3
+        );
+    }
+}

@@ -4,6 +4,7 @@
 use super::{emission_floor, HeterogeneousEmission, HeterogeneousMedium};
 use glam::Vec3;
 use risotto_components::Rgb;
+use risotto_systems::grid::MajorantGrid;
 use risotto_systems::volume_lights::{EmissionField, EmitterSupport, VolumeEmitter};
 
 impl HeterogeneousMedium {
@@ -38,7 +39,13 @@ impl HeterogeneousMedium {
                         scale: *c,
                     },
                 };
-                (field, density.clone())
+                // A per-channel density's majorants are extinction bounds: the emission
+                // follows the largest channel's density (`self.density`), bounded afresh.
+                let bound = match &self.density_channels {
+                    Some(_) => std::sync::Arc::new(MajorantGrid::new(&self.density, density.res())),
+                    None => density.clone(),
+                };
+                (field, bound)
             }
             HeterogeneousEmission::Grid {
                 grid,
@@ -64,7 +71,7 @@ impl HeterogeneousMedium {
         };
         let res = density.res();
         let floor = emission_floor((lo, hi), res);
-        let smax = self.max_scale();
+        let smax = self.majorant_scale();
         let n = res.iter().product::<usize>();
         let (mut j_max, mut majorant) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for cz in 0..res[2] {

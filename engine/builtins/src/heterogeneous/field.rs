@@ -4,7 +4,7 @@
 
 use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
-use risotto_systems::grid::{DensityGrid, MajorantGrid};
+use risotto_systems::grid::{DensityChannels, DensityGrid, MajorantGrid};
 use risotto_systems::pattern::{self, PatternGraph};
 use std::cell::{Cell, RefCell};
 use std::sync::{Arc, RwLock};
@@ -127,6 +127,8 @@ impl PatternField {
 pub(super) enum Field<'a> {
     /// A grid lookup.
     Grid(&'a DensityGrid),
+    /// A per-channel grid lookup (a 3-channel density).
+    Channels(&'a DensityChannels),
     /// A pattern.
     Pattern {
         graph: &'a PatternGraph,
@@ -157,11 +159,13 @@ impl<'a> Field<'a> {
         }
     }
 
-    /// The value at unit-cube point `uvw` (a grid's: grey).
+    /// The value at unit-cube point `uvw` (a grid's: grey; per-channel grids': each
+    /// channel's density, before the scale).
     #[inline]
     pub(super) fn colour(&self, uvw: Vec3) -> Rgb {
         match self {
             Field::Grid(g) => Rgb::splat(g.lookup(uvw)),
+            Field::Channels(g) => g.lookup(uvw),
             Field::Pattern {
                 graph,
                 lo,
@@ -189,6 +193,8 @@ impl<'a> Field<'a> {
     pub(super) fn grey(&self, uvw: Vec3) -> f32 {
         match self {
             Field::Grid(g) => g.lookup(uvw),
+            // The largest channel (not read by the per-channel trackers, which take colour).
+            Field::Channels(g) => g.lookup(uvw).max_channel(),
             Field::Pattern { .. } => self.colour(uvw).r,
         }
     }
@@ -196,7 +202,7 @@ impl<'a> Field<'a> {
     /// Pattern evaluations so far (0 for a grid).
     pub(super) fn evals(&self) -> u64 {
         match self {
-            Field::Grid(_) => 0,
+            Field::Grid(_) | Field::Channels(_) => 0,
             Field::Pattern { evals, .. } => evals.get(),
         }
     }

@@ -16,9 +16,10 @@ use risotto_systems::ray_marching::{
 };
 use risotto_systems::sampler::PathSampler;
 use risotto_systems::spectral_tracking::{
-    delta_tracking_emitting_rgb, delta_tracking_transmittance_rgb, ratio_tracking_emitting_rgb,
-    ratio_tracking_rgb, ray_marching_transmittance_rgb, spectral_tracking_emitting,
-    unbiased_ray_marching_rgb, RgbTransmittance,
+    delta_tracking_emitting_rgb, delta_tracking_transmittance_rgb, ratio_tracking_channels,
+    ratio_tracking_emitting_rgb, ratio_tracking_rgb, ray_marching_transmittance_rgb,
+    spectral_tracking_channels, spectral_tracking_emitting, unbiased_ray_marching_rgb, PerChannel,
+    RgbTransmittance,
 };
 use risotto_systems::tracking::{
     delta_tracking, delta_tracking_emitting, delta_tracking_transmittance, ratio_tracking,
@@ -95,7 +96,7 @@ impl HeterogeneousInterior<'_> {
         EmissiveSegments {
             density: grids.density.traverse(o, d, 0.0, tmax),
             emission,
-            scale: m.max_scale(),
+            scale: m.majorant_scale(),
             floor,
         }
     }
@@ -122,9 +123,10 @@ impl HeterogeneousInterior<'_> {
         let m = self.medium;
         let (lo, hi) = self.bounds();
         let to_world = self.to_world();
-        let density = match &m.density_pattern {
-            Some(p) => Field::pattern(&p.graph, lo, hi, to_world),
-            None => Field::Grid(&m.density),
+        let density = match (&m.density_pattern, &m.density_channels) {
+            (Some(p), _) => Field::pattern(&p.graph, lo, hi, to_world),
+            (None, Some(c)) => Field::Channels(c),
+            (None, None) => Field::Grid(&m.density),
         };
         let emission = match &m.emission {
             Some(HeterogeneousEmission::Pattern(p)) => {
@@ -162,6 +164,10 @@ impl HeterogeneousInterior<'_> {
         let m = self.medium;
         match &m.emission {
             None => Rgb::BLACK,
+            Some(HeterogeneousEmission::FollowsDensity(c)) if m.density_channels.is_some() => {
+                // A per-channel density: the largest channel's (the `density` grid).
+                *c * m.density.lookup(uvw)
+            }
             Some(HeterogeneousEmission::FollowsDensity(c)) => {
                 // sigma_t is the densest channel's (module docs), max_scale * density.
                 let smax = m.max_scale();
@@ -202,7 +208,17 @@ impl HeterogeneousInterior<'_> {
         let rand = || stream.next_1d();
         // The ray-marching estimators gather no emission: emissive media ratio-track.
         let residual = tracking == Tracking::Residual;
-        let r = if m.is_chromatic() {
+        let r = if let Some(channels) = &m.density_channels {
+            let scale = m.scale;
+            let sigma = PerChannel(|t: f32| scale * channels.lookup(o + d * t));
+            match tracking {
+                Tracking::Delta => {
+                    let (f, e) = spectral_tracking_channels(segs, sigma, [1.0; 3], emission, rand);
+                    (f.pass_value(), e)
+                }
+                _ => ratio_tracking_channels(segs, sigma, Some(emission), rand, residual),
+            }
+        } else if m.is_chromatic() {
             let k = m.channel_ratios();
             match tracking {
                 Tracking::Delta => delta_tracking_emitting_rgb(segs, sigma, k, emission, rand),
@@ -282,7 +298,7 @@ impl HeterogeneousInterior<'_> {
     ) -> RgbTransmittance {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
-        let smax = m.max_scale();
+        let smax = m.majorant_scale();
         let segs = || {
             fields
                 .grids
@@ -293,8 +309,12 @@ impl HeterogeneousInterior<'_> {
         let sigma = |t: f32| smax * fields.density.grey(o + d * t);
         let start = s.dimension;
         let mut stream = s.stream();
-        let rand = || stream.next_1d();
-        let r = if m.is_chromatic() {
+        let mut rand = || stream.next_1d();
+        let r = if let Some(channels) = &m.density_channels {
+            let scale = m.scale;
+            let sigma_c = |t: f32| scale * channels.lookup(o + d * t);
+            channel_transmittance(segs, sigma_c, tracking, &mut rand, self.march_step())
+        } else if m.is_chromatic() {
             // One grey majorant (the densest channel's), three running estimates
             // (risotto_systems::spectral_tracking).
             let k = m.channel_ratios();
@@ -348,6 +368,48 @@ impl Fields<'_> {
     }
 }
 
+/// Transmittance of a per-channel density (`sigma_c(t)` per channel, each bounded by the
+/// grey majorant segments `segs`, whose minorants bound every channel from below): ratio,
+/// residual and delta tracking with the per-channel spectral estimators; the marching
+/// estimators march each channel with the grey estimator (the same segments, the random
+/// numbers drawn in turn), since one march no longer serves three channels whose ratios
+/// vary.
+fn channel_transmittance<I: Iterator<Item = MajorantSegment>>(
+    segs: impl Fn() -> I,
+    sigma_c: impl Fn(f32) -> Rgb,
+    tracking: Tracking,
+    rand: &mut impl FnMut() -> f32,
+    step: f32,
+) -> RgbTransmittance {
+    let sigma = PerChannel(&sigma_c);
+    let none = None::<fn(f32, f32) -> Rgb>;
+    match tracking {
+        Tracking::Ratio => ratio_tracking_channels(segs(), sigma, none, rand, false).0,
+        Tracking::Residual => ratio_tracking_channels(segs(), sigma, none, rand, true).0,
+        Tracking::Delta => {
+            let f = spectral_tracking_channels(segs(), sigma, [1.0; 3], |_, _| Rgb::BLACK, rand);
+            f.0.pass_value()
+        }
+        Tracking::RayMarching | Tracking::UnbiasedRayMarching => {
+            let mut out = RgbTransmittance::default();
+            let mut value = [0.0; 3];
+            for (c, v) in value.iter_mut().enumerate() {
+                let one = |t: f32| sigma_c(t).to_array()[c];
+                let t = if tracking == Tracking::RayMarching {
+                    ray_marching_transmittance(segs(), one, &mut *rand, step)
+                } else {
+                    unbiased_ray_marching(&segs, one, &mut *rand, step)
+                };
+                *v = t.value;
+                out.nulls += t.nulls;
+                out.violations += t.violations;
+            }
+            out.value = Rgb::from_array(value);
+            out
+        }
+    }
+}
+
 /// A grey estimate as the same value in every channel.
 fn grey(t: Transmittance) -> RgbTransmittance {
     RgbTransmittance {
@@ -386,10 +448,13 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             .unwrap_or(m.tracking);
         let step = self.march_step();
         let emits = m.emits();
-        let smax = m.max_scale();
+        let smax = m.majorant_scale();
         // A chromatic medium's flights carry per-channel weights (spectral MIS); a grey one's
-        // are 1 on passing and the albedo at a collision, as before.
-        let chromatic = m.is_chromatic();
+        // are 1 on passing and the albedo at a collision, as before. A per-channel density
+        // is chromatic whatever its scale (its channels' ratios vary in space).
+        let channels = m.density_channels.as_deref();
+        let chromatic = m.is_chromatic() || channels.is_some();
+        let scale = m.scale;
         let k = m.channel_ratios();
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
         let fields = self.fields();
@@ -429,20 +494,25 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 // Ray-marched free flights are grey only: a chromatic medium's flights are
                 // always tracked (module docs). An emissive one gathers pbrt-v4's estimate at
                 // the flight's running per-channel weight.
-                let (f, e) = spectral_tracking_emitting(
-                    self.emissive_segments(&fields.grids, o, d, tmax[i]),
-                    sigma,
-                    k,
-                    p,
-                    |t, sigma_t| {
-                        if emits {
-                            emission_at(o + d * t, sigma_t) * light_weight(i, t)
-                        } else {
-                            Rgb::BLACK
-                        }
-                    },
-                    || stream.next_1d(),
-                );
+                let segs = self.emissive_segments(&fields.grids, o, d, tmax[i]);
+                let emission = |t: f32, sigma_t: f32| {
+                    if emits {
+                        emission_at(o + d * t, sigma_t) * light_weight(i, t)
+                    } else {
+                        Rgb::BLACK
+                    }
+                };
+                let rand = || stream.next_1d();
+                let (f, e) = match channels {
+                    Some(c) => spectral_tracking_channels(
+                        segs,
+                        PerChannel(|t: f32| scale * c.lookup(o + d * t)),
+                        p,
+                        emission,
+                        rand,
+                    ),
+                    None => spectral_tracking_emitting(segs, sigma, k, p, emission, rand),
+                };
                 if emits {
                     out.emitted.push(i as u32, e);
                 }

@@ -84,6 +84,19 @@
 //!   channel. A grey scale keeps exactly the grey estimators (the same random numbers and
 //!   images).
 //!
+//! # Per-channel density
+//! A 3-channel density grid ([`DensityChannels`], `density_channels`) gives
+//! `sigma_t,c(p) = scale_c density_c(p)`: the channels' ratios vary in space, so the medium
+//! is tracked as chromatic whatever its scale, by the same spectral estimators written
+//! against a per-point split ([`risotto_systems::spectral_tracking::PerChannel`]:
+//! `sigma = max_c sigma_t,c`, `k(t) = sigma_t(t) / sigma`). The existing trackers expect
+//! one grey majorant per segment, so the majorant grid holds, per cell, the largest
+//! channel's **extinction** bound (scale included; [`DensityChannels::majorants`]) and the
+//! smallest channel's lower bound, which is then every channel's residual-tracking control
+//! (a per-channel majorant would need three sequences of tentative collisions, and lose
+//! the shared one spectral MIS is built on). A medium with one density channel never enters
+//! these paths.
+//!
 //! # Files
 //! `interior.rs` is the volume integrator (free flights, transmittance, emission), `field.rs`
 //! the density and emission fields, `emitter.rs` the medium as a light; this file holds the
@@ -100,7 +113,7 @@ pub use interior::HeterogeneousInterior;
 use crate::phase::PhaseBxdf;
 use risotto_components::Rgb;
 use risotto_engine::plugin::{Technique, TechniqueValue};
-use risotto_systems::grid::{DensityGrid, MajorantGrid};
+use risotto_systems::grid::{DensityChannels, DensityGrid, MajorantGrid};
 use risotto_systems::phase::PhaseFunction;
 use std::sync::Arc;
 #[cfg(doc)]
@@ -209,6 +222,13 @@ pub struct HeterogeneousMedium {
     /// Bounds of `density` over coarse cells (density units); for a pattern density, one
     /// global cell (the per-shape grids are the pattern's, [`PatternField::majorants`]).
     pub majorants: Arc<MajorantGrid>,
+    /// A density per channel (a 3-channel grid, `density = { grid = "rgb.vol" }`):
+    /// `sigma_t,c = scale_c density_c`, tracked by the per-channel spectral estimators
+    /// against one grey majorant (module docs, Per-channel density). `density` then holds
+    /// the per-voxel largest channel and `majorants` the **extinction** bounds over the
+    /// channels ([`DensityChannels::majorants`], already scaled: [`Self::majorant_scale`]
+    /// is 1). `None` (the default): one density.
+    pub density_channels: Option<Arc<DensityChannels>>,
     /// A density given by a pattern of the world position instead of `density`'s grid
     /// (`density = { pattern = .. }`), grey; `None` (the default): the grid.
     pub density_pattern: Option<Arc<PatternField>>,
@@ -295,6 +315,7 @@ impl HeterogeneousMedium {
             march_step: None,
             emission: None,
             single_channel: None,
+            density_channels: None,
             density_pattern: None,
             albedo_pattern: None,
             g_pattern: None,
@@ -323,6 +344,42 @@ impl HeterogeneousMedium {
         }
     }
 
+    /// The medium over the per-channel density `channels` (replacing the grid:
+    /// `sigma_t,c = scale_c density_c`), with a majorant grid of `majorant_cells` per axis
+    /// (clamped to `[1, voxels]`) bounding the largest channel's extinction from above and
+    /// the smallest's from below. [`Self::with_scale`] rebuilds it for a new scale.
+    pub fn with_density_channels(self, channels: DensityChannels, majorant_cells: usize) -> Self {
+        let dims = channels.dims();
+        let n: usize = dims.iter().product();
+        let max: Vec<f32> = (0..n)
+            .map(|i| {
+                (0..3)
+                    .map(|c| channels.channel(c).data()[i])
+                    .fold(0.0, f32::max)
+            })
+            .collect();
+        let res = dims.map(|n| majorant_cells.clamp(1, n));
+        let majorants = channels.majorants(self.scale, res);
+        HeterogeneousMedium {
+            density: Arc::new(DensityGrid::new(dims, max).expect("the channels' own dims")),
+            majorants: Arc::new(majorants),
+            density_channels: Some(Arc::new(channels)),
+            density_pattern: None,
+            ..self
+        }
+    }
+
+    /// The factor from the majorant grid's bounds to extinction bounds: the densest
+    /// channel's scale for one density, 1 for a per-channel density (whose majorant grid
+    /// is already in extinction units).
+    pub fn majorant_scale(&self) -> f32 {
+        if self.density_channels.is_some() {
+            1.0
+        } else {
+            self.max_scale()
+        }
+    }
+
     /// The majorant cells per axis of the medium's density (the grid's or the pattern's).
     pub fn majorant_res(&self) -> [usize; 3] {
         match &self.density_pattern {
@@ -344,6 +401,9 @@ impl HeterogeneousMedium {
     /// density`).
     pub fn with_scale(mut self, scale: Rgb) -> Self {
         self.scale = scale;
+        if let Some(c) = &self.density_channels {
+            self.majorants = Arc::new(c.majorants(scale, self.majorants.res()));
+        }
         self
     }
 

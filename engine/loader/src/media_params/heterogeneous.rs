@@ -1,14 +1,14 @@
 //! Reading `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
 
 use super::patterns::{parse_albedo, parse_phase};
-use crate::grid_file::{is_vdb, read_grid_named};
+use crate::grid_file::{is_vdb, read_grid_channels, GridChannels};
 use crate::scene_file::{MaterialParams, SceneError};
 use glam::Vec3;
 use risotto_builtins::heterogeneous::{
     HeterogeneousMedium, Tracking, DEFAULT_MAJORANT_CELLS, TRACKINGS,
 };
 use risotto_components::Rgb;
-use risotto_systems::grid::DensityGrid;
+use risotto_systems::grid::{DensityChannels, DensityGrid};
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
 use std::sync::Arc;
@@ -41,7 +41,10 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
             } else {
                 None
             };
-            grid_file(&d, &path, header, name)?
+            match grid_file_channels(&d, &path, header, name)? {
+                GridChannels::One(g) => g,
+                GridChannels::Three(c) => return parse_channel_density(t, c),
+            }
         }
         (None, true) => {
             if d.has("header") {
@@ -83,6 +86,40 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
     let c = common(t)?;
     let medium = HeterogeneousMedium::new(density, c.cells, 1.0, c.albedo, c.phase, c.tracking)
         .with_scale(scale);
+    with_emission(t, c.apply(medium))
+}
+
+/// `density = { grid = "rgb.vol" }` with 3 channels: `sigma_t,c = scale_c density_c`
+/// (per-channel density; `scale` a number or a colour as for one channel). A colour
+/// `emission` (`j = colour * density`) is refused: which channel's density it would follow
+/// is not defined; an emission grid or pattern is accepted.
+fn parse_channel_density(
+    t: &MaterialParams,
+    channels: DensityChannels,
+) -> Result<HeterogeneousMedium, SceneError> {
+    let scale = scale(t)?;
+    let max = channels.max();
+    if !(scale * max).is_finite() {
+        return Err(t.error(
+            Some("scale"),
+            format!(
+                "scale [{}, {}, {}] times the grid's channel maxima [{}, {}, {}] overflows",
+                scale.r, scale.g, scale.b, max.r, max.g, max.b
+            ),
+        ));
+    }
+    if t.has("emission") && !t.is_table("emission") {
+        return Err(t.error(
+            Some("emission"),
+            "a colour emission follows the density, but this grid has 3 channels (a density \
+             per RGB channel): give `emission = { grid = \"file\" }` or a pattern table",
+        ));
+    }
+    let c = common(t)?;
+    let first = channels.channel(0).clone();
+    let medium = HeterogeneousMedium::new(first, c.cells, 1.0, c.albedo, c.phase, c.tracking)
+        .with_scale(scale)
+        .with_density_channels(channels, c.cells);
     with_emission(t, c.apply(medium))
 }
 
@@ -318,14 +355,35 @@ fn with_emission(
     })
 }
 
-/// Reads the grid file of a `{ grid = .., header = .., name = .. }` table `t` (density or
-/// emission): `header` only for raw files, `name` only for `.vdb` ones.
+/// Reads the one-channel grid file of a `{ grid = .., header = .., name = .. }` table `t`
+/// (an emission grid), as [`grid_file_channels`]; 3 channels are an error.
 fn grid_file(
     t: &MaterialParams,
     path: &std::path::Path,
     header: Option<std::path::PathBuf>,
     name: Option<String>,
 ) -> Result<DensityGrid, SceneError> {
+    match grid_file_channels(t, path, header, name)? {
+        GridChannels::One(g) => Ok(g),
+        GridChannels::Three(_) => Err(t.error(
+            Some("grid"),
+            format!(
+                "{}: 3 channels, but this grid needs one value per voxel (a density per RGB \
+                 channel belongs to a heterogeneous interior's `density`)",
+                path.display()
+            ),
+        )),
+    }
+}
+
+/// Reads the grid file of a `{ grid = .., header = .., name = .. }` table `t` (density or
+/// emission), of 1 or 3 channels: `header` only for raw files, `name` only for `.vdb` ones.
+fn grid_file_channels(
+    t: &MaterialParams,
+    path: &std::path::Path,
+    header: Option<std::path::PathBuf>,
+    name: Option<String>,
+) -> Result<GridChannels, SceneError> {
     if is_vdb(path) && header.is_some() {
         return Err(t.error(
             Some("header"),
@@ -342,7 +400,7 @@ fn grid_file(
         // A raw grid's header beside it is read too.
         t.note_file(&path.with_extension("json"));
     }
-    read_grid_named(path, header.as_deref(), name.as_deref())
+    read_grid_channels(path, header.as_deref(), name.as_deref())
         .map_err(|e| t.error(Some("grid"), e.to_string()))
 }
 
