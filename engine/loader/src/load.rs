@@ -20,6 +20,7 @@
 //! assert!(registry.contains("grey") && registry.contains("diffuse"));
 //! ```
 
+use crate::surface_params;
 use crate::scene_file::{
     load_scene, ColourParam, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc,
     SceneError, SceneErrorKind, ShapeGeometry as DescGeometry,
@@ -77,7 +78,7 @@ impl MaterialRegistry {
     }
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
-    /// `interface`, `subsurface`.
+    /// `interface`, `subsurface`, `plastic`, `thin_dielectric`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -88,9 +89,23 @@ impl MaterialRegistry {
                     reflectance: Arc::new(graph),
                 },
             };
-            builtin(p, surface, &["reflectance"])
+            let surface = surface_params::two_sided(p, surface)?;
+            builtin(p, surface, &["reflectance", "two_sided"])
+        });
+        r.register("plastic", |p| {
+            let surface = surface_params::two_sided(p, surface_params::plastic(p)?)?;
+            let mut keys = surface_params::PLASTIC_KEYS.to_vec();
+            keys.push("two_sided");
+            builtin(p, surface, &keys)
+        });
+        r.register("thin_dielectric", |p| {
+            Ok(Box::new(BuiltinMaterial {
+                surface: surface_params::thin_dielectric(p)?,
+                interior: Interior::None,
+            }))
         });
         r.register("dielectric", |p| {
+            surface_params::reject_two_sided(p, "dielectric")?;
             let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
             let cheap_shadows = p.bool("cheap_shadows", Some(false))?;
             // A colour, or a pattern table (as the diffuse reflectance).
@@ -128,8 +143,14 @@ impl MaterialRegistry {
                 builtin(p, surface, &["reflectance"])
             });
         }
-        r.register("interface", |p| builtin(p, Surface::Interface, &[]));
-        r.register("subsurface", crate::media_params::subsurface::construct);
+        r.register("interface", |p| {
+            surface_params::reject_two_sided(p, "interface")?;
+            builtin(p, Surface::Interface, &[])
+        });
+        r.register("subsurface", |p| {
+            surface_params::reject_two_sided(p, "subsurface")?;
+            crate::media_params::subsurface::construct(p)
+        });
         r
     }
 
