@@ -156,7 +156,11 @@ fn a_two_sided_surface_looks_the_same_from_both_sides() {
     let diffuse = "type = \"diffuse\"\nreflectance = [0.2, 0.5, 0.8]";
     let two_sided = format!("{diffuse}\ntwo_sided = true");
     let want = [0.1, 0.25, 0.4];
-    for (material, front) in [(diffuse, true), (two_sided.as_str(), true), (&two_sided, false)] {
+    for (material, front) in [
+        (diffuse, true),
+        (two_sided.as_str(), true),
+        (&two_sided, false),
+    ] {
         let got = lone_quad(material, front);
         for c in 0..3 {
             assert!(
@@ -210,7 +214,13 @@ fn bad_plastic_pane_and_two_sided_values_are_located_errors() {
     for (material, parts) in [
         (
             "type = \"plastic\"\nint_ior = 0",
-            &["plastic_and_panes.toml:19", "materials.m", "int_ior", "`0`", "> 0"][..],
+            &[
+                "plastic_and_panes.toml:19",
+                "materials.m",
+                "int_ior",
+                "`0`",
+                "> 0",
+            ][..],
         ),
         (
             "type = \"plastic\"\next_ior = -1.2",
@@ -222,15 +232,30 @@ fn bad_plastic_pane_and_two_sided_values_are_located_errors() {
         ),
         (
             "type = \"plastic\"\ndiffuse_reflectance = [0.5, 1.5, 0.5]",
-            &["plastic_and_panes.toml:19", "diffuse_reflectance", "1.5", "[0, 1]"],
+            &[
+                "plastic_and_panes.toml:19",
+                "diffuse_reflectance",
+                "1.5",
+                "[0, 1]",
+            ],
         ),
         (
             "type = \"plastic\"\nspecular_reflectance = -0.1",
-            &["plastic_and_panes.toml:19", "specular_reflectance", "-0.1", ">= 0"],
+            &[
+                "plastic_and_panes.toml:19",
+                "specular_reflectance",
+                "-0.1",
+                ">= 0",
+            ],
         ),
         (
             "type = \"plastic\"\nspecular_reflectance = 1.5",
-            &["plastic_and_panes.toml:19", "specular_reflectance", "1.5", "[0, 1]"],
+            &[
+                "plastic_and_panes.toml:19",
+                "specular_reflectance",
+                "1.5",
+                "[0, 1]",
+            ],
         ),
         (
             "type = \"thin_dielectric\"\nior = 0",
@@ -242,11 +267,19 @@ fn bad_plastic_pane_and_two_sided_values_are_located_errors() {
         ),
         (
             "type = \"dielectric\"\ntwo_sided = true",
-            &["plastic_and_panes.toml:19", "two_sided", "`dielectric` transmits"],
+            &[
+                "plastic_and_panes.toml:19",
+                "two_sided",
+                "`dielectric` transmits",
+            ],
         ),
         (
             "type = \"thin_dielectric\"\ntwo_sided = true",
-            &["plastic_and_panes.toml:19", "two_sided", "`thin_dielectric` transmits"],
+            &[
+                "plastic_and_panes.toml:19",
+                "two_sided",
+                "`thin_dielectric` transmits",
+            ],
         ),
         (
             "type = \"interface\"\ntwo_sided = true",

@@ -20,11 +20,11 @@
 //! assert!(registry.contains("grey") && registry.contains("diffuse"));
 //! ```
 
-use crate::surface_params;
 use crate::scene_file::{
     load_scene, ColourParam, LightDesc, MaterialParams, Projection as DescProjection, SceneDesc,
     SceneError, SceneErrorKind, ShapeGeometry as DescGeometry,
 };
+use crate::surface_params;
 use risotto_builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto_builtins::media::{HomogeneousMedium, Scattering};
 use risotto_components::Rgb;

@@ -42,8 +42,8 @@
 //! `(1 - P_s) cos_i / pi`; [`plastic_eval`] reports the same `P_s` as [`plastic_sample`]
 //! draws, so MIS sees the density that produced the sample.
 
+use super::{above, reflect_local, SPECULAR_REFLECT};
 use super::{fresnel_dielectric, sample_cosine_hemisphere, BxdfSample, DIFFUSE_REFLECT};
-use super::{reflect_local, SPECULAR_REFLECT};
 use risotto_components::{Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -139,7 +139,7 @@ impl PlasticCoat {
 /// direction with `u.y`. `None` when `wo` is at or below the surface or the diffuse sample
 /// lands on the horizon.
 pub fn plastic_sample(coat: &PlasticCoat, d: Rgb, wo: Vec3, u: Vec2) -> Option<BxdfSample> {
-    if !(wo.z > 0.0) {
+    if !above(wo.z) {
         return None;
     }
     let f_o = fresnel_dielectric(wo.z, coat.eta);
@@ -155,12 +155,12 @@ pub fn plastic_sample(coat: &PlasticCoat, d: Rgb, wo: Vec3, u: Vec2) -> Option<B
     }
     let p_d = 1.0 - p_s;
     // Only at `u.x = 1` (outside [0, 1)) with a certain specular choice.
-    if !(p_d > 0.0) {
+    if !above(p_d) {
         return None;
     }
     let ux = ((u.x - p_s) / p_d).min(ONE_MINUS_EPSILON);
     let wi = sample_cosine_hemisphere(Vec2::new(ux, u.y));
-    if !(wi.z > 0.0) {
+    if !above(wi.z) {
         return None;
     }
     let pdf = p_d * wi.z * FRAC_1_PI;
@@ -177,15 +177,12 @@ pub fn plastic_sample(coat: &PlasticCoat, d: Rgb, wo: Vec3, u: Vec2) -> Option<B
 /// the pdf [`plastic_sample`] draws `wi` with, `(1 - P_s) cos_i / pi`. Zero when either
 /// cosine is at or below the surface.
 pub fn plastic_eval(coat: &PlasticCoat, d: Rgb, cos_o: f32, cos_i: f32) -> (Rgb, f32) {
-    if !(cos_o > 0.0 && cos_i > 0.0) {
+    if !(above(cos_o) && above(cos_i)) {
         return (Rgb::BLACK, 0.0);
     }
     let f_o = fresnel_dielectric(cos_o, coat.eta);
     let p_d = 1.0 - coat.specular_probability(f_o, d);
-    (
-        coat.diffuse_value(d, f_o, cos_i),
-        p_d * cos_i * FRAC_1_PI,
-    )
+    (coat.diffuse_value(d, f_o, cos_i), p_d * cos_i * FRAC_1_PI)
 }
 
 /// The plastic's directional albedo seen at `cos_o` in closed form (module docs): the

@@ -135,7 +135,11 @@ fn chi_square_diffuse_lobe(coat: &PlasticCoat, d: Rgb, wo: Vec3, seed: u64) {
         return;
     }
     let limit = chi2_critical(df - 1);
-    assert!(chi2 < limit, "wo {wo:?}: chi2 {chi2} over {limit} (df {})", df - 1);
+    assert!(
+        chi2 < limit,
+        "wo {wo:?}: chi2 {chi2} over {limit} (df {})",
+        df - 1
+    );
 }
 
 #[test]
@@ -180,12 +184,19 @@ fn the_specular_probability_is_what_samples_report_and_eval_leaves() {
                 let (v, p) = plastic_eval(&coat, d, wo.z, s.wi.z);
                 assert!((p - s.pdf).abs() <= 1e-6 * p);
                 let w = v * (1.0 / p);
-                assert!((w.b - s.weight.b).abs() <= 1e-5 * w.b, "{w:?} {:?}", s.weight);
+                assert!(
+                    (w.b - s.weight.b).abs() <= 1e-5 * w.b,
+                    "{w:?} {:?}",
+                    s.weight
+                );
             }
         }
         let freq = spec as f64 / n as f64;
         let sigma = (reported as f64 * (1.0 - reported as f64) / n as f64).sqrt();
-        assert!((freq - reported as f64).abs() < 5.0 * sigma, "{freq} vs {reported}");
+        assert!(
+            (freq - reported as f64).abs() < 5.0 * sigma,
+            "{freq} vs {reported}"
+        );
     }
 }
 
@@ -235,7 +246,10 @@ fn white_furnace_energy_and_albedo() {
             let wo = Vec3::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
             // A white base under a clear coat loses nothing (module docs).
             let a = albedo_by_integration(&coat, Rgb::WHITE, cos_o);
-            assert!((a.r - 1.0).abs() < 2e-3, "nonlinear {nonlinear} cos {cos_o}: {a:?}");
+            assert!(
+                (a.r - 1.0).abs() < 2e-3,
+                "nonlinear {nonlinear} cos {cos_o}: {a:?}"
+            );
             // The sampling weights average the albedo (Monte Carlo, 1%).
             let n = 200_000;
             let mut mean = 0.0f64;
@@ -245,7 +259,10 @@ fn white_furnace_energy_and_albedo() {
                 }
             }
             mean /= n as f64;
-            assert!((mean - 1.0).abs() < 0.01, "nonlinear {nonlinear} cos {cos_o}: {mean}");
+            assert!(
+                (mean - 1.0).abs() < 0.01,
+                "nonlinear {nonlinear} cos {cos_o}: {mean}"
+            );
             // Grey bases: energy <= 1, and with nonlinear = false exactly F + (1 - F) d.
             for level in [0.0f32, 0.3, 0.9] {
                 let d = Rgb::splat(level);

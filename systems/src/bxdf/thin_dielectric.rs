@@ -14,7 +14,9 @@
 //!
 //! Both lobes are Dirac. The pane is symmetric: `wo` may be on either side.
 
-use super::{fresnel_dielectric, reflect_local, BxdfSample, SPECULAR_REFLECT, SPECULAR_TRANSMIT};
+use super::{
+    fresnel_dielectric, reflect_local, valid_eta, BxdfSample, SPECULAR_REFLECT, SPECULAR_TRANSMIT,
+};
 use risotto_components::{Rgb, Vec2, Vec3};
 
 /// `R'` of a thin pane of relative index `eta` seen at `cos_theta` (either sign): the
@@ -31,7 +33,7 @@ pub fn thin_dielectric_reflectance(cos_theta: f32, eta: f32) -> f32 {
 /// `wi = -wo` with probability `T' = 1 - R'` (weight 1, `eta = 1`). `None` for `wo` in the
 /// plane or a non-positive `eta`.
 pub fn thin_dielectric_sample(eta: f32, wo: Vec3, u: Vec2) -> Option<BxdfSample> {
-    if wo.z == 0.0 || !wo.z.is_finite() || !(eta > 0.0 && eta.is_finite()) {
+    if wo.z == 0.0 || !wo.z.is_finite() || !valid_eta(eta) {
         return None;
     }
     let r = thin_dielectric_reflectance(wo.z, eta);
@@ -121,7 +123,10 @@ mod tests {
             }
             let freq = reflected as f64 / n as f64;
             let sigma = (r as f64 * (1.0 - r as f64) / n as f64).sqrt();
-            assert!((freq - r as f64).abs() < 5.0 * sigma + 1e-6, "{freq} vs {r}");
+            assert!(
+                (freq - r as f64).abs() < 5.0 * sigma + 1e-6,
+                "{freq} vs {r}"
+            );
         }
         assert!(thin_dielectric_sample(1.5, Vec3::X, Vec2::splat(0.5)).is_none());
         assert!(thin_dielectric_sample(f32::NAN, Vec3::Z, Vec2::splat(0.5)).is_none());
