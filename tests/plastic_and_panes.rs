@@ -180,6 +180,14 @@ fn a_two_sided_surface_looks_the_same_from_both_sides() {
             assert!((c - 0.5).abs() < 0.005, "front {front}: {got:?}");
         }
     }
+    // The same with the base as a pattern (white cells on white: any loss of the pattern,
+    // such as the default 0.5 or black, would show), read through the two-sided wrapper.
+    let pattern = "type = \"plastic\"\ntwo_sided = true\n\
+                   diffuse_reflectance = { pattern = \"checker\", scale = 3, a = 1, b = 1 }";
+    let got = lone_quad(pattern, false);
+    for c in got {
+        assert!((c - 0.5).abs() < 0.005, "pattern: {got:?}");
+    }
     let one_sided_plastic = "type = \"plastic\"\ndiffuse_reflectance = 1";
     assert_eq!(lone_quad(one_sided_plastic, false), [0.0; 3]);
 }
