@@ -437,5 +437,12 @@ pub fn mirror_sample(reflectance: Rgb, wo: Vec3) -> Option<BxdfSample> {
     })
 }
 
+pub mod plastic;
+pub mod thin_dielectric;
+pub use plastic::{
+    fresnel_diffuse_reflectance, plastic_albedo, plastic_eval, plastic_sample, PlasticCoat,
+};
+pub use thin_dielectric::{thin_dielectric_reflectance, thin_dielectric_sample};
+
 #[cfg(test)]
 mod tests;

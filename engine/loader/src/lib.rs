@@ -8,4 +8,5 @@ pub mod grid_file;
 pub mod load;
 pub mod media_params;
 pub mod scene_file;
+pub mod surface_params;
 pub mod texture_file;

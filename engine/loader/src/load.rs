@@ -25,6 +25,7 @@ use crate::scene_file::{
     Projection as DescProjection, SceneDesc, SceneError, SceneErrorKind,
     ShapeGeometry as DescGeometry,
 };
+use crate::surface_params;
 use risotto_builtins::builtin::{BuiltinMaterial, Interior, Surface};
 use risotto_builtins::media::{HomogeneousMedium, Scattering};
 use risotto_components::Rgb;
@@ -78,7 +79,7 @@ impl MaterialRegistry {
     }
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
-    /// `interface`, `subsurface`.
+    /// `interface`, `subsurface`, `plastic`, `thin_dielectric`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -89,9 +90,23 @@ impl MaterialRegistry {
                     reflectance: Arc::new(graph),
                 },
             };
-            builtin(p, surface, &["reflectance"])
+            let surface = surface_params::two_sided(p, surface)?;
+            builtin(p, surface, &["reflectance", "two_sided"])
+        });
+        r.register("plastic", |p| {
+            let surface = surface_params::two_sided(p, surface_params::plastic(p)?)?;
+            let mut keys = surface_params::PLASTIC_KEYS.to_vec();
+            keys.push("two_sided");
+            builtin(p, surface, &keys)
+        });
+        r.register("thin_dielectric", |p| {
+            Ok(Box::new(BuiltinMaterial {
+                surface: surface_params::thin_dielectric(p)?,
+                interior: Interior::None,
+            }))
         });
         r.register("dielectric", |p| {
+            surface_params::reject_two_sided(p, "dielectric")?;
             let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
             let cheap_shadows = p.bool("cheap_shadows", Some(false))?;
             // A colour, or a pattern table (as the diffuse reflectance).
@@ -129,8 +144,14 @@ impl MaterialRegistry {
                 builtin(p, surface, &["reflectance"])
             });
         }
-        r.register("interface", |p| builtin(p, Surface::Interface, &[]));
-        r.register("subsurface", crate::media_params::subsurface::construct);
+        r.register("interface", |p| {
+            surface_params::reject_two_sided(p, "interface")?;
+            builtin(p, Surface::Interface, &[])
+        });
+        r.register("subsurface", |p| {
+            surface_params::reject_two_sided(p, "subsurface")?;
+            crate::media_params::subsurface::construct(p)
+        });
         r
     }
 

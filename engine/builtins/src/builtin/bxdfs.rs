@@ -28,7 +28,7 @@ fn for_sample_blocks(samplers: &mut [PathSampler], mut f: impl FnMut(Range<usize
 
 /// [`for_sample_blocks`] one point at a time: `f(point index, sample)`, in order.
 #[inline]
-fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2)) {
+pub(super) fn for_sample_chunks(samplers: &mut [PathSampler], mut f: impl FnMut(usize, Vec2)) {
     for_sample_blocks(samplers, |range, u| {
         for (i, &u) in range.zip(u) {
             f(i, u);
@@ -79,7 +79,7 @@ impl Reflectance for &[Rgb] {
 /// Local direction `w` relative to a frame whose normal is the point's shading normal, flipped
 /// to the side the viewer is on only for two-sided lobes (callers decide).
 #[inline]
-fn frame(n: Vec3) -> bxdf::Frame {
+pub(super) fn frame(n: Vec3) -> bxdf::Frame {
     bxdf::Frame::from_normal(n)
 }
 

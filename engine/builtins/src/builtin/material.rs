@@ -4,11 +4,15 @@
 
 use super::bxdfs::*;
 use super::interiors::*;
+use super::plastic::PlasticBxdf;
+use super::thin_dielectric::ThinDielectricBxdf;
+use super::two_sided::{facing_normals, TwoSidedBxdf};
 use crate::phase::{phase_bxdf, PhaseBxdf};
 use crate::scatter_patterns::eval_uncached;
 use bumpalo::Bump;
 use risotto_components::Rgb;
 use risotto_engine::plugin::*;
+use risotto_systems::bxdf::PlasticCoat;
 use risotto_systems::pattern::PatternGraph;
 use std::sync::Arc;
 
@@ -60,27 +64,53 @@ pub enum Surface {
     },
     /// Index-matched boundary: rays pass unchanged.
     Interface,
+    /// Smooth plastic: a Lambertian base under a smooth dielectric coat
+    /// ([`risotto_systems::bxdf::plastic`]). One-sided.
+    Plastic {
+        /// The coat.
+        coat: PlasticCoat,
+        /// The base's reflectance.
+        diffuse: Rgb,
+    },
+    /// Smooth plastic with a base-reflectance pattern (every value in [0, 1] by the graph's
+    /// bounds, checked by the scene loader), evaluated per point through the context's cache
+    /// (parameter `diffuse_reflectance`).
+    PlasticPattern {
+        /// The coat.
+        coat: PlasticCoat,
+        /// The base-reflectance graph.
+        diffuse: Arc<PatternGraph>,
+    },
+    /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no interior, no
+    /// refraction offset, shadow rays blocked.
+    ThinDielectric {
+        /// The pane's index of refraction.
+        ior: f32,
+    },
+    /// A one-sided reflecting surface (`Diffuse`, `Plastic`, their pattern forms) shaded on
+    /// whichever side the viewer is (Mitsuba 3's `twosided`). The scene loader wraps only
+    /// surfaces that do not transmit.
+    TwoSided(Box<Surface>),
 }
 
-/// A built-in material: a surface and an optional interior.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BuiltinMaterial {
-    /// Surface scattering.
-    pub surface: Surface,
-    /// Interior volume.
-    pub interior: Interior,
-}
-
-impl BxdfFactory for BuiltinMaterial {
-    fn instance_hints(&self) -> InstanceHints {
-        let surface = match &self.surface {
-            Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
+impl Surface {
+    /// The surface's share of the material's instance hints.
+    fn hints(&self) -> InstanceHints {
+        match self {
+            Surface::Diffuse { .. } | Surface::Mirror { .. } | Surface::Plastic { .. } => {
+                InstanceHints::NONE
+            }
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
             {
                 InstanceHints::READS_SURFACE_UV
             }
-            Surface::DiffusePattern { .. } | Surface::MirrorPattern { .. } => InstanceHints::NONE,
+            Surface::PlasticPattern { diffuse, .. } if diffuse.reads_uv() => {
+                InstanceHints::READS_SURFACE_UV
+            }
+            Surface::DiffusePattern { .. }
+            | Surface::MirrorPattern { .. }
+            | Surface::PlasticPattern { .. } => InstanceHints::NONE,
             Surface::DielectricPattern { tint, .. } if tint.reads_uv() => {
                 InstanceHints::TRANSMITS | InstanceHints::READS_SURFACE_UV
             }
@@ -98,7 +128,90 @@ impl BxdfFactory for BuiltinMaterial {
                     | InstanceHints::TRANSMISSION_SHADOWS
                     | InstanceHints::TRANSMITS
             }
-        };
+            // A pane passes rays without their entering anything: not `TRANSMITS` (which
+            // would track the shape on the volume stack as a closed boundary).
+            Surface::ThinDielectric { .. } => InstanceHints::NONE,
+            Surface::TwoSided(inner) => inner.hints(),
+        }
+    }
+
+    /// The surface's closure at the points of `ctx`.
+    fn scatter<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        match *self {
+            Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
+            // Patterns go through the context's cache ([`pattern_column`]).
+            Surface::DiffusePattern { ref reflectance } => arena.alloc(DiffuseBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
+            Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
+            Surface::DielectricPattern { ior, ref tint } => arena.alloc(DielectricBxdf {
+                ior,
+                tint: pattern_column(ctx, "tint", tint, arena),
+            }),
+            Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
+            Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
+                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
+            }),
+            Surface::Interface => arena.alloc(NullBxdf),
+            Surface::Plastic { coat, diffuse } => arena.alloc(PlasticBxdf { coat, diffuse }),
+            Surface::PlasticPattern { coat, ref diffuse } => arena.alloc(PlasticBxdf {
+                coat,
+                diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
+            }),
+            Surface::ThinDielectric { ior } => arena.alloc(ThinDielectricBxdf { ior }),
+            Surface::TwoSided(ref inner) => {
+                let nn = facing_normals(ctx, arena);
+                let facing = arena.alloc(ctx.with_shading_normals(nn));
+                let inner = inner.scatter(facing, arena);
+                arena.alloc(TwoSidedBxdf { inner, nn })
+            }
+        }
+    }
+
+    /// The surface's parameter `name`, for [`BxdfFactory::param`].
+    fn param(&self, name: &str) -> Option<ParamValue<'_>> {
+        match (self, name) {
+            (Surface::Diffuse { reflectance } | Surface::Mirror { reflectance }, "reflectance") => {
+                Some(ParamValue::Color(*reflectance))
+            }
+            (
+                Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance },
+                "reflectance",
+            ) => Some(ParamValue::Pattern(reflectance)),
+            (Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. }, "ior") => {
+                Some(ParamValue::Float(*ior))
+            }
+            (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
+            (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
+            (Surface::Plastic { diffuse, .. }, "diffuse_reflectance") => {
+                Some(ParamValue::Color(*diffuse))
+            }
+            (Surface::PlasticPattern { diffuse, .. }, "diffuse_reflectance") => {
+                Some(ParamValue::Pattern(diffuse))
+            }
+            (Surface::ThinDielectric { ior }, "ior") => Some(ParamValue::Float(*ior)),
+            (Surface::TwoSided(inner), _) => inner.param(name),
+            _ => None,
+        }
+    }
+}
+
+/// A built-in material: a surface and an optional interior.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuiltinMaterial {
+    /// Surface scattering.
+    pub surface: Surface,
+    /// Interior volume.
+    pub interior: Interior,
+}
+
+impl BxdfFactory for BuiltinMaterial {
+    fn instance_hints(&self) -> InstanceHints {
+        let surface = self.surface.hints();
         surface | self.interior.hints()
     }
 
@@ -131,23 +244,7 @@ impl BxdfFactory for BuiltinMaterial {
             ShadingMode::Interior => return arena.alloc(NullBxdf),
             ShadingMode::Scatter => {}
         }
-        match self.surface {
-            Surface::Diffuse { reflectance } => arena.alloc(DiffuseBxdf { reflectance }),
-            // Patterns go through the context's cache ([`pattern_column`]).
-            Surface::DiffusePattern { ref reflectance } => arena.alloc(DiffuseBxdf {
-                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
-            }),
-            Surface::Dielectric { ior, tint, .. } => arena.alloc(DielectricBxdf { ior, tint }),
-            Surface::DielectricPattern { ior, ref tint } => arena.alloc(DielectricBxdf {
-                ior,
-                tint: pattern_column(ctx, "tint", tint, arena),
-            }),
-            Surface::Mirror { reflectance } => arena.alloc(MirrorBxdf { reflectance }),
-            Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
-                reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
-            }),
-            Surface::Interface => arena.alloc(NullBxdf),
-        }
+        self.surface.scatter(ctx, arena)
     }
 
     fn begin_interior<'a>(
@@ -174,24 +271,12 @@ impl BxdfFactory for BuiltinMaterial {
 
     fn param(&self, name: &str) -> Option<ParamValue<'_>> {
         match (&self.surface, name) {
-            (Surface::Diffuse { reflectance } | Surface::Mirror { reflectance }, "reflectance") => {
-                Some(ParamValue::Color(*reflectance))
-            }
-            (
-                Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance },
-                "reflectance",
-            ) => Some(ParamValue::Pattern(reflectance)),
-            (Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. }, "ior") => {
-                Some(ParamValue::Float(*ior))
-            }
-            (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
-            (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
             (_, crate::scatter_patterns::G_PARAM) => match &self.interior {
                 Interior::Homogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
                 Interior::Heterogeneous(m) => m.g_pattern.as_deref().map(ParamValue::Pattern),
                 _ => None,
             },
-            _ => None,
+            (surface, _) => surface.param(name),
         }
     }
 

@@ -1,18 +1,26 @@
 //! Built-in materials (factories), their Bxdf closures, the phase function and the built-in
 //! interiors (`null`, `beer`).
 //!
-//! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`, `interface`.
+//! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`, `interface`,
+//! `plastic`, `thin_dielectric` (and `two_sided = true` on the one-sided reflectors).
 //! Any of them may carry an `interior = { type = "null" | "beer", ... }` table that makes the
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 //!
-//! Three files: [`bxdfs`] (the closures), [`interiors`] (which volume integrator a
-//! material's inside gets, and the `null` and `beer` ones) and [`material`] (the factory).
+//! Files: [`bxdfs`] (the first closures), [`plastic`], [`thin_dielectric`] and
+//! [`two_sided`] (one closure each), [`interiors`] (which volume integrator a material's
+//! inside gets, and the `null` and `beer` ones) and [`material`] (the factory).
 //! Everything is re-exported here.
 
 pub mod bxdfs;
 pub mod interiors;
 pub mod material;
+pub mod plastic;
+pub mod thin_dielectric;
+pub mod two_sided;
 
 pub use bxdfs::*;
 pub use interiors::*;
 pub use material::*;
+pub use plastic::PlasticBxdf;
+pub use thin_dielectric::ThinDielectricBxdf;
+pub use two_sided::TwoSidedBxdf;

@@ -88,6 +88,8 @@ pub struct ShadingContext<'a> {
     /// Where the cache's columns go and what it counts into (for child contexts' caches).
     cache_parts: Option<(&'a Bump, &'a PatternCounters)>,
     volume_space: Option<VolumeSpace>,
+    /// Shading normals that replace the points' own ([`ShadingContext::with_shading_normals`]).
+    nn: Option<&'a [Vec3]>,
 }
 
 impl<'a> ShadingContext<'a> {
@@ -109,6 +111,7 @@ impl<'a> ShadingContext<'a> {
             cache: None,
             cache_parts: None,
             volume_space: None,
+            nn: None,
         }
     }
     /// Binds the factory of the context's material: [`eval_param`](Self::eval_param) asks it
@@ -182,9 +185,40 @@ impl<'a> ShadingContext<'a> {
     pub fn p_offset(&self) -> &'a [f32] {
         &self.points.p_offset[self.range.clone()]
     }
-    /// Shading normals `Nn`.
+    /// Shading normals `Nn` (those of [`with_shading_normals`](Self::with_shading_normals)
+    /// in such a view).
     pub fn nn(&self) -> &'a [Vec3] {
-        &self.points.nn[self.range.clone()]
+        match self.nn {
+            None => &self.points.nn[self.range.clone()],
+            Some(nn) => nn,
+        }
+    }
+    /// A view of this context whose shading normals are `nn` (one per point) instead of the
+    /// points' own: the same points, mode, factory and parameter cache, so patterns are
+    /// evaluated once for both. What a two-sided closure hands the one-sided closure it
+    /// wraps, with the normals that face away from the viewer flipped (Mitsuba 3's
+    /// `twosided` flips the local frame the same way). Only [`nn`](Self::nn) changes:
+    /// [`rows`](Self::rows) still gives the table's own columns.
+    ///
+    /// # Panics
+    /// When `nn` does not have one entry per point.
+    pub fn with_shading_normals<'b>(&self, nn: &'b [Vec3]) -> ShadingContext<'b>
+    where
+        'a: 'b,
+    {
+        assert_eq!(nn.len(), self.range.len(), "one shading normal per point");
+        ShadingContext {
+            points: self.points,
+            range: self.range.clone(),
+            mode: self.mode,
+            material: self.material,
+            overlapping: self.overlapping,
+            factory: self.factory,
+            cache: self.cache,
+            cache_parts: self.cache_parts,
+            volume_space: self.volume_space,
+            nn: Some(nn),
+        }
     }
     /// Directions towards the viewer `Vn`.
     pub fn vn(&self) -> &'a [Vec3] {
@@ -381,6 +415,7 @@ impl<'a> VolumeSampling<'a> {
             cache: self.cache.as_ref().map(|c| c as &dyn ParamLookup),
             cache_parts: self.cache.as_ref().map(|c| (c.arena, c.counters)),
             volume_space: self.volume_space,
+            nn: None,
         }
     }
 

@@ -1330,6 +1330,13 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                     p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)
                         .unwrap();
                 }
+                // Read by their constructors' own parsers.
+                "plastic" => {
+                    crate::surface_params::plastic(p).unwrap();
+                }
+                "thin_dielectric" => {
+                    crate::surface_params::thin_dielectric(p).unwrap();
+                }
                 // Index-matched boundaries take no surface parameters.
                 "interface" => {}
                 // Read by `media_params::subsurface` (whose test parses every shipped one).
