@@ -38,16 +38,27 @@ fn start(scene: &Path, out: &Path, extra: &[&str]) -> Child {
         .unwrap()
 }
 
-/// Waits for the render's first progress line (it is rendering), sends `signals` (`INT`,
-/// `TERM`) one after the other, and waits for the process.
-fn interrupt(mut child: Child, signals: &[&str]) -> Output {
+/// Waits until the render is under way (`started`: its first progress line, which comes
+/// after a second; or, with `Some(file)`, until that file exists: the first checkpoint),
+/// sends `signals` (`INT`, `TERM`) one after the other, and waits for the process. The
+/// renders are sized to last far longer than that on any machine.
+fn interrupt(mut child: Child, started: Option<&Path>, signals: &[&str]) -> Output {
     let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let first = lines.next().expect("a progress line").unwrap();
-    assert!(first.contains("\"event\":\"progress\""), "{first}");
+    match started {
+        None => {
+            let first = lines.next().expect("a progress line").unwrap();
+            assert!(first.contains("\"event\":\"progress\""), "{first}");
+        }
+        Some(file) => {
+            while !file.exists() {
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+        }
+    }
     for (i, s) in signals.iter().enumerate() {
         // Standard signals do not queue: two sent before the first is handled are one.
         if i > 0 {
-            std::thread::sleep(std::time::Duration::from_millis(200));
+            std::thread::sleep(std::time::Duration::from_millis(20));
         }
         let status = Command::new("kill")
             .args([&format!("-{s}"), &child.id().to_string()])
@@ -67,12 +78,13 @@ fn stderr(out: &Output) -> String {
 
 #[test]
 fn sigint_writes_the_samples_done_and_merge_finishes_them() {
-    // Short passes (the checkpoint interval), so the interrupt lands well before the end.
-    let spp = 4096;
+    // Short passes (the checkpoint interval), and the signal at the first checkpoint, so
+    // the interrupt lands well before the end (6.3 M samples).
+    let spp = 8192;
     let (dir, scene) = setup("int", spp);
     let out = dir.join("shot.exr");
-    let child = start(&scene, &out, &["--checkpoint", "0.05"]);
-    let result = interrupt(child, &["INT"]);
+    let child = start(&scene, &out, &["--checkpoint", "0.05", "--size", "32x24"]);
+    let result = interrupt(child, Some(&out), &["INT"]);
     assert_eq!(result.status.code(), Some(130), "{}", stderr(&result));
     let msg = stderr(&result);
     assert!(
@@ -89,7 +101,15 @@ fn sigint_writes_the_samples_done_and_merge_finishes_them() {
     // The message's recipe: render the rest, merge, and get the uninterrupted image.
     let rest = dir.join("rest.exr");
     let range = format!("{done}..{spp}");
-    let args = ["render", scene.to_str().unwrap(), "--samples", &range, "-o"];
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--size",
+        "32x24",
+        "--samples",
+        &range,
+        "-o",
+    ];
     ok(
         "rest",
         risotto(&[&args[..], &[rest.to_str().unwrap(), "--quiet"]].concat()),
@@ -109,6 +129,8 @@ fn sigint_writes_the_samples_done_and_merge_finishes_them() {
     let args = [
         "render",
         scene.to_str().unwrap(),
+        "--size",
+        "32x24",
         "-o",
         whole.to_str().unwrap(),
     ];
@@ -117,6 +139,7 @@ fn sigint_writes_the_samples_done_and_merge_finishes_them() {
         read_exr_rgb(&merged).unwrap(),
         read_exr_rgb(&whole).unwrap(),
     );
+    assert_eq!((m.width, m.height), (w.width, w.height));
     // Sample passes merge to the one-process sums up to f64 summation order (README).
     for (a, b) in m.pixels.iter().zip(&w.pixels) {
         for (x, y) in a.to_array().into_iter().zip(b.to_array()) {
@@ -127,11 +150,11 @@ fn sigint_writes_the_samples_done_and_merge_finishes_them() {
 
 #[test]
 fn sigterm_without_checkpoints_ends_after_the_pass_in_flight() {
-    // About ten seconds of samples on one thread; passes of about two seconds.
+    // 200 M samples (a minute on one thread), passes of about two seconds.
     let spp = 65536;
     let (dir, scene) = setup("term", spp);
     let out = dir.join("shot.exr");
-    let result = interrupt(start(&scene, &out, &[]), &["TERM"]);
+    let result = interrupt(start(&scene, &out, &["--size", "64x48"]), None, &["TERM"]);
     assert_eq!(result.status.code(), Some(130), "{}", stderr(&result));
     let part = read_partial(&out).unwrap();
     assert!(
@@ -150,12 +173,17 @@ fn a_second_signal_exits_at_once() {
     let spp = 65536;
     let (dir, scene) = setup("twice", spp);
     let out = dir.join("shot.exr");
-    let result = interrupt(start(&scene, &out, &[]), &["INT", "INT"]);
+    // Passes of a minute (the checkpoint interval): the first signal alone would wait for
+    // the pass in flight, so only the second can end the process within the test.
+    let args = ["--size", "64x48", "--checkpoint", "60"];
+    let result = interrupt(start(&scene, &out, &args), None, &["INT", "INT"]);
     assert_eq!(result.status.code(), Some(130), "{}", stderr(&result));
     assert!(
         !stderr(&result).contains("holds samples"),
         "{}",
         stderr(&result)
     );
-    assert!(!out.exists(), "nothing written after the second signal");
+    // Only the first pass's checkpoint (one sample per pixel) was written.
+    let part = read_partial(&out).unwrap();
+    assert_eq!(part.header.samples.end, 1, "{:?}", part.header.samples);
 }
