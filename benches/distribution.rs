@@ -7,7 +7,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use risotto::components::{Rgb, Vec2};
-use risotto::systems::distribution::EnvironmentMap;
+use risotto::systems::environment_map::EnvironmentMap;
 
 const W: usize = 512;
 const H: usize = 256;

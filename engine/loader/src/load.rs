@@ -31,7 +31,7 @@ use risotto_engine::output::{read_exr_rgb, Image, OutputError};
 use risotto_engine::plugin::BxdfFactory;
 use risotto_engine::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto_systems::camera::{Camera, Projection};
-use risotto_systems::distribution::EnvironmentMap;
+use risotto_systems::environment_map::EnvironmentMap;
 use risotto_systems::geometry::Sphere;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
