@@ -426,6 +426,8 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 radiance,
                 map,
                 map_at,
+                filter,
+                to_world,
                 ..
             } => {
                 let map = match map {
@@ -444,8 +446,8 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                                     ),
                                 }
                             })?;
-                        Some(Arc::new(EnvironmentMap::new(
-                            img.pixels, img.width, img.height,
+                        Some(Arc::new(EnvironmentMap::with_filter(
+                            img.pixels, img.width, img.height, filter, to_world,
                         )))
                     }
                     None => None,
