@@ -244,7 +244,7 @@ fn read_rotation(r: &Reader<'_>) -> Result<DMat3, SceneError> {
         .to_cols_array()
         .iter()
         .fold(0.0f64, |a, &e| a.max(e.abs()));
-    if !(off <= 1e-5) {
+    if off.is_nan() || off > 1e-5 {
         let node = r.get("transform").unwrap_or(r.node);
         let rows = [m.row(0), m.row(1), m.row(2)]
             .map(|v| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z))
