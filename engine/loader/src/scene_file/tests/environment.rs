@@ -5,9 +5,27 @@ use super::*;
 use glam::Mat3;
 use risotto_systems::environment_map::EnvFilter;
 
+/// A scene path in its own scratch directory, removed when dropped.
+struct ScenePath(PathBuf);
+
+impl std::ops::Deref for ScenePath {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for ScenePath {
+    fn drop(&mut self) {
+        if let Some(dir) = self.0.parent() {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+}
+
 /// `BASE` with its environment light given a map (an existing file; only its existence is
 /// checked at parse time) and the extra keys `keys`; returns the text and its scene path.
-fn with_map(keys: &str) -> (String, PathBuf) {
+fn with_map(keys: &str) -> (String, ScenePath) {
     // One directory per call: tests run in parallel and each scratch directory starts empty.
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -18,7 +36,7 @@ fn with_map(keys: &str) -> (String, PathBuf) {
         "radiance = [0.1, 0.2, 0.3]",
         &format!("map = \"sky.exr\"\n{keys}"),
     );
-    (text, dir.join("scene.toml"))
+    (text, ScenePath(dir.join("scene.toml")))
 }
 
 fn environment(text: &str, path: &Path) -> (EnvFilter, Mat3) {
