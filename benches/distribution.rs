@@ -1,19 +1,22 @@
 //! Environment-map importance sampling throughput: 4096 direction samples per iteration
-//! from a 512x256 equirectangular map (sky gradient plus a small bright sun).
+//! from a 512x256 equirectangular map (sky gradient plus a small bright sun), looked up
+//! nearest-texel and unrotated (the original map), and bilinearly under a rotation (the
+//! scene file's default filter with a `transform`).
 #![allow(
     missing_docs,
     reason = "criterion's macros generate undocumented items"
 )]
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use glam::{Mat3, Vec3};
 use risotto::components::{Rgb, Vec2};
-use risotto::systems::distribution::EnvironmentMap;
+use risotto::systems::environment_map::{EnvFilter, EnvironmentMap};
 
 const W: usize = 512;
 const H: usize = 256;
 const N: usize = 4096;
 
-fn sky_map() -> EnvironmentMap {
+fn sky_map(filter: EnvFilter, to_world: Mat3) -> EnvironmentMap {
     let mut px = Vec::with_capacity(W * H);
     for y in 0..H {
         for x in 0..W {
@@ -30,7 +33,7 @@ fn sky_map() -> EnvironmentMap {
             px.push(p);
         }
     }
-    EnvironmentMap::new(px, W, H)
+    EnvironmentMap::with_filter(px, W, H, filter, to_world)
 }
 
 /// Low-discrepancy-ish inputs: the 2D R2 sequence (Roberts 2018), precomputed so the bench
@@ -47,32 +50,50 @@ fn inputs() -> Vec<Vec2> {
 }
 
 fn bench(c: &mut Criterion) {
-    let map = sky_map();
+    let tilt = Mat3::from_axis_angle(Vec3::new(0.6, 0.8, 0.0), 1.2);
+    let cases = [
+        ("", EnvFilter::Nearest, Mat3::IDENTITY),
+        ("bilinear_rotated_", EnvFilter::Bilinear, tilt),
+    ];
     let us = inputs();
-    let mut group = c.benchmark_group("env_map");
-    group.throughput(Throughput::Elements(N as u64));
-    group.bench_function("sample_4096_512x256", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for &u in &us {
-                let (dir, l, pdf) = map.sample(black_box(u));
-                acc += dir.x + l.r + pdf;
-            }
-            black_box(acc)
-        })
-    });
-    group.bench_function("pdf_4096_512x256", |b| {
+    for (tag, filter, to_world) in cases {
+        let map = sky_map(filter, to_world);
+        let mut group = c.benchmark_group("env_map");
+        group.throughput(Throughput::Elements(N as u64));
+        group.bench_function(format!("{tag}sample_4096_512x256"), |b| {
+            b.iter(|| {
+                let mut acc = 0.0f32;
+                for &u in &us {
+                    let (dir, l, pdf) = map.sample(black_box(u));
+                    acc += dir.x + l.r + pdf;
+                }
+                black_box(acc)
+            })
+        });
         let dirs: Vec<_> = us.iter().map(|&u| map.sample(u).0).collect();
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for &d in &dirs {
-                acc += map.pdf(black_box(d));
-            }
-            black_box(acc)
-        })
-    });
-    group.finish();
-    c.bench_function("env_map/build_512x256", |b| b.iter(sky_map));
+        group.bench_function(format!("{tag}pdf_4096_512x256"), |b| {
+            b.iter(|| {
+                let mut acc = 0.0f32;
+                for &d in &dirs {
+                    acc += map.pdf(black_box(d));
+                }
+                black_box(acc)
+            })
+        });
+        group.bench_function(format!("{tag}eval_4096_512x256"), |b| {
+            b.iter(|| {
+                let mut acc = 0.0f32;
+                for &d in &dirs {
+                    acc += map.eval(black_box(d)).g;
+                }
+                black_box(acc)
+            })
+        });
+        group.finish();
+        c.bench_function(&format!("env_map/{tag}build_512x256"), |b| {
+            b.iter(|| sky_map(filter, to_world))
+        });
+    }
 }
 
 criterion_group!(benches, bench);

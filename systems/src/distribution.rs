@@ -1,11 +1,10 @@
-//! Piecewise-constant distributions for importance sampling, and an equirectangular
-//! environment map that samples directions proportionally to its radiance.
+//! Piecewise-constant distributions for importance sampling (the environment map's
+//! sampling, [`crate::environment_map`], is built on them).
 //!
 //! The 1D and 2D distributions follow Pharr, Jakob, Humphreys, *Physically Based Rendering*
 //! (3rd ed.), §13.6.5 (inverting the CDF of a piecewise-constant 1D function) and §13.6.7
 //! (2D sampling as a marginal density over rows times a conditional density within the
-//! row). The environment map's change of variables from `(u, v)` to solid angle is §14.2.4:
-//! `p(ω) = p(u, v) / (2π² sin θ)`.
+//! row).
 //!
 //! Robustness rules (no NaN ever comes out):
 //! - negative or non-finite input values count as 0;
@@ -13,10 +12,7 @@
 //! - a zero-valued bin is never returned by sampling when the total is non-zero, and its
 //!   pdf is 0.
 
-use std::f32::consts::PI;
-
-use glam::{Vec2, Vec3};
-use risotto_components::Rgb;
+use glam::Vec2;
 
 /// Largest `f32` below 1; sampled positions stay in `[0, 1)`.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
@@ -25,7 +21,7 @@ pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 /// Every lookup (pdf, texel fetch) goes through this one formula so that a sampled position
 /// and a later lookup of that position agree on the bin.
 #[inline]
-fn bin_of(x: f32, n: usize) -> usize {
+pub(crate) fn bin_of(x: f32, n: usize) -> usize {
     // `as usize` saturates: negative and NaN give 0.
     ((x * n as f32) as usize).min(n - 1)
 }
@@ -258,157 +254,14 @@ impl Distribution2D {
     }
 }
 
-/// Map coordinates of a direction, using the scene format's equirectangular convention:
-/// `+y` up, `u = 0.5 + atan2(x, -z) / 2π`, `v = acos(y) / π` (so `-z` is the centre of the
-/// map, `+x` is at `u = 0.75`, the top row is straight up). `u = 1` wraps to 0.
-#[inline]
-pub fn dir_to_uv(dir: Vec3) -> Vec2 {
-    let mut u = 0.5 + dir.x.atan2(-dir.z) * (0.5 / PI);
-    if u >= 1.0 {
-        u -= 1.0;
-    }
-    let v = dir.y.clamp(-1.0, 1.0).acos() * (1.0 / PI);
-    Vec2::new(u.max(0.0), v)
-}
-
-/// Inverse of [`dir_to_uv`]: `φ = 2π (u - 0.5)`, `θ = π v`,
-/// `dir = (sin θ sin φ, cos θ, -sin θ cos φ)`.
-#[inline]
-pub fn uv_to_dir(uv: Vec2) -> Vec3 {
-    let (sin_phi, cos_phi) = (2.0 * PI * (uv.x - 0.5)).sin_cos();
-    let (sin_theta, cos_theta) = (PI * uv.y).sin_cos();
-    Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
-}
-
-/// An equirectangular environment map (radiance per texel, row 0 at the top, i.e. `v = 0`,
-/// direction `+y`), see [`dir_to_uv`] for the direction convention.
-///
-/// Lookups are **nearest-neighbour** (each texel is a constant-radiance patch of the sphere).
-/// That matches the piecewise-constant sampling density exactly, so within a texel the
-/// estimator `L / p` only varies with `sin θ`.
-#[derive(Clone, Debug)]
-pub struct EnvironmentMap {
-    width: usize,
-    height: usize,
-    pixels: Vec<Rgb>,
-    dist: Distribution2D,
-}
-
-impl EnvironmentMap {
-    /// A map from `width * height` texels (row-major, top row first).
-    ///
-    /// The sampling density is proportional to each texel's channel average times the
-    /// solid angle of its row. The solid angle of row `j` is
-    /// `Δφ (cos θ_j - cos θ_{j+1}) = Δφ · 2 sin(θ_mid) sin(π / 2h)`, i.e. proportional to
-    /// `sin θ_mid`, which is the weight used (PBR 3rd ed. §14.2.4).
-    ///
-    /// # Panics
-    /// When the dimensions are zero or do not match `pixels.len()`.
-    pub fn new(pixels: Vec<Rgb>, width: usize, height: usize) -> Self {
-        assert!(
-            width > 0 && height > 0 && pixels.len() == width * height,
-            "EnvironmentMap::new: {} texels for {width}x{height}",
-            pixels.len()
-        );
-        let mut weights = Vec::with_capacity(pixels.len());
-        for (j, row) in pixels.chunks_exact(width).enumerate() {
-            let sin_theta = (PI * (j as f32 + 0.5) / height as f32).sin();
-            // Average, not luminance: every channel > 0 must give a density > 0, or radiance
-            // in that channel would never be sampled (bias).
-            weights.extend(row.iter().map(|p| {
-                let a = p
-                    .map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })
-                    .average();
-                a * sin_theta
-            }));
-        }
-        EnvironmentMap {
-            width,
-            height,
-            dist: Distribution2D::new(&weights, width, height),
-            pixels,
-        }
-    }
-
-    /// Map width in texels.
-    pub fn width(&self) -> usize {
-        self.width
-    }
-
-    /// Map height in texels.
-    pub fn height(&self) -> usize {
-        self.height
-    }
-
-    /// The texel at map coordinates `uv` (nearest neighbour).
-    #[inline]
-    pub fn lookup_uv(&self, uv: Vec2) -> Rgb {
-        self.pixels[bin_of(uv.y, self.height) * self.width + bin_of(uv.x, self.width)]
-    }
-
-    /// Radiance arriving from direction `dir` (unit vector pointing away from the scene).
-    #[inline]
-    pub fn eval(&self, dir: Vec3) -> Rgb {
-        self.lookup_uv(dir_to_uv(dir))
-    }
-
-    /// Samples a direction proportionally to radiance × solid angle. Returns
-    /// `(dir, radiance, pdf)` with the pdf per unit solid angle. The radiance and pdf are
-    /// exactly [`eval`](Self::eval)`(dir)` and [`pdf`](Self::pdf)`(dir)`, so MIS weights
-    /// computed later from `pdf(dir)` agree with the sampler. At the poles (`sin θ = 0`) the
-    /// pdf is 0 and the caller should discard the sample.
-    pub fn sample(&self, u: Vec2) -> (Vec3, Rgb, f32) {
-        let (uv, _) = self.dist.sample(u);
-        let dir = uv_to_dir(uv);
-        // Re-derive (u, v) from the direction (once) so radiance and pdf are those of the
-        // texel `eval(dir)` / `pdf(dir)` would pick, even where rounding crosses a texel edge.
-        let uv = dir_to_uv(dir);
-        (dir, self.lookup_uv(uv), self.pdf_uv_dir(uv, dir))
-    }
-
-    /// Solid-angle density of [`sample`](Self::sample) in direction `dir`:
-    /// `p(ω) = p(u, v) / (2π² sin θ)` (the Jacobian of `(u, v) -> ω` is `2π · π · sin θ`).
-    pub fn pdf(&self, dir: Vec3) -> f32 {
-        self.pdf_uv_dir(dir_to_uv(dir), dir)
-    }
-
-    /// [`pdf`](Self::pdf) with `uv = dir_to_uv(dir)` already computed.
-    #[inline]
-    fn pdf_uv_dir(&self, uv: Vec2, dir: Vec3) -> f32 {
-        let sin_theta = (1.0 - dir.y * dir.y).max(0.0).sqrt();
-        if sin_theta.is_nan() || sin_theta <= 0.0 {
-            return 0.0;
-        }
-        self.dist.pdf(uv) / (2.0 * PI * PI * sin_theta)
-    }
-
-    /// `∫ L(ω) dω` over the sphere for the nearest-neighbour map, per channel: the sum of
-    /// texel radiance times texel solid angle `(2π / w) (cos θ_j - cos θ_{j+1})`.
-    pub fn integral(&self) -> Rgb {
-        let mut sum = [0.0f64; 3];
-        let dphi = 2.0 * std::f64::consts::PI / self.width as f64;
-        for (j, row) in self.pixels.chunks_exact(self.width).enumerate() {
-            let t0 = std::f64::consts::PI * j as f64 / self.height as f64;
-            let t1 = std::f64::consts::PI * (j + 1) as f64 / self.height as f64;
-            let omega = dphi * (t0.cos() - t1.cos());
-            for p in row {
-                for (s, c) in sum.iter_mut().zip(p.to_array()) {
-                    *s += f64::from(c) * omega;
-                }
-            }
-        }
-        Rgb::new(sum[0] as f32, sum[1] as f32, sum[2] as f32)
-    }
-}
-
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     use crate::sampler::SplitMix64 as Rng;
     /// Pearson's chi-square statistic of observed counts against expected probabilities.
     /// Bins with zero probability must be empty. Returns (statistic, degrees of freedom).
-    fn chi_square(counts: &[u64], probs: &[f64], n: u64) -> (f64, usize) {
+    pub(crate) fn chi_square(counts: &[u64], probs: &[f64], n: u64) -> (f64, usize) {
         let mut stat = 0.0;
         let mut df = 0usize;
         for (&c, &p) in counts.iter().zip(probs) {
@@ -426,7 +279,7 @@ mod tests {
     /// A loose upper quantile (~p < 1e-5) of chi-square with `df` degrees of freedom:
     /// mean `df`, standard deviation `sqrt(2 df)`. A wrong sampler exceeds it by orders of
     /// magnitude at these sample counts.
-    fn chi_square_limit(df: usize) -> f64 {
+    pub(crate) fn chi_square_limit(df: usize) -> f64 {
         df as f64 + 6.0 * (2.0 * df as f64).sqrt() + 10.0
     }
 
@@ -602,171 +455,5 @@ mod tests {
             assert_eq!(d.pdf(uv), 1.0);
         }
         assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
-    }
-
-    #[test]
-    fn direction_convention() {
-        // Documented anchors of the scene-format convention.
-        let uv = dir_to_uv(Vec3::NEG_Z);
-        assert!((uv - Vec2::new(0.5, 0.5)).length() < 1e-6);
-        let uv = dir_to_uv(Vec3::X);
-        assert!((uv - Vec2::new(0.75, 0.5)).length() < 1e-6);
-        let uv = dir_to_uv(Vec3::NEG_X);
-        assert!((uv - Vec2::new(0.25, 0.5)).length() < 1e-6);
-        assert_eq!(dir_to_uv(Vec3::Z).x, 0.0);
-        assert_eq!(dir_to_uv(Vec3::Y).y, 0.0);
-        assert_eq!(dir_to_uv(Vec3::NEG_Y).y, 1.0);
-        let mut rng = Rng(8);
-        for _ in 0..1000 {
-            let uv = rng.vec2();
-            let d = uv_to_dir(uv);
-            assert!((d.length() - 1.0).abs() < 1e-5);
-            let back = dir_to_uv(d);
-            assert!((back.y - uv.y).abs() < 1e-3, "{uv} {back}");
-            let du = (back.x - uv.x).abs();
-            assert!(du < 1e-4 || (1.0 - du) < 1e-4 || uv.y < 1e-3 || uv.y > 0.999);
-        }
-        // eval picks the texel the convention names: 4x2 map, texel (3, 0) is u in
-        // [0.75, 1) (between +x and +z), upper hemisphere.
-        let mut px = vec![Rgb::BLACK; 8];
-        px[3] = Rgb::new(1.0, 2.0, 3.0);
-        px[4] = Rgb::new(4.0, 0.0, 0.0); // (0, 1): u in [0, 0.25), lower half: +z, down
-        let map = EnvironmentMap::new(px, 4, 2);
-        assert_eq!(
-            map.eval(Vec3::new(1.0, 0.3, 0.1).normalize()),
-            Rgb::new(1.0, 2.0, 3.0)
-        );
-        assert_eq!(
-            map.eval(Vec3::new(-0.1, -0.3, 1.0).normalize()),
-            Rgb::new(4.0, 0.0, 0.0)
-        );
-        assert_eq!(map.eval(Vec3::new(0.0, 0.3, -1.0).normalize()), Rgb::BLACK);
-    }
-
-    fn test_map(w: usize, h: usize) -> Vec<Rgb> {
-        let mut rng = Rng(42);
-        (0..w * h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let sky = if y < h / 2 { 1.0 } else { 0.2 };
-                let mut p = Rgb::new(sky * 0.6, sky * 0.8, sky) * (0.5 + rng.f32());
-                if (x, y) == (5, 3) {
-                    p = Rgb::new(200.0, 150.0, 80.0); // a sun
-                }
-                if i % 11 == 0 {
-                    p = Rgb::BLACK;
-                }
-                p
-            })
-            .collect()
-    }
-
-    /// `∫ L dω` by direct quadrature: a fine (θ, φ) midpoint grid aligned with the texels,
-    /// 8x8 cells per texel, each weighted by its exact solid angle.
-    fn quadrature(map: &EnvironmentMap, f: impl Fn(Vec3) -> [f64; 3]) -> [f64; 3] {
-        let (nu, nv) = (map.width() * 8, map.height() * 8);
-        let mut s = [0.0f64; 3];
-        for j in 0..nv {
-            let t0 = std::f64::consts::PI * j as f64 / nv as f64;
-            let t1 = std::f64::consts::PI * (j + 1) as f64 / nv as f64;
-            let omega = 2.0 * std::f64::consts::PI / nu as f64 * (t0.cos() - t1.cos());
-            for i in 0..nu {
-                let uv = Vec2::new((i as f32 + 0.5) / nu as f32, (j as f32 + 0.5) / nv as f32);
-                let v = f(uv_to_dir(uv));
-                for c in 0..3 {
-                    s[c] += v[c] * omega;
-                }
-            }
-        }
-        s
-    }
-
-    #[test]
-    fn env_pdf_integrates_to_one_over_the_sphere() {
-        let map = EnvironmentMap::new(test_map(32, 16), 32, 16);
-        let s = quadrature(&map, |d| [f64::from(map.pdf(d)); 3]);
-        assert!((s[0] - 1.0).abs() < 2e-3, "∫ pdf dω = {}", s[0]);
-    }
-
-    #[test]
-    fn env_importance_sampling_matches_quadrature() {
-        let (w, h) = (32, 16);
-        let map = EnvironmentMap::new(test_map(w, h), w, h);
-        let exact = quadrature(&map, |d| map.eval(d).to_array().map(f64::from));
-        let closed = map.integral();
-        for (cl, ex) in closed.to_array().into_iter().zip(exact) {
-            let rel = (f64::from(cl) - ex).abs() / ex;
-            assert!(rel < 1e-4, "closed form vs quadrature: {rel}");
-        }
-        let mut rng = Rng(2024);
-        let n = 200_000;
-        let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
-        for _ in 0..n {
-            let (dir, l, pdf) = map.sample(rng.vec2());
-            assert!((dir.length() - 1.0).abs() < 1e-5);
-            assert_eq!(l, map.eval(dir));
-            assert_eq!(pdf, map.pdf(dir));
-            if pdf == 0.0 {
-                continue;
-            }
-            for (c, lc) in l.to_array().into_iter().enumerate() {
-                let x = f64::from(lc) / f64::from(pdf);
-                sum[c] += x;
-                sum2[c] += x * x;
-            }
-        }
-        for c in 0..3 {
-            let mean = sum[c] / n as f64;
-            let sigma = ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt();
-            let err = (mean - exact[c]).abs();
-            assert!(
-                err < 5.0 * sigma + 1e-6 && err < 5e-3 * exact[c],
-                "channel {c}: MC {mean} vs quadrature {} (sigma {sigma})",
-                exact[c]
-            );
-        }
-    }
-
-    #[test]
-    fn one_bright_texel_takes_almost_all_samples() {
-        let (w, h) = (64, 32);
-        let mut px = vec![Rgb::splat(1e-3); w * h];
-        let bright = Rgb::new(1e4, 5e3, 2e3);
-        px[20 * w + 10] = bright;
-        let map = EnvironmentMap::new(px, w, h);
-        let mut rng = Rng(77);
-        let n = 100_000;
-        let hits = (0..n)
-            .filter(|_| map.sample(rng.vec2()).1 == bright)
-            .count();
-        // Expected share: 5667 sin θ_20 / (5667 sin θ_20 + 1e-3 Σ sin θ) ≈ 0.9998.
-        assert!(hits as f64 > 0.999 * n as f64, "{hits} of {n}");
-    }
-
-    #[test]
-    fn zero_and_garbage_maps_do_not_nan() {
-        let mut rng = Rng(4);
-        let garbage = vec![
-            Rgb::new(f32::NAN, -1.0, 0.0),
-            Rgb::new(f32::INFINITY, 0.0, 0.0),
-            Rgb::BLACK,
-            Rgb::new(-5.0, -5.0, -5.0),
-        ];
-        for (px, w, h) in [(vec![Rgb::BLACK; 32], 8, 4), (garbage, 2, 2)] {
-            let map = EnvironmentMap::new(px, w, h);
-            for _ in 0..10_000 {
-                let (dir, _, pdf) = map.sample(rng.vec2());
-                assert!(dir.is_finite() && pdf.is_finite() && pdf >= 0.0);
-                let q = map.pdf(uv_to_dir(rng.vec2()));
-                assert!(q.is_finite() && q >= 0.0);
-            }
-            // Poles: sin θ = 0 gives pdf 0, not infinity.
-            assert_eq!(map.pdf(Vec3::Y), 0.0);
-            assert_eq!(map.pdf(Vec3::NEG_Y), 0.0);
-        }
-        // The all-black map samples uniformly in (u, v): pdf = 1 / (2π² sin θ).
-        let map = EnvironmentMap::new(vec![Rgb::BLACK; 32], 8, 4);
-        let d = Vec3::new(1.0, 0.0, 0.0);
-        assert!((map.pdf(d) - 1.0 / (2.0 * PI * PI)).abs() < 1e-6);
     }
 }

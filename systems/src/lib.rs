@@ -10,6 +10,7 @@ pub mod camera;
 pub mod clearance;
 pub mod direct_lighting;
 pub mod distribution;
+pub mod environment_map;
 pub mod film;
 pub mod geometry;
 pub mod grid;

@@ -8,7 +8,8 @@
 //! its power; the returned pdf includes that choice. Pdfs are per unit solid angle at the
 //! shading point, Dirac lights (distant, point, spot) report `delta = true` and pdf 1 x selection.
 
-use crate::distribution::{Distribution1D, EnvironmentMap, ONE_MINUS_EPSILON};
+use crate::distribution::{Distribution1D, ONE_MINUS_EPSILON};
+use crate::environment_map::EnvironmentMap;
 use crate::geometry::{gamma, SceneGeometry, UNDERFLOW};
 use crate::simd8::{Backend, Kernel8, Lanes8, Mask8, Row8, Simd};
 use crate::volume_lights::VolumeEmitter;

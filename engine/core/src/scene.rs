@@ -11,7 +11,7 @@ use crate::plugin::{BxdfFactory, InstanceHints};
 use glam::{Affine3A, Vec3};
 use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
-use risotto_systems::distribution::EnvironmentMap;
+use risotto_systems::environment_map::EnvironmentMap;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::lights::{Light, LightSet, SpotFalloff};
 use std::sync::Arc;

@@ -33,7 +33,7 @@ use risotto_engine::output::{read_exr_rgb, Image, OutputError};
 use risotto_engine::plugin::BxdfFactory;
 use risotto_engine::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto_systems::camera::{Camera, Projection};
-use risotto_systems::distribution::EnvironmentMap;
+use risotto_systems::environment_map::EnvironmentMap;
 use risotto_systems::geometry::Sphere;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -459,6 +459,8 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 radiance,
                 map,
                 map_at,
+                filter,
+                to_world,
                 ..
             } => {
                 let map = match map {
@@ -477,8 +479,8 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                                     ),
                                 }
                             })?;
-                        Some(Arc::new(EnvironmentMap::new(
-                            img.pixels, img.width, img.height,
+                        Some(Arc::new(EnvironmentMap::with_filter(
+                            img.pixels, img.width, img.height, filter, to_world,
                         )))
                     }
                     None => None,

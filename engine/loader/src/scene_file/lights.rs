@@ -1,6 +1,9 @@
 //! The `[[lights]]` of a scene file: distant, point, spot and environment lights.
 
+use super::geometry::read_transform;
 use super::*;
+use glam::{DMat3, Mat3};
+use risotto_systems::environment_map::EnvFilter;
 
 /// A light that is not a shape.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,6 +54,11 @@ pub enum LightDesc {
         map: Option<PathBuf>,
         /// Where `map` is written, for the errors of reading the map (`None` without one).
         map_at: Option<Location>,
+        /// How the map is looked up between texels (`filter`, default bilinear).
+        filter: EnvFilter,
+        /// The map's frame to world: the rotation of `transform`, composed with the half
+        /// turn about `y` of `convention = "mitsuba"` (identity by default).
+        to_world: Mat3,
     },
 }
 
@@ -118,7 +126,6 @@ pub(super) fn read_lights(
             }
             "spot" => read_spot(&r, node, name)?,
             "environment" => {
-                r.deny_unknown(&["type", "name", "radiance", "map"])?;
                 if let Some(first) = environment_seen {
                     return Err(r.invalid(
                         "type",
@@ -129,33 +136,7 @@ pub(super) fn read_lights(
                     ));
                 }
                 environment_seen = Some(i);
-                let mut map_at = None;
-                let map = match r.path_opt("map")? {
-                    None => None,
-                    Some((path, map_node)) => {
-                        if !path.is_file() {
-                            return Err(r.error(
-                                SceneErrorKind::ExternalFile,
-                                &map_node.span(),
-                                Some("map"),
-                                format!("environment map `{}` does not exist", path.display()),
-                            ));
-                        }
-                        map_at = Some(Location::new(src, map_node.span(), r.entity, Some("map")));
-                        Some(path)
-                    }
-                };
-                let radiance = if map.is_some() {
-                    r.radiance("radiance", Some(Rgb::WHITE))?
-                } else {
-                    r.radiance("radiance", None)?
-                };
-                LightDesc::Environment {
-                    name,
-                    radiance,
-                    map,
-                    map_at,
-                }
+                read_environment(&r, src, name)?
             }
             other => {
                 return Err(r.error(
@@ -173,6 +154,113 @@ pub(super) fn read_lights(
         out.push(light);
     }
     Ok(out)
+}
+
+/// Keys of an environment light that only mean something with a `map`.
+const MAP_KEYS: &[&str] = &["filter", "transform", "convention"];
+
+/// An `environment` light's keys: `radiance`, and with a `map` its `filter`, `transform`
+/// (a rotation) and `convention`.
+fn read_environment(
+    r: &Reader<'_>,
+    src: &Arc<Source>,
+    name: String,
+) -> Result<LightDesc, SceneError> {
+    r.deny_unknown(&[
+        "type",
+        "name",
+        "radiance",
+        "map",
+        "filter",
+        "transform",
+        "convention",
+    ])?;
+    let Some((path, map_node)) = r.path_opt("map")? else {
+        if let Some(key) = MAP_KEYS.iter().find(|k| r.has(k)) {
+            let node = r.get(key).unwrap_or(r.node);
+            return Err(r.invalid(
+                key,
+                node,
+                "only applies to an environment `map` (this environment is a constant)",
+            ));
+        }
+        return Ok(LightDesc::Environment {
+            name,
+            radiance: r.radiance("radiance", None)?,
+            map: None,
+            map_at: None,
+            filter: EnvFilter::default(),
+            to_world: Mat3::IDENTITY,
+        });
+    };
+    if !path.is_file() {
+        return Err(r.error(
+            SceneErrorKind::ExternalFile,
+            &map_node.span(),
+            Some("map"),
+            format!("environment map `{}` does not exist", path.display()),
+        ));
+    }
+    let map_at = Some(Location::new(src, map_node.span(), r.entity, Some("map")));
+    let filter = match r.str_opt("filter")? {
+        None | Some("bilinear") => EnvFilter::Bilinear,
+        Some("nearest") => EnvFilter::Nearest,
+        Some(_) => {
+            let node = r.get("filter").unwrap_or(r.node);
+            return Err(r.invalid("filter", node, "must be \"bilinear\" or \"nearest\""));
+        }
+    };
+    // Mitsuba 3's `u = 0` is at -z, ours at +z: its map is ours turned half about y.
+    let half_turn = match r.str_opt("convention")? {
+        None | Some("risotto") => false,
+        Some("mitsuba") => true,
+        Some(_) => {
+            let node = r.get("convention").unwrap_or(r.node);
+            return Err(r.invalid("convention", node, "must be \"risotto\" or \"mitsuba\""));
+        }
+    };
+    let mut to_world = read_rotation(r)?;
+    if half_turn {
+        to_world *= DMat3::from_rotation_y(std::f64::consts::PI);
+    }
+    Ok(LightDesc::Environment {
+        name,
+        radiance: r.radiance("radiance", Some(Rgb::WHITE))?,
+        map: Some(path),
+        map_at,
+        filter,
+        to_world: to_world.as_mat3(),
+    })
+}
+
+/// The environment's `transform`: its linear part must be orthonormal (a rotation, or a
+/// rotation with a mirror), since a scale or shear would bend the directions the map is
+/// seen in. A translation is ignored: the environment is at infinity, so moving it changes
+/// nothing (as in Mitsuba 3, whose `envmap` applies `to_world` to directions only).
+fn read_rotation(r: &Reader<'_>) -> Result<DMat3, SceneError> {
+    let m = read_transform(r)?.matrix3;
+    let gram = m.transpose() * m - DMat3::IDENTITY;
+    let off = gram
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |a, &e| a.max(e.abs()));
+    if off.is_nan() || off > 1e-5 {
+        let node = r.get("transform").unwrap_or(r.node);
+        let rows = [m.row(0), m.row(1), m.row(2)]
+            .map(|v| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z))
+            .join(", ");
+        return Err(r.error(
+            SceneErrorKind::InvalidValue,
+            &node.span(),
+            Some("transform"),
+            format!(
+                "an environment's transform must be a rotation (no scale or shear, which \
+                 would bend the directions), got the linear part [{rows}] (|MᵀM - I| = \
+                 {off:.2e})"
+            ),
+        ));
+    }
+    Ok(m)
 }
 
 /// A `spot` light's keys: `position`, the axis as `direction` or as a target point `to`

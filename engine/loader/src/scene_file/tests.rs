@@ -9,6 +9,8 @@ use risotto_components::Rgb;
 
 use super::*;
 
+mod environment;
+
 /// The file name used for inline scenes (it must show up in every message).
 const FILE: &str = "test-scenes/inline_scene.toml";
 
@@ -846,6 +848,7 @@ fn environment_map_is_resolved_and_must_exist() {
         radiance,
         map,
         map_at,
+        ..
     } = &s.lights[2]
     else {
         panic!("{:?}", s.lights[2]);
