@@ -188,3 +188,87 @@ fn only_scenes_with_opacity_run_the_opacity_stage() {
     let json = serde_json::to_string(&with.stats).unwrap();
     assert!(json.contains("\"opacity_tests\""), "{json}");
 }
+
+/// The error loading `material` (the lines of one material table, named `m`) in a small
+/// scene, checked to name the scene file, the line of `needle` and every fragment.
+fn assert_material_error(dir: &std::path::Path, material: &str, needle: &str, fragments: &[&str]) {
+    let text = format!(
+        "{}[materials.m]\n{material}\n\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\n\
+         center = [0, 0, 0]\nradius = 1\n",
+        header(8, 1, "[0, 3, 0]", "[0, 0, 0]")
+    );
+    let line = text[..text.find(needle).expect("needle in text")]
+        .matches('\n')
+        .count()
+        + 1;
+    let e = match load_scene_text(dir, &text) {
+        Ok(_) => panic!("expected an error for:\n{material}"),
+        Err(risotto::loader::load::LoadError::Scene(e)) => e,
+        Err(e) => panic!("not a scene error: {e}"),
+    };
+    let msg = e.to_string();
+    assert!(msg.contains("scene.toml"), "no file in: {msg}");
+    assert_eq!(e.line(), Some(line), "{msg}");
+    for f in fragments {
+        assert!(msg.contains(f), "message lacks `{f}`: {msg}");
+    }
+}
+
+#[test]
+fn bad_opacity_is_a_located_error() {
+    let dir = scratch_dir("opacity", "errors");
+    // Outside [0, 1], or not a number, on any material type.
+    let cases = [
+        (
+            "type = \"diffuse\"\nopacity = 1.5",
+            "opacity",
+            &["opacity", "1.5", "[0, 1]"][..],
+        ),
+        (
+            "type = \"dielectric\"\nopacity = -0.25",
+            "opacity",
+            &["opacity", "-0.25"][..],
+        ),
+        (
+            "type = \"interface\"\nopacity = nan",
+            "opacity",
+            &["opacity", "nan"][..],
+        ),
+        (
+            "type = \"subsurface\"\nopacity = \"half\"",
+            "opacity",
+            &["opacity", "half"][..],
+        ),
+        // A pattern whose bounds leave [0, 1] (a checker with a = 2).
+        (
+            "type = \"diffuse\"\nopacity = { pattern = \"checker\", a = 2 }",
+            "opacity",
+            &["opacity", "[2, 2, 2]", "remap"][..],
+        ),
+    ];
+    for (material, needle, fragments) in cases {
+        assert_material_error(&dir, material, needle, fragments);
+    }
+    // An image without alpha asked for its alpha; an unknown channel.
+    let rgb = dir.join("rgb.png");
+    let file = std::fs::File::create(&rgb).unwrap();
+    let mut e = png::Encoder::new(file, 1, 1);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header()
+        .unwrap()
+        .write_image_data(&[1, 2, 3])
+        .unwrap();
+    assert_material_error(
+        &dir,
+        "type = \"diffuse\"\nopacity = { pattern = \"image\", path = \"rgb.png\", channel = \"a\" }",
+        "opacity",
+        &["rgb.png", "alpha", "Rgb"],
+    );
+    assert_material_error(
+        &dir,
+        "type = \"diffuse\"\nopacity = { pattern = \"image\", path = \"rgb.png\", channel = \"alpha\" }",
+        "opacity",
+        &["channel", "\"alpha\"", "\"a\""],
+    );
+}

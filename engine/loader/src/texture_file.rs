@@ -212,4 +212,32 @@ mod tests {
             .contains(".png or an .exr"));
         std::fs::remove_dir_all(&dir).ok();
     }
+
+    #[test]
+    fn the_alpha_channel_is_read_linear_as_grey_and_its_absence_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("risotto-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 2 x 1 RGBA: alpha 128 and 255 (colour values that differ from them).
+        let rgba = dir.join("rgba.png");
+        let data = [10, 20, 30, 128, 200, 100, 50, 255];
+        write_png(&rgba, 2, 1, png::ColorType::Rgba, &data);
+        let t = read_texture_channels(&rgba, TextureChannels::Alpha).unwrap();
+        // Linear: 128 / 255, not sRGB-decoded (0.2158).
+        assert_eq!(t.texel(0, 0), Rgb::splat(128.0 / 255.0));
+        assert_eq!(t.texel(1, 0), Rgb::splat(1.0));
+        // The colour of the same file is unaffected.
+        let c = read_texture(&rgba).unwrap().texel(1, 0);
+        assert!((c.r - srgb_to_linear(200.0 / 255.0)).abs() < 1e-6, "{c:?}");
+        // Grey with alpha: the second sample.
+        let ga = dir.join("ga.png");
+        write_png(&ga, 1, 1, png::ColorType::GrayscaleAlpha, &[7, 51]);
+        let a = read_texture_channels(&ga, TextureChannels::Alpha).unwrap();
+        assert_eq!(a.texel(0, 0), Rgb::splat(0.2));
+        // No alpha: an error naming the file.
+        let grey = dir.join("grey.png");
+        write_png(&grey, 1, 1, png::ColorType::Grayscale, &[7]);
+        let e = read_texture_channels(&grey, TextureChannels::Alpha).unwrap_err();
+        assert!(e.contains("grey.png") && e.contains("without alpha"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
