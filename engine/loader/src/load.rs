@@ -334,7 +334,7 @@ fn with_opacity(
         Opacity::Constant(p.f32_in("opacity", Some(1.0), 0.0, 1.0)?)
     };
     Ok(match opacity {
-        Opacity::Constant(a) if a == 1.0 => factory,
+        Opacity::Constant(1.0) => factory,
         opacity => Box::new(OpacityMask {
             inner: factory,
             opacity,
