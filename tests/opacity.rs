@@ -178,6 +178,7 @@ fn only_scenes_with_opacity_run_the_opacity_stage() {
     );
     let json = serde_json::to_string(&without.stats).unwrap();
     assert!(!json.contains("opacity_tests"), "{json}");
+    assert!(!without.stats.to_string().contains("opacity:"));
     // Opacity 1 is the opaque default: still no opacity stage.
     let opaque = render_scene_text(&dir, &emitter_behind_sheet(Some(1.0)));
     assert!(!opaque.stats.features.iter().any(|f| f == "opacity"));
@@ -187,6 +188,11 @@ fn only_scenes_with_opacity_run_the_opacity_stage() {
     assert!(with.stats.counters.opacity_tests > 0);
     let json = serde_json::to_string(&with.stats).unwrap();
     assert!(json.contains("\"opacity_tests\""), "{json}");
+    let shown = with.stats.to_string();
+    assert!(
+        shown.contains("opacity: ") && shown.contains("path-ray tests"),
+        "{shown}"
+    );
 }
 
 /// The error loading `material` (the lines of one material table, named `m`) in a small

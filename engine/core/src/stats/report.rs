@@ -207,6 +207,13 @@ impl fmt::Display for RenderStats {
         }
         writeln!(f)?;
         write!(f, "nan dropped: {}", c.nan_dropped)?;
+        if self.features.iter().any(|f| f == "opacity") {
+            write!(
+                f,
+                "\nopacity: {} path-ray tests, {} passed; {} shadow-ray crossings",
+                c.opacity_tests, c.opacity_passes, c.opacity_shadow_crossings
+            )?;
+        }
         if c.majorant_violations > 0 {
             write!(
                 f,
