@@ -308,3 +308,25 @@ fn envmap_rotated_matches_mitsuba() {
         m.all.rmse
     );
 }
+
+#[test]
+fn opacity_cage_matches_mitsuba() {
+    // Opacity from an image's alpha (Mitsuba's `mask` BSDF with a bitmap `opacity`): a
+    // striped sphere casting a striped shadow under an area light. Mitsuba's `path`
+    // integrator blocks shadow rays at masked surfaces and reaches the light through them
+    // by Bxdf sampling only; risotto attenuates its shadow rays by the opacity: the same
+    // expectation by other estimators. The reference was rendered at 64x64 directly
+    // (16384 spp; `scenes/mitsuba-suite/cage.xml`:
+    // `./run.sh render.py cage.xml --variant llvm_ad_rgb --spp 16384 -D res=64`).
+    // Measured when written (64x64, 64 spp): means within 0.03 % (R +0.027 %, G -0.026 %,
+    // B +0.020 %), rmse 0.0022 against an iid prediction of 0.0052. Opacity taken as
+    // transparency (1 - alpha), or shadow rays attenuated twice, moves the means by far
+    // more than 1 %.
+    check(
+        "scenes/mitsuba-suite/cage.toml",
+        "tests/data/cage-mitsuba-64.exr",
+        64,
+        0.01,
+        0.0045,
+    );
+}

@@ -23,6 +23,9 @@ pub struct Features {
     /// Some material reads surface `u`, `v` (sphere hits compute theirs,
     /// [`InstanceHints::READS_SURFACE_UV`](crate::plugin::InstanceHints::READS_SURFACE_UV)).
     pub surface_uv: bool,
+    /// Some surface is partly present ([`InstanceHints::OPACITY`](crate::plugin::InstanceHints::OPACITY)):
+    /// path rays test it in the pass-through stage, shadow rays walk through it.
+    pub opacity: bool,
     /// Emissive shapes.
     pub area_lights: bool,
     /// Distant lights.
@@ -48,6 +51,7 @@ impl Features {
             (self.emissive_volume_lights, "emissive_volume_lights"),
             (self.transmission_shadows, "transmission_shadows"),
             (self.surface_uv, "surface_uv"),
+            (self.opacity, "opacity"),
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),

@@ -13,6 +13,7 @@ pub mod diagnostics;
 pub mod features;
 pub mod integrator;
 mod interior;
+pub mod opacity;
 pub mod output;
 pub mod path_record;
 pub mod path_tracer;

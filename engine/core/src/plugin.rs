@@ -109,6 +109,15 @@ impl InstanceHints {
     /// direction is one a path ray can take too, so adding both would count the emission
     /// seen towards light samples twice. The built-in emissive media set both hints.
     pub const INTERIOR_EMITS_ALONG_PATHS: InstanceHints = InstanceHints(2048);
+    /// The surface is partly present (the seed's opacity shaders): the factory answers
+    /// [`BxdfFactory::param`]`("opacity")` with the surface's opacity `a` in [0, 1] (a
+    /// constant or a pattern; a colour's channels are averaged). Path rays pass the surface
+    /// unchanged with probability `1 - a` and scatter with probability `a`; shadow rays
+    /// are attenuated by `1 - a` at each crossing, in addition to the volumes'
+    /// `transmission`. The scene gets the `opacity` feature, without which no opacity stage
+    /// runs. The surface's emission is not masked (Mitsuba's `mask` does the same: the
+    /// emitter is not part of the Bxdf).
+    pub const OPACITY: InstanceHints = InstanceHints(4096);
 
     /// True when every bit of `other` is set.
     pub const fn contains(self, other: InstanceHints) -> bool {

@@ -3,7 +3,9 @@
 //! material lets shadows pass ([`InstanceHints::TRANSMISSION_SHADOWS`], e.g. index-matched
 //! boundaries or glass with cheap shadows) attenuate it by their shadow transmittance, false
 //! boundaries (priorities) pass it unchanged, every other surface blocks it, and each interval
-//! inside a volume is attenuated by that volume's `transmission`.
+//! inside a volume is attenuated by that volume's `transmission`. A surface with opacity `a`
+//! ([`InstanceHints::OPACITY`]) attenuates it by `1 - a` (plus `a` times its shadow
+//! transmittance) at each crossing, in addition to the volumes (`crate::opacity`).
 //!
 //! What volumes emit along a shadow ray (the `emission` output of `transmission`, radiance
 //! reaching the interval's start) is added too, attenuated by everything before the interval
@@ -89,7 +91,7 @@ pub fn trace_shadow_rays_with(
 ) {
     let n = shadow.len();
     let f = scene.features;
-    if !f.volumes && !f.transmission_shadows && !f.transmissive {
+    if !f.volumes && !f.transmission_shadows && !f.transmissive && !f.opacity {
         // Fast path: opaque surfaces only, a single any-hit query per ray (counted as
         // `occlusion`, so the stats show which path shadow rays took).
         // Scratch from the batch arena (reset after each batch): no heap traffic per bounce.
@@ -135,6 +137,7 @@ pub fn trace_shadow_rays_with(
         segs,
         volumes,
         lists,
+        crossings,
     } = scratch;
     active.clear();
     active.extend(0..n as u32);
@@ -265,7 +268,18 @@ pub fn trace_shadow_rays_with(
             let material = scene.shapes[shape as usize].material;
             let info = &scene.material_info[material as usize];
             let false_boundary = scene.is_false_boundary(&stacks[iu], shape);
-            if !false_boundary {
+            if !false_boundary && f.opacity && info.hints.contains(InstanceHints::OPACITY) {
+                // Attenuated after the round, all crossings of a material at once.
+                crossings.crossings.push(crate::opacity::ShadowCrossing {
+                    ray: i,
+                    prim: prim[k],
+                    t: t[k],
+                    b1: b1[k],
+                    b2: b2[k],
+                    material,
+                    shape,
+                });
+            } else if !false_boundary {
                 if !info.hints.contains(InstanceHints::TRANSMISSION_SHADOWS) {
                     contribution[iu] = Rgb::BLACK;
                     continue;
@@ -295,6 +309,19 @@ pub fn trace_shadow_rays_with(
             if t0[iu] < shadow.tmax[iu] {
                 next.push(i);
             }
+        }
+        if !crossings.crossings.is_empty() {
+            stats.opacity_shadow_crossings += crossings.crossings.len() as u64;
+            crate::opacity::attenuate_shadow_crossings(
+                scene,
+                &shadow.origin,
+                &shadow.direction,
+                crossings,
+                arena,
+                &walk.counters,
+                contribution,
+                walk.transmittance,
+            );
         }
         std::mem::swap(active, next);
     }
@@ -357,6 +384,8 @@ pub struct ShadowWalkScratch {
     volumes: VolumeScratch,
     /// Each ray's hits ([`intersect_all`] overwrites the first `n`).
     lists: Vec<RayHits>,
+    /// The round's crossings of surfaces with opacity.
+    crossings: crate::opacity::CrossingScratch,
 }
 
 /// The buffers of one round's volume intervals ([`attenuate_in_volumes`]).

@@ -6,7 +6,7 @@
 //!
 //! ```
 //! use risotto_loader::load::MaterialRegistry;
-//! use risotto_builtins::builtin::{BuiltinMaterial, Interior, Surface};
+//! use risotto_builtins::builtin::{BuiltinMaterial, Interior, Opacity, OpacityMask, Surface};
 //! use risotto_components::Rgb;
 //!
 //! let mut registry = MaterialRegistry::with_builtins();
@@ -26,7 +26,7 @@ use crate::scene_file::{
     ShapeGeometry as DescGeometry,
 };
 use crate::surface_params;
-use risotto_builtins::builtin::{BuiltinMaterial, Interior, Surface};
+use risotto_builtins::builtin::{BuiltinMaterial, Interior, Opacity, OpacityMask, Surface};
 use risotto_builtins::media::{HomogeneousMedium, Scattering};
 use risotto_components::Rgb;
 use risotto_engine::output::{read_exr_rgb, Image, OutputError};
@@ -339,6 +339,31 @@ fn builtin(
     }))
 }
 
+/// Wraps `factory` in an [`OpacityMask`] when its material has an `opacity` (a key of every
+/// material, whatever its type: a number in [0, 1] or a pattern kept in [0, 1] by its
+/// bounds) other than 1; an opaque material stays as it is, so it renders as before.
+fn with_opacity(
+    p: &MaterialParams,
+    factory: Box<dyn BxdfFactory>,
+) -> Result<Box<dyn BxdfFactory>, SceneError> {
+    let p = p.with_common_keys();
+    let opacity = if p.is_table("opacity") {
+        match p.colour_or_pattern("opacity", Rgb::WHITE, [0.0, 1.0])? {
+            ColourParam::Pattern(graph) => Opacity::Pattern(Arc::new(graph)),
+            ColourParam::Constant(c) => Opacity::Constant(c.average()),
+        }
+    } else {
+        Opacity::Constant(p.f32_in("opacity", Some(1.0), 0.0, 1.0)?)
+    };
+    Ok(match opacity {
+        Opacity::Constant(1.0) => factory,
+        opacity => Box::new(OpacityMask {
+            inner: factory,
+            opacity,
+        }),
+    })
+}
+
 /// Loads a scene file and builds its world with the materials of `registry`.
 pub fn load_scene_file(path: &Path, registry: &MaterialRegistry) -> Result<Scene, LoadError> {
     let desc = load_scene(path)?;
@@ -404,7 +429,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 ),
             )
         })?;
-        let factory = ctor(&m.params)?;
+        let factory = with_opacity(&m.params, ctor(&m.params)?)?;
         scene.add_material(&m.name, m.priority, factory);
     }
     for s in desc.shapes {

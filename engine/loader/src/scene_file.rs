@@ -343,7 +343,7 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
 }
 
 /// Keys of a material that the scene layer consumes.
-const MATERIAL_HIDDEN: &[&str] = &["type", "priority"];
+const MATERIAL_HIDDEN: &[&str] = &["type", "priority", "opacity"];
 
 fn read_materials(top: &Reader<'_>, src: &Arc<Source>) -> Result<Vec<MaterialDesc>, SceneError> {
     let Some(node) = section(top, "materials")? else {

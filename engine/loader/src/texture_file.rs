@@ -1,6 +1,8 @@
 //! Reading image textures for the `image` pattern: PNG (8 or 16 bits, grey or RGB, with or
-//! without alpha, palettes expanded; decoded from sRGB to linear; alpha ignored) and OpenEXR
-//! (linear RGB through [`risotto_engine::output::read_exr_rgb`]). Sizes are checked against
+//! without alpha, palettes expanded; decoded from sRGB to linear) and OpenEXR (linear RGB
+//! through [`risotto_engine::output::read_exr_rgb`]); or, for an opacity mask, the alpha
+//! channel alone ([`TextureChannels::Alpha`]: a PNG's alpha, linear by the PNG
+//! specification, or an EXR's `A`), as grey. Sizes are checked against
 //! [`MAX_TEXTURE_PIXELS`] from the header, before the pixels are allocated.
 
 use risotto_components::Rgb;
@@ -11,14 +13,31 @@ use std::path::Path;
 /// The largest texture accepted, in pixels: 2^26 (8192 x 8192; 768 MiB of linear RGB).
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
 
+/// Which channels of an image a texture reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureChannels {
+    /// The colour (grey is spread to all three channels).
+    #[default]
+    Rgb,
+    /// The alpha channel, as grey (an opacity mask); an image without one is an error.
+    Alpha,
+}
+
 /// Reads a texture by extension (`.png` or `.exr`, any case). Errors name the file and what
 /// is wrong with it.
 pub fn read_texture(path: &Path) -> Result<Texture, String> {
+    read_texture_channels(path, TextureChannels::Rgb)
+}
+
+/// Reads `channels` of a texture by extension (`.png` or `.exr`, any case). Errors name the
+/// file and what is wrong with it (an image without alpha asked for its alpha, too).
+pub fn read_texture_channels(path: &Path, channels: TextureChannels) -> Result<Texture, String> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     let (width, height, texels) = match ext.as_deref() {
-        Some("png") => read_png(path)?,
+        Some("png") => read_png(path, channels)?,
+        Some("exr") if channels == TextureChannels::Alpha => read_exr_alpha(path)?,
         Some("exr") => {
             let image = read_exr_rgb(path).map_err(|e| e.to_string())?;
             check_size(path, image.width as u64, image.height as u64)?;
@@ -53,7 +72,35 @@ fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-fn read_png(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
+/// The `A` channel of the first layer that has one, as grey texels.
+fn read_exr_alpha(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
+    let image = risotto_engine::output::read_exr_all(path).map_err(|e| e.to_string())?;
+    let found = image.layer_data.iter().find_map(|layer| {
+        let c = layer.channel_data.list.iter().find(|c| c.name.eq("A"))?;
+        Some((layer.size.width(), layer.size.height(), c))
+    });
+    let Some((w, h, channel)) = found else {
+        return Err(format!(
+            "{}: asked for its alpha (`channel = \"a\"`), but no layer has an `A` channel",
+            path.display()
+        ));
+    };
+    check_size(path, w as u64, h as u64)?;
+    let texels: Vec<Rgb> = channel
+        .sample_data
+        .values_as_f32()
+        .map(Rgb::splat)
+        .collect();
+    if texels.len() != w * h {
+        return Err(format!(
+            "{}: a sub-sampled `A` channel is not supported",
+            path.display()
+        ));
+    }
+    Ok((w, h, texels))
+}
+
+fn read_png(path: &Path, wanted: TextureChannels) -> Result<(usize, usize, Vec<Rgb>), String> {
     let fail = |what: &dyn std::fmt::Display| format!("{}: {what}", path.display());
     let file = std::fs::File::open(path).map_err(|e| fail(&format!("cannot read: {e}")))?;
     // The decoder's own limit bounds its buffers; the pixel count is checked before the
@@ -81,6 +128,12 @@ fn read_png(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
         png::BitDepth::Sixteen => 2,
         other => return Err(fail(&format!("unsupported bit depth {other:?}"))),
     };
+    if wanted == TextureChannels::Alpha && channels % 2 == 1 {
+        return Err(fail(&format!(
+            "asked for its alpha (`channel = \"a\"`), but the image is {colour:?}, without \
+             alpha"
+        )));
+    }
     let (w, h) = (w as usize, h as usize);
     let line = frame.line_size;
     let sample = |row: &[u8], k: usize| -> f32 {
@@ -106,7 +159,10 @@ fn read_png(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
             .ok_or_else(|| fail(&"truncated frame"))?;
         for x in 0..w {
             let k = x * channels;
-            texels.push(if channels < 3 {
+            texels.push(if wanted == TextureChannels::Alpha {
+                // Alpha is linear (PNG specification, sec. 12.4): not decoded from sRGB.
+                Rgb::splat(sample(row, k + channels - 1))
+            } else if channels < 3 {
                 Rgb::splat(linear(row, k))
             } else {
                 Rgb::new(linear(row, k), linear(row, k + 1), linear(row, k + 2))
@@ -154,6 +210,34 @@ mod tests {
         assert!(read_texture(&dir.join("x.jpg"))
             .unwrap_err()
             .contains(".png or an .exr"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn the_alpha_channel_is_read_linear_as_grey_and_its_absence_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("risotto-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 2 x 1 RGBA: alpha 128 and 255 (colour values that differ from them).
+        let rgba = dir.join("rgba.png");
+        let data = [10, 20, 30, 128, 200, 100, 50, 255];
+        write_png(&rgba, 2, 1, png::ColorType::Rgba, &data);
+        let t = read_texture_channels(&rgba, TextureChannels::Alpha).unwrap();
+        // Linear: 128 / 255, not sRGB-decoded (0.2158).
+        assert_eq!(t.texel(0, 0), Rgb::splat(128.0 / 255.0));
+        assert_eq!(t.texel(1, 0), Rgb::splat(1.0));
+        // The colour of the same file is unaffected.
+        let c = read_texture(&rgba).unwrap().texel(1, 0);
+        assert!((c.r - srgb_to_linear(200.0 / 255.0)).abs() < 1e-6, "{c:?}");
+        // Grey with alpha: the second sample.
+        let ga = dir.join("ga.png");
+        write_png(&ga, 1, 1, png::ColorType::GrayscaleAlpha, &[7, 51]);
+        let a = read_texture_channels(&ga, TextureChannels::Alpha).unwrap();
+        assert_eq!(a.texel(0, 0), Rgb::splat(0.2));
+        // No alpha: an error naming the file.
+        let grey = dir.join("grey.png");
+        write_png(&grey, 1, 1, png::ColorType::Grayscale, &[7]);
+        let e = read_texture_channels(&grey, TextureChannels::Alpha).unwrap_err();
+        assert!(e.contains("grey.png") && e.contains("without alpha"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -6,13 +6,17 @@
 //! Any of them may carry an `interior = { type = "null" | "beer", ... }` table that makes the
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 //!
+//! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
+//!
 //! Files: [`bxdfs`] (the first closures), [`plastic`], [`thin_dielectric`] and
 //! [`two_sided`] (one closure each), [`interiors`] (which volume integrator a material's
-//! inside gets, and the `null` and `beer` ones) and [`material`] (the factory).
+//! inside gets, and the `null` and `beer` ones), [`mask`] (opacity) and [`material`] (the
+//! factory).
 //! Everything is re-exported here.
 
 pub mod bxdfs;
 pub mod interiors;
+pub mod mask;
 pub mod material;
 pub mod plastic;
 pub mod thin_dielectric;
@@ -20,6 +24,7 @@ pub mod two_sided;
 
 pub use bxdfs::*;
 pub use interiors::*;
+pub use mask::*;
 pub use material::*;
 pub use plastic::PlasticBxdf;
 pub use thin_dielectric::ThinDielectricBxdf;

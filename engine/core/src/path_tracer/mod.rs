@@ -14,7 +14,7 @@
 //!
 //! Splatting the finished paths is the tile loop's ([`crate::integrator::render_tile`]).
 //! Stages a scene does not need are never entered: partitioning and volume integrators only
-//! with volumes, pass-throughs only with transmissive surfaces, the walk of shadow rays
+//! with volumes, pass-throughs only with transmissive surfaces or opacity, the walk of shadow rays
 //! through surfaces only where some surface lets them pass ([`Features`](crate::scene::Features)).
 //!
 //! Depth convention (Mitsuba's `max_depth`): a path of `k` segments has `k - 1` scattering
@@ -106,8 +106,11 @@ impl Integrator for PathTracer {
                     r.traced(scene, q);
                 }
                 escaped::environment(self, scene, &mut q.escaped, &q.hits, batch, stats);
-                if scene.features.transmissive {
-                    pass_through::boundaries(self, scene, &mut q.hits, &mut q.rays, batch, stats);
+                if scene.features.transmissive || scene.features.opacity {
+                    let (hits, rays) = (&mut q.hits, &mut q.rays);
+                    pass_through::boundaries(
+                        self, scene, hits, rays, batch, stats, arena, counters,
+                    );
                     if let Some(r) = &mut rec {
                         r.passed(q);
                     }

@@ -1,20 +1,30 @@
 //! Pass-through stage: index-matched surfaces and false boundaries (a shape inside a volume
-//! of higher priority) are never shaded. Their points leave the hit queue and their rays go
+//! of higher priority) are never shaded, and a surface with opacity `a` is passed with
+//! probability `1 - a` (`crate::opacity`). Their points leave the hit queue and their rays go
 //! on along the same line as new rays to trace, without costing a bounce.
 
 use super::queues::{HitQueue, RayQueue};
 use super::{non_finite_case, PathTracer};
 use crate::integrator::PathBatch;
-use crate::plugin::InstanceHints;
+use crate::opacity::{eval_opacity, passes, OPACITY_SEED_SALT};
+use crate::plugin::{InstanceHints, PatternCounters};
 use crate::scene::CompiledScene;
 use crate::shade_groups::{ShadeGroup, ShadingMode};
 use crate::stats::{Stage, SystemStats, Termination};
+use bumpalo::Bump;
 use risotto_components::StackEvent;
 use risotto_systems::ray::skip_tmin;
+use risotto_systems::sampler::sample_1d;
 
 /// Moves the points of `hits` that lie on pass-through boundaries out of their groups and
 /// queues their rays, continued past the boundary, in `rays`. Emission on such a surface still
-/// reaches the path.
+/// reaches the path. Surfaces with opacity are tested only in scenes with the `opacity`
+/// feature; their opacity is evaluated through a parameter cache in `arena` counting into
+/// `counters`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the stage's inputs, each named; grouping them would hide which it reads"
+)]
 pub(super) fn boundaries(
     tracer: &PathTracer,
     scene: &CompiledScene,
@@ -22,6 +32,8 @@ pub(super) fn boundaries(
     rays: &mut RayQueue,
     batch: &mut PathBatch,
     stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
 ) {
     // Only this round's groups (the last ones) can hold pass-through points: earlier rounds'
     // groups were examined by earlier calls. Most rounds have none; the new rows are
@@ -37,7 +49,7 @@ pub(super) fn boundaries(
     let mut keep = std::mem::take(&mut hits.keep);
     keep.clear();
     keep.resize(n, false);
-    let mut passes = false;
+    let mut any_pass = false;
     for g in &new_groups {
         if g.mode != ShadingMode::Scatter {
             keep[g.range.start - p0..g.range.end - p0].fill(true);
@@ -45,15 +57,41 @@ pub(super) fn boundaries(
         }
         let info = &scene.material_info[g.material as usize];
         let index_matched = info.hints.contains(InstanceHints::INDEX_MATCHED);
+        let opacity = scene.features.opacity && info.hints.contains(InstanceHints::OPACITY);
+        if opacity {
+            let range = g.range.clone();
+            eval_opacity(
+                scene,
+                pts,
+                range,
+                g.material,
+                arena,
+                counters,
+                &mut hits.opacity,
+            );
+        }
         for i in g.range.clone() {
             let r = pts.ray_id[i] as usize;
-            let pass = index_matched
+            let mut pass = index_matched
                 || scene.is_false_boundary(&hits.incoming.volume_stack[r], pts.shape[i]);
+            if opacity && !pass {
+                // The choice's own sequence (`OPACITY_SEED_SALT`): no other dimension moves.
+                let inc = &hits.incoming;
+                let path = inc.path[r] as usize;
+                let u = sample_1d(
+                    batch.seeds[path] ^ OPACITY_SEED_SALT,
+                    batch.paths.sample[path],
+                    inc.dimension[r] + inc.passes[r] as u32,
+                );
+                pass = passes(u, hits.opacity[i - g.range.start]);
+                stats.opacity_tests += 1;
+                stats.opacity_passes += pass as u64;
+            }
             keep[i - p0] = !pass;
-            passes |= pass;
+            any_pass |= pass;
         }
     }
-    if !passes && keep.iter().all(|&k| k) {
+    if !any_pass && keep.iter().all(|&k| k) {
         groups.extend(new_groups);
         hits.examined_groups = groups.len();
         hits.groups.groups = groups;

@@ -36,6 +36,8 @@ pub struct HitQueue {
     pub(super) examined_groups: usize,
     /// Pass-through continuation: the rays that go on past their boundary.
     pub(super) going: PassingRays,
+    /// Pass-through of surfaces with opacity: the opacity of one group's points.
+    pub(super) opacity: Vec<f32>,
 }
 
 /// The rays the pass-through stage continues: rows of [`HitQueue::incoming`] and the

@@ -176,6 +176,7 @@ impl Scene {
             features.emissive_media |= h.contains(InstanceHints::INTERIOR_EMITS);
             features.transmission_shadows |= h.contains(InstanceHints::TRANSMISSION_SHADOWS);
             features.surface_uv |= h.contains(InstanceHints::READS_SURFACE_UV);
+            features.opacity |= h.contains(InstanceHints::OPACITY);
         }
 
         let prim_material = prim_shape

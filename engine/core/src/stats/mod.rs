@@ -285,6 +285,14 @@ pub struct SystemStats {
     /// bounds are right. The estimators stay finite but lose their guarantees: reported,
     /// never clamped silently.
     pub majorant_violations: u64,
+    /// Path-ray hits on surfaces with opacity whose opacity was tested (stochastic
+    /// pass-through, [`InstanceHints::OPACITY`](crate::plugin::InstanceHints::OPACITY)): 0
+    /// in a scene without opacity, where no opacity stage runs.
+    pub opacity_tests: u64,
+    /// Of `opacity_tests`, the hits the ray passed through.
+    pub opacity_passes: u64,
+    /// Shadow-ray crossings of surfaces with opacity (each attenuates by `1 - opacity`).
+    pub opacity_shadow_crossings: u64,
 }
 
 /// Adds 1 to `v[i]`, growing `v`.
@@ -446,6 +454,9 @@ impl SystemStats {
         self.pattern_cache_shared += other.pattern_cache_shared;
         self.pattern_evals += other.pattern_evals;
         self.volume_pattern_evals += other.volume_pattern_evals;
+        self.opacity_tests += other.opacity_tests;
+        self.opacity_passes += other.opacity_passes;
+        self.opacity_shadow_crossings += other.opacity_shadow_crossings;
     }
 }
 

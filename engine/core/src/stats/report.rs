@@ -132,6 +132,11 @@ impl Serialize for RenderStats {
             m.serialize_entry("pattern_evals", &c.pattern_evals)?;
             m.serialize_entry("volume_pattern_evals", &c.volume_pattern_evals)?;
         }
+        if self.features.iter().any(|f| f == "opacity") {
+            m.serialize_entry("opacity_tests", &c.opacity_tests)?;
+            m.serialize_entry("opacity_passes", &c.opacity_passes)?;
+            m.serialize_entry("opacity_shadow_crossings", &c.opacity_shadow_crossings)?;
+        }
         m.serialize_entry("wall_seconds", &self.wall_seconds)?;
         m.serialize_entry("features", &self.features)?;
         if !self.warnings.is_empty() {
@@ -220,6 +225,13 @@ impl fmt::Display for RenderStats {
             writeln!(f)?;
         }
         write!(f, "nan dropped: {}", c.nan_dropped)?;
+        if self.features.iter().any(|f| f == "opacity") {
+            write!(
+                f,
+                "\nopacity: {} path-ray tests, {} passed; {} shadow-ray crossings",
+                c.opacity_tests, c.opacity_passes, c.opacity_shadow_crossings
+            )?;
+        }
         if c.majorant_violations > 0 {
             write!(
                 f,

@@ -433,6 +433,15 @@ impl MaterialParams {
         &self.entity
     }
 
+    /// The same parameters with the keys every material has (`type`, `priority`,
+    /// `opacity`) visible: what the loader reads those through.
+    pub(crate) fn with_common_keys(&self) -> MaterialParams {
+        MaterialParams {
+            hidden: &[],
+            ..self.clone()
+        }
+    }
+
     /// Whether the key is present.
     pub fn has(&self, key: &str) -> bool {
         !self.hidden.contains(&key) && self.reader().has(key)

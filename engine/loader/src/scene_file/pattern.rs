@@ -163,12 +163,23 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
             }
         }
         "image" => {
-            t.deny_unknown(&["pattern", "path"])?;
+            use crate::texture_file::{read_texture_channels, TextureChannels};
+            t.deny_unknown(&["pattern", "path", "channel"])?;
             let path = t
                 .path("path")?
                 .ok_or_else(|| t.error(None, "an image pattern needs `path = \"file.png\"`"))?;
+            let channels = match t.string("channel", Some("rgb"))?.as_str() {
+                "rgb" => TextureChannels::Rgb,
+                "a" => TextureChannels::Alpha,
+                other => {
+                    return Err(t.error(
+                        Some("channel"),
+                        format!("must be \"rgb\" or \"a\", got \"{other}\""),
+                    ))
+                }
+            };
             Node::Image(
-                crate::texture_file::read_texture(&path).map_err(|e| t.error(Some("path"), e))?,
+                read_texture_channels(&path, channels).map_err(|e| t.error(Some("path"), e))?,
             )
         }
         "grid" => grid(t)?,
