@@ -23,6 +23,9 @@ pub struct Features {
     /// Some material reads surface `u`, `v` (sphere hits compute theirs,
     /// [`InstanceHints::READS_SURFACE_UV`](crate::plugin::InstanceHints::READS_SURFACE_UV)).
     pub surface_uv: bool,
+    /// Some mesh has vertex normals: shading normals differ from geometric ones, and the
+    /// directions where the two disagree are discarded (`path_tracer::shading_normals`).
+    pub vertex_normals: bool,
     /// Emissive shapes.
     pub area_lights: bool,
     /// Distant lights.
@@ -48,6 +51,7 @@ impl Features {
             (self.emissive_volume_lights, "emissive_volume_lights"),
             (self.transmission_shadows, "transmission_shadows"),
             (self.surface_uv, "surface_uv"),
+            (self.vertex_normals, "vertex_normals"),
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),
