@@ -162,7 +162,10 @@ radiance = 0.2
 /// Block z-scores of the difference of two renders (8 x 8 blocks of pixels, channels
 /// summed): `(mean_a - mean_b) / sqrt(var_a + var_b)` per block, from the films'
 /// variances of the pixel means.
-fn block_z(a: &risotto::engine::render::RenderOutput, b: &risotto::engine::render::RenderOutput) -> Vec<f64> {
+fn block_z(
+    a: &risotto::engine::render::RenderOutput,
+    b: &risotto::engine::render::RenderOutput,
+) -> Vec<f64> {
     let (w, h) = (64usize, 64usize);
     let mut z = Vec::new();
     for by in (0..h).step_by(8) {
@@ -178,7 +181,13 @@ fn block_z(a: &risotto::engine::render::RenderOutput, b: &risotto::engine::rende
                     v += 9.0 * (va.r as f64 + vb.r as f64);
                 }
             }
-            z.push(if v > 0.0 { d / v.sqrt() } else if d == 0.0 { 0.0 } else { f64::INFINITY });
+            z.push(if v > 0.0 {
+                d / v.sqrt()
+            } else if d == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            });
         }
     }
     z
@@ -202,8 +211,14 @@ fn smooth_tessellated_sphere_matches_the_analytic_sphere_and_flat_does_not() {
     let z_flat = block_z(&flat, &analytic);
     let max = |z: &[f64]| z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
     // 64 blocks: |z| > 4.5 has probability ~5e-4 under pure noise.
-    assert!(max(&z_smooth) < 4.5, "smooth mesh differs from the sphere: {z_smooth:?}");
-    assert!(max(&z_flat) > 6.0, "flat shading should show its facets: {z_flat:?}");
+    assert!(
+        max(&z_smooth) < 4.5,
+        "smooth mesh differs from the sphere: {z_smooth:?}"
+    );
+    assert!(
+        max(&z_flat) > 6.0,
+        "flat shading should show its facets: {z_flat:?}"
+    );
 }
 
 #[test]
@@ -246,7 +261,10 @@ fn textured_mesh_maps_uv_like_the_analytic_sphere() {
     assert!(z.iter().all(|z| z.abs() < 4.5), "{z:?}");
     // Barycentrics instead of the file's uv would not match (the test can fail).
     let mut no_uv = String::new();
-    for line in std::fs::read_to_string(dir.join("sphere.obj")).unwrap().lines() {
+    for line in std::fs::read_to_string(dir.join("sphere.obj"))
+        .unwrap()
+        .lines()
+    {
         if !line.starts_with("vt") {
             let line = line.replace("f ", "F ");
             let line = line

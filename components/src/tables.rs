@@ -385,7 +385,8 @@ impl ShadingPoints {
         self.ng.extend(facing());
         self.p_offset.resize(start + m, row.p_offset);
         self.nn.extend(facing());
-        self.tangent.extend(facing().map(Vec3::any_orthonormal_vector));
+        self.tangent
+            .extend(facing().map(Vec3::any_orthonormal_vector));
         self.vn.extend(facing());
         self.vlen.resize(start + m, row.vlen);
         self.u.resize(start + m, row.u);

@@ -16,8 +16,8 @@ use obvhs::{
     BvhBuildParams,
 };
 
-use crate::mesh_attributes::MeshAttributes;
 use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, MAX_BVH2_DEPTH};
+use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
 

@@ -268,8 +268,12 @@ mod tests {
     fn interpolates_normals_uvs_and_tangents() {
         let mut a = MeshAttributes::default();
         a.push(5, quad_attrs());
-        assert!(a.shading(4, 0.2, 0.2, [P[0], P[1], P[2]], Vec3::Z).is_none());
-        assert!(a.shading(7, 0.2, 0.2, [P[0], P[1], P[2]], Vec3::Z).is_none());
+        assert!(a
+            .shading(4, 0.2, 0.2, [P[0], P[1], P[2]], Vec3::Z)
+            .is_none());
+        assert!(a
+            .shading(7, 0.2, 0.2, [P[0], P[1], P[2]], Vec3::Z)
+            .is_none());
         // The centre of the square's second triangle [0, 2, 3] at b = (1/3, 1/3, 1/3).
         let third = 1.0 / 3.0;
         let s = a

@@ -9,8 +9,8 @@ use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
 use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
-use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
 use risotto_systems::lights::LightSet;
+use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
 /// the per-bounce path does not allocate.

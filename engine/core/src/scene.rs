@@ -13,10 +13,10 @@ use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
 use risotto_systems::distribution::EnvironmentMap;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
+use risotto_systems::lights::{Light, LightSet, SpotFalloff};
 /// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] shape (an
 /// optional component of its entity; [`Scene::set_vertex_attributes`]).
 pub use risotto_systems::mesh_attributes::VertexAttributes;
-use risotto_systems::lights::{Light, LightSet, SpotFalloff};
 use std::sync::Arc;
 
 mod compile;
@@ -351,10 +351,17 @@ impl Scene {
             ShapeGeometry::Triangles(t) => t.len(),
             ShapeGeometry::Sphere(_) => panic!("vertex attributes on a sphere"),
         };
-        assert_eq!(attributes.corners.len(), triangles, "one corner triple per triangle");
+        assert_eq!(
+            attributes.corners.len(),
+            triangles,
+            "one corner triple per triangle"
+        );
         let max = attributes.corners.iter().flatten().copied().max();
         for len in [attributes.normals.len(), attributes.uvs.len()] {
-            assert!(len == 0 || max.is_none_or(|m| (m as usize) < len), "corner out of range");
+            assert!(
+                len == 0 || max.is_none_or(|m| (m as usize) < len),
+                "corner out of range"
+            );
         }
         if !attributes.is_empty() {
             self.world

@@ -6,7 +6,7 @@
 
 pub mod grid_file;
 pub mod load;
-pub mod mesh_file;
 pub mod media_params;
+pub mod mesh_file;
 pub mod scene_file;
 pub mod texture_file;

@@ -31,8 +31,8 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
-use risotto_systems::sampler::MAX_SPP;
 pub use risotto_systems::mesh_attributes::VertexAttributes;
+use risotto_systems::sampler::MAX_SPP;
 
 pub use lights::LightDesc;
 pub use params::MaterialParams;

@@ -94,9 +94,19 @@ mod tests {
         assert!(leak.dot(nn) > 0.0);
         assert!(!sides_agree(ng, nn, vn, leak));
         // Below both: transmission by both (kept for Bxdfs that transmit).
-        assert!(sides_agree(ng, nn, vn, Vec3::new(-0.3, 0.0, -0.9).normalize()));
+        assert!(sides_agree(
+            ng,
+            nn,
+            vn,
+            Vec3::new(-0.3, 0.0, -0.9).normalize()
+        ));
         // With nn == ng nothing is ever discarded.
-        for wi in [leak, Vec3::X, -Vec3::Z, Vec3::new(0.1, 0.2, 0.3).normalize()] {
+        for wi in [
+            leak,
+            Vec3::X,
+            -Vec3::Z,
+            Vec3::new(0.1, 0.2, 0.3).normalize(),
+        ] {
             assert!(sides_agree(ng, ng, vn, wi));
         }
     }

@@ -26,21 +26,20 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
-            Err(tobj::LoadError::OpenFileFailed)
-        })
-        .map_err(|e| {
-            let located = match e {
-                tobj::LoadError::FaceTexCoordOutOfBounds => bad_face_index(&text, "vt", 1),
-                tobj::LoadError::FaceNormalOutOfBounds => bad_face_index(&text, "vn", 2),
-                _ => None,
-            };
-            match located {
-                Some(at) => format!("cannot parse OBJ file `{shown}`: {at}"),
-                None => format!("cannot parse OBJ file `{shown}`: {e}"),
-            }
-        })?;
+    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| {
+        let located = match e {
+            tobj::LoadError::FaceTexCoordOutOfBounds => bad_face_index(&text, "vt", 1),
+            tobj::LoadError::FaceNormalOutOfBounds => bad_face_index(&text, "vn", 2),
+            _ => None,
+        };
+        match located {
+            Some(at) => format!("cannot parse OBJ file `{shown}`: {at}"),
+            None => format!("cannot parse OBJ file `{shown}`: {e}"),
+        }
+    })?;
     let mut mesh = MeshData::default();
     let what = format!("cannot parse OBJ file `{shown}`");
     for model in &models {
@@ -77,9 +76,11 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
         if has_normals || !mesh.normals.is_empty() {
             mesh.normals.resize(base, DVec3::ZERO);
             if has_normals {
-                mesh.normals.extend(m.normals.chunks_exact(3).map(|n| {
-                    DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]))
-                }));
+                mesh.normals.extend(
+                    m.normals
+                        .chunks_exact(3)
+                        .map(|n| DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]))),
+                );
             } else {
                 mesh.normals.resize(base + n_vertices, DVec3::ZERO);
             }

@@ -8,7 +8,9 @@ use std::path::Path;
 
 use glam::{DVec3, Vec2};
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{DefaultElement, ElementDef, Encoding, Header, Property, PropertyType, ScalarType};
+use ply_rs_bw::ply::{
+    DefaultElement, ElementDef, Encoding, Header, Property, PropertyType, ScalarType,
+};
 
 use super::{check_normals, MeshData};
 
@@ -86,8 +88,9 @@ pub fn load_ply(path: &Path) -> Result<MeshData, String> {
             }
             "face" => {
                 for (f, e) in elements.iter().enumerate() {
-                    let indices = list(e, index_name)
-                        .ok_or_else(|| format!("{what}: face {f}: `{index_name}` is not an integer list"))?;
+                    let indices = list(e, index_name).ok_or_else(|| {
+                        format!("{what}: face {f}: `{index_name}` is not an integer list")
+                    })?;
                     if indices.len() < 3 {
                         return Err(format!(
                             "{what}: face {f} has {} vertices (a face needs at least 3)",
@@ -127,7 +130,11 @@ fn header_len(bytes: &[u8]) -> usize {
         return bytes.len();
     };
     let rest = &bytes[at + END.len()..];
-    at + END.len() + rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |p| p + 1)
+    at + END.len()
+        + rest
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(rest.len(), |p| p + 1)
 }
 
 /// Rejects a header whose element counts cannot fit in the `body` bytes after it, before

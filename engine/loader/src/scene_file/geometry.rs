@@ -7,8 +7,8 @@ use glam::{DAffine3, DMat3, DVec3, Vec3};
 use super::params::Reader;
 use super::raw::{Node, Value};
 use crate::mesh_file::load_mesh;
-use risotto_systems::mesh_attributes::VertexAttributes;
 use risotto_engine::diagnostics::{SceneError, SceneErrorKind};
+use risotto_systems::mesh_attributes::VertexAttributes;
 
 /// A triangle `[v0, v1, v2]`; its geometric normal is along `(v1 - v0) x (v2 - v0)`.
 pub(crate) type Triangle = [Vec3; 3];
