@@ -661,9 +661,9 @@ fn bad_mesh_attributes_and_ply_files_are_reported() {
     // `face_normals` must be a boolean.
     std::fs::write(dir.join("ok.obj"), format!("{tri}f 1 2 3\n")).unwrap();
     let text = "[materials.m]\ntype = \"diffuse\"\n\n[[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\npath = \"ok.obj\"\nface_normals = 1\n\n[camera]\nfov = 40\nfrom = [0, 0, 5]\nto = [0, 0, 0]\n";
-    let e = parse_scene(text, &scene_path)
-        .err()
-        .expect("a number is not a switch");
+    let Err(e) = parse_scene(text, &scene_path) else {
+        panic!("a number is not a switch");
+    };
     assert_eq!(e.line(), Some(8), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
