@@ -3,7 +3,7 @@
 //!
 //! Layout (compact, as issue 36 asks): per-vertex arrays (`normals`, `uvs`) and per-triangle
 //! vertex indices (`corners`), only for the meshes that have attributes. Each such mesh is
-//! one [`AttributeRange`] over its contiguous primitive indices; a scene without attributes
+//! one attribute range over its contiguous primitive indices; a scene without attributes
 //! stores nothing and never looks here (the engine checks [`MeshAttributes::is_empty`]).
 
 use glam::{Vec2, Vec3};
@@ -38,9 +38,9 @@ struct AttributeRange {
     end: u32,
     /// Offset of the mesh's first triangle in `corners`.
     corners: u32,
-    /// Offset of its first normal in `normals`, [`NONE`] without normals.
+    /// Offset of its first normal in `normals`, `NONE` without normals.
     normals: u32,
-    /// Offset of its first uv in `uvs`, [`NONE`] without uvs.
+    /// Offset of its first uv in `uvs`, `NONE` without uvs.
     uvs: u32,
 }
 
