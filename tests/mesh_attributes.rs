@@ -387,3 +387,25 @@ radiance = 1
     let min = out.beauty.pixels.iter().fold(f32::MAX, |m, p| m.min(p.r));
     assert!(min > 0.8, "darkest pixel {min}");
 }
+
+#[test]
+fn only_scenes_with_vertex_normals_run_the_shading_normal_checks() {
+    let dir = scratch_dir("mesh_attributes", "features");
+    let s = uv_sphere(8, 4);
+    write_obj(&s, &dir.join("smooth.obj"));
+    let material = "type = \"diffuse\"\nreflectance = 0.5";
+    let compile = |shape: &str| load_scene_text(&dir, &sphere_scene(shape, material, 1)).unwrap();
+    let smooth = compile("type = \"mesh\"\npath = \"smooth.obj\"");
+    assert!(smooth.features.vertex_normals);
+    assert!(smooth.geometry.attributes().has_normals(0));
+    // Flat: the normals are dropped, the uvs kept (no shading-normal stage, uv still read).
+    let flat = compile("type = \"mesh\"\npath = \"smooth.obj\"\nface_normals = true");
+    assert!(!flat.features.vertex_normals);
+    assert!(!flat.geometry.attributes().is_empty());
+    let sphere = compile("type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1");
+    assert!(!sphere.features.vertex_normals && sphere.geometry.attributes().is_empty());
+    assert!(!sphere
+        .features
+        .names()
+        .contains(&"vertex_normals".to_string()));
+}

@@ -311,7 +311,8 @@ impl SceneGeometry {
     /// spheres: `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi`
     /// the azimuth from `+x` towards `+y`, in `[0, 2pi)`. Shading points get these only in
     /// scenes with a material that asks for them (the engine's
-    /// `InstanceHints::READS_SURFACE_UV`).
+    /// `InstanceHints::READS_SURFACE_UV`). Triangles of meshes with texture coordinates get
+    /// theirs from [`Self::attributes`] instead.
     pub fn surface_uv(
         &self,
         prim: u32,
