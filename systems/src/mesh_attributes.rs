@@ -146,7 +146,7 @@ impl MeshAttributes {
         self.ranges.last().map_or(0, |r| r.end as usize)
     }
 
-    /// Bytes held (for the scene's memory report).
+    /// Bytes held: 12 per triangle for the corners, 12 per vertex for normals and 8 for uvs.
     pub fn bytes(&self) -> usize {
         self.ranges.len() * size_of::<AttributeRange>()
             + self.normals.len() * size_of::<Vec3>()
