@@ -281,6 +281,11 @@ soa_table! {
         p_offset: f32,
         /// Shading normal `Nn`, on the same side as `ng`.
         nn: Vec3,
+        /// Unit tangent orthogonal to `nn` (`dPdu` made orthogonal to `nn` on meshes with
+        /// texture coordinates; the direction of increasing `phi` on spheres; elsewhere, and
+        /// inside volumes, some unit vector orthogonal to `nn` that varies continuously with
+        /// it): with `nn` it fixes the frame of anisotropic Bxdfs.
+        tangent: Vec3,
         /// Unit vector towards the viewer `Vn` (`-ray direction`).
         vn: Vec3,
         /// Length of the incident ray segment `VLen`.
@@ -348,6 +353,7 @@ impl ShadingPointRow {
             ng: -direction,
             p_offset: 0.0,
             nn: -direction,
+            tangent: (-direction).any_orthonormal_vector(),
             vn: -direction,
             vlen: 0.0,
             u: 0.0,
@@ -366,7 +372,7 @@ impl ShadingPointRow {
 impl ShadingPoints {
     /// Appends one [`ShadingPointRow::in_volume`] row per `(p[i], direction[i])`, with
     /// `ray_id = i`, column by column (a per-row [`push`](Self::push) checks the capacity of
-    /// all fourteen columns for every row).
+    /// every column for every row).
     ///
     /// # Panics
     /// When `p` and `direction` differ in length.
@@ -379,6 +385,8 @@ impl ShadingPoints {
         self.ng.extend(facing());
         self.p_offset.resize(start + m, row.p_offset);
         self.nn.extend(facing());
+        self.tangent
+            .extend(facing().map(Vec3::any_orthonormal_vector));
         self.vn.extend(facing());
         self.vlen.resize(start + m, row.vlen);
         self.u.resize(start + m, row.u);

@@ -17,6 +17,7 @@ use obvhs::{
 };
 
 use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, MAX_BVH2_DEPTH};
+use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
 
@@ -46,6 +47,9 @@ pub struct SceneGeometry {
     /// The intersection kernel, checked to run on this CPU.
     backend: Backend,
     bounds: (Vec3, Vec3),
+    /// Shading normals and texture coordinates of the meshes that have them (empty in most
+    /// scenes: nothing is stored or looked up for meshes without).
+    attributes: MeshAttributes,
 }
 
 /// Relative padding of sphere boxes: `center +- radius` is rounded, and the box must
@@ -176,7 +180,26 @@ impl SceneGeometry {
             bvh8,
             backend: Kernel::best().backend().expect("the best kernel runs here"),
             bounds,
+            attributes: MeshAttributes::default(),
         }
+    }
+
+    /// Sets the meshes' vertex attributes (their ranges must be triangle primitives).
+    ///
+    /// # Panics
+    /// When a range of `attributes` reaches past the triangles.
+    pub fn set_attributes(&mut self, attributes: MeshAttributes) {
+        assert!(
+            attributes.max_prim_end() <= self.triangles.len(),
+            "vertex attributes of primitives that are not triangles"
+        );
+        self.attributes = attributes;
+    }
+
+    /// The meshes' vertex attributes (empty unless [`Self::set_attributes`] gave some).
+    #[inline(always)]
+    pub fn attributes(&self) -> &MeshAttributes {
+        &self.attributes
     }
 
     /// Number of triangles (they are primitives `0..num_triangles()`).
@@ -288,7 +311,8 @@ impl SceneGeometry {
     /// spheres: `(phi / 2pi, theta / pi)` with `theta` the polar angle from `+z` and `phi`
     /// the azimuth from `+x` towards `+y`, in `[0, 2pi)`. Shading points get these only in
     /// scenes with a material that asks for them (the engine's
-    /// `InstanceHints::READS_SURFACE_UV`).
+    /// `InstanceHints::READS_SURFACE_UV`). Triangles of meshes with texture coordinates get
+    /// theirs from [`Self::attributes`] instead.
     pub fn surface_uv(
         &self,
         prim: u32,

@@ -19,6 +19,7 @@ pub mod intersect;
 pub mod lights;
 mod march;
 pub mod medium;
+pub mod mesh_attributes;
 pub mod partition;
 pub mod path;
 pub mod pattern;

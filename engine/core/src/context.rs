@@ -10,6 +10,7 @@ use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
 use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::lights::LightSet;
+use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
 /// the per-bounce path does not allocate.
@@ -308,6 +309,10 @@ impl IntegratorContext for RenderContext<'_> {
         );
         write_ray_columns(scene, sorted, hits, rays, pts, base);
         pts.nn.extend_from_slice(&pts.ng[base..end]);
+        write_tangents(geometry, sorted, hits, pts, base);
+        if !geometry.attributes().is_empty() {
+            write_mesh_attributes(geometry, sorted, hits, pts, base);
+        }
         pts.w.resize(end, 0.0);
         pts.transmission.extend_from_slice(&s.whites[..count]);
         pts.ray_id.extend_from_slice(&s.sorted[..count]);
@@ -452,6 +457,70 @@ fn write_surfaces(
                 } else {
                     surf.uv
                 };
+                u[k] = uv.x;
+                v[k] = uv.y;
+            }
+        }
+    }
+}
+
+/// Pass 3 (after `nn` is a copy of `ng`): `tangent`, [`sphere_tangent`] on spheres and
+/// [`arbitrary_tangent`] of the normal on triangles (those of meshes with texture
+/// coordinates get theirs in [`write_mesh_attributes`]).
+#[inline(never)]
+fn write_tangents(
+    geometry: &SceneGeometry,
+    sorted: &[u32],
+    hits: &Hits,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let count = sorted.len();
+    let ng = &pts.ng[base..][..count];
+    pts.tangent.extend(ng.iter().map(|&n| arbitrary_tangent(n)));
+    if geometry.num_spheres() > 0 {
+        let tangent = &mut pts.tangent[base..][..count];
+        let (prims, tris) = (&hits.prim[..hits.len()], geometry.num_triangles());
+        for k in 0..count {
+            if prims[sorted[k] as usize] as usize >= tris {
+                tangent[k] = sphere_tangent(ng[k]);
+            }
+        }
+    }
+}
+
+/// Pass 4, only in scenes with mesh attributes (after [`write_tangents`]): on triangles of
+/// meshes with vertex normals or texture coordinates, the interpolated shading normal `nn`,
+/// `u`, `v` and the tangent of [`MeshAttributes::shading`](risotto_systems::mesh_attributes::MeshAttributes::shading).
+#[inline(never)]
+fn write_mesh_attributes(
+    geometry: &SceneGeometry,
+    sorted: &[u32],
+    hits: &Hits,
+    pts: &mut ShadingPoints,
+    base: usize,
+) {
+    let (n, count) = (hits.len(), sorted.len());
+    let (prims, b1, b2) = (&hits.prim[..n], &hits.b1[..n], &hits.b2[..n]);
+    let ng = &pts.ng[base..][..count];
+    let (nn, tangent) = (
+        &mut pts.nn[base..][..count],
+        &mut pts.tangent[base..][..count],
+    );
+    let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
+    let attributes = geometry.attributes();
+    let tris = geometry.num_triangles();
+    for k in 0..count {
+        let i = sorted[k] as usize;
+        let prim = prims[i];
+        if prim as usize >= tris {
+            continue;
+        }
+        let tri = geometry.triangle(prim as usize);
+        if let Some(s) = attributes.shading(prim, b1[i], b2[i], tri, ng[k]) {
+            nn[k] = s.nn;
+            tangent[k] = s.tangent;
+            if let Some(uv) = s.uv {
                 u[k] = uv.x;
                 v[k] = uv.y;
             }

@@ -26,6 +26,9 @@ pub struct Features {
     /// Some surface is partly present ([`InstanceHints::OPACITY`](crate::plugin::InstanceHints::OPACITY)):
     /// path rays test it in the pass-through stage, shadow rays walk through it.
     pub opacity: bool,
+    /// Some mesh has vertex normals: shading normals differ from geometric ones, and the
+    /// directions where the two disagree are discarded (`path_tracer::shading_normals`).
+    pub vertex_normals: bool,
     /// Emissive shapes.
     pub area_lights: bool,
     /// Distant lights.
@@ -52,6 +55,7 @@ impl Features {
             (self.transmission_shadows, "transmission_shadows"),
             (self.surface_uv, "surface_uv"),
             (self.opacity, "opacity"),
+            (self.vertex_normals, "vertex_normals"),
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),

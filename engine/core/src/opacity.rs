@@ -149,16 +149,32 @@ pub fn attenuate_shadow_crossings(
             .is_none();
         // As the trace stage writes them (`context::write_surfaces`): sphere parameters only
         // in scenes where some material reads them.
-        let uv = if is_sphere && scene.features.surface_uv {
+        let mut uv = if is_sphere && scene.features.surface_uv {
             geometry.surface_uv(c.prim, o, d, c.t, c.b1, c.b2)
         } else {
             s.uv
         };
+        // A mesh's own normals, tangent and texture coordinates, as
+        // `context::write_mesh_attributes` gives the trace stage's points: an alpha texture
+        // on a mesh is looked up where camera rays see it.
+        use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
+        let (mut nn, mut tangent) = match is_sphere {
+            true => (s.ng, sphere_tangent(s.ng)),
+            false => (s.ng, arbitrary_tangent(s.ng)),
+        };
+        if !is_sphere {
+            let tri = geometry.triangle(c.prim as usize);
+            if let Some(a) = geometry.attributes().shading(c.prim, c.b1, c.b2, tri, s.ng) {
+                (nn, tangent) = (a.nn, a.tangent);
+                uv = a.uv.unwrap_or(uv);
+            }
+        }
         points.push(risotto_components::ShadingPointRow {
             p: s.p,
             ng: s.ng,
             p_offset: s.offset(),
-            nn: s.ng,
+            nn,
+            tangent,
             vn: -d,
             vlen: c.t,
             u: uv.x,

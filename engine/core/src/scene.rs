@@ -14,6 +14,9 @@ use risotto_systems::camera::Camera;
 use risotto_systems::environment_map::EnvironmentMap;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::lights::{Light, LightSet, SpotFalloff};
+/// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] shape (an
+/// optional component of its entity; [`Scene::set_vertex_attributes`]).
+pub use risotto_systems::mesh_attributes::VertexAttributes;
 use std::sync::Arc;
 
 mod compile;
@@ -371,6 +374,41 @@ impl Scene {
                 .expect("entity was just spawned");
         }
         e
+    }
+
+    /// Gives the triangle shape `shape` per-vertex normals and texture coordinates (world
+    /// space; `attributes.corners` has one entry per triangle of the shape, in its order).
+    /// Attributes with neither normals nor uvs are not stored.
+    ///
+    /// # Panics
+    /// When `shape` is not a triangle shape of this scene, the corners are not one per
+    /// triangle, or a corner indexes past the normals or uvs.
+    pub fn set_vertex_attributes(&mut self, shape: hecs::Entity, attributes: VertexAttributes) {
+        let triangles = match &*self
+            .world
+            .get::<&ShapeGeometry>(shape)
+            .expect("a shape of this scene")
+        {
+            ShapeGeometry::Triangles(t) => t.len(),
+            ShapeGeometry::Sphere(_) => panic!("vertex attributes on a sphere"),
+        };
+        assert_eq!(
+            attributes.corners.len(),
+            triangles,
+            "one corner triple per triangle"
+        );
+        let max = attributes.corners.iter().flatten().copied().max();
+        for len in [attributes.normals.len(), attributes.uvs.len()] {
+            assert!(
+                len == 0 || max.is_none_or(|m| (m as usize) < len),
+                "corner out of range"
+            );
+        }
+        if !attributes.is_empty() {
+            self.world
+                .insert_one(shape, attributes)
+                .expect("a shape of this scene");
+        }
     }
 
     /// Adds a light entity.

@@ -7,6 +7,7 @@
 pub mod grid_file;
 pub mod load;
 pub mod media_params;
+pub mod mesh_file;
 pub mod scene_file;
 pub mod surface_params;
 pub mod texture_file;

@@ -439,13 +439,16 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             }
             DescGeometry::Triangles { triangles, .. } => ShapeGeometry::Triangles(triangles),
         };
-        scene.add_shape_with_transform(
+        let e = scene.add_shape_with_transform(
             &s.name,
             geometry,
             s.material as u32,
             s.emission,
             s.transform,
         );
+        if !s.attributes.is_empty() {
+            scene.set_vertex_attributes(e, s.attributes);
+        }
     }
     for l in desc.lights {
         let name = l.name().to_string();

@@ -32,6 +32,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
+pub use risotto_systems::mesh_attributes::VertexAttributes;
 use risotto_systems::sampler::MAX_SPP;
 
 pub use lights::LightDesc;
@@ -191,6 +192,10 @@ pub struct ShapeDesc {
     /// square or file were written in), the identity for a `sphere` and for shapes without
     /// one. A volume's `u, v, w` and grids are measured in object space.
     pub transform: Affine3A,
+    /// A `mesh`'s vertex normals and texture coordinates in world space (one corner triple
+    /// per triangle of [`ShapeGeometry::Triangles`]); empty for other shapes and for meshes
+    /// whose file has neither (or normals only, with `face_normals = true`).
+    pub attributes: VertexAttributes,
 }
 
 /// Shape geometry, resolved to world space.
@@ -448,7 +453,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             "quad" => &["corner", "edge1", "edge2", "transform"],
             "rectangle" => &["transform"],
             "box" => &["min", "max", "transform"],
-            "mesh" => &["path", "transform"],
+            "mesh" => &["path", "transform", "face_normals"],
             other => {
                 return Err(r.error(
                     SceneErrorKind::InvalidValue,
@@ -489,6 +494,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
         let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
 
         let mut transform = glam::DAffine3::IDENTITY;
+        let mut attributes = VertexAttributes::default();
         let mut triangles_of = |(triangles, m): (Vec<[Vec3; 3]>, glam::DAffine3)| {
             transform = m;
             triangles
@@ -511,10 +517,14 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
                 kind: "box",
                 triangles: triangles_of(geometry::cuboid(&r)?),
             },
-            _ => ShapeGeometry::Triangles {
-                kind: "mesh",
-                triangles: triangles_of(geometry::mesh(&r)?),
-            },
+            _ => {
+                let (triangles, m, a) = geometry::mesh(&r)?;
+                attributes = a;
+                ShapeGeometry::Triangles {
+                    kind: "mesh",
+                    triangles: triangles_of((triangles, m)),
+                }
+            }
         };
         let transform = Affine3A::from_mat3_translation(
             transform.matrix3.as_mat3(),
@@ -537,6 +547,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             emission,
             geometry,
             transform,
+            attributes,
         });
     }
     Ok(out)

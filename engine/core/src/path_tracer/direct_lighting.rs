@@ -18,6 +18,7 @@
 
 use super::non_finite_case;
 use super::queues::{scratch, GroupScratch, LightBuffers};
+use super::shading_normals::discard_light_directions;
 use crate::integrator::LightingTechnique;
 use crate::plugin::{Bxdf, LightingDelegate, ShadingContext};
 use crate::scene::CompiledScene;
@@ -106,6 +107,10 @@ pub(super) fn sample_lights(
         scratch(&mut buffers.eval_pdf, m, 0.0),
     );
     bxdf.evaluate_samples(ctx, light.wi, value, pdf);
+    if scene.features.vertex_normals && vertices.on_surface {
+        let range = vertices.range.clone();
+        discard_light_directions(vertices.points, range, light.wi, value);
+    }
     // NaN provenance: the Bxdf's evaluations and the light samples of the active points.
     let bxdf_bad = |k: usize| active[k] & !(value[k].is_finite() & pdf[k].is_finite());
     let light_bad =

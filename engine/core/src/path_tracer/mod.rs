@@ -30,6 +30,7 @@ mod pass_through;
 pub mod queues;
 mod recorder;
 mod shade;
+mod shading_normals;
 mod surface_caches;
 mod trace;
 mod transmission;

@@ -6,6 +6,7 @@
 use super::continuation::continue_group;
 use super::direct_lighting::{sample_lights, LitGroup};
 use super::queues::{scratch, GroupScratch, Queues};
+use super::shading_normals::discard_bxdf_samples;
 use super::surface_caches::SurfaceCaches;
 use super::{non_finite_case, PathTracer};
 use crate::integrator::{LightingTechnique, PathBatch};
@@ -221,6 +222,9 @@ pub(super) fn shade_groups<'a>(
         // Bxdf sampling for the next bounce.
         samples.reset(m);
         bxdf.generate_samples(&ctx, samplers, samples);
+        if features.vertex_normals && grp.mode == ShadingMode::Scatter {
+            discard_bxdf_samples(pts, range.clone(), samples);
+        }
         let system = match grp.mode {
             ShadingMode::VolumeScatter => System::Phase,
             _ => System::Bxdf,

@@ -220,6 +220,15 @@ impl<'a> ShadingContext<'a> {
             nn: Some(nn),
         }
     }
+    /// Unit tangents orthogonal to `Nn`, one per point: with `Nn` they fix the frame of an
+    /// anisotropic Bxdf (`s = tangent`, `t = Nn x tangent`), so its roughness along `s`
+    /// follows the texture's `u` direction. On meshes with texture coordinates it is `dP/du`
+    /// made orthogonal to `Nn`; on spheres the direction of increasing `phi` (`u`); elsewhere
+    /// (meshes without uvs, quads, boxes, points inside volumes) some unit vector orthogonal
+    /// to `Nn` that varies continuously with it.
+    pub fn tangent(&self) -> &'a [Vec3] {
+        &self.points.tangent[self.range.clone()]
+    }
     /// Directions towards the viewer `Vn`.
     pub fn vn(&self) -> &'a [Vec3] {
         &self.points.vn[self.range.clone()]
@@ -366,6 +375,9 @@ impl<'a> VolumeSampling<'a> {
                 // Inside a volume the normals face the viewer (no surface).
                 self.points.nn.copy_from_slice(values);
                 self.points.ng.copy_from_slice(values);
+                for (t, &n) in self.points.tangent.iter_mut().zip(values) {
+                    *t = n.any_orthonormal_vector();
+                }
             }
             Builtin::U => set_scalar(&mut self.points.u, values),
             Builtin::V => set_scalar(&mut self.points.v, values),

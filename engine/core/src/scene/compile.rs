@@ -2,6 +2,7 @@
 //! need every entity at once (coincident shapes, the camera's volume stack).
 
 use super::*;
+use risotto_systems::mesh_attributes::MeshAttributes;
 
 impl Scene {
     /// Flattens the world into a [`CompiledScene`].
@@ -9,7 +10,7 @@ impl Scene {
         self.settings.check(&self.camera)?;
         let Scene {
             files,
-            world,
+            mut world,
             materials,
             camera,
             settings,
@@ -40,7 +41,8 @@ impl Scene {
         let mut spheres = Vec::new();
         let mut sphere_shape = Vec::new();
         let mut shapes = Vec::new();
-        for (i, (_, name, geom, mat, emission)) in shape_entities.into_iter().enumerate() {
+        let mut attributes = MeshAttributes::default();
+        for (i, (entity, name, geom, mat, emission)) in shape_entities.into_iter().enumerate() {
             if mat as usize >= materials.len() {
                 return Err(CompileError::MissingMaterial {
                     shape: name,
@@ -55,6 +57,9 @@ impl Scene {
                     sphere_shape.push(i as u32);
                 }
                 ShapeGeometry::Triangles(t) => {
+                    if let Ok(a) = world.remove_one::<VertexAttributes>(entity) {
+                        attributes.push(triangles.len() as u32, a);
+                    }
                     tri_shape.extend(std::iter::repeat_n(i as u32, t.len()));
                     triangles.extend(t);
                 }
@@ -66,7 +71,12 @@ impl Scene {
             });
         }
         let num_tris = triangles.len();
-        let geometry = SceneGeometry::build(triangles, spheres);
+        let mut geometry = SceneGeometry::build(triangles, spheres);
+        let mut features = Features {
+            vertex_normals: attributes.any_normals(),
+            ..Features::default()
+        };
+        geometry.set_attributes(attributes);
         let mut prim_shape = tri_shape;
         prim_shape.extend(sphere_shape);
 
@@ -82,7 +92,6 @@ impl Scene {
         };
 
         let mut lights = Vec::new();
-        let mut features = Features::default();
         for (prim, &s) in prim_shape.iter().enumerate() {
             if let Some(radiance) = shapes[s as usize].emission {
                 if !radiance.is_black() {

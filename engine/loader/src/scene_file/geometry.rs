@@ -1,13 +1,14 @@
 //! Transforms and shape geometry: transform lists, quads, rectangles, boxes and OBJ meshes
-//! resolved to world-space triangles.
-
-use std::path::Path;
+//! resolved to world-space triangles
+//! (with a mesh's vertex normals and texture coordinates).
 
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 
 use super::params::Reader;
 use super::raw::{Node, Value};
+use crate::mesh_file::load_mesh;
 use risotto_engine::diagnostics::{SceneError, SceneErrorKind};
+use risotto_systems::mesh_attributes::VertexAttributes;
 
 /// A triangle `[v0, v1, v2]`; its geometric normal is along `(v1 - v0) x (v2 - v0)`.
 pub(crate) type Triangle = [Vec3; 3];
@@ -312,14 +313,20 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneE
     Ok((to_world(&m, box_local(lo, hi)), m))
 }
 
-/// `mesh`: the triangles of an OBJ file (every object in it, polygons fan-triangulated by
-/// tobj), placed by `transform`.
-pub(crate) fn mesh(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
+/// `mesh`: the triangles of an OBJ or PLY file (chosen by the extension; every object of
+/// an OBJ, polygons fan-triangulated), placed by `transform`, with the file's vertex normals
+/// (unless `face_normals = true`) and texture coordinates in world space: positions by the
+/// transform, normals by its inverse transpose; a mirroring transform swaps the corners of
+/// each triangle as [`to_world`] swaps its vertices.
+pub(crate) fn mesh(
+    r: &Reader<'_>,
+) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
     let (path, node) = r
         .path_opt("path")?
-        .ok_or_else(|| r.missing("path", "an OBJ file path relative to the scene file"))?;
+        .ok_or_else(|| r.missing("path", "an OBJ or PLY file path relative to the scene file"))?;
+    let face_normals = r.bool("face_normals", Some(false))?;
     let m = read_transform(r)?;
-    let local = load_obj(&path).map_err(|msg| {
+    let data = load_mesh(&path).map_err(|msg| {
         r.error(
             SceneErrorKind::ExternalFile,
             &node.span(),
@@ -327,63 +334,33 @@ pub(crate) fn mesh(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneErr
             msg,
         )
     })?;
-    Ok((to_world(&m, local), m))
-}
-
-/// Reads an OBJ file's triangles; the error is a complete sentence naming the full path.
-fn load_obj(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
-    let shown = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
-    // Files written on Windows may start with a UTF-8 byte-order mark, and comments in
-    // Latin-1 are common: the mark is dropped and bytes that are not UTF-8 become U+FFFD,
-    // harmless in a comment and still an error in a number.
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
-    let bytes = String::from_utf8_lossy(bytes).into_owned().into_bytes();
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
+    let p = &data.positions;
+    let local = data
+        .triangles
+        .iter()
+        .map(|t| [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]]);
+    let triangles = to_world(&m, local);
+    let flip = m.matrix3.determinant() < 0.0;
+    let normal_matrix = m.matrix3.inverse().transpose();
+    let normals = if face_normals {
+        Vec::new()
+    } else {
+        data.normals
+            .iter()
+            .map(|&n| (normal_matrix * n).normalize_or_zero().as_vec3())
+            .collect()
     };
-    // Materials (`mtllib`) are not used: the scene file assigns the material.
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
-            Err(tobj::LoadError::OpenFileFailed)
-        })
-        .map_err(|e| format!("cannot parse OBJ file `{shown}`: {e}"))?;
-    let mut tris = Vec::new();
-    for model in &models {
-        let mesh = &model.mesh;
-        let n_vertices = mesh.positions.len() / 3;
-        let vertex = |i: u32| -> Result<DVec3, String> {
-            let i = i as usize;
-            if i >= n_vertices {
-                return Err(format!(
-                    "cannot parse OBJ file `{shown}`: object `{}` refers to vertex {} but has {n_vertices}",
-                    model.name,
-                    i + 1
-                ));
-            }
-            let v = DVec3::new(
-                f64::from(mesh.positions[3 * i]),
-                f64::from(mesh.positions[3 * i + 1]),
-                f64::from(mesh.positions[3 * i + 2]),
-            );
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(format!(
-                    "cannot parse OBJ file `{shown}`: vertex {} is not finite",
-                    i + 1
-                ))
-            }
-        };
-        for f in mesh.indices.chunks_exact(3) {
-            tris.push([vertex(f[0])?, vertex(f[1])?, vertex(f[2])?]);
-        }
+    let mut attributes = VertexAttributes {
+        normals,
+        uvs: data.uvs,
+        corners: Vec::new(),
+    };
+    if !attributes.is_empty() {
+        attributes.corners = data
+            .triangles
+            .iter()
+            .map(|&[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
+            .collect();
     }
-    if tris.is_empty() {
-        return Err(format!("OBJ file `{shown}` contains no faces"));
-    }
-    Ok(tris)
+    Ok((triangles, m, attributes))
 }

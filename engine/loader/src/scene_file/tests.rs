@@ -572,6 +572,104 @@ fn unparsable_obj_is_reported() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Bad vertex attributes and bad PLY files: each a located error (the shape's `path`)
+/// naming the file and what is wrong with which value.
+#[test]
+fn bad_mesh_attributes_and_ply_files_are_reported() {
+    let dir = scratch_dir("bad_mesh_attributes");
+    let scene_path = dir.join("scene.toml");
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let ply_head = |vertex_props: &str, count: usize, faces: &str| {
+        format!("ply\nformat ascii 1.0\nelement vertex {count}\n{vertex_props}{faces}end_header\n")
+    };
+    let xyz = "property float x\nproperty float y\nproperty float z\n";
+    let face = "element face 1\nproperty list uchar int vertex_indices\n";
+    // Binary (ascii PLY readers reject `nan` before it reaches the check).
+    let mut nan_normal_ply = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\n{xyz}property float nx\n\
+         property float ny\nproperty float nz\n{face}end_header\n"
+    )
+    .into_bytes();
+    for v in [
+        [0.0, 0.0, 0.0, 0.0, 0.0, f32::NAN],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+    ] {
+        nan_normal_ply.extend(v.iter().flat_map(|x: &f32| x.to_le_bytes()));
+    }
+    nan_normal_ply.push(3);
+    nan_normal_ply.extend([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "bad_vn.obj",
+            format!("{tri}vn 0 0 1\nf 1//1 2//1 3//2\n").into_bytes(),
+            "line 5: face corner `3//2` refers to vn 2 but the file has 1",
+        ),
+        (
+            "bad_vt.obj",
+            format!("{tri}vt 0 0\nvt 1 0\nf 1/1 2/2 3/7\n").into_bytes(),
+            "line 6: face corner `3/7` refers to vt 7 but the file has 2",
+        ),
+        (
+            "nan_vn.obj",
+            format!("{tri}vn 0 nan 1\nf 1//1 2//1 3//1\n").into_bytes(),
+            "normal 1 is not finite (0, NaN, 1)",
+        ),
+        (
+            "no_z.ply",
+            format!(
+                "{}0 0\n1 0\n0 1\n3 0 1 2\n",
+                ply_head("property float x\nproperty float y\n", 3, face)
+            )
+            .into_bytes(),
+            "the `vertex` element has no `z` property",
+        ),
+        (
+            "no_faces.ply",
+            format!("{}0 0 0\n1 0 0\n0 1 0\n", ply_head(xyz, 3, "")).into_bytes(),
+            "the header declares no `face` element",
+        ),
+        (
+            "too_many.ply",
+            format!(
+                "{}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                ply_head(xyz, 4_000_000_000, face)
+            )
+            .into_bytes(),
+            "the header declares 4000000000 `vertex` elements, more than the file's",
+        ),
+        ("nan_normal.ply", nan_normal_ply, "normal 1 is not finite"),
+        (
+            "bad_index.ply",
+            format!("{}0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n", ply_head(xyz, 3, face)).into_bytes(),
+            "face 0 refers to vertex 5 but the file has 3",
+        ),
+    ];
+    for (name, bytes, want) in cases {
+        let file = dir.join(name);
+        std::fs::write(&file, bytes).unwrap();
+        let text = format!(
+            "[materials.m]\ntype = \"diffuse\"\n\n[[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\npath = \"{name}\"\n\n[camera]\nfov = 40\nfrom = [0, 0, 5]\nto = [0, 0, 0]\n"
+        );
+        let e = parse_scene(&text, &scene_path)
+            .err()
+            .unwrap_or_else(|| panic!("{name} should be rejected"));
+        let msg = e.to_string();
+        assert_eq!(e.kind(), SceneErrorKind::ExternalFile, "{name}: {msg}");
+        assert!(msg.contains(&file.display().to_string()), "{name}: {msg}");
+        assert!(msg.contains(want), "{name}: {msg}");
+        assert_eq!(e.line(), Some(7), "{name}: {msg}");
+    }
+    // `face_normals` must be a boolean.
+    std::fs::write(dir.join("ok.obj"), format!("{tri}f 1 2 3\n")).unwrap();
+    let text = "[materials.m]\ntype = \"diffuse\"\n\n[[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\npath = \"ok.obj\"\nface_normals = 1\n\n[camera]\nfov = 40\nfrom = [0, 0, 5]\nto = [0, 0, 0]\n";
+    let Err(e) = parse_scene(text, &scene_path) else {
+        panic!("a number is not a switch");
+    };
+    assert_eq!(e.line(), Some(8), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn unknown_material_reference_lists_the_known_ones() {
     let text = base_with("material = \"glass\"", "material = \"glas\"");

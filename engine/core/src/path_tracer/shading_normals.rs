@@ -1,0 +1,113 @@
+//! Shading normals that differ from the geometric normal (meshes with vertex normals): the
+//! directions for which the two disagree are discarded, so light neither leaks through a
+//! surface nor is reflected from below it.
+//!
+//! A Bxdf decides between reflection and transmission with its shading normal `Nn`; the
+//! ray that leaves the point decides with the geometric one `Ng`. Where they disagree (near
+//! the silhouette of a coarse mesh with smooth normals), a "reflected" direction actually
+//! goes through the surface, and light arriving from behind it is "reflected" to the viewer:
+//! a leak. The treatment here is pbrt-v3's (Pharr, Jakob and Humphreys, 3rd ed., sec. 9.1,
+//! `BSDF::f`, which evaluates only the reflection lobes when `wi` and `wo` lie on the same
+//! side of `Ng` and only the transmission lobes otherwise) and Veach 1997's (sec. 5.3.2,
+//! "the use of shading normals"): keep a direction `wi` only where its classification as
+//! reflection or transmission by `Ng` agrees with that by `Nn`. It needs no knowledge of a
+//! Bxdf's lobes, so it applies to every plug-in. Mitsuba 3 instead evaluates in the shading
+//! frame alone, which leaks; pbrt-v4 does the same. The cost is a small darkening where the
+//! normals disagree strongly (the discarded directions), which vanishes as the mesh is
+//! refined (`tests/mesh_attributes.rs` measures both).
+//!
+//! These checks are only for paths traced from the camera. An integrator that traces light
+//! from the lights (none yet) must also apply Veach's adjoint correction (1997, sec. 5.3,
+//! eq. 5.19): scattering of importance with shading normals is not symmetric, and the
+//! light-path throughput is multiplied by `|wo . Nn| |wi . Ng| / (|wo . Ng| |wi . Nn|)`. It
+//! would go beside these functions, applied to the light path's Bxdf samples.
+
+use risotto_components::{LobeSampled, Rgb, ShadingPoints};
+use risotto_systems::bxdf_samples::BxdfSamples;
+use std::ops::Range;
+
+/// Whether leaving the point with normals `ng`, `nn`, seen from `vn`, in direction `wi` is
+/// reflection by both normals or transmission by both.
+#[inline]
+pub(crate) fn sides_agree(ng: glam::Vec3, nn: glam::Vec3, vn: glam::Vec3, wi: glam::Vec3) -> bool {
+    let geometric = wi.dot(ng) * vn.dot(ng) > 0.0;
+    let shading = wi.dot(nn) * vn.dot(nn) > 0.0;
+    geometric == shading
+}
+
+/// Makes the Bxdf samples of the points `range` whose direction the normals disagree on
+/// "no sample" (the path ends there, as for an absorbed sample).
+pub(super) fn discard_bxdf_samples(
+    points: &ShadingPoints,
+    range: Range<usize>,
+    samples: &mut BxdfSamples,
+) {
+    let (ng, nn, vn) = (
+        &points.ng[range.clone()],
+        &points.nn[range.clone()],
+        &points.vn[range],
+    );
+    for k in 0..ng.len() {
+        if samples.pdf[k] > 0.0 && !sides_agree(ng[k], nn[k], vn[k], samples.wi[k]) {
+            samples.pdf[k] = 0.0;
+            samples.weight[k] = Rgb::BLACK;
+            samples.lobe[k] = LobeSampled::NONE;
+        }
+    }
+}
+
+/// Zeroes the Bxdf values towards the light samples `wi` of the points `range` whose
+/// direction the normals disagree on.
+pub(super) fn discard_light_directions(
+    points: &ShadingPoints,
+    range: Range<usize>,
+    wi: &[glam::Vec3],
+    value: &mut [Rgb],
+) {
+    let (ng, nn, vn) = (
+        &points.ng[range.clone()],
+        &points.nn[range.clone()],
+        &points.vn[range],
+    );
+    for k in 0..ng.len() {
+        if !sides_agree(ng[k], nn[k], vn[k], wi[k]) {
+            value[k] = Rgb::BLACK;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn directions_the_normals_classify_differently_are_discarded() {
+        let ng = Vec3::Z;
+        // A shading normal tilted 60 degrees towards +x.
+        let nn = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+        let vn = Vec3::new(0.0, 0.0, 1.0);
+        // Above both planes: reflection by both.
+        assert!(sides_agree(ng, nn, vn, Vec3::new(0.0, 0.6, 0.8)));
+        // Below the geometric plane but above the shading one: a leak, discarded.
+        let leak = Vec3::new(0.9, 0.0, -0.2).normalize();
+        assert!(leak.dot(nn) > 0.0);
+        assert!(!sides_agree(ng, nn, vn, leak));
+        // Below both: transmission by both (kept for Bxdfs that transmit).
+        assert!(sides_agree(
+            ng,
+            nn,
+            vn,
+            Vec3::new(-0.3, 0.0, -0.9).normalize()
+        ));
+        // With nn == ng nothing is ever discarded.
+        for wi in [
+            leak,
+            Vec3::X,
+            -Vec3::Z,
+            Vec3::new(0.1, 0.2, 0.3).normalize(),
+        ] {
+            assert!(sides_agree(ng, ng, vn, wi));
+        }
+    }
+}
