@@ -60,6 +60,24 @@ impl RoughDielectric {
         }
     }
 
+    /// The same interface at another relative index (a shape nested in a medium of index
+    /// other than 1), without energy compensation: its tables hold the albedo at the
+    /// material's own index, and integrating new ones per shading point would cost a few
+    /// milliseconds each.
+    pub fn with_eta(&self, eta: f32) -> Self {
+        RoughDielectric {
+            ggx: self.ggx,
+            eta,
+            tint: self.tint,
+            compensation: None,
+        }
+    }
+
+    /// True when energy compensation is on.
+    pub fn compensated(&self) -> bool {
+        self.compensation.is_some()
+    }
+
     /// `wo` (and `wi`) mirrored to the outside when `wo` is inside, with the relative
     /// index and the table index of that side. The microfacet distribution and Smith's
     /// `Lambda` are even, so the inside looks like an outside of index `1 / eta`.

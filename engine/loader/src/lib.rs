@@ -7,5 +7,6 @@
 pub mod grid_file;
 pub mod load;
 pub mod media_params;
+mod rough_params;
 pub mod scene_file;
 pub mod texture_file;

@@ -77,7 +77,7 @@ impl MaterialRegistry {
     }
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
-    /// `interface`, `subsurface`.
+    /// `rough_conductor`, `rough_dielectric`, `interface`, `subsurface`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -128,6 +128,8 @@ impl MaterialRegistry {
                 builtin(p, surface, &["reflectance"])
             });
         }
+        r.register("rough_conductor", crate::rough_params::rough_conductor);
+        r.register("rough_dielectric", crate::rough_params::rough_dielectric);
         r.register("interface", |p| builtin(p, Surface::Interface, &[]));
         r.register("subsurface", crate::media_params::subsurface::construct);
         r
@@ -303,7 +305,7 @@ fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
     }))
 }
 
-fn builtin(
+pub(crate) fn builtin(
     p: &MaterialParams,
     surface: Surface,
     keys: &[&str],

@@ -4,12 +4,15 @@
 
 use super::bxdfs::*;
 use super::interiors::*;
+use super::rough::*;
 use crate::phase::{phase_bxdf, PhaseBxdf};
 use crate::scatter_patterns::eval_uncached;
 use bumpalo::Bump;
 use risotto_components::Rgb;
 use risotto_engine::plugin::*;
 use risotto_systems::pattern::PatternGraph;
+use risotto_systems::rough_conductor::RoughConductor;
+use risotto_systems::rough_dielectric::RoughDielectric;
 use std::sync::Arc;
 
 /// The surface part of a built-in material.
@@ -58,6 +61,11 @@ pub enum Surface {
         /// The reflectance graph.
         reflectance: Arc<PatternGraph>,
     },
+    /// GGX rough conductor (complex index, Fresnel tint, optional energy compensation),
+    /// its tables integrated when the material was built.
+    RoughConductor(RoughConductor),
+    /// GGX rough dielectric; its `eta` is the material's index (against vacuum).
+    RoughDielectric(RoughDielectric),
     /// Index-matched boundary: rays pass unchanged.
     Interface,
 }
@@ -74,7 +82,10 @@ pub struct BuiltinMaterial {
 impl BxdfFactory for BuiltinMaterial {
     fn instance_hints(&self) -> InstanceHints {
         let surface = match &self.surface {
-            Surface::Diffuse { .. } | Surface::Mirror { .. } => InstanceHints::NONE,
+            Surface::Diffuse { .. } | Surface::Mirror { .. } | Surface::RoughConductor(_) => {
+                InstanceHints::NONE
+            }
+            Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
             {
@@ -146,6 +157,8 @@ impl BxdfFactory for BuiltinMaterial {
             Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
                 reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
             }),
+            Surface::RoughConductor(ref lobe) => arena.alloc(RoughConductorBxdf { lobe }),
+            Surface::RoughDielectric(ref lobe) => arena.alloc(RoughDielectricBxdf { lobe }),
             Surface::Interface => arena.alloc(NullBxdf),
         }
     }
@@ -184,6 +197,11 @@ impl BxdfFactory for BuiltinMaterial {
             (Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. }, "ior") => {
                 Some(ParamValue::Float(*ior))
             }
+            (Surface::RoughDielectric(lobe), "ior") => Some(ParamValue::Float(lobe.eta)),
+            (Surface::RoughDielectric(lobe), "tint") => Some(ParamValue::Color(lobe.tint)),
+            (Surface::RoughConductor(lobe), "specular_reflectance") => {
+                Some(ParamValue::Color(lobe.tint))
+            }
             (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
             (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
             (_, crate::scatter_patterns::G_PARAM) => match &self.interior {
@@ -213,6 +231,7 @@ impl BxdfFactory for BuiltinMaterial {
     fn ior(&self) -> f32 {
         match self.surface {
             Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,
+            Surface::RoughDielectric(ref lobe) => lobe.eta,
             _ => 1.0,
         }
     }
