@@ -21,6 +21,13 @@ use std::f32::consts::PI;
 /// `alpha^-4` terms would still fit an `f32`.
 pub const ALPHA_MIN: f32 = 1e-4;
 
+/// Strictly positive (false for NaN): the guard of the rough lobes against degenerate
+/// directions and densities.
+#[inline]
+pub(crate) fn positive(x: f32) -> bool {
+    x > 0.0
+}
+
 /// The anisotropic GGX distribution of microfacet normals, `alpha_u` along the local `+x`
 /// and `alpha_v` along `+y` (both in `[ALPHA_MIN, 1]` after [`Ggx::new`]).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,7 +5,7 @@
 use crate::bxdf::{sample_cosine_hemisphere, BxdfSample};
 use crate::conductor::fresnel_conductor_rgb;
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::Ggx;
+use crate::microfacet::{positive, Ggx};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -109,7 +109,7 @@ impl RoughConductor {
         }
         let h = wo + wi;
         let len2 = h.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() {
+        if !positive(len2) || !len2.is_finite() {
             return (Rgb::BLACK, 0.0);
         }
         let m = h / len2.sqrt();
@@ -131,12 +131,12 @@ impl RoughConductor {
 
     /// Samples a direction from local `wo` (`u` a 2D sample, `u_lobe` a third number for
     /// the lobe choice): a visible normal (Heitz 2018) mirrored, or with probability
-    /// [`RoughConductor::ms_probability`] a cosine-weighted direction for the
+    /// `1 - E(mu_o)` (the white lobe's missing share) a cosine-weighted direction for the
     /// multiple-scattering lobe; the weight is `f cos / pdf` of the one-sample mixture. The
     /// microfacet term's weight is `F G2 / G1(wo)`, finite at any roughness. `None` for
     /// `wo` at or below the surface or a sample below it.
     pub fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BxdfSample> {
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return None;
         }
         let wi = if u_lobe < self.ms_probability(wo.z) {
@@ -146,7 +146,7 @@ impl RoughConductor {
             2.0 * wo.dot(m) * m - wo
         };
         let (value, pdf) = self.eval(wo, wi);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !positive(pdf) || !pdf.is_finite() {
             return None;
         }
         Some(BxdfSample {

@@ -9,7 +9,7 @@
 
 use crate::bxdf::{fresnel_dielectric, BxdfSample};
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::Ggx;
+use crate::microfacet::{positive, Ggx};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 
 /// Lobe bits of a reflected sample (a density exists: light sampling and MIS apply).
@@ -105,13 +105,13 @@ impl RoughDielectric {
         // eq. 16), turned to the outside.
         let h = if reflect { wo + wi } else { wo + wi * eta };
         let len2 = h.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() {
+        if !positive(len2) || !len2.is_finite() {
             return (Rgb::BLACK, 0.0);
         }
         let m = h * (1.0f32.copysign(h.z) / len2.sqrt());
         let (wo_m, wi_m) = (wo.dot(m), wi.dot(m));
         // Both directions on the sides of the microfacet their macro sides say.
-        if !(wo_m > 0.0) || (reflect != (wi_m > 0.0)) || wi_m == 0.0 {
+        if !positive(wo_m) || (reflect != (wi_m > 0.0)) || wi_m == 0.0 {
             return (Rgb::BLACK, 0.0);
         }
         let f = fresnel_dielectric(wo_m, eta);
@@ -173,7 +173,7 @@ impl RoughDielectric {
         }
         let wi = wi_up * flip;
         let (value, pdf) = self.eval(wo, wi);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !positive(pdf) || !pdf.is_finite() {
             return None;
         }
         Some(BxdfSample {
