@@ -14,7 +14,7 @@
 //! lobe makes up the loss exactly up to the interpolation error (< 0.5%, tested).
 
 use crate::bxdf::fresnel_dielectric;
-use crate::microfacet::Ggx;
+use crate::microfacet::{refract_about, Ggx};
 use risotto_components::{Vec2, Vec3};
 
 /// Cosines at which the table holds the albedo: `mu_i = i / (MU_POINTS - 1)`.
@@ -157,7 +157,7 @@ fn dielectric_albedo_at(ggx: &Ggx, eta: f32, wo: Vec3) -> f64 {
         if wr.z > 0.0 {
             sum += (r * ggx.g2(wo, wr) / g1) as f64;
         }
-        if let Some(wt) = crate::rough_dielectric::refract_about(wo, m, eta) {
+        if let Some(wt) = refract_about(wo, m, eta) {
             if wt.z < 0.0 {
                 sum += ((1.0 - r) * ggx.g2(wo, wt) / g1) as f64;
             }

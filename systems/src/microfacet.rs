@@ -140,3 +140,17 @@ impl Ggx {
         Vec3::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
     }
 }
+
+/// Refraction of `wo` through a microfacet with normal `m` (`wo . m > 0`), relative index
+/// `eta = n_t / n_i` (Snell's law in vector form, Walter et al. 2007 eq. 40): `None` under
+/// total internal reflection.
+#[inline]
+pub fn refract_about(wo: Vec3, m: Vec3, eta: f32) -> Option<Vec3> {
+    let c = wo.dot(m);
+    let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(m * (c / eta - cos_t) - wo / eta)
+}

@@ -9,7 +9,7 @@
 
 use crate::bxdf::{fresnel_dielectric, BxdfSample};
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::{positive, Ggx};
+use crate::microfacet::{positive, refract_about, Ggx};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 
 /// Lobe bits of a reflected sample (a density exists: light sampling and MIS apply).
@@ -184,20 +184,6 @@ impl RoughDielectric {
             eta: eta_rel,
         })
     }
-}
-
-/// Refraction of `wo` through a microfacet with normal `m` (`wo . m > 0`), relative index
-/// `eta = n_t / n_i` (Snell's law in vector form, Walter et al. 2007 eq. 40): `None` under
-/// total internal reflection.
-#[inline]
-pub fn refract_about(wo: Vec3, m: Vec3, eta: f32) -> Option<Vec3> {
-    let c = wo.dot(m);
-    let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    Some(m * (c / eta - cos_t) - wo / eta)
 }
 
 #[cfg(test)]

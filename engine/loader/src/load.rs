@@ -128,8 +128,14 @@ impl MaterialRegistry {
                 builtin(p, surface, &["reflectance"])
             });
         }
-        r.register("rough_conductor", crate::rough_params::rough_conductor);
-        r.register("rough_dielectric", crate::rough_params::rough_dielectric);
+        r.register("rough_conductor", |p| {
+            let (surface, keys) = crate::rough_params::rough_conductor(p)?;
+            builtin(p, surface, &keys)
+        });
+        r.register("rough_dielectric", |p| {
+            let (surface, keys) = crate::rough_params::rough_dielectric(p)?;
+            builtin(p, surface, &keys)
+        });
         r.register("interface", |p| builtin(p, Surface::Interface, &[]));
         r.register("subsurface", crate::media_params::subsurface::construct);
         r
@@ -305,7 +311,7 @@ fn homogeneous(t: &MaterialParams) -> Result<Interior, SceneError> {
     }))
 }
 
-pub(crate) fn builtin(
+fn builtin(
     p: &MaterialParams,
     surface: Surface,
     keys: &[&str],

@@ -2,11 +2,9 @@
 //! named as Mitsuba 3's `roughconductor` / `roughdielectric` (`alpha`, `alpha_u`,
 //! `alpha_v`, `eta`, `k`, `material`, `specular_reflectance`) in the project's TOML style.
 
-use crate::load::builtin;
 use crate::scene_file::{MaterialParams, SceneError};
 use risotto_builtins::builtin::Surface;
 use risotto_components::Rgb;
-use risotto_engine::plugin::BxdfFactory;
 use risotto_systems::conductor::{metal, METALS};
 use risotto_systems::microfacet::Ggx;
 use risotto_systems::rough_conductor::RoughConductor;
@@ -51,8 +49,11 @@ fn distribution(p: &MaterialParams) -> Result<Ggx, SceneError> {
 /// `type = "rough_conductor"`: `alpha` or `alpha_u` + `alpha_v`; the complex index as
 /// `material` (a name of [`METALS`], default `"none"`, a perfect reflector) or as `eta` and
 /// `k` colours; `specular_reflectance` (a colour in [0, 1], default 1);
-/// `energy_compensation` (default true).
-pub(crate) fn rough_conductor(p: &MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError> {
+/// `energy_compensation` (default true). Returns the surface and the keys it read (the
+/// registry adds `interior` and rejects any other key).
+pub(crate) fn rough_conductor(
+    p: &MaterialParams,
+) -> Result<(Surface, Vec<&'static str>), SceneError> {
     let ggx = distribution(p)?;
     let non_negative = "every channel >= 0 and finite";
     let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
@@ -95,13 +96,15 @@ pub(crate) fn rough_conductor(p: &MaterialParams) -> Result<Box<dyn BxdfFactory>
     let lobe = RoughConductor::new(ggx, eta, k, tint, compensation);
     let mut keys = ROUGHNESS_KEYS.to_vec();
     keys.extend(["material", "eta", "k", "specular_reflectance"]);
-    builtin(p, Surface::RoughConductor(lobe), &keys)
+    Ok((Surface::RoughConductor(lobe), keys))
 }
 
 /// `type = "rough_dielectric"`: `alpha` or `alpha_u` + `alpha_v`; `ior` (> 0, default 1.5);
 /// `tint` (a colour in [0, 1] multiplying transmitted light, default 1);
-/// `energy_compensation` (default true).
-pub(crate) fn rough_dielectric(p: &MaterialParams) -> Result<Box<dyn BxdfFactory>, SceneError> {
+/// `energy_compensation` (default true). Returns the surface and the keys it read.
+pub(crate) fn rough_dielectric(
+    p: &MaterialParams,
+) -> Result<(Surface, Vec<&'static str>), SceneError> {
     let ggx = distribution(p)?;
     let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
     let tint = p.rgb_where("tint", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
@@ -111,5 +114,5 @@ pub(crate) fn rough_dielectric(p: &MaterialParams) -> Result<Box<dyn BxdfFactory
     let lobe = RoughDielectric::new(ggx, ior, tint, compensation);
     let mut keys = ROUGHNESS_KEYS.to_vec();
     keys.extend(["ior", "tint"]);
-    builtin(p, Surface::RoughDielectric(lobe), &keys)
+    Ok((Surface::RoughDielectric(lobe), keys))
 }
