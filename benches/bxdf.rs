@@ -7,6 +7,9 @@ use risotto::systems::bxdf::{
     dielectric_sample, diffuse_sample, diffuse_sample_world, hg_sample, sample_cosine_hemisphere,
     sample_uniform_sphere, BxdfSample,
 };
+use risotto::systems::microfacet::Ggx;
+use risotto::systems::rough_conductor::RoughConductor;
+use risotto::systems::rough_dielectric::RoughDielectric;
 
 const N: usize = 4096;
 
@@ -76,6 +79,50 @@ fn bench_bxdf(c: &mut Criterion) {
         b.iter(|| {
             for ((o, wo), u) in out.iter_mut().zip(black_box(&wo_any)).zip(black_box(&u)) {
                 *o = dielectric_sample(black_box(1.5), Rgb::WHITE, *wo, *u);
+            }
+            black_box(&out);
+        })
+    });
+    // The GGX lobes (alpha 0.3, energy compensation on, Au): visible-normal sampling plus
+    // the evaluation each sample's weight and pdf come from, and the evaluation alone (what
+    // light sampling runs).
+    let au = risotto::systems::conductor::metal("Au").expect("a preset");
+    let gold = RoughConductor::new(
+        Ggx::isotropic(0.3),
+        Rgb::from_array(au.eta),
+        Rgb::from_array(au.k),
+        Rgb::WHITE,
+        true,
+    );
+    let lobe_u = u_column(21.0);
+    group.bench_function("rough_conductor_sample", |b| {
+        b.iter(|| {
+            let samples = out.iter_mut().zip(black_box(&wo_up)).zip(black_box(&u));
+            for (((o, wo), u), ul) in samples.zip(&lobe_u) {
+                *o = gold.sample(*wo, *u, ul.x);
+            }
+            black_box(&out);
+        })
+    });
+    let wi_up: Vec<Vec3> = lobe_u
+        .iter()
+        .map(|&u| sample_cosine_hemisphere(u))
+        .collect();
+    let mut evals = vec![(Rgb::BLACK, 0.0f32); N];
+    group.bench_function("rough_conductor_eval", |b| {
+        b.iter(|| {
+            for ((e, wo), wi) in evals.iter_mut().zip(black_box(&wo_up)).zip(&wi_up) {
+                *e = gold.eval(*wo, *wi);
+            }
+            black_box(&evals);
+        })
+    });
+    let glass = RoughDielectric::new(Ggx::isotropic(0.3), 1.5, Rgb::WHITE, true);
+    group.bench_function("rough_dielectric_sample", |b| {
+        b.iter(|| {
+            let samples = out.iter_mut().zip(black_box(&wo_any)).zip(black_box(&u));
+            for (((o, wo), u), ul) in samples.zip(&lobe_u) {
+                *o = glass.sample(*wo, *u, ul.x);
             }
             black_box(&out);
         })

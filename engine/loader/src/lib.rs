@@ -8,6 +8,7 @@ pub mod grid_file;
 pub mod load;
 pub mod media_params;
 pub mod mesh_file;
+mod rough_params;
 pub mod scene_file;
 pub mod surface_params;
 pub mod texture_file;

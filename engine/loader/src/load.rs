@@ -79,7 +79,8 @@ impl MaterialRegistry {
     }
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
-    /// `interface`, `subsurface`, `plastic`, `thin_dielectric`.
+    /// `rough_conductor`, `rough_dielectric`, `interface`, `subsurface`, `plastic`,
+    /// `thin_dielectric`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -144,6 +145,15 @@ impl MaterialRegistry {
                 builtin(p, surface, &["reflectance"])
             });
         }
+        r.register("rough_conductor", |p| {
+            let (surface, keys) = crate::rough_params::rough_conductor(p)?;
+            builtin(p, surface, &keys)
+        });
+        r.register("rough_dielectric", |p| {
+            surface_params::reject_two_sided(p, "rough_dielectric")?;
+            let (surface, keys) = crate::rough_params::rough_dielectric(p)?;
+            builtin(p, surface, &keys)
+        });
         r.register("interface", |p| {
             surface_params::reject_two_sided(p, "interface")?;
             builtin(p, Surface::Interface, &[])

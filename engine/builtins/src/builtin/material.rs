@@ -5,6 +5,7 @@
 use super::bxdfs::*;
 use super::interiors::*;
 use super::plastic::PlasticBxdf;
+use super::rough::*;
 use super::thin_dielectric::ThinDielectricBxdf;
 use super::two_sided::{facing_normals, TwoSidedBxdf};
 use crate::phase::{phase_bxdf, PhaseBxdf};
@@ -14,6 +15,8 @@ use risotto_components::Rgb;
 use risotto_engine::plugin::*;
 use risotto_systems::bxdf::PlasticCoat;
 use risotto_systems::pattern::PatternGraph;
+use risotto_systems::rough_conductor::RoughConductor;
+use risotto_systems::rough_dielectric::RoughDielectric;
 use std::sync::Arc;
 
 /// The surface part of a built-in material.
@@ -62,6 +65,11 @@ pub enum Surface {
         /// The reflectance graph.
         reflectance: Arc<PatternGraph>,
     },
+    /// GGX rough conductor (complex index, Fresnel tint, optional energy compensation),
+    /// its tables integrated when the material was built.
+    RoughConductor(RoughConductor),
+    /// GGX rough dielectric; its `eta` is the material's index (against vacuum).
+    RoughDielectric(RoughDielectric),
     /// Index-matched boundary: rays pass unchanged.
     Interface,
     /// Smooth plastic: a Lambertian base under a smooth dielectric coat
@@ -97,9 +105,11 @@ impl Surface {
     /// The surface's share of the material's instance hints.
     fn hints(&self) -> InstanceHints {
         match self {
-            Surface::Diffuse { .. } | Surface::Mirror { .. } | Surface::Plastic { .. } => {
-                InstanceHints::NONE
-            }
+            Surface::Diffuse { .. }
+            | Surface::Mirror { .. }
+            | Surface::Plastic { .. }
+            | Surface::RoughConductor(_) => InstanceHints::NONE,
+            Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
             {
@@ -156,6 +166,8 @@ impl Surface {
             Surface::MirrorPattern { ref reflectance } => arena.alloc(MirrorBxdf {
                 reflectance: pattern_column(ctx, "reflectance", reflectance, arena),
             }),
+            Surface::RoughConductor(ref lobe) => arena.alloc(RoughConductorBxdf { lobe }),
+            Surface::RoughDielectric(ref lobe) => arena.alloc(RoughDielectricBxdf { lobe }),
             Surface::Interface => arena.alloc(NullBxdf),
             Surface::Plastic { coat, diffuse } => arena.alloc(PlasticBxdf { coat, diffuse }),
             Surface::PlasticPattern { coat, ref diffuse } => arena.alloc(PlasticBxdf {
@@ -194,6 +206,11 @@ impl Surface {
                 Some(ParamValue::Pattern(diffuse))
             }
             (Surface::ThinDielectric { ior }, "ior") => Some(ParamValue::Float(*ior)),
+            (Surface::RoughDielectric(lobe), "ior") => Some(ParamValue::Float(lobe.eta)),
+            (Surface::RoughDielectric(lobe), "tint") => Some(ParamValue::Color(lobe.tint)),
+            (Surface::RoughConductor(lobe), "specular_reflectance") => {
+                Some(ParamValue::Color(lobe.tint))
+            }
             (Surface::TwoSided(inner), _) => inner.param(name),
             _ => None,
         }
@@ -298,6 +315,7 @@ impl BxdfFactory for BuiltinMaterial {
     fn ior(&self) -> f32 {
         match self.surface {
             Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,
+            Surface::RoughDielectric(ref lobe) => lobe.eta,
             _ => 1.0,
         }
     }

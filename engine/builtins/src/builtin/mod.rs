@@ -1,17 +1,18 @@
 //! Built-in materials (factories), their Bxdf closures, the phase function and the built-in
 //! interiors (`null`, `beer`).
 //!
-//! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`, `interface`,
-//! `plastic`, `thin_dielectric` (and `two_sided = true` on the one-sided reflectors).
+//! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`,
+//! `rough_conductor`, `rough_dielectric`, `interface`, `plastic`, `thin_dielectric` (and
+//! `two_sided = true` on the one-sided reflectors).
 //! Any of them may carry an `interior = { type = "null" | "beer", ... }` table that makes the
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 //!
 //! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
 //!
-//! Files: [`bxdfs`] (the first closures), [`plastic`], [`thin_dielectric`] and
-//! [`two_sided`] (one closure each), [`interiors`] (which volume integrator a material's
-//! inside gets, and the `null` and `beer` ones), [`mask`] (opacity) and [`material`] (the
-//! factory).
+//! Files: [`bxdfs`] (the first closures), [`rough`] (the GGX closures), [`plastic`],
+//! [`thin_dielectric`] and [`two_sided`] (one closure each), [`interiors`] (which volume
+//! integrator a material's inside gets, and the `null` and `beer` ones), [`mask`] (opacity)
+//! and [`material`] (the factory).
 //! Everything is re-exported here.
 
 pub mod bxdfs;
@@ -19,6 +20,7 @@ pub mod interiors;
 pub mod mask;
 pub mod material;
 pub mod plastic;
+pub mod rough;
 pub mod thin_dielectric;
 pub mod two_sided;
 
@@ -27,5 +29,6 @@ pub use interiors::*;
 pub use mask::*;
 pub use material::*;
 pub use plastic::PlasticBxdf;
+pub use rough::*;
 pub use thin_dielectric::ThinDielectricBxdf;
 pub use two_sided::TwoSidedBxdf;

@@ -1442,6 +1442,13 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                 "interface" => {}
                 // Read by `media_params::subsurface` (whose test parses every shipped one).
                 "subsurface" => {}
+                // Read by `rough_params`, whose readers run here.
+                "rough_conductor" => {
+                    crate::rough_params::rough_conductor(p).unwrap();
+                }
+                "rough_dielectric" => {
+                    crate::rough_params::rough_dielectric(p).unwrap();
+                }
                 other => panic!("{what}: unexpected material type {other}"),
             }
             if let Some(interior) = p.table("interior").unwrap() {

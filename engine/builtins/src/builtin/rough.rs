@@ -1,0 +1,195 @@
+//! The GGX closures: rough conductor and rough dielectric, over the per-sample functions of
+//! [`risotto_systems::rough_conductor`] and [`risotto_systems::rough_dielectric`]. Their
+//! lobes have densities (`DIFFUSE` bits), so the renderer light-samples them with MIS.
+
+use glam::Vec3;
+use risotto_components::{LobeSampled, Rgb};
+use risotto_engine::plugin::*;
+use risotto_systems::bxdf::{BxdfSample, Frame};
+use risotto_systems::rough_conductor::RoughConductor;
+use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::sampler::PathSampler;
+
+/// The local frame of a microfacet lobe at a point with unit shading normal `nn` and the
+/// point's tangent ([`ShadingContext::tangent`]): `s` (the direction of `alpha_u`) is the
+/// tangent made orthogonal to `nn` (Gram-Schmidt: a two-sided view flips `nn`, and the
+/// tangent must stay orthogonal to the normal actually used), `t = nn x s`, so anisotropy
+/// follows the surface's `dP/du` as in Mitsuba 3 and pbrt-v4. A degenerate tangent falls back
+/// to Duff et al.'s basis around the normal.
+#[inline]
+pub fn microfacet_frame(nn: Vec3, tangent: Vec3) -> Frame {
+    match (tangent - nn * nn.dot(tangent)).try_normalize() {
+        Some(s) => Frame {
+            s,
+            t: nn.cross(s),
+            n: nn,
+        },
+        None => Frame::from_normal(nn),
+    }
+}
+
+/// A lobe in the local frame of [`microfacet_frame`].
+trait LocalLobe {
+    /// A sample from local `wo` with a 2D sample and a lobe-choice number.
+    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample>;
+    /// `(f |cos|, pdf)` at local directions.
+    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32);
+}
+
+impl LocalLobe for RoughConductor {
+    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample> {
+        self.sample(wo, u, u_lobe)
+    }
+    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        self.eval(wo, wi)
+    }
+}
+
+impl LocalLobe for RoughDielectric {
+    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample> {
+        self.sample(wo, u, u_lobe)
+    }
+    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        self.eval(wo, wi)
+    }
+}
+
+/// Samples `lobe` at every point of `ctx`: three sampler dimensions per point (the Bxdf's
+/// 2D pair, then the lobe choice).
+fn generate<L: LocalLobe>(
+    lobe: &L,
+    ctx: &ShadingContext<'_>,
+    samplers: &mut [PathSampler],
+    out: &mut BxdfSamples,
+) {
+    let (nn, vn, tangent) = (ctx.nn(), ctx.vn(), ctx.tangent());
+    for (i, sampler) in samplers.iter_mut().enumerate().take(ctx.num_points()) {
+        let u = sampler.next_2d();
+        let u_lobe = sampler.next_1d();
+        let f = microfacet_frame(nn[i], tangent[i]);
+        if let Some(s) = lobe.sample_local(f.to_local(vn[i]), u, u_lobe) {
+            out.set_local(i, &f, s);
+        }
+    }
+}
+
+/// Evaluates `lobe` towards `wi[i]` at every point of `ctx`.
+fn evaluate<L: LocalLobe>(
+    lobe: &L,
+    ctx: &ShadingContext<'_>,
+    wi: &[Vec3],
+    value: &mut [Rgb],
+    pdf: &mut [f32],
+) {
+    let (nn, vn, tangent) = (ctx.nn(), ctx.vn(), ctx.tangent());
+    for i in 0..ctx.num_points() {
+        let f = microfacet_frame(nn[i], tangent[i]);
+        (value[i], pdf[i]) = lobe.eval_local(f.to_local(vn[i]), f.to_local(wi[i]));
+    }
+}
+
+/// The rough conductor closure (one-sided, as Mitsuba 3's `roughconductor`: black seen
+/// from behind the shading normal).
+#[derive(Clone, Copy, Debug)]
+pub struct RoughConductorBxdf<'a> {
+    /// The lobe's parameters (the material's).
+    pub lobe: &'a RoughConductor,
+}
+
+impl Bxdf for RoughConductorBxdf<'_> {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::DIFFUSE
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        generate(self.lobe, ctx, samplers, out);
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        evaluate(self.lobe, ctx, wi, value, pdf);
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(self.lobe.normal_reflectance());
+    }
+}
+
+/// The rough dielectric closure. `eta` is the material's index over the index outside the
+/// shape (the context's `ior_outside`), computed per point, as the smooth dielectric's.
+#[derive(Clone, Copy, Debug)]
+pub struct RoughDielectricBxdf<'a> {
+    /// The lobe's parameters, with the material's index over 1 (vacuum outside).
+    pub lobe: &'a RoughDielectric,
+}
+
+impl RoughDielectricBxdf<'_> {
+    /// The lobe at point `i`: the material's own when the outside is vacuum (the common
+    /// case, with its compensation tables), else one for the relative index there.
+    fn at<'b>(
+        &'b self,
+        ior_outside: f32,
+        scratch: &'b mut Option<RoughDielectric>,
+    ) -> &'b RoughDielectric {
+        if ior_outside == 1.0 {
+            return self.lobe;
+        }
+        let eta = self.lobe.eta / ior_outside.max(1e-6);
+        let fresh = scratch.as_ref().is_none_or(|d| d.eta != eta);
+        if fresh {
+            *scratch = Some(self.lobe.with_eta(eta));
+        }
+        scratch.as_ref().unwrap_or(self.lobe)
+    }
+}
+
+impl Bxdf for RoughDielectricBxdf<'_> {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::TRANSMIT | LobeSampled::DIFFUSE
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
+        let tangent = ctx.tangent();
+        let mut scratch = None;
+        for (i, sampler) in samplers.iter_mut().enumerate().take(ctx.num_points()) {
+            let u = sampler.next_2d();
+            let u_lobe = sampler.next_1d();
+            let f = microfacet_frame(nn[i], tangent[i]);
+            let lobe = self.at(ior_out[i], &mut scratch);
+            if let Some(s) = lobe.sample(f.to_local(vn[i]), u, u_lobe) {
+                out.set_local(i, &f, s);
+            }
+        }
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
+        let tangent = ctx.tangent();
+        let mut scratch = None;
+        for i in 0..ctx.num_points() {
+            let f = microfacet_frame(nn[i], tangent[i]);
+            let lobe = self.at(ior_out[i], &mut scratch);
+            (value[i], pdf[i]) = lobe.eval(f.to_local(vn[i]), f.to_local(wi[i]));
+        }
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        out.fill(Rgb::WHITE);
+    }
+}

@@ -1,0 +1,118 @@
+//! Scene-file parameters of the GGX materials, `rough_conductor` and `rough_dielectric`,
+//! named as Mitsuba 3's `roughconductor` / `roughdielectric` (`alpha`, `alpha_u`,
+//! `alpha_v`, `eta`, `k`, `material`, `specular_reflectance`) in the project's TOML style.
+
+use crate::scene_file::{MaterialParams, SceneError};
+use risotto_builtins::builtin::Surface;
+use risotto_components::Rgb;
+use risotto_systems::conductor::{metal, METALS};
+use risotto_systems::microfacet::Ggx;
+use risotto_systems::rough_conductor::RoughConductor;
+use risotto_systems::rough_dielectric::RoughDielectric;
+
+/// Roughness when a material gives none (Mitsuba's default).
+const DEFAULT_ALPHA: f32 = 0.1;
+
+/// The keys both GGX materials share.
+const ROUGHNESS_KEYS: [&str; 4] = ["alpha", "alpha_u", "alpha_v", "energy_compensation"];
+
+/// One roughness: a finite number in `(0, 1]`.
+fn alpha(p: &MaterialParams, key: &str) -> Result<f32, SceneError> {
+    p.f32_where(key, Some(DEFAULT_ALPHA), "must be in (0, 1]", |a| {
+        a > 0.0 && a <= 1.0
+    })
+}
+
+/// The distribution: `alpha` (isotropic), or `alpha_u` and `alpha_v` together.
+fn distribution(p: &MaterialParams) -> Result<Ggx, SceneError> {
+    match (p.has("alpha"), p.has("alpha_u"), p.has("alpha_v")) {
+        (true, false, false) | (false, false, false) => Ok(Ggx::isotropic(alpha(p, "alpha")?)),
+        (false, true, true) => Ok(Ggx::new(alpha(p, "alpha_u")?, alpha(p, "alpha_v")?)),
+        (true, _, _) => {
+            let key = if p.has("alpha_u") {
+                "alpha_u"
+            } else {
+                "alpha_v"
+            };
+            Err(p.error(
+                Some(key),
+                "give either `alpha` (isotropic) or `alpha_u` and `alpha_v`, not both",
+            ))
+        }
+        (false, u, _) => Err(p.error(
+            Some(if u { "alpha_u" } else { "alpha_v" }),
+            "an anisotropic roughness needs both `alpha_u` and `alpha_v`",
+        )),
+    }
+}
+
+/// `type = "rough_conductor"`: `alpha` or `alpha_u` + `alpha_v`; the complex index as
+/// `material` (a name of [`METALS`], default `"none"`, a perfect reflector) or as `eta` and
+/// `k` colours; `specular_reflectance` (a colour in [0, 1], default 1);
+/// `energy_compensation` (default true). Returns the surface and the keys it read (the
+/// registry adds `interior` and rejects any other key).
+pub(crate) fn rough_conductor(
+    p: &MaterialParams,
+) -> Result<(Surface, Vec<&'static str>), SceneError> {
+    let ggx = distribution(p)?;
+    let non_negative = "every channel >= 0 and finite";
+    let ok = |c: Rgb| c.min_channel() >= 0.0 && c.is_finite();
+    let (eta, k) = match (p.has("material"), p.has("eta"), p.has("k")) {
+        (true, false, false) | (false, false, false) => {
+            let name = p.string("material", Some("none"))?;
+            let m = metal(&name).ok_or_else(|| {
+                let known: Vec<&str> = METALS.iter().map(|m| m.name).collect();
+                p.error(
+                    Some("material"),
+                    format!("unknown metal \"{name}\" (known: {})", known.join(", ")),
+                )
+            })?;
+            (Rgb::from_array(m.eta), Rgb::from_array(m.k))
+        }
+        (false, true, true) => (
+            p.rgb_where("eta", None, non_negative, ok)?,
+            p.rgb_where("k", None, non_negative, ok)?,
+        ),
+        (true, _, _) => {
+            return Err(p.error(
+                Some("material"),
+                "give either `material` or `eta` and `k`, not both",
+            ))
+        }
+        (false, e, _) => {
+            return Err(p.error(
+                Some(if e { "eta" } else { "k" }),
+                "a complex index needs both `eta` and `k`",
+            ))
+        }
+    };
+    let tint = p.rgb_where(
+        "specular_reflectance",
+        Some(Rgb::WHITE),
+        "every channel in [0, 1]",
+        |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
+    )?;
+    let compensation = p.bool("energy_compensation", Some(true))?;
+    let lobe = RoughConductor::new(ggx, eta, k, tint, compensation);
+    let mut keys = ROUGHNESS_KEYS.to_vec();
+    keys.extend(["material", "eta", "k", "specular_reflectance"]);
+    Ok((Surface::RoughConductor(lobe), keys))
+}
+
+/// `type = "rough_dielectric"`: `alpha` or `alpha_u` + `alpha_v`; `ior` (> 0, default 1.5);
+/// `tint` (a colour in [0, 1] multiplying transmitted light, default 1);
+/// `energy_compensation` (default true). Returns the surface and the keys it read.
+pub(crate) fn rough_dielectric(
+    p: &MaterialParams,
+) -> Result<(Surface, Vec<&'static str>), SceneError> {
+    let ggx = distribution(p)?;
+    let ior = p.f32_where("ior", Some(1.5), "must be > 0", |v| v > 0.0)?;
+    let tint = p.rgb_where("tint", Some(Rgb::WHITE), "every channel in [0, 1]", |c| {
+        c.min_channel() >= 0.0 && c.max_channel() <= 1.0
+    })?;
+    let compensation = p.bool("energy_compensation", Some(true))?;
+    let lobe = RoughDielectric::new(ggx, ior, tint, compensation);
+    let mut keys = ROUGHNESS_KEYS.to_vec();
+    keys.extend(["ior", "tint"]);
+    Ok((Surface::RoughDielectric(lobe), keys))
+}
