@@ -38,14 +38,14 @@
 //! exponent = 40             # n > 0, larger is sharper; default 20
 //! ```
 
-use bumpalo::Bump;
-use glam::{Vec2, Vec3};
+use risotto::bumpalo::Bump;
 use risotto::components::{LobeSampled, Rgb};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
     Bxdf, BxdfFactory, BxdfSamples, InstanceHints, ShadingContext, ShadingMode,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::glam::{Vec2, Vec3};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::{parse_scene, MaterialParams, SceneError};
 use risotto::systems::bxdf::Frame;

@@ -45,8 +45,8 @@
 //! cheap_shadows = true      # shadow rays pass (attenuated by the interior); default false
 //! ```
 
-use bumpalo::Bump;
 use risotto::builtins::builtin::DielectricBxdf;
+use risotto::bumpalo::Bump;
 use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::IntegratorContext;

@@ -76,9 +76,8 @@
 //! albedo = 0.99     # single-scattering albedo, number or [r, g, b], each in [0, 1]
 //! ```
 
-use bumpalo::Bump;
-use glam::{Vec2, Vec3};
 use risotto::builtins::builtin::DielectricBxdf;
+use risotto::bumpalo::Bump;
 use risotto::components::{Hits, LobeSampled, Rays, Rgb, NO_HIT};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::{
@@ -86,6 +85,7 @@ use risotto::engine::plugin::{
     ShadeGroups, ShadingContext, ShadingMode, VolumeEvent, VolumeIntegrator, VolumeServices,
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::glam::{Vec2, Vec3};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::{parse_scene, MaterialParams, SceneError};
 use risotto::systems::medium::{channel_pdf, sample_free_flight, transmittance};

@@ -22,10 +22,9 @@
 //! (`p / pdf = 1` for exact HG sampling) must not multiply by the albedo again: the phase
 //! Bxdf here has albedo 1.
 
-use bumpalo::Bump;
-use glam::Vec3;
 use risotto::builtins::builtin::{DiffuseBxdf, NullBxdf};
 use risotto::builtins::phase::PhaseBxdf;
+use risotto::bumpalo::Bump;
 use risotto::components::{LobeSampled, Rays, Rgb};
 use risotto::engine::output::{write_exr, write_png};
 use risotto::engine::plugin::IntegratorContext;
@@ -35,6 +34,7 @@ use risotto::engine::plugin::{
 };
 use risotto::engine::render::{render, RenderOptions, RenderOutput};
 use risotto::engine::scene::{CompiledScene, LightComponent, RenderSettings, Scene, ShapeGeometry};
+use risotto::glam::Vec3;
 use risotto::systems::camera::{Camera, Projection};
 use risotto::systems::geometry::Sphere;
 use risotto::systems::medium::{channel_pdf, sample_free_flight, transmittance};

@@ -1,7 +1,14 @@
 //! risotto: a physically based CPU renderer with first-class volumes.
 //!
-//! This crate is the `risotto` driver (`risotto render scene.toml`) and re-exports the
-//! workspace's crates under short paths:
+//! This crate is the one an embedder depends on: it re-exports the workspace's crates under
+//! short paths, and [`glam`] and [`bumpalo`] at the versions the contract uses, so a plug-in
+//! needs nothing else. The `risotto` command-line driver is the default feature `cli`
+//! (clap, indicatif, signal-hook, ...); a library user turns it off:
+//!
+//! ```toml
+//! [dependencies]
+//! risotto = { git = "...", default-features = false }
+//! ```
 //!
 //! | path | crate | what |
 //! | --- | --- | --- |
@@ -12,8 +19,61 @@
 //! | [`loader`] | `risotto-loader` | scene files, the material registry, grid / mesh / texture readers |
 //! | [`tools`] | `risotto-tools` | converge, merge, compare |
 //!
-//! An embedder who builds scenes in code needs only `risotto-engine` (plus
-//! `risotto-builtins` for the built-in materials); see the README's "Embedding".
+//! # Quick start
+//!
+//! Read a scene (a file with [`loader::load::load_scene_file`], or text as here), compile it,
+//! render it and write the EXR:
+//!
+//! ```
+//! use risotto::engine::output::write_exr;
+//! use risotto::engine::render::{render, RenderOptions};
+//! use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+//! use risotto::loader::scene_file::parse_scene;
+//!
+//! let text = r#"
+//! [render]
+//! width = 32
+//! height = 24
+//! spp = 4
+//!
+//! [camera]
+//! from = [0, 1, 4]
+//! to = [0, 0.5, 0]
+//! fov = 40
+//!
+//! [materials.white]
+//! type = "diffuse"
+//! reflectance = 0.8
+//!
+//! [[shapes]]
+//! type = "sphere"
+//! material = "white"
+//! center = [0, 0.5, 0]
+//! radius = 0.5
+//!
+//! [[lights]]
+//! type = "environment"
+//! radiance = 1
+//! "#;
+//! // Relative paths in the text resolve against the directory of this (unread) path.
+//! let desc = parse_scene(text, std::path::Path::new("quick_start.toml"))?;
+//! // Your own material types are registered by name here (`MaterialRegistry::register`).
+//! let scene = scene_from_desc(desc, &MaterialRegistry::with_builtins())?.compile()?;
+//! let output = render(&scene, &RenderOptions::default(), &|_samples_done| {})?;
+//! assert_eq!((output.beauty.width, output.beauty.height), (32, 24));
+//! // A white furnace seen around the sphere: the sky is exactly 1.
+//! assert_eq!(output.beauty.get(0, 0).to_array(), [1.0; 3]);
+//! let path = std::env::temp_dir().join("risotto_quick_start.exr");
+//! write_exr(&path, &output.film_output(false))?;
+//! # std::fs::remove_file(&path)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! A scene can also be built in code ([`engine::scene::Scene`]), and materials and volume
+//! integrators of your own implement [`engine::plugin::BxdfFactory`]: see the README's
+//! "Embedding" and the examples (`cargo run --release --example custom_bxdf`).
+pub use bumpalo;
+pub use glam;
 pub use risotto_builtins as builtins;
 pub use risotto_components as components;
 pub use risotto_engine as engine;

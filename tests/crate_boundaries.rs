@@ -119,3 +119,43 @@ fn the_core_engine_depends_on_no_file_format_or_plotting_crate() {
     }
     assert!(deps.contains("risotto-systems"), "{deps}");
 }
+
+/// The library an embedder depends on (`risotto` with `default-features = false`) pulls in
+/// none of the driver's crates: each is optional and enabled only by the `cli` feature, and
+/// what a plug-in needs (the workspace crates, glam, bumpalo) is not optional.
+#[test]
+fn the_driver_s_crates_are_behind_the_cli_feature() {
+    let manifest: toml::Table = std::fs::read_to_string(root().join("Cargo.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let deps = manifest["dependencies"].as_table().unwrap();
+    let cli: Vec<&str> = manifest["features"]["cli"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    let optional = |name: &str| deps[name].get("optional").and_then(|o| o.as_bool()) == Some(true);
+    for name in ["clap", "indicatif", "signal-hook", "anyhow"] {
+        assert!(optional(name), "{name} is not optional");
+        assert!(
+            cli.contains(&format!("dep:{name}").as_str()),
+            "cli lacks {name}"
+        );
+    }
+    for name in [
+        "risotto-engine",
+        "risotto-builtins",
+        "risotto-loader",
+        "glam",
+        "bumpalo",
+    ] {
+        assert!(!optional(name), "{name} must come with the library");
+    }
+    let bin = &manifest["bin"].as_array().unwrap()[0];
+    assert_eq!(
+        bin["required-features"].as_array().unwrap()[0].as_str(),
+        Some("cli")
+    );
+}
