@@ -96,3 +96,31 @@ fn devices_fifos_and_directories_are_refused_before_reading() {
         );
     }
 }
+
+/// An OBJ's points and lines are not surfaces: skipped, and said so in the compiled scene's
+/// warnings (which every render's stats repeat), counted.
+#[test]
+fn obj_points_and_lines_are_skipped_with_a_warning() {
+    use risotto::loader::load::{compile_scene, load_scene_file, MaterialRegistry};
+    let d = dir("obj-pl");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 1 1 1\np 4\nl 1 4\n  l 2 4\nf 1 3 2\n";
+    std::fs::write(d.join("pl.obj"), obj).unwrap();
+    let scene = d.join("pl.toml");
+    let mesh = "[[shapes]]\ntype = \"mesh\"\nmaterial = \"floor\"\npath = \"pl.obj\"\n";
+    std::fs::write(&scene, format!("{SCENE}\n{mesh}")).unwrap();
+    let loaded = load_scene_file(&scene, &MaterialRegistry::with_builtins()).unwrap();
+    let compiled = compile_scene(loaded, &scene).unwrap();
+    let w: Vec<&String> = compiled
+        .warnings
+        .iter()
+        .filter(|w| w.contains("pl.obj"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", compiled.warnings);
+    assert!(
+        w[0].contains("1 point and 2 line statements skipped"),
+        "{}",
+        w[0]
+    );
+    // Two quads (the scene's) and the one face.
+    assert_eq!(compiled.geometry.num_triangles(), 5);
+}

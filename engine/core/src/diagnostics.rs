@@ -122,6 +122,9 @@ pub struct Source {
     pub text: String,
     /// Every file path resolved from the text (and noted by factories).
     pub files: ReferencedFiles,
+    /// What reading the scene and its files found that a user should know without it being
+    /// an error (an OBJ's points and lines skipped); every render's stats repeat them.
+    pub warnings: SceneWarnings,
     /// Where the command-line overrides begin in `text`, if there are any
     /// ([`Source::with_overrides`]): errors in them name the `-D` argument, not a line of the
     /// file.
@@ -161,6 +164,7 @@ impl Source {
             dir,
             text: text.to_owned(),
             files: ReferencedFiles::default(),
+            warnings: SceneWarnings::default(),
             overrides_at: None,
         }
     }
@@ -380,6 +384,26 @@ impl PartialEq for Location {
             && self.span == other.span
             && self.entity == other.entity
             && self.field == other.field
+    }
+}
+
+/// Warnings found while reading a scene (a shared handle, like [`ReferencedFiles`]: readers
+/// deep in the loader add to it; the scene and its compiled form carry them to the stats).
+#[derive(Clone, Debug, Default)]
+pub struct SceneWarnings(Arc<std::sync::Mutex<Vec<String>>>);
+
+impl SceneWarnings {
+    /// Adds a warning (once: the same text twice is one warning).
+    pub fn add(&self, warning: String) {
+        let mut w = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !w.contains(&warning) {
+            w.push(warning);
+        }
+    }
+
+    /// The warnings, in the order they were found.
+    pub fn list(&self) -> Vec<String> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 }
 

@@ -179,6 +179,9 @@ impl RenderSettings {
 pub struct Scene {
     /// The files a scene file made it from reads (empty for a scene built in code).
     pub files: crate::diagnostics::ReferencedFiles,
+    /// Warnings from reading the scene (its files' skipped content); compiling adds its own,
+    /// and every render's stats repeat them.
+    pub warnings: Vec<String>,
     /// The entities.
     pub world: hecs::World,
     /// Materials by index.
@@ -313,6 +316,7 @@ impl Scene {
         (settings.width, settings.height) = (camera.width, camera.height);
         Scene {
             files: Default::default(),
+            warnings: Vec::new(),
             world: hecs::World::new(),
             materials: Vec::new(),
             camera,

@@ -425,6 +425,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         })?;
     let mut scene = Scene::new(camera, settings);
     scene.files = desc.files.clone();
+    scene.warnings = desc.warnings.clone();
     scene.camera_volume = desc.camera_volume.clone();
     scene.camera_volume_at = desc.camera_volume_at.clone();
     for m in &desc.materials {

@@ -24,6 +24,18 @@ pub struct MeshData {
     /// Vertex indices of each triangle (every index below `positions.len()`), polygons
     /// fan-triangulated; the geometric normal is along `(v1 - v0) x (v2 - v0)`.
     pub triangles: Vec<[u32; 3]>,
+    /// Elements of the file that are not surfaces and were skipped: OBJ points (`p`) and
+    /// lines (`l`), counted.
+    pub skipped: Skipped,
+}
+
+/// Counts of a mesh file's elements that are not surfaces (skipped, with a warning).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Skipped {
+    /// OBJ `p` statements.
+    pub points: usize,
+    /// OBJ `l` statements.
+    pub lines: usize,
 }
 
 /// Reads an OBJ or PLY file, chosen by its extension (`.ply`, any case, is PLY; anything

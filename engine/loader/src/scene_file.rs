@@ -58,6 +58,9 @@ pub struct SceneDesc {
     pub path: PathBuf,
     /// The files the scene reads (see [`ReferencedFiles`]).
     pub files: ReferencedFiles,
+    /// What reading the scene and its files found that is worth a warning but not an error
+    /// (an OBJ's points and lines, which are skipped).
+    pub warnings: Vec<String>,
     /// Image size, sample count, path depth, seed.
     pub render: RenderSettings,
     /// The camera.
@@ -274,6 +277,7 @@ pub fn parse_scene_with(
     Ok(SceneDesc {
         path: path.to_path_buf(),
         files: src.files.clone(),
+        warnings: src.warnings.list(),
         render,
         camera,
         materials,

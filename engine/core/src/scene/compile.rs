@@ -10,6 +10,7 @@ impl Scene {
         self.settings.check(&self.camera)?;
         let Scene {
             files,
+            warnings: read_warnings,
             mut world,
             materials,
             camera,
@@ -33,7 +34,7 @@ impl Scene {
             .iter()
             .map(|s| world.get::<&ObjectTransform>(s.0).ok().map(|t| t.0))
             .collect();
-        let mut warnings = Vec::new();
+        let mut warnings = read_warnings;
         let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
 
         let mut triangles = Vec::new();

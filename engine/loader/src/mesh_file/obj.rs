@@ -40,7 +40,10 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
             None => format!("cannot parse OBJ file `{shown}`: {e}"),
         }
     })?;
-    let mut mesh = MeshData::default();
+    let mut mesh = MeshData {
+        skipped: count_skipped(&text),
+        ..MeshData::default()
+    };
     let what = format!("cannot parse OBJ file `{shown}`");
     for model in &models {
         let m = &model.mesh;
@@ -170,4 +173,19 @@ fn bad_face_index(text: &str, kind: &str, slot: usize) -> Option<String> {
         }
     }
     None
+}
+
+/// The OBJ statements that are not surfaces, which tobj is told to ignore: points (`p`) and
+/// lines (`l`), counted so the scene can warn that they were skipped.
+fn count_skipped(text: &str) -> super::Skipped {
+    let mut skipped = super::Skipped::default();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("p") => skipped.points += 1,
+            Some("l") => skipped.lines += 1,
+            _ => {}
+        }
+    }
+    skipped
 }

@@ -334,6 +334,15 @@ pub(crate) fn mesh(
             msg,
         )
     })?;
+    let skipped = data.skipped;
+    if skipped.points + skipped.lines > 0 {
+        r.src.warnings.add(format!(
+            "{}: {} point and {} line statements skipped (only faces are surfaces)",
+            path.display(),
+            skipped.points,
+            skipped.lines
+        ));
+    }
     let p = &data.positions;
     let local = data
         .triangles
