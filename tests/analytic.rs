@@ -313,6 +313,7 @@ fn spot_light_above_plane_follows_its_falloff() {
             intensity,
             cutoff_angle: cutoff_deg as f32,
             beam_width: beam_deg as f32,
+            texture: None,
         },
     );
     let out = render_default(&scene.compile().unwrap());

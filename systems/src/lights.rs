@@ -22,7 +22,7 @@ mod build;
 mod column;
 mod spot;
 
-pub use spot::SpotFalloff;
+pub use spot::{SpotFalloff, SpotTexture};
 
 /// One light.
 #[derive(Clone, Debug)]
@@ -59,6 +59,8 @@ pub enum Light {
         intensity: Rgb,
         /// The angular falloff.
         falloff: SpotFalloff,
+        /// The projection texture, if any (multiplies the intensity).
+        texture: Option<std::sync::Arc<SpotTexture>>,
     },
     /// Radiance arriving from every direction at infinity.
     Environment {
@@ -412,14 +414,16 @@ impl LightSet {
                 direction,
                 intensity,
                 falloff,
+                texture,
             } => {
                 let s = point_light_sample(*position, *intensity, p, pmf)?;
                 // The light emits towards -wi, at angle theta from its axis.
                 let f = falloff.eval(-s.wi.dot(*direction));
-                (f > 0.0).then(|| LightSample {
-                    radiance: s.radiance * f,
-                    ..s
-                })
+                let radiance = match texture {
+                    None => s.radiance * f,
+                    Some(t) => s.radiance * t.eval(-s.wi, *direction) * f,
+                };
+                (f > 0.0).then_some(LightSample { radiance, ..s })
             }
             Light::Volume { emitter } => {
                 let cdf = self.selection.as_ref()?.cdf();

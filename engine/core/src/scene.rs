@@ -13,7 +13,7 @@ use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
 use risotto_systems::environment_map::EnvironmentMap;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
-use risotto_systems::lights::{Light, LightSet, SpotFalloff};
+use risotto_systems::lights::{Light, LightSet, SpotFalloff, SpotTexture};
 /// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] shape (an
 /// optional component of its entity; [`Scene::set_vertex_attributes`]).
 pub use risotto_systems::mesh_attributes::VertexAttributes;
@@ -83,6 +83,9 @@ pub enum LightComponent {
         cutoff_angle: f32,
         /// Half-angle of the fully lit beam, degrees, in `(0, cutoff_angle]`.
         beam_width: f32,
+        /// A projection texture and the `up` that orients it (Mitsuba's `lookat` up; not
+        /// parallel to `direction`), if any ([`risotto_systems::lights::SpotTexture`]).
+        texture: Option<(Arc<risotto_systems::pattern::Texture>, Vec3)>,
     },
     /// Environment.
     Environment {

@@ -486,6 +486,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 intensity,
                 cutoff_angle,
                 beam_width,
+                texture,
                 ..
             } => LightComponent::Spot {
                 position,
@@ -493,6 +494,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 intensity,
                 cutoff_angle,
                 beam_width,
+                texture,
             },
             LightDesc::Environment {
                 radiance,

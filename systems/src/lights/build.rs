@@ -40,8 +40,14 @@ impl LightSet {
                 Light::Point { intensity, .. } => 4.0 * PI * intensity.average(),
                 // Intensity times the falloff's integral over the sphere (not 4 pi).
                 Light::Spot {
-                    intensity, falloff, ..
-                } => falloff.solid_angle() * intensity.average(),
+                    intensity,
+                    falloff,
+                    texture,
+                    ..
+                } => {
+                    let tint = texture.as_ref().map_or(1.0, |t| t.mean.average());
+                    falloff.solid_angle() * intensity.average() * tint
+                }
                 // As an area light's `L pi A`: radiance per length times volume, times pi.
                 Light::Volume { emitter } => emitter.power() * PI,
                 Light::Environment {

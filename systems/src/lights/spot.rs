@@ -68,3 +68,69 @@ impl SpotFalloff {
         (2.0 * std::f64::consts::PI * (1.0 - ramp)) as f32
     }
 }
+
+/// A spot light's projection texture (Mitsuba 3's `spot` `texture`): the intensity is
+/// multiplied by the texture, projected through the spot's frame with the cutoff cone as the
+/// field of view. For a direction `d` leaving the light with local coordinates
+/// `(x, y, z) = (d . s, d . t, d . axis)`, the texture is read at Mitsuba's
+/// `(0.5 + 0.5 x / (z tan cutoff), 0.5 + 0.5 y / (z tan cutoff))`, `s` and `t` being the
+/// frame of Mitsuba's `lookat` (`s = normalize(up x axis)`, `t = axis x s`), and the image's
+/// top row at Mitsuba's `v = 0` (our [`Texture`](crate::pattern::Texture) has `v` growing upwards, so `1 - v`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpotTexture {
+    /// The image (linear RGB).
+    pub texture: crate::pattern::Texture,
+    /// The frame's first axis (the texture's `u` direction).
+    pub s: glam::Vec3,
+    /// The frame's second axis (the texture's `v` direction).
+    pub t: glam::Vec3,
+    /// `tan(cutoff)`: the cone's half-width at unit distance along the axis.
+    pub tan_cutoff: f32,
+    /// The mean texel, per channel: the texture's share of the light's power (for light
+    /// selection only, which needs no more than a positive estimate).
+    pub mean: risotto_components::Rgb,
+}
+
+impl SpotTexture {
+    /// The projection of `texture` by a spot at `axis` (unit) with `up` (not parallel to it)
+    /// and `cutoff` (radians). `None` when `up` is parallel to the axis.
+    pub fn new(
+        texture: crate::pattern::Texture,
+        axis: glam::Vec3,
+        up: glam::Vec3,
+        cutoff: f32,
+    ) -> Option<SpotTexture> {
+        let s = up.cross(axis).try_normalize()?;
+        let t = axis.cross(s);
+        let (w, h) = texture.size();
+        let mut sum = risotto_components::Rgb::BLACK;
+        for y in 0..h {
+            for x in 0..w {
+                sum += texture.texel(x, y);
+            }
+        }
+        let mean = sum * (1.0 / (w * h) as f32);
+        Some(SpotTexture {
+            texture,
+            s,
+            t,
+            tan_cutoff: cutoff.tan(),
+            mean,
+        })
+    }
+
+    /// The texture's factor for the unit direction `d` leaving the light (`axis` its axis);
+    /// black behind the light.
+    #[inline]
+    pub fn eval(&self, d: glam::Vec3, axis: glam::Vec3) -> risotto_components::Rgb {
+        let z = d.dot(axis);
+        // Behind the light (or NaN): nothing.
+        if z.is_nan() || z <= 0.0 {
+            return risotto_components::Rgb::BLACK;
+        }
+        let scale = 0.5 / (z * self.tan_cutoff);
+        let u = 0.5 + d.dot(self.s) * scale;
+        let v = 0.5 + d.dot(self.t) * scale;
+        self.texture.lookup(u, 1.0 - v)
+    }
+}

@@ -180,6 +180,7 @@ fn column_sampling_equals_per_point_sampling() {
         direction: -Vec3::Y,
         intensity: Rgb::splat(8.0),
         falloff: SpotFalloff::from_degrees(60.0, 40.0),
+        texture: None,
     });
     lights.push(Light::Environment {
         radiance: Rgb::splat(0.1),
@@ -313,6 +314,7 @@ fn spot_power_is_the_integrated_falloff() {
             direction: Vec3::Y,
             intensity: Rgb::new(1.0, 2.0, 3.0),
             falloff: f,
+            texture: None,
         },
         Light::Point {
             position: Vec3::ZERO,
@@ -338,6 +340,7 @@ fn spot_sample_is_intensity_falloff_over_distance_squared() {
             direction: Vec3::NEG_Y,
             intensity: Rgb::new(4.0, 2.0, 1.0),
             falloff: f,
+            texture: None,
         }],
         &geometry,
         1.0,

@@ -139,13 +139,34 @@ impl Scene {
                     intensity,
                     cutoff_angle,
                     beam_width,
+                    texture,
                 } => {
                     features.spot_lights = true;
+                    let direction = direction.normalize();
+                    let texture = match texture {
+                        None => None,
+                        Some((image, up)) => Some(Arc::new(
+                            SpotTexture::new(
+                                (*image).clone(),
+                                direction,
+                                up,
+                                cutoff_angle.to_radians(),
+                            )
+                            .ok_or_else(|| CompileError::Invalid {
+                                entity: "spot light".into(),
+                                message: format!(
+                                    "`up` {up} is parallel to the direction {direction}: it \
+                                     cannot orient the texture"
+                                ),
+                            })?,
+                        )),
+                    };
                     Light::Spot {
                         position,
-                        direction: direction.normalize(),
+                        direction,
                         intensity,
                         falloff: SpotFalloff::from_degrees(cutoff_angle, beam_width),
+                        texture,
                     }
                 }
                 LightComponent::Environment { radiance, map } => {

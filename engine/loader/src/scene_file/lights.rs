@@ -42,6 +42,9 @@ pub enum LightDesc {
         /// Half-angle of the fully lit beam, degrees, in `(0, cutoff_angle]` (default
         /// `3/4 cutoff_angle`).
         beam_width: f32,
+        /// `texture` (an image projected through the cone, Mitsuba's spot `texture`) and the
+        /// `up` that orients it (default `[0, 1, 0]`).
+        texture: Option<(Arc<risotto_systems::pattern::Texture>, Vec3)>,
     },
     /// Radiance arriving from every direction at infinity (seen by every escaping ray).
     Environment {
@@ -276,6 +279,8 @@ fn read_spot(r: &Reader<'_>, node: &Node, name: String) -> Result<LightDesc, Sce
         "intensity",
         "cutoff_angle",
         "beam_width",
+        "texture",
+        "up",
     ])?;
     let position = r.vec3("position", None)?;
     let (key, axis) = match (r.vec3_opt("direction")?, r.vec3_opt("to")?) {
@@ -316,12 +321,41 @@ fn read_spot(r: &Reader<'_>, node: &Node, name: String) -> Result<LightDesc, Sce
         &format!("must be in (0, cutoff_angle] = (0, {cutoff_angle}] degrees"),
         |v| v > 0.0 && v <= cutoff_angle,
     )?;
+    let direction = axis / len;
+    let texture = match r.path_opt("texture")? {
+        None => {
+            if let Some(up) = r.get("up") {
+                return Err(r.invalid("up", up, "only orients a `texture`"));
+            }
+            None
+        }
+        Some((path, path_node)) => {
+            let image = crate::texture_file::read_texture(&path).map_err(|message| {
+                r.error(
+                    SceneErrorKind::ExternalFile,
+                    &path_node.span(),
+                    Some("texture"),
+                    message,
+                )
+            })?;
+            let up = r.vec3("up", Some(Vec3::Y))?;
+            if up.cross(direction).length() <= 1e-6 * up.length() {
+                return Err(r.invalid(
+                    "up",
+                    r.get("up").unwrap_or(node),
+                    "must not be parallel to the spot's direction (it orients the texture)",
+                ));
+            }
+            Some((Arc::new(image), up))
+        }
+    };
     Ok(LightDesc::Spot {
         name,
         position,
-        direction: axis / len,
+        direction,
         intensity: r.radiance("intensity", None)?,
         cutoff_angle,
         beam_width,
+        texture,
     })
 }

@@ -1818,6 +1818,7 @@ fn spot_light_parses_with_mitsubas_defaults() {
             intensity: Rgb::splat(5.0),
             cutoff_angle: 20.0,
             beam_width: 15.0,
+            texture: None,
         }
     );
     // The axis as a target point; explicit angles (beam = cutoff allowed).
@@ -1834,6 +1835,7 @@ fn spot_light_parses_with_mitsubas_defaults() {
             intensity: Rgb::new(1.0, 2.0, 3.0),
             cutoff_angle: 90.0,
             beam_width: 90.0,
+            texture: None,
         }
     );
     assert_eq!(s.lights[3].name(), "lamp");
