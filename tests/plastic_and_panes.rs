@@ -190,6 +190,24 @@ fn a_two_sided_surface_looks_the_same_from_both_sides() {
     }
     let one_sided_plastic = "type = \"plastic\"\ndiffuse_reflectance = 1";
     assert_eq!(lone_quad(one_sided_plastic, false), [0.0; 3]);
+    // A white rough conductor (energy-compensated: a white furnace within 1 %) is one-sided
+    // as Mitsuba's `roughconductor`, and the same from both sides with `two_sided = true`.
+    let metal = "type = \"rough_conductor\"\nmaterial = \"none\"\nalpha = 0.3";
+    let two_sided_metal = format!("{metal}\ntwo_sided = true");
+    for (material, front) in [
+        (metal, true),
+        (&two_sided_metal, true),
+        (&two_sided_metal, false),
+    ] {
+        let got = lone_quad(material, front);
+        for c in got {
+            assert!(
+                (c - 0.5).abs() < 0.01,
+                "{material:?} front {front}: {got:?}"
+            );
+        }
+    }
+    assert_eq!(lone_quad(metal, false), [0.0; 3]);
 }
 
 /// The error building `material` (a TOML table body) into a scene, as text.

@@ -146,7 +146,10 @@ impl MaterialRegistry {
             });
         }
         r.register("rough_conductor", |p| {
-            let (surface, keys) = crate::rough_params::rough_conductor(p)?;
+            let (surface, mut keys) = crate::rough_params::rough_conductor(p)?;
+            // One-sided as Mitsuba's `roughconductor`; `two_sided = true` as its `twosided`.
+            let surface = surface_params::two_sided(p, surface)?;
+            keys.push("two_sided");
             builtin(p, surface, &keys)
         });
         r.register("rough_dielectric", |p| {

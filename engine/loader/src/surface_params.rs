@@ -93,7 +93,7 @@ pub fn reject_two_sided(p: &MaterialParams, kind: &str) -> Result<(), SceneError
         return Err(p.error(
             Some("two_sided"),
             format!(
-                "`two_sided` applies to surfaces that only reflect (diffuse, plastic); a \
+                "`two_sided` applies to surfaces that only reflect (diffuse, plastic, rough_conductor); a \
                  `{kind}` transmits light and is already seen from both sides"
             ),
         ));
