@@ -165,6 +165,3 @@ fn dielectric_albedo_at(ggx: &Ggx, eta: f32, wo: Vec3) -> f64 {
     }
     sum / (STRATA * STRATA) as f64
 }
-
-#[cfg(test)]
-mod tests;

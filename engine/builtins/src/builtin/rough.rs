@@ -28,63 +28,39 @@ pub fn microfacet_frame(nn: Vec3, tangent: Vec3) -> Frame {
     }
 }
 
-/// A lobe in the local frame of [`microfacet_frame`].
-trait LocalLobe {
-    /// A sample from local `wo` with a 2D sample and a lobe-choice number.
-    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample>;
-    /// `(f |cos|, pdf)` at local directions.
-    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32);
-}
-
-impl LocalLobe for RoughConductor {
-    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample> {
-        self.sample(wo, u, u_lobe)
-    }
-    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
-        self.eval(wo, wi)
-    }
-}
-
-impl LocalLobe for RoughDielectric {
-    fn sample_local(&self, wo: Vec3, u: glam::Vec2, u_lobe: f32) -> Option<BxdfSample> {
-        self.sample(wo, u, u_lobe)
-    }
-    fn eval_local(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
-        self.eval(wo, wi)
-    }
-}
-
-/// Samples `lobe` at every point of `ctx`: three sampler dimensions per point (the Bxdf's
-/// 2D pair, then the lobe choice).
-fn generate<L: LocalLobe>(
-    lobe: &L,
+/// Samples every point of `ctx` in its [`microfacet_frame`]: three sampler dimensions per
+/// point (the Bxdf's 2D pair, then the lobe choice), handed to `sample(i, wo, u, u_lobe)`
+/// with the local `wo`.
+fn generate(
     ctx: &ShadingContext<'_>,
     samplers: &mut [PathSampler],
     out: &mut BxdfSamples,
+    mut sample: impl FnMut(usize, Vec3, glam::Vec2, f32) -> Option<BxdfSample>,
 ) {
     let (nn, vn, tangent) = (ctx.nn(), ctx.vn(), ctx.tangent());
     for (i, sampler) in samplers.iter_mut().enumerate().take(ctx.num_points()) {
         let u = sampler.next_2d();
         let u_lobe = sampler.next_1d();
         let f = microfacet_frame(nn[i], tangent[i]);
-        if let Some(s) = lobe.sample_local(f.to_local(vn[i]), u, u_lobe) {
+        if let Some(s) = sample(i, f.to_local(vn[i]), u, u_lobe) {
             out.set_local(i, &f, s);
         }
     }
 }
 
-/// Evaluates `lobe` towards `wi[i]` at every point of `ctx`.
-fn evaluate<L: LocalLobe>(
-    lobe: &L,
+/// Evaluates every point of `ctx` towards `wi[i]` in its [`microfacet_frame`]:
+/// `eval(i, wo, wi)` with local directions gives `(f |cos|, pdf)`.
+fn evaluate(
     ctx: &ShadingContext<'_>,
     wi: &[Vec3],
     value: &mut [Rgb],
     pdf: &mut [f32],
+    mut eval: impl FnMut(usize, Vec3, Vec3) -> (Rgb, f32),
 ) {
     let (nn, vn, tangent) = (ctx.nn(), ctx.vn(), ctx.tangent());
     for i in 0..ctx.num_points() {
         let f = microfacet_frame(nn[i], tangent[i]);
-        (value[i], pdf[i]) = lobe.eval_local(f.to_local(vn[i]), f.to_local(wi[i]));
+        (value[i], pdf[i]) = eval(i, f.to_local(vn[i]), f.to_local(wi[i]));
     }
 }
 
@@ -106,7 +82,9 @@ impl Bxdf for RoughConductorBxdf<'_> {
         samplers: &mut [PathSampler],
         out: &mut BxdfSamples,
     ) {
-        generate(self.lobe, ctx, samplers, out);
+        generate(ctx, samplers, out, |_, wo, u, u_lobe| {
+            self.lobe.sample(wo, u, u_lobe)
+        });
     }
     fn evaluate_samples(
         &mut self,
@@ -115,7 +93,7 @@ impl Bxdf for RoughConductorBxdf<'_> {
         value: &mut [Rgb],
         pdf: &mut [f32],
     ) {
-        evaluate(self.lobe, ctx, wi, value, pdf);
+        evaluate(ctx, wi, value, pdf, |_, wo, wi| self.lobe.eval(wo, wi));
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
         out.fill(self.lobe.normal_reflectance());
@@ -160,18 +138,11 @@ impl Bxdf for RoughDielectricBxdf<'_> {
         samplers: &mut [PathSampler],
         out: &mut BxdfSamples,
     ) {
-        let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
-        let tangent = ctx.tangent();
+        let ior_out = ctx.ior_outside();
         let mut scratch = None;
-        for (i, sampler) in samplers.iter_mut().enumerate().take(ctx.num_points()) {
-            let u = sampler.next_2d();
-            let u_lobe = sampler.next_1d();
-            let f = microfacet_frame(nn[i], tangent[i]);
-            let lobe = self.at(ior_out[i], &mut scratch);
-            if let Some(s) = lobe.sample(f.to_local(vn[i]), u, u_lobe) {
-                out.set_local(i, &f, s);
-            }
-        }
+        generate(ctx, samplers, out, |i, wo, u, u_lobe| {
+            self.at(ior_out[i], &mut scratch).sample(wo, u, u_lobe)
+        });
     }
     fn evaluate_samples(
         &mut self,
@@ -180,14 +151,11 @@ impl Bxdf for RoughDielectricBxdf<'_> {
         value: &mut [Rgb],
         pdf: &mut [f32],
     ) {
-        let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
-        let tangent = ctx.tangent();
+        let ior_out = ctx.ior_outside();
         let mut scratch = None;
-        for i in 0..ctx.num_points() {
-            let f = microfacet_frame(nn[i], tangent[i]);
-            let lobe = self.at(ior_out[i], &mut scratch);
-            (value[i], pdf[i]) = lobe.eval(f.to_local(vn[i]), f.to_local(wi[i]));
-        }
+        evaluate(ctx, wi, value, pdf, |i, wo, wi| {
+            self.at(ior_out[i], &mut scratch).eval(wo, wi)
+        });
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
         out.fill(Rgb::WHITE);

@@ -1,11 +1,20 @@
 //! The albedo tables against a different integration: a product midpoint rule over the
 //! hemisphere of directions (not visible-normal sampling), evaluating the lobes' `f`.
 
-use super::*;
-use crate::rough_conductor::RoughConductor;
-use crate::rough_dielectric::RoughDielectric;
+//! (An integration test: it evaluates the rough lobes, which build on the tables.)
+
+use glam::Vec3;
 use risotto_components::Rgb;
+use risotto_systems::energy_compensation::AlbedoTable;
+use risotto_systems::microfacet::Ggx;
+use risotto_systems::rough_conductor::RoughConductor;
+use risotto_systems::rough_dielectric::RoughDielectric;
 use std::f64::consts::PI;
+
+/// The direction at cosine `mu` in the `xz` plane.
+fn direction(mu: f32) -> Vec3 {
+    Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+}
 
 /// `int g(wi) dwi` over the sphere (`z > 0` half only when `upper`) by the midpoint rule in
 /// `(cos theta, phi)` (uniform in solid angle), `n` x `2n` cells.
@@ -75,7 +84,7 @@ fn dielectric_table_matches_sphere_quadrature() {
 /// The energy single scattering loses, `1 - E_avg`, printed against roughness (the curve
 /// Kulla & Conty 2017 plot for GGX: nothing at the smooth end, growing with roughness).
 /// Measured here (height-correlated Smith, 2026-12-06; `cargo test -p risotto-systems
-/// single_scattering_loss -- --nocapture` prints the row):
+/// --test energy_compensation single_scattering_loss -- --nocapture` prints the row):
 ///
 /// | alpha | 0.1 | 0.2 | 0.3 | 0.4 | 0.5 | 0.6 | 0.7 | 0.8 | 0.9 | 1.0 |
 /// |---|---|---|---|---|---|---|---|---|---|---|
