@@ -71,6 +71,18 @@ enum Command {
     /// into the whole render: writes the EXR (with the AOV layers when the parts carry them),
     /// its PNG preview and merged stats JSON.
     Merge(MergeArgs),
+    /// Convert a Mitsuba 3 XML or pbrt-v4 scene into risotto's TOML scene format (relative
+    /// paths rewritten for OUT's directory). Rendering OUT gives the same image as rendering
+    /// the original.
+    Convert {
+        /// The scene (`.xml` or `.pbrt`), or `-` to read it from standard input.
+        scene: PathBuf,
+        /// The TOML scene to write.
+        out: PathBuf,
+        /// Set a scene parameter (Mitsuba's `<default>` / `$name`), repeatable.
+        #[arg(short = 'D', long = "define", value_name = "NAME=VALUE")]
+        defines: Vec<String>,
+    },
     /// Print a partial render's header as JSON: resolution, window, sample range, spp,
     /// seed, scene hash, whether it carries AOVs.
     Info {
@@ -218,6 +230,11 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge_command(args),
         Command::Merge(args) => merge_command(args),
         Command::Info { part } => info_command(&part),
+        Command::Convert {
+            scene,
+            out,
+            defines,
+        } => convert_command(&scene, &out, &defines),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -556,6 +573,23 @@ fn render_techniques(args: &RenderArgs, scene: &CompiledScene) -> Result<Techniq
         }
     }
     Ok(t)
+}
+
+fn convert_command(scene_path: &Path, out: &Path, defines: &[String]) -> Result<()> {
+    let input = SceneInput::read(scene_path, &[], None)?;
+    if scene_path != Path::new("-") && same_file(scene_path, out) {
+        anyhow::bail!(
+            "{}: the output would overwrite the scene being converted",
+            out.display()
+        );
+    }
+    let (toml, warnings) =
+        risotto::loader::scene_file::convert_scene(&input.text, &input.path, defines, out)?;
+    for w in &warnings {
+        eprintln!("warning: {}", printable(w));
+    }
+    std::fs::write(out, toml).with_context(|| format!("{}: cannot write", out.display()))?;
+    Ok(())
 }
 
 fn techniques_command(scene_path: &Path, defines: &[String]) -> Result<()> {

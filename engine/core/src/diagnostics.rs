@@ -129,6 +129,20 @@ pub struct Source {
     /// ([`Source::with_overrides`]): errors in them name the `-D` argument, not a line of the
     /// file.
     overrides_at: Option<usize>,
+    /// When `text` is the TOML a scene of another format was converted to
+    /// ([`Source::converted`]): where each part of it came from, by byte range in `text`
+    /// (ascending, disjoint), so errors name the original file and line.
+    origins: Option<Vec<(Range<usize>, Origin)>>,
+}
+
+/// Where a part of a converted scene was written in its original file (a Mitsuba XML
+/// element, a pbrt directive): errors found in the converted TOML are reported here.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Origin {
+    /// The original file (an `<include>`d or `Import`ed file where the part was written).
+    pub file: PathBuf,
+    /// 1-based line in `file`.
+    pub line: usize,
 }
 
 /// Characters of a source line shown on each side of an error's caret.
@@ -166,7 +180,29 @@ impl Source {
             files: ReferencedFiles::default(),
             warnings: SceneWarnings::default(),
             overrides_at: None,
+            origins: None,
         }
+    }
+
+    /// The TOML text `toml` that the scene file `path` (Mitsuba XML, pbrt) was converted to,
+    /// with the origin of each part: `origins[i] = (range, origin)` says that the bytes
+    /// `range` of `toml` were converted from `origin`. Errors in such a part are reported at
+    /// the original file and line, others at `path` without a line; the converted TOML line
+    /// is quoted below either. Relative paths in `toml` resolve against `path`'s directory.
+    pub fn converted(path: &Path, toml: &str, mut origins: Vec<(Range<usize>, Origin)>) -> Source {
+        let mut src = Source::new(path, toml);
+        origins.sort_by_key(|(r, _)| r.start);
+        src.origins = Some(origins);
+        src
+    }
+
+    /// The origin of the converted text at byte `offset`, if this is a converted scene and
+    /// the offset lies in a part with one.
+    fn origin_at(&self, offset: usize) -> Option<&Origin> {
+        let origins = self.origins.as_ref()?;
+        let i = origins.partition_point(|(r, _)| r.start <= offset);
+        let (range, origin) = origins.get(i.checked_sub(1)?)?;
+        range.contains(&offset).then_some(origin)
     }
 
     /// The text `text` of the file `path` followed by command-line overrides (`-D KEY=VALUE`),
@@ -175,25 +211,31 @@ impl Source {
     /// of each override's line (it starts with `-D `).
     pub fn with_overrides(path: &Path, text: &str, overrides: &[String]) -> (Source, Vec<usize>) {
         let mut src = Source::new(path, text);
+        let starts = src.append_overrides(overrides);
+        (src, starts)
+    }
+
+    /// Appends command-line overrides after the text as [`Source::with_overrides`] does
+    /// (also to a [`Source::converted`] scene) and returns the byte offset of each one's line.
+    pub fn append_overrides(&mut self, overrides: &[String]) -> Vec<usize> {
         if overrides.is_empty() {
-            return (src, Vec::new());
+            return Vec::new();
         }
-        if !src.text.ends_with('\n') {
-            src.text.push('\n');
+        if !self.text.ends_with('\n') {
+            self.text.push('\n');
         }
-        src.overrides_at = Some(src.text.len());
-        let starts = overrides
+        self.overrides_at = Some(self.text.len());
+        overrides
             .iter()
             .map(|o| {
-                let start = src.text.len();
+                let start = self.text.len();
                 // One line each: a line break inside an argument would split it.
-                src.text.push_str("-D ");
-                src.text.push_str(&o.replace(['\n', '\r'], " "));
-                src.text.push('\n');
+                self.text.push_str("-D ");
+                self.text.push_str(&o.replace(['\n', '\r'], " "));
+                self.text.push('\n');
                 start
             })
-            .collect();
-        (src, starts)
+            .collect()
     }
 
     /// Whether a byte offset lies in the command-line overrides.
@@ -292,7 +334,15 @@ impl Source {
     ) -> SceneError {
         let message = message.into();
         let (line, col) = self.line_col(span.start);
-        let mut head = if self.in_overrides(span.start) {
+        let origin = self
+            .origin_at(span.start)
+            .filter(|_| !self.in_overrides(span.start));
+        let converted = self.origins.is_some() && !self.in_overrides(span.start);
+        let mut head = if let Some(o) = origin {
+            format!("{}:{}: ", o.file.display(), o.line)
+        } else if converted {
+            format!("{}: ", self.path.display())
+        } else if self.in_overrides(span.start) {
             let start = self.clamp(span.start);
             let line_start = self.text[..start].rfind('\n').map_or(0, |i| i + 1);
             let line_end = self.text[start..]
@@ -322,11 +372,26 @@ impl Source {
             }
             (None, None) => {}
         }
-        let rendered = format!("{head}{message}\n{}", self.excerpt(span));
+        let rendered = match converted {
+            true => format!(
+                "{head}{message}\n  in the scene's TOML conversion (`risotto convert`), line \
+                 {line}:\n{}",
+                self.excerpt(span)
+            ),
+            false => format!("{head}{message}\n{}", self.excerpt(span)),
+        };
+        let (file, line_col) = match origin {
+            Some(o) => (o.file.clone(), Some((o.line, 1))),
+            None if converted => (self.path.clone(), None),
+            None => (
+                self.path.clone(),
+                (!self.in_overrides(span.start)).then_some((line, col)),
+            ),
+        };
         SceneError(Box::new(ErrorData {
             kind,
-            file: self.path.clone(),
-            line_col: (!self.in_overrides(span.start)).then_some((line, col)),
+            file,
+            line_col,
             entity: entity.map(str::to_owned),
             field: field.map(str::to_owned),
             message,

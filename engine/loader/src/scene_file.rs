@@ -40,6 +40,7 @@ pub use params::MaterialParams;
 pub use pattern::ColourParam;
 pub use risotto_engine::diagnostics::{Location, ReferencedFiles, SceneError, SceneErrorKind};
 
+use crate::import::{self, ImportOptions, SceneFormat};
 use lights::read_lights;
 use params::Reader;
 use raw::{Node, Value};
@@ -250,8 +251,84 @@ pub fn parse_scene_with(
     path: &Path,
     overrides: &[String],
 ) -> Result<SceneDesc, SceneError> {
+    let format = SceneFormat::detect(path, text);
+    if format != SceneFormat::Toml {
+        // Another format: converted to TOML, then read as TOML with each part's errors
+        // located at the original (`crate::import`).
+        let (defines, toml_overrides) = import::split_defines(path, overrides)?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let options = ImportOptions {
+            defines: &defines,
+            toml_dir: dir,
+        };
+        let imported = import::import_scene(format, path, text, &options)?;
+        return parse_imported(imported, path, &toml_overrides);
+    }
     let (src, override_lines) = Source::with_overrides(path, text, overrides);
-    let src = Arc::new(src);
+    parse_source(Arc::new(src), text, path, overrides, &override_lines)
+}
+
+/// Reads a converted scene (`path` the original file, whose directory relative paths are
+/// written against) with TOML `overrides` (dotted `-D` paths) applied to the conversion.
+pub(crate) fn parse_imported(
+    imported: import::ImportedScene,
+    path: &Path,
+    overrides: &[String],
+) -> Result<SceneDesc, SceneError> {
+    let (toml, origins) = imported.scene.write();
+    let mut src = Source::converted(path, &toml, origins);
+    let override_lines = src.append_overrides(overrides);
+    for w in imported.warnings {
+        src.warnings.add(w);
+    }
+    parse_source(Arc::new(src), &toml, path, overrides, &override_lines)
+}
+
+/// Converts a scene in another format ([`SceneFormat::detect`]) to the TOML text of a file
+/// to be written at `out`, with relative paths written relative to `out`'s directory, and
+/// checks that the TOML reads back (an error is located at the original file and line).
+/// `defines` are the command line's `-D name=value`; a TOML override (a dotted name) is an
+/// error here: it applies when rendering the converted file. Returns the text and the
+/// conversion's warnings.
+pub fn convert_scene(
+    text: &str,
+    path: &Path,
+    defines: &[String],
+    out: &Path,
+) -> Result<(String, Vec<String>), SceneError> {
+    let format = SceneFormat::detect(path, text);
+    let (defines, toml_overrides) = import::split_defines(path, defines)?;
+    if let Some(o) = toml_overrides.first() {
+        return Err(SceneError::unlocated(
+            path,
+            SceneErrorKind::InvalidValue,
+            &format!(
+                "`-D {o}` is a TOML override (a dotted name); give it when rendering the \
+                 converted scene"
+            ),
+        ));
+    }
+    let dir = out.parent().unwrap_or(Path::new(""));
+    let options = ImportOptions {
+        defines: &defines,
+        toml_dir: dir,
+    };
+    let imported = import::import_scene(format, path, text, &options)?;
+    let (toml, origins) = imported.scene.write();
+    // Checked as the file will be read: from `out`'s directory.
+    let src = Source::converted(out, &toml, origins);
+    parse_source(Arc::new(src), &toml, out, &[], &[])?;
+    Ok((toml, imported.warnings))
+}
+
+/// Reads the TOML `text` of `src` (with `overrides` appended at `override_lines`).
+fn parse_source(
+    src: Arc<Source>,
+    text: &str,
+    path: &Path,
+    overrides: &[String],
+    override_lines: &[usize],
+) -> Result<SceneDesc, SceneError> {
     let mut root = raw::parse_document(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         src.error(
@@ -265,7 +342,7 @@ pub fn parse_scene_with(
             ),
         )
     })?;
-    overrides::apply_overrides(&src, &mut root, overrides, &override_lines)?;
+    overrides::apply_overrides(&src, &mut root, overrides, override_lines)?;
     let top = Reader::new(&src, &root, "scene");
     top.deny_unknown(&["render", "camera", "materials", "shapes", "lights"])?;
 
