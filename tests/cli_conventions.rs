@@ -247,3 +247,26 @@ fn stats_say_which_build_image_threads_and_where_the_time_went() {
         );
     }
 }
+
+/// `convert` refuses what it cannot convert, with the reason: a TOML scene (nothing to
+/// convert) and an output that would overwrite its input.
+#[test]
+fn convert_refuses_toml_input_and_overwriting_the_scene() {
+    let (dir, scene) = setup("convert-refusals");
+    let out = dir.join("out.toml");
+    let o = risotto(&["convert", scene.to_str().unwrap(), out.to_str().unwrap()]);
+    assert_fails("convert toml", &o, &["already a risotto TOML scene"]);
+    assert!(!out.exists());
+    let xml = dir.join("scene.xml");
+    std::fs::write(&xml, "<scene version=\"3.0.0\"/>").unwrap();
+    let o = risotto(&["convert", xml.to_str().unwrap(), xml.to_str().unwrap()]);
+    assert_fails(
+        "convert onto itself",
+        &o,
+        &["would overwrite the scene being converted"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(&xml).unwrap(),
+        "<scene version=\"3.0.0\"/>"
+    );
+}
