@@ -336,8 +336,19 @@ fn push_rgb(
 pub fn read_exr_all(
     path: &Path,
 ) -> Result<x::Image<x::Layers<x::AnyChannels<x::FlatSamples>>>, OutputError> {
+    read_exr_all_within(path, MAX_IMAGE_PIXELS)
+}
+
+/// [`read_exr_all`] with a bound on each part's pixels (at most [`MAX_IMAGE_PIXELS`]) and on
+/// all the samples of all parts together (four channels' worth of `max_pixels`), both checked
+/// in the headers before the reader allocates anything: a small compressed file that claims
+/// a huge image, or dozens of channels, is an error naming the claim.
+pub fn read_exr_all_within(
+    path: &Path,
+    max_pixels: u64,
+) -> Result<x::Image<x::Layers<x::AnyChannels<x::FlatSamples>>>, OutputError> {
     // The header's claimed size is checked before the reader allocates for it.
-    check_exr_header(path)?;
+    check_exr_header(path, max_pixels.min(MAX_IMAGE_PIXELS))?;
     x::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -392,8 +403,9 @@ pub fn exr_part_names(path: &Path) -> Result<Vec<String>, OutputError> {
         .collect())
 }
 
-/// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`]).
-fn check_exr_header(path: &Path) -> Result<(), OutputError> {
+/// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`] and
+/// [`read_exr_all_within`]).
+fn check_exr_header(path: &Path, max_pixels: u64) -> Result<(), OutputError> {
     let file = File::open(path).map_err(|cause| OutputError::Io {
         path: path.to_path_buf(),
         cause,
@@ -408,19 +420,31 @@ fn check_exr_header(path: &Path) -> Result<(), OutputError> {
     let meta = exr::meta::MetaData::read_from_unbuffered(file, false)
         .map_err(|source| exr_error(path, source))?;
     let mut chunks = 0u64;
+    let mut samples = 0u64;
     for (i, header) in meta.headers.iter().enumerate() {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         let pixels = (w as u64).saturating_mul(h as u64);
-        if pixels > MAX_IMAGE_PIXELS {
+        if pixels > max_pixels {
             return Err(invalid(
                 path,
                 format!(
-                    "part {i}: the header claims {w} x {h} pixels, more than the {MAX_IMAGE_PIXELS} \
-                     pixels an image may have"
+                    "part {i}: the header claims {w} x {h} pixels, more than the {max_pixels} \
+                     pixels this image may have"
                 ),
             ));
         }
+        samples = samples.saturating_add(pixels.saturating_mul(header.channels.list.len() as u64));
         chunks = chunks.saturating_add(header.chunk_count as u64);
+    }
+    let max_samples = max_pixels.saturating_mul(4);
+    if samples > max_samples {
+        return Err(invalid(
+            path,
+            format!(
+                "the headers claim {samples} samples in all channels of all parts, more than \
+                 the {max_samples} (four channels of {max_pixels} pixels) this image may have"
+            ),
+        ));
     }
     let needed = chunks.saturating_mul(MIN_BYTES_PER_CHUNK);
     if needed > file_len {
@@ -453,7 +477,13 @@ fn check_exr_header(path: &Path) -> Result<(), OutputError> {
 /// the headers imply (an offset-table entry and a chunk header for each), so a small file
 /// whose header claims a huge image is an error naming the file and the claimed size.
 pub fn read_exr_rgb(path: &Path) -> Result<Image, OutputError> {
-    let image = read_exr_all(path)?;
+    read_exr_rgb_within(path, MAX_IMAGE_PIXELS)
+}
+
+/// [`read_exr_rgb`] with a smaller bound on the pixels of a part (a texture's, an
+/// environment map's), checked in the headers before any pixel is decoded.
+pub fn read_exr_rgb_within(path: &Path, max_pixels: u64) -> Result<Image, OutputError> {
+    let image = read_exr_all_within(path, max_pixels)?;
 
     type Layer = x::Layer<x::AnyChannels<x::FlatSamples>>;
     let find = |layer: &Layer, name: &str| -> Option<usize> {

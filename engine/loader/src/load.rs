@@ -29,7 +29,7 @@ use crate::surface_params;
 use risotto_builtins::builtin::{BuiltinMaterial, Interior, Opacity, OpacityMask, Surface};
 use risotto_builtins::media::{HomogeneousMedium, Scattering};
 use risotto_components::Rgb;
-use risotto_engine::output::{read_exr_rgb, Image, OutputError};
+use risotto_engine::output::{read_exr_rgb_within, Image, OutputError};
 use risotto_engine::plugin::BxdfFactory;
 use risotto_engine::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto_systems::camera::{Camera, Projection};
@@ -377,6 +377,11 @@ fn with_opacity(
     })
 }
 
+/// The largest environment map accepted, in pixels: 2^27 (16384 x 8192; about 30 bytes
+/// a pixel while it is read and its sampling distribution built). Checked in the EXR's
+/// header before anything is decoded.
+pub const MAX_ENVIRONMENT_PIXELS: u64 = 1 << 27;
+
 /// Loads a scene file and builds its world with the materials of `registry`.
 pub fn load_scene_file(path: &Path, registry: &MaterialRegistry) -> Result<Scene, LoadError> {
     let desc = load_scene(path)?;
@@ -509,7 +514,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             } => {
                 let map = match map {
                     Some(p) => {
-                        let img = read_exr_rgb(&p)
+                        let img = read_exr_rgb_within(&p, MAX_ENVIRONMENT_PIXELS)
                             .and_then(|img| check_radiance_map(&p, img))
                             .map_err(|e| {
                                 let message = format!("cannot read environment map: {e}");

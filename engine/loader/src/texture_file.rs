@@ -6,7 +6,7 @@
 //! [`MAX_TEXTURE_PIXELS`] from the header, before the pixels are allocated.
 
 use risotto_components::Rgb;
-use risotto_engine::output::read_exr_rgb;
+use risotto_engine::output::read_exr_rgb_within;
 use risotto_systems::pattern::Texture;
 use std::path::Path;
 
@@ -39,8 +39,8 @@ pub fn read_texture_channels(path: &Path, channels: TextureChannels) -> Result<T
         Some("png") => read_png(path, channels)?,
         Some("exr") if channels == TextureChannels::Alpha => read_exr_alpha(path)?,
         Some("exr") => {
-            let image = read_exr_rgb(path).map_err(|e| e.to_string())?;
-            check_size(path, image.width as u64, image.height as u64)?;
+            // The size is checked in the header, before the pixels are decoded.
+            let image = read_exr_rgb_within(path, MAX_TEXTURE_PIXELS).map_err(|e| e.to_string())?;
             (image.width, image.height, image.pixels)
         }
         _ => {
@@ -74,7 +74,8 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 /// The `A` channel of the first layer that has one, as grey texels.
 fn read_exr_alpha(path: &Path) -> Result<(usize, usize, Vec<Rgb>), String> {
-    let image = risotto_engine::output::read_exr_all(path).map_err(|e| e.to_string())?;
+    let image = risotto_engine::output::read_exr_all_within(path, MAX_TEXTURE_PIXELS)
+        .map_err(|e| e.to_string())?;
     let found = image.layer_data.iter().find_map(|layer| {
         let c = layer.channel_data.list.iter().find(|c| c.name.eq("A"))?;
         Some((layer.size.width(), layer.size.height(), c))

@@ -337,3 +337,34 @@ fn outputs_are_written_atomically() {
     assert_eq!(std::fs::read(&path).unwrap(), b"new");
     assert_eq!(names().len(), 1, "{:?}", names());
 }
+
+/// A reader's own pixel bound (a texture's, an environment map's) is checked in the header:
+/// the same file reads under a bound it fits and is refused, naming the claim, under one it
+/// does not; and a film EXR's many channels (beauty, variance, count: 7 samples a pixel) are
+/// counted against four channels' worth of the bound.
+#[test]
+fn reader_bounds_are_checked_from_the_header() {
+    let (w, h) = (8, 4);
+    let beauty = test_image(w, h, 3);
+    let variance = test_image(w, h, 4);
+    let counts = vec![1.0; w * h];
+    let (_dir, path) = scratch("bounded.exr");
+    let out = FilmOutput {
+        beauty: &beauty,
+        variance: &variance,
+        sample_count: &counts,
+        albedo: None,
+        normal: None,
+        depth: None,
+    };
+    write_exr(&path, &out).unwrap();
+    // 32 pixels, 7 channels = 224 samples: fits a bound of 56 pixels (224 samples).
+    assert_eq!(read_exr_rgb_within(&path, 56).unwrap(), beauty);
+    let e = read_exr_rgb_within(&path, 31).unwrap_err().to_string();
+    assert!(e.contains("8 x 4 pixels, more than the 31"), "{e}");
+    let e = read_exr_rgb_within(&path, 55).unwrap_err().to_string();
+    assert!(
+        e.contains("224 samples") && e.contains("more than the 220"),
+        "{e}"
+    );
+}
