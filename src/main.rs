@@ -3,6 +3,7 @@
 //! `risotto merge PART.exr... --out FULL.exr` and `risotto info PART.exr`.
 
 mod converge_command;
+mod display;
 mod interrupt;
 mod progress;
 mod replay_args;
@@ -191,6 +192,17 @@ struct RenderArgs {
     /// Write the merge data (a partial EXR) even for a whole render.
     #[arg(long)]
     partial: bool,
+    /// Show the image while it renders in the tev viewer listening at HOST:PORT (default
+    /// 127.0.0.1:14158, tev's own), updated about every second (pbrt-v4's
+    /// --display-server). A viewer that is not there costs a warning, not the render.
+    #[arg(
+        long,
+        alias = "display-server",
+        value_name = "HOST:PORT",
+        num_args = 0..=1,
+        default_missing_value = display::DEFAULT_ADDRESS
+    )]
+    display: Option<String>,
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
@@ -272,6 +284,9 @@ fn printable(message: &str) -> String {
         .collect::<Vec<_>>()
         .join("\n")
 }
+
+/// How often `--display` updates the viewer.
+const DISPLAY_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
 
 fn render_command(args: RenderArgs) -> Result<()> {
     check_exposure(args.exposure)?;
@@ -422,27 +437,63 @@ fn render_command(args: RenderArgs) -> Result<()> {
     // A checkpoint that cannot be written (a full disk, a vanished directory) costs only the
     // protection it would have given: the render goes on, and the failure is a warning.
     let mut failed_checkpoints = 0u32;
-    let mut result = match checkpoint {
-        Some(every) => {
-            let mut write = |r: &RenderOutput| {
+    let mut display = args.display.as_deref().and_then(|address| {
+        let name = out.file_name().map_or_else(
+            || "risotto".to_owned(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        display::TevDisplay::connect(address, &name, width, height)
+            .map_err(|e| bar.suspend(|| eprintln!("warning: {}; rendering on", printable(&e))))
+            .ok()
+    });
+    let mut result = if checkpoint.is_none() && display.is_none() {
+        render(&compiled, &options, &tick)?
+    } else {
+        // Passes: a checkpoint after those that end its interval, the display after each.
+        let every = match (checkpoint, &display) {
+            (Some(c), Some(_)) => c.min(DISPLAY_EVERY),
+            (Some(c), None) => c,
+            (None, _) => DISPLAY_EVERY,
+        };
+        // Without a display every pass ends a checkpoint interval (as before); with one, the
+        // passes are the display's and a checkpoint follows those that end about its interval
+        // (passes are sized to take `every`, give or take).
+        let checkpoint_every_pass = display.is_none();
+        let mut last_checkpoint = std::time::Instant::now();
+        let mut write = |r: &RenderOutput| {
+            if let Some(d) = display.as_mut() {
+                if let Err(e) = d.show(&r.beauty, r.window) {
+                    bar.suspend(|| eprintln!("warning: --display stopped: {e}"));
+                    display = None;
+                }
+            }
+            if checkpoint.is_some_and(|c| {
+                checkpoint_every_pass || last_checkpoint.elapsed() >= c.mul_f64(0.75)
+            }) {
+                last_checkpoint = std::time::Instant::now();
                 if let Err(e) = write_partial(&out, &to_partial(r)) {
                     failed_checkpoints += 1;
                     let e = printable(&e.to_string());
                     bar.suspend(|| eprintln!("warning: checkpoint not written, rendering on: {e}"));
                 }
-                Ok(())
-            };
-            render_checkpointed(
-                &compiled,
-                &options,
-                &tick,
-                Checkpoints {
-                    every,
-                    write: &mut write,
-                },
-            )?
+            }
+            Ok(())
+        };
+        let result = render_checkpointed(
+            &compiled,
+            &options,
+            &tick,
+            Checkpoints {
+                every,
+                write: &mut write,
+            },
+        )?;
+        if let Some(d) = display.as_mut() {
+            if let Err(e) = d.show(&result.beauty, result.window) {
+                bar.suspend(|| eprintln!("warning: --display stopped: {e}"));
+            }
         }
-        None => render(&compiled, &options, &tick)?,
+        result
     };
     bar.finish_and_clear();
     if let Some(j) = &json {
