@@ -20,8 +20,8 @@ use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
 use risotto::engine::output::{read_exr_rgb, write_exr, write_png};
 use risotto::engine::render::{
-    checked_extent, render, render_checkpointed, Checkpoints, RenderError, RenderOptions,
-    RenderOutput,
+    checked_extent, render, render_checkpointed, Checkpoints, NoiseTarget, RenderError,
+    RenderOptions, RenderOutput,
 };
 use risotto::engine::replay::replay;
 use risotto::engine::scene::CompiledScene;
@@ -46,7 +46,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file to an EXR (beauty, variance, sampleCount) and a PNG preview.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Compare an image with a reference (RMSE, relMSE, MAE, per-channel means), as the
     /// Mitsuba harness's rmse.py does.
     Compare {
@@ -192,6 +192,23 @@ struct RenderArgs {
     /// Write the merge data (a partial EXR) even for a whole render.
     #[arg(long)]
     partial: bool,
+    /// Adaptive sampling: each pixel stops once its estimated relative error (standard
+    /// error over value, 3x3 window) is at most X, e.g. 0.02; the scene's spp (or --spp)
+    /// is then the most a pixel takes. See README, "Accuracy and its cost".
+    #[arg(
+        long,
+        value_name = "X",
+        conflicts_with_all = ["samples", "chunks", "checkpoint", "partial", "crop", "grid"]
+    )]
+    noise_target: Option<f32>,
+    /// With --noise-target: the samples every pixel takes before any stops.
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 16,
+        requires = "noise_target"
+    )]
+    min_spp: u32,
     /// Show the image while it renders in the tev viewer listening at HOST:PORT (default
     /// 127.0.0.1:14158, tev's own), updated about every second (pbrt-v4's
     /// --display-server). A viewer that is not there costs a warning, not the render.
@@ -236,7 +253,7 @@ enum ProgressMode {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render_command(args),
+        Command::Render(args) => render_command(*args),
         Command::Compare { test, reference } => compare_command(&test, &reference),
         Command::Techniques { scene, defines } => techniques_command(&scene, &defines),
         Command::Converge(args) => converge_command(args),
@@ -380,12 +397,26 @@ fn render_command(args: RenderArgs) -> Result<()> {
         None => None,
     };
     let partial = args.partial || crop.is_some() || samples.is_some() || checkpoint.is_some();
+    let noise_target = match args.noise_target {
+        Some(x) if x.is_finite() && x > 0.0 => {
+            anyhow::ensure!(args.min_spp >= 1, "--min-spp 0: must be at least 1");
+            Some(NoiseTarget {
+                relative_error: x,
+                min_spp: args.min_spp,
+            })
+        }
+        Some(x) => {
+            anyhow::bail!("--noise-target {x}: must be a positive relative error (e.g. 0.02)")
+        }
+        None => None,
+    };
     let options = techniques.render_options(RenderOptions {
         threads: args.threads,
         batch_size: args.batch_size,
         crop,
         samples,
         interrupt: Some(interrupt::install()?),
+        noise_target,
         ..RenderOptions::default()
     });
     let (window, range) = checked_extent(&compiled, &options).map_err(|e| match e {
@@ -517,8 +548,13 @@ fn render_command(args: RenderArgs) -> Result<()> {
     ));
 
     // Interrupted: the passes done are written as a partial render that `merge` finishes.
-    let interrupted = result.samples.end < range.end;
-    if interrupted {
+    // An adaptive render ends early by design; only a signal interrupts it, and what it has
+    // is written as a whole image (its pixels' sample counts differ: not a partial render).
+    let interrupted = match noise_target {
+        Some(_) => interrupt::requested(),
+        None => result.samples.end < range.end,
+    };
+    if interrupted && noise_target.is_none() {
         let hash = match partial {
             true => hash.clone(),
             false => split::partial_scene_hash(&input, &compiled, &techniques)?,
@@ -546,6 +582,13 @@ fn render_command(args: RenderArgs) -> Result<()> {
             Some(png) => eprintln!("wrote {} and {}", out.display(), png.display()),
             None => eprintln!("wrote {}", out.display()),
         }
+    }
+    if interrupted && noise_target.is_some() {
+        return Err(interrupt::Interrupted(format!(
+            "interrupted: {} holds the image so far (an adaptive render cannot be resumed)",
+            out.display()
+        ))
+        .into());
     }
     if interrupted {
         let (done, want) = (result.samples, range);

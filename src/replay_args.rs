@@ -67,7 +67,7 @@ mod tests {
     fn render_args(args: &[&str]) -> RenderArgs {
         let argv = ["risotto", "render"].iter().chain(args);
         match Cli::try_parse_from(argv).unwrap().command {
-            Command::Render(a) => a,
+            Command::Render(a) => *a,
             _ => unreachable!("a render command"),
         }
     }

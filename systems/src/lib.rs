@@ -2,6 +2,7 @@
 //! the slices it writes, knows nothing of the scene world, the scheduler or the global
 //! integrator, and can be benchmarked alone.
 
+pub mod adaptive;
 pub mod bssrdf;
 mod bvh8;
 pub mod bxdf;

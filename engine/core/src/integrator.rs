@@ -73,6 +73,12 @@ pub struct TileFilm {
     pub x0: u32,
     /// Tile origin in the image.
     pub y0: u32,
+    /// Which pixels (row-major in the tile) still take samples: adaptive sampling stops
+    /// those that reached their target. Empty: all of them.
+    pub active: Vec<bool>,
+    /// Adaptive sampling's guard: how many consecutive pass ends found each pixel at its
+    /// target (it stops at two). Empty when not adaptive.
+    pub converged_passes: Vec<u8>,
 }
 
 impl TileFilm {
@@ -83,7 +89,15 @@ impl TileFilm {
             aovs: AovFilm::new(w, h),
             x0,
             y0,
+            active: Vec::new(),
+            converged_passes: Vec::new(),
         }
+    }
+
+    /// Whether the pixel `local` (row-major in the tile) takes samples.
+    #[inline]
+    pub fn is_active(&self, local: usize) -> bool {
+        self.active.get(local).copied().unwrap_or(true)
     }
     fn local(&self, pixel: u32, image_width: u32) -> u32 {
         let (x, y) = (pixel % image_width, pixel / image_width);
@@ -119,7 +133,13 @@ pub fn render_tile<I: Integrator>(
 ) {
     let w = tile.film.width;
     let h = tile.film.height;
-    let pixels = (w * h) as usize;
+    // The pixels that take samples (all but those adaptive sampling has stopped).
+    let pixels = (0..(w * h) as usize)
+        .filter(|&local| tile.is_active(local))
+        .count();
+    if pixels == 0 {
+        return;
+    }
     // Saturating: a batch size of 2^40 paths must mean "all samples at once", not a
     // truncated or wrapped sample range (which never advanced `s0`).
     let per_batch = (batch_size / pixels.max(1)).clamp(1, u32::MAX as usize) as u32;
@@ -143,6 +163,9 @@ pub fn render_tile<I: Integrator>(
             .zip(paths.sample.chunks_exact_mut(spp));
         for y in 0..h {
             for x in 0..w {
+                if !tile.is_active((y * w + x) as usize) {
+                    continue;
+                }
                 let (pixel, sample) = rows.next().expect("one run of rows per pixel");
                 pixel.fill((tile.y0 + y) * scene.camera.width + tile.x0 + x);
                 for (v, s) in sample.iter_mut().zip(s0..s1) {
@@ -155,8 +178,10 @@ pub fn render_tile<I: Integrator>(
         // (x, y) (`TileFilm::local` of its image pixel, without two integer divisions per
         // path).
         film_pixel.clear();
-        for local in 0..pixels as u32 {
-            film_pixel.extend(std::iter::repeat_n(local, spp));
+        for local in 0..w * h {
+            if tile.is_active(local as usize) {
+                film_pixel.extend(std::iter::repeat_n(local, spp));
+            }
         }
         debug_assert!(film_pixel
             .iter()

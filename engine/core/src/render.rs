@@ -15,6 +15,7 @@ use crate::stats::{RenderStats, SystemStats};
 use bumpalo::Bump;
 use rayon::prelude::*;
 use risotto_components::Rgb;
+use risotto_systems::adaptive::AdaptiveSummary;
 use risotto_systems::film::{AovFilm, Film};
 use risotto_systems::independent_sampler::SamplerKind;
 
@@ -154,7 +155,33 @@ pub struct RenderOptions {
     /// samples of the passes done ([`RenderOutput::samples`] says which; the same bits those
     /// samples have in the whole render). Defaults to `None`: one pass, not interruptible.
     pub interrupt: Option<&'static std::sync::atomic::AtomicBool>,
+    /// Adaptive sampling: pixels stop taking samples once their estimated relative error
+    /// reaches the target ([`NoiseTarget`]); the scene's spp is then the most a pixel
+    /// takes. Defaults to `None`: every pixel takes every sample.
+    pub noise_target: Option<NoiseTarget>,
 }
+
+/// Adaptive sampling's request ([`RenderOptions::noise_target`]).
+///
+/// Every pixel first takes `min_spp` samples; then, after each pass, the pixels whose
+/// relative error (estimated from the film's variance over a 3 x 3 window, relative to 1 %
+/// of the image's mean for dark pixels: [`risotto_systems::adaptive`]) is at or below
+/// `relative_error` stop for good, and the others take as many samples again as they have
+/// (doubling passes, shorter when the render is interruptible or checkpointed). A pixel's
+/// samples are the first indices of its sequence, so the `sampleCount` layer says how many
+/// it took; the output's [`RenderOutput::samples`] is the range the most-sampled pixels
+/// took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseTarget {
+    /// The relative error (standard error over value) at which a pixel stops, > 0.
+    pub relative_error: f32,
+    /// Samples every pixel takes before any stops, >= 1 (the driver's default: 16).
+    pub min_spp: u32,
+}
+
+/// The fraction of the image's mean value (per channel) below which a pixel's error is
+/// measured against that floor rather than its own value.
+pub const NOISE_FLOOR_FRACTION: f32 = 0.01;
 
 /// How long each pass of an interruptible render ([`RenderOptions::interrupt`]) without
 /// checkpoints is sized to take: the longest an interrupt waits for the passes in flight
@@ -174,6 +201,7 @@ impl Default for RenderOptions {
             crop: None,
             samples: None,
             interrupt: None,
+            noise_target: None,
         }
     }
 }
@@ -418,6 +446,45 @@ fn render_passes<I: Integrator>(
         (None, Some(_)) => Some(INTERRUPTIBLE_PASS),
         (None, None) => None,
     };
+    if let Some(target) = options.noise_target {
+        // Adaptive: a first pass of `min_spp`, then passes that double the samples of the
+        // pixels still above the target (or take `every`, whichever is shorter).
+        let mut next = samples
+            .start
+            .saturating_add(target.min_spp.max(1))
+            .min(samples.end);
+        loop {
+            let t = std::time::Instant::now();
+            pass(&mut tiles, done..next);
+            let per_sample = t.elapsed().as_secs_f64() / (next - done) as f64;
+            done = next;
+            if interrupted() || done >= samples.end {
+                break;
+            }
+            if stop_converged_pixels(&mut tiles, window, target) == 0 {
+                break;
+            }
+            let mut chunk = done - samples.start;
+            if let Some(every) = every {
+                let mut write_seconds = 0.0;
+                if let Some(cp) = &mut checkpoints {
+                    let t = std::time::Instant::now();
+                    let so_far = gather(scene, window, samples.start..done, &tiles, start);
+                    (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
+                    write_seconds = t.elapsed().as_secs_f64();
+                }
+                chunk = chunk.min(next_pass_samples(
+                    every.as_secs_f64(),
+                    write_seconds,
+                    per_sample,
+                ));
+            }
+            next = done.saturating_add(chunk.max(1)).min(samples.end);
+        }
+        let mut out = gather(scene, window, samples.start..done, &tiles, start);
+        out.stats.adaptive = Some(adaptive_summary(&out, target));
+        return Ok(out);
+    }
     match every {
         None => {
             pass(&mut tiles, samples.start..samples.end);
@@ -448,6 +515,78 @@ fn render_passes<I: Integrator>(
         }
     }
     Ok(gather(scene, window, samples.start..done, &tiles, start))
+}
+
+/// The means and variances of the means of the window's pixels, gathered from `tiles`.
+fn window_estimates(tiles: &[Tile], window: Window) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let (w, h) = (window.width() as usize, window.height() as usize);
+    let mut value = vec![[0.0f32; 3]; w * h];
+    let mut variance = vec![[0.0f32; 3]; w * h];
+    for (tile, _) in tiles {
+        let film = &tile.film;
+        for ty in 0..film.height {
+            for tx in 0..film.width {
+                let src = (ty * film.width + tx) as usize;
+                let x = (tile.x0 - window.x0 + tx) as usize;
+                let y = (tile.y0 - window.y0 + ty) as usize;
+                value[y * w + x] = film.mean(src).to_array();
+                variance[y * w + x] = film.variance_of_mean(src).to_array();
+            }
+        }
+    }
+    (value, variance)
+}
+
+/// The estimated relative error of each pixel of the window ([`NoiseTarget`]).
+fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> Vec<f32> {
+    let (w, h) = (window.width() as usize, window.height() as usize);
+    let floor = risotto_systems::adaptive::error_floor(value, NOISE_FLOOR_FRACTION);
+    let mut error = vec![0.0; w * h];
+    risotto_systems::adaptive::windowed_relative_error(w, h, value, variance, floor, &mut error);
+    error
+}
+
+/// Stops, for good, the pixels whose estimated error has been at or below the target at two
+/// consecutive pass ends (the guard against stopping on an unluckily low estimate: the
+/// second look has twice the samples); returns how many still take samples.
+fn stop_converged_pixels(tiles: &mut [Tile], window: Window, target: NoiseTarget) -> usize {
+    let (value, variance) = window_estimates(tiles, window);
+    let error = window_errors(&value, &variance, window);
+    let w = window.width() as usize;
+    let mut active = 0;
+    for (tile, _) in tiles.iter_mut() {
+        let (tw, th) = (tile.film.width as usize, tile.film.height as usize);
+        if tile.active.is_empty() {
+            tile.active = vec![true; tw * th];
+            tile.converged_passes = vec![0; tw * th];
+        }
+        for ty in 0..th {
+            for tx in 0..tw {
+                let local = ty * tw + tx;
+                let x = (tile.x0 - window.x0) as usize + tx;
+                let y = (tile.y0 - window.y0) as usize + ty;
+                if tile.active[local] {
+                    let passes = &mut tile.converged_passes[local];
+                    *passes = if error[y * w + x] <= target.relative_error {
+                        *passes + 1
+                    } else {
+                        0
+                    };
+                    tile.active[local] = *passes < 2;
+                }
+                active += usize::from(tile.active[local]);
+            }
+        }
+    }
+    active
+}
+
+/// The stats of an adaptive render: its sample counts and final error estimates.
+fn adaptive_summary(out: &RenderOutput, target: NoiseTarget) -> AdaptiveSummary {
+    let value: Vec<[f32; 3]> = out.beauty.pixels.iter().map(|p| p.to_array()).collect();
+    let variance: Vec<[f32; 3]> = out.variance.pixels.iter().map(|p| p.to_array()).collect();
+    let error = window_errors(&value, &variance, out.window);
+    AdaptiveSummary::new(target.relative_error, &out.film.count, &error)
 }
 
 /// Samples per pixel of the next pass of a render in passes: the time between checkpoints,

@@ -482,6 +482,10 @@ pub struct RenderStats {
     /// Facts about the run for benchmarkers (version, image, threads, phase times, peak
     /// memory), set by the program that ran the render; serialised as `"run"` when set.
     pub run: Option<RunInfo>,
+    /// Where an adaptive render's samples went and the relative error it estimates at the
+    /// end ([`RenderOptions::noise_target`](crate::render::RenderOptions::noise_target));
+    /// serialised as `"adaptive"` when set.
+    pub adaptive: Option<risotto_systems::adaptive::AdaptiveSummary>,
 }
 
 /// What a benchmark needs to know about a run besides the counters: which build, which

@@ -108,6 +108,22 @@ impl Serialize for RenderStats {
         if let Some(run) = &self.run {
             m.serialize_entry("run", run)?;
         }
+        if let Some(a) = &self.adaptive {
+            m.serialize_entry(
+                "adaptive",
+                &serde_json::json!({
+                    "target": a.target,
+                    "spp_min": a.spp_min,
+                    "spp_mean": a.spp_mean,
+                    "spp_max": a.spp_max,
+                    "converged_fraction": a.converged_fraction,
+                    // An estimate can be infinite (a pixel with variance and no light):
+                    // JSON has no infinity, so such a quantile is written as null.
+                    "error_median": finite_or_null(a.error_median),
+                    "error_p95": finite_or_null(a.error_p95),
+                }),
+            )?;
+        }
         m.serialize_entry("systems", &SystemsJson(&c.systems))?;
         m.serialize_entry("rays", &c.rays)?;
         m.serialize_entry("samples", &c.samples)?;
@@ -155,6 +171,15 @@ fn rate(x: f64, t: f64) -> f64 {
     }
 }
 
+/// `v` as JSON, `null` when not finite.
+fn finite_or_null(v: f32) -> serde_json::Value {
+    if v.is_finite() {
+        serde_json::json!(v)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
 /// The human summary the driver prints.
 impl fmt::Display for RenderStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -191,6 +216,20 @@ impl fmt::Display for RenderStats {
             rate(c.samples as f64, self.wall_seconds) * 1e-6,
             self.wall_seconds
         )?;
+        if let Some(a) = &self.adaptive {
+            writeln!(
+                f,
+                "adaptive: target {:.4}, spp {} / {:.1} / {} (min / mean / max), {:.1} % of \
+                 pixels at the target, estimated error median {:.4}, 95th percentile {:.4}",
+                a.target,
+                a.spp_min,
+                a.spp_mean,
+                a.spp_max,
+                100.0 * a.converged_fraction,
+                a.error_median,
+                a.error_p95
+            )?;
+        }
         let ended: u64 = c.terminated.iter().sum();
         write!(f, "terminated:")?;
         if ended == 0 {

@@ -1,0 +1,273 @@
+//! Adaptive sampling (`RenderOptions::noise_target`, `render --noise-target`; issue 36) on a
+//! scene of very uneven noise: a glass ball of smoke (noisy: light reaches its inside
+//! through refraction and scattering) beside diffuse walls lit by a lamp (smooth). Against
+//! a long uniform reference:
+//! - at equal samples (the adaptive bookkeeping is one pass over the film per pass, so
+//!   equal samples is equal time up to that; `--nocapture` prints both times), the
+//!   adaptive image's MSE is lower than uniform sampling's;
+//! - the pixels it stops are at the target: their measured relative error, RMS over them,
+//!   is within 1.5 times the target;
+//! - the stopping rule's bias stays below 2 % (it is measurable here: see the test).
+
+use risotto::engine::render::{render, NoiseTarget, RenderOptions, RenderOutput};
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene_with;
+
+const SCENE: &str = r#"
+[render]
+width = 32
+height = 24
+spp = 64
+max_depth = 12
+
+[camera]
+from = [0, 1, 4]
+to = [0, 0.8, 0]
+fov = 45
+
+[materials.wall]
+type = "diffuse"
+reflectance = 0.6
+
+[materials.lamp]
+type = "diffuse"
+reflectance = 0
+
+[materials.smoky_glass]
+type = "dielectric"
+ior = 1.5
+interior = { type = "homogeneous", sigma_t = 4, albedo = 0.95 }
+
+[[shapes]]
+name = "floor"
+type = "quad"
+material = "wall"
+corner = [-3, 0, -3]
+edge1 = [0, 0, 6]
+edge2 = [6, 0, 0]
+
+[[shapes]]
+name = "back"
+type = "quad"
+material = "wall"
+corner = [-3, 0, -1.5]
+edge1 = [6, 0, 0]
+edge2 = [0, 4, 0]
+
+[[shapes]]
+name = "lamp"
+type = "quad"
+material = "lamp"
+emission = 12
+corner = [-0.4, 2.5, -0.4]
+edge1 = [0.8, 0, 0]
+edge2 = [0, 0, 0.8]
+
+[[shapes]]
+name = "ball"
+type = "sphere"
+material = "smoky_glass"
+center = [0.6, 0.6, 0.3]
+radius = 0.5
+"#;
+
+fn render_with(spp: u32, target: Option<NoiseTarget>) -> (RenderOutput, f64) {
+    let desc = parse_scene_with(
+        SCENE,
+        std::path::Path::new("adaptive.toml"),
+        &[format!("render.spp={spp}")],
+    )
+    .unwrap();
+    let scene = scene_from_desc(desc, &MaterialRegistry::with_builtins())
+        .unwrap()
+        .compile()
+        .unwrap();
+    let options = RenderOptions {
+        threads: Some(2),
+        noise_target: target,
+        ..RenderOptions::default()
+    };
+    let t = std::time::Instant::now();
+    let out = render(&scene, &options, &|_| {}).unwrap();
+    (out, t.elapsed().as_secs_f64())
+}
+
+fn luminance(p: [f32; 3]) -> f64 {
+    (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
+}
+
+fn mse(a: &RenderOutput, reference: &RenderOutput) -> f64 {
+    let n = a.beauty.pixels.len();
+    a.beauty
+        .pixels
+        .iter()
+        .zip(&reference.beauty.pixels)
+        .map(|(p, r)| {
+            let (p, r) = (p.to_array(), r.to_array());
+            (0..3).map(|c| ((p[c] - r[c]) as f64).powi(2)).sum::<f64>() / 3.0
+        })
+        .sum::<f64>()
+        / n as f64
+}
+
+#[test]
+fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
+    let target = NoiseTarget {
+        relative_error: 0.08,
+        min_spp: 16,
+    };
+    let (reference, _) = render_with(4096, None);
+    let (adaptive, adaptive_seconds) = render_with(2048, Some(target));
+    let pixels = adaptive.sample_count.len() as f64;
+    let total: f64 = adaptive.sample_count.iter().map(|&c| c as f64).sum();
+    let equal_spp = (total / pixels).round() as u32;
+    let (uniform, uniform_seconds) = render_with(equal_spp, None);
+
+    let summary = adaptive.stats.adaptive.clone().unwrap();
+    let (mse_a, mse_u) = (mse(&adaptive, &reference), mse(&uniform, &reference));
+    println!(
+        "adaptive: {summary:?}, {adaptive_seconds:.2} s, MSE {mse_a:.3e}; uniform at {equal_spp} \
+         spp: {uniform_seconds:.2} s, MSE {mse_u:.3e}"
+    );
+    // The samples went unevenly (the test would say nothing if they had not); a pixel stops
+    // after two looks at its target, the second after twice the minimum.
+    assert!(
+        summary.spp_min == 32 && summary.spp_max > 16 * 32,
+        "{summary:?}"
+    );
+    assert!(
+        mse_a < 0.8 * mse_u,
+        "adaptive MSE {mse_a:e} vs uniform {mse_u:e}"
+    );
+
+    // Pixels that stopped: measured relative error against the reference (with the
+    // renderer's floor of 1 % of the image mean), RMS over them, within 1.5 x the target.
+    let mean = |img: &RenderOutput| {
+        img.beauty
+            .pixels
+            .iter()
+            .map(|p| luminance(p.to_array()))
+            .sum::<f64>()
+            / pixels
+    };
+    let floor = 0.01 * mean(&reference);
+    let (mut sum_sq, mut stopped) = (0.0, 0usize);
+    for (i, (p, r)) in adaptive
+        .beauty
+        .pixels
+        .iter()
+        .zip(&reference.beauty.pixels)
+        .enumerate()
+    {
+        if adaptive.sample_count[i] < 2048.0 {
+            let (p, r) = (luminance(p.to_array()), luminance(r.to_array()));
+            sum_sq += ((p - r) / r.max(floor)).powi(2);
+            stopped += 1;
+        }
+    }
+    assert!(
+        stopped as f64 > 0.5 * pixels,
+        "only {stopped} pixels stopped"
+    );
+    let achieved = (sum_sq / stopped as f64).sqrt();
+    println!("achieved relative error over {stopped} stopped pixels: {achieved:.4}");
+    assert!(
+        achieved < 1.5 * target.relative_error as f64,
+        "achieved {achieved}"
+    );
+
+    // The stopping rule's bias. Measured here: -1.1 % (adaptive 0.1176, reference 0.1189,
+    // 5 standard errors): the walls' light includes rare caustic paths through the ball, and
+    // a pixel that has not yet drawn one shows a low mean *and* a low variance, so a rule
+    // that reads the samples it stops on stops it low (Kirk and Arvo 1991). The window and
+    // the second look bound it; the assertion keeps it below 2 % so a worse rule fails.
+    let var_of_image_mean: f64 = adaptive
+        .variance
+        .pixels
+        .iter()
+        .map(|v| {
+            let v = v.to_array();
+            0.2126f64.powi(2) * v[0] as f64
+                + 0.7152f64.powi(2) * v[1] as f64
+                + 0.0722f64.powi(2) * v[2] as f64
+        })
+        .sum::<f64>()
+        / (pixels * pixels);
+    let (ma, mr) = (mean(&adaptive), mean(&reference));
+    println!("uniform mean {:.5}", mean(&uniform));
+    println!(
+        "image mean: adaptive {ma:.5}, reference {mr:.5}, sigma {:.5}",
+        var_of_image_mean.sqrt()
+    );
+    assert!((ma - mr).abs() < 0.02 * mr, "{ma} vs {mr}");
+}
+
+/// With a target no pixel can miss, every pixel stops at its second look, after twice the
+/// minimum: the render is the uniform render of `2 min_spp` samples, bit for bit (stopped
+/// pixels take nothing more, the others the same sample indices as a uniform render).
+#[test]
+fn a_target_every_pixel_meets_stops_all_after_the_minimum() {
+    let (adaptive, _) = render_with(
+        256,
+        Some(NoiseTarget {
+            relative_error: 1e30,
+            min_spp: 8,
+        }),
+    );
+    let (uniform, _) = render_with(16, None);
+    assert!(adaptive.sample_count.iter().all(|&c| c == 16.0));
+    assert_eq!(adaptive.beauty, uniform.beauty);
+}
+
+/// The driver: `--noise-target` writes the adaptive stats, and refuses what it cannot do.
+#[test]
+fn the_driver_reports_adaptive_stats_and_refuses_splitting() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("adaptive-cli");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let (out, stats) = (dir.join("a.exr"), dir.join("a.json"));
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "--no-preview", "-o"];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        std::process::Command::new(env!("CARGO_BIN_EXE_risotto"))
+            .args(&args)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[
+        "--noise-target",
+        "0.2",
+        "--min-spp",
+        "4",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let a = &json["adaptive"];
+    assert_eq!(a["target"].as_f64(), Some(0.2f32 as f64));
+    assert!(a["spp_max"].as_u64().unwrap() <= 64);
+    assert!(a["spp_min"].as_u64().unwrap() >= 8);
+    for (args, needle) in [
+        (
+            &["--noise-target", "0"][..],
+            "must be a positive relative error",
+        ),
+        (
+            &["--noise-target", "0.1", "--checkpoint", "5"][..],
+            "cannot be used with",
+        ),
+        (&["--min-spp", "4"][..], "--noise-target"),
+    ] {
+        let o = run(args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains(needle),
+            "{args:?}: {stderr}"
+        );
+    }
+}
