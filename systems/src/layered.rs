@@ -274,11 +274,13 @@ impl Layered {
         seed: u64,
     ) -> Option<BxdfSample> {
         let flip = if wo.z < 0.0 { -1.0 } else { 1.0 };
+        let wo_given = wo;
         let wo = wo * flip;
         if !(wo.z > 0.0) {
             return None;
         }
         let (beta, wi, path_pdf, specular) = self.sample_walk(base, wo, uc, u, seed)?;
+        let wi = wi * flip;
         let weight = beta * wi.z.abs();
         if !weight.is_finite() {
             return None;
@@ -286,10 +288,11 @@ impl Layered {
         let pdf = if specular {
             path_pdf
         } else {
-            let mut rng = SplitMix64(crate::sampler::seed_from(&[
-                wi.x, wi.y, wi.z, wo.x, wo.y, wo.z,
-            ]));
-            self.pdf(base, wo, wi, &mut rng)
+            // The stream an evaluation's density at (wo, wi) draws (`evaluation_rng(wi, wo)`
+            // of the engine's contract), so both report the same number.
+            let (a, b) = (wi, wo_given);
+            let mut rng = SplitMix64(crate::sampler::seed_from(&[a.x, a.y, a.z, b.x, b.y, b.z]));
+            self.pdf(base, wo_given, wi, &mut rng)
         };
         let kind = if specular {
             LobeSampled::SPECULAR
@@ -297,7 +300,7 @@ impl Layered {
             LobeSampled::DIFFUSE
         };
         Some(BxdfSample {
-            wi: wi * flip,
+            wi,
             weight,
             pdf,
             lobe: LobeSampled::REFLECT | kind,
