@@ -51,7 +51,8 @@ fn furnace(body: &str) -> [f64; 3] {
     assert_eq!(out.stats.counters.nan_dropped, 0, "{body}");
     let px = &out.beauty.pixels;
     let n = px.len() as f64;
-    let sum = |f: fn(&risotto::components::Rgb) -> f32| px.iter().map(|c| f(c) as f64).sum::<f64>() / n;
+    let sum =
+        |f: fn(&risotto::components::Rgb) -> f32| px.iter().map(|c| f(c) as f64).sum::<f64>() / n;
     [sum(|c| c.r), sum(|c| c.g), sum(|c| c.b)]
 }
 
@@ -60,9 +61,7 @@ fn furnace(body: &str) -> [f64; 3] {
 /// samples' MIS all through the renderer), within 1%.
 #[test]
 fn white_coated_diffuse_stays_white_in_a_furnace() {
-    let m = furnace(
-        "type = \"coated_diffuse\"\nreflectance = 1\nthickness = 0\nmax_depth = 200",
-    );
+    let m = furnace("type = \"coated_diffuse\"\nreflectance = 1\nthickness = 0\nmax_depth = 200");
     for c in m {
         assert!((c - 1.0).abs() < 0.01, "{m:?}");
     }
@@ -156,7 +155,10 @@ fn smooth_coated_diffuse_matches_the_physical_plastic() {
     // interreflections, more paths through the slab).
     let (rel_thick, _) = difference(&thick, &plastic);
     eprintln!("coated (thickness 0.01) vs plastic: means {rel_thick:?}");
-    assert!(rel_thick[0] < rel[0] - 0.003 && rel_thick[0] > -0.03, "{rel_thick:?}");
+    assert!(
+        rel_thick[0] < rel[0] - 0.003 && rel_thick[0] > -0.03,
+        "{rel_thick:?}"
+    );
 }
 
 /// Bad parameters are errors that name the material, the key and the value.

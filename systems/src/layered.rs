@@ -46,6 +46,7 @@ pub use interfaces::{Base, Coat, InterfaceSample, SMOOTH_ALPHA};
 
 use crate::bxdf::BxdfSample;
 use crate::lights::power_heuristic;
+use crate::microfacet::positive;
 use crate::phase::{hg_eval, hg_sample};
 use crate::rough_dielectric::Lobes;
 use crate::sampler::SplitMix64;
@@ -114,10 +115,10 @@ impl Layered {
     pub fn lobes(&self, base: &Base<'_>) -> LobeSampled {
         let mut lobes = LobeSampled::REFLECT;
         if self.coat.is_specular() {
-            lobes = lobes | LobeSampled::SPECULAR;
+            lobes |= LobeSampled::SPECULAR;
         }
         if !(self.coat.is_specular() && base.is_specular() && !self.scatters()) {
-            lobes = lobes | LobeSampled::DIFFUSE;
+            lobes |= LobeSampled::DIFFUSE;
         }
         lobes
     }
@@ -170,7 +171,7 @@ impl Layered {
                 if draw(rng) < q {
                     break;
                 }
-                beta = beta * (1.0 / (1.0 - q));
+                beta *= 1.0 / (1.0 - q);
             }
             if !self.scatters() {
                 z = if z == self.thickness {
@@ -194,7 +195,7 @@ impl Layered {
                     // ...then the phase function's sample, which may leave through the coat.
                     let u = Vec2::new(draw(rng), draw(rng));
                     let (wp, pdf_p) = hg_sample(self.g, -w, u);
-                    if !(pdf_p > 0.0) || wp.z == 0.0 {
+                    if !positive(pdf_p) || wp.z == 0.0 {
                         continue;
                     }
                     // HG is sampled exactly: p / pdf = 1.
@@ -230,10 +231,7 @@ impl Layered {
                         power_heuristic(wis.pdf, base.pdf(-w, -wis.wi))
                     };
                     let f_base = base.f(-w, -wis.wi);
-                    f += beta
-                        * f_base
-                        * wis_f
-                        * (wis.wi.z.abs() * wt * tr(self.thickness, wis.wi));
+                    f += beta * f_base * wis_f * (wis.wi.z.abs() * wt * tr(self.thickness, wis.wi));
                 }
                 // ...then the base's sample, towards the coat and through it to `wi`.
                 let uc = draw(rng);
@@ -276,7 +274,7 @@ impl Layered {
         let flip = if wo.z < 0.0 { -1.0 } else { 1.0 };
         let wo_given = wo;
         let wo = wo * flip;
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return None;
         }
         let (beta, wi, path_pdf, specular) = self.sample_walk(base, wo, uc, u, seed)?;
@@ -338,7 +336,7 @@ impl Layered {
                 if draw(&mut rng) < q {
                     return None;
                 }
-                beta = beta * (1.0 / (1.0 - q));
+                beta *= 1.0 / (1.0 - q);
                 pdf *= 1.0 - q;
             }
             if w.z == 0.0 {
@@ -353,7 +351,7 @@ impl Layered {
                 if 0.0 < zp && zp < self.thickness {
                     let u = Vec2::new(draw(&mut rng), draw(&mut rng));
                     let (wp, pdf_p) = hg_sample(self.g, -w, u);
-                    if !(pdf_p > 0.0) || wp.z == 0.0 {
+                    if !positive(pdf_p) || wp.z == 0.0 {
                         return None;
                     }
                     // HG is sampled exactly: p / pdf = 1.

@@ -181,13 +181,7 @@ impl RoughDielectric {
     /// reflection), each with the density of [`RoughDielectric::eval_lobes`] (no Fresnel
     /// choice) and so a weight carrying the Fresnel factor. The index-matched pass-through
     /// is a transmission.
-    pub fn sample_lobes(
-        &self,
-        wo: Vec3,
-        u: Vec2,
-        u_lobe: f32,
-        lobes: Lobes,
-    ) -> Option<BxdfSample> {
+    pub fn sample_lobes(&self, wo: Vec3, u: Vec2, u_lobe: f32, lobes: Lobes) -> Option<BxdfSample> {
         if wo.z == 0.0 || !wo.z.is_finite() || !(self.eta > 0.0 && self.eta.is_finite()) {
             return None;
         }

@@ -51,8 +51,8 @@ pub use exits::{answer_exits, Exits};
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb};
 pub use risotto_systems::bxdf_samples::BxdfSamples;
-use risotto_systems::sampler::{seed_from, PathSampler};
 pub use risotto_systems::sampler::SplitMix64;
+use risotto_systems::sampler::{seed_from, PathSampler};
 pub use shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling, VolumeSpace,

@@ -121,7 +121,13 @@ pub(crate) fn coated_diffuse(
         reflectance,
     }));
     let mut keys = LAYER_KEYS.to_vec();
-    keys.extend(["reflectance", "roughness", "uroughness", "vroughness", "eta"]);
+    keys.extend([
+        "reflectance",
+        "roughness",
+        "uroughness",
+        "vroughness",
+        "eta",
+    ]);
     Ok((surface, keys))
 }
 
@@ -178,7 +184,10 @@ pub(crate) fn coated_conductor(
             ))
         }
     };
-    let (cond_eta, cond_k) = (cond_eta * (1.0 / interface_eta), cond_k * (1.0 / interface_eta));
+    let (cond_eta, cond_k) = (
+        cond_eta * (1.0 / interface_eta),
+        cond_k * (1.0 / interface_eta),
+    );
     let base = match roughness(p, "conductor_", remap)? {
         None => CoatedBase::SmoothConductor {
             eta: cond_eta,

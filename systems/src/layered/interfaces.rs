@@ -6,6 +6,7 @@
 
 use crate::bxdf::{fresnel_dielectric, reflect_local, refract_local, sample_cosine_hemisphere};
 use crate::conductor::fresnel_conductor_rgb;
+use crate::microfacet::positive;
 use crate::microfacet::Ggx;
 use crate::rough_conductor::RoughConductor;
 use crate::rough_dielectric::{Lobes, RoughDielectric};
@@ -238,7 +239,7 @@ impl Base<'_> {
     /// base, the mirror direction for the smooth conductor, visible normals for the rough
     /// one.
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<InterfaceSample> {
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return None;
         }
         let s = match self {

@@ -53,13 +53,16 @@ fn close(a: Rgb, b: Rgb, rel: f32) -> bool {
 fn index_matched_coat_is_the_bare_base_times_the_slab_transmittance() {
     let mut rng = Rng(3);
     let cu = copper(0.3);
-    let bases = [Base::Diffuse(Rgb::new(0.2, 0.5, 0.9)), Base::RoughConductor(&cu)];
+    let bases = [
+        Base::Diffuse(Rgb::new(0.2, 0.5, 0.9)),
+        Base::RoughConductor(&cu),
+    ];
     for base in bases {
         for thickness in [f32::MIN_POSITIVE, 0.01, 0.3] {
             let l = layered(0.5, 1.0, thickness, Rgb::BLACK, 10);
             for _ in 0..500 {
-                let wo = dir(rng.f32() * 1.5, rng.f32() * 6.28);
-                let wi = dir(rng.f32() * 1.5, rng.f32() * 6.28);
+                let wo = dir(rng.f32() * 1.5, rng.f32() * std::f32::consts::TAU);
+                let wi = dir(rng.f32() * 1.5, rng.f32() * std::f32::consts::TAU);
                 let bare = match base {
                     Base::Diffuse(r) => r * (wi.z / PI),
                     Base::RoughConductor(c) => c.eval(wo, wi).0,
@@ -231,11 +234,17 @@ fn layered_bxdf_is_reciprocal_in_expectation() {
             layered(0.0, 1.5, 0.2, Rgb::new(0.9, 0.5, 0.2), 10),
             Base::Diffuse(Rgb::splat(0.6)),
         ),
-        (layered(0.2, 1.4, 0.05, Rgb::splat(0.8), 10), Base::RoughConductor(&cu)),
+        (
+            layered(0.2, 1.4, 0.05, Rgb::splat(0.8), 10),
+            Base::RoughConductor(&cu),
+        ),
     ];
     let mut rng = Rng(17);
     for (l, base) in cases.iter() {
-        for (a, b) in [((0.2f32, 0.0f32), (1.1f32, 2.5f32)), ((0.9, 1.0), (0.4, 4.0))] {
+        for (a, b) in [
+            ((0.2f32, 0.0f32), (1.1f32, 2.5f32)),
+            ((0.9, 1.0), (0.4, 4.0)),
+        ] {
             let (wo, wi) = (dir(a.0, a.1), dir(b.0, b.1));
             let stats = |wo: Vec3, wi: Vec3, rng: &mut Rng| {
                 let n = 40_000;
@@ -279,7 +288,10 @@ fn sample_weights_integrate_the_evaluation_bin_by_bin() {
             layered(0.5, 1.5, 0.3, Rgb::splat(0.9), 10),
             Base::Diffuse(Rgb::splat(0.5)),
         ),
-        (layered(0.15, 1.5, 0.01, Rgb::BLACK, 10), Base::RoughConductor(&cu)),
+        (
+            layered(0.15, 1.5, 0.01, Rgb::BLACK, 10),
+            Base::RoughConductor(&cu),
+        ),
     ];
     let bin = |w: Vec3| {
         let i = ((w.z * NT as f32) as usize).min(NT - 1);
@@ -391,6 +403,9 @@ fn restricted_dielectric_samplers_agree_with_the_unrestricted_one() {
     }
     let (ro, rb) = (refl_only / n as f64, refl_both / n as f64);
     let (to, tb) = (trans_only / n as f64, trans_both / n as f64);
-    assert!((ro - rb).abs() < 0.02 * rb.max(0.01), "reflection {ro} vs {rb}");
+    assert!(
+        (ro - rb).abs() < 0.02 * rb.max(0.01),
+        "reflection {ro} vs {rb}"
+    );
     assert!((to - tb).abs() < 0.02 * tb, "transmission {to} vs {tb}");
 }
