@@ -42,7 +42,7 @@ impl SplitMix64 {
     }
 }
 
-/// A 64-bit seed from the bits of `values` (each folded in with [`mix64`]): the same numbers
+/// A 64-bit seed from the bits of `values` (each folded in with the SplitMix64 output function): the same numbers
 /// give the same seed, nearby ones unrelated seeds. What a stochastic Bxdf seeds its
 /// [`SplitMix64`] with from the directions it is asked about (pbrt-v4 seeds its layered
 /// BxDF's RNG from `Hash(wo)` and `Hash(wi)` the same way), so evaluating one pair twice
