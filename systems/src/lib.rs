@@ -19,6 +19,7 @@ pub mod geometry;
 pub mod grid;
 pub mod independent_sampler;
 pub mod intersect;
+pub mod layered;
 pub mod lights;
 mod march;
 pub mod medium;

@@ -20,6 +20,17 @@ const GLOSSY_TRANSMIT: LobeSampled = LobeSampled(LobeSampled::TRANSMIT.0 | LobeS
 const SPECULAR_TRANSMIT: LobeSampled =
     LobeSampled(LobeSampled::TRANSMIT.0 | LobeSampled::SPECULAR.0);
 
+/// Which lobes of an interface a sampler may choose (pbrt-v4's `BxDFReflTransFlags`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobes {
+    /// Reflection or transmission, chosen by the Fresnel factor.
+    Both,
+    /// Reflection only.
+    Reflection,
+    /// Transmission only.
+    Transmission,
+}
+
 /// A rough dielectric interface's parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
@@ -95,6 +106,14 @@ impl RoughDielectric {
     /// density of [`RoughDielectric::sample`] (eqs. 14 and 17 for the Jacobians of the
     /// half vectors, times the Fresnel lobe probability).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        self.eval_lobes(wo, wi, Lobes::Both)
+    }
+
+    /// [`RoughDielectric::eval`] with the density of a sampler restricted to `lobes`
+    /// ([`RoughDielectric::sample_lobes`]): the value is the same, the density is that of
+    /// the one lobe without the Fresnel choice, 0 for a direction of the other lobe (pbrt-v4's
+    /// `PDF` with `BxDFReflTransFlags`, which its layered BxDF uses).
+    pub fn eval_lobes(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> (Rgb, f32) {
         if wo.z == 0.0 || wi.z == 0.0 || !(self.eta > 0.0 && self.eta != 1.0) {
             return (Rgb::BLACK, 0.0);
         }
@@ -124,7 +143,12 @@ impl RoughDielectric {
         };
         if reflect {
             let value = f * d * g / (4.0 * wo.z);
-            (Rgb::splat(value * scale), pdf_m / (4.0 * wo_m) * f)
+            let choice = match lobes {
+                Lobes::Both => f,
+                Lobes::Reflection => 1.0,
+                Lobes::Transmission => 0.0,
+            };
+            (Rgb::splat(value * scale), pdf_m / (4.0 * wo_m) * choice)
         } else {
             // Walter eq. 21 in the form of pbrt-v4 sec. 9.7 with eta = n_t / n_i:
             // f_t |cos_i| = (1 - F) D G2 |wi.m| |wo.m| / (cos_o (wi.m + wo.m / eta)^2) / eta^2
@@ -133,7 +157,12 @@ impl RoughDielectric {
             let denom2 = denom * denom;
             let dm_dwi = -wi_m / denom2;
             let value = (1.0 - f) * d * g * wo_m * dm_dwi / (wo.z * eta * eta);
-            (self.tint * (value * scale), pdf_m * dm_dwi * (1.0 - f))
+            let choice = match lobes {
+                Lobes::Both => 1.0 - f,
+                Lobes::Reflection => 0.0,
+                Lobes::Transmission => 1.0,
+            };
+            (self.tint * (value * scale), pdf_m * dm_dwi * choice)
         }
     }
 
@@ -144,10 +173,22 @@ impl RoughDielectric {
     /// a sample on the wrong side. An index-matched interface (`eta = 1`) passes the ray
     /// straight through (a Dirac transmission of weight `tint`).
     pub fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BxdfSample> {
+        self.sample_lobes(wo, u, u_lobe, Lobes::Both)
+    }
+
+    /// [`RoughDielectric::sample`] restricted to `lobes`: `Reflection` always reflects about
+    /// the visible normal, `Transmission` always refracts (`None` under total internal
+    /// reflection), each with the density of [`RoughDielectric::eval_lobes`] (no Fresnel
+    /// choice) and so a weight carrying the Fresnel factor. The index-matched pass-through
+    /// is a transmission.
+    pub fn sample_lobes(&self, wo: Vec3, u: Vec2, u_lobe: f32, lobes: Lobes) -> Option<BxdfSample> {
         if wo.z == 0.0 || !wo.z.is_finite() || !(self.eta > 0.0 && self.eta.is_finite()) {
             return None;
         }
         if self.eta == 1.0 {
+            if lobes == Lobes::Reflection {
+                return None;
+            }
             return Some(BxdfSample {
                 wi: -wo,
                 weight: self.tint,
@@ -161,7 +202,12 @@ impl RoughDielectric {
         let m = self.ggx.sample_visible(wo_up, u);
         let wo_m = wo_up.dot(m);
         let f = fresnel_dielectric(wo_m, eta);
-        let (wi_up, lobe, eta_rel) = if u_lobe < f {
+        let reflect = match lobes {
+            Lobes::Both => u_lobe < f,
+            Lobes::Reflection => true,
+            Lobes::Transmission => false,
+        };
+        let (wi_up, lobe, eta_rel) = if reflect {
             (2.0 * wo_m * m - wo_up, GLOSSY_REFLECT, 1.0)
         } else {
             (refract_about(wo_up, m, eta)?, GLOSSY_TRANSMIT, eta)
@@ -172,7 +218,7 @@ impl RoughDielectric {
             return None;
         }
         let wi = wi_up * flip;
-        let (value, pdf) = self.eval(wo, wi);
+        let (value, pdf) = self.eval_lobes(wo, wi, lobes);
         if !positive(pdf) || !pdf.is_finite() {
             return None;
         }

@@ -32,7 +32,7 @@ use crate::independent_sampler::{self as independent, SamplerKind};
 use crate::simd8::{Backend, Kernel8, Simd};
 use crate::splitmix::{mix64, GOLDEN_GAMMA};
 // The generator lives in `crate::splitmix`, below both samplers; this is its public path.
-pub use crate::splitmix::SplitMix64;
+pub use crate::splitmix::{seed_from, SplitMix64};
 use glam::Vec2;
 
 /// Largest supported samples per pixel (the Sobol tables of `sobol_burley` hold 2^16 points).

@@ -41,3 +41,14 @@ impl SplitMix64 {
         Vec2::new(self.f32(), self.f32())
     }
 }
+
+/// A 64-bit seed from the bits of `values` (each folded in with the SplitMix64 output function): the same numbers
+/// give the same seed, nearby ones unrelated seeds. What a stochastic Bxdf seeds its
+/// [`SplitMix64`] with from the directions it is asked about (pbrt-v4 seeds its layered
+/// BxDF's RNG from `Hash(wo)` and `Hash(wi)` the same way), so evaluating one pair twice
+/// gives the same value.
+pub fn seed_from(values: &[f32]) -> u64 {
+    values.iter().fold(GOLDEN_GAMMA, |h, v| {
+        mix64(h ^ u64::from(v.to_bits()).wrapping_mul(GOLDEN_GAMMA))
+    })
+}

@@ -51,7 +51,8 @@ pub use exits::{answer_exits, Exits};
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rays, Rgb};
 pub use risotto_systems::bxdf_samples::BxdfSamples;
-use risotto_systems::sampler::PathSampler;
+pub use risotto_systems::sampler::SplitMix64;
+use risotto_systems::sampler::{seed_from, PathSampler};
 pub use shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
     VolumeSampling, VolumeSpace,
@@ -150,6 +151,12 @@ pub trait Bxdf {
 
     /// Evaluates `f * |cos|` and the solid-angle pdf of sampling `wi[i]` at point `i`
     /// (RIS `EvaluateSamples`). Dirac lobes evaluate to zero.
+    ///
+    /// A stochastic Bxdf (one whose value is itself a Monte Carlo estimate, as pbrt-v4's
+    /// layered BxDF) draws the random numbers it needs here from
+    /// [`evaluation_rng`]`(wo, wi)` for point `i`'s directions: the same pair always gets
+    /// the same numbers, so a value and its pdf are reproducible, renders are deterministic
+    /// for any thread count, and no sampler dimensions are consumed.
     fn evaluate_samples(
         &mut self,
         ctx: &ShadingContext<'_>,
@@ -163,6 +170,15 @@ pub trait Bxdf {
         let _ = ctx;
         out.fill(Rgb::BLACK);
     }
+}
+
+/// The random numbers a stochastic Bxdf's evaluation draws for the direction pair `(a, b)`
+/// (see [`Bxdf::evaluate_samples`]): a [`SplitMix64`] seeded by hashing the six coordinates'
+/// bits, as pbrt-v4 seeds its layered BxDF's generator from `Hash(wo)` and `Hash(wi)`. Any
+/// frame, as long as the Bxdf uses one consistently; swapping the arguments gives an
+/// unrelated stream (what a density estimate drawn beside the value wants).
+pub fn evaluation_rng(a: Vec3, b: Vec3) -> SplitMix64 {
+    SplitMix64(seed_from(&[a.x, a.y, a.z, b.x, b.y, b.z]))
 }
 
 /// A Bxdf that never scatters: what a factory's `begin_scatter` returns where it has

@@ -5,6 +5,7 @@
 //! reference: density grids (`.vol`, and OpenVDB with the default `vdb` feature), image
 //! textures and environment maps.
 
+mod coated_params;
 pub mod grid_file;
 pub mod import;
 pub mod load;

@@ -80,7 +80,7 @@ impl MaterialRegistry {
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
     /// `rough_conductor`, `rough_dielectric`, `interface`, `subsurface`, `plastic`,
-    /// `thin_dielectric`.
+    /// `thin_dielectric`, `coated_diffuse`, `coated_conductor`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -150,6 +150,14 @@ impl MaterialRegistry {
             // One-sided as Mitsuba's `roughconductor`; `two_sided = true` as its `twosided`.
             let surface = surface_params::two_sided(p, surface)?;
             keys.push("two_sided");
+            builtin(p, surface, &keys)
+        });
+        r.register("coated_diffuse", |p| {
+            let (surface, keys) = crate::coated_params::coated_diffuse(p)?;
+            builtin(p, surface, &keys)
+        });
+        r.register("coated_conductor", |p| {
+            let (surface, keys) = crate::coated_params::coated_conductor(p)?;
             builtin(p, surface, &keys)
         });
         r.register("rough_dielectric", |p| {

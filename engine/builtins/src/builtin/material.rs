@@ -3,6 +3,7 @@
 //! volume integrator.
 
 use super::bxdfs::*;
+use super::coated::{CoatedBase, CoatedBxdf};
 use super::interiors::*;
 use super::plastic::PlasticBxdf;
 use super::rough::*;
@@ -14,6 +15,7 @@ use bumpalo::Bump;
 use risotto_components::Rgb;
 use risotto_engine::plugin::*;
 use risotto_systems::bxdf::PlasticCoat;
+use risotto_systems::layered::Layered;
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
@@ -95,10 +97,35 @@ pub enum Surface {
         /// The pane's index of refraction.
         ior: f32,
     },
+    /// pbrt-v4's `coateddiffuse` / `coatedconductor`: a dielectric coat over a base with a
+    /// slab between ([`risotto_systems::layered`]). Two-sided.
+    Coated(Box<CoatedSurface>),
     /// A one-sided reflecting surface (`Diffuse`, `Plastic`, their pattern forms) shaded on
     /// whichever side the viewer is (Mitsuba 3's `twosided`). The scene loader wraps only
     /// surfaces that do not transmit.
     TwoSided(Box<Surface>),
+}
+
+/// The parameters of a [`Surface::Coated`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoatedSurface {
+    /// Coat, slab and walk.
+    pub layered: Layered,
+    /// The base.
+    pub base: CoatedBase,
+    /// A diffuse base's reflectance: a colour, or a pattern (every value in [0, 1] by the
+    /// graph's bounds, checked by the scene loader) evaluated per point through the
+    /// context's cache (parameter `reflectance`). Ignored by a conductor base.
+    pub reflectance: CoatedReflectance,
+}
+
+/// A diffuse base's reflectance.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CoatedReflectance {
+    /// One colour.
+    Color(Rgb),
+    /// A pattern.
+    Pattern(Arc<PatternGraph>),
 }
 
 impl Surface {
@@ -109,6 +136,10 @@ impl Surface {
             | Surface::Mirror { .. }
             | Surface::Plastic { .. }
             | Surface::RoughConductor(_) => InstanceHints::NONE,
+            Surface::Coated(c) => match &c.reflectance {
+                CoatedReflectance::Pattern(g) if g.reads_uv() => InstanceHints::READS_SURFACE_UV,
+                _ => InstanceHints::NONE,
+            },
             Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
@@ -175,6 +206,18 @@ impl Surface {
                 diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
             }),
             Surface::ThinDielectric { ior } => arena.alloc(ThinDielectricBxdf { ior }),
+            Surface::Coated(ref c) => match c.reflectance {
+                CoatedReflectance::Color(reflectance) => arena.alloc(CoatedBxdf {
+                    layered: &c.layered,
+                    base: &c.base,
+                    reflectance,
+                }),
+                CoatedReflectance::Pattern(ref graph) => arena.alloc(CoatedBxdf {
+                    layered: &c.layered,
+                    base: &c.base,
+                    reflectance: pattern_column(ctx, "reflectance", graph, arena),
+                }),
+            },
             Surface::TwoSided(ref inner) => {
                 let nn = facing_normals(ctx, arena);
                 let facing = arena.alloc(ctx.with_shading_normals(nn));
@@ -211,6 +254,10 @@ impl Surface {
             (Surface::RoughConductor(lobe), "specular_reflectance") => {
                 Some(ParamValue::Color(lobe.tint))
             }
+            (Surface::Coated(c), "reflectance") => match &c.reflectance {
+                CoatedReflectance::Color(r) => Some(ParamValue::Color(*r)),
+                CoatedReflectance::Pattern(g) => Some(ParamValue::Pattern(g)),
+            },
             (Surface::TwoSided(inner), _) => inner.param(name),
             _ => None,
         }

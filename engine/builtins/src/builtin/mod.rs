@@ -2,20 +2,22 @@
 //! interiors (`null`, `beer`).
 //!
 //! Scene-file material types: `diffuse`, `dielectric`, `conductor` / `mirror`,
-//! `rough_conductor`, `rough_dielectric`, `interface`, `plastic`, `thin_dielectric` (and
+//! `rough_conductor`, `rough_dielectric`, `interface`, `plastic`, `thin_dielectric`,
+//! `coated_diffuse`, `coated_conductor` ([`coated`], pbrt-v4's layered materials) (and
 //! `two_sided = true` on the one-sided reflectors).
 //! Any of them may carry an `interior = { type = "null" | "beer", ... }` table that makes the
 //! shape's inside a volume with that integrator (see `docs/scene-format.md`).
 //!
 //! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
 //!
-//! Files: [`bxdfs`] (the first closures), [`rough`] (the GGX closures), [`plastic`],
+//! Files: [`bxdfs`] (the first closures), [`coated`] (the layered closure), [`rough`] (the GGX closures), [`plastic`],
 //! [`thin_dielectric`] and [`two_sided`] (one closure each), [`interiors`] (which volume
 //! integrator a material's inside gets, and the `null` and `beer` ones), [`mask`] (opacity)
 //! and [`material`] (the factory).
 //! Everything is re-exported here.
 
 pub mod bxdfs;
+pub mod coated;
 pub mod interiors;
 pub mod mask;
 pub mod material;
@@ -25,6 +27,7 @@ pub mod thin_dielectric;
 pub mod two_sided;
 
 pub use bxdfs::*;
+pub use coated::{CoatedBase, CoatedBxdf};
 pub use interiors::*;
 pub use mask::*;
 pub use material::*;

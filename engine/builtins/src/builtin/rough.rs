@@ -31,7 +31,7 @@ pub fn microfacet_frame(nn: Vec3, tangent: Vec3) -> Frame {
 /// Samples every point of `ctx` in its [`microfacet_frame`]: three sampler dimensions per
 /// point (the Bxdf's 2D pair, then the lobe choice), handed to `sample(i, wo, u, u_lobe)`
 /// with the local `wo`.
-fn generate(
+pub(super) fn generate(
     ctx: &ShadingContext<'_>,
     samplers: &mut [PathSampler],
     out: &mut BxdfSamples,
@@ -50,7 +50,7 @@ fn generate(
 
 /// Evaluates every point of `ctx` towards `wi[i]` in its [`microfacet_frame`]:
 /// `eval(i, wo, wi)` with local directions gives `(f |cos|, pdf)`.
-fn evaluate(
+pub(super) fn evaluate(
     ctx: &ShadingContext<'_>,
     wi: &[Vec3],
     value: &mut [Rgb],
