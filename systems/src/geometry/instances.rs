@@ -318,6 +318,17 @@ impl SceneGeometry {
         }
     }
 
+    /// Bytes the objects hold (each once: its triangles, spheres, attributes and BVH); the
+    /// rest of [`Self::memory_bytes`] is the flat geometry, the top-level BVH and the
+    /// instances.
+    pub fn object_bytes(&self) -> usize {
+        let bvhs = self
+            .bvh8
+            .as_ref()
+            .map_or(0, |b| b.objects.iter().map(|o| o.bytes()).sum::<usize>());
+        self.objects.iter().map(Self::memory_bytes).sum::<usize>() + bvhs
+    }
+
     /// Bytes this geometry holds: triangles, spheres, both BVHs, mesh attributes, and the
     /// objects and instances (an object counted once, however many instances place it).
     pub fn memory_bytes(&self) -> usize {
