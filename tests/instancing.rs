@@ -296,3 +296,49 @@ fn thousand_instances_of_a_large_object_fit_in_memory() {
     assert_eq!(compiled.shapes[shape as usize].name, "f999/field");
     assert_eq!(compiled.material_of_prim(last), 0);
 }
+
+/// Scenes built in code get the loader's checks at compile time: an instance of a missing
+/// object, and an object with no primitives, are errors naming them.
+#[test]
+fn compile_rejects_bad_instances() {
+    use risotto::engine::scene::{ObjectShape, ShapeGeometry};
+    use risotto::glam::Affine3A;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = || {
+        let desc = parse_scene(HEADER, &root.join("scenes/instancing-test.toml")).unwrap();
+        scene_from_desc(desc, &MaterialRegistry::with_builtins()).unwrap()
+    };
+    let mut s = scene();
+    s.add_instance("ghost", 3, Affine3A::IDENTITY);
+    let e = s.compile().err().expect("an error").to_string();
+    assert!(
+        e.contains("instance \"ghost\"") && e.contains("object index 3"),
+        "{e}"
+    );
+
+    let mut s = scene();
+    let o = s.add_object(
+        "hollow",
+        vec![ObjectShape {
+            name: "nothing".into(),
+            geometry: ShapeGeometry::Triangles(Vec::new()),
+            material: 0,
+            attributes: Default::default(),
+        }],
+    );
+    s.add_instance("h", o, Affine3A::IDENTITY);
+    let e = s.compile().err().expect("an error").to_string();
+    assert!(
+        e.contains("object \"hollow\"") && e.contains("no primitives"),
+        "{e}"
+    );
+
+    let mut s = scene();
+    let o = s.add_object("none", Vec::new());
+    s.add_instance("n", o, Affine3A::IDENTITY);
+    let e = s.compile().err().expect("an error").to_string();
+    assert!(
+        e.contains("object \"none\"") && e.contains("has no shapes"),
+        "{e}"
+    );
+}
