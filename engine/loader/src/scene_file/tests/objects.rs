@@ -181,3 +181,16 @@ fn instance_keys_and_object_shape_names_are_checked() {
         &["singular"],
     );
 }
+
+/// `[[objects.NAME.shapes]]` tables are the same as the inline array.
+#[test]
+fn object_shapes_as_arrays_of_tables() {
+    let text = with(
+        "[[objects.rock.shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"white\"\n\n\
+         [[objects.rock.shapes]]\ntype = \"box\"\nmaterial = \"white\"\n\n\
+         [[shapes]]\ntype = \"instance\"\nobject = \"rock\"\n",
+    );
+    let s = parse(&text).unwrap();
+    assert_eq!(s.objects[0].shapes.len(), 2);
+    assert_eq!(s.instances.len(), 1);
+}
