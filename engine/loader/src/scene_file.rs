@@ -555,18 +555,18 @@ fn read_shape(
         }
         "quad" => ShapeGeometry::Triangles {
             kind: "quad",
-            triangles: triangles_of(geometry::quad(&r)?),
+            triangles: triangles_of(geometry::quad(r)?),
         },
         "rectangle" => ShapeGeometry::Triangles {
             kind: "quad",
-            triangles: triangles_of(geometry::rectangle(&r)?),
+            triangles: triangles_of(geometry::rectangle(r)?),
         },
         "box" => ShapeGeometry::Triangles {
             kind: "box",
-            triangles: triangles_of(geometry::cuboid(&r)?),
+            triangles: triangles_of(geometry::cuboid(r)?),
         },
         _ => {
-            let (triangles, m, a) = geometry::mesh(&r)?;
+            let (triangles, m, a) = geometry::mesh(r)?;
             attributes = a;
             ShapeGeometry::Triangles {
                 kind: "mesh",
