@@ -452,3 +452,35 @@ fn instances_share_their_object() {
     let (k, j) = g.instance_of(1_234_567).unwrap();
     assert_eq!((k, j), (617, 567));
 }
+
+/// Clearance through instances is a lower bound of the true distance: at most the flat
+/// copy's clearance, and for rigid placements at least that over `sqrt(3)` (the Frobenius
+/// norm of a rotation, which the bound divides by).
+#[test]
+fn instanced_clearance_bounds_the_flat_clearance() {
+    let tris = octahedron();
+    let object = SceneGeometry::build(tris.clone(), Vec::new());
+    let rigid = [
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::new(2.0, 0.0, 0.0)),
+        Affine3A::from_rotation_translation(Quat::from_rotation_x(1.2), Vec3::new(-2.0, 1.0, 0.0)),
+    ];
+    let placements: Vec<(u32, Affine3A)> = rigid.iter().map(|&m| (0, m)).collect();
+    let inst =
+        SceneGeometry::build_with_instances(Vec::new(), Vec::new(), vec![object], &placements);
+    let flat_tris: Vec<[Vec3; 3]> = rigid
+        .iter()
+        .flat_map(|m| tris.iter().map(move |t| t.map(|v| m.transform_point3(v))))
+        .collect();
+    let flat = SceneGeometry::build(flat_tris, Vec::new());
+    let mut rng = Rng(5);
+    for _ in 0..500 {
+        let p = rand_vec(&mut rng, -5.0, 5.0);
+        let ci = crate::clearance::clearance(&inst, p, 100.0);
+        let cf = crate::clearance::clearance(&flat, p, 100.0);
+        assert!(ci <= cf * (1.0 + 1e-5) + 1e-6, "at {p}: {ci} vs flat {cf}");
+        assert!(
+            ci >= cf / 3f32.sqrt() * (1.0 - 1e-5) - 1e-6,
+            "at {p}: {ci} vs flat {cf}"
+        );
+    }
+}
