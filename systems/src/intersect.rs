@@ -37,6 +37,13 @@
 //! within the f32 bound is decided again in double precision, whose bound is 2^29 times
 //! smaller: a camera 1e-6 above a 40-unit floor sees the floor.
 //!
+//! Instances ([`SceneGeometry::build_with_instances`]): a top-level leaf may be an instance
+//! (flagged like a sphere leaf, so only the sphere branch tests for it); the ray is mapped
+//! into the instance's object space by the inverse transform (direction not renormalised, so
+//! `t` and `tmax` carry over), its per-ray constants are set up for that one ray, and the
+//! object's own BVH is traversed with a second stack. The visitors take a `TOP` const
+//! parameter: object-level visitors have no instance branch, so two levels are all there is.
+//!
 //! | file | holds |
 //! |---|---|
 //! | `intersect.rs` | the kernels' choice ([`Kernel`]), the traversals, the closest-hit and occlusion kernels |
@@ -45,6 +52,7 @@
 //! | `intersect/packet.rs` | the watertight test on a leaf's eight triangles at once |
 //! | `intersect/triangle.rs` | the scalar watertight test and the error bound of its `t` |
 //! | `intersect/sphere.rs` | the double-precision sphere roots |
+//! | `intersect/instance_tests.rs` | instanced hits against flat copies and the analytic ellipsoid |
 
 use std::marker::PhantomData;
 
