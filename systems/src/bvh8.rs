@@ -9,7 +9,7 @@
 //! coordinate with one triangle per lane so that the watertight test runs on all of them at
 //! once, or a single sphere.
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Affine3A, Vec3, Vec3A, Vec4};
 use obvhs::{
     aabb::Aabb,
     bvh2::{node::Bvh2Node, Bvh2},
@@ -26,8 +26,13 @@ pub(crate) const WIDTH: usize = 8;
 pub(crate) const LEAF: u32 = 1 << 31;
 /// [`Node8::child`] flag of a sphere leaf.
 pub(crate) const SPHERE: u32 = 1 << 30;
+/// [`Node8::child`] flag of an instance leaf (set together with [`SPHERE`]: like a sphere it
+/// is a single-primitive leaf with no triangle packet, so the triangle path never sees it
+/// and only the sphere branch of a kernel tests this bit; the low bits index
+/// [`Bvh8::instances`]).
+pub(crate) const INSTANCE: u32 = 1 << 29;
 /// The index bits of a leaf child.
-pub(crate) const INDEX_MASK: u32 = SPHERE - 1;
+pub(crate) const INDEX_MASK: u32 = INSTANCE - 1;
 
 /// One node of the 8-wide BVH.
 #[derive(Clone, Copy, Debug)]
@@ -101,12 +106,29 @@ pub(crate) struct SphereLeaf {
     pub(crate) prim: u32,
 }
 
-/// The 8-wide BVH: nodes (root at 0), triangle packets and sphere leaves.
+/// An instance leaf: how a ray reaches its object's BVH ([`Bvh8::objects`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct InstanceLeaf {
+    /// World to object space (the inverse of the instance's transform).
+    pub(crate) to_object: Affine3A,
+    /// Index into [`Bvh8::objects`].
+    pub(crate) object: u32,
+    /// Scene primitive index of the object's primitive 0 in this instance.
+    pub(crate) prim_base: u32,
+}
+
+/// The 8-wide BVH: nodes (root at 0), triangle packets and sphere leaves, and in a scene
+/// with instances the instance leaves and the BVHs of the objects they place (two levels:
+/// the objects' BVHs hold no instances).
 #[derive(Clone, Debug)]
 pub(crate) struct Bvh8 {
     pub(crate) nodes: Vec<Node8>,
     pub(crate) packets: Vec<TriPacket8>,
     pub(crate) spheres: Vec<SphereLeaf>,
+    /// Instance leaves (empty without instances).
+    pub(crate) instances: Vec<InstanceLeaf>,
+    /// The objects' BVHs, in object space (empty without instances).
+    pub(crate) objects: Vec<Bvh8>,
     /// Per axis, the largest magnitude of any box coordinate: bounds the rounding error of
     /// the slab distances (see [`crate::intersect`]).
     pub(crate) max_abs: Vec3A,
@@ -513,7 +535,8 @@ struct Source<'a> {
 
 impl Bvh8 {
     /// Collapses `bvh2` (non-empty, over `triangles` as primitives `0..triangles.len()`
-    /// and `spheres` after them) into 8-wide nodes with the SAH-optimal assignment of
+    /// and `spheres` after them, then instance leaves: primitive `triangles.len() +
+    /// spheres.len() + k` is instance `k`, priced as a sphere) into 8-wide nodes with the SAH-optimal assignment of
     /// binary subtrees to child slots and leaves ([`Collapse`]).
     pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
         let tri_count = triangles.len() as u32;
@@ -536,6 +559,8 @@ impl Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
             spheres: Vec::new(),
+            instances: Vec::new(),
+            objects: Vec::new(),
             max_abs: root.aabb.min.abs().max(root.aabb.max.abs()),
             depth: 0,
         };
@@ -554,6 +579,28 @@ impl Bvh8 {
     /// `WIDTH - 1` entries per level above the current node plus `WIDTH` for it.
     pub(crate) fn stack_capacity(&self) -> usize {
         (WIDTH - 1) * self.depth + 1
+    }
+
+    /// [`Self::stack_capacity`] of the deepest object BVH (0 without instances): the stack
+    /// a traversal of an instance's object uses, separate from the top-level one it
+    /// interrupts.
+    pub(crate) fn object_stack_capacity(&self) -> usize {
+        self.objects
+            .iter()
+            .map(Self::stack_capacity)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Bytes held by the nodes, leaves and instances, the objects' BVHs included.
+    pub(crate) fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.nodes.capacity() * size_of::<Node8>()
+            + self.packets.capacity() * size_of::<TriPacket8>()
+            + self.spheres.capacity() * size_of::<SphereLeaf>()
+            + self.instances.capacity() * size_of::<InstanceLeaf>()
+            + self.objects.iter().map(Self::bytes).sum::<usize>()
+            + size_of::<Self>()
     }
 
     /// Appends the 8-wide node whose children are the slots of binary subtree `n`, and the
@@ -627,7 +674,13 @@ impl Bvh8 {
             }
         }
         let tri_count = src.triangles.len() as u32;
-        if prims[0] >= tri_count {
+        let instance_first = tri_count as usize + src.spheres.len();
+        if prims[0] as usize >= instance_first {
+            assert_eq!(prims.len(), 1, "instance leaves hold one instance");
+            let index = prims[0] - instance_first as u32;
+            assert!(index <= INDEX_MASK, "too many instances");
+            LEAF | SPHERE | INSTANCE | index
+        } else if prims[0] >= tri_count {
             assert_eq!(prims.len(), 1, "sphere leaves hold one sphere");
             let s = src.spheres[(prims[0] - tri_count) as usize];
             let index = self.spheres.len() as u32;

@@ -9,9 +9,13 @@
 //! lane of the node's box rows); a triangle's distance is Ericson's closest point on a
 //! triangle (*Real-Time Collision Detection*, 2005, sec. 5.1.5), a sphere's
 //! `| |p - c| - r |`. The result is exact up to f32 rounding (a few ulps of the scene's
-//! coordinates); callers that need a strict bound shrink it by a margin.
+//! coordinates); callers that need a strict bound shrink it by a margin. An instance's
+//! object is searched in object space and its distance divided by the Frobenius norm of
+//! the world-to-object map (at least its largest singular value, the most the map can
+//! stretch a distance): a lower bound of the world distance, exact for rigid placements up
+//! to the norm's overestimate of 1 by `sqrt(3)`.
 
-use crate::bvh8::{Node8, INDEX_MASK, LEAF, SPHERE, WIDTH};
+use crate::bvh8::{Bvh8, Node8, INDEX_MASK, INSTANCE, LEAF, SPHERE, WIDTH};
 use crate::geometry::SceneGeometry;
 use glam::{Vec3, Vec3A};
 
@@ -21,7 +25,11 @@ pub fn clearance(geometry: &SceneGeometry, p: Vec3, cap: f32) -> f32 {
     let Some((bvh, _)) = geometry.bvh8() else {
         return cap;
     };
-    let p = Vec3A::from(p);
+    clearance_in(bvh, Vec3A::from(p), cap)
+}
+
+/// [`clearance`] over `bvh` (the top level or an object's).
+fn clearance_in(bvh: &Bvh8, p: Vec3A, cap: f32) -> f32 {
     let mut best2 = cap * cap;
     let mut stack: Vec<u32> = Vec::with_capacity(bvh.stack_capacity());
     stack.push(0);
@@ -38,6 +46,17 @@ pub fn clearance(geometry: &SceneGeometry, p: Vec3, cap: f32) -> f32 {
             let child = node.child[c];
             if child & LEAF == 0 {
                 stack.push(child);
+            } else if child & INSTANCE != 0 {
+                let leaf = &bvh.instances[(child & INDEX_MASK) as usize];
+                let m = leaf.to_object.matrix3;
+                let norm = (m.x_axis.length_squared()
+                    + m.y_axis.length_squared()
+                    + m.z_axis.length_squared())
+                .sqrt();
+                let q = leaf.to_object.transform_point3a(p);
+                let object = &bvh.objects[leaf.object as usize];
+                let d = clearance_in(object, q, best2.sqrt() * norm) / norm;
+                best2 = best2.min(d * d);
             } else if child & SPHERE != 0 {
                 let s = bvh.spheres[(child & INDEX_MASK) as usize].center_radius;
                 let d = (p - Vec3A::from(s.truncate())).length() - s.w;

@@ -2,12 +2,16 @@
 //!
 //! Primitive index convention (used in [`risotto_components::Hits::prim`] and everywhere
 //! else): `0..num_triangles` are the triangles in the order given to [`SceneGeometry::build`],
-//! `num_triangles..num_prims` are the spheres in the order given. The BVH reorders its leaves;
-//! that order never leaks out of this module and [`crate::intersect`].
+//! `num_triangles..num_flat_prims` are the spheres in the order given, and in a scene with
+//! instances ([`SceneGeometry::build_with_instances`]) instance `k`'s primitive `j` (its
+//! object's primitive `j`) is `prim_base(k) + j`, the instances numbered one after another
+//! from `num_flat_prims` ([`SceneGeometry::instance_of`] maps back by binary search, so
+//! nothing is stored per instanced primitive). The BVH reorders its leaves; that order
+//! never leaks out of this module and [`crate::intersect`].
 
 use std::f32::consts::PI;
 
-use glam::{DVec3, Vec2, Vec3, Vec3A};
+use glam::{Affine3A, DVec3, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
     bvh2::reinsertion::ReinsertionOptimizer,
@@ -16,7 +20,7 @@ use obvhs::{
     BvhBuildParams,
 };
 
-use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, MAX_BVH2_DEPTH};
+use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, InstanceLeaf, MAX_BVH2_DEPTH};
 use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
@@ -27,6 +31,10 @@ pub(crate) use crate::primitive::{gamma, UNDERFLOW};
 pub use crate::primitive::{
     sphere_point_error, surface_offset, triangle_point_error, Sphere, SurfaceSample, Triangles,
 };
+
+mod instances;
+pub(crate) use instances::ray_to_object;
+pub use instances::Instance;
 
 /// All primitives of a compiled scene and the BVH over them.
 ///
@@ -50,6 +58,13 @@ pub struct SceneGeometry {
     /// Shading normals and texture coordinates of the meshes that have them (empty in most
     /// scenes: nothing is stored or looked up for meshes without).
     attributes: MeshAttributes,
+    /// The objects the instances place, in object space (their BVHs are moved into
+    /// `bvh8`'s objects, where the traversal finds them). Empty without instances.
+    objects: Vec<SceneGeometry>,
+    /// The instances in primitive order (`prim_base` increasing).
+    instances: Vec<Instance>,
+    /// Whether this geometry or one of its objects has mesh attributes.
+    any_attributes: bool,
 }
 
 /// Relative padding of sphere boxes: `center +- radius` is rounded, and the box must
@@ -76,11 +91,36 @@ impl SceneGeometry {
     /// If a vertex, centre or radius is not finite, a radius is not positive, or there are
     /// more than `u32::MAX - 1` primitives.
     pub fn build(triangles: Vec<[Vec3; 3]>, spheres: Vec<Sphere>) -> Self {
+        Self::build_with_instances(triangles, spheres, Vec::new(), &[])
+    }
+
+    /// [`Self::build`] with instances: `objects` are geometries built in object space (by
+    /// [`Self::build`], with their attributes set), and each `(object, to_world)` of
+    /// `instances` places `objects[object]` in the world by the affine map `to_world` (any
+    /// invertible one: rotation, non-uniform scale, mirroring). Two levels: the top BVH holds
+    /// the triangles, the spheres and one leaf per instance (its object's box mapped to the
+    /// world); a ray reaching an instance leaf is mapped into object space (by the inverse
+    /// map, its direction not renormalised, so its parameter `t` is the world one) and
+    /// traverses the object's own BVH. An object's geometry is stored once whatever the
+    /// number of its instances; see the module doc for the primitive numbering.
+    ///
+    /// # Panics
+    /// As [`Self::build`]; also if an object is empty or has instances itself, an instance
+    /// names no object, a map is not invertible, or there are more than `u32::MAX - 1`
+    /// primitives counting every instance's (callers check that first:
+    /// [`Self::count_instanced_prims`]).
+    pub fn build_with_instances(
+        triangles: Vec<[Vec3; 3]>,
+        spheres: Vec<Sphere>,
+        mut objects: Vec<SceneGeometry>,
+        instances: &[(u32, Affine3A)],
+    ) -> Self {
         let num_prims = triangles.len() + spheres.len();
         assert!(
             num_prims < u32::MAX as usize,
             "too many primitives: {num_prims}"
         );
+        let placed = instances::place(&objects, instances, num_prims as u32);
         for tri in &triangles {
             assert!(
                 tri.iter().all(|v| v.is_finite()),
@@ -118,6 +158,10 @@ impl SceneGeometry {
             ));
             indices.push(tri_count + i as u32);
         }
+        for (k, (lo, hi)) in placed.boxes.iter().enumerate() {
+            aabbs.push(padded_box(*lo, *hi));
+            indices.push((num_prims + k) as u32);
+        }
 
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
         let (bvh, bvh8) = if aabbs.is_empty() {
@@ -135,6 +179,10 @@ impl SceneGeometry {
             for s in &spheres {
                 lo = lo.min(finite(s.center - Vec3::splat(s.radius)));
                 hi = hi.max(finite(s.center + Vec3::splat(s.radius)));
+            }
+            for (blo, bhi) in &placed.boxes {
+                lo = lo.min(finite(*blo));
+                hi = hi.max(finite(*bhi));
             }
             bounds = (lo, hi);
 
@@ -169,10 +217,31 @@ impl SceneGeometry {
             let cwbvh_cost = half_area * (aabbs.len() as f64) * (depth + 1.0) * 2.0;
             let bvh = (cwbvh_cost < f32::MAX as f64)
                 .then(|| bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false));
-            let bvh8 = Bvh8::from_bvh2(&bvh2, &triangles, &spheres);
+            let mut bvh8 = Bvh8::from_bvh2(&bvh2, &triangles, &spheres);
+            if !placed.instances.is_empty() {
+                bvh8.instances = placed
+                    .instances
+                    .iter()
+                    .map(|i| InstanceLeaf {
+                        to_object: i.to_object,
+                        object: i.object,
+                        prim_base: i.prim_base,
+                    })
+                    .collect();
+                // The objects' BVHs move to where the traversal reads them; their CWBVHs
+                // (diagnostics only) are dropped: memory scales with the objects.
+                bvh8.objects = objects
+                    .iter_mut()
+                    .map(|o| {
+                        o.bvh = None;
+                        o.bvh8.take().expect("objects are not empty")
+                    })
+                    .collect();
+            }
             (bvh, Some(bvh8))
         };
 
+        let any_attributes = objects.iter().any(|o| o.any_attributes);
         Self {
             triangles: triangles.into_iter().map(Triangle::new).collect(),
             spheres,
@@ -181,6 +250,13 @@ impl SceneGeometry {
             backend: Kernel::best().backend().expect("the best kernel runs here"),
             bounds,
             attributes: MeshAttributes::default(),
+            objects: if placed.instances.is_empty() {
+                Vec::new()
+            } else {
+                objects
+            },
+            instances: placed.instances,
+            any_attributes,
         }
     }
 
@@ -194,9 +270,13 @@ impl SceneGeometry {
             "vertex attributes of primitives that are not triangles"
         );
         self.attributes = attributes;
+        self.any_attributes =
+            !self.attributes.is_empty() || self.objects.iter().any(|o| o.any_attributes);
     }
 
-    /// The meshes' vertex attributes (empty unless [`Self::set_attributes`] gave some).
+    /// The meshes' vertex attributes (empty unless [`Self::set_attributes`] gave some), of
+    /// the triangles outside instances (an instance's are its object's; what a hit on any
+    /// triangle gets: [`Self::mesh_shading`]).
     #[inline(always)]
     pub fn attributes(&self) -> &MeshAttributes {
         &self.attributes
@@ -212,9 +292,16 @@ impl SceneGeometry {
         self.spheres.len()
     }
 
-    /// Number of primitives.
-    pub fn num_prims(&self) -> usize {
+    /// Number of primitives outside instances (the triangles and the spheres).
+    pub fn num_flat_prims(&self) -> usize {
         self.triangles.len() + self.spheres.len()
+    }
+
+    /// Number of primitives, every instance's included.
+    pub fn num_prims(&self) -> usize {
+        self.instances.last().map_or(self.num_flat_prims(), |i| {
+            i.prim_base as usize + self.objects[i.object as usize].num_prims()
+        })
     }
 
     /// World AABB `(min, max)` of every primitive; `(0, 0)` for an empty scene.
@@ -284,7 +371,7 @@ impl SceneGeometry {
     ) -> SurfaceSample {
         match self.triangles().surface_at(prim, b1, b2) {
             Some(s) => s,
-            None => self.sphere_surface_at(prim as usize, origin, direction, t, b1),
+            None => self.sphere_surface_at(prim as usize, origin, direction, t, b1, b2),
         }
     }
 
@@ -297,6 +384,8 @@ impl SceneGeometry {
     pub fn hit_is_front(&self, prim: u32, origin: Vec3, direction: Vec3, t: f32, b1: f32) -> bool {
         if (prim as usize) < self.triangles.len() {
             direction.dot(self.triangles[prim as usize].ng()) < 0.0
+        } else if prim as usize >= self.num_flat_prims() {
+            self.instance_hit_is_front(prim, origin, direction, t, b1)
         } else {
             let s = self.spheres[prim as usize - self.triangles.len()];
             let t64 = t as f64 + if b1.is_finite() { b1 as f64 } else { 0.0 };
@@ -324,6 +413,8 @@ impl SceneGeometry {
     ) -> Vec2 {
         if (prim as usize) < self.triangles.len() {
             Vec2::new(b1, b2)
+        } else if prim as usize >= self.num_flat_prims() {
+            self.instance_surface_uv(prim, origin, direction, t, b1, b2)
         } else {
             let s = self.spheres[prim as usize - self.triangles.len()];
             sphere_uv(sphere_hit_dir(s, origin, direction, t, b1))
@@ -336,7 +427,7 @@ impl SceneGeometry {
         Triangles(&self.triangles)
     }
 
-    /// The sphere case of [`Self::surface_at`].
+    /// The sphere case of [`Self::surface_at`], and that of primitives of instances.
     #[inline(never)]
     fn sphere_surface_at(
         &self,
@@ -345,7 +436,11 @@ impl SceneGeometry {
         direction: Vec3,
         t: f32,
         b1: f32,
+        b2: f32,
     ) -> SurfaceSample {
+        if prim >= self.num_flat_prims() {
+            return self.instance_surface_at(prim as u32, origin, direction, t, b1, b2);
+        }
         let s = self.spheres[prim - self.triangles.len()];
         let n = sphere_hit_dir(s, origin, direction, t, b1);
         // The point in double precision, rounded once: its distance to the sphere is then
@@ -362,7 +457,8 @@ impl SceneGeometry {
         }
     }
 
-    /// Surface area of primitive `prim`.
+    /// Surface area of primitive `prim` (not of an instance: instanced primitives are never
+    /// lights).
     pub fn prim_area(&self, prim: u32) -> f32 {
         let prim = prim as usize;
         if prim < self.triangles.len() {
@@ -373,7 +469,8 @@ impl SceneGeometry {
         }
     }
 
-    /// Samples a point uniformly by area on primitive `prim` (for area lights) from
+    /// Samples a point uniformly by area on primitive `prim` (for area lights; not of an
+    /// instance) from
     /// `u` in `[0, 1)^2`. Returns the point and the unit geometric normal (as in
     /// [`Self::surface_at`]); the area-measure pdf is `1 / prim_area(prim)`. Degenerate
     /// triangles (zero area) return a zero normal. [`Self::sample_surface`] also returns the

@@ -37,6 +37,13 @@
 //! within the f32 bound is decided again in double precision, whose bound is 2^29 times
 //! smaller: a camera 1e-6 above a 40-unit floor sees the floor.
 //!
+//! Instances ([`SceneGeometry::build_with_instances`]): a top-level leaf may be an instance
+//! (flagged like a sphere leaf, so only the sphere branch tests for it); the ray is mapped
+//! into the instance's object space by the inverse transform (direction not renormalised, so
+//! `t` and `tmax` carry over), its per-ray constants are set up for that one ray, and the
+//! object's own BVH is traversed with a second stack. The visitors take a `TOP` const
+//! parameter: object-level visitors have no instance branch, so two levels are all there is.
+//!
 //! | file | holds |
 //! |---|---|
 //! | `intersect.rs` | the kernels' choice ([`Kernel`]), the traversals, the closest-hit and occlusion kernels |
@@ -45,14 +52,15 @@
 //! | `intersect/packet.rs` | the watertight test on a leaf's eight triangles at once |
 //! | `intersect/triangle.rs` | the scalar watertight test and the error bound of its `t` |
 //! | `intersect/sphere.rs` | the double-precision sphere roots |
+//! | `intersect/instance_tests.rs` | instanced hits against flat copies and the analytic ellipsoid |
 
 use std::marker::PhantomData;
 
 use glam::{Vec3, Vec3A, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
-use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, LEAF, SPHERE, WIDTH};
-use crate::geometry::SceneGeometry;
+use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, INSTANCE, LEAF, SPHERE, WIDTH};
+use crate::geometry::{ray_to_object, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
 use crate::simd8::{Backend, Lanes8, Mask8, Portable, Row8, Simd};
@@ -98,13 +106,13 @@ impl Entry {
 /// `tmax` are skipped, so leaves behind the closest hit are never tested.
 /// [`ClosestRay::leaf`] tests a leaf child and may shrink `tmax`.
 #[inline(always)]
-fn traverse_closest<S: Simd>(
+fn traverse_closest<S: Simd, const TOP: bool>(
     s: S,
     bvh: &Bvh8,
     ray: &NodeRay<S::F>,
     stack: &mut [Entry],
     tmax: &mut f32,
-    leaf: &mut ClosestRay<'_, S>,
+    leaf: &mut ClosestRay<'_, S, TOP>,
 ) {
     // A fixed slice ([`Bvh8::stack_capacity`] entries) and a local depth `sp` (a register,
     // where a `Vec`'s length would be loaded and stored through memory at every push).
@@ -272,8 +280,10 @@ struct ClosestColumns<'a> {
 /// No sphere hit: the closest hit so far is a triangle or nothing.
 const NO_SPHERE: u32 = u32::MAX;
 
-/// A closest-hit ray during traversal: its constants and the closest hit so far.
-struct ClosestRay<'a, S: Simd> {
+/// A closest-hit ray during traversal: its constants and the closest hit so far. `TOP`:
+/// a ray of the top-level BVH, which may reach instance leaves; an object-level ray (in an
+/// instance's object space) never does, and has no code for them.
+struct ClosestRay<'a, S: Simd, const TOP: bool> {
     s: S,
     tri: PacketRay<'a, S::F>,
     tmin: f32,
@@ -284,14 +294,21 @@ struct ClosestRay<'a, S: Simd> {
     sphere_t: f64,
     b1: f32,
     b2: f32,
+    /// The stack of the traversals of instances' objects ([`Bvh8::object_stack_capacity`];
+    /// empty without instances and at object level).
+    object_stack: &'a mut [Entry],
 }
 
-impl<S: Simd> ClosestRay<'_, S> {
+impl<S: Simd, const TOP: bool> ClosestRay<'_, S, TOP> {
     /// Tests leaf child `child`, shrinking `tmax` to a closer hit.
     #[inline(always)]
     fn leaf(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
+            if TOP && child & INSTANCE != 0 {
+                self.instance(bvh, index, tmax);
+                return;
+            }
             let leaf = &bvh.spheres[index];
             let (o, d) = (self.tri.origin(), self.tri.direction());
             if let Some(t64) = sphere_leaf_t64(leaf, o, d, self.tmin, *tmax) {
@@ -339,12 +356,45 @@ impl<S: Simd> ClosestRay<'_, S> {
             }
         }
     }
+
+    /// Traverses the object of instance leaf `index` with the ray mapped into its object
+    /// space (same `t`), taking a closer hit with its primitive numbered in the scene.
+    #[inline(always)]
+    fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: &mut f32) {
+        let s = self.s;
+        let leaf = &bvh.instances[index];
+        let object = &bvh.objects[leaf.object as usize];
+        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
+        let mut block = RayBlock::zero();
+        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let node_ray = NodeRay::new(s, &block, 0, self.tmin);
+        let mut inner = ClosestRay::<S, false> {
+            s,
+            tri: PacketRay::new(s, &block, 0),
+            tmin: self.tmin,
+            prim: NO_HIT,
+            sphere: NO_SPHERE,
+            sphere_t: 0.0,
+            b1: 0.0,
+            b2: 0.0,
+            object_stack: &mut [],
+        };
+        traverse_closest(s, object, &node_ray, self.object_stack, tmax, &mut inner);
+        if inner.prim != NO_HIT {
+            self.prim = leaf.prim_base + inner.prim;
+            self.sphere = inner.sphere;
+            self.sphere_t = inner.sphere_t;
+            self.b1 = inner.b1;
+            self.b2 = inner.b2;
+        }
+    }
 }
 
 /// [`intersect_closest`] on the lanes of `s`.
 #[inline(always)]
 fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
     let mut stack = vec![Entry { child: 0, t: 0.0 }; bvh.stack_capacity()];
+    let mut object_stack = vec![Entry { child: 0, t: 0.0 }; bvh.object_stack_capacity()];
     let mut block = RayBlock::zero();
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
@@ -364,7 +414,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
-            let mut ray = ClosestRay {
+            let mut ray = ClosestRay::<S, true> {
                 s,
                 tri: PacketRay::new(s, &block, lane),
                 tmin: ray_tmin,
@@ -373,6 +423,7 @@ fn closest_kernel<S: Simd>(s: S, bvh: &Bvh8, c: ClosestColumns) {
                 sphere_t: 0.0,
                 b1: 0.0,
                 b2: 0.0,
+                object_stack: &mut object_stack,
             };
             let mut best_t = tmax[i];
             traverse_closest(s, bvh, &node_ray, &mut stack, &mut best_t, &mut ray);
@@ -403,20 +454,25 @@ struct OccludedColumns<'a> {
     occluded: &'a mut [bool],
 }
 
-/// A shadow ray's constants during traversal.
-struct AnyRay<'a, S: Simd> {
+/// A shadow ray's constants during traversal (`TOP` as for [`ClosestRay`]).
+struct AnyRay<'a, S: Simd, const TOP: bool> {
     s: S,
     tri: PacketRay<'a, S::F>,
     tmin: f32,
+    /// The stack of the instances' traversals (as [`ClosestRay::object_stack`]).
+    object_stack: &'a mut [u32],
 }
 
-impl<S: Simd> LeafVisitor<S> for AnyRay<'_, S> {
+impl<S: Simd, const TOP: bool> LeafVisitor<S> for AnyRay<'_, S, TOP> {
     /// Whether leaf child `child` has a hit before `tmax` (which stays).
     #[inline(always)]
     fn visit(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) -> bool {
-        let tmax = *tmax;
         let index = (child & INDEX_MASK) as usize;
+        let tmax = *tmax;
         if child & SPHERE != 0 {
+            if TOP && child & INSTANCE != 0 {
+                return self.instance(bvh, index, tmax);
+            }
             let (o, d) = (self.tri.origin(), self.tri.direction());
             return sphere_leaf_t(&bvh.spheres[index], o, d, self.tmin, tmax) < f32::INFINITY;
         }
@@ -438,10 +494,34 @@ impl<S: Simd> LeafVisitor<S> for AnyRay<'_, S> {
     }
 }
 
+impl<S: Simd, const TOP: bool> AnyRay<'_, S, TOP> {
+    /// Whether the object of instance leaf `index` has a hit before `tmax`, with the ray
+    /// mapped into its object space (same `t`).
+    #[inline(always)]
+    fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: f32) -> bool {
+        let s = self.s;
+        let leaf = &bvh.instances[index];
+        let object = &bvh.objects[leaf.object as usize];
+        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
+        let mut block = RayBlock::zero();
+        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let node_ray = NodeRay::new(s, &block, 0, self.tmin);
+        let mut inner = AnyRay::<S, false> {
+            s,
+            tri: PacketRay::new(s, &block, 0),
+            tmin: self.tmin,
+            object_stack: &mut [],
+        };
+        let mut t = tmax;
+        traverse_leaves_first(s, object, &node_ray, self.object_stack, &mut t, &mut inner)
+    }
+}
+
 /// [`intersect_occluded`] on the lanes of `s`.
 #[inline(always)]
 fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
     let mut stack = vec![0u32; bvh.stack_capacity()];
+    let mut object_stack = vec![0u32; bvh.object_stack_capacity()];
     let mut block = RayBlock::zero();
     // Every column cut to the same length, so that indexing needs no bounds checks.
     let n = c.origin.len();
@@ -459,10 +539,11 @@ fn occluded_kernel<S: Simd>(s: S, bvh: &Bvh8, c: OccludedColumns) {
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
-            let mut ray = AnyRay {
+            let mut ray = AnyRay::<S, true> {
                 s,
                 tri: PacketRay::new(s, &block, lane),
                 tmin: ray_tmin,
+                object_stack: &mut object_stack,
             };
             let mut ray_tmax = tmax[i];
             occluded[i] =
@@ -616,6 +697,8 @@ pub fn intersect_occluded(
 mod all_hits;
 pub use all_hits::{intersect_all, NextHit, RayHits, MAX_HITS};
 
+#[cfg(test)]
+mod instance_tests;
 #[cfg(test)]
 mod surface_tests;
 #[cfg(test)]

@@ -190,6 +190,25 @@ impl MeshAttributes {
         v: [Vec3; 3],
         ng: Vec3,
     ) -> Option<MeshShading> {
+        self.shading_mapped(prim, b1, b2, v, ng, |n| n)
+    }
+
+    /// [`Self::shading`] of a mesh stored in another space than the hit's (an instance's
+    /// object space): `v` and `ng` are in the hit's space, and `map_normal` maps the
+    /// interpolated stored normal there before it is normalised (for an instance, the
+    /// inverse transpose of its map). The tangent is then `dpdu` of the mapped vertices,
+    /// which is the mapped `dpdu` (it is linear in the vertices), made orthogonal to the
+    /// mapped normal.
+    #[inline(always)]
+    pub fn shading_mapped(
+        &self,
+        prim: u32,
+        b1: f32,
+        b2: f32,
+        v: [Vec3; 3],
+        ng: Vec3,
+        map_normal: impl Fn(Vec3) -> Vec3,
+    ) -> Option<MeshShading> {
         let r = self.range_of(prim)?;
         let c = self.corners[(r.corners + (prim - r.first)) as usize];
         let b0 = 1.0 - b1 - b2;
@@ -197,7 +216,7 @@ impl MeshAttributes {
             ng
         } else {
             let n = |k: usize| self.normals[(r.normals + c[k]) as usize];
-            let n = n(0) * b0 + n(1) * b1 + n(2) * b2;
+            let n = map_normal(n(0) * b0 + n(1) * b1 + n(2) * b2);
             let len2 = n.length_squared();
             if len2 > 1e-20 && len2.is_finite() {
                 let n = n / len2.sqrt();

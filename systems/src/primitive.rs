@@ -174,7 +174,8 @@ impl Triangle {
 pub struct Triangles<'a>(pub(crate) &'a [Triangle]);
 
 impl Triangles<'_> {
-    /// [`SceneGeometry::surface_at`] when `prim` is a triangle, `None` for a sphere. A few
+    /// [`SceneGeometry::surface_at`] when `prim` is a triangle outside instances, `None` for
+    /// a sphere or a primitive of an instance. A few
     /// instructions and the common case: batch loops inline it and call `surface_at` for
     /// spheres, writing the result of each branch directly (not merging two results through
     /// memory).

@@ -166,7 +166,7 @@ impl IntegratorContext for RenderContext<'_> {
     }
 
     fn shape_of(&self, prim: u32) -> u32 {
-        self.scene.prim_shape[prim as usize]
+        self.scene.shape_of_prim(prim)
     }
 
     fn clearance(&self, p: Vec3, cap: f32) -> f32 {
@@ -310,7 +310,7 @@ impl IntegratorContext for RenderContext<'_> {
         write_ray_columns(scene, sorted, hits, rays, pts, base);
         pts.nn.extend_from_slice(&pts.ng[base..end]);
         write_tangents(geometry, sorted, hits, pts, base);
-        if !geometry.attributes().is_empty() {
+        if geometry.has_attributes() {
             write_mesh_attributes(geometry, sorted, hits, pts, base);
         }
         pts.w.resize(end, 0.0);
@@ -384,7 +384,12 @@ fn group_by_material(
         if prim == NO_HIT {
             escaped.push(i as u32);
         } else {
-            buckets[prim_material[prim as usize] as usize].push(i as u32);
+            // Primitives of instances (past the table) look theirs up.
+            let m = match prim_material.get(prim as usize) {
+                Some(&m) => m,
+                None => scene.material_of_prim(prim),
+            };
+            buckets[m as usize].push(i as u32);
         }
     };
     match keep {
@@ -481,9 +486,23 @@ fn write_tangents(
     if geometry.num_spheres() > 0 {
         let tangent = &mut pts.tangent[base..][..count];
         let (prims, tris) = (&hits.prim[..hits.len()], geometry.num_triangles());
+        let flat = geometry.num_flat_prims();
         for k in 0..count {
-            if prims[sorted[k] as usize] as usize >= tris {
+            let prim = prims[sorted[k] as usize] as usize;
+            if prim >= tris && prim < flat {
                 tangent[k] = sphere_tangent(ng[k]);
+            }
+        }
+    }
+    if geometry.num_instances() > 0 {
+        // An instanced sphere's tangent is its object's, mapped; an instanced triangle's
+        // stays the arbitrary one.
+        let tangent = &mut pts.tangent[base..][..count];
+        let (prims, flat) = (&hits.prim[..hits.len()], geometry.num_flat_prims());
+        for k in 0..count {
+            let prim = prims[sorted[k] as usize];
+            if prim as usize >= flat {
+                tangent[k] = geometry.tangent_at(prim, ng[k]);
             }
         }
     }
@@ -508,16 +527,10 @@ fn write_mesh_attributes(
         &mut pts.tangent[base..][..count],
     );
     let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
-    let attributes = geometry.attributes();
-    let tris = geometry.num_triangles();
     for k in 0..count {
         let i = sorted[k] as usize;
         let prim = prims[i];
-        if prim as usize >= tris {
-            continue;
-        }
-        let tri = geometry.triangle(prim as usize);
-        if let Some(s) = attributes.shading(prim, b1[i], b2[i], tri, ng[k]) {
+        if let Some(s) = geometry.mesh_shading(prim, b1[i], b2[i], ng[k]) {
             nn[k] = s.nn;
             tangent[k] = s.tangent;
             if let Some(uv) = s.uv {
@@ -559,7 +572,11 @@ fn write_ray_columns(
         vn[k] = -d;
         vlen[k] = t[i];
         front_face[k] = d.dot(ng[k]) < 0.0;
-        shape[k] = prim_shape[prims[i] as usize];
+        let prim = prims[i];
+        shape[k] = match prim_shape.get(prim as usize) {
+            Some(&s) => s,
+            None => scene.shape_of_prim(prim),
+        };
     }
     // Stacks get entries only in scenes with volumes, transmissive materials or a camera
     // inside a shape (only such shapes are tracked, `CompiledScene::tracks_interior`);

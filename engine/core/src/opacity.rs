@@ -143,13 +143,15 @@ pub fn attenuate_shadow_crossings(
         let i = c.ray as usize;
         let (o, d) = (origin[i], direction[i]);
         let s = geometry.surface_at(c.prim, o, d, c.t, c.b1, c.b2);
-        let is_sphere = geometry
+        let is_triangle = geometry
             .triangles()
             .surface_at(c.prim, c.b1, c.b2)
-            .is_none();
+            .is_some();
+        let is_sphere = !is_triangle && geometry.is_sphere(c.prim);
         // As the trace stage writes them (`context::write_surfaces`): sphere parameters only
-        // in scenes where some material reads them.
-        let mut uv = if is_sphere && scene.features.surface_uv {
+        // in scenes where some material reads them (a primitive of an instance gets its
+        // object's parameters as there).
+        let mut uv = if !is_triangle && (!is_sphere || scene.features.surface_uv) {
             geometry.surface_uv(c.prim, o, d, c.t, c.b1, c.b2)
         } else {
             s.uv
@@ -157,14 +159,13 @@ pub fn attenuate_shadow_crossings(
         // A mesh's own normals, tangent and texture coordinates, as
         // `context::write_mesh_attributes` gives the trace stage's points: an alpha texture
         // on a mesh is looked up where camera rays see it.
-        use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
-        let (mut nn, mut tangent) = match is_sphere {
-            true => (s.ng, sphere_tangent(s.ng)),
-            false => (s.ng, arbitrary_tangent(s.ng)),
+        use risotto_systems::mesh_attributes::arbitrary_tangent;
+        let (mut nn, mut tangent) = match is_triangle {
+            true => (s.ng, arbitrary_tangent(s.ng)),
+            false => (s.ng, geometry.tangent_at(c.prim, s.ng)),
         };
         if !is_sphere {
-            let tri = geometry.triangle(c.prim as usize);
-            if let Some(a) = geometry.attributes().shading(c.prim, c.b1, c.b2, tri, s.ng) {
+            if let Some(a) = geometry.mesh_shading(c.prim, c.b1, c.b2, s.ng) {
                 (nn, tangent) = (a.nn, a.tangent);
                 uv = a.uv.unwrap_or(uv);
             }

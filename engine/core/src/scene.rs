@@ -20,7 +20,9 @@ pub use risotto_systems::mesh_attributes::VertexAttributes;
 use std::sync::Arc;
 
 mod compile;
+mod instances;
 mod volume_lights;
+pub use instances::{InstanceOf, InstancedShapes, ObjectDef, ObjectShape};
 
 /// Name of an entity (shape or light), used in messages and stats.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -200,6 +202,9 @@ pub struct Scene {
     /// Where [`Self::camera_volume`] was written (`camera.inside` in a scene file), so its
     /// errors name the file and line; `None` for scenes built in code.
     pub camera_volume_at: Option<crate::diagnostics::Location>,
+    /// Objects: shapes defined once and placed by instance entities ([`InstanceOf`];
+    /// [`Self::add_object`], [`Self::add_instance`]).
+    pub objects: Vec<ObjectDef>,
 }
 
 /// Per-shape data of a compiled scene.
@@ -233,12 +238,16 @@ pub struct CompiledScene {
     pub files: Vec<std::path::PathBuf>,
     /// All primitives and the BVH.
     pub geometry: SceneGeometry,
-    /// Shape index of every primitive.
+    /// Shape index of every primitive outside instances (of any primitive:
+    /// [`Self::shape_of_prim`]).
     pub prim_shape: Vec<u32>,
-    /// Material index of every primitive (its shape's material; what grouping hits by
-    /// material reads, one lookup instead of two).
+    /// Material index of every primitive outside instances (its shape's material; what
+    /// grouping hits by material reads, one lookup instead of two; of any primitive:
+    /// [`Self::material_of_prim`]).
     pub prim_material: Vec<u32>,
-    /// Shapes.
+    /// The shapes of the instances' primitives.
+    pub instanced: InstancedShapes,
+    /// Shapes: those of the scene, then one per (instance, object shape).
     pub shapes: Vec<ShapeInfo>,
     /// Materials (factories).
     pub materials: Vec<Material>,
@@ -326,6 +335,7 @@ impl Scene {
             settings,
             camera_volume: None,
             camera_volume_at: None,
+            objects: Vec::new(),
         }
     }
 
@@ -425,6 +435,24 @@ impl Scene {
 }
 
 impl CompiledScene {
+    /// The shape of primitive `prim` (any, instanced or not).
+    #[inline(always)]
+    pub fn shape_of_prim(&self, prim: u32) -> u32 {
+        match self.prim_shape.get(prim as usize) {
+            Some(&s) => s,
+            None => self.instanced.shape_of(&self.geometry, prim),
+        }
+    }
+
+    /// The material of primitive `prim` (any, instanced or not).
+    #[inline(always)]
+    pub fn material_of_prim(&self, prim: u32) -> u32 {
+        match self.prim_material.get(prim as usize) {
+            Some(&m) => m,
+            None => self.shapes[self.instanced.shape_of(&self.geometry, prim) as usize].material,
+        }
+    }
+
     /// Adds the volume emitters of the emissive interiors to both light sets (after the
     /// shapes' bounds are known), and records each shape's light.
     fn add_volume_lights(&mut self) {
@@ -570,7 +598,7 @@ impl CompiledScene {
             if prim[0] == risotto_components::NO_HIT {
                 break;
             }
-            let shape = self.prim_shape[prim[0] as usize];
+            let shape = self.shape_of_prim(prim[0]);
             let s = self
                 .geometry
                 .surface_at(prim[0], origin, d, t[0], b1[0], b2[0]);

@@ -264,7 +264,7 @@ pub fn trace_shadow_rays_with(
             if prim[k] == NO_HIT || contribution[iu].is_black() {
                 continue;
             }
-            let shape = scene.prim_shape[prim[k] as usize];
+            let shape = scene.shape_of_prim(prim[k]);
             let material = scene.shapes[shape as usize].material;
             let info = &scene.material_info[material as usize];
             let false_boundary = scene.is_false_boundary(&stacks[iu], shape);

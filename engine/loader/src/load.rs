@@ -477,6 +477,30 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             scene.set_vertex_attributes(e, s.attributes);
         }
     }
+    // Objects in file order (their index is the instances' `object`), then instances.
+    for o in desc.objects {
+        let shapes = o
+            .shapes
+            .into_iter()
+            .map(|s| risotto_engine::scene::ObjectShape {
+                name: s.name,
+                geometry: match s.geometry {
+                    DescGeometry::Sphere { center, radius } => {
+                        ShapeGeometry::Sphere(Sphere { center, radius })
+                    }
+                    DescGeometry::Triangles { triangles, .. } => {
+                        ShapeGeometry::Triangles(triangles)
+                    }
+                },
+                material: s.material as u32,
+                attributes: s.attributes,
+            })
+            .collect();
+        scene.add_object(&o.name, shapes);
+    }
+    for i in desc.instances {
+        scene.add_instance(&i.name, i.object as u32, i.transform);
+    }
     for l in desc.lights {
         let name = l.name().to_string();
         let light = match l {

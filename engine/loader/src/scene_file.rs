@@ -18,6 +18,7 @@
 
 mod geometry;
 mod lights;
+mod objects;
 mod overrides;
 mod params;
 mod pattern;
@@ -36,6 +37,7 @@ pub use risotto_systems::mesh_attributes::VertexAttributes;
 use risotto_systems::sampler::MAX_SPP;
 
 pub use lights::LightDesc;
+pub use objects::{InstanceDesc, ObjectDesc};
 pub use params::MaterialParams;
 pub use pattern::ColourParam;
 pub use risotto_engine::diagnostics::{Location, ReferencedFiles, SceneError, SceneErrorKind};
@@ -68,8 +70,13 @@ pub struct SceneDesc {
     pub camera: CameraDesc,
     /// Materials in file order; shapes refer to them by index.
     pub materials: Vec<MaterialDesc>,
-    /// Shapes in file order.
+    /// Objects (`[objects.NAME]`) in file order: shapes defined once in object space,
+    /// rendered where instances place them.
+    pub objects: Vec<ObjectDesc>,
+    /// Shapes in file order (but instances).
     pub shapes: Vec<ShapeDesc>,
+    /// The `type = "instance"` entries of `shapes`, in file order.
+    pub instances: Vec<InstanceDesc>,
     /// Lights other than emissive shapes, in file order (at most one environment).
     pub lights: Vec<LightDesc>,
     /// The volume stack at the camera given explicitly (`camera.inside`): names of the
@@ -344,11 +351,20 @@ fn parse_source(
     })?;
     overrides::apply_overrides(&src, &mut root, overrides, override_lines)?;
     let top = Reader::new(&src, &root, "scene");
-    top.deny_unknown(&["render", "camera", "materials", "shapes", "lights"])?;
+    top.deny_unknown(&[
+        "render",
+        "camera",
+        "materials",
+        "objects",
+        "shapes",
+        "lights",
+    ])?;
 
     let render = read_render(&top)?;
     let materials = read_materials(&top, &src)?;
-    let shapes = read_shapes(&top, &materials)?;
+    let objects = objects::read_objects(&top, &materials)?;
+    let (shapes, instances) = read_shapes(&top, &materials, &objects)?;
+    objects::warn_unused(&src, &objects, &instances);
     let lights = read_lights(&top, &src)?;
     let (camera, camera_volume, camera_volume_at) = read_camera(&top, &shapes, &src)?;
     Ok(SceneDesc {
@@ -358,7 +374,9 @@ fn parse_source(
         render,
         camera,
         materials,
+        objects,
         shapes,
+        instances,
         lights,
         camera_volume,
         camera_volume_at,
@@ -508,14 +526,22 @@ fn element_entity(list: &str, i: usize, name: Option<&str>) -> String {
     }
 }
 
-const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh"];
+const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh", "instance"];
 
-fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<ShapeDesc>, SceneError> {
+/// The `[[shapes]]` list: shapes, and the instances of objects (`type = "instance"`).
+type ShapesAndInstances = (Vec<ShapeDesc>, Vec<InstanceDesc>);
+
+fn read_shapes(
+    top: &Reader<'_>,
+    materials: &[MaterialDesc],
+    objects: &[ObjectDesc],
+) -> Result<ShapesAndInstances, SceneError> {
     let Some(items) = top.array_opt("shapes")? else {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), Vec::new()));
     };
     let mut names = Names::new("shape");
     let mut out = Vec::with_capacity(items.len());
+    let mut instances = Vec::new();
     for (i, node) in items.iter().enumerate() {
         if node.as_table().is_none() {
             return Err(top.wrong_type("shapes", node, "a table (write shapes as [[shapes]])"));
@@ -528,110 +554,126 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
         names.insert(&r, &name, r.get("name").unwrap_or(node))?;
 
         let type_name = r.str_req("type")?;
-        let common = ["type", "name", "material", "emission"];
-        let specific: &[&str] = match type_name {
-            "sphere" => &["center", "radius"],
-            "quad" => &["corner", "edge1", "edge2", "transform"],
-            "rectangle" => &["transform"],
-            "box" => &["min", "max", "transform"],
-            "mesh" => &["path", "transform", "face_normals"],
-            other => {
-                return Err(r.error(
-                    SceneErrorKind::InvalidValue,
-                    &r.get("type").unwrap_or(node).span(),
-                    Some("type"),
-                    format!(
-                        "unknown shape type `{other}`; expected one of {}",
-                        SHAPE_TYPES.join(", ")
-                    ),
-                ))
-            }
-        };
-        let allowed: Vec<&str> = common.iter().chain(specific).copied().collect();
-        r.deny_unknown(&allowed)?;
+        if type_name == "instance" {
+            instances.push(objects::read_instance(&r, node, name, objects)?);
+            continue;
+        }
+        out.push(read_shape(&r, node, type_name, name, materials)?);
+    }
+    Ok((out, instances))
+}
 
-        let material_name = r.str_req("material")?;
-        let material = materials
-            .iter()
-            .position(|m| m.name == material_name)
-            .ok_or_else(|| {
-                let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-                let mut message = format!("unknown material `{material_name}`");
-                if let Some(near) = params::suggestion(material_name, &known) {
-                    message.push_str(&format!(" (did you mean `{near}`?)"));
-                }
-                if known.is_empty() {
-                    message.push_str("; no materials are defined (add a [materials.NAME] table)");
-                } else {
-                    message.push_str(&format!("; defined materials: {}", known.join(", ")));
-                }
-                r.error(
-                    SceneErrorKind::UnknownReference,
-                    &r.get("material").unwrap_or(node).span(),
-                    Some("material"),
-                    message,
-                )
-            })?;
-        let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
+/// One shape (any type but `instance`) of `[[shapes]]` or of an object, its type and name
+/// read.
+fn read_shape(
+    r: &Reader<'_>,
+    node: &Node,
+    type_name: &str,
+    name: String,
+    materials: &[MaterialDesc],
+) -> Result<ShapeDesc, SceneError> {
+    let common = ["type", "name", "material", "emission"];
+    let specific: &[&str] = match type_name {
+        "sphere" => &["center", "radius"],
+        "quad" => &["corner", "edge1", "edge2", "transform"],
+        "rectangle" => &["transform"],
+        "box" => &["min", "max", "transform"],
+        "mesh" => &["path", "transform", "face_normals"],
+        other => {
+            return Err(r.error(
+                SceneErrorKind::InvalidValue,
+                &r.get("type").unwrap_or(node).span(),
+                Some("type"),
+                format!(
+                    "unknown shape type `{other}`; expected one of {}",
+                    SHAPE_TYPES.join(", ")
+                ),
+            ))
+        }
+    };
+    let allowed: Vec<&str> = common.iter().chain(specific).copied().collect();
+    r.deny_unknown(&allowed)?;
 
-        let mut transform = glam::DAffine3::IDENTITY;
-        let mut attributes = VertexAttributes::default();
-        let mut triangles_of = |(triangles, m): (Vec<[Vec3; 3]>, glam::DAffine3)| {
-            transform = m;
-            triangles
-        };
-        let geometry = match type_name {
-            "sphere" => {
-                let center = r.vec3("center", None)?;
-                let radius = r.f32_where("radius", None, "must be > 0", |v| v > 0.0)?;
-                ShapeGeometry::Sphere { center, radius }
+    let material_name = r.str_req("material")?;
+    let material = materials
+        .iter()
+        .position(|m| m.name == material_name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+            let mut message = format!("unknown material `{material_name}`");
+            if let Some(near) = params::suggestion(material_name, &known) {
+                message.push_str(&format!(" (did you mean `{near}`?)"));
             }
-            "quad" => ShapeGeometry::Triangles {
-                kind: "quad",
-                triangles: triangles_of(geometry::quad(&r)?),
-            },
-            "rectangle" => ShapeGeometry::Triangles {
-                kind: "quad",
-                triangles: triangles_of(geometry::rectangle(&r)?),
-            },
-            "box" => ShapeGeometry::Triangles {
-                kind: "box",
-                triangles: triangles_of(geometry::cuboid(&r)?),
-            },
-            _ => {
-                let (triangles, m, a) = geometry::mesh(&r)?;
-                attributes = a;
-                ShapeGeometry::Triangles {
-                    kind: "mesh",
-                    triangles: triangles_of((triangles, m)),
-                }
+            if known.is_empty() {
+                message.push_str("; no materials are defined (add a [materials.NAME] table)");
+            } else {
+                message.push_str(&format!("; defined materials: {}", known.join(", ")));
             }
-        };
-        let transform = Affine3A::from_mat3_translation(
-            transform.matrix3.as_mat3(),
-            transform.translation.as_vec3(),
-        );
-        if let ShapeGeometry::Triangles { triangles, .. } = &geometry {
-            if !triangles.iter().flatten().all(|v| v.is_finite()) {
-                let at = r.get("transform").unwrap_or(node);
-                return Err(r.error(
-                    SceneErrorKind::InvalidValue,
-                    &at.span(),
-                    None,
-                    "vertex coordinates overflow f32 (values too large)",
-                ));
+            r.error(
+                SceneErrorKind::UnknownReference,
+                &r.get("material").unwrap_or(node).span(),
+                Some("material"),
+                message,
+            )
+        })?;
+    let emission = r.radiance_opt("emission")?.filter(|e| !e.is_black());
+
+    let mut transform = glam::DAffine3::IDENTITY;
+    let mut attributes = VertexAttributes::default();
+    let mut triangles_of = |(triangles, m): (Vec<[Vec3; 3]>, glam::DAffine3)| {
+        transform = m;
+        triangles
+    };
+    let geometry = match type_name {
+        "sphere" => {
+            let center = r.vec3("center", None)?;
+            let radius = r.f32_where("radius", None, "must be > 0", |v| v > 0.0)?;
+            ShapeGeometry::Sphere { center, radius }
+        }
+        "quad" => ShapeGeometry::Triangles {
+            kind: "quad",
+            triangles: triangles_of(geometry::quad(r)?),
+        },
+        "rectangle" => ShapeGeometry::Triangles {
+            kind: "quad",
+            triangles: triangles_of(geometry::rectangle(r)?),
+        },
+        "box" => ShapeGeometry::Triangles {
+            kind: "box",
+            triangles: triangles_of(geometry::cuboid(r)?),
+        },
+        _ => {
+            let (triangles, m, a) = geometry::mesh(r)?;
+            attributes = a;
+            ShapeGeometry::Triangles {
+                kind: "mesh",
+                triangles: triangles_of((triangles, m)),
             }
         }
-        out.push(ShapeDesc {
-            name,
-            material,
-            emission,
-            geometry,
-            transform,
-            attributes,
-        });
+    };
+    let transform = Affine3A::from_mat3_translation(
+        transform.matrix3.as_mat3(),
+        transform.translation.as_vec3(),
+    );
+    if let ShapeGeometry::Triangles { triangles, .. } = &geometry {
+        if !triangles.iter().flatten().all(|v| v.is_finite()) {
+            let at = r.get("transform").unwrap_or(node);
+            return Err(r.error(
+                SceneErrorKind::InvalidValue,
+                &at.span(),
+                None,
+                "vertex coordinates overflow f32 (values too large)",
+            ));
+        }
     }
-    Ok(out)
+    Ok(ShapeDesc {
+        name,
+        material,
+        emission,
+        geometry,
+        transform,
+        attributes,
+    })
 }
 
 type CameraParts = (CameraDesc, Option<Vec<String>>, Option<Location>);

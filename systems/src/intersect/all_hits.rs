@@ -133,22 +133,31 @@ pub enum NextHit {
 }
 
 /// A ray collecting every hit during traversal.
-struct AllRay<'a, S: Simd> {
+struct AllRay<'a, S: Simd, const TOP: bool> {
     s: S,
     tri: PacketRay<'a, S::F>,
     tmin: f32,
     hits: RayHits,
+    /// The stack of the instances' traversals (as for closest hits; empty at object level).
+    object_stack: &'a mut [u32],
+    /// Added to the primitive indices of hits (an instance's first primitive at object
+    /// level, 0 at the top).
+    prim_base: u32,
 }
 
 /// All-hits traversal is [`traverse_leaves_first`] with a visitor that never ends it and
 /// shrinks `tmax` only once the ray's list is full.
-impl<S: Simd> LeafVisitor<S> for AllRay<'_, S> {
+impl<S: Simd, const TOP: bool> LeafVisitor<S> for AllRay<'_, S, TOP> {
     /// Records the hits of leaf child `child` before `tmax` (which shrinks when the list
     /// fills).
     #[inline(always)]
     fn visit(&mut self, bvh: &Bvh8, child: u32, tmax: &mut f32) -> bool {
         let index = (child & INDEX_MASK) as usize;
         if child & SPHERE != 0 {
+            if TOP && child & INSTANCE != 0 {
+                self.instance(bvh, index, tmax);
+                return false;
+            }
             let leaf = &bvh.spheres[index];
             let (o, d) = (self.tri.origin(), self.tri.direction());
             let cr = leaf.center_radius;
@@ -156,7 +165,14 @@ impl<S: Simd> LeafVisitor<S> for AllRay<'_, S> {
                 for root in [t0, t1] {
                     if sphere_root_in_range(root, self.tmin, *tmax) {
                         let (b1, b2) = sphere_hit_params(root);
-                        self.hits.insert(root as f32, leaf.prim, b1, b2, 0.0, tmax);
+                        self.hits.insert(
+                            root as f32,
+                            self.prim_base + leaf.prim,
+                            b1,
+                            b2,
+                            0.0,
+                            tmax,
+                        );
                     }
                 }
             }
@@ -174,17 +190,55 @@ impl<S: Simd> LeafVisitor<S> for AllRay<'_, S> {
             let l = lanes.trailing_zeros() as usize & 7;
             lanes &= lanes - 1;
             if r.fallback & (1 << l) == 0 {
-                self.hits
-                    .insert(t[l], p.prim[l], b1[l], b2[l], bound[l], tmax);
+                self.hits.insert(
+                    t[l],
+                    self.prim_base + p.prim[l],
+                    b1[l],
+                    b2[l],
+                    bound[l],
+                    tmax,
+                );
             } else {
                 let (o, d) = (self.tri.origin().into(), self.tri.direction().into());
                 if let Some(h) = packet_lane_scalar(p, l, o, d, self.tmin, *tmax) {
-                    self.hits
-                        .insert(h.t, p.prim[l], h.b1, h.b2, f32::INFINITY, tmax);
+                    self.hits.insert(
+                        h.t,
+                        self.prim_base + p.prim[l],
+                        h.b1,
+                        h.b2,
+                        f32::INFINITY,
+                        tmax,
+                    );
                 }
             }
         }
         false
+    }
+}
+
+impl<S: Simd, const TOP: bool> AllRay<'_, S, TOP> {
+    /// Collects the hits on the object of instance leaf `index` into this ray's list (the
+    /// ray mapped into its object space, same `t`; the list's `tmax` shrinking as it
+    /// fills), numbered in the scene.
+    #[inline(always)]
+    fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: &mut f32) {
+        let s = self.s;
+        let leaf = &bvh.instances[index];
+        let object = &bvh.objects[leaf.object as usize];
+        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
+        let mut block = RayBlock::zero();
+        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let node_ray = NodeRay::new(s, &block, 0, self.tmin);
+        let mut inner = AllRay::<S, false> {
+            s,
+            tri: PacketRay::new(s, &block, 0),
+            tmin: self.tmin,
+            hits: self.hits,
+            object_stack: &mut [],
+            prim_base: leaf.prim_base,
+        };
+        traverse_leaves_first(s, object, &node_ray, self.object_stack, tmax, &mut inner);
+        self.hits = inner.hits;
     }
 }
 
@@ -201,6 +255,7 @@ struct AllColumns<'a> {
 #[inline(always)]
 fn all_kernel<S: Simd>(s: S, bvh: &Bvh8, c: AllColumns) {
     let mut stack = vec![0u32; bvh.stack_capacity()];
+    let mut object_stack = vec![0u32; bvh.object_stack_capacity()];
     let mut block = RayBlock::zero();
     let n = c.origin.len();
     let (origin, direction) = (&c.origin[..n], &c.direction[..n]);
@@ -217,7 +272,7 @@ fn all_kernel<S: Simd>(s: S, bvh: &Bvh8, c: AllColumns) {
         for i in start..end {
             let (lane, ray_tmin) = (i - start, tmin[i]);
             let node_ray = NodeRay::new(s, &block, lane, ray_tmin);
-            let mut ray = AllRay {
+            let mut ray = AllRay::<S, true> {
                 s,
                 tri: PacketRay::new(s, &block, lane),
                 tmin: ray_tmin,
@@ -225,6 +280,8 @@ fn all_kernel<S: Simd>(s: S, bvh: &Bvh8, c: AllColumns) {
                     complete: true,
                     ..RayHits::EMPTY
                 },
+                object_stack: &mut object_stack,
+                prim_base: 0,
             };
             let mut ray_tmax = tmax[i];
             traverse_leaves_first(s, bvh, &node_ray, &mut stack, &mut ray_tmax, &mut ray);

@@ -127,7 +127,7 @@ fn light_pdf_at(
         &mut b1,
         &mut b2,
     );
-    if prim[0] == NO_HIT || scene.prim_shape[prim[0] as usize] != shape {
+    if prim[0] == NO_HIT || scene.shape_of_prim(prim[0]) != shape {
         return 0.0;
     }
     scene.mis_lights.area_pdf(prim[0], from, p, ng)

@@ -17,6 +17,7 @@ impl Scene {
             settings,
             camera_volume,
             camera_volume_at,
+            objects,
         } = self;
         // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
         // primitive numbering is stable).
@@ -30,7 +31,7 @@ impl Scene {
             shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
         }
         shape_entities.sort_by_key(|s| s.0.id());
-        let transforms: Vec<Option<glam::Affine3A>> = shape_entities
+        let mut transforms: Vec<Option<glam::Affine3A>> = shape_entities
             .iter()
             .map(|s| world.get::<&ObjectTransform>(s.0).ok().map(|t| t.0))
             .collect();
@@ -72,11 +73,26 @@ impl Scene {
             });
         }
         let num_tris = triangles.len();
-        let mut geometry = SceneGeometry::build(triangles, spheres);
+        let num_flat_shapes = shapes.len();
+        let objects = instances::compile_objects(
+            objects,
+            &world,
+            &materials,
+            num_flat_shapes,
+            triangles.len() + spheres.len(),
+        )?;
+        shapes.extend(objects.shapes);
+        transforms.resize(shapes.len(), None);
         let mut features = Features {
-            vertex_normals: attributes.any_normals(),
+            vertex_normals: attributes.any_normals() || objects.any_normals,
             ..Features::default()
         };
+        let mut geometry = SceneGeometry::build_with_instances(
+            triangles,
+            spheres,
+            objects.geometries,
+            &objects.placements,
+        );
         geometry.set_attributes(attributes);
         let mut prim_shape = tri_shape;
         prim_shape.extend(sphere_shape);
@@ -219,6 +235,7 @@ impl Scene {
             geometry,
             prim_shape,
             prim_material,
+            instanced: objects.numbering,
             shapes,
             materials,
             material_info,
@@ -238,7 +255,9 @@ impl Scene {
             warnings,
         };
         let empty = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        let mut bounds = vec![empty; compiled.shapes.len()];
+        let mut bounds = vec![empty; num_flat_shapes];
+        // Instances' shapes: their object-space bounds mapped (they hold no volumes).
+        bounds.extend(objects.bounds);
         let mut object_bounds = bounds.clone();
         // The inverse transforms in double precision: object bounds as exact as the f32
         // vertices allow (a unit box turned 90 degrees maps back to [0, 1], not 0.99999994).
