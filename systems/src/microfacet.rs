@@ -1,5 +1,7 @@
-//! The GGX (Trowbridge-Reitz) microfacet distribution, isotropic and anisotropic, with the
-//! height-correlated Smith masking-shadowing function and sampling of the visible normals.
+//! Microfacet distributions: GGX (Trowbridge-Reitz, here) and Beckmann ([`Beckmann`]),
+//! isotropic and anisotropic, each with its height-correlated Smith masking-shadowing
+//! function and sampling of the visible normals; [`Microfacet`] is the choice of one, as a
+//! material holds it (`distribution = "ggx" | "beckmann"`).
 //!
 //! Everything works in the local shading frame of [`crate::bxdf`] (macro normal `+z`, the
 //! tangent `+x` carries `alpha_u`, the bitangent `+y` carries `alpha_v`). References:
@@ -15,6 +17,10 @@
 
 use risotto_components::{Vec2, Vec3};
 use std::f32::consts::PI;
+
+mod beckmann;
+pub mod erf;
+pub use beckmann::Beckmann;
 
 /// Smallest roughness the distribution takes (Mitsuba 3 clamps at the same value): below
 /// it `D` peaks above `1e7` and the lobe is a mirror for all practical purposes, while
@@ -138,6 +144,103 @@ impl Ggx {
         // Section 3.4: unstretch (z kept positive: the normal of a facet is never in the
         // plane, and `d` is 0 there).
         Vec3::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
+    }
+}
+
+/// A material's microfacet distribution: GGX or Beckmann. Every method forwards to the
+/// distribution's own (same arithmetic, so a GGX lobe reads the same numbers as before the
+/// choice existed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Microfacet {
+    /// GGX (Trowbridge-Reitz): long tails, risotto's default.
+    Ggx(Ggx),
+    /// Beckmann: Gaussian slopes, Mitsuba 3's default.
+    Beckmann(Beckmann),
+}
+
+impl From<Ggx> for Microfacet {
+    fn from(g: Ggx) -> Self {
+        Microfacet::Ggx(g)
+    }
+}
+
+impl From<Beckmann> for Microfacet {
+    fn from(b: Beckmann) -> Self {
+        Microfacet::Beckmann(b)
+    }
+}
+
+/// `$call` on whichever distribution `$self` holds.
+macro_rules! forward {
+    ($self:ident, $d:ident => $call:expr) => {
+        match $self {
+            Microfacet::Ggx($d) => $call,
+            Microfacet::Beckmann($d) => $call,
+        }
+    };
+}
+
+impl Microfacet {
+    /// Roughness along the tangent (`+x`).
+    #[inline]
+    pub fn alpha_u(&self) -> f32 {
+        forward!(self, d => d.alpha_u)
+    }
+
+    /// Roughness along the bitangent (`+y`).
+    #[inline]
+    pub fn alpha_v(&self) -> f32 {
+        forward!(self, d => d.alpha_v)
+    }
+
+    /// True when both roughnesses are equal.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_u() == self.alpha_v()
+    }
+
+    /// The distribution's name in the scene file (`"ggx"` or `"beckmann"`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Microfacet::Ggx(_) => "ggx",
+            Microfacet::Beckmann(_) => "beckmann",
+        }
+    }
+
+    /// Microfacet normal density `D(m)` ([`Ggx::d`], [`Beckmann::d`]).
+    #[inline]
+    pub fn d(&self, m: Vec3) -> f32 {
+        forward!(self, d => d.d(m))
+    }
+
+    /// Smith's `Lambda(w)` ([`Ggx::lambda`], [`Beckmann::lambda`]).
+    #[inline]
+    pub fn lambda(&self, w: Vec3) -> f32 {
+        forward!(self, d => d.lambda(w))
+    }
+
+    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))`.
+    #[inline]
+    pub fn g1(&self, w: Vec3) -> f32 {
+        forward!(self, d => d.g1(w))
+    }
+
+    /// Height-correlated masking-shadowing `G2(wo, wi)`.
+    #[inline]
+    pub fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
+        forward!(self, d => d.g2(wo, wi))
+    }
+
+    /// Density of the visible normals seen from `wo`, per solid angle of `m`.
+    #[inline]
+    pub fn pdf_visible(&self, wo: Vec3, m: Vec3) -> f32 {
+        forward!(self, d => d.pdf_visible(wo, m))
+    }
+
+    /// Samples a visible normal seen from `wo`, density [`Microfacet::pdf_visible`].
+    #[inline]
+    pub fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        forward!(self, d => d.sample_visible(wo, u))
     }
 }
 
