@@ -1,15 +1,18 @@
-//! Scene-file parameters of the microfacet materials, `rough_conductor` and
-//! `rough_dielectric`, named as Mitsuba 3's `roughconductor` / `roughdielectric`
+//! Scene-file parameters of the microfacet materials, `rough_conductor`,
+//! `rough_dielectric` and `rough_plastic`, named as Mitsuba 3's `roughconductor` / `roughdielectric`
 //! (`distribution`, `alpha`, `alpha_u`, `alpha_v`, `eta`, `k`, `material`,
 //! `specular_reflectance`) in the project's TOML style.
 
-use crate::scene_file::{MaterialParams, SceneError};
+use crate::scene_file::{ColourParam, MaterialParams, SceneError};
+use crate::surface_params::{coat_eta, specular_reflectance};
 use risotto_builtins::builtin::Surface;
 use risotto_components::Rgb;
 use risotto_systems::conductor::{metal, METALS};
 use risotto_systems::microfacet::{Beckmann, Ggx, Microfacet};
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::rough_plastic::RoughPlastic;
+use std::sync::Arc;
 
 /// Roughness when a material gives none (Mitsuba's default).
 const DEFAULT_ALPHA: f32 = 0.1;
@@ -158,4 +161,63 @@ pub(crate) fn rough_dielectric(
     let mut keys = ROUGHNESS_KEYS.to_vec();
     keys.extend(["ior", "tint"]);
     Ok((Surface::RoughDielectric(lobe), keys))
+}
+
+/// The keys of a `rough_plastic` material besides `interior` and `two_sided`.
+pub(crate) const ROUGH_PLASTIC_KEYS: [&str; 7] = [
+    "distribution",
+    "alpha",
+    "diffuse_reflectance",
+    "specular_reflectance",
+    "int_ior",
+    "ext_ior",
+    "nonlinear",
+];
+
+/// `type = "rough_plastic"`: Mitsuba 3's `roughplastic`. `distribution` (default `"ggx"`),
+/// `alpha` (isotropic only, as Mitsuba's), `diffuse_reflectance` (a colour or a pattern in
+/// [0, 1], default 0.5), `specular_reflectance`, `int_ior`, `ext_ior` and `nonlinear` as
+/// the smooth `plastic`; `int_ior` must differ from `ext_ior`. No energy compensation (the
+/// model's diffuse lobe is its own account of the coat's transmission).
+pub(crate) fn rough_plastic(p: &MaterialParams) -> Result<Surface, SceneError> {
+    for key in ["alpha_u", "alpha_v"] {
+        if p.has(key) {
+            return Err(p.error(
+                Some(key),
+                "rough_plastic is isotropic (its coat's transmittance is tabulated per \
+                 cosine, as Mitsuba's): give `alpha`",
+            ));
+        }
+    }
+    if p.has("energy_compensation") {
+        return Err(p.error(
+            Some("energy_compensation"),
+            "rough_plastic has no energy compensation: its diffuse lobe already accounts \
+             for the light the rough coat transmits (Mitsuba 3's model)",
+        ));
+    }
+    let family = family(p)?;
+    let a = alpha(p, "alpha")?;
+    let eta = coat_eta(p)?;
+    if eta == 1.0 {
+        return Err(p.error(
+            Some("int_ior"),
+            "int_ior equals ext_ior: an index-matched coat reflects nothing (use `diffuse`)",
+        ));
+    }
+    let lobe = RoughPlastic::new(
+        family.with(a, a),
+        eta,
+        specular_reflectance(p)?,
+        p.bool("nonlinear", Some(false))?,
+    );
+    Ok(
+        match p.colour_or_pattern("diffuse_reflectance", Rgb::splat(0.5), [0.0, 1.0])? {
+            ColourParam::Constant(diffuse) => Surface::RoughPlastic { lobe, diffuse },
+            ColourParam::Pattern(graph) => Surface::RoughPlasticPattern {
+                lobe,
+                diffuse: Arc::new(graph),
+            },
+        },
+    )
 }

@@ -17,6 +17,7 @@ use risotto_systems::bxdf::PlasticCoat;
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::rough_plastic::RoughPlastic;
 use std::sync::Arc;
 
 /// The surface part of a built-in material.
@@ -89,6 +90,24 @@ pub enum Surface {
         /// The base-reflectance graph.
         diffuse: Arc<PatternGraph>,
     },
+    /// Rough plastic: a Lambertian base under a rough dielectric coat
+    /// ([`risotto_systems::rough_plastic`], its tables integrated when the material was
+    /// built). One-sided.
+    RoughPlastic {
+        /// The coat.
+        lobe: RoughPlastic,
+        /// The base's reflectance.
+        diffuse: Rgb,
+    },
+    /// Rough plastic with a base-reflectance pattern (every value in [0, 1] by the graph's
+    /// bounds, checked by the scene loader), evaluated per point through the context's cache
+    /// (parameter `diffuse_reflectance`).
+    RoughPlasticPattern {
+        /// The coat.
+        lobe: RoughPlastic,
+        /// The base-reflectance graph.
+        diffuse: Arc<PatternGraph>,
+    },
     /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no interior, no
     /// refraction offset, shadow rays blocked.
     ThinDielectric {
@@ -108,6 +127,7 @@ impl Surface {
             Surface::Diffuse { .. }
             | Surface::Mirror { .. }
             | Surface::Plastic { .. }
+            | Surface::RoughPlastic { .. }
             | Surface::RoughConductor(_) => InstanceHints::NONE,
             Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
@@ -115,12 +135,16 @@ impl Surface {
             {
                 InstanceHints::READS_SURFACE_UV
             }
-            Surface::PlasticPattern { diffuse, .. } if diffuse.reads_uv() => {
+            Surface::PlasticPattern { diffuse, .. }
+            | Surface::RoughPlasticPattern { diffuse, .. }
+                if diffuse.reads_uv() =>
+            {
                 InstanceHints::READS_SURFACE_UV
             }
             Surface::DiffusePattern { .. }
             | Surface::MirrorPattern { .. }
-            | Surface::PlasticPattern { .. } => InstanceHints::NONE,
+            | Surface::PlasticPattern { .. }
+            | Surface::RoughPlasticPattern { .. } => InstanceHints::NONE,
             Surface::DielectricPattern { tint, .. } if tint.reads_uv() => {
                 InstanceHints::TRANSMITS | InstanceHints::READS_SURFACE_UV
             }
@@ -174,6 +198,16 @@ impl Surface {
                 coat,
                 diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
             }),
+            Surface::RoughPlastic { ref lobe, diffuse } => {
+                arena.alloc(RoughPlasticBxdf { lobe, diffuse })
+            }
+            Surface::RoughPlasticPattern {
+                ref lobe,
+                ref diffuse,
+            } => arena.alloc(RoughPlasticBxdf {
+                lobe,
+                diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
+            }),
             Surface::ThinDielectric { ior } => arena.alloc(ThinDielectricBxdf { ior }),
             Surface::TwoSided(ref inner) => {
                 let nn = facing_normals(ctx, arena);
@@ -199,12 +233,15 @@ impl Surface {
             }
             (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
             (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
-            (Surface::Plastic { diffuse, .. }, "diffuse_reflectance") => {
-                Some(ParamValue::Color(*diffuse))
-            }
-            (Surface::PlasticPattern { diffuse, .. }, "diffuse_reflectance") => {
-                Some(ParamValue::Pattern(diffuse))
-            }
+            (
+                Surface::Plastic { diffuse, .. } | Surface::RoughPlastic { diffuse, .. },
+                "diffuse_reflectance",
+            ) => Some(ParamValue::Color(*diffuse)),
+            (
+                Surface::PlasticPattern { diffuse, .. }
+                | Surface::RoughPlasticPattern { diffuse, .. },
+                "diffuse_reflectance",
+            ) => Some(ParamValue::Pattern(diffuse)),
             (Surface::ThinDielectric { ior }, "ior") => Some(ParamValue::Float(*ior)),
             (Surface::RoughDielectric(lobe), "ior") => Some(ParamValue::Float(lobe.eta)),
             (Surface::RoughDielectric(lobe), "tint") => Some(ParamValue::Color(lobe.tint)),
