@@ -476,8 +476,7 @@ fn rough_plastic_matches_mitsuba() {
     // specular, nonlinear). Reference `scenes/mitsuba-suite/rough_plastic.xml` at 64x64,
     // 16384 spp, llvm_ad_rgb (`./run.sh render.py rough_plastic.xml -D res=64 --spp 16384`).
     // Measured when written (64x64, 64 spp): means within 0.08 % (R +0.060 %, G +0.065 %, B +0.079 %), rmse
-    // 0.0025 against an iid prediction of 0.0047. Mitsuba's grid-mean rule for the coat's
-    // internal reflectance is what matches: the exact integral makes the diffuse lobe brighter.
+    // 0.0025 against an iid prediction of 0.0047.
     check(
         "scenes/mitsuba-suite/rough_plastic.toml",
         "tests/data/rough_plastic-mitsuba-64.exr",
