@@ -66,10 +66,10 @@ pub enum Surface {
         /// The reflectance graph.
         reflectance: Arc<PatternGraph>,
     },
-    /// GGX rough conductor (complex index, Fresnel tint, optional energy compensation),
+    /// Rough conductor, GGX or Beckmann (complex index, Fresnel tint, optional energy compensation),
     /// its tables integrated when the material was built.
     RoughConductor(RoughConductor),
-    /// GGX rough dielectric; its `eta` is the material's index (against vacuum).
+    /// Rough dielectric, GGX or Beckmann; its `eta` is the material's index (against vacuum).
     RoughDielectric(RoughDielectric),
     /// Index-matched boundary: rays pass unchanged.
     Interface,

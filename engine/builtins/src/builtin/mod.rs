@@ -9,8 +9,9 @@
 //!
 //! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
 //!
-//! Files: [`bxdfs`] (the first closures), [`rough`] (the GGX closures), [`plastic`],
-//! [`thin_dielectric`] and [`two_sided`] (one closure each), [`interiors`] (which volume
+//! Files: [`bxdfs`] (the first closures), [`rough`] (the microfacet closures: rough
+//! conductor, dielectric and plastic), [`plastic`], [`thin_dielectric`] and [`two_sided`]
+//! (one closure each), [`interiors`] (which volume
 //! integrator a material's inside gets, and the `null` and `beer` ones), [`mask`] (opacity)
 //! and [`material`] (the factory).
 //! Everything is re-exported here.
