@@ -168,7 +168,7 @@ fn visible_slopes_unit(cos_theta: f32, sin_theta: f32, u: Vec2) -> (f32, f32) {
         let slope = erfinv(x);
         let value = 1.0 + x + tan_theta * FRAC_1_SQRT_PI * (-slope * slope).exp() - target;
         let derivative = 1.0 - slope * tan_theta;
-        if !(derivative > 0.0) {
+        if derivative.is_nan() || derivative <= 0.0 {
             break;
         }
         // Stay inside the CDF's domain: Newton may overshoot near x_max, where C' -> 0.
