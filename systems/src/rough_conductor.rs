@@ -5,7 +5,7 @@
 use crate::bxdf::{sample_cosine_hemisphere, BxdfSample};
 use crate::conductor::fresnel_conductor_rgb;
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::{positive, Microfacet};
+use crate::microfacet::{positive, reflection_half_vector, Microfacet};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -115,12 +115,9 @@ impl RoughConductor {
         if !(wo.z > 0.0 && wi.z > 0.0) {
             return (Rgb::BLACK, 0.0);
         }
-        let h = wo + wi;
-        let len2 = h.length_squared();
-        if !positive(len2) || !len2.is_finite() {
+        let Some(m) = reflection_half_vector(wo, wi) else {
             return (Rgb::BLACK, 0.0);
-        }
-        let m = h / len2.sqrt();
+        };
         let wo_m = wo.dot(m);
         let d = self.distribution.d(m);
         let single = self.fresnel(wo_m) * (d * self.distribution.g2(wo, wi) / (4.0 * wo.z));

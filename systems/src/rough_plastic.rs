@@ -44,7 +44,7 @@
 
 use crate::bxdf::{fresnel_dielectric, sample_cosine_hemisphere, BxdfSample};
 use crate::energy_compensation::strata_of;
-use crate::microfacet::{positive, refract_about, Microfacet};
+use crate::microfacet::{positive, reflection_half_vector, refract_about, Microfacet};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -199,12 +199,9 @@ impl RoughPlastic {
         if !(wo.z > 0.0 && wi.z > 0.0) {
             return (Rgb::BLACK, 0.0);
         }
-        let h = wo + wi;
-        let len2 = h.length_squared();
-        if !positive(len2) || !len2.is_finite() {
+        let Some(h) = reflection_half_vector(wo, wi) else {
             return (Rgb::BLACK, 0.0);
-        }
-        let h = h / len2.sqrt();
+        };
         let wo_h = wo.dot(h);
         let dist = &self.distribution;
         let f = fresnel_dielectric(wo_h, self.eta);

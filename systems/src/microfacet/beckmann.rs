@@ -20,7 +20,7 @@
 //!   original fitted inversion), from an initial guess exact at grazing incidence.
 
 use super::erf::{erf, erfinv, FRAC_1_SQRT_PI};
-use super::ALPHA_MIN;
+use super::{Smith, ALPHA_MIN};
 use risotto_components::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -51,71 +51,8 @@ impl Beckmann {
         Beckmann::new(alpha, alpha)
     }
 
-    /// Microfacet normal density `D(m)` per unit projected area (Heitz 2014 eq. 83):
-    /// `exp(-(x^2/au^2 + y^2/av^2) / z^2) / (pi au av z^4)`; 0 for `m.z <= 0`.
-    #[inline]
-    pub fn d(&self, m: Vec3) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
-        let (x, y) = (m.x / self.alpha_u, m.y / self.alpha_v);
-        let z2 = m.z * m.z;
-        let e = (-(x * x + y * y) / z2).exp();
-        e / (PI * self.alpha_u * self.alpha_v * z2 * z2)
-    }
-
-    /// Smith's `Lambda(w)` for Beckmann (Heitz 2014 eq. 84): with
-    /// `a = 1 / (alpha_w tan theta)` (`alpha_w` the roughness projected on `w`'s azimuth),
-    /// `Lambda = (erf(a) - 1) / 2 + exp(-a^2) / (2 a sqrt(pi))`; 0 at the normal, infinite in
-    /// the plane.
-    #[inline]
-    pub fn lambda(&self, w: Vec3) -> f32 {
-        let (x, y) = (self.alpha_u * w.x, self.alpha_v * w.y);
-        let xy = (x * x + y * y).sqrt();
-        if xy == 0.0 {
-            return 0.0;
-        }
-        let a = w.z.abs() / xy;
-        if a == 0.0 {
-            return f32::INFINITY;
-        }
-        // Both terms fall as exp(-a^2); beyond a = 5 the sum is below 1e-13.
-        if a > 5.0 {
-            return 0.0;
-        }
-        (0.5 * (erf(a) - 1.0) + (-a * a).exp() * FRAC_1_SQRT_PI / (2.0 * a)).max(0.0)
-    }
-
-    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))` (Heitz 2014 eq. 43).
-    #[inline]
-    pub fn g1(&self, w: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(w))
-    }
-
-    /// Height-correlated masking-shadowing `1 / (1 + Lambda(wo) + Lambda(wi))` (Heitz 2014
-    /// eq. 99), as [`super::Ggx::g2`].
-    #[inline]
-    pub fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
-    }
-
-    /// Density of the visible normals seen from `wo` (`wo.z > 0`), per solid angle of `m`:
-    /// `G1(wo) max(0, wo . m) D(m) / wo.z` (Heitz and d'Eon 2014 eq. 2). 0 for `wo` at or
-    /// below the horizon.
-    #[inline]
-    pub fn pdf_visible(&self, wo: Vec3, m: Vec3) -> f32 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        let wo_m = wo.dot(m);
-        if wo_m <= 0.0 {
-            return 0.0;
-        }
-        self.g1(wo) * wo_m * self.d(m) / wo.z
-    }
-
     /// Samples a microfacet normal from the visible normals seen from `wo` (`wo.z > 0`),
-    /// density [`Beckmann::pdf_visible`] (Heitz and d'Eon 2014 sec. 4 with Jakob 2014's
+    /// density [`Smith::pdf_visible`] (Heitz and d'Eon 2014 sec. 4 with Jakob 2014's
     /// inversion): stretch `wo` to unit roughness, draw the visible slopes there for its
     /// elevation, rotate them to its azimuth, unstretch, and turn the slope into a normal.
     pub fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
@@ -139,6 +76,43 @@ impl Beckmann {
             return Vec3::new(flat.x, flat.y, 1e-6).normalize();
         }
         m.normalize()
+    }
+}
+
+impl Smith for Beckmann {
+    /// Microfacet normal density `D(m)` per unit projected area (Heitz 2014 eq. 83):
+    /// `exp(-(x^2/au^2 + y^2/av^2) / z^2) / (pi au av z^4)`; 0 for `m.z <= 0`.
+    #[inline]
+    fn d(&self, m: Vec3) -> f32 {
+        if m.z <= 0.0 {
+            return 0.0;
+        }
+        let (x, y) = (m.x / self.alpha_u, m.y / self.alpha_v);
+        let z2 = m.z * m.z;
+        let e = (-(x * x + y * y) / z2).exp();
+        e / (PI * self.alpha_u * self.alpha_v * z2 * z2)
+    }
+
+    /// Smith's `Lambda(w)` for Beckmann (Heitz 2014 eq. 84): with
+    /// `a = 1 / (alpha_w tan theta)` (`alpha_w` the roughness projected on `w`'s azimuth),
+    /// `Lambda = (erf(a) - 1) / 2 + exp(-a^2) / (2 a sqrt(pi))`; 0 at the normal, infinite in
+    /// the plane.
+    #[inline]
+    fn lambda(&self, w: Vec3) -> f32 {
+        let (x, y) = (self.alpha_u * w.x, self.alpha_v * w.y);
+        let xy = (x * x + y * y).sqrt();
+        if xy == 0.0 {
+            return 0.0;
+        }
+        let a = w.z.abs() / xy;
+        if a == 0.0 {
+            return f32::INFINITY;
+        }
+        // Both terms fall as exp(-a^2); beyond a = 5 the sum is below 1e-13.
+        if a > 5.0 {
+            return 0.0;
+        }
+        (0.5 * (erf(a) - 1.0) + (-a * a).exp() * FRAC_1_SQRT_PI / (2.0 * a)).max(0.0)
     }
 }
 
