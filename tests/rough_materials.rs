@@ -67,6 +67,15 @@ fn white_rough_conductor_stays_white_in_a_furnace() {
         64,
     );
     assert!((aniso - 1.0).abs() < 0.015, "anisotropic: {aniso}");
+    // Beckmann's tables compensate it as well.
+    let beckmann = mean_radiance(
+        "type = \"rough_conductor\"\nalpha = 1\ndistribution = \"beckmann\"",
+        64,
+    );
+    assert!(
+        (beckmann - 1.0).abs() < 0.01,
+        "Beckmann, compensated: {beckmann}"
+    );
 }
 
 /// A clear rough glass sphere in a white environment is invisible (every path ends in the
@@ -82,12 +91,32 @@ fn rough_glass_is_invisible_in_a_furnace() {
     assert!(off < 0.97, "uncompensated: {off}");
 }
 
-/// Bad GGX parameters are located errors naming the file, the material, the key and the
+/// Bad microfacet parameters are located errors naming the file, the material, the key and the
 /// value (or the choices).
 #[test]
 fn bad_rough_parameters_are_located_errors() {
     let d = common::scratch_dir("rough", "errors");
-    let cases: [(&str, &[&str]); 11] = [
+    let cases: [(&str, &[&str]); 16] = [
+        (
+            "type = \"rough_conductor\"\ndistribution = \"phong\"",
+            &["distribution", "phong", "ggx", "beckmann"],
+        ),
+        (
+            "type = \"rough_plastic\"\ndistribution = \"Beckmann\"",
+            &["distribution", "Beckmann", "beckmann"],
+        ),
+        (
+            "type = \"rough_plastic\"\nalpha_u = 0.2\nalpha_v = 0.1",
+            &["alpha_u", "isotropic"],
+        ),
+        (
+            "type = \"rough_plastic\"\nenergy_compensation = false",
+            &["energy_compensation", "no energy compensation"],
+        ),
+        (
+            "type = \"rough_plastic\"\nint_ior = 1.3\next_ior = 1.3",
+            &["int_ior", "ext_ior"],
+        ),
         (
             "type = \"rough_conductor\"\nalpha = 0",
             &["alpha", "(0, 1]", "`0`"],
@@ -148,8 +177,14 @@ fn bad_rough_parameters_are_located_errors() {
             assert!(err.contains(n), "{body}: `{n}` missing from: {err}");
         }
     }
-    // Defaults load: alpha 0.1, material "none", ior 1.5.
-    for body in ["type = \"rough_conductor\"", "type = \"rough_dielectric\""] {
+    // Defaults load: alpha 0.1, material "none", ior 1.5; and either distribution.
+    for body in [
+        "type = \"rough_conductor\"",
+        "type = \"rough_dielectric\"",
+        "type = \"rough_plastic\"",
+        "type = \"rough_dielectric\"\ndistribution = \"beckmann\"",
+        "type = \"rough_plastic\"\ndistribution = \"beckmann\"\ntwo_sided = true",
+    ] {
         assert!(
             common::load_scene_text(&d, &furnace_scene(body, 1)).is_ok(),
             "{body}"

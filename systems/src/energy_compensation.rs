@@ -1,4 +1,5 @@
-//! Directional-albedo tables of single-scattering GGX lobes, for the energy compensation
+//! Directional-albedo tables of single-scattering microfacet lobes (GGX or Beckmann: the
+//! quadrature only samples visible normals and evaluates `G1`, `G2`), for the energy compensation
 //! of multiple scattering between microfacets.
 //!
 //! A microfacet lobe with single scattering only loses the light that bounces more than
@@ -14,7 +15,7 @@
 //! lobe makes up the loss exactly up to the interpolation error (< 0.5%, tested).
 
 use crate::bxdf::fresnel_dielectric;
-use crate::microfacet::{refract_about, Ggx};
+use crate::microfacet::{refract_about, Microfacet};
 use risotto_components::{Vec2, Vec3};
 
 /// Cosines at which the table holds the albedo: `mu_i = i / (MU_POINTS - 1)`.
@@ -56,16 +57,16 @@ impl AlbedoTable {
         }
     }
 
-    /// The albedo of a white (`F = 1`) GGX conductor: [`conductor_albedo`] at every cosine.
-    pub fn conductor(ggx: &Ggx) -> Self {
-        AlbedoTable::from_fn(|mu| conductor_albedo(ggx, mu))
+    /// The albedo of a white (`F = 1`) rough conductor: [`conductor_albedo`] at every cosine.
+    pub fn conductor(distribution: &Microfacet) -> Self {
+        AlbedoTable::from_fn(|mu| conductor_albedo(distribution, mu))
     }
 
     /// The albedo of a rough dielectric interface seen from the side where the relative
     /// index is `eta` (reflection plus transmission, without the radiance scaling):
     /// [`dielectric_albedo`] at every cosine.
-    pub fn dielectric(ggx: &Ggx, eta: f32) -> Self {
-        AlbedoTable::from_fn(|mu| dielectric_albedo(ggx, eta, mu))
+    pub fn dielectric(distribution: &Microfacet, eta: f32) -> Self {
+        AlbedoTable::from_fn(|mu| dielectric_albedo(distribution, eta, mu))
     }
 
     /// `E(mu)` by linear interpolation (`mu` clamped to `[0, 1]`).
@@ -81,11 +82,17 @@ impl AlbedoTable {
 /// Midpoints of a `STRATA x STRATA` grid over the unit square: a deterministic product
 /// midpoint rule for the tables.
 fn strata() -> impl Iterator<Item = Vec2> {
-    let n = STRATA as f32;
-    (0..STRATA * STRATA).map(move |k| {
+    strata_of(STRATA)
+}
+
+/// Midpoints of a `count x count` grid over the unit square (a product midpoint rule over
+/// the samples of a visible-normal sampler).
+pub(crate) fn strata_of(count: usize) -> impl Iterator<Item = Vec2> {
+    let n = count as f32;
+    (0..count * count).map(move |k| {
         Vec2::new(
-            ((k / STRATA) as f32 + 0.5) / n,
-            ((k % STRATA) as f32 + 0.5) / n,
+            ((k / count) as f32 + 0.5) / n,
+            ((k % count) as f32 + 0.5) / n,
         )
     })
 }
@@ -102,9 +109,9 @@ const AZIMUTHS: usize = 4;
 /// The mean of `albedo(wo)` over the azimuths of `wo` at cosine `mu`: one azimuth for an
 /// isotropic lobe, [`AZIMUTHS`] over a quarter turn for an anisotropic one (whose
 /// compensation is then exact on average over azimuth rather than at every azimuth).
-fn azimuthal_mean(ggx: &Ggx, mu: f32, albedo: impl Fn(Vec3) -> f64) -> f32 {
+fn azimuthal_mean(distribution: &Microfacet, mu: f32, albedo: impl Fn(Vec3) -> f64) -> f32 {
     let d = direction(mu);
-    if ggx.alpha_u == ggx.alpha_v {
+    if distribution.is_isotropic() {
         return albedo(d) as f32;
     }
     let mut sum = 0.0;
@@ -116,22 +123,22 @@ fn azimuthal_mean(ggx: &Ggx, mu: f32, albedo: impl Fn(Vec3) -> f64) -> f32 {
     (sum / AZIMUTHS as f64) as f32
 }
 
-/// `E(mu) = int f cos dwi` of the white GGX reflection lobe, by sampling visible normals:
+/// `E(mu) = int f cos dwi` of the white microfacet reflection lobe, by sampling visible normals:
 /// each sample's weight `f cos / pdf` is `G2(wo, wi) / G1(wo)` (Heitz 2018 sec. 2), averaged
 /// over a stratified grid.
-pub fn conductor_albedo(ggx: &Ggx, mu: f32) -> f32 {
-    azimuthal_mean(ggx, mu, |wo| conductor_albedo_at(ggx, wo))
+pub fn conductor_albedo(distribution: &Microfacet, mu: f32) -> f32 {
+    azimuthal_mean(distribution, mu, |wo| conductor_albedo_at(distribution, wo))
 }
 
 /// [`conductor_albedo`] seen from one direction `wo`.
-fn conductor_albedo_at(ggx: &Ggx, wo: Vec3) -> f64 {
-    let g1 = ggx.g1(wo);
+fn conductor_albedo_at(distribution: &Microfacet, wo: Vec3) -> f64 {
+    let g1 = distribution.g1(wo);
     let mut sum = 0.0f64;
     for u in strata() {
-        let m = ggx.sample_visible(wo, u);
+        let m = distribution.sample_visible(wo, u);
         let wi = 2.0 * wo.dot(m) * m - wo;
         if wi.z > 0.0 {
-            sum += (ggx.g2(wo, wi) / g1) as f64;
+            sum += (distribution.g2(wo, wi) / g1) as f64;
         }
     }
     sum / (STRATA * STRATA) as f64
@@ -141,25 +148,27 @@ fn conductor_albedo_at(ggx: &Ggx, wo: Vec3) -> f64 {
 /// above): the Fresnel-weighted sum of the reflected and the refracted weights
 /// `G2 / G1` per visible normal, without the `1 / eta^2` radiance factor -- the fraction
 /// of energy single scattering keeps, which is 1 for a smooth interface.
-pub fn dielectric_albedo(ggx: &Ggx, eta: f32, mu: f32) -> f32 {
-    azimuthal_mean(ggx, mu, |wo| dielectric_albedo_at(ggx, eta, wo))
+pub fn dielectric_albedo(distribution: &Microfacet, eta: f32, mu: f32) -> f32 {
+    azimuthal_mean(distribution, mu, |wo| {
+        dielectric_albedo_at(distribution, eta, wo)
+    })
 }
 
 /// [`dielectric_albedo`] seen from one direction `wo`.
-fn dielectric_albedo_at(ggx: &Ggx, eta: f32, wo: Vec3) -> f64 {
-    let g1 = ggx.g1(wo);
+fn dielectric_albedo_at(distribution: &Microfacet, eta: f32, wo: Vec3) -> f64 {
+    let g1 = distribution.g1(wo);
     let mut sum = 0.0f64;
     for u in strata() {
-        let m = ggx.sample_visible(wo, u);
+        let m = distribution.sample_visible(wo, u);
         let c = wo.dot(m);
         let r = fresnel_dielectric(c, eta);
         let wr = 2.0 * c * m - wo;
         if wr.z > 0.0 {
-            sum += (r * ggx.g2(wo, wr) / g1) as f64;
+            sum += (r * distribution.g2(wo, wr) / g1) as f64;
         }
         if let Some(wt) = refract_about(wo, m, eta) {
             if wt.z < 0.0 {
-                sum += ((1.0 - r) * ggx.g2(wo, wt) / g1) as f64;
+                sum += ((1.0 - r) * distribution.g2(wo, wt) / g1) as f64;
             }
         }
     }

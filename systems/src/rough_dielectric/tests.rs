@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::bxdf::sample_uniform_sphere;
+use crate::microfacet::{Beckmann, Ggx};
 use crate::sampler::SplitMix64 as Rng;
 
 /// Reflection is reciprocal; transmission with the radiance factor obeys
@@ -41,12 +42,19 @@ fn rough_dielectric_reciprocity() {
 }
 
 /// The mean weight with the radiance factor undone is the energy the interface keeps: 1
-/// within 1% with compensation (alpha 0.1 to 1, both sides); less without.
+/// within 1% with compensation (alpha 0.1 to 1, GGX and Beckmann, both sides); less
+/// without.
 #[test]
 fn furnace_with_compensation_keeps_energy() {
     let n = 200_000;
-    for alpha in [0.1f32, 0.3, 0.6, 1.0] {
-        let ggx = Ggx::isotropic(alpha);
+    let both = |a: f32| {
+        [
+            Microfacet::from(Ggx::isotropic(a)),
+            Beckmann::isotropic(a).into(),
+        ]
+    };
+    for ggx in [0.1f32, 0.3, 0.6, 1.0].into_iter().flat_map(both) {
+        let alpha = ggx.alpha_u();
         let on = RoughDielectric::new(ggx, 1.5, Rgb::WHITE, true);
         let off = RoughDielectric::new(ggx, 1.5, Rgb::WHITE, false);
         for &mu in &[0.15f32, 0.5, 0.95, -0.3, -0.8] {

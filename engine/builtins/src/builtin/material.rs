@@ -19,6 +19,7 @@ use risotto_systems::layered::Layered;
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::rough_plastic::RoughPlastic;
 use std::sync::Arc;
 
 /// The surface part of a built-in material.
@@ -67,10 +68,10 @@ pub enum Surface {
         /// The reflectance graph.
         reflectance: Arc<PatternGraph>,
     },
-    /// GGX rough conductor (complex index, Fresnel tint, optional energy compensation),
+    /// Rough conductor, GGX or Beckmann (complex index, Fresnel tint, optional energy compensation),
     /// its tables integrated when the material was built.
     RoughConductor(RoughConductor),
-    /// GGX rough dielectric; its `eta` is the material's index (against vacuum).
+    /// Rough dielectric, GGX or Beckmann; its `eta` is the material's index (against vacuum).
     RoughDielectric(RoughDielectric),
     /// Index-matched boundary: rays pass unchanged.
     Interface,
@@ -88,6 +89,24 @@ pub enum Surface {
     PlasticPattern {
         /// The coat.
         coat: PlasticCoat,
+        /// The base-reflectance graph.
+        diffuse: Arc<PatternGraph>,
+    },
+    /// Rough plastic: a Lambertian base under a rough dielectric coat
+    /// ([`risotto_systems::rough_plastic`], its tables integrated when the material was
+    /// built). One-sided.
+    RoughPlastic {
+        /// The coat.
+        lobe: RoughPlastic,
+        /// The base's reflectance.
+        diffuse: Rgb,
+    },
+    /// Rough plastic with a base-reflectance pattern (every value in [0, 1] by the graph's
+    /// bounds, checked by the scene loader), evaluated per point through the context's cache
+    /// (parameter `diffuse_reflectance`).
+    RoughPlasticPattern {
+        /// The coat.
+        lobe: RoughPlastic,
         /// The base-reflectance graph.
         diffuse: Arc<PatternGraph>,
     },
@@ -135,6 +154,7 @@ impl Surface {
             Surface::Diffuse { .. }
             | Surface::Mirror { .. }
             | Surface::Plastic { .. }
+            | Surface::RoughPlastic { .. }
             | Surface::RoughConductor(_) => InstanceHints::NONE,
             Surface::Coated(c) => match &c.reflectance {
                 CoatedReflectance::Pattern(g) if g.reads_uv() => InstanceHints::READS_SURFACE_UV,
@@ -146,12 +166,16 @@ impl Surface {
             {
                 InstanceHints::READS_SURFACE_UV
             }
-            Surface::PlasticPattern { diffuse, .. } if diffuse.reads_uv() => {
+            Surface::PlasticPattern { diffuse, .. }
+            | Surface::RoughPlasticPattern { diffuse, .. }
+                if diffuse.reads_uv() =>
+            {
                 InstanceHints::READS_SURFACE_UV
             }
             Surface::DiffusePattern { .. }
             | Surface::MirrorPattern { .. }
-            | Surface::PlasticPattern { .. } => InstanceHints::NONE,
+            | Surface::PlasticPattern { .. }
+            | Surface::RoughPlasticPattern { .. } => InstanceHints::NONE,
             Surface::DielectricPattern { tint, .. } if tint.reads_uv() => {
                 InstanceHints::TRANSMITS | InstanceHints::READS_SURFACE_UV
             }
@@ -205,6 +229,16 @@ impl Surface {
                 coat,
                 diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
             }),
+            Surface::RoughPlastic { ref lobe, diffuse } => {
+                arena.alloc(RoughPlasticBxdf { lobe, diffuse })
+            }
+            Surface::RoughPlasticPattern {
+                ref lobe,
+                ref diffuse,
+            } => arena.alloc(RoughPlasticBxdf {
+                lobe,
+                diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
+            }),
             Surface::ThinDielectric { ior } => arena.alloc(ThinDielectricBxdf { ior }),
             Surface::Coated(ref c) => match c.reflectance {
                 CoatedReflectance::Color(reflectance) => arena.alloc(CoatedBxdf {
@@ -242,12 +276,15 @@ impl Surface {
             }
             (Surface::DielectricPattern { tint, .. }, "tint") => Some(ParamValue::Pattern(tint)),
             (Surface::Dielectric { tint, .. }, "tint") => Some(ParamValue::Color(*tint)),
-            (Surface::Plastic { diffuse, .. }, "diffuse_reflectance") => {
-                Some(ParamValue::Color(*diffuse))
-            }
-            (Surface::PlasticPattern { diffuse, .. }, "diffuse_reflectance") => {
-                Some(ParamValue::Pattern(diffuse))
-            }
+            (
+                Surface::Plastic { diffuse, .. } | Surface::RoughPlastic { diffuse, .. },
+                "diffuse_reflectance",
+            ) => Some(ParamValue::Color(*diffuse)),
+            (
+                Surface::PlasticPattern { diffuse, .. }
+                | Surface::RoughPlasticPattern { diffuse, .. },
+                "diffuse_reflectance",
+            ) => Some(ParamValue::Pattern(diffuse)),
             (Surface::ThinDielectric { ior }, "ior") => Some(ParamValue::Float(*ior)),
             (Surface::RoughDielectric(lobe), "ior") => Some(ParamValue::Float(lobe.eta)),
             (Surface::RoughDielectric(lobe), "tint") => Some(ParamValue::Color(lobe.tint)),

@@ -10,7 +10,8 @@
 //!
 //! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
 //!
-//! Files: [`bxdfs`] (the first closures), [`coated`] (the layered closure), [`rough`] (the GGX closures), [`plastic`],
+//! Files: [`bxdfs`] (the first closures), [`coated`] (the layered closure), [`rough`] (the
+//! microfacet closures: rough conductor, dielectric and plastic), [`plastic`],
 //! [`thin_dielectric`] and [`two_sided`] (one closure each), [`interiors`] (which volume
 //! integrator a material's inside gets, and the `null` and `beer` ones), [`mask`] (opacity)
 //! and [`material`] (the factory).

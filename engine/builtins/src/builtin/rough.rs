@@ -1,13 +1,16 @@
-//! The GGX closures: rough conductor and rough dielectric, over the per-sample functions of
-//! [`risotto_systems::rough_conductor`] and [`risotto_systems::rough_dielectric`]. Their
+//! The microfacet closures: rough conductor, rough dielectric and rough plastic, over the
+//! per-sample functions of [`risotto_systems::rough_conductor`],
+//! [`risotto_systems::rough_dielectric`] and [`risotto_systems::rough_plastic`]. Their
 //! lobes have densities (`DIFFUSE` bits), so the renderer light-samples them with MIS.
 
+use super::bxdfs::Reflectance;
 use glam::Vec3;
 use risotto_components::{LobeSampled, Rgb};
 use risotto_engine::plugin::*;
 use risotto_systems::bxdf::{BxdfSample, Frame};
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::rough_plastic::RoughPlastic;
 use risotto_systems::sampler::PathSampler;
 
 /// The local frame of a microfacet lobe at a point with unit shading normal `nn` and the
@@ -159,5 +162,47 @@ impl Bxdf for RoughDielectricBxdf<'_> {
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
         out.fill(Rgb::WHITE);
+    }
+}
+
+/// The rough plastic closure (one-sided, as Mitsuba 3's `roughplastic`). The base
+/// reflectance is one colour (`R = Rgb`) or one per point (`R = &[Rgb]`, a pattern's
+/// column), as [`super::PlasticBxdf`]'s.
+#[derive(Clone, Copy, Debug)]
+pub struct RoughPlasticBxdf<'a, R = Rgb> {
+    /// The coat (the material's, with its tables).
+    pub lobe: &'a RoughPlastic,
+    /// The base's (diffuse) reflectance, in [0, 1].
+    pub diffuse: R,
+}
+
+impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
+    fn lobes(&self) -> LobeSampled {
+        LobeSampled::REFLECT | LobeSampled::DIFFUSE
+    }
+    fn generate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        samplers: &mut [PathSampler],
+        out: &mut BxdfSamples,
+    ) {
+        generate(ctx, samplers, out, |i, wo, u, u_lobe| {
+            self.lobe.sample(self.diffuse.at(i), wo, u, u_lobe)
+        });
+    }
+    fn evaluate_samples(
+        &mut self,
+        ctx: &ShadingContext<'_>,
+        wi: &[Vec3],
+        value: &mut [Rgb],
+        pdf: &mut [f32],
+    ) {
+        evaluate(ctx, wi, value, pdf, |i, wo, wi| {
+            self.lobe.eval(self.diffuse.at(i), wo, wi)
+        });
+    }
+    fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
+        // The base's reflectance, as Mitsuba's `eval_diffuse_reflectance`.
+        self.diffuse.fill(out);
     }
 }

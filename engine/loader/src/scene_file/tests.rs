@@ -1439,8 +1439,8 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                 // Read by their own parsers (`surface_params`, `rough_params`, which build on
                 // this module): `tests/scenes.rs` builds every shipped scene with the
                 // built-in registry.
-                "plastic" | "thin_dielectric" | "rough_conductor" | "rough_dielectric"
-                | "coated_diffuse" | "coated_conductor" => {}
+                "plastic" | "rough_plastic" | "thin_dielectric" | "rough_conductor"
+                | "rough_dielectric" | "coated_diffuse" | "coated_conductor" => {}
                 other => panic!("{what}: unexpected material type {other}"),
             }
             if let Some(interior) = p.table("interior").unwrap() {
