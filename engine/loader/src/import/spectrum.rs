@@ -323,7 +323,9 @@ mod tests {
     /// then `mi.traverse(...)[...value]` (script in the commit message of this file).
     #[test]
     fn sampled_spectra_convert_as_mitsuba_3_does() {
-        let cases: &[(&[(f64, f64)], [f64; 3], [f64; 3])] = &[
+        // (spectrum, Mitsuba's reflectance RGB, Mitsuba's emission RGB)
+        type Case<'a> = (&'a [(f64, f64)], [f64; 3], [f64; 3]);
+        let cases: &[Case] = &[
             (
                 &[(400.0, 0.1), (500.0, 0.5), (700.0, 0.9)],
                 [0.775405, 0.593508, 0.277033],
