@@ -230,3 +230,6 @@ impl Converter<'_> {
 fn props<'a>(cx: &'a Cx, node: &Rc<xml::Node>) -> Result<Props<'a>, SceneError> {
     Props::new(cx, node)
 }
+
+#[cfg(test)]
+mod tests;
