@@ -47,12 +47,19 @@ impl Converter<'_> {
                         node = inner.clone();
                         continue;
                     }
+                    if kind == "direct" {
+                        // Emitted light and one scattering vertex lit by emitter and BSDF
+                        // samples: a path of at most 2 segments, in expectation.
+                        p.finish(&["emitter_samples", "bsdf_samples", "shading_samples"])?;
+                        render.origin = self.origin(&node);
+                        break (2, 5);
+                    }
                     if !matches!(kind.as_str(), "path" | "volpath" | "volpathmis") {
                         return Err(p.error(
                             Some("type"),
                             format!(
                                 "integrator type \"{kind}\" is not supported (path, volpath, \
-                                 volpathmis; moment and aov wrappers)"
+                                 volpathmis, direct; moment and aov wrappers)"
                             ),
                         ));
                     }

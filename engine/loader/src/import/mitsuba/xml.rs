@@ -372,12 +372,15 @@ impl Loader {
                 format!("includes are nested more than {MAX_INCLUDE_DEPTH} deep"),
             ));
         }
+        // Next to the including file, else (Mitsuba's file resolver) in the <path>
+        // directories and next to the scene file.
         let mut path = self.sources[file].dir.join(name);
         if !path.exists() {
             if let Some(p) = self
                 .search_paths
                 .iter()
                 .rev()
+                .chain(std::iter::once(&self.sources[0].dir))
                 .map(|d| d.join(name))
                 .find(|p| p.exists())
             {
