@@ -534,7 +534,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             "quad" => &["corner", "edge1", "edge2", "transform"],
             "rectangle" => &["transform"],
             "box" => &["min", "max", "transform"],
-            "mesh" => &["path", "transform", "face_normals"],
+            "mesh" => &["path", "transform", "face_normals", "flip_normals"],
             other => {
                 return Err(r.error(
                     SceneErrorKind::InvalidValue,

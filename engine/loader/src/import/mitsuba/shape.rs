@@ -110,9 +110,6 @@ impl Converter<'_> {
                 placement.to_world = glam::DMat4::IDENTITY;
             }
             "obj" | "ply" => {
-                if flip {
-                    return Err(flip_error());
-                }
                 let file = p.string("filename")?.ok_or_else(|| {
                     p.error(Some("filename"), format!("a {kind} shape needs a filename"))
                 })?;
@@ -120,6 +117,9 @@ impl Converter<'_> {
                 e.set("path", self.file_path(node, &file));
                 if p.boolean("face_normals")? == Some(true) {
                     e.set("face_normals", true);
+                }
+                if flip {
+                    e.set("flip_normals", true);
                 }
                 set_transform(&mut e, &to_world);
             }
