@@ -1,10 +1,10 @@
 //! Mitsuba 3 XML scenes, converted to risotto's TOML (`docs/import-mitsuba.md` lists every
 //! element and parameter read, its mapping, and what is an error or a warning).
 //!
-//! The document is read and preprocessed first ([`xml`]: defaults, substitution,
+//! The document is read and preprocessed first (`xml.rs`: defaults, substitution,
 //! includes, references), then each top-level plugin is converted by its kind: the sensor
-//! with its film and sampler and the integrator ([`sensor`]), shapes ([`shape`]) with their
-//! BSDFs ([`bsdf`], textures in [`texture`]), emitters and media ([`emitter`], [`medium`]).
+//! with its film and sampler and the integrator (`sensor.rs`), shapes (`shape.rs`) with their
+//! BSDFs (`bsdf.rs`, textures in `texture.rs`), emitters and media (`emitter.rs`, `medium.rs`).
 
 mod bsdf;
 mod emitter;
@@ -117,6 +117,9 @@ pub fn import(
     })
 }
 
+/// A world-space box, min and max.
+type Bounds = (glam::DVec3, glam::DVec3);
+
 /// A material made: its BSDF element and interior medium (by identity) and its name.
 struct MadeMaterial {
     bsdf: Option<Rc<xml::Node>>,
@@ -141,7 +144,7 @@ struct Converter<'a> {
     /// The sensor, its position and its near and far clip distances.
     clip_planes: Option<(Rc<xml::Node>, glam::DVec3, f64, f64)>,
     /// Each shape and its world bounds when known without reading files.
-    shape_bounds: Vec<(Rc<xml::Node>, Option<(glam::DVec3, glam::DVec3)>)>,
+    shape_bounds: Vec<(Rc<xml::Node>, Option<Bounds>)>,
 }
 
 impl Converter<'_> {
