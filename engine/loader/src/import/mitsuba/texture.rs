@@ -49,14 +49,6 @@ impl Converter<'_> {
                     ));
                 }
                 let raw = p.boolean("raw")?.unwrap_or(false);
-                if raw && lower.ends_with(".png") {
-                    return Err(p.error(
-                        Some("raw"),
-                        "raw = true on a PNG is not converted: risotto decodes PNG colours from \
-                         sRGB (as Mitsuba does without raw); use the PNG's alpha channel or an \
-                         EXR for linear data",
-                    ));
-                }
                 let filter = p
                     .string("filter_type")?
                     .unwrap_or_else(|| "bilinear".into());
@@ -75,6 +67,9 @@ impl Converter<'_> {
                 }
                 t.insert("pattern".into(), "image".into());
                 t.insert("path".into(), self.file_path(&p.node, &file).into());
+                if raw {
+                    t.insert("raw".into(), true.into());
+                }
             }
             "checkerboard" => {
                 let c = |name: &str, default: f64| -> Result<toml::Value, SceneError> {
