@@ -430,3 +430,50 @@ fn comments_with_double_hyphens_are_read_as_mitsuba_reads_them() {
         .scene;
     assert_eq!(s.shapes.len(), 1);
 }
+
+#[test]
+fn clip_planes_filters_and_sensor_media_are_stated() {
+    // A shape nearer than near_clip: Mitsuba cuts it, risotto does not: a warning.
+    let text = scene(r#"<shape type="sphere"><point name="center" x="0" y="0" z="4.5"/><float name="radius" value="0.2"/></shape>"#)
+        .replace(r#"<float name="fov" value="40"/>"#, r#"<float name="fov" value="40"/><float name="near_clip" value="0.5"/>"#);
+    let out = convert(&text).unwrap();
+    assert!(
+        out.warnings
+            .iter()
+            .any(|w| w.contains("closer to the camera than near_clip")),
+        "{:?}",
+        out.warnings
+    );
+    // Far enough: no warning.
+    let out = convert(&text.replace(r#"z="4.5""#, r#"z="0""#)).unwrap();
+    assert!(out.warnings.is_empty(), "{:?}", out.warnings);
+    // No rfilter is Mitsuba's Gaussian; a tent keeps its radius.
+    let gaussian = convert(&scene("").replace(r#"<rfilter type="box"/>"#, ""))
+        .unwrap()
+        .scene;
+    assert_eq!(gaussian.render.table["filter"].as_str(), Some("gaussian"));
+    let tent = convert(&scene("").replace(
+        r#"<rfilter type="box"/>"#,
+        r#"<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>"#,
+    ))
+    .unwrap()
+    .scene;
+    assert_eq!(tent.render.table["filter"].as_str(), Some("tent"));
+    assert_eq!(tent.render.table["filter_radius"].as_float(), Some(1.5));
+    let box_ = convert(&scene("")).unwrap().scene;
+    assert!(!box_.render.table.contains_key("filter"));
+    // A camera inside a medium is not converted yet: an error saying what to do.
+    let e = convert(&scene("").replace(
+        "</sensor>",
+        r#"<medium type="homogeneous" name="medium"/></sensor>"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("a medium on the sensor"), "{e}");
+    // A cropped film is an error.
+    let e = convert(&scene("").replace(
+        r#"<rfilter type="box"/>"#,
+        r#"<rfilter type="box"/><integer name="crop_width" value="4"/>"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("cropped film"), "{e}");
+}
