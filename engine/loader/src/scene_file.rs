@@ -578,7 +578,7 @@ fn read_shape(
         "quad" => &["corner", "edge1", "edge2", "transform"],
         "rectangle" => &["transform"],
         "box" => &["min", "max", "transform"],
-        "mesh" => &["path", "transform", "face_normals"],
+        "mesh" => &["path", "transform", "face_normals", "flip_normals"],
         other => {
             return Err(r.error(
                 SceneErrorKind::InvalidValue,

@@ -21,6 +21,9 @@ pub enum TextureChannels {
     Rgb,
     /// The alpha channel, as grey (an opacity mask); an image without one is an error.
     Alpha,
+    /// The colour as stored, without decoding a PNG from sRGB (Mitsuba's `raw = true`:
+    /// masks and other data written as 8- or 16-bit values); an EXR reads as [`Self::Rgb`].
+    RawRgb,
 }
 
 /// Reads a texture by extension (`.png` or `.exr`, any case). Errors name the file and what
@@ -147,7 +150,9 @@ fn read_png(path: &Path, wanted: TextureChannels) -> Result<(usize, usize, Vec<R
     // sRGB decoding of 8-bit values through a table (256 entries, each exact).
     let table: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
     let linear = |row: &[u8], k: usize| -> f32 {
-        if bytes == 1 {
+        if wanted == TextureChannels::RawRgb {
+            sample(row, k)
+        } else if bytes == 1 {
             table[row[k] as usize]
         } else {
             srgb_to_linear(sample(row, k))
@@ -211,6 +216,20 @@ mod tests {
         assert!(read_texture(&dir.join("x.jpg"))
             .unwrap_err()
             .contains(".png or an .exr"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn raw_colour_is_read_as_stored() {
+        let dir = std::env::temp_dir().join(format!("risotto-raw-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rgb = dir.join("rgb.png");
+        write_png(&rgb, 1, 1, png::ColorType::Rgb, &[128, 64, 255]);
+        let raw = read_texture_channels(&rgb, TextureChannels::RawRgb).unwrap();
+        assert_eq!(raw.texel(0, 0), Rgb::new(128.0 / 255.0, 64.0 / 255.0, 1.0));
+        // Decoded from sRGB without raw: 128 is 0.2158.
+        let decoded = read_texture(&rgb).unwrap().texel(0, 0);
+        assert!((decoded.r - 0.2158).abs() < 1e-3, "{decoded:?}");
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -317,7 +317,9 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneE
 /// an OBJ, polygons fan-triangulated), placed by `transform`, with the file's vertex normals
 /// (unless `face_normals = true`) and texture coordinates in world space: positions by the
 /// transform, normals by its inverse transpose; a mirroring transform swaps the corners of
-/// each triangle as [`to_world`] swaps its vertices.
+/// each triangle as [`to_world`] swaps its vertices. `flip_normals = true` (Mitsuba's
+/// `flip_normals`) reverses every triangle's winding, so the front is the other side, and
+/// the file's normals with it.
 pub(crate) fn mesh(
     r: &Reader<'_>,
 ) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
@@ -325,6 +327,7 @@ pub(crate) fn mesh(
         .path_opt("path")?
         .ok_or_else(|| r.missing("path", "an OBJ or PLY file path relative to the scene file"))?;
     let face_normals = r.bool("face_normals", Some(false))?;
+    let flip_normals = r.bool("flip_normals", Some(false))?;
     let m = read_transform(r)?;
     let data = load_mesh(&path).map_err(|msg| {
         r.error(
@@ -344,13 +347,21 @@ pub(crate) fn mesh(
         ));
     }
     let p = &data.positions;
-    let local = data
-        .triangles
-        .iter()
-        .map(|t| [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]]);
+    let local = data.triangles.iter().map(|t| {
+        let (a, b, c) = (p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
+        if flip_normals {
+            [a, c, b]
+        } else {
+            [a, b, c]
+        }
+    });
     let triangles = to_world(&m, local);
-    let flip = m.matrix3.determinant() < 0.0;
-    let normal_matrix = m.matrix3.inverse().transpose();
+    let flip = (m.matrix3.determinant() < 0.0) != flip_normals;
+    let normal_matrix = if flip_normals {
+        -m.matrix3.inverse().transpose()
+    } else {
+        m.matrix3.inverse().transpose()
+    };
     let normals = if face_normals {
         Vec::new()
     } else {

@@ -164,7 +164,7 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
         }
         "image" => {
             use crate::texture_file::{read_texture_channels, TextureChannels};
-            t.deny_unknown(&["pattern", "path", "channel"])?;
+            t.deny_unknown(&["pattern", "path", "channel", "raw"])?;
             let path = t
                 .path("path")?
                 .ok_or_else(|| t.error(None, "an image pattern needs `path = \"file.png\"`"))?;
@@ -177,6 +177,12 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                         format!("must be \"rgb\" or \"a\", got \"{other}\""),
                     ))
                 }
+            };
+            // `raw = true`: a PNG's colour values as stored, not decoded from sRGB (alpha is
+            // linear either way).
+            let channels = match (channels, t.bool("raw", Some(false))?) {
+                (TextureChannels::Rgb, true) => TextureChannels::RawRgb,
+                (c, _) => c,
             };
             Node::Image(
                 read_texture_channels(&path, channels).map_err(|e| t.error(Some("path"), e))?,

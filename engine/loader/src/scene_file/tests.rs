@@ -668,6 +668,21 @@ fn bad_mesh_attributes_and_ply_files_are_reported() {
         panic!("a number is not a switch");
     };
     assert_eq!(e.line(), Some(8), "{e}");
+    // `flip_normals` reverses each triangle: its normal (v1 - v0) x (v2 - v0) turns over.
+    let normal_z = |extra: &str| {
+        let text = format!("[materials.m]\ntype = \"diffuse\"\n\n[[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\npath = \"ok.obj\"\n{extra}\n\n[camera]\nfov = 40\nfrom = [0, 0, 5]\nto = [0, 0, 0]\n");
+        let desc = parse_scene(&text, &scene_path).unwrap();
+        match &desc.shapes[0].geometry {
+            ShapeGeometry::Triangles { triangles, .. } => {
+                let [a, b, c] = triangles[0];
+                (b - a).cross(c - a).z
+            }
+            other => panic!("{other:?}"),
+        }
+    };
+    let (plain, flipped) = (normal_z(""), normal_z("flip_normals = true"));
+    assert!(plain != 0.0 && flipped == -plain, "{plain} {flipped}");
+    assert_eq!(normal_z("flip_normals = false"), plain);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1,0 +1,211 @@
+//! Shapes: `obj`, `ply` (meshes), `cube`, `sphere`, `rectangle`, `disk`, with their BSDF,
+//! area emitter and interior medium.
+
+use std::rc::Rc;
+
+use glam::{DMat3, DVec3};
+use risotto_engine::diagnostics::SceneError;
+
+use super::transform::Transform;
+use super::xml::Node;
+use super::{props, Converter};
+use crate::import::spectrum::SpectrumUse;
+use crate::import::Entity;
+
+/// Shape parameters that cannot change the image.
+const HARMLESS: &[&str] = &["optimize"];
+
+/// What a medium needs to know of the shape it fills: its object-space box and transform.
+pub(super) struct Placement {
+    /// Object-space bounds (`None`: not known without reading the mesh).
+    pub bounds: Option<(DVec3, DVec3)>,
+    /// Object to world.
+    pub to_world: glam::DMat4,
+}
+
+impl Converter<'_> {
+    /// One `<shape>`.
+    pub(super) fn shape(&mut self, node: &Rc<Node>) -> Result<(), SceneError> {
+        let p = props(self.cx, node)?;
+        let kind = p.kind()?;
+        let mut e = Entity::new(self.origin(node));
+        let to_world = p.transform("to_world")?;
+        let flip = p.boolean("flip_normals")?.unwrap_or(false);
+        let flip_error = || {
+            p.error(
+                Some("flip_normals"),
+                format!("flip_normals on a {kind} is not converted (risotto's closed shapes face outwards)"),
+            )
+        };
+        let mut placement = Placement {
+            bounds: None,
+            to_world: to_world
+                .as_ref()
+                .map_or(glam::DMat4::IDENTITY, |t| t.matrix),
+        };
+        let set_transform = |e: &mut Entity, t: &Option<Transform>| {
+            if let Some(t) = t {
+                e.set("transform", t.toml());
+            }
+        };
+        match kind.as_str() {
+            "rectangle" | "disk" => {
+                e.set("type", kind.as_str());
+                // A mirror along local z turns the normal and keeps the (symmetric) shape.
+                let t = if flip {
+                    let mirror = Transform {
+                        steps: vec![toml::Value::Table(toml::Table::from_iter([(
+                            "scale".to_owned(),
+                            super::bsdf::rgb([1.0, 1.0, -1.0]),
+                        )]))],
+                        matrix: glam::DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0)),
+                    };
+                    Some(mirror.then(&to_world.clone().unwrap_or_default()))
+                } else {
+                    to_world.clone()
+                };
+                set_transform(&mut e, &t);
+            }
+            "cube" => {
+                if flip {
+                    return Err(flip_error());
+                }
+                e.set("type", "box");
+                set_transform(&mut e, &to_world);
+                placement.bounds = Some((DVec3::splat(-1.0), DVec3::splat(1.0)));
+                if to_world.is_none() {
+                    placement.to_world = glam::DMat4::IDENTITY;
+                }
+            }
+            "sphere" => {
+                if flip {
+                    return Err(flip_error());
+                }
+                let c = DVec3::from(p.vec3("center")?.unwrap_or([0.0; 3]));
+                let r = p.float_or("radius", 1.0)?;
+                // Mitsuba: to_world * translate(center) * scale(radius); risotto's sphere
+                // has no transform, so the product must be a uniform scale and translation.
+                let m = placement.to_world;
+                let lin = DMat3::from_mat4(m);
+                let s = lin.x_axis.x;
+                let tol = 1e-9 * s.abs().max(1e-300);
+                let diagonal = (lin - DMat3::from_diagonal(DVec3::splat(s)))
+                    .to_cols_array()
+                    .iter()
+                    .all(|v| v.abs() <= tol);
+                if !diagonal || s <= 0.0 {
+                    return Err(p.error(
+                        Some("to_world"),
+                        "a sphere's to_world must be a uniform scale and translation (risotto's \
+                         sphere is not transformed; a rotation would turn its texture \
+                         coordinates, other scales make an ellipsoid)",
+                    ));
+                }
+                let center = m.transform_point3(c);
+                let radius = s * r;
+                e.set("type", "sphere");
+                e.set("center", super::sensor::vec3(center));
+                e.set("radius", radius);
+                placement.bounds = Some((center - radius, center + radius));
+                placement.to_world = glam::DMat4::IDENTITY;
+            }
+            "obj" | "ply" => {
+                let file = p.string("filename")?.ok_or_else(|| {
+                    p.error(Some("filename"), format!("a {kind} shape needs a filename"))
+                })?;
+                e.set("type", "mesh");
+                e.set("path", self.file_path(node, &file));
+                if p.boolean("face_normals")? == Some(true) {
+                    e.set("face_normals", true);
+                }
+                if flip {
+                    e.set("flip_normals", true);
+                }
+                set_transform(&mut e, &to_world);
+            }
+            other => {
+                return Err(p.error(
+                    Some("type"),
+                    format!(
+                        "shape type \"{other}\" is not supported (obj, ply, cube, sphere, \
+                         rectangle, disk)"
+                    ),
+                ))
+            }
+        }
+        if let Some(id) = node.attr("id") {
+            let name = Converter::unique(&mut self.names, id);
+            e.set("name", name);
+        }
+        let bsdf = p.one_unnamed("bsdf")?;
+        let interior = match p.object("interior", "medium")? {
+            Some(m) => {
+                if kind == "rectangle" || kind == "disk" {
+                    return Err(p.error(
+                        Some("interior"),
+                        format!("a {kind} is open: it cannot hold an interior medium"),
+                    ));
+                }
+                self.has_media = true;
+                let table = self.medium_table(&m, &placement, node)?;
+                Some((m, table))
+            }
+            None => None,
+        };
+        if let Some(ext) = p.object("exterior", "medium")? {
+            return Err(self.cx.error(
+                &ext,
+                Some("exterior"),
+                "exterior media are not converted: risotto infers the medium outside a shape \
+                 from the shapes enclosing it (give that medium as the interior of an \
+                 enclosing shape with a null BSDF)",
+            ));
+        }
+        let material = self.material(bsdf, interior, node)?;
+        e.set("material", material);
+        if let Some(em) = p.one_unnamed("emitter")? {
+            let ep = props(self.cx, &em)?;
+            if ep.kind()? != "area" {
+                return Err(ep.error(
+                    Some("type"),
+                    "only an area emitter can be attached to a shape",
+                ));
+            }
+            let radiance = self
+                .constant_use(&ep, "radiance", SpectrumUse::Emission)?
+                .ok_or_else(|| ep.error(Some("radiance"), "an area emitter needs a radiance"))?;
+            ep.finish(&["sampling_weight"])?;
+            e.set("emission", super::bsdf::rgb(radiance));
+        }
+        p.finish(HARMLESS)?;
+        // World bounds of analytic shapes, for the near-clip check.
+        let local = match kind.as_str() {
+            "rectangle" | "disk" => Some((DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 0.0))),
+            "cube" => Some((DVec3::splat(-1.0), DVec3::splat(1.0))),
+            _ => None,
+        };
+        let world = match (kind.as_str(), local) {
+            ("sphere", _) => placement.bounds,
+            (_, Some((lo, hi))) => {
+                let m = to_world
+                    .as_ref()
+                    .map_or(glam::DMat4::IDENTITY, |t| t.matrix);
+                let mut b = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                for i in 0..8 {
+                    let c = DVec3::new(
+                        if i & 1 == 0 { lo.x } else { hi.x },
+                        if i & 2 == 0 { lo.y } else { hi.y },
+                        if i & 4 == 0 { lo.z } else { hi.z },
+                    );
+                    let w = m.transform_point3(c);
+                    b = (b.0.min(w), b.1.max(w));
+                }
+                Some(b)
+            }
+            _ => None,
+        };
+        self.shape_bounds.push((node.clone(), world));
+        self.scene.shapes.push(e);
+        Ok(())
+    }
+}

@@ -1,0 +1,102 @@
+//! Textures to risotto patterns: `bitmap` (an `image` pattern) and `checkerboard` (a `uv`
+//! `checker`).
+
+use std::rc::Rc;
+
+use risotto_engine::diagnostics::SceneError;
+
+use super::values::Colour;
+use super::xml::Node;
+use super::{props, Converter};
+use crate::import::spectrum::SpectrumUse;
+
+impl Converter<'_> {
+    /// The pattern table of a `<texture>`.
+    pub(super) fn texture(&self, node: &Rc<Node>) -> Result<toml::Value, SceneError> {
+        let p = props(self.cx, node)?;
+        let kind = p.kind()?;
+        let mut t = toml::Table::new();
+        // to_uv: only a uniform scale of (u, v) (a checker's frequency) is converted.
+        let uv_scale = match p.transform("to_uv")? {
+            None => 1.0,
+            Some(tr) => {
+                let m = tr.matrix;
+                let s = m.x_axis.x;
+                let uniform = (m.y_axis.y - s).abs() < 1e-12
+                    && m.x_axis.y == 0.0
+                    && m.y_axis.x == 0.0
+                    && m.w_axis.x == 0.0
+                    && m.w_axis.y == 0.0;
+                if !uniform || s <= 0.0 || kind != "checkerboard" {
+                    return Err(p.error(
+                        Some("to_uv"),
+                        "to_uv is converted only as a uniform positive scale of a checkerboard",
+                    ));
+                }
+                s
+            }
+        };
+        match kind.as_str() {
+            "bitmap" => {
+                let file = p.string("filename")?.ok_or_else(|| {
+                    p.error(Some("filename"), "a bitmap texture needs a filename")
+                })?;
+                let lower = file.to_ascii_lowercase();
+                if !(lower.ends_with(".png") || lower.ends_with(".exr")) {
+                    return Err(p.error(
+                        Some("filename"),
+                        format!("`{file}`: only PNG and EXR bitmaps are read"),
+                    ));
+                }
+                let raw = p.boolean("raw")?.unwrap_or(false);
+                let filter = p
+                    .string("filter_type")?
+                    .unwrap_or_else(|| "bilinear".into());
+                if filter != "bilinear" {
+                    return Err(p.error(
+                        Some("filter_type"),
+                        format!("filter_type \"{filter}\" is not converted (bilinear only)"),
+                    ));
+                }
+                let wrap = p.string("wrap_mode")?.unwrap_or_else(|| "repeat".into());
+                if wrap != "repeat" {
+                    return Err(p.error(
+                        Some("wrap_mode"),
+                        format!("wrap_mode \"{wrap}\" is not converted (repeat only)"),
+                    ));
+                }
+                t.insert("pattern".into(), "image".into());
+                t.insert("path".into(), self.file_path(&p.node, &file).into());
+                if raw {
+                    t.insert("raw".into(), true.into());
+                }
+            }
+            "checkerboard" => {
+                let c = |name: &str, default: f64| -> Result<toml::Value, SceneError> {
+                    match p.colour(name, SpectrumUse::Reflectance)? {
+                        None => Ok(super::bsdf::rgb([default; 3])),
+                        Some(Colour::Rgb(c)) => Ok(super::bsdf::rgb(c)),
+                        Some(Colour::Texture(_)) => {
+                            Err(p.error(Some(name), "a checkerboard colour cannot be a texture"))
+                        }
+                    }
+                };
+                // Mitsuba: color0 where u mod 1 and v mod 1 are both below or both above
+                // 1/2, i.e. even parity of floor(2u) + floor(2v): risotto's `a` at scale 2.
+                t.insert("pattern".into(), "checker".into());
+                t.insert("space".into(), "uv".into());
+                t.insert("scale".into(), toml::Value::Float(2.0 * uv_scale));
+                t.insert("a".into(), c("color0", 0.4)?);
+                t.insert("b".into(), c("color1", 0.2)?);
+            }
+            other => {
+                return Err(p.error(
+                    Some("type"),
+                    format!("texture type \"{other}\" is not supported (bitmap, checkerboard)"),
+                ))
+            }
+        }
+        p.finish(&[])?;
+        Ok(toml::Value::Table(t))
+    }
+}
