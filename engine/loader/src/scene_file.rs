@@ -19,7 +19,7 @@
 mod geometry;
 mod lights;
 mod overrides;
-mod params;
+pub(crate) mod params;
 mod pattern;
 mod raw;
 #[cfg(test)]
@@ -508,7 +508,7 @@ fn element_entity(list: &str, i: usize, name: Option<&str>) -> String {
     }
 }
 
-const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh"];
+const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh", "triangles"];
 
 fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<ShapeDesc>, SceneError> {
     let Some(items) = top.array_opt("shapes")? else {
@@ -535,6 +535,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             "rectangle" => &["transform"],
             "box" => &["min", "max", "transform"],
             "mesh" => &["path", "transform", "face_normals"],
+            "triangles" => &["positions", "indices", "normals", "uv", "transform", "face_normals"],
             other => {
                 return Err(r.error(
                     SceneErrorKind::InvalidValue,
@@ -598,6 +599,14 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
                 kind: "box",
                 triangles: triangles_of(geometry::cuboid(&r)?),
             },
+            "triangles" => {
+                let (triangles, m, a) = geometry::triangles(&r)?;
+                attributes = a;
+                ShapeGeometry::Triangles {
+                    kind: "mesh",
+                    triangles: triangles_of((triangles, m)),
+                }
+            }
             _ => {
                 let (triangles, m, a) = geometry::mesh(&r)?;
                 attributes = a;
