@@ -241,11 +241,12 @@ impl Lexer {
                         i += 1;
                     }
                     let w = &self.files[file].src.text[start..i];
+                    // Only digits, signs, a point and an exponent: Rust would also read
+                    // `inf` and `nan`, which pbrt does not.
+                    let numeric = w.bytes().all(|c| c.is_ascii_digit() || b"+-.eE".contains(&c));
                     match w.parse::<f64>() {
-                        Ok(v) if v.is_finite() && !w.chars().any(char::is_alphabetic) => {
-                            (Tok::Num(v), i)
-                        }
-                        Ok(v) if !v.is_finite() && !w.chars().any(char::is_alphabetic) => {
+                        Ok(v) if numeric && v.is_finite() => (Tok::Num(v), i),
+                        Ok(_) if numeric => {
                             return Err(self.error(
                                 SceneErrorKind::InvalidValue,
                                 &at(i),
