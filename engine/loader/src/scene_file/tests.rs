@@ -10,6 +10,7 @@ use risotto_components::Rgb;
 use super::*;
 
 mod environment;
+mod triangles;
 
 /// The file name used for inline scenes (it must show up in every message).
 const FILE: &str = "test-scenes/inline_scene.toml";
