@@ -11,6 +11,7 @@
 
 mod convert;
 mod lexer;
+mod loop_subdiv;
 mod materials;
 mod params;
 mod shapes;

@@ -48,6 +48,9 @@ pub(super) struct GraphicsState {
     pub inside: String,
     /// See `inside`.
     pub outside: String,
+    /// `Attribute "target"` defaults by target (`shape`, `light`, `material`, `medium`,
+    /// `texture`).
+    pub attributes: HashMap<String, Vec<super::params::Param>>,
 }
 
 /// A converted material definition, written into the scene when a shape first uses it.
@@ -112,6 +115,7 @@ impl<'o> Converter<'o> {
                 area_light: None,
                 inside: String::new(),
                 outside: String::new(),
+                attributes: HashMap::new(),
             },
             stack: Vec::new(),
             named_coords: HashMap::new(),
@@ -334,7 +338,8 @@ impl<'o> Converter<'o> {
                 }
                 "MakeNamedMedium" => {
                     let n = self.string_arg(&at, &name)?;
-                    let p = Params::read(&mut self.lx, &format!("MakeNamedMedium \"{n}\""))?;
+                    let p = Params::read(&mut self.lx, &format!("MakeNamedMedium \"{n}\""))?
+                        .with_defaults(self.gs.attributes.get("medium"));
                     let table = self.medium(&p)?;
                     p.finish(&self.lx)?;
                     self.media.insert(n, (table, at));
@@ -355,18 +360,22 @@ impl<'o> Converter<'o> {
                 }
                 "Attribute" => {
                     let target = self.string_arg(&at, &name)?;
+                    let targets = ["shape", "light", "material", "medium", "texture"];
+                    if !targets.contains(&target.as_str()) {
+                        return Err(self.error(&at, &name, format!("unknown target \"{target}\"; expected one of {}", targets.join(", "))));
+                    }
                     let p = Params::read(&mut self.lx, &format!("Attribute \"{target}\""))?;
-                    match p.list.first() {
-                        Some(first) => {
-                            return Err(p.error(&self.lx, first, "`Attribute` defaults are not supported; give the parameter on each directive"))
-                        }
-                        None => {}
+                    let list = self.gs.attributes.entry(target).or_default();
+                    for q in p.list {
+                        list.retain(|old| old.name != q.name);
+                        list.push(q);
                     }
                 }
                 "Material" => {
                     let ty = self.string_arg(&at, &name)?;
                     let entity = format!("Material \"{ty}\"");
-                    let p = Params::read(&mut self.lx, &entity)?;
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("material"));
                     let def = self.material(&ty, &p, &at, &format!("{ty}_{}", self.lx.line(&at)))?;
                     p.finish(&self.lx)?;
                     self.anonymous.push(def);
@@ -375,7 +384,8 @@ impl<'o> Converter<'o> {
                 "MakeNamedMaterial" => {
                     let n = self.string_arg(&at, &name)?;
                     let entity = format!("MakeNamedMaterial \"{n}\"");
-                    let p = Params::read(&mut self.lx, &entity)?;
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("material"));
                     let ty = match p.string(&self.lx, "type")? {
                         Some((t, _)) => t.to_owned(),
                         None => return Err(self.error(&at, &entity, "needs \"string type\"")),
@@ -393,27 +403,31 @@ impl<'o> Converter<'o> {
                     let class = self.string_arg(&at, &name)?;
                     let ty = self.string_arg(&at, &name)?;
                     let entity = format!("Texture \"{n}\"");
-                    let p = Params::read(&mut self.lx, &entity)?;
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("texture"));
                     let v = self.texture(&class, &ty, &p, &at, &entity)?;
                     p.finish(&self.lx)?;
                     self.textures.insert(n, v);
                 }
                 "LightSource" => {
                     let ty = self.string_arg(&at, &name)?;
-                    let p = Params::read(&mut self.lx, &format!("LightSource \"{ty}\""))?;
+                    let p = Params::read(&mut self.lx, &format!("LightSource \"{ty}\""))?
+                        .with_defaults(self.gs.attributes.get("light"));
                     self.light(&ty, &p, &at)?;
                     p.finish(&self.lx)?;
                 }
                 "AreaLightSource" => {
                     let ty = self.string_arg(&at, &name)?;
                     let entity = format!("AreaLightSource \"{ty}\"");
-                    let p = Params::read(&mut self.lx, &entity)?;
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("light"));
                     self.area_light(&ty, &p, &at)?;
                     p.finish(&self.lx)?;
                 }
                 "Shape" => {
                     let ty = self.string_arg(&at, &name)?;
-                    let p = Params::read(&mut self.lx, &format!("Shape \"{ty}\""))?;
+                    let p = Params::read(&mut self.lx, &format!("Shape \"{ty}\""))?
+                        .with_defaults(self.gs.attributes.get("shape"));
                     self.shape(&ty, &p, &at)?;
                     p.finish(&self.lx)?;
                 }

@@ -21,7 +21,7 @@ pub(super) enum Values {
 }
 
 /// One parameter.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct Param {
     /// Its type (`float`, `rgb`, ...).
     pub ty: String,
@@ -115,6 +115,17 @@ impl Params {
             list,
             entity: entity.to_owned(),
         })
+    }
+
+    /// Adds the `Attribute` defaults not given here (pbrt-v4: a parameter on the directive
+    /// wins over the default).
+    pub fn with_defaults(mut self, defaults: Option<&Vec<Param>>) -> Params {
+        for d in defaults.into_iter().flatten() {
+            if !self.list.iter().any(|p| p.name == d.name) {
+                self.list.push(d.clone());
+            }
+        }
+        self
     }
 
     fn find(&self, name: &str) -> Option<&Param> {

@@ -62,6 +62,7 @@ impl Converter<'_> {
         let mut local = DMat4::IDENTITY;
         match ty {
             "trianglemesh" | "bilinearmesh" => self.triangles(ty, p, at, &mut e)?,
+            "loopsubdiv" => self.loop_subdiv(p, at, &mut e)?,
             "plymesh" => {
                 let Some((file, _)) = p.string(&self.lx, "filename")? else {
                     return Err(self.error(at, &entity, "needs \"string filename\""));
@@ -122,7 +123,7 @@ impl Converter<'_> {
                 }
             }
             _ => {
-                return Err(self.error(at, &entity, format!("shape \"{ty}\" is not supported (trianglemesh, bilinearmesh, plymesh, sphere, disk)")))
+                return Err(self.error(at, &entity, format!("shape \"{ty}\" is not supported (trianglemesh, bilinearmesh, loopsubdiv, plymesh, sphere, disk)")))
             }
         }
         let m = if self.object.is_some() { ctm * local } else { self.world_root * ctm * local };
@@ -214,12 +215,63 @@ impl Converter<'_> {
         } else {
             tris.extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
         }
+        let pos = pos.to_vec();
+        let normals = normals.map(<[f64]>::to_vec);
+        let uv = uv.map(<[f64]>::to_vec);
+        self.emit_triangles(pos, &tris, normals, uv, e);
+        Ok(())
+    }
+
+    /// `loopsubdiv` (`levels`, default 3; `P`, `indices`): subdivided here
+    /// ([`super::loop_subdiv`]) and written as a `triangles` shape with the limit normals.
+    fn loop_subdiv(&mut self, p: &Params, at: &At, e: &mut Entity) -> Result<(), SceneError> {
+        let lx = &self.lx;
+        let entity = p.entity.clone();
+        let levels = p.int(lx, "levels", 3)?;
+        let Some((pos, _)) = p.nums(lx, "P", &["point3", "point"], 3)? else {
+            return Err(self.error(at, &entity, "needs \"point3 P\""));
+        };
+        let Some((indices, iq)) = p.ints(lx, "indices")? else {
+            return Err(self.error(at, &entity, "needs \"integer indices\""));
+        };
+        let nv = pos.len() / 3;
+        if indices.len() % 3 != 0 {
+            return Err(p.error(lx, iq, format!("expected a multiple of 3 indices, got {}", indices.len())));
+        }
+        if let Some(bad) = indices.iter().find(|&&x| x as usize >= nv) {
+            return Err(p.error(lx, iq, format!("index {bad} is out of range (P has {nv} points)")));
+        }
+        if !(0..=16).contains(&levels) {
+            let q = p.list.iter().find(|q| q.name == "levels").expect("given");
+            return Err(p.error(lx, q, format!("must be in [0, 16], got {levels}")));
+        }
+        let points: Vec<DVec3> = pos.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
+        let tris: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let s = super::loop_subdiv::loop_subdivide(&points, &tris, levels as u32)
+            .map_err(|m| self.error(at, &entity, m))?;
+        let flat = |v: &[DVec3]| v.iter().flat_map(|q| q.to_array()).collect::<Vec<f64>>();
+        self.emit_triangles(flat(&s.positions), &s.triangles, Some(flat(&s.normals)), None, e);
+        Ok(())
+    }
+
+    /// Writes a `triangles` shape, each triangle wound so its front is pbrt's (see the
+    /// module documentation).
+    fn emit_triangles(
+        &mut self,
+        pos: Vec<f64>,
+        tris: &[[u32; 3]],
+        normals: Option<Vec<f64>>,
+        uv: Option<Vec<f64>>,
+        e: &mut Entity,
+    ) {
+        let point = |i: u32| DVec3::new(pos[3 * i as usize], pos[3 * i as usize + 1], pos[3 * i as usize + 2]);
         let reverse = self.gs.reverse;
+        let normals = normals.as_deref();
         let normal_at = |i: u32| {
             normals.map_or(DVec3::ZERO, |n| DVec3::new(n[3 * i as usize], n[3 * i as usize + 1], n[3 * i as usize + 2]))
         };
         let mut flat = Vec::with_capacity(tris.len() * 3);
-        for [a, b, c] in tris {
+        for &[a, b, c] in tris {
             let winding = (point(b) - point(a)).cross(point(c) - point(a));
             let flip = match normals {
                 Some(_) => (winding.dot(normal_at(a) + normal_at(b) + normal_at(c)) < 0.0) ^ reverse,
@@ -229,15 +281,14 @@ impl Converter<'_> {
             flat.extend(t.map(|i| toml::Value::Integer(i64::from(i))));
         }
         e.set("type", "triangles");
-        e.set("positions", pos.to_vec());
         e.set("indices", toml::Value::Array(flat));
         if let Some(n) = normals {
             e.set("normals", n.to_vec());
         }
+        e.set("positions", pos);
         if let Some(u) = uv {
-            e.set("uv", u.to_vec());
+            e.set("uv", u);
         }
-        Ok(())
     }
 }
 

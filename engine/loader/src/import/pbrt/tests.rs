@@ -299,7 +299,8 @@ fn errors_are_located() {
         ("Shape \"sphere\" \"string x\" \"abc", "6:27", "unterminated string"),
         ("LightSource \"goniometric\"", "6:1", "light \"goniometric\" is not supported"),
         ("LightSource \"infinite\" \"string filename\" \"sky.exr\"", "6:24", "octahedral"),
-        ("Shape \"loopsubdiv\"", "6:1", "shape \"loopsubdiv\" is not supported"),
+        ("Shape \"curve\"", "6:1", "shape \"curve\" is not supported"),
+        ("Shape \"loopsubdiv\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"integer indices\" [0 1 2 0 1 3 1 0 2]", "6:1", "more than two triangles"),
         ("AttributeEnd", "6:1", "has no matching Begin"),
         ("ObjectInstance \"x\"", "6:1", "no object named \"x\""),
         ("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]", "6:53", "index 3 is out of range"),
@@ -331,4 +332,39 @@ fn errors_are_located() {
     std::fs::write(d.join("self.pbrt"), "Include \"self.pbrt\"\n").unwrap();
     let e = convert_in(&d, &format!("{HEAD}WorldBegin\nInclude \"self.pbrt\"\n")).unwrap_err();
     assert!(e.contains("nested more than"), "{e}");
+}
+
+#[test]
+fn attribute_defaults_apply_within_their_attribute_block() {
+    let s = convert(
+        "attribute",
+        &format!(
+            "Scale -1 1 1\n{HEAD}WorldBegin\nAttributeBegin\nAttribute \"shape\" \"float radius\" 2\n\
+             Shape \"sphere\"\nShape \"sphere\" \"float radius\" 3\nAttributeEnd\nShape \"sphere\"\n"
+        ),
+    );
+    let radii: Vec<f64> = s
+        .shapes
+        .iter()
+        .map(|e| e.table["radius"].as_float().unwrap())
+        .collect();
+    assert_eq!(radii, vec![2.0, 3.0, 1.0]);
+}
+
+#[test]
+fn loop_subdivision_surfaces_become_triangles_with_normals() {
+    let s = convert(
+        "loop",
+        &format!(
+            "Scale -1 1 1\n{HEAD}WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 2 \
+             \"point3 P\" [1 1 1 1 -1 -1 -1 1 -1 -1 -1 1] \"integer indices\" [0 1 2 0 3 1 0 2 3 1 3 2]\n"
+        ),
+    );
+    let t = &s.shapes[0].table;
+    assert_eq!(t["type"].as_str(), Some("triangles"));
+    assert_eq!(t["indices"].as_array().unwrap().len(), 3 * 64);
+    assert_eq!(
+        t["normals"].as_array().unwrap().len(),
+        t["positions"].as_array().unwrap().len()
+    );
 }
