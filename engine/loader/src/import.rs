@@ -15,6 +15,7 @@
 
 pub mod mitsuba;
 pub mod pbrt;
+pub mod spectrum;
 mod toml_out;
 
 use std::path::{Path, PathBuf};

@@ -15,6 +15,7 @@ mod loop_subdiv;
 mod materials;
 mod params;
 mod shapes;
+mod spectra;
 
 use std::path::Path;
 

@@ -270,9 +270,21 @@ impl Lexer {
         }
     }
 
-    /// The file `name` names, relative to the directory of the file `at` is in.
+    /// The file `name` names: relative to the directory of the file `at` is in, or, when
+    /// nothing is there, to the top-level file's (pbrt-v4 resolves every name against the
+    /// directory of the scene it was given, which is the same for files in that
+    /// directory).
     pub fn resolve(&self, at: &At, name: &str) -> PathBuf {
-        let dir = self.files[at.file].path.parent().unwrap_or(Path::new(""));
-        dir.join(name)
+        let dir_of = |f: usize| self.files[f].path.parent().unwrap_or(Path::new("")).to_path_buf();
+        let here = dir_of(at.file).join(name);
+        if at.file == 0 || here.exists() {
+            return here;
+        }
+        let top = dir_of(0).join(name);
+        if top.exists() {
+            top
+        } else {
+            here
+        }
     }
 }

@@ -6,7 +6,7 @@ use risotto_engine::diagnostics::SceneError;
 
 use super::convert::{Converter, MaterialDef, MaterialRef};
 use super::lexer::At;
-use super::params::{Colour, Param, Params, Values};
+use super::params::{Colour, Params};
 use crate::import::{path_for_toml, Entity};
 
 /// pbrt-v4's named metal spectra (`metal-Au-eta` / `metal-Au-k`) that risotto's conductor
@@ -14,20 +14,6 @@ use crate::import::{path_for_toml, Entity};
 const METALS: &[&str] = &["Ag", "Al", "Au", "Cu", "MgO", "TiO2"];
 
 impl Converter<'_> {
-    /// A `spectrum` or `blackbody` parameter as a colour: named spectra are kept by name
-    /// (the caller maps the ones it knows); sampled spectra, `.spd` files and blackbody
-    /// emitters are a located error in this build.
-    pub(super) fn spectrum_colour(&self, p: &Params, q: &Param) -> Result<Colour, SceneError> {
-        match &q.values {
-            Values::Strs(v) if v.len() == 1 && !v[0].ends_with(".spd") => Ok(Colour::Named(v[0].clone())),
-            _ => Err(p.error(
-                &self.lx,
-                q,
-                "sampled spectra, .spd files and blackbody emitters are not converted yet; give an rgb value",
-            )),
-        }
-    }
-
     /// A colour parameter as a TOML value (a colour or, with `textures`, a pattern).
     fn colour_value(&self, p: &Params, name: &str, textures: bool) -> Result<Option<toml::Value>, SceneError> {
         let c = p.colour(&self.lx, name, textures, &|q| self.spectrum_colour(p, q))?;

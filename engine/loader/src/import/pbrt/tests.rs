@@ -368,3 +368,40 @@ fn loop_subdivision_surfaces_become_triangles_with_normals() {
         t["positions"].as_array().unwrap().len()
     );
 }
+
+#[test]
+fn spectra_become_rgb_and_light_spectra_have_unit_luminance() {
+    let d = dir("spectra");
+    std::fs::write(d.join("flat.spd"), "# a flat spectrum\n360 0.25\n830 0.25\n").unwrap();
+    let s = convert_in(
+        &d,
+        &format!(
+            "Scale -1 1 1\n{HEAD}WorldBegin\n\
+             LightSource \"point\" \"blackbody I\" 3000 \"float scale\" 2\n\
+             LightSource \"distant\" \"spectrum L\" [ 400 1 700 1 ]\n\
+             Material \"diffuse\" \"spectrum reflectance\" [ 300 0.5 800 0.5 ]\nShape \"sphere\"\n\
+             Material \"conductor\" \"spectrum eta\" \"flat.spd\" \"spectrum k\" \"flat.spd\"\nShape \"sphere\"\n"
+        ),
+    )
+    .unwrap();
+    let lum = |c: &[f64]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let warm = floats(&s.lights[0].table["intensity"]);
+    // pbrt divides a light's spectrum by its photometric value: luminance = scale.
+    assert!((lum(&warm) - 2.0).abs() < 1e-9, "{warm:?}");
+    // 3000 K is reddish.
+    assert!(warm[0] > warm[1] && warm[1] > warm[2], "{warm:?}");
+    assert!((lum(&floats(&s.lights[1].table["irradiance"])) - 1.0).abs() < 1e-9);
+    // A flat reflectance is grey of its value (D65-weighted, as Mitsuba's RGB modes).
+    let grey = floats(&s.materials[0].1.table["reflectance"]);
+    assert!(grey.iter().all(|c| (c - 0.5).abs() < 2e-3), "{grey:?}");
+    let eta = floats(&s.materials[1].1.table["eta"]);
+    assert!(eta.iter().all(|c| (c - 0.25).abs() < 2e-3), "{eta:?}");
+    // A bad .spd is a located error naming the file.
+    std::fs::write(d.join("bad.spd"), "400 1\n500 x\n").unwrap();
+    let e = convert_in(
+        &d,
+        &format!("{HEAD}WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"bad.spd\"\n"),
+    )
+    .unwrap_err();
+    assert!(e.contains("scene.pbrt:6:20:") && e.contains("bad.spd` line 2: `x`"), "{e}");
+}
