@@ -51,7 +51,8 @@ fn block_z(a: &RenderOutput, b: &RenderOutput) -> Vec<f64> {
                         let pb = b.beauty.pixels[k].to_array()[c] as f64;
                         d += pa - pb;
                         v += (a.variance.pixels[k].to_array()[c]
-                            + b.variance.pixels[k].to_array()[c]) as f64;
+                            + b.variance.pixels[k].to_array()[c])
+                            as f64;
                     }
                 }
                 z.push(if v > 0.0 {
@@ -96,13 +97,19 @@ fn every_supported_directive_renders_within_noise_of_its_toml_twin() {
     let wrong = render_file(&dir.join("twin.toml"), 2);
     let z = block_z(&pbrt, &wrong);
     let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
-    assert!(max > 10.0, "a mirrored scene is not told apart: max |z| = {max}");
+    assert!(
+        max > 10.0,
+        "a mirrored scene is not told apart: max |z| = {max}"
+    );
 }
 
 /// The beauty's pixels as bits.
 fn bits(path: &Path) -> Vec<[u32; 3]> {
     let img = read_exr_rgb(path).unwrap();
-    img.pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+    img.pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
 }
 
 #[test]
@@ -114,7 +121,11 @@ fn convert_then_render_is_byte_identical_to_rendering_the_pbrt() {
     let converted = dir.join("out/twin.toml");
     ok(
         "convert",
-        risotto(&["convert", scene.to_str().unwrap(), converted.to_str().unwrap()]),
+        risotto(&[
+            "convert",
+            scene.to_str().unwrap(),
+            converted.to_str().unwrap(),
+        ]),
     );
     let text = std::fs::read_to_string(&converted).unwrap();
     // Paths are written for the TOML's directory (the PLY lies elsewhere: absolute).
@@ -240,7 +251,10 @@ fn killeroo_simple_renders_with_diffuse_in_place_of_the_coated_materials() {
     .unwrap();
     let desc = load_scene(&dir.join("killeroo-simple.pbrt")).unwrap();
     assert_eq!(desc.shapes.len(), 5);
-    assert_eq!((desc.render.width, desc.render.height, desc.render.spp), (70, 70, 256));
+    assert_eq!(
+        (desc.render.width, desc.render.height, desc.render.spp),
+        (70, 70, 256)
+    );
     let out = render_cli(&dir.join("killeroo-simple.pbrt"), "killeroo-simple-diffuse");
     let m = mean(&out);
     assert!(m.is_finite() && m > 0.0, "mean {m}");

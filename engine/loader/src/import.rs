@@ -89,10 +89,7 @@ pub type Defines = Vec<(String, String)>;
 /// Splits `-D` arguments into the importer's definitions (no dot in the name) and TOML
 /// overrides of the converted scene (a dotted path). An argument without `=` is an error
 /// naming it.
-pub fn split_defines(
-    path: &Path,
-    args: &[String],
-) -> Result<(Defines, Vec<String>), SceneError> {
+pub fn split_defines(path: &Path, args: &[String]) -> Result<(Defines, Vec<String>), SceneError> {
     let mut defines = Vec::new();
     let mut overrides = Vec::new();
     for arg in args {

@@ -535,7 +535,14 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             "rectangle" => &["transform"],
             "box" => &["min", "max", "transform"],
             "mesh" => &["path", "transform", "face_normals"],
-            "triangles" => &["positions", "indices", "normals", "uv", "transform", "face_normals"],
+            "triangles" => &[
+                "positions",
+                "indices",
+                "normals",
+                "uv",
+                "transform",
+                "face_normals",
+            ],
             other => {
                 return Err(r.error(
                     SceneErrorKind::InvalidValue,

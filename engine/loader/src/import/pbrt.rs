@@ -1,7 +1,7 @@
 //! pbrt-v4 scenes, converted to risotto's TOML (`docs/import-pbrt.md` lists every
 //! directive, parameter and convention).
 //!
-//! A parser of our own ([`lexer`], [`params`]): the `pbrt4` crate (0.2) parses the format
+//! A parser of our own (`lexer`, `params`): the `pbrt4` crate (0.2) parses the format
 //! but its errors carry no file positions, and every error here must name `file:line:col`.
 //! The directives are interpreted as pbrt-v4 does (`src/pbrt/scene.cpp`,
 //! `BasicSceneBuilder`): a current transformation matrix (CTM) post-multiplied by each

@@ -365,7 +365,10 @@ pub(crate) fn triangles(
             return Err(r.invalid(
                 key,
                 node,
-                &format!("expected a non-empty multiple of {per} numbers, got {}", out.len()),
+                &format!(
+                    "expected a non-empty multiple of {per} numbers, got {}",
+                    out.len()
+                ),
             ));
         }
         Ok(Some((out, node)))

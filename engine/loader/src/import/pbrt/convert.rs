@@ -253,14 +253,16 @@ impl<'o> Converter<'o> {
                                 &name,
                                 format!(
                                     "does not match the {} at line {}",
-                                    if attribute { "TransformBegin" } else { "AttributeBegin" },
+                                    if attribute {
+                                        "TransformBegin"
+                                    } else {
+                                        "AttributeBegin"
+                                    },
                                     self.lx.line(&begin)
                                 ),
                             ))
                         }
-                        None => {
-                            return Err(self.error(&at, &name, "has no matching Begin"))
-                        }
+                        None => return Err(self.error(&at, &name, "has no matching Begin")),
                     }
                 }
                 "ActiveTransform" => {
@@ -362,7 +364,14 @@ impl<'o> Converter<'o> {
                     let target = self.string_arg(&at, &name)?;
                     let targets = ["shape", "light", "material", "medium", "texture"];
                     if !targets.contains(&target.as_str()) {
-                        return Err(self.error(&at, &name, format!("unknown target \"{target}\"; expected one of {}", targets.join(", "))));
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!(
+                                "unknown target \"{target}\"; expected one of {}",
+                                targets.join(", ")
+                            ),
+                        ));
                     }
                     let p = Params::read(&mut self.lx, &format!("Attribute \"{target}\""))?;
                     let list = self.gs.attributes.entry(target).or_default();
@@ -376,7 +385,8 @@ impl<'o> Converter<'o> {
                     let entity = format!("Material \"{ty}\"");
                     let p = Params::read(&mut self.lx, &entity)?
                         .with_defaults(self.gs.attributes.get("material"));
-                    let def = self.material(&ty, &p, &at, &format!("{ty}_{}", self.lx.line(&at)))?;
+                    let def =
+                        self.material(&ty, &p, &at, &format!("{ty}_{}", self.lx.line(&at)))?;
                     p.finish(&self.lx)?;
                     self.anonymous.push(def);
                     self.gs.material = MaterialRef::Anonymous(self.anonymous.len() - 1);
@@ -434,10 +444,21 @@ impl<'o> Converter<'o> {
                 "ObjectBegin" => {
                     let n = self.string_arg(&at, &name)?;
                     if let Some((open, _, begin)) = &self.object {
-                        return Err(self.error(&at, &name, format!("object \"{open}\" (line {}) is still open", self.lx.line(begin))));
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!(
+                                "object \"{open}\" (line {}) is still open",
+                                self.lx.line(begin)
+                            ),
+                        ));
                     }
                     if self.scene.objects.iter().any(|(o, _)| *o == n) {
-                        return Err(self.error(&at, &name, format!("object \"{n}\" is defined twice")));
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!("object \"{n}\" is defined twice"),
+                        ));
                     }
                     self.stack.push((self.gs.clone(), true, at.clone()));
                     self.object = Some((n, Vec::new(), at));
@@ -455,7 +476,11 @@ impl<'o> Converter<'o> {
                 "ObjectInstance" => {
                     let n = self.string_arg(&at, &name)?;
                     if !self.scene.objects.iter().any(|(o, _)| *o == n) {
-                        return Err(self.error(&at, &name, format!("no object named \"{n}\" (define it with ObjectBegin before)")));
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!("no object named \"{n}\" (define it with ObjectBegin before)"),
+                        ));
                     }
                     let m = self.world_root * self.gs.ctm;
                     let e = Entity::new(Some(self.origin(&at)))
@@ -469,7 +494,9 @@ impl<'o> Converter<'o> {
                         SceneErrorKind::InvalidValue,
                         &at,
                         "directive",
-                        format!("unknown or unsupported directive `{other}` (see docs/import-pbrt.md)"),
+                        format!(
+                            "unknown or unsupported directive `{other}` (see docs/import-pbrt.md)"
+                        ),
                     ))
                 }
             }
@@ -526,7 +553,10 @@ impl<'o> Converter<'o> {
                             SceneErrorKind::Syntax,
                             &t.at,
                             name,
-                            format!("{name} expects {n} numbers, found {} and then this", out.len()),
+                            format!(
+                                "{name} expects {n} numbers, found {} and then this",
+                                out.len()
+                            ),
                         ))
                     }
                 },
@@ -535,7 +565,10 @@ impl<'o> Converter<'o> {
                         SceneErrorKind::Syntax,
                         at,
                         name,
-                        format!("{name} expects {n} numbers, the file ends after {}", out.len()),
+                        format!(
+                            "{name} expects {n} numbers, the file ends after {}",
+                            out.len()
+                        ),
                     ))
                 }
             }
@@ -553,7 +586,14 @@ impl<'o> Converter<'o> {
         if bracketed {
             match self.lx.next()? {
                 Some(t) if t.tok == Tok::Close => {}
-                _ => return Err(self.lx.error(SceneErrorKind::Syntax, at, name, format!("{name} expects 16 numbers and a closing `]`"))),
+                _ => {
+                    return Err(self.lx.error(
+                        SceneErrorKind::Syntax,
+                        at,
+                        name,
+                        format!("{name} expects 16 numbers and a closing `]`"),
+                    ))
+                }
             }
         }
         let mut m = [0.0; 16];
@@ -567,18 +607,37 @@ impl<'o> Converter<'o> {
         match t {
             Some(t) => match t.tok {
                 Tok::Str(s) => Ok(s),
-                _ => Err(self.lx.error(SceneErrorKind::Syntax, &t.at, name, format!("{name} expects a quoted string here"))),
+                _ => Err(self.lx.error(
+                    SceneErrorKind::Syntax,
+                    &t.at,
+                    name,
+                    format!("{name} expects a quoted string here"),
+                )),
             },
-            None => Err(self.lx.error(SceneErrorKind::Syntax, at, name, format!("{name} expects a quoted string; the file ends"))),
+            None => Err(self.lx.error(
+                SceneErrorKind::Syntax,
+                at,
+                name,
+                format!("{name} expects a quoted string; the file ends"),
+            )),
         }
     }
 
     /// `m` as a TOML transform list (one `matrix` step), checking it is affine and
     /// invertible.
-    pub fn transform_value(&self, m: &DMat4, at: &At, entity: &str) -> Result<toml::Value, SceneError> {
+    pub fn transform_value(
+        &self,
+        m: &DMat4,
+        at: &At,
+        entity: &str,
+    ) -> Result<toml::Value, SceneError> {
         let row3 = m.row(3);
         if (row3 - DVec4::new(0.0, 0.0, 0.0, 1.0)).abs().max_element() > 1e-9 {
-            return Err(self.error(at, entity, "the transform is projective (its last row is not 0 0 0 1)"));
+            return Err(self.error(
+                at,
+                entity,
+                "the transform is projective (its last row is not 0 0 0 1)",
+            ));
         }
         if !m.is_finite() || m.determinant() == 0.0 {
             return Err(self.error(at, entity, "the transform is singular or not finite"));
@@ -606,8 +665,7 @@ impl<'o> Converter<'o> {
         if right.dot(risotto_right) < 0.0 {
             let n = risotto_right;
             // Householder reflection about the plane {p : (p - pos) . n = 0}.
-            let r = glam::DMat3::IDENTITY
-                - 2.0 * glam::DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+            let r = glam::DMat3::IDENTITY - 2.0 * glam::DMat3::from_cols(n * n.x, n * n.y, n * n.z);
             let t = pos - r * pos;
             self.world_root = DMat4::from_cols(
                 r.x_axis.extend(0.0),
@@ -630,18 +688,35 @@ impl<'o> Converter<'o> {
     ) -> Result<(), SceneError> {
         let lx = &self.lx;
         let entity = p.entity.clone();
-        render.origin.get_or_insert_with(|| origin(lx.path(at), lx.line(at)));
+        render
+            .origin
+            .get_or_insert_with(|| origin(lx.path(at), lx.line(at)));
         match name {
             "Film" => {
                 if ty != "rgb" && ty != "gbuffer" {
-                    return Err(self.error(at, &entity, format!("film \"{ty}\" is not supported (only \"rgb\"; risotto renders RGB)")));
+                    return Err(self.error(
+                        at,
+                        &entity,
+                        format!(
+                            "film \"{ty}\" is not supported (only \"rgb\"; risotto renders RGB)"
+                        ),
+                    ));
                 }
                 let w = p.int(lx, "xresolution", 1280)?;
                 let h = p.int(lx, "yresolution", 720)?;
                 for (k, v) in [("xresolution", w), ("yresolution", h)] {
                     if !(1..=65536).contains(&v) {
-                        let at = p.list.iter().find(|q| q.name == k).map(|q| q.at.clone()).unwrap_or(at.clone());
-                        return Err(self.error(&at, &entity, format!("`{k}` must be in [1, 65536], got {v}")));
+                        let at = p
+                            .list
+                            .iter()
+                            .find(|q| q.name == k)
+                            .map(|q| q.at.clone())
+                            .unwrap_or(at.clone());
+                        return Err(self.error(
+                            &at,
+                            &entity,
+                            format!("`{k}` must be in [1, 65536], got {v}"),
+                        ));
                     }
                 }
                 render.set("width", w);
@@ -651,16 +726,28 @@ impl<'o> Converter<'o> {
                 p.ignore("diagonal");
                 if let Some((c, q)) = p.nums(lx, "cropwindow", &["float"], 4)? {
                     if c != [0.0, 1.0, 0.0, 1.0] {
-                        return Err(p.error(lx, q, "a crop window is not supported (render the whole image)"));
+                        return Err(p.error(
+                            lx,
+                            q,
+                            "a crop window is not supported (render the whole image)",
+                        ));
                     }
                 }
                 if let Some((_, q)) = p.nums(lx, "pixelbounds", &["integer"], 4)? {
-                    return Err(p.error(lx, q, "pixel bounds are not supported (render the whole image)"));
+                    return Err(p.error(
+                        lx,
+                        q,
+                        "pixel bounds are not supported (render the whole image)",
+                    ));
                 }
                 let iso = p.float(lx, "iso", 100.0)?;
                 let wb = p.float(lx, "whitebalance", 0.0)?;
                 if iso != 100.0 || wb != 0.0 {
-                    let q = p.list.iter().find(|q| q.name == "iso" || q.name == "whitebalance").expect("given");
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "iso" || q.name == "whitebalance")
+                        .expect("given");
                     return Err(p.error(lx, q, "iso and white balance are not supported (risotto writes the radiance: iso 100, no white balance)"));
                 }
                 if let Some((s, q)) = p.string(lx, "sensor")? {
@@ -681,7 +768,11 @@ impl<'o> Converter<'o> {
                 p.ignore("dimension");
                 let spp = p.int(lx, "pixelsamples", 16)?;
                 if !(1..=1 << 24).contains(&spp) {
-                    let q = p.list.iter().find(|q| q.name == "pixelsamples").expect("given");
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "pixelsamples")
+                        .expect("given");
                     return Err(p.error(lx, q, format!("must be in [1, 16777216], got {spp}")));
                 }
                 render.set("spp", spp);
@@ -711,7 +802,11 @@ impl<'o> Converter<'o> {
                 // path segments (Mitsuba's convention): one more.
                 render.set("max_depth", depth + 1);
                 if p.bool(lx, "regularize", false)? {
-                    let q = p.list.iter().find(|q| q.name == "regularize").expect("given");
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "regularize")
+                        .expect("given");
                     return Err(p.error(lx, q, "path regularization is not supported"));
                 }
                 p.ignore("lightsampler");
@@ -720,7 +815,11 @@ impl<'o> Converter<'o> {
                 let xr = p.float(lx, "xradius", f64::NAN)?;
                 let yr = p.float(lx, "yradius", f64::NAN)?;
                 if !(xr.is_nan() && yr.is_nan()) && xr != yr {
-                    let q = p.list.iter().find(|q| q.name == "xradius" || q.name == "yradius").expect("given");
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "xradius" || q.name == "yradius")
+                        .expect("given");
                     return Err(p.error(lx, q, "xradius and yradius must be equal (risotto's filters are the same along x and y)"));
                 }
                 let r = if xr.is_nan() { yr } else { xr };
@@ -732,7 +831,11 @@ impl<'o> Converter<'o> {
                 };
                 let r = if r.is_nan() { default_r } else { r };
                 if !(r > 0.0 && r.is_finite()) {
-                    return Err(self.error(at, &entity, format!("the filter radius must be > 0, got {r}")));
+                    return Err(self.error(
+                        at,
+                        &entity,
+                        format!("the filter radius must be > 0, got {r}"),
+                    ));
                 }
                 render.table.remove("filter_stddev");
                 render.set("filter", kind);
@@ -777,18 +880,31 @@ impl<'o> Converter<'o> {
             .with("up", vec![up.x, up.y, up.z]);
         for k in ["frameaspectratio", "screenwindow"] {
             if let Some(q) = p.ignore(k) {
-                return Err(p.error(lx, q, "is not supported (the image's aspect ratio decides the screen window)"));
+                return Err(p.error(
+                    lx,
+                    q,
+                    "is not supported (the image's aspect ratio decides the screen window)",
+                ));
             }
         }
         let open = p.float(lx, "shutteropen", 0.0)?;
         let close = p.float(lx, "shutterclose", 1.0)?;
         if close - open != 1.0 {
-            let q = p.list.iter().find(|q| q.name.starts_with("shutter")).expect("given");
-            return Err(p.error(lx, q, "an exposure time other than 1 scales pbrt's image; not supported"));
+            let q = p
+                .list
+                .iter()
+                .find(|q| q.name.starts_with("shutter"))
+                .expect("given");
+            return Err(p.error(
+                lx,
+                q,
+                "an exposure time other than 1 scales pbrt's image; not supported",
+            ));
         }
         match ty {
             "perspective" => {
-                let fov = p.float_where(lx, "fov", 90.0, "in (0, 180)", |f| f > 0.0 && f < 180.0)?;
+                let fov =
+                    p.float_where(lx, "fov", 90.0, "in (0, 180)", |f| f > 0.0 && f < 180.0)?;
                 // pbrt's fov spans the shorter image axis; risotto's is horizontal.
                 let hfov = if w >= h {
                     2.0 * ((fov.to_radians() / 2.0).tan() * w / h).atan().to_degrees()
@@ -809,12 +925,26 @@ impl<'o> Converter<'o> {
                 // pbrt's default screen window spans [-1, 1] along the shorter axis.
                 cam.set("width", if w >= h { 2.0 * w / h } else { 2.0 });
                 if p.float(lx, "lensradius", 0.0)? != 0.0 {
-                    let q = p.list.iter().find(|q| q.name == "lensradius").expect("given");
-                    return Err(p.error(lx, q, "an orthographic camera with a lens is not supported"));
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "lensradius")
+                        .expect("given");
+                    return Err(p.error(
+                        lx,
+                        q,
+                        "an orthographic camera with a lens is not supported",
+                    ));
                 }
                 p.ignore("focaldistance");
             }
-            _ => return Err(self.error(at, &entity, format!("camera \"{ty}\" is not supported (perspective, orthographic)"))),
+            _ => {
+                return Err(self.error(
+                    at,
+                    &entity,
+                    format!("camera \"{ty}\" is not supported (perspective, orthographic)"),
+                ))
+            }
         }
         self.scene.camera = cam;
         Ok(())

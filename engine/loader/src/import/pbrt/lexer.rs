@@ -243,7 +243,9 @@ impl Lexer {
                     let w = &self.files[file].src.text[start..i];
                     // Only digits, signs, a point and an exponent: Rust would also read
                     // `inf` and `nan`, which pbrt does not.
-                    let numeric = w.bytes().all(|c| c.is_ascii_digit() || b"+-.eE".contains(&c));
+                    let numeric = w
+                        .bytes()
+                        .all(|c| c.is_ascii_digit() || b"+-.eE".contains(&c));
                     match w.parse::<f64>() {
                         Ok(v) if numeric && v.is_finite() => (Tok::Num(v), i),
                         Ok(_) if numeric => {
@@ -275,7 +277,13 @@ impl Lexer {
     /// directory of the scene it was given, which is the same for files in that
     /// directory).
     pub fn resolve(&self, at: &At, name: &str) -> PathBuf {
-        let dir_of = |f: usize| self.files[f].path.parent().unwrap_or(Path::new("")).to_path_buf();
+        let dir_of = |f: usize| {
+            self.files[f]
+                .path
+                .parent()
+                .unwrap_or(Path::new(""))
+                .to_path_buf()
+        };
         let here = dir_of(at.file).join(name);
         if at.file == 0 || here.exists() {
             return here;

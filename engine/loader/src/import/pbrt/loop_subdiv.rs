@@ -49,11 +49,14 @@ fn edges(tris: &[[u32; 3]]) -> Result<HashMap<(u32, u32), Vec<u32>>, String> {
     Ok(map)
 }
 
+/// Per vertex, a list of vertices.
+type PerVertex = Vec<Vec<u32>>;
+
 /// Per vertex: its ring (neighbours) and its boundary neighbours.
 fn rings(
     n: usize,
     edges: &HashMap<(u32, u32), Vec<u32>>,
-) -> Result<(Vec<Vec<u32>>, Vec<Vec<u32>>), String> {
+) -> Result<(PerVertex, PerVertex), String> {
     let mut ring = vec![Vec::new(); n];
     let mut boundary = vec![Vec::new(); n];
     for (&(a, b), opp) in edges {

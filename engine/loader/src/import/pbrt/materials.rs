@@ -15,7 +15,12 @@ const METALS: &[&str] = &["Ag", "Al", "Au", "Cu", "MgO", "TiO2"];
 
 impl Converter<'_> {
     /// A colour parameter as a TOML value (a colour or, with `textures`, a pattern).
-    fn colour_value(&self, p: &Params, name: &str, textures: bool) -> Result<Option<toml::Value>, SceneError> {
+    fn colour_value(
+        &self,
+        p: &Params,
+        name: &str,
+        textures: bool,
+    ) -> Result<Option<toml::Value>, SceneError> {
         let c = p.colour(&self.lx, name, textures, &|q| self.spectrum_colour(p, q))?;
         let q = || p.list.iter().find(|q| q.name == name).expect("given");
         Ok(match c {
@@ -26,13 +31,23 @@ impl Converter<'_> {
                 None => return Err(p.error(&self.lx, q(), format!("no texture named \"{t}\""))),
             },
             Some(Colour::Named(n)) => {
-                return Err(p.error(&self.lx, q(), format!("the named spectrum \"{n}\" is not supported here")))
+                return Err(p.error(
+                    &self.lx,
+                    q(),
+                    format!("the named spectrum \"{n}\" is not supported here"),
+                ))
             }
         })
     }
 
     /// A material definition (`Material` or `MakeNamedMaterial`).
-    pub(super) fn material(&mut self, ty: &str, p: &Params, at: &At, name: &str) -> Result<MaterialDef, SceneError> {
+    pub(super) fn material(
+        &mut self,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        name: &str,
+    ) -> Result<MaterialDef, SceneError> {
         let mut t = Entity::new(None);
         let lx = &self.lx;
         for k in ["displacement", "normalmap"] {
@@ -44,7 +59,11 @@ impl Converter<'_> {
         match ty {
             "diffuse" => {
                 t.set("type", "diffuse");
-                t.set("reflectance", self.colour_value(p, "reflectance", true)?.unwrap_or(0.5.into()));
+                t.set(
+                    "reflectance",
+                    self.colour_value(p, "reflectance", true)?
+                        .unwrap_or(0.5.into()),
+                );
                 // pbrt's diffuse reflects on both sides.
                 t.set("two_sided", true);
             }
@@ -61,12 +80,26 @@ impl Converter<'_> {
                         // pbrt-v4 `ConductorMaterial` with a reflectance: eta = 1 and
                         // k = 2 sqrt(r) / sqrt(1 - r), whose normal-incidence Fresnel
                         // reflectance is r.
-                        let r: Vec<f64> = r.as_array().expect("rgb").iter().map(|x| x.as_float().unwrap_or(0.0).clamp(0.0, 0.9999)).collect();
+                        let r: Vec<f64> = r
+                            .as_array()
+                            .expect("rgb")
+                            .iter()
+                            .map(|x| x.as_float().unwrap_or(0.0).clamp(0.0, 0.9999))
+                            .collect();
                         t.set("eta", vec![1.0; 3]);
-                        t.set("k", r.iter().map(|r| 2.0 * r.sqrt() / (1.0 - r).sqrt()).collect::<Vec<_>>());
+                        t.set(
+                            "k",
+                            r.iter()
+                                .map(|r| 2.0 * r.sqrt() / (1.0 - r).sqrt())
+                                .collect::<Vec<_>>(),
+                        );
                     }
                     (Some(Colour::Named(e)), Some(Colour::Named(k)), None) => {
-                        let metal = |s: &str, suffix: &str| s.strip_prefix("metal-").and_then(|s| s.strip_suffix(suffix)).map(str::to_owned);
+                        let metal = |s: &str, suffix: &str| {
+                            s.strip_prefix("metal-")
+                                .and_then(|s| s.strip_suffix(suffix))
+                                .map(str::to_owned)
+                        };
                         match (metal(&e, "-eta"), metal(&k, "-k")) {
                             (Some(a), Some(b)) if a == b && METALS.contains(&a.as_str()) => t.set("material", a.as_str()),
                             _ => return Err(self.error(at, &p.entity, format!("the spectra \"{e}\" / \"{k}\" are not a metal risotto knows ({})", METALS.join(", ")))),
@@ -76,7 +109,13 @@ impl Converter<'_> {
                         t.set("eta", e.to_vec());
                         t.set("k", k.to_vec());
                     }
-                    _ => return Err(self.error(at, &p.entity, "give eta and k (both rgb or both named metal spectra), or reflectance")),
+                    _ => {
+                        return Err(self.error(
+                            at,
+                            &p.entity,
+                            "give eta and k (both rgb or both named metal spectra), or reflectance",
+                        ))
+                    }
                 }
                 t.set("two_sided", true);
                 t.set("energy_compensation", false);
@@ -90,7 +129,7 @@ impl Converter<'_> {
                         return Err(p.error(lx, q, "a wavelength-dependent index (dispersion) is not supported; give one number"));
                     }
                 };
-                if !(eta > 0.0) {
+                if eta.is_nan() || eta <= 0.0 {
                     let q = p.list.iter().find(|q| q.name == "eta").expect("given");
                     return Err(p.error(lx, q, format!("must be > 0, got {eta}")));
                 }
@@ -117,11 +156,34 @@ impl Converter<'_> {
             }
             "coateddiffuse" | "coatedconductor" => {
                 // The branch `coated` reads these names (pbrt's, with underscores).
-                t.set("type", if ty == "coateddiffuse" { "coated_diffuse" } else { "coated_conductor" });
+                t.set(
+                    "type",
+                    if ty == "coateddiffuse" {
+                        "coated_diffuse"
+                    } else {
+                        "coated_conductor"
+                    },
+                );
                 let floats: &[(&str, &str)] = if ty == "coateddiffuse" {
-                    &[("roughness", "roughness"), ("uroughness", "uroughness"), ("vroughness", "vroughness"), ("thickness", "thickness"), ("g", "g")]
+                    &[
+                        ("roughness", "roughness"),
+                        ("uroughness", "uroughness"),
+                        ("vroughness", "vroughness"),
+                        ("thickness", "thickness"),
+                        ("g", "g"),
+                    ]
                 } else {
-                    &[("interface.roughness", "interface_roughness"), ("interface.uroughness", "interface_uroughness"), ("interface.vroughness", "interface_vroughness"), ("conductor.roughness", "conductor_roughness"), ("conductor.uroughness", "conductor_uroughness"), ("conductor.vroughness", "conductor_vroughness"), ("thickness", "thickness"), ("g", "g"), ("interface.eta", "interface_eta")]
+                    &[
+                        ("interface.roughness", "interface_roughness"),
+                        ("interface.uroughness", "interface_uroughness"),
+                        ("interface.vroughness", "interface_vroughness"),
+                        ("conductor.roughness", "conductor_roughness"),
+                        ("conductor.uroughness", "conductor_uroughness"),
+                        ("conductor.vroughness", "conductor_vroughness"),
+                        ("thickness", "thickness"),
+                        ("g", "g"),
+                        ("interface.eta", "interface_eta"),
+                    ]
                 };
                 for (from, to) in floats {
                     if p.has(from) {
@@ -131,10 +193,17 @@ impl Converter<'_> {
                 let colours: &[(&str, &str)] = if ty == "coateddiffuse" {
                     &[("reflectance", "reflectance"), ("albedo", "albedo")]
                 } else {
-                    &[("reflectance", "reflectance"), ("albedo", "albedo"), ("conductor.eta", "conductor_eta"), ("conductor.k", "conductor_k")]
+                    &[
+                        ("reflectance", "reflectance"),
+                        ("albedo", "albedo"),
+                        ("conductor.eta", "conductor_eta"),
+                        ("conductor.k", "conductor_k"),
+                    ]
                 };
                 for (from, to) in colours {
-                    if let Some(v) = self.colour_value(p, from, *from == "reflectance" && ty == "coateddiffuse")? {
+                    if let Some(v) =
+                        self.colour_value(p, from, *from == "reflectance" && ty == "coateddiffuse")?
+                    {
                         t.set(to, v);
                     }
                 }
@@ -171,7 +240,8 @@ impl Converter<'_> {
     /// (`TrowbridgeReitzDistribution::RoughnessToAlpha`).
     fn roughness(&self, p: &Params, prefix: &str) -> Result<(f64, f64), SceneError> {
         let lx = &self.lx;
-        let nonneg = |k: &str, d: f64| p.float_where(lx, &format!("{prefix}{k}"), d, ">= 0", |r| r >= 0.0);
+        let nonneg =
+            |k: &str, d: f64| p.float_where(lx, &format!("{prefix}{k}"), d, ">= 0", |r| r >= 0.0);
         let r = nonneg("roughness", 0.0)?;
         let u = nonneg("uroughness", r)?;
         let v = nonneg("vroughness", r)?;
@@ -179,8 +249,16 @@ impl Converter<'_> {
         let (au, av) = if remap { (u.sqrt(), v.sqrt()) } else { (u, v) };
         for (a, k) in [(au, "uroughness"), (av, "vroughness")] {
             if a > 1.0 {
-                let q = p.list.iter().find(|q| q.name.ends_with(k) || q.name.ends_with("roughness")).expect("given");
-                return Err(p.error(lx, q, format!("gives the GGX alpha {a}, above risotto's limit of 1")));
+                let q = p
+                    .list
+                    .iter()
+                    .find(|q| q.name.ends_with(k) || q.name.ends_with("roughness"))
+                    .expect("given");
+                return Err(p.error(
+                    lx,
+                    q,
+                    format!("gives the GGX alpha {a}, above risotto's limit of 1"),
+                ));
             }
         }
         Ok((au, av))
@@ -188,10 +266,18 @@ impl Converter<'_> {
 
     /// The TOML name of the material a shape gets here (written on first use, with the
     /// shape's inside medium as its interior).
-    pub(super) fn material_for_shape(&mut self, at: &At, entity: &str) -> Result<String, SceneError> {
+    pub(super) fn material_for_shape(
+        &mut self,
+        at: &At,
+        entity: &str,
+    ) -> Result<String, SceneError> {
         let def = match self.gs.material.clone() {
             MaterialRef::Default => MaterialDef {
-                table: Entity::new(None).with("type", "diffuse").with("reflectance", 0.5).with("two_sided", true).table,
+                table: Entity::new(None)
+                    .with("type", "diffuse")
+                    .with("reflectance", 0.5)
+                    .with("two_sided", true)
+                    .table,
                 name: "default".into(),
                 origin: self.origin(at),
                 transmits: false,
@@ -199,11 +285,25 @@ impl Converter<'_> {
             MaterialRef::Anonymous(i) => self.anonymous[i].clone(),
             MaterialRef::Named(n, nat) => match self.named_materials.get(&n) {
                 Some(d) => d.clone(),
-                None => return Err(self.error(&nat, "NamedMaterial", format!("no material named \"{n}\" (define it with MakeNamedMaterial)"))),
+                None => {
+                    return Err(self.error(
+                        &nat,
+                        "NamedMaterial",
+                        format!("no material named \"{n}\" (define it with MakeNamedMaterial)"),
+                    ))
+                }
             },
         };
         let inside = self.gs.inside.clone();
-        let key = (format!("{}@{}:{}", def.name, def.origin.file.display(), def.origin.line), inside.clone());
+        let key = (
+            format!(
+                "{}@{}:{}",
+                def.name,
+                def.origin.file.display(),
+                def.origin.line
+            ),
+            inside.clone(),
+        );
         if let Some(name) = self.emitted.get(&key) {
             return Ok(name.clone());
         }
@@ -216,35 +316,74 @@ impl Converter<'_> {
             table.insert("interior".into(), toml::Value::Table(medium));
             self.media_used.push(inside.clone());
         }
-        let base = if inside.is_empty() { def.name.clone() } else { format!("{} in {inside}", def.name) };
+        let base = if inside.is_empty() {
+            def.name.clone()
+        } else {
+            format!("{} in {inside}", def.name)
+        };
         let name = self.unique(&base);
-        self.scene.materials.push((name.clone(), Entity { table, origin: Some(def.origin) }));
+        self.scene.materials.push((
+            name.clone(),
+            Entity {
+                table,
+                origin: Some(def.origin),
+            },
+        ));
         self.emitted.insert(key, name.clone());
         Ok(name)
     }
 
     /// `Texture "name" "spectrum"|"float" "class"` as a pattern value.
-    pub(super) fn texture(&mut self, class: &str, ty: &str, p: &Params, at: &At, entity: &str) -> Result<toml::Value, SceneError> {
+    pub(super) fn texture(
+        &mut self,
+        class: &str,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        entity: &str,
+    ) -> Result<toml::Value, SceneError> {
         if class != "spectrum" && class != "float" {
-            return Err(self.error(at, entity, format!("texture type \"{class}\" must be \"spectrum\" or \"float\"")));
+            return Err(self.error(
+                at,
+                entity,
+                format!("texture type \"{class}\" must be \"spectrum\" or \"float\""),
+            ));
         }
         let lx = &self.lx;
         let mut t = toml::Table::new();
-        let mapping = p.string(lx, "mapping")?.map(|(m, _)| m.to_owned()).unwrap_or("uv".into());
+        let mapping = p
+            .string(lx, "mapping")?
+            .map(|(m, _)| m.to_owned())
+            .unwrap_or("uv".into());
         if mapping != "uv" {
-            return Err(self.error(at, entity, format!("texture mapping \"{mapping}\" is not supported (only \"uv\")")));
+            return Err(self.error(
+                at,
+                entity,
+                format!("texture mapping \"{mapping}\" is not supported (only \"uv\")"),
+            ));
         }
-        for (k, d) in [("uscale", 1.0), ("vscale", 1.0), ("udelta", 0.0), ("vdelta", 0.0)] {
+        for (k, d) in [
+            ("uscale", 1.0),
+            ("vscale", 1.0),
+            ("udelta", 0.0),
+            ("vdelta", 0.0),
+        ] {
             if ty != "checkerboard" || k.ends_with("delta") {
                 if let Some(q) = p.ignore(k) {
                     if p.float(lx, k, d)? != d {
-                        return Err(p.error(lx, q, "texture coordinate scales and offsets are not supported"));
+                        return Err(p.error(
+                            lx,
+                            q,
+                            "texture coordinate scales and offsets are not supported",
+                        ));
                     }
                 }
             }
         }
         let float_or_tex = |name: &str, d: f64| -> Result<toml::Value, SceneError> {
-            Ok(self.colour_value(p, name, true)?.unwrap_or(vec![d; 3].into()))
+            Ok(self
+                .colour_value(p, name, true)?
+                .unwrap_or(vec![d; 3].into()))
         };
         match ty {
             "imagemap" => {
@@ -313,7 +452,7 @@ impl Converter<'_> {
                     return Err(self.error(at, entity, "only 2D checkerboards are supported"));
                 }
                 let (su, sv) = (p.float(lx, "uscale", 1.0)?, p.float(lx, "vscale", 1.0)?);
-                if su != sv || !(su > 0.0) {
+                if su != sv || su.is_nan() || su <= 0.0 {
                     return Err(self.error(at, entity, "the checkerboard's uscale and vscale must be equal and > 0"));
                 }
                 // pbrt: tex1 where floor(s) + floor(t) is even; risotto's `a` likewise.
@@ -337,13 +476,28 @@ impl Converter<'_> {
     pub(super) fn medium(&mut self, p: &Params) -> Result<toml::Table, SceneError> {
         let lx = &self.lx;
         let Some((ty, q)) = p.string(lx, "type")? else {
-            return Err(lx.error(risotto_engine::diagnostics::SceneErrorKind::MissingField, &p.list.first().map_or_else(|| super::lexer::At { file: 0, span: 0..0 }, |q| q.at.clone()), &p.entity, "needs \"string type\""));
+            return Err(lx.error(
+                risotto_engine::diagnostics::SceneErrorKind::MissingField,
+                &p.list.first().map_or_else(
+                    || super::lexer::At {
+                        file: 0,
+                        span: 0..0,
+                    },
+                    |q| q.at.clone(),
+                ),
+                &p.entity,
+                "needs \"string type\"",
+            ));
         };
         if ty != "homogeneous" {
             return Err(p.error(lx, q, format!("medium \"{ty}\" is not supported (only \"homogeneous\"; grids are not converted yet)")));
         }
         if let Some(q) = p.ignore("preset") {
-            return Err(p.error(lx, q, "named scattering presets are not supported; give sigma_a and sigma_s"));
+            return Err(p.error(
+                lx,
+                q,
+                "named scattering presets are not supported; give sigma_a and sigma_s",
+            ));
         }
         let rgb = |name: &str| -> Result<[f64; 3], SceneError> {
             match p.colour(lx, name, false, &|q| self.spectrum_colour(p, q))? {
@@ -391,7 +545,11 @@ impl Converter<'_> {
         let m = self.world_root * self.gs.ctm;
         let scale = p.float(lx, "scale", 1.0)?;
         if let Some(q) = p.ignore("power").or_else(|| p.ignore("illuminance")) {
-            return Err(p.error(lx, q, "is not supported (give the radiance or intensity and scale)"));
+            return Err(p.error(
+                lx,
+                q,
+                "is not supported (give the radiance or intensity and scale)",
+            ));
         }
         let rgb = |name: &str| -> Result<Vec<f64>, SceneError> {
             match p.colour(lx, name, false, &|q| self.spectrum_colour(p, q))? {
@@ -403,7 +561,9 @@ impl Converter<'_> {
                 }
             }
         };
-        let v3 = |name: &str, d: DVec3| -> Result<DVec3, SceneError> { Ok(p.vec3(lx, name)?.map_or(d, DVec3::from)) };
+        let v3 = |name: &str, d: DVec3| -> Result<DVec3, SceneError> {
+            Ok(p.vec3(lx, name)?.map_or(d, DVec3::from))
+        };
         let mut e = Entity::new(Some(self.origin(at)));
         match ty {
             "point" => {
@@ -416,8 +576,12 @@ impl Converter<'_> {
                 let from = v3("from", DVec3::ZERO)?;
                 let to = v3("to", DVec3::Z)?;
                 let dir = m.transform_vector3(to - from);
-                let cone = p.float_where(lx, "coneangle", 30.0, "in (0, 90]", |a| a > 0.0 && a <= 90.0)?;
-                let delta = p.float_where(lx, "conedelta", 5.0, "in [0, coneangle)", |d| d >= 0.0 && d < cone)?;
+                let cone = p.float_where(lx, "coneangle", 30.0, "in (0, 90]", |a| {
+                    a > 0.0 && a <= 90.0
+                })?;
+                let delta = p.float_where(lx, "conedelta", 5.0, "in [0, coneangle)", |d| {
+                    d >= 0.0 && d < cone
+                })?;
                 e.set("type", "spot");
                 e.set("position", m.transform_point3(from).to_array().to_vec());
                 e.set("direction", dir.to_array().to_vec());
@@ -454,10 +618,20 @@ impl Converter<'_> {
                 e.set("type", "environment");
                 e.set("radiance", rgb("L")?);
             }
-            _ => return Err(self.error(at, &p.entity, format!("light \"{ty}\" is not supported (point, spot, distant, infinite)"))),
+            _ => {
+                return Err(self.error(
+                    at,
+                    &p.entity,
+                    format!("light \"{ty}\" is not supported (point, spot, distant, infinite)"),
+                ))
+            }
         }
         if self.object.is_some() {
-            return Err(self.error(at, &p.entity, "lights inside an object (ObjectBegin) are not supported"));
+            return Err(self.error(
+                at,
+                &p.entity,
+                "lights inside an object (ObjectBegin) are not supported",
+            ));
         }
         self.scene.lights.push(e);
         Ok(())

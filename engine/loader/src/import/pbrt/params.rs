@@ -38,8 +38,23 @@ pub(super) struct Param {
 /// The parameter types of pbrt-v4 (and `color`, pbrt-v3's `rgb`; `point` / `vector` /
 /// `normal`, the short forms of the 3-D ones).
 const TYPES: &[&str] = &[
-    "integer", "float", "point2", "vector2", "point3", "vector3", "point", "vector", "normal",
-    "normal3", "rgb", "color", "spectrum", "blackbody", "bool", "string", "texture",
+    "integer",
+    "float",
+    "point2",
+    "vector2",
+    "point3",
+    "vector3",
+    "point",
+    "vector",
+    "normal",
+    "normal3",
+    "rgb",
+    "color",
+    "spectrum",
+    "blackbody",
+    "bool",
+    "string",
+    "texture",
 ];
 
 /// A directive's parameters.
@@ -66,8 +81,7 @@ impl Params {
     /// Reads `"type name" value` pairs while the next token is a string.
     pub fn read(lx: &mut Lexer, entity: &str) -> Result<Params, SceneError> {
         let mut list: Vec<Param> = Vec::new();
-        loop {
-            let Some(tok) = lx.peek()? else { break };
+        while let Some(tok) = lx.peek()? {
             let Tok::Str(decl) = &tok.tok else { break };
             let decl = decl.clone();
             let at = tok.at.clone();
@@ -260,7 +274,9 @@ impl Params {
         };
         match &p.values {
             Values::Bools(v) if v.len() == 1 && p.ty == "bool" => Ok(v[0]),
-            Values::Strs(v) if v.len() == 1 && p.ty == "bool" && (v[0] == "true" || v[0] == "false") => {
+            Values::Strs(v)
+                if v.len() == 1 && p.ty == "bool" && (v[0] == "true" || v[0] == "false") =>
+            {
                 Ok(v[0] == "true")
             }
             _ => Err(self.error(lx, p, "expected one bool (true or false)")),
@@ -295,7 +311,9 @@ impl Params {
             ("rgb" | "color", _) => return Err(self.error(lx, p, "expected 3 numbers")),
             ("float", Values::Nums(v)) if v.len() == 1 => Colour::Rgb([v[0]; 3]),
             ("spectrum", Values::Nums(v)) if v.len() == 1 => Colour::Rgb([v[0]; 3]),
-            ("texture", Values::Strs(v)) if textures && v.len() == 1 => Colour::Texture(v[0].clone()),
+            ("texture", Values::Strs(v)) if textures && v.len() == 1 => {
+                Colour::Texture(v[0].clone())
+            }
             ("texture", _) if !textures => {
                 return Err(self.error(lx, p, "a texture is not supported here (give a value)"))
             }

@@ -18,7 +18,11 @@ impl Converter<'_> {
     /// `AreaLightSource "diffuse"`.
     pub(super) fn area_light(&mut self, ty: &str, p: &Params, at: &At) -> Result<(), SceneError> {
         if ty != "diffuse" {
-            return Err(self.error(at, &p.entity, format!("area light \"{ty}\" is not supported (only \"diffuse\")")));
+            return Err(self.error(
+                at,
+                &p.entity,
+                format!("area light \"{ty}\" is not supported (only \"diffuse\")"),
+            ));
         }
         let lx = &self.lx;
         let l = match p.colour(lx, "L", false, &|q| self.spectrum_colour(p, q))? {
@@ -29,7 +33,11 @@ impl Converter<'_> {
         let scale = p.float(lx, "scale", 1.0)?;
         if p.bool(lx, "twosided", false)? {
             let q = p.list.iter().find(|q| q.name == "twosided").expect("given");
-            return Err(p.error(lx, q, "two-sided area lights are not supported (risotto's emit from the front)"));
+            return Err(p.error(
+                lx,
+                q,
+                "two-sided area lights are not supported (risotto's emit from the front)",
+            ));
         }
         for k in ["filename", "power"] {
             if let Some(q) = p.ignore(k) {
@@ -47,9 +55,15 @@ impl Converter<'_> {
     pub(super) fn shape(&mut self, ty: &str, p: &Params, at: &At) -> Result<(), SceneError> {
         let entity = p.entity.clone();
         if let Some(q) = p.ignore("alpha") {
-            let a = p.float(&self.lx, "alpha", 1.0).map_err(|_| p.error(&self.lx, q, "a texture alpha is not supported"))?;
+            let a = p
+                .float(&self.lx, "alpha", 1.0)
+                .map_err(|_| p.error(&self.lx, q, "a texture alpha is not supported"))?;
             if a != 1.0 {
-                return Err(p.error(&self.lx, q, "alpha (cut-outs) on pbrt shapes is not supported"));
+                return Err(p.error(
+                    &self.lx,
+                    q,
+                    "alpha (cut-outs) on pbrt shapes is not supported",
+                ));
             }
         }
         for k in ["emissionfilename", "displacement", "edgelength"] {
@@ -126,14 +140,24 @@ impl Converter<'_> {
                 return Err(self.error(at, &entity, format!("shape \"{ty}\" is not supported (trianglemesh, bilinearmesh, loopsubdiv, plymesh, sphere, disk)")))
             }
         }
-        let m = if self.object.is_some() { ctm * local } else { self.world_root * ctm * local };
+        let m = if self.object.is_some() {
+            ctm * local
+        } else {
+            self.world_root * ctm * local
+        };
         let t = self.transform_value(&m, at, &entity)?;
         self.finish_shape(e, Some(t), at, &entity)
     }
 
     /// Adds the material, emission and transform, and files the shape in the scene or the
     /// open object.
-    fn finish_shape(&mut self, mut e: Entity, transform: Option<toml::Value>, at: &At, entity: &str) -> Result<(), SceneError> {
+    fn finish_shape(
+        &mut self,
+        mut e: Entity,
+        transform: Option<toml::Value>,
+        at: &At,
+        entity: &str,
+    ) -> Result<(), SceneError> {
         if let Some(t) = transform {
             if !is_identity(&t) {
                 e.set("transform", t);
@@ -156,7 +180,13 @@ impl Converter<'_> {
 
     /// `trianglemesh` (P, indices, N, uv) and `bilinearmesh` (P, indices in fours, each quad
     /// split into two triangles), as a `triangles` shape.
-    fn triangles(&mut self, ty: &str, p: &Params, at: &At, e: &mut Entity) -> Result<(), SceneError> {
+    fn triangles(
+        &mut self,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        e: &mut Entity,
+    ) -> Result<(), SceneError> {
         let lx = &self.lx;
         let entity = p.entity.clone();
         let Some((pos, pq)) = p.nums(lx, "P", &["point3", "point"], 3)? else {
@@ -167,22 +197,50 @@ impl Converter<'_> {
         let indices: Vec<u32> = match p.ints(lx, "indices")? {
             Some((i, q)) => {
                 if i.len() % per != 0 {
-                    return Err(p.error(lx, q, format!("expected a multiple of {per} indices, got {}", i.len())));
+                    return Err(p.error(
+                        lx,
+                        q,
+                        format!("expected a multiple of {per} indices, got {}", i.len()),
+                    ));
                 }
                 if let Some(bad) = i.iter().find(|&&x| x as usize >= nv) {
-                    return Err(p.error(lx, q, format!("index {bad} is out of range (P has {nv} points)")));
+                    return Err(p.error(
+                        lx,
+                        q,
+                        format!("index {bad} is out of range (P has {nv} points)"),
+                    ));
                 }
                 i
             }
             None if nv == per => (0..per as u32).collect(),
-            None => return Err(p.error(lx, pq, format!("without \"integer indices\", P must hold exactly {per} points, got {nv}"))),
+            None => {
+                return Err(p.error(
+                    lx,
+                    pq,
+                    format!(
+                        "without \"integer indices\", P must hold exactly {per} points, got {nv}"
+                    ),
+                ))
+            }
         };
         let normals = match p.nums(lx, "N", &["normal", "normal3"], 3)? {
-            Some((n, q)) if n.len() != pos.len() => return Err(p.error(lx, q, format!("expected one normal per point ({nv}), got {}", n.len() / 3))),
+            Some((n, q)) if n.len() != pos.len() => {
+                return Err(p.error(
+                    lx,
+                    q,
+                    format!("expected one normal per point ({nv}), got {}", n.len() / 3),
+                ))
+            }
             n => n.map(|(n, _)| n),
         };
         let uv = match p.nums(lx, "uv", &["point2", "float"], 2)? {
-            Some((u, q)) if u.len() / 2 != nv => return Err(p.error(lx, q, format!("expected one uv per point ({nv}), got {}", u.len() / 2))),
+            Some((u, q)) if u.len() / 2 != nv => {
+                return Err(p.error(
+                    lx,
+                    q,
+                    format!("expected one uv per point ({nv}), got {}", u.len() / 2),
+                ))
+            }
             u => u.map(|(u, _)| u),
         };
         for k in ["S", "faceIndices"] {
@@ -190,7 +248,13 @@ impl Converter<'_> {
                 return Err(p.error(lx, q, "is not supported"));
             }
         }
-        let point = |i: u32| DVec3::new(pos[3 * i as usize], pos[3 * i as usize + 1], pos[3 * i as usize + 2]);
+        let point = |i: u32| {
+            DVec3::new(
+                pos[3 * i as usize],
+                pos[3 * i as usize + 1],
+                pos[3 * i as usize + 2],
+            )
+        };
         let mut tris: Vec<[u32; 3]> = Vec::with_capacity(indices.len() / per * (per - 2));
         if per == 4 {
             let mut warned = false;
@@ -236,21 +300,41 @@ impl Converter<'_> {
         };
         let nv = pos.len() / 3;
         if indices.len() % 3 != 0 {
-            return Err(p.error(lx, iq, format!("expected a multiple of 3 indices, got {}", indices.len())));
+            return Err(p.error(
+                lx,
+                iq,
+                format!("expected a multiple of 3 indices, got {}", indices.len()),
+            ));
         }
         if let Some(bad) = indices.iter().find(|&&x| x as usize >= nv) {
-            return Err(p.error(lx, iq, format!("index {bad} is out of range (P has {nv} points)")));
+            return Err(p.error(
+                lx,
+                iq,
+                format!("index {bad} is out of range (P has {nv} points)"),
+            ));
         }
         if !(0..=16).contains(&levels) {
             let q = p.list.iter().find(|q| q.name == "levels").expect("given");
             return Err(p.error(lx, q, format!("must be in [0, 16], got {levels}")));
         }
-        let points: Vec<DVec3> = pos.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
-        let tris: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let points: Vec<DVec3> = pos
+            .chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect();
+        let tris: Vec<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
         let s = super::loop_subdiv::loop_subdivide(&points, &tris, levels as u32)
             .map_err(|m| self.error(at, &entity, m))?;
         let flat = |v: &[DVec3]| v.iter().flat_map(|q| q.to_array()).collect::<Vec<f64>>();
-        self.emit_triangles(flat(&s.positions), &s.triangles, Some(flat(&s.normals)), None, e);
+        self.emit_triangles(
+            flat(&s.positions),
+            &s.triangles,
+            Some(flat(&s.normals)),
+            None,
+            e,
+        );
         Ok(())
     }
 
@@ -264,17 +348,31 @@ impl Converter<'_> {
         uv: Option<Vec<f64>>,
         e: &mut Entity,
     ) {
-        let point = |i: u32| DVec3::new(pos[3 * i as usize], pos[3 * i as usize + 1], pos[3 * i as usize + 2]);
+        let point = |i: u32| {
+            DVec3::new(
+                pos[3 * i as usize],
+                pos[3 * i as usize + 1],
+                pos[3 * i as usize + 2],
+            )
+        };
         let reverse = self.gs.reverse;
         let normals = normals.as_deref();
         let normal_at = |i: u32| {
-            normals.map_or(DVec3::ZERO, |n| DVec3::new(n[3 * i as usize], n[3 * i as usize + 1], n[3 * i as usize + 2]))
+            normals.map_or(DVec3::ZERO, |n| {
+                DVec3::new(
+                    n[3 * i as usize],
+                    n[3 * i as usize + 1],
+                    n[3 * i as usize + 2],
+                )
+            })
         };
         let mut flat = Vec::with_capacity(tris.len() * 3);
         for &[a, b, c] in tris {
             let winding = (point(b) - point(a)).cross(point(c) - point(a));
             let flip = match normals {
-                Some(_) => (winding.dot(normal_at(a) + normal_at(b) + normal_at(c)) < 0.0) ^ reverse,
+                Some(_) => {
+                    (winding.dot(normal_at(a) + normal_at(b) + normal_at(c)) < 0.0) ^ reverse
+                }
                 None => reverse,
             };
             let t = if flip { [a, c, b] } else { [a, b, c] };
@@ -294,13 +392,22 @@ impl Converter<'_> {
 
 /// Whether a transform list is the identity matrix.
 fn is_identity(t: &toml::Value) -> bool {
-    let Some(step) = t.as_array().and_then(|a| a.first()).and_then(|s| s.get("matrix")) else {
+    let Some(step) = t
+        .as_array()
+        .and_then(|a| a.first())
+        .and_then(|s| s.get("matrix"))
+    else {
         return false;
     };
-    let want = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+    let want = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
     step.as_array().is_some_and(|rows| {
         rows.iter().zip(want).all(|(r, w)| {
-            r.as_array().is_some_and(|c| c.iter().zip(w).all(|(x, y)| x.as_float() == Some(y)))
+            r.as_array()
+                .is_some_and(|c| c.iter().zip(w).all(|(x, y)| x.as_float() == Some(y)))
         })
     })
 }

@@ -89,25 +89,45 @@ impl Converter<'_> {
         let lx = &self.lx;
         let path = lx.resolve(&q.at, name);
         let fail = |m: String| {
-            lx.error(SceneErrorKind::ExternalFile, &q.at, &p.entity, format!("parameter `{} {}`: {m}", q.ty, q.name))
+            lx.error(
+                SceneErrorKind::ExternalFile,
+                &q.at,
+                &p.entity,
+                format!("parameter `{} {}`: {m}", q.ty, q.name),
+            )
         };
-        let meta = std::fs::metadata(&path).map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
+        let meta = std::fs::metadata(&path)
+            .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
         if !meta.is_file() || meta.len() > crate::scene_file::params::MAX_SIDE_FILE_BYTES {
-            return Err(fail(format!("`{}` is not a regular file of a readable size", path.display())));
+            return Err(fail(format!(
+                "`{}` is not a regular file of a readable size",
+                path.display()
+            )));
         }
-        let text = std::fs::read_to_string(&path).map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
         let mut values = Vec::new();
         for (i, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("");
             for w in line.split_whitespace() {
                 match w.parse::<f64>() {
                     Ok(v) if v.is_finite() => values.push(v),
-                    _ => return Err(fail(format!("`{}` line {}: `{w}` is not a finite number", path.display(), i + 1))),
+                    _ => {
+                        return Err(fail(format!(
+                            "`{}` line {}: `{w}` is not a finite number",
+                            path.display(),
+                            i + 1
+                        )))
+                    }
                 }
             }
         }
         if values.len() % 2 != 0 || values.is_empty() {
-            return Err(fail(format!("`{}` must hold wavelength and value pairs (it has {} numbers)", path.display(), values.len())));
+            return Err(fail(format!(
+                "`{}` must hold wavelength and value pairs (it has {} numbers)",
+                path.display(),
+                values.len()
+            )));
         }
         Ok(values.chunks_exact(2).map(|c| (c[0], c[1])).collect())
     }

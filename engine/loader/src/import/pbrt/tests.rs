@@ -81,7 +81,10 @@ fn the_transform_stack_composes_and_restores_as_pbrt() {
     );
     // After AttributeEnd and TransformEnd only the rotation applies: x -> y.
     let m = matrix(&s.shapes[1].table);
-    assert!((m[1][0] - 1.0).abs() < 1e-12 && m[0][0].abs() < 1e-12, "{m:?}");
+    assert!(
+        (m[1][0] - 1.0).abs() < 1e-12 && m[0][0].abs() < 1e-12,
+        "{m:?}"
+    );
     assert!(m.iter().all(|r| r[3] == 0.0), "{m:?}");
 }
 
@@ -95,22 +98,25 @@ fn a_plain_look_at_mirrors_the_world_so_the_image_matches_pbrt() {
     assert_eq!(floats(&s.lights[0].table["position"]), vec![-2.0, 1.0, 0.0]);
     assert_eq!(floats(&s.camera.table["from"]), vec![0.0, 0.0, 5.0]);
     // With `Scale -1 1 1` (pbrt's exporters' idiom) nothing is mirrored.
-    let s = convert(
-        "mirror-scaled",
-        &format!("Scale -1 1 1\n{text}"),
-    );
+    let s = convert("mirror-scaled", &format!("Scale -1 1 1\n{text}"));
     assert_eq!(floats(&s.lights[0].table["position"]), vec![2.0, 1.0, 0.0]);
 }
 
 #[test]
 fn fov_is_the_shorter_axis_and_becomes_horizontal() {
     let landscape = convert("fov", &format!("{HEAD}WorldBegin\n"));
-    let want = 2.0 * ((20f64.to_radians()).tan() * 40.0 / 30.0).atan().to_degrees();
+    let want = 2.0
+        * ((20f64.to_radians()).tan() * 40.0 / 30.0)
+            .atan()
+            .to_degrees();
     let got = landscape.camera.table["fov"].as_float().unwrap();
     assert!((got - want).abs() < 1e-12, "{got} vs {want}");
     let portrait = convert(
         "fov-portrait",
-        &format!("{}WorldBegin\n", HEAD.replace("xresolution\" 40", "xresolution\" 20")),
+        &format!(
+            "{}WorldBegin\n",
+            HEAD.replace("xresolution\" 40", "xresolution\" 20")
+        ),
     );
     assert_eq!(portrait.camera.table["fov"].as_float(), Some(40.0));
 }
@@ -189,7 +195,11 @@ fn includes_resolve_against_the_including_file() {
         "Shape \"plymesh\" \"string filename\" \"m.ply\"\n",
     )
     .unwrap();
-    std::fs::write(d.join("geo/c.pbrt"), "Shape \"sphere\" \"float radius\" 2\n").unwrap();
+    std::fs::write(
+        d.join("geo/c.pbrt"),
+        "Shape \"sphere\" \"float radius\" 2\n",
+    )
+    .unwrap();
     let s = convert_in(
         &d,
         &format!("Scale -1 1 1\n{HEAD}WorldBegin\nInclude \"geo/a.pbrt\"\nImport \"geo/c.pbrt\"\n"),
@@ -215,7 +225,11 @@ fn reverse_orientation_and_normals_decide_the_emitting_side() {
              AttributeEnd\n{with_n}\nReverseOrientation\n{with_n}\n"
         ),
     );
-    let idx: Vec<Vec<f64>> = s.shapes.iter().map(|e| floats(&e.table["indices"])).collect();
+    let idx: Vec<Vec<f64>> = s
+        .shapes
+        .iter()
+        .map(|e| floats(&e.table["indices"]))
+        .collect();
     assert_eq!(idx[0], vec![0.0, 1.0, 2.0]);
     assert_eq!(idx[1], vec![0.0, 2.0, 1.0], "ReverseOrientation flips");
     assert_eq!(idx[2], vec![0.0, 2.0, 1.0], "faces the normals");
@@ -276,7 +290,10 @@ fn the_conversion_reads_back_as_toml() {
         toml_dir: &d,
     };
     let imported = import_scene(SceneFormat::Pbrt, &path, &text, &options).unwrap();
-    assert!(!imported.warnings.is_empty(), "the spot's falloff is warned about");
+    assert!(
+        !imported.warnings.is_empty(),
+        "the spot's falloff is warned about"
+    );
     let desc = parse_imported(imported, &path, &[]).unwrap();
     assert_eq!(desc.shapes.len(), 2);
     assert_eq!(desc.lights.len(), 3);
@@ -317,16 +334,25 @@ fn errors_are_located() {
     }
     // Before WorldBegin.
     let e = error("err-film", "Film \"spectral\"\nWorldBegin\n");
-    assert!(e.contains("scene.pbrt:1:1:") && e.contains("film \"spectral\""), "{e}");
+    assert!(
+        e.contains("scene.pbrt:1:1:") && e.contains("film \"spectral\""),
+        "{e}"
+    );
     let e = error("err-filter", "PixelFilter \"mitchell\"\nWorldBegin\n");
-    assert!(e.contains("scene.pbrt:1:1:") && e.contains("negative lobes"), "{e}");
+    assert!(
+        e.contains("scene.pbrt:1:1:") && e.contains("negative lobes"),
+        "{e}"
+    );
     let e = error("err-world", "LookAt 0 0 1 0 0 0 0 1 0\n");
     assert!(e.contains("no WorldBegin"), "{e}");
     // An error in an included file names that file.
     let d = dir("err-include");
     std::fs::write(d.join("inc.pbrt"), "\n  Shape \"cone\"\n").unwrap();
     let e = convert_in(&d, &format!("{HEAD}WorldBegin\nInclude \"inc.pbrt\"\n")).unwrap_err();
-    assert!(e.contains("inc.pbrt:2:3:") && e.contains("shape \"cone\""), "{e}");
+    assert!(
+        e.contains("inc.pbrt:2:3:") && e.contains("shape \"cone\""),
+        "{e}"
+    );
     // A file including itself stops at the nesting limit.
     let d = dir("err-recursive");
     std::fs::write(d.join("self.pbrt"), "Include \"self.pbrt\"\n").unwrap();
@@ -372,7 +398,11 @@ fn loop_subdivision_surfaces_become_triangles_with_normals() {
 #[test]
 fn spectra_become_rgb_and_light_spectra_have_unit_luminance() {
     let d = dir("spectra");
-    std::fs::write(d.join("flat.spd"), "# a flat spectrum\n360 0.25\n830 0.25\n").unwrap();
+    std::fs::write(
+        d.join("flat.spd"),
+        "# a flat spectrum\n360 0.25\n830 0.25\n",
+    )
+    .unwrap();
     let s = convert_in(
         &d,
         &format!(
@@ -403,5 +433,8 @@ fn spectra_become_rgb_and_light_spectra_have_unit_luminance() {
         &format!("{HEAD}WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"bad.spd\"\n"),
     )
     .unwrap_err();
-    assert!(e.contains("scene.pbrt:6:20:") && e.contains("bad.spd` line 2: `x`"), "{e}");
+    assert!(
+        e.contains("scene.pbrt:6:20:") && e.contains("bad.spd` line 2: `x`"),
+        "{e}"
+    );
 }

@@ -37,21 +37,61 @@ fn triangles_are_placed_with_their_attributes() {
 #[test]
 fn bad_triangles_are_located_errors() {
     let cases = [
-        ("positions = [0, 0, 0, 1, 0]\nindices = [0, 0, 0]", "positions", "multiple of 3"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 3]", "indices", "index 3 is not a vertex"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, -1]", "indices", "index -1"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 1.5]", "indices", "index 1.5"),
-        ("positions = [0, 0, nan, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]", "positions", "finite"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nnormals = [0, 0, 1]", "normals", "one normal per vertex"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nuv = [0, 0]", "uv", "one (u, v) pair"),
+        (
+            "positions = [0, 0, 0, 1, 0]\nindices = [0, 0, 0]",
+            "positions",
+            "multiple of 3",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 3]",
+            "indices",
+            "index 3 is not a vertex",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, -1]",
+            "indices",
+            "index -1",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 1.5]",
+            "indices",
+            "index 1.5",
+        ),
+        (
+            "positions = [0, 0, nan, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]",
+            "positions",
+            "finite",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nnormals = [0, 0, 1]",
+            "normals",
+            "one normal per vertex",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nuv = [0, 0]",
+            "uv",
+            "one (u, v) pair",
+        ),
         ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]", "type", "indices"),
-        ("positions = \"many\"\nindices = [0, 1, 2]", "positions", "flat array"),
-        ("positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nradius = 1", "radius", "radius"),
+        (
+            "positions = \"many\"\nindices = [0, 1, 2]",
+            "positions",
+            "flat array",
+        ),
+        (
+            "positions = [0, 0, 0, 1, 0, 0, 0, 1, 0]\nindices = [0, 1, 2]\nradius = 1",
+            "radius",
+            "radius",
+        ),
     ];
     for (body, at, fragment) in cases {
         let text = scene(body);
         let e = parse_err(&text);
-        let line = if at == "type" { line_of(&text, "[[shapes]]") } else { line_of(&text, at) };
+        let line = if at == "type" {
+            line_of(&text, "[[shapes]]")
+        } else {
+            line_of(&text, at)
+        };
         assert_message(&e, line, &[fragment]);
     }
 }
