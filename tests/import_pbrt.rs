@@ -267,3 +267,37 @@ fn killeroo_simple_renders() {
     let m = mean(&out);
     assert!(m.is_finite() && m > 0.0, "mean {m}");
 }
+
+#[test]
+#[ignore = "needs branch instancing (objects and instance shapes)"]
+fn instanced_objects_render_as_their_copies() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-instances");
+    std::fs::create_dir_all(&dir).unwrap();
+    let head = "LookAt 0 2 8  0 0.5 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+                Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 48\n\
+                PixelFilter \"box\"\nSampler \"halton\" \"integer pixelsamples\" 64\nWorldBegin\n\
+                LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n\
+                LightSource \"distant\" \"point3 from\" [1 3 2] \"rgb L\" [2 2 2]\n";
+    let tri = "Shape \"trianglemesh\" \"point3 P\" [-0.5 0 0 0.5 0 0 0 1 0.2]";
+    let placements = [
+        "Translate -1.5 0 0",
+        "Translate 0 0 -1\nRotate 30 0 1 0",
+        "Translate 1.5 0 0\nScale 1 1.5 1",
+    ];
+    let mut instanced =
+        format!("{head}ObjectBegin \"t\"\nMaterial \"diffuse\"\n{tri}\nObjectEnd\n");
+    let mut copies = format!("{head}Material \"diffuse\"\n");
+    for p in placements {
+        instanced.push_str(&format!(
+            "AttributeBegin\n{p}\nObjectInstance \"t\"\nAttributeEnd\n"
+        ));
+        copies.push_str(&format!("AttributeBegin\n{p}\n{tri}\nAttributeEnd\n"));
+    }
+    std::fs::write(dir.join("instanced.pbrt"), instanced).unwrap();
+    std::fs::write(dir.join("copies.pbrt"), copies).unwrap();
+    let a = render_file(&dir.join("instanced.pbrt"), 1);
+    let b = render_file(&dir.join("copies.pbrt"), 2);
+    let z = block_z(&a, &b);
+    let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+    assert!(max < 4.5, "max |z| = {max}");
+}

@@ -19,7 +19,7 @@
 mod geometry;
 mod lights;
 mod overrides;
-pub(crate) mod params;
+mod params;
 mod pattern;
 mod raw;
 #[cfg(test)]

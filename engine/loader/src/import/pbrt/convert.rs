@@ -179,6 +179,38 @@ impl<'o> Converter<'o> {
                     "expected a directive (such as Shape or WorldBegin)",
                 ));
             };
+            // pbrt-v4's two blocks: options before WorldBegin, the world after it.
+            let options = [
+                "Camera",
+                "Film",
+                "Sampler",
+                "Integrator",
+                "PixelFilter",
+                "Accelerator",
+                "ColorSpace",
+                "Option",
+            ];
+            let world = [
+                "Shape",
+                "LightSource",
+                "AreaLightSource",
+                "Material",
+                "MakeNamedMaterial",
+                "NamedMaterial",
+                "Texture",
+                "ObjectBegin",
+                "ObjectEnd",
+                "ObjectInstance",
+                "AttributeBegin",
+                "AttributeEnd",
+                "Attribute",
+            ];
+            if self.in_world && options.contains(&name.as_str()) {
+                return Err(self.error(&at, &name, format!("{name} must come before WorldBegin")));
+            }
+            if !self.in_world && world.contains(&name.as_str()) {
+                return Err(self.error(&at, &name, format!("{name} must come after WorldBegin")));
+            }
             match name.as_str() {
                 "Translate" => {
                     let v = self.numbers(&at, &name, 3)?;

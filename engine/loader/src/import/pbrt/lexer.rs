@@ -118,19 +118,9 @@ impl Lexer {
             ));
         }
         let fail = |m: String| self.error(SceneErrorKind::ExternalFile, at, directive, m);
-        let meta = std::fs::metadata(path)
+        std::fs::metadata(path)
             .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
-        if !meta.is_file() {
-            return Err(fail(format!("`{}` is not a regular file", path.display())));
-        }
-        if meta.len() > crate::scene_file::params::MAX_SIDE_FILE_BYTES {
-            return Err(fail(format!(
-                "`{}` is {} bytes, more than the {} a file the scene reads may have",
-                path.display(),
-                meta.len(),
-                crate::scene_file::params::MAX_SIDE_FILE_BYTES
-            )));
-        }
+        crate::side_file::check(path).map_err(fail)?;
         let text = std::fs::read_to_string(path)
             .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
         self.files.push(File {

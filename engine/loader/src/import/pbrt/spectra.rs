@@ -96,14 +96,7 @@ impl Converter<'_> {
                 format!("parameter `{} {}`: {m}", q.ty, q.name),
             )
         };
-        let meta = std::fs::metadata(&path)
-            .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
-        if !meta.is_file() || meta.len() > crate::scene_file::params::MAX_SIDE_FILE_BYTES {
-            return Err(fail(format!(
-                "`{}` is not a regular file of a readable size",
-                path.display()
-            )));
-        }
+        crate::side_file::check(&path).map_err(fail)?;
         let text = std::fs::read_to_string(&path)
             .map_err(|e| fail(format!("cannot read `{}`: {e}", path.display())))?;
         let mut values = Vec::new();

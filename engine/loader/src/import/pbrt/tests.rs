@@ -343,6 +343,16 @@ fn errors_are_located() {
         e.contains("scene.pbrt:1:1:") && e.contains("negative lobes"),
         "{e}"
     );
+    let e = error("err-order", "Shape \"sphere\"\nWorldBegin\n");
+    assert!(
+        e.contains("scene.pbrt:1:1:") && e.contains("after WorldBegin"),
+        "{e}"
+    );
+    let e = error("err-order2", "WorldBegin\nCamera \"perspective\"\n");
+    assert!(
+        e.contains("scene.pbrt:2:1:") && e.contains("before WorldBegin"),
+        "{e}"
+    );
     let e = error("err-world", "LookAt 0 0 1 0 0 0 0 1 0\n");
     assert!(e.contains("no WorldBegin"), "{e}");
     // An error in an included file names that file.
