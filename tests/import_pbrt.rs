@@ -85,6 +85,8 @@ fn every_supported_directive_renders_within_noise_of_its_toml_twin() {
     let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
     // 48 blocks x 3 channels: |z| > 4.5 has probability ~1e-3 under pure noise.
     assert!(max < 4.5, "max |z| = {max}: {z:?}");
+    let means: Vec<f64> = m.per_channel.iter().map(|c| c.mean_reldiff).collect();
+    eprintln!("twin: channel mean differences {means:?}, max block |z| {max:.2}");
     // The test can fail: the twin without the mirror (x not negated) is far off.
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-twin-unmirrored");
     std::fs::create_dir_all(&dir).unwrap();
@@ -101,6 +103,7 @@ fn every_supported_directive_renders_within_noise_of_its_toml_twin() {
         max > 10.0,
         "a mirrored scene is not told apart: max |z| = {max}"
     );
+    eprintln!("twin without the mirror: max block |z| {max:.1}");
 }
 
 /// The beauty's pixels as bits.
