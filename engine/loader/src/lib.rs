@@ -13,5 +13,6 @@ pub mod media_params;
 pub mod mesh_file;
 mod rough_params;
 pub mod scene_file;
+pub mod side_file;
 pub mod surface_params;
 pub mod texture_file;

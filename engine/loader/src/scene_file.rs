@@ -526,7 +526,15 @@ fn element_entity(list: &str, i: usize, name: Option<&str>) -> String {
     }
 }
 
-const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh", "instance"];
+const SHAPE_TYPES: &[&str] = &[
+    "sphere",
+    "quad",
+    "rectangle",
+    "box",
+    "mesh",
+    "triangles",
+    "instance",
+];
 
 /// The `[[shapes]]` list: shapes, and the instances of objects (`type = "instance"`).
 type ShapesAndInstances = (Vec<ShapeDesc>, Vec<InstanceDesc>);
@@ -579,6 +587,14 @@ fn read_shape(
         "rectangle" => &["transform"],
         "box" => &["min", "max", "transform"],
         "mesh" => &["path", "transform", "face_normals", "flip_normals"],
+        "triangles" => &[
+            "positions",
+            "indices",
+            "normals",
+            "uv",
+            "transform",
+            "face_normals",
+        ],
         other => {
             return Err(r.error(
                 SceneErrorKind::InvalidValue,
@@ -642,6 +658,14 @@ fn read_shape(
             kind: "box",
             triangles: triangles_of(geometry::cuboid(r)?),
         },
+        "triangles" => {
+            let (triangles, m, a) = geometry::triangles(r)?;
+            attributes = a;
+            ShapeGeometry::Triangles {
+                kind: "mesh",
+                triangles: triangles_of((triangles, m)),
+            }
+        }
         _ => {
             let (triangles, m, a) = geometry::mesh(r)?;
             attributes = a;

@@ -2,7 +2,7 @@
 //! resolved to world-space triangles
 //! (with a mesh's vertex normals and texture coordinates).
 
-use glam::{DAffine3, DMat3, DVec3, Vec3};
+use glam::{DAffine3, DMat3, DVec3, Vec2, Vec3};
 
 use super::params::Reader;
 use super::raw::{Node, Value};
@@ -337,6 +337,117 @@ pub(crate) fn mesh(
             msg,
         )
     })?;
+    mesh_from_data(r, &path, data, face_normals, flip_normals, m)
+}
+
+/// `triangles`: an indexed mesh written in the scene itself (a converted pbrt
+/// `trianglemesh`): `positions` (flat x, y, z), `indices` (three per triangle, each below
+/// the vertex count), optional `normals` (one per vertex) and `uv` (one pair per vertex),
+/// with the checks of the mesh files (finite values, indices in range) and the same
+/// treatment as `mesh` (transform, `face_normals`).
+pub(crate) fn triangles(
+    r: &Reader<'_>,
+) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
+    let numbers = |key: &str, per: usize| -> Result<Option<(Vec<f64>, &Node)>, SceneError> {
+        let Some(node) = r.get(key) else {
+            return Ok(None);
+        };
+        let Value::Array(items) = &node.value else {
+            return Err(r.wrong_type(key, node, "a flat array of numbers"));
+        };
+        let mut out = Vec::with_capacity(items.len());
+        for item in items {
+            match item.value {
+                Value::Integer(v) => out.push(v as f64),
+                Value::Float(v) if v.is_finite() => out.push(v),
+                Value::Float(_) => return Err(r.invalid(key, item, "must be finite")),
+                _ => return Err(r.wrong_type(key, item, "a number")),
+            }
+        }
+        if out.is_empty() || out.len() % per != 0 {
+            return Err(r.invalid(
+                key,
+                node,
+                &format!(
+                    "expected a non-empty multiple of {per} numbers, got {}",
+                    out.len()
+                ),
+            ));
+        }
+        Ok(Some((out, node)))
+    };
+    let (positions, _) = numbers("positions", 3)?
+        .ok_or_else(|| r.missing("positions", "a flat array [x, y, z, ...]"))?;
+    let nv = positions.len() / 3;
+    let (indices, inode) = numbers("indices", 3)?
+        .ok_or_else(|| r.missing("indices", "three vertex indices per triangle"))?;
+    let mut tris = Vec::with_capacity(indices.len() / 3);
+    for t in indices.chunks_exact(3) {
+        let mut tri = [0u32; 3];
+        for (k, &i) in t.iter().enumerate() {
+            if i.fract() != 0.0 || i < 0.0 || i >= nv as f64 {
+                return Err(r.invalid(
+                    "indices",
+                    inode,
+                    &format!("index {i} is not a vertex (there are {nv}, counted from 0)"),
+                ));
+            }
+            tri[k] = i as u32;
+        }
+        tris.push(tri);
+    }
+    let vec3s = |v: &[f64]| -> Vec<DVec3> {
+        v.chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect()
+    };
+    let normals = match numbers("normals", 3)? {
+        Some((n, node)) if n.len() != positions.len() => {
+            return Err(r.invalid("normals", node, "expected one normal per vertex"))
+        }
+        n => n.map(|(n, _)| vec3s(&n)).unwrap_or_default(),
+    };
+    let uvs = match numbers("uv", 2)? {
+        Some((u, node)) if u.len() / 2 != nv => {
+            return Err(r.invalid("uv", node, "expected one (u, v) pair per vertex"))
+        }
+        u => u
+            .map(|(u, _)| {
+                u.chunks_exact(2)
+                    .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
+                    .collect()
+            })
+            .unwrap_or_default(),
+    };
+    let face_normals = r.bool("face_normals", Some(false))?;
+    let m = read_transform(r)?;
+    let data = crate::mesh_file::MeshData {
+        positions: vec3s(&positions),
+        normals,
+        uvs,
+        triangles: tris,
+        skipped: Default::default(),
+    };
+    mesh_from_data(
+        r,
+        std::path::Path::new("triangles"),
+        data,
+        face_normals,
+        false,
+        m,
+    )
+}
+
+/// A mesh's triangles and attributes placed by `m`, their winding reversed with
+/// `flip_normals` (see [`mesh`]).
+fn mesh_from_data(
+    r: &Reader<'_>,
+    path: &std::path::Path,
+    data: crate::mesh_file::MeshData,
+    face_normals: bool,
+    flip_normals: bool,
+    m: DAffine3,
+) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
     let skipped = data.skipped;
     if skipped.points + skipped.lines > 0 {
         r.src.warnings.add(format!(

@@ -352,44 +352,18 @@ impl<'a> Reader<'a> {
         }
         let joined = self.src.dir.join(rel);
         let full = std::path::absolute(&joined).unwrap_or(joined);
-        // A side file that exists must be a regular file (after symbolic links) within
-        // MAX_SIDE_FILE_BYTES: `/dev/zero` or a FIFO would be read forever, a directory
-        // gives an obscure error later. A missing one is its reader's error to report.
-        if let Ok(meta) = std::fs::metadata(&full) {
-            let fail = |message: String| {
-                Err(self.error(
-                    SceneErrorKind::ExternalFile,
-                    &node.span(),
-                    Some(key),
-                    message,
-                ))
-            };
-            if !meta.is_file() {
-                let kind = if meta.is_dir() {
-                    "a directory"
-                } else {
-                    "not a regular file (a device, FIFO or socket)"
-                };
-                return fail(format!("`{}` is {kind}", full.display()));
-            }
-            if meta.len() > MAX_SIDE_FILE_BYTES {
-                return fail(format!(
-                    "`{}` is {} bytes, more than the {MAX_SIDE_FILE_BYTES} a file the scene \
-                     reads may have",
-                    full.display(),
-                    meta.len()
-                ));
-            }
-        }
+        crate::side_file::check(&full).map_err(|message| {
+            self.error(
+                SceneErrorKind::ExternalFile,
+                &node.span(),
+                Some(key),
+                message,
+            )
+        })?;
         self.src.files.add(&full);
         Ok(Some((full, node)))
     }
 }
-
-/// The largest file a scene may name (meshes, grids, textures, environment maps): 16 GiB,
-/// documented in `docs/scene-format.md` ("Conventions"). Larger files are refused before
-/// anything is read.
-pub const MAX_SIDE_FILE_BYTES: u64 = 16 << 30;
 
 /// The closest allowed key within edit distance 2 (or equal ignoring case), if any.
 pub(crate) fn suggestion<'k>(key: &str, allowed: &[&'k str]) -> Option<&'k str> {

@@ -11,6 +11,7 @@ use super::*;
 
 mod environment;
 mod objects;
+mod triangles;
 
 /// The file name used for inline scenes (it must show up in every message).
 const FILE: &str = "test-scenes/inline_scene.toml";

@@ -1,0 +1,1035 @@
+//! The directive loop: graphics state, transforms, the camera and the render settings.
+//! Shapes are in [`super::shapes`], materials, textures, media and lights in
+//! [`super::materials`].
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{DMat4, DVec3, DVec4};
+use risotto_engine::diagnostics::{Origin, SceneError, SceneErrorKind};
+
+use super::lexer::{At, Lexer, Tok};
+use super::params::Params;
+use crate::import::{origin, Entity, ImportOptions, ImportedScene, TomlScene};
+
+/// The material a shape gets.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) enum MaterialRef {
+    /// pbrt's default, `diffuse` with reflectance 0.5.
+    Default,
+    /// A `Material` directive's material (index into `Converter::anonymous`).
+    Anonymous(usize),
+    /// `NamedMaterial "name"` (looked up when a shape uses it, as pbrt does).
+    Named(String, At),
+}
+
+/// An `AreaLightSource "diffuse"`: the radiance of the shapes that follow.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct AreaLight {
+    /// `L * scale`, linear RGB.
+    pub radiance: [f64; 3],
+    /// Where it was written.
+    pub at: At,
+}
+
+/// pbrt-v4's graphics state (what `AttributeBegin` saves).
+#[derive(Clone, Debug)]
+pub(super) struct GraphicsState {
+    /// The current transformation matrix: object to world (or to camera before
+    /// `WorldBegin`).
+    pub ctm: DMat4,
+    /// `ReverseOrientation` in effect.
+    pub reverse: bool,
+    /// The current material.
+    pub material: MaterialRef,
+    /// The current area light.
+    pub area_light: Option<AreaLight>,
+    /// `MediumInterface`'s inside and outside media (`""` is none).
+    pub inside: String,
+    /// See `inside`.
+    pub outside: String,
+    /// `Attribute "target"` defaults by target (`shape`, `light`, `material`, `medium`,
+    /// `texture`).
+    pub attributes: HashMap<String, Vec<super::params::Param>>,
+}
+
+/// A converted material definition, written into the scene when a shape first uses it.
+#[derive(Clone, Debug)]
+pub(super) struct MaterialDef {
+    /// The TOML table (without an interior).
+    pub table: toml::Table,
+    /// A name for it in the TOML.
+    pub name: String,
+    /// Where it was defined.
+    pub origin: Origin,
+    /// Whether it transmits (dielectrics, interfaces): may hold a medium.
+    pub transmits: bool,
+}
+
+/// The converter's state.
+pub(super) struct Converter<'o> {
+    pub lx: Lexer,
+    pub options: &'o ImportOptions<'o>,
+    pub scene: TomlScene,
+    pub warnings: Vec<String>,
+    pub gs: GraphicsState,
+    /// Saved states: (state, `true` for `AttributeBegin`, `false` for `TransformBegin`, where).
+    stack: Vec<(GraphicsState, bool, At)>,
+    named_coords: HashMap<String, DMat4>,
+    /// Applied after every world-space transform: the mirror that turns pbrt's image x
+    /// into risotto's (see [`Converter::camera`]), or the identity.
+    pub world_root: DMat4,
+    in_world: bool,
+    camera_seen: bool,
+    /// `Material` definitions.
+    pub anonymous: Vec<MaterialDef>,
+    /// `MakeNamedMaterial` definitions.
+    pub named_materials: HashMap<String, MaterialDef>,
+    /// Emitted materials: (definition name, interior medium) -> TOML name.
+    pub emitted: HashMap<(String, String), String>,
+    /// Named textures, as pattern values.
+    pub textures: HashMap<String, toml::Value>,
+    /// Named media, as `interior` tables.
+    pub media: HashMap<String, (toml::Table, At)>,
+    /// Media some shape holds (for the camera's medium check).
+    pub media_used: Vec<String>,
+    /// The object being defined: name, shapes, where.
+    pub object: Option<(String, Vec<toml::Value>, At)>,
+    /// The camera's medium (`MediumInterface` outside at `Camera`) and where it was set.
+    camera_medium: Option<(String, At)>,
+    names: HashMap<String, usize>,
+}
+
+impl<'o> Converter<'o> {
+    /// A converter for the top-level file.
+    pub fn new(path: &Path, text: &str, options: &'o ImportOptions<'o>) -> Converter<'o> {
+        Converter {
+            lx: Lexer::new(path, text),
+            options,
+            scene: TomlScene::default(),
+            warnings: Vec::new(),
+            gs: GraphicsState {
+                ctm: DMat4::IDENTITY,
+                reverse: false,
+                material: MaterialRef::Default,
+                area_light: None,
+                inside: String::new(),
+                outside: String::new(),
+                attributes: HashMap::new(),
+            },
+            stack: Vec::new(),
+            named_coords: HashMap::new(),
+            world_root: DMat4::IDENTITY,
+            in_world: false,
+            camera_seen: false,
+            anonymous: Vec::new(),
+            named_materials: HashMap::new(),
+            emitted: HashMap::new(),
+            textures: HashMap::new(),
+            media: HashMap::new(),
+            media_used: Vec::new(),
+            object: None,
+            camera_medium: None,
+            names: HashMap::new(),
+        }
+    }
+
+    /// A name not used before, from `base` (`base`, `base_2`, ...).
+    pub fn unique(&mut self, base: &str) -> String {
+        let n = self.names.entry(base.to_owned()).or_insert(0);
+        *n += 1;
+        if *n == 1 {
+            base.to_owned()
+        } else {
+            format!("{base}_{n}")
+        }
+    }
+
+    /// The origin of `at` for a converted entity.
+    pub fn origin(&self, at: &At) -> Origin {
+        origin(self.lx.path(at), self.lx.line(at))
+    }
+
+    /// A located error at `at`.
+    pub fn error(&self, at: &At, entity: &str, message: impl Into<String>) -> SceneError {
+        self.lx
+            .error(SceneErrorKind::InvalidValue, at, entity, message)
+    }
+
+    /// Reads every directive and returns the converted scene.
+    pub fn run(mut self) -> Result<ImportedScene, SceneError> {
+        let mut render = Entity::new(None)
+            .with("width", 1280)
+            .with("height", 720)
+            .with("spp", 16)
+            .with("max_depth", 6)
+            .with("filter", "gaussian")
+            .with("filter_radius", 1.5)
+            .with("filter_stddev", 0.5);
+        let mut camera: Option<(Params, String, At, DMat4)> = None;
+        let mut last_at = None;
+        while let Some(tok) = self.lx.next()? {
+            let at = tok.at.clone();
+            last_at = Some(at.clone());
+            let Tok::Word(name) = tok.tok else {
+                return Err(self.lx.error(
+                    SceneErrorKind::Syntax,
+                    &at,
+                    "directive",
+                    "expected a directive (such as Shape or WorldBegin)",
+                ));
+            };
+            // pbrt-v4's two blocks: options before WorldBegin, the world after it.
+            let options = [
+                "Camera",
+                "Film",
+                "Sampler",
+                "Integrator",
+                "PixelFilter",
+                "Accelerator",
+                "ColorSpace",
+                "Option",
+            ];
+            let world = [
+                "Shape",
+                "LightSource",
+                "AreaLightSource",
+                "Material",
+                "MakeNamedMaterial",
+                "NamedMaterial",
+                "Texture",
+                "ObjectBegin",
+                "ObjectEnd",
+                "ObjectInstance",
+                "AttributeBegin",
+                "AttributeEnd",
+                "Attribute",
+            ];
+            if self.in_world && options.contains(&name.as_str()) {
+                return Err(self.error(&at, &name, format!("{name} must come before WorldBegin")));
+            }
+            if !self.in_world && world.contains(&name.as_str()) {
+                return Err(self.error(&at, &name, format!("{name} must come after WorldBegin")));
+            }
+            match name.as_str() {
+                "Translate" => {
+                    let v = self.numbers(&at, &name, 3)?;
+                    self.concat(DMat4::from_translation(DVec3::new(v[0], v[1], v[2])));
+                }
+                "Scale" => {
+                    let v = self.numbers(&at, &name, 3)?;
+                    self.concat(DMat4::from_scale(DVec3::new(v[0], v[1], v[2])));
+                }
+                "Rotate" => {
+                    let v = self.numbers(&at, &name, 4)?;
+                    let axis = DVec3::new(v[1], v[2], v[3]);
+                    if axis.length_squared() == 0.0 {
+                        return Err(self.error(&at, &name, "the rotation axis is zero"));
+                    }
+                    // Right-handed rotation by an angle in degrees about the axis (pbrt-v4
+                    // `Rotate`, Rodrigues' formula).
+                    self.concat(DMat4::from_axis_angle(axis.normalize(), v[0].to_radians()));
+                }
+                "LookAt" => {
+                    let v = self.numbers(&at, &name, 9)?;
+                    let m = look_at(&v).ok_or_else(|| {
+                        self.error(&at, &name, "eye and look-at point coincide, or up is parallel to the view direction")
+                    })?;
+                    self.concat(m);
+                }
+                "Identity" => self.gs.ctm = DMat4::IDENTITY,
+                "Transform" | "ConcatTransform" => {
+                    let v = self.matrix(&at, &name)?;
+                    let m = DMat4::from_cols_array(&v);
+                    if name == "Transform" {
+                        self.gs.ctm = m;
+                    } else {
+                        self.concat(m);
+                    }
+                }
+                "CoordinateSystem" => {
+                    let n = self.string_arg(&at, &name)?;
+                    self.named_coords.insert(n, self.gs.ctm);
+                }
+                "CoordSysTransform" => {
+                    let n = self.string_arg(&at, &name)?;
+                    match self.named_coords.get(&n) {
+                        Some(m) => self.gs.ctm = *m,
+                        None => {
+                            return Err(self.error(
+                                &at,
+                                &name,
+                                format!("no coordinate system named \"{n}\" (name one with CoordinateSystem, or \"camera\" after Camera)"),
+                            ))
+                        }
+                    }
+                }
+                "ReverseOrientation" => self.gs.reverse = !self.gs.reverse,
+                "AttributeBegin" | "TransformBegin" => {
+                    self.stack
+                        .push((self.gs.clone(), name == "AttributeBegin", at.clone()));
+                }
+                "AttributeEnd" | "TransformEnd" => {
+                    let attribute = name == "AttributeEnd";
+                    match self.stack.pop() {
+                        Some((saved, was_attribute, _)) if was_attribute == attribute => {
+                            if attribute {
+                                self.gs = saved;
+                            } else {
+                                self.gs.ctm = saved.ctm;
+                            }
+                        }
+                        Some((_, _, begin)) => {
+                            return Err(self.error(
+                                &at,
+                                &name,
+                                format!(
+                                    "does not match the {} at line {}",
+                                    if attribute {
+                                        "TransformBegin"
+                                    } else {
+                                        "AttributeBegin"
+                                    },
+                                    self.lx.line(&begin)
+                                ),
+                            ))
+                        }
+                        None => return Err(self.error(&at, &name, "has no matching Begin")),
+                    }
+                }
+                "ActiveTransform" => {
+                    let Some(t) = self.lx.next()? else {
+                        return Err(self.error(&at, &name, "expects StartTime, EndTime or All"));
+                    };
+                    match t.tok {
+                        Tok::Word(w) if w == "All" => {}
+                        _ => {
+                            return Err(self.error(
+                                &t.at,
+                                &name,
+                                "animated transforms (motion blur) are not supported: only `ActiveTransform All`",
+                            ))
+                        }
+                    }
+                }
+                "TransformTimes" => {
+                    self.numbers(&at, &name, 2)?;
+                }
+                "Option" => {
+                    let p = Params::read(&mut self.lx, "Option")?;
+                    if let Some(first) = p.list.first() {
+                        let ignorable = ["disablepixeljitter", "disablewavelengthjitter", "seed"];
+                        if !ignorable.contains(&first.name.as_str()) || p.list.len() > 1 {
+                            return Err(p.error(&self.lx, first, "this Option is not supported"));
+                        }
+                        p.ignore(&first.name.clone());
+                    }
+                }
+                "ColorSpace" => {
+                    let n = self.string_arg(&at, &name)?;
+                    if n != "srgb" {
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!("color space \"{n}\" is not supported (risotto renders linear Rec.709 / sRGB primaries)"),
+                        ));
+                    }
+                }
+                "Camera" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let p = Params::read(&mut self.lx, &format!("Camera \"{ty}\""))?;
+                    let ctm = self.gs.ctm;
+                    if ctm.determinant() == 0.0 || !ctm.is_finite() {
+                        return Err(self.error(&at, &name, "the camera transform is singular"));
+                    }
+                    self.named_coords.insert("camera".into(), ctm.inverse());
+                    if !self.gs.outside.is_empty() {
+                        self.camera_medium = Some((self.gs.outside.clone(), at.clone()));
+                    }
+                    self.camera_seen = true;
+                    camera = Some((p, ty, at, ctm));
+                }
+                "Film" | "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let p = Params::read(&mut self.lx, &format!("{name} \"{ty}\""))?;
+                    self.render_setting(&name, &ty, &p, &at, &mut render)?;
+                    p.finish(&self.lx)?;
+                }
+                "WorldBegin" => {
+                    if self.in_world {
+                        return Err(self.error(&at, &name, "WorldBegin is given twice"));
+                    }
+                    self.in_world = true;
+                    self.named_coords.insert("world".into(), DMat4::IDENTITY);
+                    self.gs.ctm = DMat4::IDENTITY;
+                    self.begin_world(camera.as_ref().map(|c| c.3))?;
+                }
+                "WorldEnd" => {}
+                "Include" | "Import" => {
+                    let file = self.string_arg(&at, &name)?;
+                    let path = self.lx.resolve(&at, &file);
+                    self.lx.push_file(&path, &at, &name)?;
+                }
+                "MakeNamedMedium" => {
+                    let n = self.string_arg(&at, &name)?;
+                    let p = Params::read(&mut self.lx, &format!("MakeNamedMedium \"{n}\""))?
+                        .with_defaults(self.gs.attributes.get("medium"));
+                    let table = self.medium(&p)?;
+                    p.finish(&self.lx)?;
+                    self.media.insert(n, (table, at));
+                }
+                "MediumInterface" => {
+                    let inside = self.string_arg(&at, &name)?;
+                    let outside = match self.lx.peek()? {
+                        Some(t) if matches!(t.tok, Tok::Str(_)) => self.string_arg(&at, &name)?,
+                        _ => inside.clone(),
+                    };
+                    for m in [&inside, &outside] {
+                        if !m.is_empty() && !self.media.contains_key(m) {
+                            return Err(self.error(&at, &name, format!("no medium named \"{m}\" (define it with MakeNamedMedium first)")));
+                        }
+                    }
+                    self.gs.inside = inside;
+                    self.gs.outside = outside;
+                }
+                "Attribute" => {
+                    let target = self.string_arg(&at, &name)?;
+                    let targets = ["shape", "light", "material", "medium", "texture"];
+                    if !targets.contains(&target.as_str()) {
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!(
+                                "unknown target \"{target}\"; expected one of {}",
+                                targets.join(", ")
+                            ),
+                        ));
+                    }
+                    let p = Params::read(&mut self.lx, &format!("Attribute \"{target}\""))?;
+                    let list = self.gs.attributes.entry(target).or_default();
+                    for q in p.list {
+                        list.retain(|old| old.name != q.name);
+                        list.push(q);
+                    }
+                }
+                "Material" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let entity = format!("Material \"{ty}\"");
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("material"));
+                    let def =
+                        self.material(&ty, &p, &at, &format!("{ty}_{}", self.lx.line(&at)))?;
+                    p.finish(&self.lx)?;
+                    self.anonymous.push(def);
+                    self.gs.material = MaterialRef::Anonymous(self.anonymous.len() - 1);
+                }
+                "MakeNamedMaterial" => {
+                    let n = self.string_arg(&at, &name)?;
+                    let entity = format!("MakeNamedMaterial \"{n}\"");
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("material"));
+                    let ty = match p.string(&self.lx, "type")? {
+                        Some((t, _)) => t.to_owned(),
+                        None => return Err(self.error(&at, &entity, "needs \"string type\"")),
+                    };
+                    let def = self.material(&ty, &p, &at, &n)?;
+                    p.finish(&self.lx)?;
+                    self.named_materials.insert(n, def);
+                }
+                "NamedMaterial" => {
+                    let n = self.string_arg(&at, &name)?;
+                    self.gs.material = MaterialRef::Named(n, at);
+                }
+                "Texture" => {
+                    let n = self.string_arg(&at, &name)?;
+                    let class = self.string_arg(&at, &name)?;
+                    let ty = self.string_arg(&at, &name)?;
+                    let entity = format!("Texture \"{n}\"");
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("texture"));
+                    let v = self.texture(&class, &ty, &p, &at, &entity)?;
+                    p.finish(&self.lx)?;
+                    self.textures.insert(n, v);
+                }
+                "LightSource" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let p = Params::read(&mut self.lx, &format!("LightSource \"{ty}\""))?
+                        .with_defaults(self.gs.attributes.get("light"));
+                    self.light(&ty, &p, &at)?;
+                    p.finish(&self.lx)?;
+                }
+                "AreaLightSource" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let entity = format!("AreaLightSource \"{ty}\"");
+                    let p = Params::read(&mut self.lx, &entity)?
+                        .with_defaults(self.gs.attributes.get("light"));
+                    self.area_light(&ty, &p, &at)?;
+                    p.finish(&self.lx)?;
+                }
+                "Shape" => {
+                    let ty = self.string_arg(&at, &name)?;
+                    let p = Params::read(&mut self.lx, &format!("Shape \"{ty}\""))?
+                        .with_defaults(self.gs.attributes.get("shape"));
+                    self.shape(&ty, &p, &at)?;
+                    p.finish(&self.lx)?;
+                }
+                "ObjectBegin" => {
+                    let n = self.string_arg(&at, &name)?;
+                    if let Some((open, _, begin)) = &self.object {
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!(
+                                "object \"{open}\" (line {}) is still open",
+                                self.lx.line(begin)
+                            ),
+                        ));
+                    }
+                    if self.scene.objects.iter().any(|(o, _)| *o == n) {
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!("object \"{n}\" is defined twice"),
+                        ));
+                    }
+                    self.stack.push((self.gs.clone(), true, at.clone()));
+                    self.object = Some((n, Vec::new(), at));
+                }
+                "ObjectEnd" => {
+                    let Some((n, shapes, begin)) = self.object.take() else {
+                        return Err(self.error(&at, &name, "has no matching ObjectBegin"));
+                    };
+                    if let Some((saved, _, _)) = self.stack.pop() {
+                        self.gs = saved;
+                    }
+                    let e = Entity::new(Some(self.origin(&begin))).with("shapes", shapes);
+                    self.scene.objects.push((n, e));
+                }
+                "ObjectInstance" => {
+                    let n = self.string_arg(&at, &name)?;
+                    if !self.scene.objects.iter().any(|(o, _)| *o == n) {
+                        return Err(self.error(
+                            &at,
+                            &name,
+                            format!("no object named \"{n}\" (define it with ObjectBegin before)"),
+                        ));
+                    }
+                    let m = self.world_root * self.gs.ctm;
+                    let e = Entity::new(Some(self.origin(&at)))
+                        .with("type", "instance")
+                        .with("object", n.as_str())
+                        .with("transform", self.transform_value(&m, &at, &name)?);
+                    self.scene.shapes.push(e);
+                }
+                other => {
+                    return Err(self.lx.error(
+                        SceneErrorKind::InvalidValue,
+                        &at,
+                        "directive",
+                        format!(
+                            "unknown or unsupported directive `{other}` (see docs/import-pbrt.md)"
+                        ),
+                    ))
+                }
+            }
+        }
+        if let Some((_, _, begin)) = self.stack.last() {
+            return Err(self.error(begin, "AttributeBegin", "is never ended"));
+        }
+        if !self.in_world {
+            return Err(match last_at {
+                Some(at) => self.error(&at, "scene", "the file has no WorldBegin"),
+                None => SceneError::unlocated(
+                    &self.lx.files[0].path,
+                    SceneErrorKind::InvalidValue,
+                    "the pbrt file is empty (no WorldBegin)",
+                ),
+            });
+        }
+        if let Some((p, ty, at, _)) = camera {
+            self.camera(&ty, &p, &at, &render)?;
+            p.finish(&self.lx)?;
+        } else {
+            self.default_camera(&render);
+        }
+        if let Some((m, at)) = self.camera_medium.clone() {
+            if !self.media_used.contains(&m) {
+                return Err(self.error(&at, "Camera", format!("the camera is in medium \"{m}\", but no shape has it inside (risotto's media are the interiors of closed shapes: put the camera inside a shape with `MediumInterface \"{m}\" \"\"`)")));
+            }
+        }
+        self.scene.render = render;
+        self.scene.header = vec![format!(
+            "converted from the pbrt-v4 scene {}",
+            self.lx.files[0].path.display()
+        )];
+        Ok(ImportedScene {
+            scene: self.scene,
+            warnings: self.warnings,
+        })
+    }
+
+    /// `ctm = ctm * m` (pbrt post-multiplies).
+    fn concat(&mut self, m: DMat4) {
+        self.gs.ctm *= m;
+    }
+
+    /// `n` numbers following a directive.
+    fn numbers(&mut self, at: &At, name: &str, n: usize) -> Result<Vec<f64>, SceneError> {
+        let mut out = Vec::with_capacity(n);
+        while out.len() < n {
+            match self.lx.next()? {
+                Some(t) => match t.tok {
+                    Tok::Num(v) => out.push(v),
+                    _ => {
+                        return Err(self.lx.error(
+                            SceneErrorKind::Syntax,
+                            &t.at,
+                            name,
+                            format!(
+                                "{name} expects {n} numbers, found {} and then this",
+                                out.len()
+                            ),
+                        ))
+                    }
+                },
+                None => {
+                    return Err(self.lx.error(
+                        SceneErrorKind::Syntax,
+                        at,
+                        name,
+                        format!(
+                            "{name} expects {n} numbers, the file ends after {}",
+                            out.len()
+                        ),
+                    ))
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// 16 numbers, bracketed or not (column by column: the translation is 13-15).
+    fn matrix(&mut self, at: &At, name: &str) -> Result<[f64; 16], SceneError> {
+        let bracketed = matches!(self.lx.peek()?, Some(t) if t.tok == Tok::Open);
+        if bracketed {
+            self.lx.next()?;
+        }
+        let v = self.numbers(at, name, 16)?;
+        if bracketed {
+            match self.lx.next()? {
+                Some(t) if t.tok == Tok::Close => {}
+                _ => {
+                    return Err(self.lx.error(
+                        SceneErrorKind::Syntax,
+                        at,
+                        name,
+                        format!("{name} expects 16 numbers and a closing `]`"),
+                    ))
+                }
+            }
+        }
+        let mut m = [0.0; 16];
+        m.copy_from_slice(&v);
+        Ok(m)
+    }
+
+    /// One quoted string after a directive (or a one-string list `[ "x" ]`).
+    pub fn string_arg(&mut self, at: &At, name: &str) -> Result<String, SceneError> {
+        let t = self.lx.next()?;
+        match t {
+            Some(t) => match t.tok {
+                Tok::Str(s) => Ok(s),
+                _ => Err(self.lx.error(
+                    SceneErrorKind::Syntax,
+                    &t.at,
+                    name,
+                    format!("{name} expects a quoted string here"),
+                )),
+            },
+            None => Err(self.lx.error(
+                SceneErrorKind::Syntax,
+                at,
+                name,
+                format!("{name} expects a quoted string; the file ends"),
+            )),
+        }
+    }
+
+    /// `m` as a TOML transform list (one `matrix` step), checking it is affine and
+    /// invertible.
+    pub fn transform_value(
+        &self,
+        m: &DMat4,
+        at: &At,
+        entity: &str,
+    ) -> Result<toml::Value, SceneError> {
+        let row3 = m.row(3);
+        if (row3 - DVec4::new(0.0, 0.0, 0.0, 1.0)).abs().max_element() > 1e-9 {
+            return Err(self.error(
+                at,
+                entity,
+                "the transform is projective (its last row is not 0 0 0 1)",
+            ));
+        }
+        if !m.is_finite() || m.determinant() == 0.0 {
+            return Err(self.error(at, entity, "the transform is singular or not finite"));
+        }
+        let rows: Vec<toml::Value> = (0..3)
+            .map(|i| {
+                let r = m.row(i);
+                toml::Value::Array(vec![r.x.into(), r.y.into(), r.z.into(), r.w.into()])
+            })
+            .collect();
+        let mut step = toml::Table::new();
+        step.insert("matrix".into(), toml::Value::Array(rows));
+        Ok(toml::Value::Array(vec![toml::Value::Table(step)]))
+    }
+
+    /// `WorldBegin`: decides the world mirror from the camera (see [`Converter::camera`]).
+    fn begin_world(&mut self, camera_from_world: Option<DMat4>) -> Result<(), SceneError> {
+        let world_from_camera = camera_from_world.unwrap_or(DMat4::IDENTITY).inverse();
+        let (pos, fwd, up, right) = camera_frame(&world_from_camera);
+        // risotto's image right is cross(forward, up); pbrt's is the camera's +x. When they
+        // are opposite (pbrt's plain LookAt, whose camera space is left-handed), the whole
+        // world is mirrored across the plane through the eye spanned by the view direction
+        // and up: the camera then sees what pbrt's does, with its x axis where pbrt's is.
+        let risotto_right = fwd.cross(up).normalize();
+        if right.dot(risotto_right) < 0.0 {
+            let n = risotto_right;
+            // Householder reflection about the plane {p : (p - pos) . n = 0}.
+            let r = glam::DMat3::IDENTITY - 2.0 * glam::DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+            let t = pos - r * pos;
+            self.world_root = DMat4::from_cols(
+                r.x_axis.extend(0.0),
+                r.y_axis.extend(0.0),
+                r.z_axis.extend(0.0),
+                t.extend(1.0),
+            );
+        }
+        Ok(())
+    }
+
+    /// `Film`, `Sampler`, `Integrator`, `PixelFilter`, `Accelerator`.
+    fn render_setting(
+        &mut self,
+        name: &str,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        render: &mut Entity,
+    ) -> Result<(), SceneError> {
+        let lx = &self.lx;
+        let entity = p.entity.clone();
+        render
+            .origin
+            .get_or_insert_with(|| origin(lx.path(at), lx.line(at)));
+        match name {
+            "Film" => {
+                if ty != "rgb" && ty != "gbuffer" {
+                    return Err(self.error(
+                        at,
+                        &entity,
+                        format!(
+                            "film \"{ty}\" is not supported (only \"rgb\"; risotto renders RGB)"
+                        ),
+                    ));
+                }
+                let w = p.int(lx, "xresolution", 1280)?;
+                let h = p.int(lx, "yresolution", 720)?;
+                for (k, v) in [("xresolution", w), ("yresolution", h)] {
+                    if !(1..=65536).contains(&v) {
+                        let at = p
+                            .list
+                            .iter()
+                            .find(|q| q.name == k)
+                            .map(|q| q.at.clone())
+                            .unwrap_or(at.clone());
+                        return Err(self.error(
+                            &at,
+                            &entity,
+                            format!("`{k}` must be in [1, 65536], got {v}"),
+                        ));
+                    }
+                }
+                render.set("width", w);
+                render.set("height", h);
+                p.ignore("filename");
+                p.ignore("savefp16");
+                p.ignore("diagonal");
+                if let Some((c, q)) = p.nums(lx, "cropwindow", &["float"], 4)? {
+                    if c != [0.0, 1.0, 0.0, 1.0] {
+                        return Err(p.error(
+                            lx,
+                            q,
+                            "a crop window is not supported (render the whole image)",
+                        ));
+                    }
+                }
+                if let Some((_, q)) = p.nums(lx, "pixelbounds", &["integer"], 4)? {
+                    return Err(p.error(
+                        lx,
+                        q,
+                        "pixel bounds are not supported (render the whole image)",
+                    ));
+                }
+                let iso = p.float(lx, "iso", 100.0)?;
+                let wb = p.float(lx, "whitebalance", 0.0)?;
+                if iso != 100.0 || wb != 0.0 {
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "iso" || q.name == "whitebalance")
+                        .expect("given");
+                    return Err(p.error(lx, q, "iso and white balance are not supported (risotto writes the radiance: iso 100, no white balance)"));
+                }
+                if let Some((s, q)) = p.string(lx, "sensor")? {
+                    if s != "cie1931" {
+                        return Err(p.error(lx, q, "only the \"cie1931\" sensor is supported"));
+                    }
+                }
+                if let Some(q) = p.ignore("maxcomponentvalue") {
+                    let v = p.float(lx, "maxcomponentvalue", f64::INFINITY)?;
+                    if v.is_finite() {
+                        return Err(p.error(lx, q, "clamping sample values is not supported"));
+                    }
+                }
+            }
+            "Sampler" => {
+                p.ignore("seed");
+                p.ignore("randomization");
+                p.ignore("dimension");
+                let spp = p.int(lx, "pixelsamples", 16)?;
+                if !(1..=1 << 24).contains(&spp) {
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "pixelsamples")
+                        .expect("given");
+                    return Err(p.error(lx, q, format!("must be in [1, 16777216], got {spp}")));
+                }
+                render.set("spp", spp);
+            }
+            "Integrator" => {
+                match ty {
+                    "path" | "volpath" => {}
+                    "bdpt" | "mlt" | "sppm" | "simplepath" | "simplevolpath" | "randomwalk" => {
+                        self.warnings.push(format!(
+                            "{}:{}: integrator \"{ty}\" is rendered with risotto's path tracer (the same image in expectation, different noise)",
+                            self.lx.path(at).display(),
+                            self.lx.line(at)
+                        ));
+                        for k in ["mutationsperpixel", "chains", "bootstrapsamples", "largestepprobability", "sigma", "iterations", "photonsperiteration", "radius", "seed", "visualizestrategies", "visualizeweights"] {
+                            p.ignore(k);
+                        }
+                    }
+                    _ => return Err(self.error(at, &entity, format!("integrator \"{ty}\" is not supported (it renders a different image than a path tracer)"))),
+                }
+                let lx = &self.lx;
+                let depth = p.int(lx, "maxdepth", 5)?;
+                if !(0..i64::from(u32::MAX)).contains(&depth) {
+                    let q = p.list.iter().find(|q| q.name == "maxdepth").expect("given");
+                    return Err(p.error(lx, q, format!("must be >= 0, got {depth}")));
+                }
+                // pbrt's maxdepth counts scattering events; risotto's max_depth counts
+                // path segments (Mitsuba's convention): one more.
+                render.set("max_depth", depth + 1);
+                if p.bool(lx, "regularize", false)? {
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "regularize")
+                        .expect("given");
+                    return Err(p.error(lx, q, "path regularization is not supported"));
+                }
+                p.ignore("lightsampler");
+            }
+            "PixelFilter" => {
+                let xr = p.float(lx, "xradius", f64::NAN)?;
+                let yr = p.float(lx, "yradius", f64::NAN)?;
+                if !(xr.is_nan() && yr.is_nan()) && xr != yr {
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "xradius" || q.name == "yradius")
+                        .expect("given");
+                    return Err(p.error(lx, q, "xradius and yradius must be equal (risotto's filters are the same along x and y)"));
+                }
+                let r = if xr.is_nan() { yr } else { xr };
+                let (kind, default_r) = match ty {
+                    "box" => ("box", 0.5),
+                    "triangle" => ("tent", 2.0),
+                    "gaussian" => ("gaussian", 1.5),
+                    _ => return Err(self.error(at, &entity, format!("filter \"{ty}\" is not supported (box, triangle, gaussian; filters with negative lobes cannot be importance sampled)"))),
+                };
+                let r = if r.is_nan() { default_r } else { r };
+                if !(r > 0.0 && r.is_finite()) {
+                    return Err(self.error(
+                        at,
+                        &entity,
+                        format!("the filter radius must be > 0, got {r}"),
+                    ));
+                }
+                render.table.remove("filter_stddev");
+                render.set("filter", kind);
+                render.set("filter_radius", r);
+                if kind == "gaussian" {
+                    let s = p.float_where(lx, "sigma", 0.5, "> 0", |s| s > 0.0)?;
+                    render.set("filter_stddev", s);
+                }
+                if kind == "box" && r == 0.5 {
+                    // The default filter: written as nothing, so such scenes need no filter support.
+                    render.table.remove("filter");
+                    render.table.remove("filter_radius");
+                }
+            }
+            _ => {
+                // Accelerator: how rays are traced, not what they see.
+                for q in &p.list {
+                    p.ignore(&q.name);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The risotto camera from pbrt's `Camera` (after the whole file: the film's aspect
+    /// ratio is needed for the field of view).
+    fn camera(&mut self, ty: &str, p: &Params, at: &At, render: &Entity) -> Result<(), SceneError> {
+        let world_from_camera = self.named_coords["camera"];
+        let (pos, fwd, up, _) = camera_frame(&world_from_camera);
+        let (pos, fwd, up) = (
+            self.world_root.transform_point3(pos),
+            self.world_root.transform_vector3(fwd),
+            self.world_root.transform_vector3(up),
+        );
+        let w = render.table["width"].as_integer().unwrap_or(1280) as f64;
+        let h = render.table["height"].as_integer().unwrap_or(720) as f64;
+        let lx = &self.lx;
+        let entity = p.entity.clone();
+        let mut cam = Entity::new(Some(self.origin(at)))
+            .with("from", vec![pos.x, pos.y, pos.z])
+            .with("to", vec![pos.x + fwd.x, pos.y + fwd.y, pos.z + fwd.z])
+            .with("up", vec![up.x, up.y, up.z]);
+        for k in ["frameaspectratio", "screenwindow"] {
+            if let Some(q) = p.ignore(k) {
+                return Err(p.error(
+                    lx,
+                    q,
+                    "is not supported (the image's aspect ratio decides the screen window)",
+                ));
+            }
+        }
+        let open = p.float(lx, "shutteropen", 0.0)?;
+        let close = p.float(lx, "shutterclose", 1.0)?;
+        if close - open != 1.0 {
+            let q = p
+                .list
+                .iter()
+                .find(|q| q.name.starts_with("shutter"))
+                .expect("given");
+            return Err(p.error(
+                lx,
+                q,
+                "an exposure time other than 1 scales pbrt's image; not supported",
+            ));
+        }
+        match ty {
+            "perspective" => {
+                let fov =
+                    p.float_where(lx, "fov", 90.0, "in (0, 180)", |f| f > 0.0 && f < 180.0)?;
+                // pbrt's fov spans the shorter image axis; risotto's is horizontal.
+                let hfov = if w >= h {
+                    2.0 * ((fov.to_radians() / 2.0).tan() * w / h).atan().to_degrees()
+                } else {
+                    fov
+                };
+                cam.set("fov", hfov);
+                let lens = p.float_where(lx, "lensradius", 0.0, ">= 0", |r| r >= 0.0)?;
+                let focus = p.float_where(lx, "focaldistance", 1e6, "> 0", |d| d > 0.0)?;
+                if lens > 0.0 {
+                    cam.set("projection", "thin_lens");
+                    cam.set("aperture_radius", lens);
+                    cam.set("focus_distance", focus);
+                }
+            }
+            "orthographic" => {
+                cam.set("projection", "orthographic");
+                // pbrt's default screen window spans [-1, 1] along the shorter axis.
+                cam.set("width", if w >= h { 2.0 * w / h } else { 2.0 });
+                if p.float(lx, "lensradius", 0.0)? != 0.0 {
+                    let q = p
+                        .list
+                        .iter()
+                        .find(|q| q.name == "lensradius")
+                        .expect("given");
+                    return Err(p.error(
+                        lx,
+                        q,
+                        "an orthographic camera with a lens is not supported",
+                    ));
+                }
+                p.ignore("focaldistance");
+            }
+            _ => {
+                return Err(self.error(
+                    at,
+                    &entity,
+                    format!("camera \"{ty}\" is not supported (perspective, orthographic)"),
+                ))
+            }
+        }
+        self.scene.camera = cam;
+        Ok(())
+    }
+
+    /// pbrt's camera when the file has none: at the origin looking along +z, fov 90.
+    fn default_camera(&mut self, render: &Entity) {
+        let w = render.table["width"].as_integer().unwrap_or(1280) as f64;
+        let h = render.table["height"].as_integer().unwrap_or(720) as f64;
+        let (pos, fwd, up) = (
+            self.world_root.transform_point3(DVec3::ZERO),
+            self.world_root.transform_vector3(DVec3::Z),
+            self.world_root.transform_vector3(DVec3::Y),
+        );
+        let fov = 90f64;
+        let hfov = if w >= h {
+            2.0 * ((fov.to_radians() / 2.0).tan() * w / h).atan().to_degrees()
+        } else {
+            fov
+        };
+        self.scene.camera = Entity::new(None)
+            .with("from", vec![pos.x, pos.y, pos.z])
+            .with("to", vec![pos.x + fwd.x, pos.y + fwd.y, pos.z + fwd.z])
+            .with("up", vec![up.x, up.y, up.z])
+            .with("fov", hfov);
+    }
+}
+
+/// The eye, view direction, up and right (pbrt's camera +x) of a world-from-camera
+/// matrix, unit length.
+fn camera_frame(world_from_camera: &DMat4) -> (DVec3, DVec3, DVec3, DVec3) {
+    let pos = world_from_camera.transform_point3(DVec3::ZERO);
+    let fwd = world_from_camera.transform_vector3(DVec3::Z).normalize();
+    let up = world_from_camera.transform_vector3(DVec3::Y).normalize();
+    let right = world_from_camera.transform_vector3(DVec3::X).normalize();
+    (pos, fwd, up, right)
+}
+
+/// pbrt's `LookAt ex ey ez  lx ly lz  ux uy uz`: the camera-from-world matrix of a camera
+/// at `e` looking at `l`, camera +x = normalize(cross(up, dir)), +y = cross(dir, +x), +z =
+/// dir (pbrt-v4 `LookAt`, a left-handed camera space); `None` when degenerate.
+fn look_at(v: &[f64]) -> Option<DMat4> {
+    let eye = DVec3::new(v[0], v[1], v[2]);
+    let look = DVec3::new(v[3], v[4], v[5]);
+    let up = DVec3::new(v[6], v[7], v[8]);
+    let dir = (look - eye).try_normalize()?;
+    let right = up.try_normalize()?.cross(dir).try_normalize()?;
+    let new_up = dir.cross(right);
+    let world_from_camera = DMat4::from_cols(
+        right.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        eye.extend(1.0),
+    );
+    Some(world_from_camera.inverse())
+}

@@ -1,0 +1,651 @@
+//! pbrt-v4 materials, textures, media and lights, as risotto materials, patterns,
+//! interiors and lights.
+
+use glam::DVec3;
+use risotto_engine::diagnostics::SceneError;
+
+use super::convert::{Converter, MaterialDef, MaterialRef};
+use super::lexer::At;
+use super::params::{Colour, Params};
+use crate::import::{path_for_toml, Entity};
+
+/// pbrt-v4's named metal spectra (`metal-Au-eta` / `metal-Au-k`) that risotto's conductor
+/// presets (Mitsuba 3's RGB tables) also hold.
+const METALS: &[&str] = &["Ag", "Al", "Au", "Cu", "MgO", "TiO2"];
+
+impl Converter<'_> {
+    /// A colour parameter as a TOML value (a colour or, with `textures`, a pattern).
+    fn colour_value(
+        &self,
+        p: &Params,
+        name: &str,
+        textures: bool,
+    ) -> Result<Option<toml::Value>, SceneError> {
+        let c = p.colour(&self.lx, name, textures, &|q| self.spectrum_colour(p, q))?;
+        let q = || p.list.iter().find(|q| q.name == name).expect("given");
+        Ok(match c {
+            None => None,
+            Some(Colour::Rgb(c)) => Some(c.to_vec().into()),
+            Some(Colour::Texture(t)) => match self.textures.get(&t) {
+                Some(v) => Some(v.clone()),
+                None => return Err(p.error(&self.lx, q(), format!("no texture named \"{t}\""))),
+            },
+            Some(Colour::Named(n)) => {
+                return Err(p.error(
+                    &self.lx,
+                    q(),
+                    format!("the named spectrum \"{n}\" is not supported here"),
+                ))
+            }
+        })
+    }
+
+    /// A material definition (`Material` or `MakeNamedMaterial`).
+    pub(super) fn material(
+        &mut self,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        name: &str,
+    ) -> Result<MaterialDef, SceneError> {
+        let mut t = Entity::new(None);
+        let lx = &self.lx;
+        for k in ["displacement", "normalmap"] {
+            if let Some(q) = p.ignore(k) {
+                return Err(p.error(lx, q, "is not supported"));
+            }
+        }
+        let mut transmits = false;
+        match ty {
+            "diffuse" => {
+                t.set("type", "diffuse");
+                t.set(
+                    "reflectance",
+                    self.colour_value(p, "reflectance", true)?
+                        .unwrap_or(0.5.into()),
+                );
+                // pbrt's diffuse reflects on both sides.
+                t.set("two_sided", true);
+            }
+            "conductor" => {
+                t.set("type", "rough_conductor");
+                let (alpha_u, alpha_v) = self.roughness(p, "")?;
+                set_alpha(&mut t, alpha_u, alpha_v);
+                let eta = p.colour(lx, "eta", false, &|q| self.spectrum_colour(p, q))?;
+                let k = p.colour(lx, "k", false, &|q| self.spectrum_colour(p, q))?;
+                let refl = self.colour_value(p, "reflectance", false)?;
+                match (eta, k, refl) {
+                    (None, None, None) => t.set("material", "Cu"),
+                    (None, None, Some(r)) => {
+                        // pbrt-v4 `ConductorMaterial` with a reflectance: eta = 1 and
+                        // k = 2 sqrt(r) / sqrt(1 - r), whose normal-incidence Fresnel
+                        // reflectance is r.
+                        let r: Vec<f64> = r
+                            .as_array()
+                            .expect("rgb")
+                            .iter()
+                            .map(|x| x.as_float().unwrap_or(0.0).clamp(0.0, 0.9999))
+                            .collect();
+                        t.set("eta", vec![1.0; 3]);
+                        t.set(
+                            "k",
+                            r.iter()
+                                .map(|r| 2.0 * r.sqrt() / (1.0 - r).sqrt())
+                                .collect::<Vec<_>>(),
+                        );
+                    }
+                    (Some(Colour::Named(e)), Some(Colour::Named(k)), None) => {
+                        let metal = |s: &str, suffix: &str| {
+                            s.strip_prefix("metal-")
+                                .and_then(|s| s.strip_suffix(suffix))
+                                .map(str::to_owned)
+                        };
+                        match (metal(&e, "-eta"), metal(&k, "-k")) {
+                            (Some(a), Some(b)) if a == b && METALS.contains(&a.as_str()) => t.set("material", a.as_str()),
+                            _ => return Err(self.error(at, &p.entity, format!("the spectra \"{e}\" / \"{k}\" are not a metal risotto knows ({})", METALS.join(", ")))),
+                        }
+                    }
+                    (Some(Colour::Rgb(e)), Some(Colour::Rgb(k)), None) => {
+                        t.set("eta", e.to_vec());
+                        t.set("k", k.to_vec());
+                    }
+                    _ => {
+                        return Err(self.error(
+                            at,
+                            &p.entity,
+                            "give eta and k (both rgb or both named metal spectra), or reflectance",
+                        ))
+                    }
+                }
+                t.set("two_sided", true);
+                t.set("energy_compensation", false);
+            }
+            "dielectric" | "thindielectric" => {
+                let eta = match p.colour(lx, "eta", false, &|q| self.spectrum_colour(p, q))? {
+                    None => 1.5,
+                    Some(Colour::Rgb([a, b, c])) if a == b && b == c => a,
+                    Some(_) => {
+                        let q = p.list.iter().find(|q| q.name == "eta").expect("given");
+                        return Err(p.error(lx, q, "a wavelength-dependent index (dispersion) is not supported; give one number"));
+                    }
+                };
+                if eta.is_nan() || eta <= 0.0 {
+                    let q = p.list.iter().find(|q| q.name == "eta").expect("given");
+                    return Err(p.error(lx, q, format!("must be > 0, got {eta}")));
+                }
+                transmits = true;
+                if ty == "thindielectric" {
+                    t.set("type", "thin_dielectric");
+                } else {
+                    let (au, av) = self.roughness(p, "")?;
+                    // pbrt-v4 treats alpha below 1e-3 as perfectly smooth
+                    // (`TrowbridgeReitzDistribution::EffectivelySmooth`).
+                    if au.max(av) < 1e-3 {
+                        t.set("type", "dielectric");
+                    } else {
+                        t.set("type", "rough_dielectric");
+                        set_alpha(&mut t, au, av);
+                        t.set("energy_compensation", false);
+                    }
+                }
+                t.set("ior", eta);
+            }
+            "interface" => {
+                t.set("type", "interface");
+                transmits = true;
+            }
+            "coateddiffuse" | "coatedconductor" => {
+                // The branch `coated` reads these names (pbrt's, with underscores).
+                t.set(
+                    "type",
+                    if ty == "coateddiffuse" {
+                        "coated_diffuse"
+                    } else {
+                        "coated_conductor"
+                    },
+                );
+                let floats: &[(&str, &str)] = if ty == "coateddiffuse" {
+                    &[
+                        ("roughness", "roughness"),
+                        ("uroughness", "uroughness"),
+                        ("vroughness", "vroughness"),
+                        ("thickness", "thickness"),
+                        ("g", "g"),
+                    ]
+                } else {
+                    &[
+                        ("interface.roughness", "interface_roughness"),
+                        ("interface.uroughness", "interface_uroughness"),
+                        ("interface.vroughness", "interface_vroughness"),
+                        ("conductor.roughness", "conductor_roughness"),
+                        ("conductor.uroughness", "conductor_uroughness"),
+                        ("conductor.vroughness", "conductor_vroughness"),
+                        ("thickness", "thickness"),
+                        ("g", "g"),
+                        ("interface.eta", "interface_eta"),
+                    ]
+                };
+                for (from, to) in floats {
+                    if p.has(from) {
+                        t.set(to, p.float(lx, from, 0.0)?);
+                    }
+                }
+                let colours: &[(&str, &str)] = if ty == "coateddiffuse" {
+                    &[("reflectance", "reflectance"), ("albedo", "albedo")]
+                } else {
+                    &[
+                        ("reflectance", "reflectance"),
+                        ("albedo", "albedo"),
+                        ("conductor.eta", "conductor_eta"),
+                        ("conductor.k", "conductor_k"),
+                    ]
+                };
+                for (from, to) in colours {
+                    if let Some(v) =
+                        self.colour_value(p, from, *from == "reflectance" && ty == "coateddiffuse")?
+                    {
+                        t.set(to, v);
+                    }
+                }
+                if ty == "coateddiffuse" && p.has("eta") {
+                    t.set("eta", p.float(lx, "eta", 1.5)?);
+                }
+                for (from, to) in [("maxdepth", "max_depth"), ("nsamples", "n_samples")] {
+                    if p.has(from) {
+                        t.set(to, p.int(lx, from, 10)?);
+                    }
+                }
+                if p.has("remaproughness") {
+                    t.set("remap_roughness", p.bool(lx, "remaproughness", true)?);
+                }
+            }
+            "mix" => {
+                return Err(self.error(at, &p.entity, "\"mix\" materials (pbrt-v4 picks one of two materials per hit at random) are not supported"));
+            }
+            _ => {
+                return Err(self.error(at, &p.entity, format!("material \"{ty}\" is not supported (diffuse, conductor, dielectric, thindielectric, interface, coateddiffuse, coatedconductor)")));
+            }
+        }
+        p.ignore("type");
+        Ok(MaterialDef {
+            table: t.table,
+            name: name.to_owned(),
+            origin: self.origin(at),
+            transmits,
+        })
+    }
+
+    /// `roughness` or `uroughness` / `vroughness` (prefixed), remapped to GGX alphas as
+    /// pbrt-v4 does when `remaproughness` is true: `alpha = sqrt(roughness)`
+    /// (`TrowbridgeReitzDistribution::RoughnessToAlpha`).
+    fn roughness(&self, p: &Params, prefix: &str) -> Result<(f64, f64), SceneError> {
+        let lx = &self.lx;
+        let nonneg =
+            |k: &str, d: f64| p.float_where(lx, &format!("{prefix}{k}"), d, ">= 0", |r| r >= 0.0);
+        let r = nonneg("roughness", 0.0)?;
+        let u = nonneg("uroughness", r)?;
+        let v = nonneg("vroughness", r)?;
+        let remap = p.bool(lx, "remaproughness", true)?;
+        let (au, av) = if remap { (u.sqrt(), v.sqrt()) } else { (u, v) };
+        for (a, k) in [(au, "uroughness"), (av, "vroughness")] {
+            if a > 1.0 {
+                let q = p
+                    .list
+                    .iter()
+                    .find(|q| q.name.ends_with(k) || q.name.ends_with("roughness"))
+                    .expect("given");
+                return Err(p.error(
+                    lx,
+                    q,
+                    format!("gives the GGX alpha {a}, above risotto's limit of 1"),
+                ));
+            }
+        }
+        Ok((au, av))
+    }
+
+    /// The TOML name of the material a shape gets here (written on first use, with the
+    /// shape's inside medium as its interior).
+    pub(super) fn material_for_shape(
+        &mut self,
+        at: &At,
+        entity: &str,
+    ) -> Result<String, SceneError> {
+        let def = match self.gs.material.clone() {
+            MaterialRef::Default => MaterialDef {
+                table: Entity::new(None)
+                    .with("type", "diffuse")
+                    .with("reflectance", 0.5)
+                    .with("two_sided", true)
+                    .table,
+                name: "default".into(),
+                origin: self.origin(at),
+                transmits: false,
+            },
+            MaterialRef::Anonymous(i) => self.anonymous[i].clone(),
+            MaterialRef::Named(n, nat) => match self.named_materials.get(&n) {
+                Some(d) => d.clone(),
+                None => {
+                    return Err(self.error(
+                        &nat,
+                        "NamedMaterial",
+                        format!("no material named \"{n}\" (define it with MakeNamedMaterial)"),
+                    ))
+                }
+            },
+        };
+        let inside = self.gs.inside.clone();
+        let key = (
+            format!(
+                "{}@{}:{}",
+                def.name,
+                def.origin.file.display(),
+                def.origin.line
+            ),
+            inside.clone(),
+        );
+        if let Some(name) = self.emitted.get(&key) {
+            return Ok(name.clone());
+        }
+        let mut table = def.table.clone();
+        if !inside.is_empty() && inside != self.gs.outside {
+            if !def.transmits && table.get("type").and_then(|t| t.as_str()) != Some("interface") {
+                return Err(self.error(at, entity, format!("the shape holds medium \"{inside}\" but its material is opaque; use an \"interface\" or dielectric material")));
+            }
+            let (medium, _) = self.media[&inside].clone();
+            table.insert("interior".into(), toml::Value::Table(medium));
+            self.media_used.push(inside.clone());
+        }
+        let base = if inside.is_empty() {
+            def.name.clone()
+        } else {
+            format!("{} in {inside}", def.name)
+        };
+        let name = self.unique(&base);
+        self.scene.materials.push((
+            name.clone(),
+            Entity {
+                table,
+                origin: Some(def.origin),
+            },
+        ));
+        self.emitted.insert(key, name.clone());
+        Ok(name)
+    }
+
+    /// `Texture "name" "spectrum"|"float" "class"` as a pattern value.
+    pub(super) fn texture(
+        &mut self,
+        class: &str,
+        ty: &str,
+        p: &Params,
+        at: &At,
+        entity: &str,
+    ) -> Result<toml::Value, SceneError> {
+        if class != "spectrum" && class != "float" {
+            return Err(self.error(
+                at,
+                entity,
+                format!("texture type \"{class}\" must be \"spectrum\" or \"float\""),
+            ));
+        }
+        let lx = &self.lx;
+        let mut t = toml::Table::new();
+        let mapping = p
+            .string(lx, "mapping")?
+            .map(|(m, _)| m.to_owned())
+            .unwrap_or("uv".into());
+        if mapping != "uv" {
+            return Err(self.error(
+                at,
+                entity,
+                format!("texture mapping \"{mapping}\" is not supported (only \"uv\")"),
+            ));
+        }
+        for (k, d) in [
+            ("uscale", 1.0),
+            ("vscale", 1.0),
+            ("udelta", 0.0),
+            ("vdelta", 0.0),
+        ] {
+            if ty != "checkerboard" || k.ends_with("delta") {
+                if let Some(q) = p.ignore(k) {
+                    if p.float(lx, k, d)? != d {
+                        return Err(p.error(
+                            lx,
+                            q,
+                            "texture coordinate scales and offsets are not supported",
+                        ));
+                    }
+                }
+            }
+        }
+        let float_or_tex = |name: &str, d: f64| -> Result<toml::Value, SceneError> {
+            Ok(self
+                .colour_value(p, name, true)?
+                .unwrap_or(vec![d; 3].into()))
+        };
+        match ty {
+            "imagemap" => {
+                let Some((file, _)) = p.string(lx, "filename")? else {
+                    return Err(self.error(at, entity, "needs \"string filename\""));
+                };
+                let path = self.lx.resolve(at, file);
+                t.insert("pattern".into(), "image".into());
+                t.insert("path".into(), path_for_toml(&path, self.options.toml_dir).into());
+                // pbrt-v4 flips t (`st[1] = 1 - st[1]`), so v = 0 is the image's bottom
+                // row, as in risotto; it repeats, as risotto's image does.
+                if let Some((w, q)) = p.string(lx, "wrap")? {
+                    if w != "repeat" {
+                        return Err(p.error(lx, q, "only \"repeat\" wrapping is supported"));
+                    }
+                }
+                if let Some((f, q)) = p.string(lx, "filter")? {
+                    if f != "bilinear" {
+                        return Err(p.error(lx, q, "only \"bilinear\" filtering is supported"));
+                    }
+                }
+                if let Some((enc, q)) = p.string(lx, "encoding")? {
+                    let png = file.to_ascii_lowercase().ends_with(".png");
+                    if (png && enc != "sRGB") || (!png && enc != "linear") {
+                        return Err(p.error(lx, q, "risotto decodes PNG from sRGB and EXR as linear; other encodings are not supported"));
+                    }
+                }
+                if p.bool(lx, "invert", false)? {
+                    let q = p.list.iter().find(|q| q.name == "invert").expect("given");
+                    return Err(p.error(lx, q, "inverted image textures are not supported"));
+                }
+                let scale = p.float(lx, "scale", 1.0)?;
+                if scale != 1.0 {
+                    let mut s = toml::Table::new();
+                    s.insert("pattern".into(), "scale".into());
+                    s.insert("a".into(), toml::Value::Table(t));
+                    s.insert("factor".into(), vec![scale; 3].into());
+                    return Ok(toml::Value::Table(s));
+                }
+            }
+            "constant" => {
+                t.insert("pattern".into(), "constant".into());
+                t.insert("value".into(), float_or_tex("value", 1.0)?);
+            }
+            "scale" => {
+                let a = float_or_tex("tex", 1.0)?;
+                let s = float_or_tex("scale", 1.0)?;
+                if s.is_array() {
+                    t.insert("pattern".into(), "scale".into());
+                    t.insert("a".into(), a);
+                    t.insert("factor".into(), s);
+                } else {
+                    t.insert("pattern".into(), "multiply".into());
+                    t.insert("a".into(), a);
+                    t.insert("b".into(), s);
+                }
+            }
+            "mix" => {
+                t.insert("pattern".into(), "mix".into());
+                t.insert("a".into(), float_or_tex("tex1", 0.0)?);
+                t.insert("b".into(), float_or_tex("tex2", 1.0)?);
+                t.insert("t".into(), float_or_tex("amount", 0.5)?);
+            }
+            "checkerboard" => {
+                if p.int(lx, "dimension", 2)? != 2 {
+                    return Err(self.error(at, entity, "only 2D checkerboards are supported"));
+                }
+                let (su, sv) = (p.float(lx, "uscale", 1.0)?, p.float(lx, "vscale", 1.0)?);
+                if su != sv || su.is_nan() || su <= 0.0 {
+                    return Err(self.error(at, entity, "the checkerboard's uscale and vscale must be equal and > 0"));
+                }
+                // pbrt: tex1 where floor(s) + floor(t) is even; risotto's `a` likewise.
+                let a = float_or_tex("tex1", 1.0)?;
+                let b = float_or_tex("tex2", 0.0)?;
+                if !a.is_array() || !b.is_array() {
+                    return Err(self.error(at, entity, "the checkerboard's tex1 and tex2 must be values, not textures"));
+                }
+                t.insert("pattern".into(), "checker".into());
+                t.insert("space".into(), "uv".into());
+                t.insert("scale".into(), su.into());
+                t.insert("a".into(), a);
+                t.insert("b".into(), b);
+            }
+            _ => return Err(self.error(at, entity, format!("texture \"{ty}\" is not supported (imagemap, constant, scale, mix, checkerboard)"))),
+        }
+        Ok(toml::Value::Table(t))
+    }
+
+    /// `MakeNamedMedium`: an `interior` table.
+    pub(super) fn medium(&mut self, p: &Params) -> Result<toml::Table, SceneError> {
+        let lx = &self.lx;
+        let Some((ty, q)) = p.string(lx, "type")? else {
+            return Err(lx.error(
+                risotto_engine::diagnostics::SceneErrorKind::MissingField,
+                &p.list.first().map_or_else(
+                    || super::lexer::At {
+                        file: 0,
+                        span: 0..0,
+                    },
+                    |q| q.at.clone(),
+                ),
+                &p.entity,
+                "needs \"string type\"",
+            ));
+        };
+        if ty != "homogeneous" {
+            return Err(p.error(lx, q, format!("medium \"{ty}\" is not supported (only \"homogeneous\"; grids are not converted yet)")));
+        }
+        if let Some(q) = p.ignore("preset") {
+            return Err(p.error(
+                lx,
+                q,
+                "named scattering presets are not supported; give sigma_a and sigma_s",
+            ));
+        }
+        let rgb = |name: &str| -> Result<[f64; 3], SceneError> {
+            match p.colour(lx, name, false, &|q| self.spectrum_colour(p, q))? {
+                None => Ok([1.0; 3]),
+                Some(Colour::Rgb(c)) => Ok(c),
+                Some(_) => {
+                    let q = p.list.iter().find(|q| q.name == name).expect("given");
+                    Err(p.error(lx, q, "give an rgb value"))
+                }
+            }
+        };
+        let scale = p.float(lx, "scale", 1.0)?;
+        let sa = rgb("sigma_a")?.map(|c| c * scale);
+        let ss = rgb("sigma_s")?.map(|c| c * scale);
+        let g = p.float_where(lx, "g", 0.0, "in (-1, 1)", |g| g.abs() < 1.0)?;
+        let mut t = Entity::new(None)
+            .with("type", "homogeneous")
+            .with("sigma_a", sa.to_vec())
+            .with("sigma_s", ss.to_vec());
+        if g != 0.0 {
+            let mut phase = toml::Table::new();
+            phase.insert("type".into(), "hg".into());
+            phase.insert("g".into(), g.into());
+            t.set("phase", phase);
+        }
+        if p.has("Le") {
+            let le = match p.colour(lx, "Le", false, &|q| self.spectrum_colour(p, q))? {
+                Some(Colour::Rgb(c)) => c,
+                _ => [0.0; 3],
+            };
+            let ls = p.float(lx, "Lescale", 1.0)?;
+            // pbrt's source term is sigma_a Le (`HomogeneousMedium`); risotto's is the
+            // emission coefficient itself.
+            let j: Vec<f64> = (0..3).map(|i| sa[i] * le[i] * ls).collect();
+            if j.iter().any(|&x| x > 0.0) {
+                t.set("emission", j);
+            }
+        }
+        Ok(t.table)
+    }
+
+    /// `LightSource`.
+    pub(super) fn light(&mut self, ty: &str, p: &Params, at: &At) -> Result<(), SceneError> {
+        let lx = &self.lx;
+        let m = self.world_root * self.gs.ctm;
+        let scale = p.float(lx, "scale", 1.0)?;
+        if let Some(q) = p.ignore("power").or_else(|| p.ignore("illuminance")) {
+            return Err(p.error(
+                lx,
+                q,
+                "is not supported (give the radiance or intensity and scale)",
+            ));
+        }
+        let rgb = |name: &str| -> Result<Vec<f64>, SceneError> {
+            match p.colour(lx, name, false, &|q| self.spectrum_colour(p, q))? {
+                None => Ok(vec![scale; 3]),
+                Some(Colour::Rgb(c)) => Ok(c.iter().map(|c| c * scale).collect()),
+                Some(_) => {
+                    let q = p.list.iter().find(|q| q.name == name).expect("given");
+                    Err(p.error(lx, q, "give an rgb value"))
+                }
+            }
+        };
+        let v3 = |name: &str, d: DVec3| -> Result<DVec3, SceneError> {
+            Ok(p.vec3(lx, name)?.map_or(d, DVec3::from))
+        };
+        let mut e = Entity::new(Some(self.origin(at)));
+        match ty {
+            "point" => {
+                let pos = m.transform_point3(v3("from", DVec3::ZERO)?);
+                e.set("type", "point");
+                e.set("position", pos.to_array().to_vec());
+                e.set("intensity", rgb("I")?);
+            }
+            "spot" => {
+                let from = v3("from", DVec3::ZERO)?;
+                let to = v3("to", DVec3::Z)?;
+                let dir = m.transform_vector3(to - from);
+                let cone = p.float_where(lx, "coneangle", 30.0, "in (0, 90]", |a| {
+                    a > 0.0 && a <= 90.0
+                })?;
+                let delta = p.float_where(lx, "conedelta", 5.0, "in [0, coneangle)", |d| {
+                    d >= 0.0 && d < cone
+                })?;
+                e.set("type", "spot");
+                e.set("position", m.transform_point3(from).to_array().to_vec());
+                e.set("direction", dir.to_array().to_vec());
+                e.set("intensity", rgb("I")?);
+                e.set("cutoff_angle", cone);
+                e.set("beam_width", cone - delta);
+                if delta > 0.0 {
+                    self.warnings.push(format!(
+                        "{}:{}: the spot light's falloff is linear in the angle over the last {delta} degrees (pbrt's is a smoothstep in the cosine): the edge of the beam differs slightly",
+                        lx.path(at).display(),
+                        lx.line(at)
+                    ));
+                }
+            }
+            "distant" => {
+                let from = v3("from", DVec3::ZERO)?;
+                let to = v3("to", DVec3::Z)?;
+                // The light travels from `from` towards `to`.
+                let dir = m.transform_vector3(to - from);
+                if dir.length_squared() == 0.0 {
+                    return Err(self.error(at, &p.entity, "from and to coincide"));
+                }
+                e.set("type", "distant");
+                e.set("direction", dir.to_array().to_vec());
+                e.set("irradiance", rgb("L")?);
+            }
+            "infinite" => {
+                if let Some(q) = p.ignore("filename") {
+                    return Err(p.error(lx, q, "image infinite lights are not converted yet (pbrt-v4's maps are equal-area octahedral, risotto's latitude-longitude); give a constant L"));
+                }
+                if let Some(q) = p.ignore("portal") {
+                    return Err(p.error(lx, q, "portals are not supported"));
+                }
+                e.set("type", "environment");
+                e.set("radiance", rgb("L")?);
+            }
+            _ => {
+                return Err(self.error(
+                    at,
+                    &p.entity,
+                    format!("light \"{ty}\" is not supported (point, spot, distant, infinite)"),
+                ))
+            }
+        }
+        if self.object.is_some() {
+            return Err(self.error(
+                at,
+                &p.entity,
+                "lights inside an object (ObjectBegin) are not supported",
+            ));
+        }
+        self.scene.lights.push(e);
+        Ok(())
+    }
+}
+
+/// Sets `alpha` (isotropic) or `alpha_u` / `alpha_v`; alphas below 1e-4 act as 1e-4 in
+/// risotto (a mirror in all but name), as pbrt's smooth conductor.
+fn set_alpha(t: &mut Entity, u: f64, v: f64) {
+    let (u, v) = (u.max(1e-4), v.max(1e-4));
+    if u == v {
+        t.set("alpha", u);
+    } else {
+        t.set("alpha_u", u);
+        t.set("alpha_v", v);
+    }
+}

@@ -1,0 +1,306 @@
+//! pbrt-v4 scenes (issue 33): a scene with every supported directive against its
+//! hand-written TOML twin (block z-test), the `convert` -> `render` round trip, and the
+//! killeroo scenes of mmp/pbrt-v4-scenes.
+
+use std::path::{Path, PathBuf};
+
+use risotto::engine::output::read_exr_rgb;
+use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::load_scene;
+use risotto::tools::compare::compare;
+
+mod common;
+use common::cli::{assert_fails, ok, risotto};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/pbrt")
+        .join(name)
+}
+
+fn render_file(path: &Path, seed: u64) -> RenderOutput {
+    let mut desc = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
+    desc.render.seed = seed;
+    let compiled = scene_from_desc(desc, &MaterialRegistry::with_builtins())
+        .unwrap()
+        .compile()
+        .unwrap();
+    let options = RenderOptions {
+        threads: Some(2),
+        ..RenderOptions::default()
+    };
+    let out = render(&compiled, &options, &|_| {}).unwrap();
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+    out
+}
+
+/// Per-channel z-scores of the difference of two renders over 8 x 8-pixel blocks:
+/// `(mean_a - mean_b) / sqrt(var_a + var_b)`, from the films' variances of the pixel means.
+fn block_z(a: &RenderOutput, b: &RenderOutput) -> Vec<f64> {
+    let (w, h) = (a.beauty.width, a.beauty.height);
+    let mut z = Vec::new();
+    for by in (0..h).step_by(8) {
+        for bx in (0..w).step_by(8) {
+            for c in 0..3 {
+                let (mut d, mut v) = (0.0f64, 0.0f64);
+                for y in by..(by + 8).min(h) {
+                    for x in bx..(bx + 8).min(w) {
+                        let k = y * w + x;
+                        let pa = a.beauty.pixels[k].to_array()[c] as f64;
+                        let pb = b.beauty.pixels[k].to_array()[c] as f64;
+                        d += pa - pb;
+                        v += (a.variance.pixels[k].to_array()[c]
+                            + b.variance.pixels[k].to_array()[c])
+                            as f64;
+                    }
+                }
+                z.push(if v > 0.0 {
+                    d / v.sqrt()
+                } else if d.abs() < 1e-6 {
+                    0.0
+                } else {
+                    f64::INFINITY
+                });
+            }
+        }
+    }
+    z
+}
+
+#[test]
+fn every_supported_directive_renders_within_noise_of_its_toml_twin() {
+    // twin.pbrt uses a plain LookAt (mirrored image convention), Include and Import,
+    // named and anonymous materials, a texture, a medium, every light type, ReverseOrientation
+    // on an area light, TransformBegin/End, CoordinateSystem/CoordSysTransform, Transform
+    // and ConcatTransform, spheres, a trianglemesh, a bilinearmesh and a PLY mesh.
+    let pbrt = render_file(&data("twin.pbrt"), 1);
+    let toml = render_file(&data("twin.toml"), 2);
+    assert_eq!((pbrt.beauty.width, pbrt.beauty.height), (64, 48));
+    let m = compare(&pbrt.beauty, &toml.beauty).unwrap();
+    for c in &m.per_channel {
+        assert!(c.mean_reldiff.abs() < 0.02, "{:?}", m.per_channel);
+    }
+    let z = block_z(&pbrt, &toml);
+    let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+    // 48 blocks x 3 channels: |z| > 4.5 has probability ~1e-3 under pure noise.
+    assert!(max < 4.5, "max |z| = {max}: {z:?}");
+    let means: Vec<f64> = m.per_channel.iter().map(|c| c.mean_reldiff).collect();
+    eprintln!("twin: channel mean differences {means:?}, max block |z| {max:.2}");
+    // The test can fail: the twin without the mirror (x not negated) is far off.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-twin-unmirrored");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(data("twin.toml")).unwrap();
+    let unmirrored = text
+        .replace("center = [-1.2, 0.6, 0]", "center = [1.2, 0.6, 0]")
+        .replace("center = [1.2, 0.5, 0.5]", "center = [-1.2, 0.5, 0.5]");
+    std::fs::write(dir.join("twin.toml"), unmirrored).unwrap();
+    std::fs::copy(data("tetra.ply"), dir.join("tetra.ply")).unwrap();
+    let wrong = render_file(&dir.join("twin.toml"), 2);
+    let z = block_z(&pbrt, &wrong);
+    let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+    assert!(
+        max > 10.0,
+        "a mirrored scene is not told apart: max |z| = {max}"
+    );
+    eprintln!("twin without the mirror: max block |z| {max:.1}");
+}
+
+/// The beauty's pixels as bits.
+fn bits(path: &Path) -> Vec<[u32; 3]> {
+    let img = read_exr_rgb(path).unwrap();
+    img.pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn convert_then_render_is_byte_identical_to_rendering_the_pbrt() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-convert");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    let scene = data("twin.pbrt");
+    let converted = dir.join("out/twin.toml");
+    ok(
+        "convert",
+        risotto(&[
+            "convert",
+            scene.to_str().unwrap(),
+            converted.to_str().unwrap(),
+        ]),
+    );
+    let text = std::fs::read_to_string(&converted).unwrap();
+    // Paths are written for the TOML's directory (the PLY lies elsewhere: absolute).
+    assert!(text.contains("tetra.ply"), "{text}");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    for (s, out) in [(&scene, &a), (&converted, &b)] {
+        ok(
+            "render",
+            risotto(&[
+                "render",
+                s.to_str().unwrap(),
+                "--spp",
+                "2",
+                "--threads",
+                "1",
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ]),
+        );
+    }
+    assert_eq!(bits(&a), bits(&b));
+    // Rendering the pbrt file wrote nothing beside it.
+    assert!(!data("twin.toml.exr").exists() && !data("twin.exr").exists());
+}
+
+#[test]
+fn a_bad_pbrt_file_fails_with_its_location() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("bad.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n\n  Shape \"curve\"\n",
+    )
+    .unwrap();
+    let out = risotto(&["render", scene.to_str().unwrap(), "--quiet"]);
+    assert_fails(
+        "curve",
+        &out,
+        &["bad.pbrt:5:3:", "shape \"curve\" is not supported"],
+    );
+}
+
+/// mmp/pbrt-v4-scenes `killeroos/killeroo-gold.pbrt` (and its `geometry/`, `spds/`,
+/// `textures/`), fetched into `$PBRT_V4_SCENES`: it needs the disk of the `filter-disk`
+/// branch and sampled `.spd` spectra.
+#[test]
+#[ignore = "needs $PBRT_V4_SCENES, branch filter-disk (disk) and .spd spectra"]
+fn killeroo_gold_renders() {
+    let root = PathBuf::from(std::env::var("PBRT_V4_SCENES").expect("PBRT_V4_SCENES"));
+    let out = risotto(&[
+        "render",
+        root.join("killeroos/killeroo-gold.pbrt").to_str().unwrap(),
+        "--spp",
+        "1",
+        "--size",
+        "68x51",
+        "--threads",
+        "2",
+        "--quiet",
+        "--out",
+        Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join("killeroo-gold.exr")
+            .to_str()
+            .unwrap(),
+    ]);
+    ok("killeroo-gold", out);
+}
+
+/// Renders `scene` with the binary at `size` and 4 spp into the test's scratch directory.
+fn render_cli(scene: &Path, name: &str) -> PathBuf {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.exr"));
+    ok(
+        name,
+        risotto(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--size",
+            "35x35",
+            "--threads",
+            "2",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]),
+    );
+    out
+}
+
+/// The mean of an image's channels.
+fn mean(path: &Path) -> f64 {
+    let img = read_exr_rgb(path).unwrap();
+    let sum: f64 = img
+        .pixels
+        .iter()
+        .map(|p| (p.r + p.g + p.b) as f64 / 3.0)
+        .sum();
+    sum / img.pixels.len() as f64
+}
+
+#[test]
+fn killeroo_simple_renders_with_diffuse_in_place_of_the_coated_materials() {
+    // The scene's own pixel filter (pbrt's default Gaussian) and coated materials need
+    // other branches; everything else (the two Includes of a loop-subdivision surface under
+    // Scale / Rotate / Translate, the area-lit sphere, the floor and wall meshes, the
+    // LookAt with up = +z and the Rotate after it) is read here.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("killeroo-simple-diffuse");
+    std::fs::create_dir_all(dir.join("geometry")).unwrap();
+    let text = std::fs::read_to_string(data("killeroos/killeroo-simple.pbrt")).unwrap();
+    let text = text
+        .replace("\"coateddiffuse\"", "\"diffuse\"")
+        .replace("\"float roughness\" [ 0.025 ]", "")
+        .replace("\"float roughness\" [ 0.15 ]", "")
+        .replace("WorldBegin", "PixelFilter \"box\"\nWorldBegin");
+    std::fs::write(dir.join("killeroo-simple.pbrt"), text).unwrap();
+    std::fs::copy(
+        data("killeroos/geometry/killeroo.pbrt"),
+        dir.join("geometry/killeroo.pbrt"),
+    )
+    .unwrap();
+    let desc = load_scene(&dir.join("killeroo-simple.pbrt")).unwrap();
+    assert_eq!(desc.shapes.len(), 5);
+    assert_eq!(
+        (desc.render.width, desc.render.height, desc.render.spp),
+        (70, 70, 256)
+    );
+    let out = render_cli(&dir.join("killeroo-simple.pbrt"), "killeroo-simple-diffuse");
+    let m = mean(&out);
+    assert!(m.is_finite() && m > 0.0, "mean {m}");
+}
+
+#[test]
+#[ignore = "needs branches coated (coated_diffuse) and filter-disk (the Gaussian filter)"]
+fn killeroo_simple_renders() {
+    let out = render_cli(&data("killeroos/killeroo-simple.pbrt"), "killeroo-simple");
+    let m = mean(&out);
+    assert!(m.is_finite() && m > 0.0, "mean {m}");
+}
+
+#[test]
+#[ignore = "needs branch instancing (objects and instance shapes)"]
+fn instanced_objects_render_as_their_copies() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-instances");
+    std::fs::create_dir_all(&dir).unwrap();
+    let head = "LookAt 0 2 8  0 0.5 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+                Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 48\n\
+                PixelFilter \"box\"\nSampler \"halton\" \"integer pixelsamples\" 64\nWorldBegin\n\
+                LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n\
+                LightSource \"distant\" \"point3 from\" [1 3 2] \"rgb L\" [2 2 2]\n";
+    let tri = "Shape \"trianglemesh\" \"point3 P\" [-0.5 0 0 0.5 0 0 0 1 0.2]";
+    let placements = [
+        "Translate -1.5 0 0",
+        "Translate 0 0 -1\nRotate 30 0 1 0",
+        "Translate 1.5 0 0\nScale 1 1.5 1",
+    ];
+    let mut instanced =
+        format!("{head}ObjectBegin \"t\"\nMaterial \"diffuse\"\n{tri}\nObjectEnd\n");
+    let mut copies = format!("{head}Material \"diffuse\"\n");
+    for p in placements {
+        instanced.push_str(&format!(
+            "AttributeBegin\n{p}\nObjectInstance \"t\"\nAttributeEnd\n"
+        ));
+        copies.push_str(&format!("AttributeBegin\n{p}\n{tri}\nAttributeEnd\n"));
+    }
+    std::fs::write(dir.join("instanced.pbrt"), instanced).unwrap();
+    std::fs::write(dir.join("copies.pbrt"), copies).unwrap();
+    let a = render_file(&dir.join("instanced.pbrt"), 1);
+    let b = render_file(&dir.join("copies.pbrt"), 2);
+    let z = block_z(&a, &b);
+    let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+    assert!(max < 4.5, "max |z| = {max}");
+}
