@@ -272,7 +272,6 @@ fn killeroo_simple_renders() {
 }
 
 #[test]
-#[ignore = "needs branch instancing (objects and instance shapes)"]
 fn instanced_objects_render_as_their_copies() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-instances");
     std::fs::create_dir_all(&dir).unwrap();
