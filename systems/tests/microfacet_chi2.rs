@@ -202,7 +202,7 @@ fn chi2_rough_dielectric_restricted_to_one_lobe() {
                 } else {
                     reflect_local(wo)
                 };
-                let domain = dielectric_domain(&g, axis);
+                let domain = dielectric_domain(&g.into(), axis);
                 let mut rng = Rng(11);
                 let r = chi2_test(
                     &domain,
