@@ -21,6 +21,7 @@ mod lights;
 mod overrides;
 mod params;
 mod pattern;
+mod pixel_filter;
 mod raw;
 #[cfg(test)]
 mod tests;
@@ -33,6 +34,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
 pub use risotto_systems::mesh_attributes::VertexAttributes;
+pub use risotto_systems::pixel_filter::PixelFilter;
 use risotto_systems::sampler::MAX_SPP;
 
 pub use lights::LightDesc;
@@ -80,7 +82,7 @@ pub struct SceneDesc {
 }
 
 /// The `[render]` section.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     /// Image width in pixels (default 512).
     pub width: u32,
@@ -97,6 +99,9 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Russian roulette starts after this many scattering vertices (default 5).
     pub rr_depth: u32,
+    /// The pixel reconstruction filter (`filter`, `filter_radius`, `filter_stddev`;
+    /// default the box of radius 1/2, uniform over each pixel).
+    pub filter: PixelFilter,
 }
 
 impl RenderSettings {
@@ -119,6 +124,7 @@ impl Default for RenderSettings {
             max_depth: d.max_depth,
             seed: d.seed,
             rr_depth: d.rr_depth,
+            filter: PixelFilter::PIXEL_BOX,
         }
     }
 }
@@ -299,7 +305,8 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         return Ok(d);
     };
     let r = Reader::new(top.src, node, "render");
-    r.deny_unknown(&["width", "height", "spp", "max_depth", "seed", "rr_depth"])?;
+    let keys = ["width", "height", "spp", "max_depth", "seed", "rr_depth"];
+    r.deny_unknown(&[&keys[..], &pixel_filter::FILTER_KEYS].concat())?;
     // Each side bounded so that width * height stays far from overflow; the product is
     // bounded below.
     let max_res = 1 << 16;
@@ -348,6 +355,7 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         max_depth,
         seed: r.int_in("seed", Some(d.seed as i64), 0, i64::MAX)? as u64,
         rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,
+        filter: pixel_filter::read_pixel_filter(&r)?,
     })
 }
 
