@@ -125,7 +125,7 @@ const GAUSSIAN_TABLE: usize = 32;
 
 /// The truncated, lowered Gaussian of [`PixelFilter::Gaussian`] with its CDF over
 /// `[0, radius]` tabulated at construction (the sampler's starting guesses).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 pub struct GaussianFilter {
     /// Standard deviation in pixels, finite and > 0.
     pub stddev: f32,
@@ -137,6 +137,16 @@ pub struct GaussianFilter {
     half_integral: f64,
     /// `int_0^{x_i} f` at `x_i = i r / GAUSSIAN_TABLE`.
     cdf: [f64; GAUSSIAN_TABLE + 1],
+}
+
+impl std::fmt::Debug for GaussianFilter {
+    /// The parameters (the table follows from them).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GaussianFilter")
+            .field("stddev", &self.stddev)
+            .field("radius", &self.radius)
+            .finish()
+    }
 }
 
 impl GaussianFilter {
