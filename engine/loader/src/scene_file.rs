@@ -16,6 +16,7 @@
 //! Conventions: right-handed coordinates, +y up; colours are linear Rec.709 RGB;
 //! transforms apply in the order written (`p_world = T_n ... T_1 p_local`).
 
+mod disk;
 mod geometry;
 mod lights;
 mod overrides;
@@ -196,14 +197,15 @@ pub struct ShapeDesc {
     pub emission: Option<Rgb>,
     /// The geometry in world space.
     pub geometry: ShapeGeometry,
-    /// The shape's object-to-world transform: its `transform` (a `quad`, `rectangle`, `box`
-    /// or `mesh`; the object space is the one its corner and edges, `min` / `max`, unit
-    /// square or file were written in), the identity for a `sphere` and for shapes without
+    /// The shape's object-to-world transform: its `transform` (a `quad`, `rectangle`,
+    /// `disk`, `box` or `mesh`; the object space is the one its corner and edges, unit disk,
+    /// `min` / `max`, unit square or file were written in), the identity for a `sphere` and for shapes without
     /// one. A volume's `u, v, w` and grids are measured in object space.
     pub transform: Affine3A,
     /// A `mesh`'s vertex normals and texture coordinates in world space (one corner triple
-    /// per triangle of [`ShapeGeometry::Triangles`]); empty for other shapes and for meshes
-    /// whose file has neither (or normals only, with `face_normals = true`).
+    /// per triangle of [`ShapeGeometry::Triangles`]), a `disk`'s polar texture coordinates;
+    /// empty for other shapes and for meshes whose file has neither (or normals only, with
+    /// `face_normals = true`).
     pub attributes: VertexAttributes,
 }
 
@@ -221,7 +223,7 @@ pub enum ShapeGeometry {
     /// `(v1 - v0) x (v2 - v0)`. Boxes and meshes keep their outward orientation under any
     /// transform; a quad's normal is `normalize(edge1 x edge2)`.
     Triangles {
-        /// Where they came from: `"quad"` (also `rectangle`), `"box"` or `"mesh"`.
+        /// Where they came from: `"quad"` (also `rectangle`), `"disk"`, `"box"` or `"mesh"`.
         kind: &'static str,
         /// The triangles.
         triangles: Vec<[Vec3; 3]>,
@@ -439,7 +441,7 @@ fn element_entity(list: &str, i: usize, name: Option<&str>) -> String {
     }
 }
 
-const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "box", "mesh"];
+const SHAPE_TYPES: &[&str] = &["sphere", "quad", "rectangle", "disk", "box", "mesh"];
 
 fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<ShapeDesc>, SceneError> {
     let Some(items) = top.array_opt("shapes")? else {
@@ -464,6 +466,7 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
             "sphere" => &["center", "radius"],
             "quad" => &["corner", "edge1", "edge2", "transform"],
             "rectangle" => &["transform"],
+            "disk" => &["radius", "inner_radius", "transform"],
             "box" => &["min", "max", "transform"],
             "mesh" => &["path", "transform", "face_normals"],
             other => {
@@ -525,6 +528,14 @@ fn read_shapes(top: &Reader<'_>, materials: &[MaterialDesc]) -> Result<Vec<Shape
                 kind: "quad",
                 triangles: triangles_of(geometry::rectangle(&r)?),
             },
+            "disk" => {
+                let (triangles, m, a) = disk::disk(&r)?;
+                attributes = a;
+                ShapeGeometry::Triangles {
+                    kind: "disk",
+                    triangles: triangles_of((triangles, m)),
+                }
+            }
             "box" => ShapeGeometry::Triangles {
                 kind: "box",
                 triangles: triangles_of(geometry::cuboid(&r)?),
@@ -694,14 +705,15 @@ fn read_inside(
                 format!("unknown shape `{name}`"),
             ));
         };
-        if matches!(
-            shape.geometry,
-            ShapeGeometry::Triangles { kind: "quad", .. }
-        ) {
+        if let ShapeGeometry::Triangles {
+            kind: kind @ ("quad" | "disk"),
+            ..
+        } = shape.geometry
+        {
             return Err(r.invalid(
                 "inside",
                 item,
-                &format!("shape `{name}` is a quad, which has no inside"),
+                &format!("shape `{name}` is a {kind}, which has no inside"),
             ));
         }
         if out.contains(name) {

@@ -9,6 +9,7 @@ use risotto_components::Rgb;
 
 use super::*;
 
+mod disk;
 mod environment;
 mod pixel_filter;
 
