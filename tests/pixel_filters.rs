@@ -100,7 +100,10 @@ fn gaussian_and_tent_filters_match_mitsuba_and_the_box_does_not() {
         // The box-filtered image has the same means (a filter keeps the integral) but not
         // the same blocks: the comparison sees the filter.
         let (box_means, box_z) = mean_diffs_and_block_z(&box_render, reference, spp);
-        eprintln!("box vs {reference}: means {box_means:?}, max |z| {}", max_abs(&box_z));
+        eprintln!(
+            "box vs {reference}: means {box_means:?}, max |z| {}",
+            max_abs(&box_z)
+        );
         assert!(
             max_abs(&box_z) > 10.0,
             "the box filter passes for {filter:?}: {box_z:?}"
@@ -109,5 +112,8 @@ fn gaussian_and_tent_filters_match_mitsuba_and_the_box_does_not() {
     // And the two filters are told apart from each other.
     let out = render_with(tent, spp);
     let (_, z) = mean_diffs_and_block_z(&out, cases[0].1, spp);
-    assert!(max_abs(&z) > 10.0, "the tent passes for the Gaussian: {z:?}");
+    assert!(
+        max_abs(&z) > 10.0,
+        "the tent passes for the Gaussian: {z:?}"
+    );
 }

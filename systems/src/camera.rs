@@ -19,8 +19,8 @@
 //! other dimension; with `aperture_radius = 0` they are not drawn and the rays are the
 //! pinhole camera's, bit for bit.
 
-pub use crate::pixel_filter::PixelFilter;
 use crate::pixel_filter::warp_pixel_jitter;
+pub use crate::pixel_filter::PixelFilter;
 use crate::sampler::{first_2d_column, sample_2d, PathSampler};
 use crate::simd8::{Backend, Kernel8, Lanes8, Row8, Simd};
 use crate::warp::sample_concentric_disk;
@@ -626,8 +626,8 @@ mod tests {
                 for i in 0..n {
                     let u = sample_2d(seed[i], sample[i], 0);
                     let offset = Vec2::new(filter.sample_1d(u.x), filter.sample_1d(u.y));
-                    let centre = Vec2::new((pixel[i] % w) as f32, (pixel[i] / w) as f32)
-                        + Vec2::splat(0.5);
+                    let centre =
+                        Vec2::new((pixel[i] % w) as f32, (pixel[i] / w) as f32) + Vec2::splat(0.5);
                     let film = centre + offset;
                     let lens = sample_2d(seed[i], sample[i], LENS_DIMENSION);
                     let (o, d) = cam.ray_through_lens(film, lens);
@@ -636,7 +636,10 @@ mod tests {
                     assert!(close(o2[i], o) && close(d2[i], d));
                     outside += usize::from(offset.abs().max_element() > 0.5);
                 }
-                assert!(outside > n / 20, "{filter:?}: {outside} of {n} outside the pixel");
+                assert!(
+                    outside > n / 20,
+                    "{filter:?}: {outside} of {n} outside the pixel"
+                );
             }
         }
     }

@@ -13,7 +13,7 @@
 //!
 //! Every filter here is separable, `f(x, y) = f1(x) f1(y)`, so each axis is sampled alone by
 //! the exact inverse of the 1-D CDF: closed forms for the box and the tent, and for the
-//! Gaussian a tabulated CDF refined by safeguarded Newton steps on the integral of the
+//! Gaussian a tabulated CDF (16 entries) refined by safeguarded Newton steps on the integral of the
 //! density itself (so the samples follow the truncated Gaussian, not a piecewise-constant
 //! approximation of it, and weight 1 is exact).
 //!
@@ -121,7 +121,7 @@ fn sample_tent(u: f32, r: f32) -> f32 {
 }
 
 /// Number of intervals of a [`GaussianFilter`]'s CDF table over [0, radius].
-const GAUSSIAN_TABLE: usize = 32;
+const GAUSSIAN_TABLE: usize = 16;
 
 /// The truncated, lowered Gaussian of [`PixelFilter::Gaussian`] with its CDF over
 /// `[0, radius]` tabulated at construction (the sampler's starting guesses).
@@ -189,7 +189,7 @@ impl GaussianFilter {
     /// Stegun 25.4.29, exact for polynomials of degree 9) on pieces no wider than a quarter
     /// of the standard deviation, where the Gaussian is so close to a polynomial that the
     /// error is at f64 rounding (the test compares with the closed form through `erf`).
-    /// Within one table interval of the defaults (`radius / 32 = 1/16` pixel) that is one
+    /// Within one table interval of the defaults (`radius / 16 = 1/8` pixel) that is one
     /// piece.
     #[inline]
     fn integral(&self, a: f64, b: f64) -> f64 {

@@ -101,7 +101,10 @@ fn filter_samples_follow_the_filter_chi_square() {
         let mut rng = Rng(17);
         for _ in 0..n {
             let x = f64::from(filter.sample_1d(rng.f32()));
-            assert!(x.abs() <= r * (1.0 + 1e-6), "{filter:?}: {x} outside the support");
+            assert!(
+                x.abs() <= r * (1.0 + 1e-6),
+                "{filter:?}: {x} outside the support"
+            );
             let bin = (((x + r) / (2.0 * r)) * bins as f64) as usize;
             counts[bin.min(bins - 1)] += 1;
         }
@@ -114,12 +117,17 @@ fn filter_samples_follow_the_filter_chi_square() {
 }
 
 /// The Gaussian sampler inverts the exact CDF (the closed form through erf): `F(x(u)) = u`
-/// to f32 resolution, so the weight-1 estimator is unbiased for the truncated Gaussian and
-/// not for some tabulated stand-in (a piecewise-linear inverse on the 32-entry table misses
-/// by up to 1e-3).
+/// to f32 resolution, so the weight-1 estimator is unbiased for the truncated Gaussian, not
+/// for a tabulated stand-in of it.
 #[test]
 fn gaussian_sampler_inverts_the_closed_form_cdf() {
-    for (s, r) in [(0.5f32, 2.0f32), (0.5, 1.5), (1.0, 1.0), (0.1, 3.0), (2.0, 0.5)] {
+    for (s, r) in [
+        (0.5f32, 2.0f32),
+        (0.5, 1.5),
+        (1.0, 1.0),
+        (0.1, 3.0),
+        (2.0, 0.5),
+    ] {
         let g = GaussianFilter::new(s, r).unwrap();
         let mut worst = 0.0f64;
         let mut last = -f32::INFINITY;
@@ -131,7 +139,10 @@ fn gaussian_sampler_inverts_the_closed_form_cdf() {
             let cdf = gaussian_cdf(f64::from(s), f64::from(r), f64::from(x));
             worst = worst.max((cdf - f64::from(u)).abs());
         }
-        assert!(worst < 2e-6, "stddev {s}, radius {r}: |F(x(u)) - u| up to {worst}");
+        assert!(
+            worst < 2e-6,
+            "stddev {s}, radius {r}: |F(x(u)) - u| up to {worst}"
+        );
         // And the filter value is the lowered Gaussian.
         let b = (-(r * r) / (2.0 * s * s)).exp();
         let x = 0.3 * r;
@@ -156,7 +167,10 @@ fn tent_sampler_inverts_its_cdf() {
     for i in 0..1000 {
         let u = i as f32 / 1000.0;
         let x = sample_tent(u, r);
-        assert!((cdf(f64::from(x)) - f64::from(u)).abs() < 1e-6, "u {u}: x {x}");
+        assert!(
+            (cdf(f64::from(x)) - f64::from(u)).abs() < 1e-6,
+            "u {u}: x {x}"
+        );
     }
     assert_eq!(sample_tent(0.0, r), -r);
     assert_eq!(sample_tent(0.5, r), 0.0);
@@ -184,7 +198,10 @@ fn warped_jitter_follows_the_2d_filter_chi_square() {
         let mut counts = vec![0u64; cells * cells];
         for (j, u) in jitter.iter().zip(&before) {
             let want = Vec2::splat(0.5) + Vec2::new(filter.sample_1d(u.x), filter.sample_1d(u.y));
-            assert!((*j - want).length() < 1e-6, "{filter:?}: warp {j} vs {want}");
+            assert!(
+                (*j - want).length() < 1e-6,
+                "{filter:?}: warp {j} vs {want}"
+            );
             let cell = |v: f32| {
                 ((((f64::from(v) - 0.5 + r) / (2.0 * r)) * cells as f64) as usize).min(cells - 1)
             };
@@ -200,8 +217,17 @@ fn warped_jitter_follows_the_2d_filter_chi_square() {
 
 #[test]
 fn invalid_gaussians_are_refused() {
-    for (s, r) in [(0.0, 1.0), (-1.0, 1.0), (0.5, 0.0), (f32::NAN, 1.0), (0.5, f32::INFINITY)] {
-        assert!(GaussianFilter::new(s, r).is_none(), "stddev {s}, radius {r}");
+    for (s, r) in [
+        (0.0, 1.0),
+        (-1.0, 1.0),
+        (0.5, 0.0),
+        (f32::NAN, 1.0),
+        (0.5, f32::INFINITY),
+    ] {
+        assert!(
+            GaussianFilter::new(s, r).is_none(),
+            "stddev {s}, radius {r}"
+        );
     }
     assert!(PixelFilter::default().is_pixel_box());
     assert!(!PixelFilter::Box { radius: 0.6 }.is_pixel_box());

@@ -83,7 +83,8 @@ fn tessellate(radius: f64, inner: f64) -> Tessellation {
     for k in 0..n {
         let phi = std::f64::consts::TAU * (k as f64 + 0.5) / n as f64;
         t.positions.push(DVec3::ZERO);
-        t.uvs.push(Vec2::new(0.0, (phi / std::f64::consts::TAU) as f32));
+        t.uvs
+            .push(Vec2::new(0.0, (phi / std::f64::consts::TAU) as f32));
         let centre = (t.positions.len() - 1) as u32;
         t.triangles.push([centre, inside[k], inside[k + 1]]);
     }
@@ -162,7 +163,10 @@ mod tests {
             }
             let x = std::f64::consts::TAU / RIM_SEGMENTS as f64;
             let polygon = 0.5 * RIM_SEGMENTS as f64 * x.sin() * (radius * radius - inner * inner);
-            assert!((area - polygon).abs() < 1e-12 * polygon, "{area} vs {polygon}");
+            assert!(
+                (area - polygon).abs() < 1e-12 * polygon,
+                "{area} vs {polygon}"
+            );
             let exact = std::f64::consts::PI * (radius * radius - inner * inner);
             let error = 1.0 - area / exact;
             assert!(error > 0.0 && error < 1e-4, "relative area error {error}");

@@ -61,10 +61,7 @@ fn disk_normals_follow_mirroring_transforms() {
         ("[]", Vec3::Z),
         ("[{ scale = [1, 1, -1] }]", -Vec3::Z),
         ("[{ scale = [-1, 1, 1] }]", Vec3::Z),
-        (
-            "[{ rotate = { axis = [1, 0, 0], angle = -90 } }]",
-            Vec3::Y,
-        ),
+        ("[{ rotate = { axis = [1, 0, 0], angle = -90 } }]", Vec3::Y),
         (
             "[{ scale = [1, -2, 1] }, { rotate = { axis = [1, 0, 0], angle = -90 } }]",
             Vec3::Y,
@@ -75,10 +72,16 @@ fn disk_normals_follow_mirroring_transforms() {
         assert_eq!(tris.len(), 1520);
         for [a, b, c] in tris {
             let n = (*b - *a).cross(*c - *a).normalize();
-            assert!((n - normal).length() < 1e-4, "{transform}: normal {n}, want {normal}");
+            assert!(
+                (n - normal).length() < 1e-4,
+                "{transform}: normal {n}, want {normal}"
+            );
         }
         let attrs = &s.shapes[0].attributes;
-        assert!(attrs.normals.is_empty(), "the plane's normal, not vertex normals");
+        assert!(
+            attrs.normals.is_empty(),
+            "the plane's normal, not vertex normals"
+        );
         assert_eq!(attrs.corners.len(), tris.len());
         // Each corner's uv is the polar coordinate of its world vertex mapped back to the
         // object disk: u = r, v = phi / 2 pi (v = 1 allowed at the seam).
@@ -87,7 +90,10 @@ fn disk_normals_follow_mirroring_transforms() {
             for (p, &k) in t.iter().zip(corners) {
                 let q = inverse.transform_point3(*p);
                 let uv = attrs.uvs[k as usize];
-                assert!((q.truncate().length() - uv.x).abs() < 1e-4, "{transform}: u");
+                assert!(
+                    (q.truncate().length() - uv.x).abs() < 1e-4,
+                    "{transform}: u"
+                );
                 if uv.x > 0.0 {
                     let phi = q.y.atan2(q.x).rem_euclid(std::f32::consts::TAU);
                     let d = (uv.y - phi / std::f32::consts::TAU).abs();
@@ -104,14 +110,23 @@ fn bad_disks_are_located_errors() {
         (
             "inner_radius = 1",
             "inner_radius",
-            &["shapes[0] \"d\"", "inner_radius", "`1`", "below the radius (1)"],
+            &[
+                "shapes[0] \"d\"",
+                "inner_radius",
+                "`1`",
+                "below the radius (1)",
+            ],
         ),
         (
             "radius = 0.5\ninner_radius = 0.7",
             "inner_radius",
             &["inner_radius", "`0.7`", "below the radius (0.5)"],
         ),
-        ("inner_radius = -0.1", "inner_radius", &["inner_radius", "`-0.1`", ">= 0"]),
+        (
+            "inner_radius = -0.1",
+            "inner_radius",
+            &["inner_radius", "`-0.1`", ">= 0"],
+        ),
         ("radius = 0", "radius", &["radius", "`0`", "> 0"]),
         ("center = [0, 0, 0]", "center", &["center"]),
         (
@@ -129,5 +144,9 @@ fn bad_disks_are_located_errors() {
     let text = disk_scene("") + "";
     let text = text.replace("to = [0, 0, 0]\n", "to = [0, 0, 0]\ninside = [\"d\"]\n");
     let e = parse_err(&text);
-    assert_message(&e, line_of(&text, "inside"), &["`d` is a disk, which has no inside"]);
+    assert_message(
+        &e,
+        line_of(&text, "inside"),
+        &["`d` is a disk, which has no inside"],
+    );
 }

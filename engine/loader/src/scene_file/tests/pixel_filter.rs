@@ -16,7 +16,10 @@ fn filters_default_to_mitsubas_parameters() {
         filter("filter = \"box\"\nfilter_radius = 1"),
         PixelFilter::Box { radius: 1.0 }
     );
-    assert_eq!(filter("filter = \"tent\""), PixelFilter::Tent { radius: 1.0 });
+    assert_eq!(
+        filter("filter = \"tent\""),
+        PixelFilter::Tent { radius: 1.0 }
+    );
     assert_eq!(
         filter("filter = \"tent\"\nfilter_radius = 2.5"),
         PixelFilter::Tent { radius: 2.5 }
@@ -43,7 +46,12 @@ fn bad_filters_are_located_errors() {
         (
             "filter = \"mitchell\"",
             "filter =",
-            &["render", "filter", "`mitchell` has negative lobes", "`gaussian`"],
+            &[
+                "render",
+                "filter",
+                "`mitchell` has negative lobes",
+                "`gaussian`",
+            ],
         ),
         (
             "filter = \"blur\"",
