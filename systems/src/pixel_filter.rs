@@ -276,7 +276,7 @@ impl GaussianFilter {
         // Near the radius, where f vanishes and the inverse is steep, one step is not
         // enough: those few intervals (of probability 1 / INVERSE_TABLE each) take the full
         // solver.
-        if d > 0.0 && step.abs() <= 1e-3 * (b - a) {
+        if d > 0.0 && step.abs() <= 0.05 * (b - a) {
             (x - step).clamp(a, b)
         } else {
             self.invert_half(v)
