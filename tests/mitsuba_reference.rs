@@ -621,3 +621,21 @@ fn rough_plastic_matches_mitsuba() {
         0.006,
     );
 }
+
+#[test]
+fn disk_light_matches_mitsuba() {
+    // The disk shape (issue 33): a disk area light (radius 0.6, tilted) over a diffuse floor
+    // with a red diffuse disk on it, both disks tessellated (the 512-gon rim, area short by
+    // 2.5e-5). Reference: 64x64 directly, 16384 spp, llvm_ad_rgb (the command is in
+    // `scenes/mitsuba-suite/disk_light.xml`). Measured when written (64 spp): means within
+    // 0.011 %, rmse 0.0010 against an iid prediction of 0.0052. A disk of the wrong size
+    // (the area is the light's power) or facing up (no light on the floor) would be off by
+    // far more.
+    check(
+        "scenes/mitsuba-suite/disk_light.toml",
+        "tests/data/disk_light-mitsuba-64.exr",
+        64,
+        0.01,
+        0.003,
+    );
+}

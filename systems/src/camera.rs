@@ -2,7 +2,10 @@
 //!
 //! Conventions: image (0,0) is the top-left pixel; `right = normalize(cross(forward, up))`,
 //! `image up = cross(right, forward)`. The perspective field of view is the full *horizontal*
-//! angle. Samples are uniform over each pixel's square (a box pixel filter).
+//! angle. Samples are uniform over each pixel's square (a box pixel filter) unless the
+//! camera's [`PixelFilter`] says otherwise: its film positions are then drawn from the
+//! filter around the pixel centre ([`crate::pixel_filter`], filter importance sampling),
+//! from the same two sampler dimensions.
 //!
 //! The thin-lens camera ([`Projection::ThinLens`]) follows Mitsuba 3's `thinlens` sensor
 //! (`src/sensors/thinlens.cpp`, `ThinLensCamera::sample_ray`) and pbrt-v4's
@@ -16,6 +19,8 @@
 //! other dimension; with `aperture_radius = 0` they are not drawn and the rays are the
 //! pinhole camera's, bit for bit.
 
+use crate::pixel_filter::warp_pixel_jitter;
+pub use crate::pixel_filter::PixelFilter;
 use crate::sampler::{first_2d_column, sample_2d, PathSampler};
 use crate::simd8::{Backend, Kernel8, Lanes8, Row8, Simd};
 use crate::warp::sample_concentric_disk;
@@ -83,6 +88,9 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// The pixel reconstruction filter the film positions of the camera rays are drawn from.
+    /// Defaults to [`PixelFilter::PIXEL_BOX`] (uniform over each pixel).
+    pub filter: PixelFilter,
 }
 
 impl Camera {
@@ -107,7 +115,13 @@ impl Camera {
             up,
             width,
             height,
+            filter: PixelFilter::PIXEL_BOX,
         })
+    }
+
+    /// This camera with pixel filter `filter`.
+    pub fn with_filter(self, filter: PixelFilter) -> Camera {
+        Camera { filter, ..self }
     }
 
     /// The ray through film position `film` (in pixels, (0,0) = top-left corner of the image);
@@ -217,12 +231,15 @@ impl RayGenerator {
 }
 
 /// Film position of camera sample `(pixel, sample)`: the pixel's corner plus the jitter,
-/// sampler dimensions 0 and 1.
+/// sampler dimensions 0 and 1, warped by the camera's filter unless it is the pixel box.
 #[inline(always)]
-fn film_position(width: u32, pixel: u32, sample: u32, seed: u32) -> Vec2 {
-    let px = pixel % width;
-    let py = pixel / width;
-    let jitter = sample_2d(seed, sample, 0);
+fn film_position(camera: &Camera, pixel: u32, sample: u32, seed: u32) -> Vec2 {
+    let px = pixel % camera.width;
+    let py = pixel / camera.width;
+    let mut jitter = sample_2d(seed, sample, 0);
+    if !camera.filter.is_pixel_box() {
+        warp_pixel_jitter(&camera.filter, std::slice::from_mut(&mut jitter));
+    }
     Vec2::new(px as f32 + jitter.x, py as f32 + jitter.y)
 }
 
@@ -248,7 +265,7 @@ pub fn generate_camera_rays(
     let (origin, direction) = (&mut origin[..n], &mut direction[..n]);
     let lens = camera.projection.lens();
     for i in 0..n {
-        let film = film_position(camera.width, pixel[i], sample[i], seed[i]);
+        let film = film_position(camera, pixel[i], sample[i], seed[i]);
         (origin[i], direction[i]) = match lens {
             Some((radius, focus)) => {
                 let u = sample_2d(seed[i], sample[i], LENS_DIMENSION);
@@ -281,6 +298,11 @@ pub fn push_camera_rays(
     // The jitter of every sample first, eight per call of the column sampler.
     let mut jitter = vec![Vec2::ZERO; n];
     first_2d_column(&seed[..n], &sample[..n], &mut jitter);
+    // The pixel box is the jitter itself: not warped, so its rays are those of a camera
+    // without filters, bit for bit.
+    if !camera.filter.is_pixel_box() {
+        warp_pixel_jitter(&camera.filter, &mut jitter);
+    }
     let width = camera.width;
     // A batch holds each pixel's samples together: the pixel's coordinates (an integer
     // division and remainder) are computed once per run of equal pixel indices.
@@ -552,6 +574,72 @@ mod tests {
                 assert_eq!(r.dimension, FIRST_PATH_DIMENSION);
                 assert_eq!(r.shading_ctx_index, u32::MAX);
                 assert_eq!(r.volume_stack, stack);
+            }
+        }
+    }
+
+    /// A filtered camera's rays go through the pixel centre plus the filter's sample of
+    /// the jitter dimensions (both ray generators, every projection), and reach beyond the
+    /// pixel square, which the box-filtered camera's never do.
+    #[test]
+    fn filtered_camera_rays_go_through_the_filter_sample() {
+        use crate::pixel_filter::GaussianFilter;
+        let (w, h) = (9, 6);
+        let filters = [
+            PixelFilter::Tent { radius: 1.0 },
+            PixelFilter::Gaussian(GaussianFilter::new(0.5, 2.0).unwrap()),
+            PixelFilter::Box { radius: 1.5 },
+        ];
+        let projections = [
+            Projection::Perspective { fov_deg: 50.0 },
+            Projection::Orthographic { width: 3.0 },
+            Projection::ThinLens {
+                fov_deg: 35.0,
+                aperture_radius: 0.2,
+                focus_distance: 3.0,
+            },
+        ];
+        let pixel: Vec<u32> = (0..w * h).flat_map(|p| [p; 16]).collect();
+        let sample: Vec<u32> = (0..pixel.len() as u32).map(|i| i % 16).collect();
+        let seed: Vec<u32> = pixel
+            .iter()
+            .map(|&p| crate::sampler::pixel_seed(3, p))
+            .collect();
+        for projection in projections {
+            for filter in filters {
+                let cam = Camera::look_at(
+                    projection,
+                    Vec3::new(0.5, 1.0, 4.0),
+                    Vec3::new(0.0, 0.2, 0.0),
+                    Vec3::Y,
+                    w,
+                    h,
+                )
+                .unwrap()
+                .with_filter(filter);
+                let mut rays = Rays::default();
+                push_camera_rays(&cam, &pixel, &sample, &seed, &VolumeStack::new(), &mut rays);
+                let n = pixel.len();
+                let (mut o2, mut d2) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+                generate_camera_rays(&cam, &pixel, &sample, &seed, &mut o2, &mut d2);
+                let mut outside = 0;
+                for i in 0..n {
+                    let u = sample_2d(seed[i], sample[i], 0);
+                    let offset = Vec2::new(filter.sample_1d(u.x), filter.sample_1d(u.y));
+                    let centre =
+                        Vec2::new((pixel[i] % w) as f32, (pixel[i] / w) as f32) + Vec2::splat(0.5);
+                    let film = centre + offset;
+                    let lens = sample_2d(seed[i], sample[i], LENS_DIMENSION);
+                    let (o, d) = cam.ray_through_lens(film, lens);
+                    let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+                    assert!(close(rays.origin[i], o) && close(rays.direction[i], d));
+                    assert!(close(o2[i], o) && close(d2[i], d));
+                    outside += usize::from(offset.abs().max_element() > 0.5);
+                }
+                assert!(
+                    outside > n / 20,
+                    "{filter:?}: {outside} of {n} outside the pixel"
+                );
             }
         }
     }

@@ -29,6 +29,7 @@ pub mod partition;
 pub mod path;
 pub mod pattern;
 pub mod phase;
+pub mod pixel_filter;
 mod primitive;
 pub mod ray;
 pub mod ray_marching;

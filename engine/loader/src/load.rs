@@ -440,12 +440,11 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
             focus_distance,
         },
     };
-    let camera =
-        Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height).ok_or_else(|| {
-            LoadError::Camera {
-                scene: desc.path.clone(),
-            }
-        })?;
+    let camera = Camera::look_at(projection, c.from, c.to, c.up, r.width, r.height)
+        .ok_or_else(|| LoadError::Camera {
+            scene: desc.path.clone(),
+        })?
+        .with_filter(r.filter);
     let mut scene = Scene::new(camera, settings);
     scene.files = desc.files.clone();
     scene.warnings = desc.warnings.clone();

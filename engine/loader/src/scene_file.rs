@@ -16,12 +16,14 @@
 //! Conventions: right-handed coordinates, +y up; colours are linear Rec.709 RGB;
 //! transforms apply in the order written (`p_world = T_n ... T_1 p_local`).
 
+mod disk;
 mod geometry;
 mod lights;
 mod objects;
 mod overrides;
 mod params;
 mod pattern;
+mod pixel_filter;
 mod raw;
 #[cfg(test)]
 mod tests;
@@ -34,6 +36,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3};
 use risotto_components::Rgb;
 pub use risotto_systems::mesh_attributes::VertexAttributes;
+pub use risotto_systems::pixel_filter::PixelFilter;
 use risotto_systems::sampler::MAX_SPP;
 
 pub use lights::LightDesc;
@@ -88,7 +91,7 @@ pub struct SceneDesc {
 }
 
 /// The `[render]` section.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     /// Image width in pixels (default 512).
     pub width: u32,
@@ -105,6 +108,9 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Russian roulette starts after this many scattering vertices (default 5).
     pub rr_depth: u32,
+    /// The pixel reconstruction filter (`filter`, `filter_radius`, `filter_stddev`;
+    /// default the box of radius 1/2, uniform over each pixel).
+    pub filter: PixelFilter,
 }
 
 impl RenderSettings {
@@ -127,6 +133,7 @@ impl Default for RenderSettings {
             max_depth: d.max_depth,
             seed: d.seed,
             rr_depth: d.rr_depth,
+            filter: PixelFilter::PIXEL_BOX,
         }
     }
 }
@@ -198,14 +205,15 @@ pub struct ShapeDesc {
     pub emission: Option<Rgb>,
     /// The geometry in world space.
     pub geometry: ShapeGeometry,
-    /// The shape's object-to-world transform: its `transform` (a `quad`, `rectangle`, `box`
-    /// or `mesh`; the object space is the one its corner and edges, `min` / `max`, unit
-    /// square or file were written in), the identity for a `sphere` and for shapes without
+    /// The shape's object-to-world transform: its `transform` (a `quad`, `rectangle`,
+    /// `disk`, `box` or `mesh`; the object space is the one its corner and edges, unit disk,
+    /// `min` / `max`, unit square or file were written in), the identity for a `sphere` and for shapes without
     /// one. A volume's `u, v, w` and grids are measured in object space.
     pub transform: Affine3A,
     /// A `mesh`'s vertex normals and texture coordinates in world space (one corner triple
-    /// per triangle of [`ShapeGeometry::Triangles`]); empty for other shapes and for meshes
-    /// whose file has neither (or normals only, with `face_normals = true`).
+    /// per triangle of [`ShapeGeometry::Triangles`]), a `disk`'s polar texture coordinates;
+    /// empty for other shapes and for meshes whose file has neither (or normals only, with
+    /// `face_normals = true`).
     pub attributes: VertexAttributes,
 }
 
@@ -223,7 +231,7 @@ pub enum ShapeGeometry {
     /// `(v1 - v0) x (v2 - v0)`. Boxes and meshes keep their outward orientation under any
     /// transform; a quad's normal is `normalize(edge1 x edge2)`.
     Triangles {
-        /// Where they came from: `"quad"` (also `rectangle`), `"box"` or `"mesh"`.
+        /// Where they came from: `"quad"` (also `rectangle`), `"disk"`, `"box"` or `"mesh"`.
         kind: &'static str,
         /// The triangles.
         triangles: Vec<[Vec3; 3]>,
@@ -394,7 +402,8 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         return Ok(d);
     };
     let r = Reader::new(top.src, node, "render");
-    r.deny_unknown(&["width", "height", "spp", "max_depth", "seed", "rr_depth"])?;
+    let keys = ["width", "height", "spp", "max_depth", "seed", "rr_depth"];
+    r.deny_unknown(&[&keys[..], &pixel_filter::FILTER_KEYS].concat())?;
     // Each side bounded so that width * height stays far from overflow; the product is
     // bounded below.
     let max_res = 1 << 16;
@@ -443,6 +452,7 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         max_depth,
         seed: r.int_in("seed", Some(d.seed as i64), 0, i64::MAX)? as u64,
         rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,
+        filter: pixel_filter::read_pixel_filter(&r)?,
     })
 }
 
@@ -530,6 +540,7 @@ const SHAPE_TYPES: &[&str] = &[
     "sphere",
     "quad",
     "rectangle",
+    "disk",
     "box",
     "mesh",
     "triangles",
@@ -585,6 +596,7 @@ fn read_shape(
         "sphere" => &["center", "radius"],
         "quad" => &["corner", "edge1", "edge2", "transform"],
         "rectangle" => &["transform"],
+        "disk" => &["radius", "inner_radius", "transform"],
         "box" => &["min", "max", "transform"],
         "mesh" => &["path", "transform", "face_normals", "flip_normals"],
         "triangles" => &[
@@ -658,6 +670,14 @@ fn read_shape(
             kind: "box",
             triangles: triangles_of(geometry::cuboid(r)?),
         },
+        "disk" => {
+            let (triangles, m, a) = disk::disk(r)?;
+            attributes = a;
+            ShapeGeometry::Triangles {
+                kind: "disk",
+                triangles: triangles_of((triangles, m)),
+            }
+        }
         "triangles" => {
             let (triangles, m, a) = geometry::triangles(r)?;
             attributes = a;
@@ -829,14 +849,15 @@ fn read_inside(
                 format!("unknown shape `{name}`"),
             ));
         };
-        if matches!(
-            shape.geometry,
-            ShapeGeometry::Triangles { kind: "quad", .. }
-        ) {
+        if let ShapeGeometry::Triangles {
+            kind: kind @ ("quad" | "disk"),
+            ..
+        } = shape.geometry
+        {
             return Err(r.invalid(
                 "inside",
                 item,
-                &format!("shape `{name}` is a quad, which has no inside"),
+                &format!("shape `{name}` is a {kind}, which has no inside"),
             ));
         }
         if out.contains(name) {

@@ -9,9 +9,11 @@ use risotto_components::Rgb;
 
 use super::*;
 
+mod disk;
 mod environment;
 mod objects;
 mod triangles;
+mod pixel_filter;
 
 /// The file name used for inline scenes (it must show up in every message).
 const FILE: &str = "test-scenes/inline_scene.toml";
@@ -263,7 +265,8 @@ fn defaults_when_render_section_is_absent() {
             spp: 64,
             max_depth: 8,
             seed: 0,
-            rr_depth: 5
+            rr_depth: 5,
+            filter: PixelFilter::PIXEL_BOX,
         }
     );
     assert_eq!(s.camera.up, Vec3::Y);
@@ -1549,7 +1552,8 @@ fn mitsuba_suite_cornell_matches_the_readme() {
             spp: 64,
             max_depth: 8,
             seed: 0,
-            rr_depth: 5
+            rr_depth: 5,
+            filter: PixelFilter::PIXEL_BOX,
         }
     );
     assert_eq!(
