@@ -264,7 +264,6 @@ fn killeroo_simple_renders_with_diffuse_in_place_of_the_coated_materials() {
 }
 
 #[test]
-#[ignore = "needs branches coated (coated_diffuse) and filter-disk (the Gaussian filter)"]
 fn killeroo_simple_renders() {
     let out = render_cli(&data("killeroos/killeroo-simple.pbrt"), "killeroo-simple");
     let m = mean(&out);

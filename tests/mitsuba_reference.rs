@@ -533,6 +533,7 @@ fn suite_xml_twins_match_mitsuba() {
     for name in [
         "aniso_gold",
         "cage",
+        "disk_light",
         "envmap_rotated",
         "hetero_rgb",
         "leaf",

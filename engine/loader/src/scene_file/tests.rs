@@ -12,8 +12,8 @@ use super::*;
 mod disk;
 mod environment;
 mod objects;
-mod triangles;
 mod pixel_filter;
+mod triangles;
 
 /// The file name used for inline scenes (it must show up in every message).
 const FILE: &str = "test-scenes/inline_scene.toml";
