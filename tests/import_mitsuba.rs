@@ -102,3 +102,100 @@ fn definitions_reach_the_xml_and_dotted_ones_the_conversion() {
         &["bad.xml:39:5:", "bsdf type \"hair\" is not supported"],
     );
 }
+
+/// `shapegroup` / `instance` become a TOML object and its instances: the instanced scene
+/// renders as the same shapes written out in place (block z-test, independent seeds), and
+/// its conversion holds one object and three instances.
+#[test]
+fn shapegroups_render_as_their_copies() {
+    let dir = setup("shapegroups");
+    let head = r#"<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 2, 8" target="0, 0.5, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>
+  <emitter type="directional"><vector name="direction" value="-1, -3, -2"/><rgb name="irradiance" value="2"/></emitter>
+  <bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.7"/></bsdf>
+"#;
+    let shapes = r#"<shape type="cube"><transform name="to_world"><scale value="0.4"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><translate y="-0.4"/></transform><ref id="white"/></shape>"#;
+    let placements = [
+        r#"<translate x="-1.5"/>"#,
+        r#"<rotate y="1" angle="30"/><translate z="-1"/>"#,
+        r#"<scale x="1" y="1.5" z="1"/><translate x="1.5"/>"#,
+    ];
+    let mut instanced =
+        format!("{head}  <shape type=\"shapegroup\" id=\"thing\">{shapes}</shape>\n");
+    let mut copies = head.to_string();
+    for p in placements {
+        instanced.push_str(&format!(
+            "  <shape type=\"instance\"><ref id=\"thing\"/><transform name=\"to_world\">{p}</transform></shape>\n"
+        ));
+        // The same shapes with the placement appended to each one's own to_world.
+        copies.push_str(&shapes.replace("</transform>", &format!("{p}</transform>")));
+        copies.push('\n');
+    }
+    instanced.push_str("</scene>\n");
+    copies.push_str("</scene>\n");
+    let (a, b) = (dir.join("instanced.xml"), dir.join("copies.xml"));
+    std::fs::write(&a, instanced).unwrap();
+    std::fs::write(&b, copies).unwrap();
+
+    let converted = dir.join("instanced.toml");
+    ok(
+        "convert",
+        risotto(&["convert", a.to_str().unwrap(), converted.to_str().unwrap()]),
+    );
+    let toml = std::fs::read_to_string(&converted).unwrap();
+    assert_eq!(toml.matches("[objects.thing]").count(), 1, "{toml}");
+    assert_eq!(toml.matches("type = \"instance\"").count(), 3, "{toml}");
+
+    let render = |path: &Path, seed: u64| {
+        let mut desc = risotto::loader::scene_file::load_scene(path).unwrap();
+        desc.render.seed = seed;
+        let scene = risotto::loader::load::scene_from_desc(
+            desc,
+            &risotto::loader::load::MaterialRegistry::with_builtins(),
+        )
+        .unwrap()
+        .compile()
+        .unwrap();
+        let options = risotto::engine::render::RenderOptions {
+            threads: Some(2),
+            ..Default::default()
+        };
+        risotto::engine::render::render(&scene, &options, &|_| {}).unwrap()
+    };
+    let z = common::images::block_z(&render(&a, 1), &render(&b, 2));
+    let max = z.iter().fold(0.0f64, |m, &v| m.max(v.abs()));
+    assert!(max < 4.5, "max |z| = {max}");
+}
+
+/// A group may not hold what an object cannot: an area light inside is a located error.
+#[test]
+fn an_emitting_shape_in_a_shapegroup_is_an_error() {
+    let dir = setup("shapegroup-emitter");
+    let xml = dir.join("s.xml");
+    std::fs::write(
+        &xml,
+        r#"<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/></sensor>
+  <shape type="shapegroup" id="g">
+    <shape type="cube"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+  </shape>
+  <shape type="instance"><ref id="g"/></shape>
+</scene>
+"#,
+    )
+    .unwrap();
+    let o = risotto(&[
+        "convert",
+        xml.to_str().unwrap(),
+        dir.join("o.toml").to_str().unwrap(),
+    ]);
+    assert_fails("emitter in a group", &o, &["s.xml:3", "emission"]);
+}

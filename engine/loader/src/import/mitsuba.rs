@@ -47,6 +47,8 @@ pub fn import(
         path_integrator: None,
         clip_planes: None,
         shape_bounds: Vec::new(),
+        groups: Vec::new(),
+        group_shapes: None,
     };
     conv.scene.header.push(format!(
         "Converted from the Mitsuba 3 scene {} (docs/import-mitsuba.md).",
@@ -145,6 +147,10 @@ struct Converter<'a> {
     clip_planes: Option<(Rc<xml::Node>, glam::DVec3, f64, f64)>,
     /// Each shape and its world bounds when known without reading files.
     shape_bounds: Vec<(Rc<xml::Node>, Option<Bounds>)>,
+    /// The `shapegroup`s converted so far and the object each became.
+    groups: Vec<(Rc<xml::Node>, String)>,
+    /// While a `shapegroup` is converted: the shapes converted into it.
+    group_shapes: Option<Vec<super::Entity>>,
 }
 
 impl Converter<'_> {

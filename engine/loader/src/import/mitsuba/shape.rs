@@ -1,5 +1,6 @@
 //! Shapes: `obj`, `ply` (meshes), `cube`, `sphere`, `rectangle`, `disk`, with their BSDF,
-//! area emitter and interior medium.
+//! area emitter and interior medium; `shapegroup` and `instance` as TOML objects and
+//! instances.
 
 use std::rc::Rc;
 
@@ -24,10 +25,86 @@ pub(super) struct Placement {
 }
 
 impl Converter<'_> {
+    /// A `shapegroup` (its shapes defined once, placed by `instance`s) as a TOML object,
+    /// converted once however often it is referenced; returns the object's name.
+    fn shapegroup(&mut self, node: &Rc<Node>) -> Result<String, SceneError> {
+        if let Some((_, name)) = self.groups.iter().find(|(n, _)| Rc::ptr_eq(n, node)) {
+            return Ok(name.clone());
+        }
+        let p = props(self.cx, node)?;
+        if self.group_shapes.is_some() {
+            return Err(p.error(None, "a shapegroup inside a shapegroup is not supported"));
+        }
+        let shapes = p.unnamed("shape")?;
+        if shapes.is_empty() {
+            return Err(p.error(None, "an empty shapegroup"));
+        }
+        self.group_shapes = Some(Vec::new());
+        let converted: Result<(), SceneError> =
+            shapes.iter().try_for_each(|child| self.shape(child));
+        let entities = self.group_shapes.take().unwrap_or_default();
+        converted?;
+        p.finish(&[])?;
+        let base = node.attr("id").unwrap_or("shapegroup").to_owned();
+        let mut name = base.clone();
+        let mut k = 1;
+        while self.scene.objects.iter().any(|(n, _)| *n == name) {
+            k += 1;
+            name = format!("{base}_{k}");
+        }
+        let list: Vec<toml::Value> = entities
+            .into_iter()
+            .map(|mut e| {
+                // Names are for shapes placed once; an object's shapes have none.
+                e.table.remove("name");
+                toml::Value::Table(e.table)
+            })
+            .collect();
+        let object = Entity::new(self.origin(node)).with("shapes", list);
+        self.scene.objects.push((name.clone(), object));
+        self.groups.push((node.clone(), name.clone()));
+        Ok(name)
+    }
+
+    /// An `instance` of a `shapegroup` (by reference or nested): a TOML `instance` shape.
+    fn instance(&mut self, node: &Rc<Node>) -> Result<(), SceneError> {
+        let p = props(self.cx, node)?;
+        if self.group_shapes.is_some() {
+            return Err(p.error(None, "an instance inside a shapegroup is not supported"));
+        }
+        let group = p
+            .one_unnamed("shape")?
+            .ok_or_else(|| p.error(None, "an instance needs the shapegroup it places"))?;
+        let group = self.cx.deref(&group)?;
+        let gp = props(self.cx, &group)?;
+        if gp.kind()? != "shapegroup" {
+            return Err(gp.error(Some("type"), "an instance places a shapegroup"));
+        }
+        let object = self.shapegroup(&group)?;
+        let mut e = Entity::new(self.origin(node))
+            .with("type", "instance")
+            .with("object", object);
+        if let Some(t) = p.transform("to_world")? {
+            e.set("transform", t.toml());
+        }
+        if let Some(id) = node.attr("id") {
+            let name = Converter::unique(&mut self.names, id);
+            e.set("name", name);
+        }
+        p.finish(&[])?;
+        self.scene.shapes.push(e);
+        Ok(())
+    }
+
     /// One `<shape>`.
     pub(super) fn shape(&mut self, node: &Rc<Node>) -> Result<(), SceneError> {
         let p = props(self.cx, node)?;
         let kind = p.kind()?;
+        match kind.as_str() {
+            "shapegroup" => return self.shapegroup(node).map(|_| ()),
+            "instance" => return self.instance(node),
+            _ => {}
+        }
         let mut e = Entity::new(self.origin(node));
         let to_world = p.transform("to_world")?;
         let flip = p.boolean("flip_normals")?.unwrap_or(false);
@@ -128,7 +205,7 @@ impl Converter<'_> {
                     Some("type"),
                     format!(
                         "shape type \"{other}\" is not supported (obj, ply, cube, sphere, \
-                         rectangle, disk)"
+                         rectangle, disk, shapegroup, instance)"
                     ),
                 ))
             }
@@ -204,8 +281,13 @@ impl Converter<'_> {
             }
             _ => None,
         };
-        self.shape_bounds.push((node.clone(), world));
-        self.scene.shapes.push(e);
+        match &mut self.group_shapes {
+            Some(group) => group.push(e),
+            None => {
+                self.shape_bounds.push((node.clone(), world));
+                self.scene.shapes.push(e);
+            }
+        }
         Ok(())
     }
 }
