@@ -86,7 +86,7 @@ fn parse_spp_list(s: &str) -> Result<Vec<u32>> {
 pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
     let input = SceneInput::read(&args.scene, &args.defines, None)?;
-    let mut compiled = compile_scene(input.load(&registry)?, &input.path)?;
+    let mut compiled = compile_scene(input.load(&registry)?)?;
     let registry = TechniqueRegistry::for_scene(&compiled);
     let variants = if args.techniques.trim() == "all" {
         Techniques::variants(&registry)

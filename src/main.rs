@@ -351,7 +351,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         args.batch_size
     );
     let build_start = std::time::Instant::now();
-    let compiled = compile_scene(scene, &input.path)?;
+    let compiled = compile_scene(scene)?;
     let build_seconds = build_start.elapsed().as_secs_f64();
     let techniques = render_techniques(&args, &compiled)?;
     if let Some(spec) = &args.replay {
@@ -689,7 +689,7 @@ fn convert_command(scene_path: &Path, out: &Path, defines: &[String]) -> Result<
 fn techniques_command(scene_path: &Path, defines: &[String]) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
     let input = SceneInput::read(scene_path, defines, None)?;
-    let compiled = compile_scene(input.load(&registry)?, &input.path)?;
+    let compiled = compile_scene(input.load(&registry)?)?;
     print!(
         "{}",
         technique::listing(&TechniqueRegistry::for_scene(&compiled))

@@ -82,7 +82,7 @@ fn render_bytes(spp: u32) -> (usize, usize) {
     scene.settings.spp = spp;
     scene.camera.width = 16;
     scene.camera.height = 16;
-    let compiled = compile_scene(scene, &file).unwrap();
+    let compiled = compile_scene(scene).unwrap();
     let options = RenderOptions {
         threads: Some(1),
         batch_size: 16 * 16 * 4,

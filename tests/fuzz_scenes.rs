@@ -146,7 +146,7 @@ fn mutated_shipped_scenes_fail_located_or_render_finite() {
                 scene.settings.height = 6;
                 scene.settings.spp = 1;
                 scene.settings.max_depth = scene.settings.max_depth.min(6);
-                let compiled = compile_scene(scene, &file).map_err(|e| e.to_string())?;
+                let compiled = compile_scene(scene).map_err(|e| e.to_string())?;
                 let options = RenderOptions {
                     threads: Some(1),
                     ..RenderOptions::default()

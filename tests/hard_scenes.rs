@@ -62,7 +62,7 @@ fn load(text: &str, path: &Path) -> risotto::engine::scene::CompiledScene {
     let desc = parse_scene(text, path).unwrap_or_else(|e| panic!("{e}"));
     let scene =
         scene_from_desc(desc, &MaterialRegistry::with_builtins()).unwrap_or_else(|e| panic!("{e}"));
-    compile_scene(scene, path).unwrap_or_else(|e| panic!("{e}"))
+    compile_scene(scene).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn render_default_options(scene: &risotto::engine::scene::CompiledScene) -> RenderOutput {

@@ -196,7 +196,7 @@ fn near_lamp(technique: LightingTechnique) -> (f64, [f64; 3]) {
             ) = (NEAR_LAMP_SIZE.0, NEAR_LAMP_SIZE.1, 32);
             (scene.camera.width, scene.camera.height) = NEAR_LAMP_SIZE;
             scene.settings.seed = seed;
-            let compiled = compile_scene(scene, &file).unwrap();
+            let compiled = compile_scene(scene).unwrap();
             let options = RenderOptions {
                 technique,
                 ..RenderOptions::default()

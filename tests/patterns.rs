@@ -59,9 +59,8 @@ fn load_text(dir: &Path, text: &str) -> Result<risotto::engine::scene::Scene, St
 }
 
 fn render_text(dir: &Path, text: &str) -> RenderOutput {
-    let path = dir.join("scene.toml");
     let scene = load_text(dir, text).unwrap_or_else(|e| panic!("{e}"));
-    let compiled = compile_scene(scene, &path).unwrap();
+    let compiled = compile_scene(scene).unwrap();
     render(&compiled, &RenderOptions::default(), &|_| {}).unwrap()
 }
 
@@ -209,7 +208,7 @@ fn the_shipped_patterns_scene_evaluates_patterns_and_cornell_does_not() {
         let h = ((32 * s.height) / s.width).max(1);
         (s.width, s.height, s.spp) = (32, h, 2);
         (scene.camera.width, scene.camera.height) = (32, h);
-        let compiled = compile_scene(scene, &file).unwrap();
+        let compiled = compile_scene(scene).unwrap();
         render(&compiled, &RenderOptions::default(), &|_| {}).unwrap()
     };
     let patterns = tiny("patterns.toml");

@@ -17,7 +17,7 @@ use std::path::Path;
 fn load(path: &str) -> CompiledScene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
     let scene = load_scene_file(&path, &MaterialRegistry::with_builtins()).unwrap();
-    compile_scene(scene, &path).unwrap()
+    compile_scene(scene).unwrap()
 }
 
 /// The replayed path is the render's: its radiance has the bits of a one-sample render of

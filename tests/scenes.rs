@@ -53,7 +53,7 @@ fn every_scene_renders_finite_and_not_black() {
         s.spp = 4;
         scene.camera.width = 24;
         scene.camera.height = h;
-        let compiled = compile_scene(scene, &file).unwrap_or_else(|e| panic!("{e}"));
+        let compiled = compile_scene(scene).unwrap_or_else(|e| panic!("{e}"));
         let out = render(&compiled, &RenderOptions::default(), &|_| {}).unwrap();
         let what = file.display();
         assert_eq!(out.stats.counters.nan_dropped, 0, "{what}: NaN samples");
@@ -72,10 +72,10 @@ fn camera_in_volume_scene_states_what_probing_finds() {
     let registry = MaterialRegistry::with_builtins();
     let explicit = load_scene_file(&file, &registry).unwrap();
     assert_eq!(explicit.camera_volume, Some(vec!["haze".to_string()]));
-    let explicit = compile_scene(explicit, &file).unwrap();
+    let explicit = compile_scene(explicit).unwrap();
     let mut probed = load_scene_file(&file, &registry).unwrap();
     probed.camera_volume = None;
-    let probed = compile_scene(probed, &file).unwrap();
+    let probed = compile_scene(probed).unwrap();
     assert_eq!(probed.camera_stack.len(), 1);
     assert_eq!(probed.camera_stack, explicit.camera_stack);
 }

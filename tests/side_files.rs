@@ -109,7 +109,7 @@ fn obj_points_and_lines_are_skipped_with_a_warning() {
     let mesh = "[[shapes]]\ntype = \"mesh\"\nmaterial = \"floor\"\npath = \"pl.obj\"\n";
     std::fs::write(&scene, format!("{SCENE}\n{mesh}")).unwrap();
     let loaded = load_scene_file(&scene, &MaterialRegistry::with_builtins()).unwrap();
-    let compiled = compile_scene(loaded, &scene).unwrap();
+    let compiled = compile_scene(loaded).unwrap();
     let w: Vec<&String> = compiled
         .warnings
         .iter()

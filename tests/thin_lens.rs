@@ -13,7 +13,7 @@ use risotto::loader::load::{compile_scene, scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::parse_scene;
 use risotto::systems::camera::{Camera, Projection};
 use risotto_components::Rgb;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Image of the edge scene: wide, a few rows (averaged into one profile).
 const W: u32 = 128;
@@ -166,7 +166,7 @@ fn thin_lens_of_radius_zero_renders_the_pinhole_image_bit_for_bit() {
             scene.settings.spp,
         ) = (48, 36, 4);
         (scene.camera.width, scene.camera.height) = (48, 36);
-        let compiled = compile_scene(scene, Path::new(&file)).unwrap();
+        let compiled = compile_scene(scene).unwrap();
         render(&compiled, &RenderOptions::default(), &|_| {}).unwrap()
     };
     let bits = |out: &RenderOutput| -> Vec<[u32; 3]> {

@@ -178,7 +178,7 @@ fn every_shipped_scene_renders_without_warnings() {
         let h = ((64 * s.height) / s.width).max(1);
         (s.width, s.height, s.spp) = (64, h, 4);
         (scene.camera.width, scene.camera.height) = (64, h);
-        let compiled = compile_scene(scene, &file).unwrap_or_else(|e| panic!("{e}"));
+        let compiled = compile_scene(scene).unwrap_or_else(|e| panic!("{e}"));
         let out = render_default(&compiled);
         let c = &out.stats.counters;
         eprintln!(

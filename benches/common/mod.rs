@@ -9,5 +9,5 @@ use std::path::Path;
 pub fn compile(relative: &str) -> CompiledScene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
     let scene = load_scene_file(&path, &MaterialRegistry::with_builtins()).unwrap();
-    compile_scene(scene, &path).unwrap()
+    compile_scene(scene).unwrap()
 }

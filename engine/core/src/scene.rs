@@ -187,6 +187,9 @@ pub struct Scene {
     /// Warnings from reading the scene (its files' skipped content); compiling adds its own,
     /// and every render's stats repeat them.
     pub warnings: Vec<String>,
+    /// The file the scene was read from, which compile errors without a line of their own
+    /// name (`None`: built in code).
+    pub source: Option<std::path::PathBuf>,
     /// The entities.
     pub world: hecs::World,
     /// Materials by index.
@@ -329,6 +332,7 @@ impl Scene {
         Scene {
             files: Default::default(),
             warnings: Vec::new(),
+            source: None,
             world: hecs::World::new(),
             materials: Vec::new(),
             camera,

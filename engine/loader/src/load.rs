@@ -448,6 +448,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
     let mut scene = Scene::new(camera, settings);
     scene.files = desc.files.clone();
     scene.warnings = desc.warnings.clone();
+    scene.source = Some(desc.path.clone());
     scene.camera_volume = desc.camera_volume.clone();
     scene.camera_volume_at = desc.camera_volume_at.clone();
     for m in &desc.materials {
@@ -603,17 +604,16 @@ fn check_radiance_map(path: &Path, img: Image) -> Result<Image, OutputError> {
     Ok(img)
 }
 
-/// Compiles a scene, attributing errors to its file.
-pub fn compile_scene(
-    scene: Scene,
-    path: &Path,
-) -> Result<risotto_engine::scene::CompiledScene, LoadError> {
+/// Compiles a scene, attributing errors to the file it was read from
+/// ([`Scene::source`]; `<scene>` for one built in code).
+pub fn compile_scene(scene: Scene) -> Result<risotto_engine::scene::CompiledScene, LoadError> {
+    let path = scene
+        .source
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from("<scene>"));
     scene.compile().map_err(|source| match source {
         // Already names the file (and line).
         CompileError::Scene(e) => LoadError::Scene(e),
-        cause => LoadError::Compile {
-            scene: path.to_path_buf(),
-            cause,
-        },
+        cause => LoadError::Compile { scene: path, cause },
     })
 }

@@ -18,6 +18,7 @@ impl Scene {
             camera_volume,
             camera_volume_at,
             objects,
+            source: _,
         } = self;
         // Shapes in spawn order (hecs iteration order is by archetype; sort by entity id so
         // primitive numbering is stable).
