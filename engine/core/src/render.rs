@@ -179,6 +179,9 @@ pub struct NoiseTarget {
     pub min_spp: u32,
 }
 
+/// The largest tile edge of an adaptive render ([`RenderOptions::noise_target`]).
+pub const ADAPTIVE_TILE_SIZE: u32 = 8;
+
 /// The fraction of the image's mean value (per channel) below which a pixel's error is
 /// measured against that floor rather than its own value.
 pub const NOISE_FLOOR_FRACTION: f32 = 0.01;
@@ -391,7 +394,13 @@ fn render_passes<I: Integrator>(
 ) -> Result<RenderOutput, RenderError> {
     let start = std::time::Instant::now();
     let (window, samples) = checked_extent(scene, options)?;
-    let ts = options.tile_size.max(1);
+    // Adaptive sampling's late passes have work only where the noise is: smaller tiles let
+    // every thread take part there (16 x 16 tiles left one of two threads idle on a
+    // 32 x 24 test image).
+    let ts = match options.noise_target {
+        Some(_) => options.tile_size.clamp(1, ADAPTIVE_TILE_SIZE),
+        None => options.tile_size.max(1),
+    };
     let mut tiles: Vec<Tile> = Vec::new();
     for y0 in (window.y0..window.y1).step_by(ts as usize) {
         for x0 in (window.x0..window.x1).step_by(ts as usize) {
