@@ -284,8 +284,10 @@ pub fn parse_scene_with(
 }
 
 /// Reads a converted scene (`path` the original file, whose directory relative paths are
-/// written against) with TOML `overrides` (dotted `-D` paths) applied to the conversion.
-pub(crate) fn parse_imported(
+/// written against) with TOML `overrides` (dotted `-D` paths) applied to the conversion:
+/// what [`parse_scene_with`] does after an importer ran, and what an embedder's own importer
+/// (a [`TomlScene`](crate::import::TomlScene) with origins) calls to be read as TOML.
+pub fn parse_imported(
     imported: import::ImportedScene,
     path: &Path,
     overrides: &[String],

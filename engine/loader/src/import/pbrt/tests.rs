@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use crate::import::{import_scene, ImportOptions, SceneFormat, TomlScene};
-use crate::scene_file::parse_imported;
 
 /// A fresh directory for a test's files.
 fn dir(test: &str) -> PathBuf {
@@ -267,36 +266,6 @@ fn media_become_interiors_of_their_shapes() {
     assert_eq!(floats(&interior["sigma_a"]), vec![0.2, 0.4, 0.6]);
     assert_eq!(floats(&interior["sigma_s"]), vec![2.0, 2.0, 2.0]);
     assert_eq!(interior["phase"]["g"].as_float(), Some(0.5));
-}
-
-#[test]
-fn the_conversion_reads_back_as_toml() {
-    let d = dir("readback");
-    let text = format!(
-        "{HEAD}Sampler \"halton\" \"integer pixelsamples\" 4\nWorldBegin\n\
-         LightSource \"spot\" \"point3 from\" [0 4 0] \"point3 to\" [0 0 0] \"float coneangle\" 30\n\
-         LightSource \"distant\" \"rgb L\" [1 1 1]\nLightSource \"infinite\" \"rgb L\" [0.1 0.1 0.1]\n\
-         Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 \
-         \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n\
-         Material \"diffuse\" \"texture reflectance\" \"c\"\n\
-         Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1] \
-         \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n\
-         Material \"dielectric\" \"float eta\" 1.33 \"float roughness\" 0.1\nShape \"sphere\"\n"
-    );
-    let path = d.join("s.pbrt");
-    std::fs::write(&path, &text).unwrap();
-    let options = ImportOptions {
-        defines: &[],
-        toml_dir: &d,
-    };
-    let imported = import_scene(SceneFormat::Pbrt, &path, &text, &options).unwrap();
-    assert!(
-        !imported.warnings.is_empty(),
-        "the spot's falloff is warned about"
-    );
-    let desc = parse_imported(imported, &path, &[]).unwrap();
-    assert_eq!(desc.shapes.len(), 2);
-    assert_eq!(desc.lights.len(), 3);
 }
 
 /// Each error names the file, line and column of what is wrong.
