@@ -1,7 +1,7 @@
 //! `risotto render --replay X,Y,SAMPLE`: parsing the flag, and the render command that
 //! re-runs a non-finite case's path (printed with each case; `engine::replay` does the work).
 
-use crate::RenderArgs;
+use crate::render_args::RenderArgs;
 use anyhow::{Context, Result};
 
 /// Parses `--replay X,Y,SAMPLE`.

@@ -142,10 +142,11 @@ fn a_bad_pbrt_file_fails_with_its_location() {
 }
 
 /// mmp/pbrt-v4-scenes `killeroos/killeroo-gold.pbrt` (and its `geometry/`, `spds/`,
-/// `textures/`), fetched into `$PBRT_V4_SCENES`: it needs the disk of the `filter-disk`
-/// branch and sampled `.spd` spectra.
+/// `textures/`), from a checkout in `$PBRT_V4_SCENES`: the repository is 1.4 GB, too large
+/// for CI to fetch, and its killeroo mesh (286 KB) is not committed here, so this test runs
+/// only by hand (`PBRT_V4_SCENES=... cargo test --release --test import_pbrt -- --ignored`).
 #[test]
-#[ignore = "needs $PBRT_V4_SCENES, branch filter-disk (disk) and .spd spectra"]
+#[ignore = "needs a checkout of mmp/pbrt-v4-scenes (1.4 GB) in $PBRT_V4_SCENES: run with --ignored"]
 fn killeroo_gold_renders() {
     let root = PathBuf::from(std::env::var("PBRT_V4_SCENES").expect("PBRT_V4_SCENES"));
     let out = risotto(&[

@@ -59,7 +59,9 @@ use std::marker::PhantomData;
 use glam::{Vec3, Vec3A, Vec4, Vec4Swizzles};
 use risotto_components::NO_HIT;
 
-use crate::bvh8::{Bvh8, Node8, SphereLeaf, TriPacket8, INDEX_MASK, INSTANCE, LEAF, SPHERE, WIDTH};
+use crate::bvh8::{
+    Bvh8, InstanceLeaf, Node8, SphereLeaf, TriPacket8, INDEX_MASK, INSTANCE, LEAF, SPHERE, WIDTH,
+};
 use crate::geometry::{ray_to_object, SceneGeometry};
 #[cfg(target_arch = "x86_64")]
 use crate::simd8::Avx2;
@@ -76,6 +78,27 @@ mod triangle;
 use packet::*;
 use ray_block::*;
 pub use sphere::intersect_sphere;
+
+/// The ray of instance leaf `index` of `bvh` in its object's space (the same `t`, since
+/// the direction is mapped without renormalising): the leaf, the object's BVH and the
+/// one-ray block its traversal reads (what every query's instance step starts from).
+#[inline(always)]
+fn object_ray<S: Simd>(
+    s: S,
+    bvh: &Bvh8,
+    index: usize,
+    origin: Vec3,
+    direction: Vec3,
+    tmin: f32,
+) -> (&InstanceLeaf, &Bvh8, RayBlock) {
+    let leaf = &bvh.instances[index];
+    let object = &bvh.objects[leaf.object as usize];
+    let (o, d) = ray_to_object(&leaf.to_object, origin, direction);
+    let mut block = RayBlock::zero();
+    block.set(s, &[o], &[d], &[tmin], object.max_abs);
+    (leaf, object, block)
+}
+
 #[cfg(test)]
 pub(crate) use sphere::sphere_root_for_tests;
 use sphere::*;
@@ -362,11 +385,14 @@ impl<S: Simd, const TOP: bool> ClosestRay<'_, S, TOP> {
     #[inline(always)]
     fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: &mut f32) {
         let s = self.s;
-        let leaf = &bvh.instances[index];
-        let object = &bvh.objects[leaf.object as usize];
-        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
-        let mut block = RayBlock::zero();
-        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let (leaf, object, block) = object_ray(
+            s,
+            bvh,
+            index,
+            self.tri.origin(),
+            self.tri.direction(),
+            self.tmin,
+        );
         let node_ray = NodeRay::new(s, &block, 0, self.tmin);
         let mut inner = ClosestRay::<S, false> {
             s,
@@ -500,11 +526,14 @@ impl<S: Simd, const TOP: bool> AnyRay<'_, S, TOP> {
     #[inline(always)]
     fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: f32) -> bool {
         let s = self.s;
-        let leaf = &bvh.instances[index];
-        let object = &bvh.objects[leaf.object as usize];
-        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
-        let mut block = RayBlock::zero();
-        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let (_, object, block) = object_ray(
+            s,
+            bvh,
+            index,
+            self.tri.origin(),
+            self.tri.direction(),
+            self.tmin,
+        );
         let node_ray = NodeRay::new(s, &block, 0, self.tmin);
         let mut inner = AnyRay::<S, false> {
             s,

@@ -223,11 +223,14 @@ impl<S: Simd, const TOP: bool> AllRay<'_, S, TOP> {
     #[inline(always)]
     fn instance(&mut self, bvh: &Bvh8, index: usize, tmax: &mut f32) {
         let s = self.s;
-        let leaf = &bvh.instances[index];
-        let object = &bvh.objects[leaf.object as usize];
-        let (o, d) = ray_to_object(&leaf.to_object, self.tri.origin(), self.tri.direction());
-        let mut block = RayBlock::zero();
-        block.set(s, &[o], &[d], &[self.tmin], object.max_abs);
+        let (leaf, object, block) = object_ray(
+            s,
+            bvh,
+            index,
+            self.tri.origin(),
+            self.tri.direction(),
+            self.tmin,
+        );
         let node_ray = NodeRay::new(s, &block, 0, self.tmin);
         let mut inner = AllRay::<S, false> {
             s,
