@@ -20,8 +20,10 @@ use std::sync::Arc;
 
 mod build;
 mod column;
+mod emission;
 mod spot;
 
+pub use emission::EmissionSample;
 pub use spot::{SpotFalloff, SpotTexture};
 
 /// One light.

@@ -37,6 +37,13 @@ impl SpotFalloff {
         }
     }
 
+    /// `cos(cutoff)`: directions with a larger cosine to the axis are inside the cone the
+    /// falloff is non-zero in.
+    #[inline]
+    pub fn cos_cutoff(&self) -> f32 {
+        self.cos_cutoff
+    }
+
     /// The falloff factor in `[0, 1]` for a direction at `cos_theta` from the axis.
     #[inline]
     pub fn eval(&self, cos_theta: f32) -> f32 {
