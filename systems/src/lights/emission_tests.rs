@@ -55,8 +55,11 @@ fn sky_map() -> EnvironmentMap {
     EnvironmentMap::new(px, w, h)
 }
 
-/// `j(x) = (2, 1, 0.5) clamp(x.y, 0, 1)` over `[-1, 1] x [0, 2] x [-1, 1]` in two cells
-/// (bounds 1): `int j dV = (2, 1, 0.5) (4 * 1/2 + 4 * 1) = (12, 6, 3)`.
+/// `j(x) = (2, 1, 0.5) clamp(x.y, 0, 1)` over `[-1, 1] x [0, 2] x [-1, 1]` in two cells:
+/// `int j dV = (2, 1, 0.5) (4 * 1/2 + 4 * 1) = (12, 6, 3)`. Both cells are given the same
+/// bound, so they are sampled equally often although the lower one emits half as much:
+/// `j / p_V` varies, and an estimator that sampled the wrong cells or the wrong points
+/// in them would be biased.
 fn gradient_emitter() -> VolumeEmitter {
     let graph = PatternGraph::new(vec![Node::Gradient {
         axis: Axis::Y,
@@ -71,7 +74,7 @@ fn gradient_emitter() -> VolumeEmitter {
         scale: Rgb::new(2.0, 1.0, 0.5),
     };
     let b = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
-    let j_max = [Rgb::splat(0.5), Rgb::WHITE];
+    let j_max = [Rgb::new(2.0, 1.0, 0.5); 2];
     VolumeEmitter::new(
         b,
         [1, 2, 1],
