@@ -49,7 +49,7 @@ fn axis_range(x: f32, radius: f32, n: u32) -> (u32, u32) {
     let hi = (x - 0.5 + radius).floor() + 1.0;
     // `x` finite: both bounds are finite; clamping in f32 before the cast keeps huge
     // positions from wrapping. NaN compares false and yields the empty range.
-    if !(lo < hi) {
+    if lo.is_nan() || hi.is_nan() || lo >= hi {
         return (0, 0);
     }
     let clamp = |v: f32| v.clamp(0.0, n as f32) as u32;
