@@ -18,6 +18,13 @@
 //! dimensions 2 and 3, reserved for them ([`FIRST_PATH_DIMENSION`]), so a lens shifts no
 //! other dimension; with `aperture_radius = 0` they are not drawn and the rays are the
 //! pinhole camera's, bit for bit.
+//!
+//! The inverse direction, a scene point connected to the camera (light tracing, BDPT, VCM:
+//! the film position, sensor importance and pdfs), is [`CameraConnection`]'s module,
+//! `camera/importance.rs`.
+
+mod importance;
+pub use importance::CameraConnection;
 
 use crate::pixel_filter::warp_pixel_jitter;
 pub use crate::pixel_filter::PixelFilter;

@@ -1,4 +1,5 @@
-//! The film and the splat system.
+//! The film and the splat system; light-traced contributions, which land at any pixel,
+//! go to the thread-shared fixed-point [`SplatFilm`].
 //!
 //! Per pixel the film keeps the sum of sample radiance, the sum of squares and the sample
 //! count, so the mean and the variance of the mean can be reported. Non-finite samples (NaN,
@@ -18,6 +19,9 @@
 pub const MAX_PIXELS: u64 = 1 << 26;
 
 use risotto_components::Rgb;
+
+mod splat;
+pub use splat::SplatFilm;
 
 /// Accumulated samples for a rectangle of pixels (a whole image or one tile).
 #[derive(Clone, Debug)]

@@ -23,6 +23,9 @@
 
 use glam::Vec2;
 
+mod splat;
+pub use splat::{film_coverage, splat_weights};
+
 /// A pixel reconstruction filter, separable, non-negative, centred on the pixel centre;
 /// distances in pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
