@@ -10,7 +10,7 @@ use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use risotto_components::Paths;
-use risotto_systems::film::{splat, AovFilm, Film};
+use risotto_systems::film::{splat, AovFilm, Film, SplatFilm};
 use risotto_systems::sampler::pixel_seed;
 
 /// How direct lighting is estimated; a named technique so its cost and error can be compared.
@@ -24,6 +24,42 @@ pub enum LightingTechnique {
     NeeOnly,
     /// Bxdf sampling only (no shadow rays; Dirac lights are invisible).
     BxdfOnly,
+}
+
+/// Which global integrator renders (the `integrator` technique; `[render] integrator` in a
+/// scene file).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum GlobalIntegrator {
+    /// The path tracer ([`PathTracer`](crate::path_tracer::PathTracer)).
+    #[default]
+    Path,
+    /// Light tracing alone ([`Strategy::Light`](crate::bidir::Strategy::Light)).
+    Light,
+    /// Bidirectional path tracing ([`Strategy::Bdpt`](crate::bidir::Strategy::Bdpt)).
+    Bdpt,
+}
+
+impl GlobalIntegrator {
+    /// Every integrator, in listing order.
+    pub const ALL: [GlobalIntegrator; 3] = [
+        GlobalIntegrator::Path,
+        GlobalIntegrator::Light,
+        GlobalIntegrator::Bdpt,
+    ];
+
+    /// The name scene files and `--technique integrator=NAME` use.
+    pub fn name(self) -> &'static str {
+        match self {
+            GlobalIntegrator::Path => "path",
+            GlobalIntegrator::Light => "light",
+            GlobalIntegrator::Bdpt => "bdpt",
+        }
+    }
+
+    /// The integrator called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|g| g.name() == name)
+    }
 }
 
 /// The camera samples of one batch: one path per pixel and sample, with the pixel seeds of
@@ -61,6 +97,13 @@ pub trait Integrator: Sync {
         stats: &mut SystemStats,
         arena: &Bump,
     );
+
+    /// Radiance this integrator carries to pixels other than its own paths' (light
+    /// tracing's splats), added to the image whenever it is gathered: sums per pixel of the
+    /// whole image, and the factor that makes them radiance. Defaults to none.
+    fn splats(&self) -> Option<(&SplatFilm, f64)> {
+        None
+    }
 }
 
 /// Film plus AOV accumulators for one tile.

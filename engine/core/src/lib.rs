@@ -8,6 +8,7 @@
 //! (`risotto-builtins`), exactly as a user's are; scene files are read by `risotto-loader`,
 //! and the converge / merge / compare tools are `risotto-tools`.
 
+pub mod bidir;
 pub mod context;
 pub mod diagnostics;
 pub mod features;

@@ -7,7 +7,10 @@
 //! are those of the whole render, so such pieces are independent farm tasks that
 //! `risotto merge` (`risotto-tools`) puts back together.
 
-use crate::integrator::{render_tile, Integrator, LightingTechnique, TileFilm, TileWorker};
+use crate::bidir::{Bidirectional, Strategy};
+use crate::integrator::{
+    render_tile, GlobalIntegrator, Integrator, LightingTechnique, TileFilm, TileWorker,
+};
 use crate::output::Image;
 use crate::path_tracer::PathTracer;
 use crate::scene::CompiledScene;
@@ -16,7 +19,7 @@ use bumpalo::Bump;
 use rayon::prelude::*;
 use risotto_components::Rgb;
 use risotto_systems::adaptive::AdaptiveSummary;
-use risotto_systems::film::{AovFilm, Film};
+use risotto_systems::film::{AovFilm, Film, SplatFilm};
 use risotto_systems::independent_sampler::SamplerKind;
 
 /// A pixel window of the full image: columns `x0..x1`, rows `y0..y1` (half-open; row 0 is
@@ -159,6 +162,9 @@ pub struct RenderOptions {
     /// reaches the target ([`NoiseTarget`]); the scene's spp is then the most a pixel
     /// takes. Defaults to `None`: every pixel takes every sample.
     pub noise_target: Option<NoiseTarget>,
+    /// The global integrator (the `integrator` technique). Defaults to `None`: the one the
+    /// scene asks for ([`RenderSettings::integrator`](crate::scene::RenderSettings::integrator)).
+    pub integrator: Option<GlobalIntegrator>,
 }
 
 /// Adaptive sampling's request ([`RenderOptions::noise_target`]).
@@ -205,6 +211,7 @@ impl Default for RenderOptions {
             samples: None,
             interrupt: None,
             noise_target: None,
+            integrator: None,
         }
     }
 }
@@ -306,18 +313,16 @@ pub struct Checkpoints<'a> {
     pub write: &'a mut dyn FnMut(&RenderOutput) -> Result<(), String>,
 }
 
-/// Renders `scene` with the path tracer (`options.technique` for direct lighting).
-/// `progress` is called with the number of samples finished, from worker threads.
+/// Renders `scene` with the global integrator `options.integrator` (or the scene's): the
+/// path tracer (`options.technique` for direct lighting) or a bidirectional one
+/// ([`crate::bidir`]). `progress` is called with the number of samples finished, from worker
+/// threads.
 pub fn render(
     scene: &CompiledScene,
     options: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderOutput, RenderError> {
-    let tracer = PathTracer {
-        technique: options.technique,
-        techniques: options.plugin_techniques,
-    };
-    render_passes(&tracer, scene, options, progress, None)
+    render_dispatch(scene, options, progress, None)
 }
 
 /// [`render`] with checkpoints: the partial render so far is handed to
@@ -330,11 +335,52 @@ pub fn render_checkpointed(
     progress: &(dyn Fn(u64) + Sync),
     checkpoints: Checkpoints,
 ) -> Result<RenderOutput, RenderError> {
+    render_dispatch(scene, options, progress, Some(checkpoints))
+}
+
+/// The integrator `options` and `scene` ask for, rendering.
+fn render_dispatch(
+    scene: &CompiledScene,
+    options: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+    checkpoints: Option<Checkpoints>,
+) -> Result<RenderOutput, RenderError> {
     let tracer = PathTracer {
         technique: options.technique,
         techniques: options.plugin_techniques,
     };
-    render_passes(&tracer, scene, options, progress, Some(checkpoints))
+    let strategy = match options.integrator.unwrap_or(scene.settings.integrator) {
+        GlobalIntegrator::Path => {
+            return render_passes(&tracer, scene, options, progress, checkpoints)
+        }
+        GlobalIntegrator::Light => Strategy::Light,
+        GlobalIntegrator::Bdpt => Strategy::Bdpt,
+    };
+    if let Err(reason) = Bidirectional::supports(scene) {
+        // The documented fallback: the path tracer renders what the bidirectional
+        // integrator cannot, and the stats say so.
+        let mut out = render_passes(&tracer, scene, options, progress, checkpoints)?;
+        out.stats.warnings.push(format!(
+            "integrator {} cannot render this scene ({reason}); the path tracer rendered it",
+            strategy.name()
+        ));
+        return Ok(out);
+    }
+    let (window, samples) = checked_extent(scene, options)?;
+    if options.noise_target.is_some() {
+        return Err(RenderError::Samples {
+            samples,
+            reason: format!(
+                "adaptive sampling (a noise target) needs the path tracer: integrator {} \
+                 splats light paths onto every pixel, stopped or not",
+                strategy.name()
+            ),
+        });
+    }
+    let integrator =
+        Bidirectional::new(scene, strategy, options.plugin_techniques, window.pixels())
+            .map_err(|reason| RenderError::Samples { samples, reason })?;
+    render_passes(&integrator, scene, options, progress, checkpoints)
 }
 
 /// Renders `scene` with any global integrator (`options.technique` is the path tracer's and
@@ -478,7 +524,14 @@ fn render_passes<I: Integrator>(
                 let mut write_seconds = 0.0;
                 if let Some(cp) = &mut checkpoints {
                     let t = std::time::Instant::now();
-                    let so_far = gather(scene, window, samples.start..done, &tiles, start);
+                    let so_far = gather(
+                        scene,
+                        window,
+                        samples.start..done,
+                        &tiles,
+                        start,
+                        integrator.splats(),
+                    );
                     (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
                     write_seconds = t.elapsed().as_secs_f64();
                 }
@@ -490,7 +543,14 @@ fn render_passes<I: Integrator>(
             }
             next = done.saturating_add(chunk.max(1)).min(samples.end);
         }
-        let mut out = gather(scene, window, samples.start..done, &tiles, start);
+        let mut out = gather(
+            scene,
+            window,
+            samples.start..done,
+            &tiles,
+            start,
+            integrator.splats(),
+        );
         out.stats.adaptive = Some(adaptive_summary(&out, target));
         return Ok(out);
     }
@@ -515,7 +575,14 @@ fn render_passes<I: Integrator>(
                 let mut write_seconds = 0.0;
                 if let (Some(cp), true) = (&mut checkpoints, done < samples.end) {
                     let t = std::time::Instant::now();
-                    let so_far = gather(scene, window, samples.start..done, &tiles, start);
+                    let so_far = gather(
+                        scene,
+                        window,
+                        samples.start..done,
+                        &tiles,
+                        start,
+                        integrator.splats(),
+                    );
                     (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
                     write_seconds = t.elapsed().as_secs_f64();
                 }
@@ -523,7 +590,14 @@ fn render_passes<I: Integrator>(
             }
         }
     }
-    Ok(gather(scene, window, samples.start..done, &tiles, start))
+    Ok(gather(
+        scene,
+        window,
+        samples.start..done,
+        &tiles,
+        start,
+        integrator.splats(),
+    ))
 }
 
 /// The means and variances of the means of the window's pixels, gathered from `tiles`.
@@ -620,6 +694,7 @@ fn gather(
     samples: std::ops::Range<u32>,
     tiles: &[Tile],
     start: std::time::Instant,
+    splats: Option<(&SplatFilm, f64)>,
 ) -> RenderOutput {
     let (w, h) = (window.width(), window.height());
     let mut film = Film::new(w, h);
@@ -631,6 +706,9 @@ fn gather(
         film.add_tile(&tile.film, x0, y0);
         aovs.add_tile(&tile.aovs, x0, y0);
         counters.merge(stats);
+    }
+    if let Some((splat, scale)) = splats {
+        add_splats(&mut film, window, splat, scale);
     }
     let image = |f: &dyn Fn(usize) -> Rgb| Image {
         width: w as usize,
@@ -661,6 +739,24 @@ fn gather(
             end: samples.end,
         },
         stats,
+    }
+}
+
+/// Adds the light-traced image `splat` (sums over the whole image, times `scale`) to the
+/// window's film: each pixel's sum grows by its splat value times its sample count, so
+/// that its mean is the camera paths' mean plus the splats'. The sums of squares are the
+/// camera paths' alone: the variance layer does not include the splats' noise.
+fn add_splats(film: &mut Film, window: Window, splat: &SplatFilm, scale: f64) {
+    let w = window.width();
+    for y in window.y0..window.y1 {
+        for x in window.x0..window.x1 {
+            let j = ((y - window.y0) * w + (x - window.x0)) as usize;
+            let s = splat.sum(y * splat.width() + x);
+            let count = f64::from(film.count[j]);
+            for c in 0..3 {
+                film.sum[j][c] += s[c] * scale * count;
+            }
+        }
     }
 }
 

@@ -127,6 +127,10 @@ pub struct RenderSettings {
     /// Pass-throughs (index-matched or false boundaries) one path may make before it is
     /// stopped; a generous guard against infinite loops. Defaults to 1024.
     pub max_passes: u32,
+    /// The global integrator the scene asks for (`[render] integrator`); a render's
+    /// [`RenderOptions::integrator`](crate::render::RenderOptions::integrator) overrides it.
+    /// Defaults to the path tracer.
+    pub integrator: crate::integrator::GlobalIntegrator,
 }
 
 impl Default for RenderSettings {
@@ -139,6 +143,7 @@ impl Default for RenderSettings {
             rr_depth: 5,
             seed: 0,
             max_passes: 1024,
+            integrator: crate::integrator::GlobalIntegrator::Path,
         }
     }
 }

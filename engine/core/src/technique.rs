@@ -16,7 +16,7 @@
 //!
 //! [`IntegratorContext::technique`]: crate::plugin::IntegratorContext::technique
 
-use crate::integrator::LightingTechnique;
+use crate::integrator::{GlobalIntegrator, LightingTechnique};
 pub use crate::plugin::technique::{
     always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue, MAX_PLUGIN_CHOICES,
 };
@@ -79,12 +79,41 @@ pub static SAMPLER: Technique = Technique {
     applies_to: "every scene",
 };
 
+/// `integrator`: which global integrator renders.
+pub static INTEGRATOR: Technique = Technique {
+    name: "integrator",
+    summary: "the global integrator: which strategies make each path",
+    values: &[
+        TechniqueValue {
+            name: "path",
+            summary: "path tracing from the camera, with light sampling at every vertex",
+            converges: always,
+        },
+        TechniqueValue {
+            name: "light",
+            summary: "light tracing: paths from the lights, splatted where they meet the camera",
+            converges: |f| !f.emissive_media,
+        },
+        TechniqueValue {
+            name: "bdpt",
+            summary: "bidirectional path tracing: camera and light subpaths, every connection, MIS (Veach 1997)",
+            converges: always,
+        },
+    ],
+    default: "path",
+    applies_to: "scenes with lights (emitters, distant, point, spot, environment, emissive media)",
+};
+
 /// Whether a technique of the global integrator applies to a scene with these features.
 pub type Applies = fn(&Features) -> bool;
 
 /// The global integrator's own techniques, in listing order, each with the scenes it
 /// applies to.
-pub static CORE: [(&Technique, Applies); 2] = [(&LIGHTING, has_lights), (&SAMPLER, |_| true)];
+pub static CORE: [(&Technique, Applies); 3] = [
+    (&INTEGRATOR, has_lights),
+    (&LIGHTING, has_lights),
+    (&SAMPLER, |_| true),
+];
 
 /// The techniques known in one scene: the global integrator's ([`CORE`]) and those its
 /// materials declare.
@@ -165,6 +194,8 @@ impl TechniqueRegistry {
 /// A choice of value for every technique of a scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Techniques {
+    /// `integrator` (`None`: not chosen, the scene's).
+    pub integrator: Option<GlobalIntegrator>,
     /// `lighting`.
     pub lighting: LightingTechnique,
     /// `sampler`.
@@ -182,6 +213,7 @@ impl Techniques {
     ) -> Result<&'static str, TechniqueError> {
         let t = registry.find(name)?;
         Ok(match t.name {
+            "integrator" => self.integrator.unwrap_or_default().name(),
             "lighting" => match self.lighting {
                 LightingTechnique::Mis => "mis",
                 LightingTechnique::NeeOnly => "nee",
@@ -205,6 +237,7 @@ impl Techniques {
         let t = registry.find(name)?;
         let v = t.value(value)?;
         match t.name {
+            "integrator" => self.integrator = GlobalIntegrator::from_name(v.name),
             "lighting" => {
                 self.lighting = match v.name {
                     "nee" => LightingTechnique::NeeOnly,
@@ -312,6 +345,7 @@ impl Techniques {
     /// `base` with these techniques.
     pub fn render_options(&self, base: RenderOptions) -> RenderOptions {
         RenderOptions {
+            integrator: self.integrator.or(base.integrator),
             technique: self.lighting,
             sampler: self.sampler,
             plugin_techniques: self.plugins,

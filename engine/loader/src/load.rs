@@ -424,6 +424,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         max_depth: r.max_depth,
         rr_depth: r.rr_depth,
         seed: r.seed,
+        integrator: r.integrator,
         ..RenderSettings::default()
     };
     let c = desc.camera;

@@ -45,6 +45,7 @@ pub use objects::{InstanceDesc, ObjectDesc};
 pub use params::MaterialParams;
 pub use pattern::ColourParam;
 pub use risotto_engine::diagnostics::{Location, ReferencedFiles, SceneError, SceneErrorKind};
+use risotto_engine::integrator::GlobalIntegrator;
 
 use crate::import::{self, ImportOptions, SceneFormat};
 use lights::read_lights;
@@ -112,6 +113,8 @@ pub struct RenderSettings {
     /// The pixel reconstruction filter (`filter`, `filter_radius`, `filter_stddev`;
     /// default the box of radius 1/2, uniform over each pixel).
     pub filter: PixelFilter,
+    /// The global integrator (`integrator = "path" | "light" | "bdpt"`, default `"path"`).
+    pub integrator: GlobalIntegrator,
 }
 
 impl RenderSettings {
@@ -135,6 +138,7 @@ impl Default for RenderSettings {
             seed: d.seed,
             rr_depth: d.rr_depth,
             filter: PixelFilter::PIXEL_BOX,
+            integrator: d.integrator,
         }
     }
 }
@@ -405,7 +409,15 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         return Ok(d);
     };
     let r = Reader::new(top.src, node, "render");
-    let keys = ["width", "height", "spp", "max_depth", "seed", "rr_depth"];
+    let keys = [
+        "width",
+        "height",
+        "spp",
+        "max_depth",
+        "seed",
+        "rr_depth",
+        "integrator",
+    ];
     r.deny_unknown(&[&keys[..], &pixel_filter::FILTER_KEYS].concat())?;
     // Each side bounded so that width * height stays far from overflow; the product is
     // bounded below.
@@ -456,6 +468,23 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         seed: r.int_in("seed", Some(d.seed as i64), 0, i64::MAX)? as u64,
         rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,
         filter: pixel_filter::read_pixel_filter(&r)?,
+        integrator: read_integrator(&r)?,
+    })
+}
+
+/// The `integrator` key of the `[render]` table `r`.
+fn read_integrator(r: &Reader<'_>) -> Result<GlobalIntegrator, SceneError> {
+    let Some(name) = r.str_opt("integrator")? else {
+        return Ok(GlobalIntegrator::default());
+    };
+    GlobalIntegrator::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = GlobalIntegrator::ALL.iter().map(|g| g.name()).collect();
+        let node = r.get("integrator").unwrap_or(r.node);
+        r.invalid(
+            "integrator",
+            node,
+            &format!("must be one of {}", names.join(", ")),
+        )
     })
 }
 

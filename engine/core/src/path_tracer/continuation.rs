@@ -15,7 +15,7 @@ use risotto_systems::path::{continue_paths, PathLimits, Vertices};
     clippy::too_many_arguments,
     reason = "the columns it reads and writes, named"
 )]
-pub(super) fn continue_group(
+pub(crate) fn continue_group(
     scene: &CompiledScene,
     paths: &Paths,
     vertices: Vertices<'_>,

@@ -111,8 +111,17 @@ fn light_pdf_at(
     rays: &Rays,
     r: usize,
 ) -> f32 {
-    // The hit primitive is not stored on the point; find it by re-intersecting the ray (cheap
-    // and rare: only for emitter hits after a non-specular bounce).
+    let prim = hit_prim(scene, rays, r);
+    if prim == NO_HIT || scene.shape_of_prim(prim) != shape {
+        return 0.0;
+    }
+    scene.mis_lights.area_pdf(prim, from, p, ng)
+}
+
+/// The primitive ray `r` of `rays` hits (`NO_HIT` for none). The hit primitive is not stored
+/// on shading points; it is found by re-intersecting the ray (cheap and rare: only for
+/// emitter hits after a non-specular bounce).
+pub(crate) fn hit_prim(scene: &CompiledScene, rays: &Rays, r: usize) -> u32 {
     let mut t = [0.0f32];
     let mut prim = [NO_HIT];
     let (mut b1, mut b2) = ([0.0f32], [0.0f32]);
@@ -127,8 +136,5 @@ fn light_pdf_at(
         &mut b1,
         &mut b2,
     );
-    if prim[0] == NO_HIT || scene.shape_of_prim(prim[0]) != shape {
-        return 0.0;
-    }
-    scene.mis_lights.area_pdf(prim[0], from, p, ng)
+    prim[0]
 }

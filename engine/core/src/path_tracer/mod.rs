@@ -22,8 +22,10 @@
 //! `k <= max_depth`. Crossings of index-matched and false boundaries are not vertices.
 
 mod continuation;
+pub(crate) use continuation::continue_group;
 mod direct_lighting;
 mod emitters;
+pub(crate) use emitters::hit_prim;
 mod escaped;
 mod generate;
 mod pass_through;
@@ -160,6 +162,38 @@ impl Integrator for PathTracer {
     }
 }
 
+/// The trace stage for other global integrators (`crate::bidir`): traces `q.rays` into
+/// `q.hits` and `q.escaped` with `tracer`'s techniques (a `BxdfOnly` tracer offers volume
+/// integrators no lighting delegate), no surface caches shared.
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+pub(crate) fn trace_nearest_hits(
+    tracer: &PathTracer,
+    scene: &CompiledScene,
+    batch: &mut PathBatch,
+    q: &mut Queues,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let surfaces = SurfaceCaches::default();
+    trace::nearest_hits(tracer, scene, batch, q, stats, arena, counters, &surfaces);
+}
+
+/// The pass-through stage for other global integrators (`crate::bidir`): moves the points
+/// of `q.hits` on pass-through boundaries out and queues their rays in `q.rays`.
+pub(crate) fn pass_through_boundaries(
+    tracer: &PathTracer,
+    scene: &CompiledScene,
+    q: &mut Queues,
+    batch: &mut PathBatch,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let (hits, rays) = (&mut q.hits, &mut q.rays);
+    pass_through::boundaries(tracer, scene, hits, rays, batch, stats, arena, counters);
+}
+
 /// NaN provenance: records that `stage` made a value of path `path` (a row of the batch's
 /// `paths`) non-finite at a vertex of depth `depth`, with the material involved where there is
 /// one ([`SystemStats::non_finite_event`]). Out of line: it runs only for non-finite values.
@@ -189,7 +223,7 @@ pub(crate) fn non_finite_case(
 impl HitQueue {
     /// Starts a bounce: empties the queue, handing the dead rows of the last bounce's rays to
     /// `next` as storage (`Rays::reuse_rows` then spares writing defaults into them).
-    fn recycle_into(&mut self, next: &mut RayQueue) {
+    pub(crate) fn recycle_into(&mut self, next: &mut RayQueue) {
         std::mem::swap(&mut self.incoming, &mut next.rays);
         self.incoming.clear();
         self.groups.clear();

@@ -1,0 +1,545 @@
+//! Camera subpaths: from the camera as the path tracer's, and at every vertex each strategy
+//! that ends there: the emitter or environment the subpath hits, a light sample (next-event
+//! estimation, one light vertex), and connections to every stored vertex of the camera
+//! sample's own light subpath, each weighted by [`super::mis`] against all the others.
+
+use super::evaluate::cos_at;
+use super::mis::{
+    connection_weight, emitter_hit_weight, light_sample_weight, pdf_w_to_a, ConnectionPdfs,
+    SubpathMis,
+};
+use super::vertices::{LightVertices, NO_VERTEX};
+use super::walk::{arrival_margin, push_connection, stack_toward, trace_bounce};
+use super::{BidirWorker, Bidirectional, Scratch, Strategy};
+use crate::integrator::PathBatch;
+use crate::path_tracer::{continue_group, hit_prim};
+use crate::plugin::{Bxdf, ParamCache, PatternCounters, ShadingContext};
+use crate::scene::CompiledScene;
+use crate::shade_groups::ShadingMode;
+use crate::stats::SystemStats;
+use bumpalo::Bump;
+use glam::{Vec2, Vec3};
+use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints, NO_HIT};
+use risotto_systems::camera::push_camera_rays;
+use risotto_systems::lights::{Light, LightSample};
+use risotto_systems::path::Vertices;
+use risotto_systems::sampler::{next_4d_column, PathSampler};
+
+/// Traces the camera subpaths of `batch`, adding to each path's radiance what its strategies
+/// estimate (shadow rays of its light samples and connections traced at the end).
+pub(super) fn camera_subpaths(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    batch: &mut PathBatch,
+    w: &mut BidirWorker,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let n = batch.paths.len();
+    let f = bd.factors();
+    let q = &mut w.camera_q;
+    q.rays.rays.clear();
+    push_camera_rays(
+        &scene.camera,
+        &batch.paths.pixel,
+        &batch.paths.sample,
+        &batch.seeds,
+        &scene.camera_stack,
+        &mut q.rays.rays,
+    );
+    stats.add_rays(n);
+    w.s.mis.clear();
+    w.s.mis.extend(q.rays.rays.direction.iter().map(|&d| {
+        SubpathMis::camera_start(scene.camera.pdf_direction(d), f.light_paths_per_pixel)
+    }));
+    w.s.connections.clear();
+    let stages = super::walk::stages(bd.techniques);
+    let mut first = true;
+    while !w.camera_q.rays.rays.is_empty() {
+        trace_bounce(
+            &stages,
+            scene,
+            batch,
+            &mut w.camera_q,
+            &mut w.s.escaped,
+            stats,
+            arena,
+            counters,
+        );
+        environment(bd, scene, batch, w);
+        camera_vertices(bd, scene, batch, w, first, stats, arena, counters);
+        let q = &mut w.camera_q;
+        std::mem::swap(&mut q.rays, &mut q.next);
+        q.next.rays.clear();
+        stats.add_rays(q.rays.rays.len());
+        first = false;
+    }
+    let shadow = &w.s.connections;
+    if !shadow.is_empty() {
+        let mut contribution = std::mem::take(&mut w.s.connection_contribution);
+        contribution.clear();
+        contribution.extend_from_slice(&shadow.contribution);
+        crate::transmission::trace_shadow_rays(
+            scene,
+            shadow,
+            batch,
+            bd.techniques,
+            &mut contribution,
+            stats,
+            arena,
+        );
+        for (&path, &c) in shadow.path.iter().zip(&contribution) {
+            batch.paths.radiance[path as usize] += c;
+        }
+        w.s.connection_contribution = contribution;
+    }
+}
+
+/// The environment seen by the rays that left the scene.
+fn environment(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    batch: &mut PathBatch,
+    w: &mut BidirWorker,
+) {
+    let incoming = &w.camera_q.hits.incoming;
+    let env = scene.lights.environment_light();
+    for &(r, tr) in &w.s.escaped {
+        let r = r as usize;
+        let path = incoming.path[r] as usize;
+        let d = incoming.direction[r];
+        let le = scene.lights.environment_radiance(d);
+        let depth = incoming.depth[r];
+        if depth == 0 && batch.paths.depth[path].is_infinite() {
+            batch.paths.albedo[path] = le;
+        }
+        if le.is_black() || depth as u32 + 1 > scene.settings.max_depth {
+            continue;
+        }
+        let weight = match (depth, bd.strategy, env) {
+            (0, _, _) => 1.0,
+            (_, Strategy::Light, _) | (_, _, None) => continue,
+            (_, _, Some(env)) => {
+                let direct = scene.lights.environment_pdf(d);
+                let bounds = scene.geometry.bounds();
+                let (pp, pd) = scene.lights.emission_pdf(env, Vec3::ZERO, -d, -d, bounds);
+                emitter_hit_weight(&w.s.mis[path], direct, pp * pd, false)
+            }
+        };
+        batch.paths.radiance[path] += incoming.throughput[r] * tr * le * weight;
+    }
+}
+
+/// The camera vertices of one bounce: emitters hit, the strategies that connect there, and
+/// the next direction.
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+fn camera_vertices(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    batch: &mut PathBatch,
+    w: &mut BidirWorker,
+    first: bool,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let settings = scene.settings;
+    let (q, s, light) = (&mut w.camera_q, &mut w.s, &w.light);
+    let groups = std::mem::take(&mut q.hits.groups.groups);
+    let total: usize = groups.iter().map(|g| g.range.len()).sum();
+    let mut next_len = 0;
+    let mut next_out = q.next.rays.reuse_rows(total);
+    // The dead rows reused here hold old bounds; continuing rays are unbounded.
+    next_out.tmin.fill(0.0);
+    next_out.tmax.fill(f32::INFINITY);
+    let bounds = scene.geometry.bounds();
+    for grp in &groups {
+        let range = grp.range.clone();
+        let pts = &q.hits.groups.points;
+        let incoming = &mut q.hits.incoming;
+        let m = range.len();
+        for i in range.clone() {
+            let r = pts.ray_id[i] as usize;
+            incoming.throughput[r] *= pts.transmission[i];
+            let path = incoming.path[r] as usize;
+            let distance = (pts.p[i] - incoming.prev_p[r]).length();
+            s.mis[path].arrive(distance, cos_at(pts, i, pts.vn[i]), false);
+            // An emitter hit: the strategy that finds the light by following the camera.
+            let shape = pts.shape[i];
+            if shape == u32::MAX || !pts.front_face[i] {
+                continue;
+            }
+            let Some(le) = scene.shapes[shape as usize].emission else {
+                continue;
+            };
+            let depth = incoming.depth[r];
+            if depth as u32 + 1 > settings.max_depth {
+                continue;
+            }
+            let weight = if depth == 0 {
+                1.0
+            } else if bd.strategy == Strategy::Light {
+                continue;
+            } else {
+                let prim = hit_prim(scene, incoming, r);
+                let Some(light) = (prim != NO_HIT)
+                    .then(|| scene.lights.area_light(prim))
+                    .flatten()
+                else {
+                    continue;
+                };
+                let (pp, pd) = scene
+                    .lights
+                    .emission_pdf(light, pts.p[i], pts.ng[i], pts.vn[i], bounds);
+                emitter_hit_weight(&s.mis[path], pp, pp * pd, false)
+            };
+            batch.paths.radiance[path] += incoming.throughput[r] * le * weight;
+        }
+        let factory = scene.materials[grp.material as usize].factory.as_ref();
+        let cache = arena.alloc(ParamCache::new(arena, counters));
+        let ctx = ShadingContext::new(pts, range.clone(), grp.mode, grp.material, &[])
+            .with_factory(factory)
+            .with_cache(cache);
+        let bxdf = factory.begin_scatter(&ctx, grp.mode, arena);
+        if first {
+            first_hit_aovs(
+                batch,
+                incoming,
+                pts,
+                range.clone(),
+                &ctx,
+                &mut *bxdf,
+                &mut s.albedo,
+            );
+        }
+        if bd.strategy == Strategy::Light {
+            // Light tracing alone: camera rays only see what they hit directly.
+            continue;
+        }
+        let connectable = bxdf.lobes().contains(LobeSampled::DIFFUSE);
+        s.samplers.clear();
+        s.samplers
+            .extend(pts.ray_id[range.clone()].iter().map(|&r| {
+                let r = r as usize;
+                let path = incoming.path[r] as usize;
+                PathSampler {
+                    seed: batch.seeds[path],
+                    sample: batch.paths.sample[path],
+                    dimension: incoming.dimension[r],
+                }
+            }));
+        s.u4.clear();
+        s.u4.resize(m, [0.0; 4]);
+        next_4d_column(&mut s.samplers, &mut s.u4);
+        if connectable {
+            let at = CameraVertices {
+                pts,
+                incoming,
+                range: range.clone(),
+            };
+            light_samples(bd, scene, s, &at, arena, counters);
+            connect_light_vertices(bd, scene, s, light, &at, arena, counters);
+        }
+        s.samples.reset(m);
+        bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
+        s.evals.clear();
+        for (k, i) in range.clone().enumerate() {
+            let smp = &s.samples;
+            if smp.pdf[k] > 0.0 && !smp.lobe[k].is_specular() {
+                s.evals.push(pts, i, smp.wi[k], pts.vn[i]);
+            }
+        }
+        s.evals.run(scene, arena, counters);
+        let mut e = 0;
+        for (k, i) in range.clone().enumerate() {
+            let smp = &s.samples;
+            if smp.pdf[k] <= 0.0 {
+                continue;
+            }
+            let r = pts.ray_id[i] as usize;
+            let path = incoming.path[r] as usize;
+            let specular = smp.lobe[k].is_specular();
+            let pdf_rev = if specular {
+                smp.pdf[k]
+            } else {
+                e += 1;
+                s.evals.pdf[e - 1]
+            };
+            let cos_out = cos_at(pts, i, smp.wi[k]);
+            s.mis[path].scatter(
+                smp.pdf[k],
+                pdf_rev,
+                cos_out,
+                specular,
+                f.at(pts.shape[i] == u32::MAX),
+            );
+        }
+        let vertices = Vertices {
+            points: pts,
+            range: range.clone(),
+            on_surface: grp.mode == ShadingMode::Scatter,
+            incoming,
+        };
+        next_len += continue_group(
+            scene,
+            &batch.paths,
+            vertices,
+            &s.samples,
+            &s.u4,
+            &mut s.stack_errors,
+            &mut next_out,
+            next_len,
+            stats,
+        );
+    }
+    q.next.rays.truncate(next_len);
+    q.hits.groups.groups = groups;
+}
+
+/// The camera vertices of one group: rows `range` of `pts`, reached by rows of `incoming`.
+struct CameraVertices<'a> {
+    pts: &'a ShadingPoints,
+    incoming: &'a Rays,
+    range: std::ops::Range<usize>,
+}
+
+/// First-hit AOVs of the camera rays' vertices (as the path tracer's shade stage).
+fn first_hit_aovs(
+    batch: &mut PathBatch,
+    incoming: &Rays,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    ctx: &ShadingContext<'_>,
+    bxdf: &mut dyn Bxdf,
+    albedo: &mut Vec<Rgb>,
+) {
+    albedo.clear();
+    albedo.resize(range.len(), Rgb::BLACK);
+    bxdf.albedo(ctx, albedo);
+    for (k, i) in range.enumerate() {
+        let r = pts.ray_id[i] as usize;
+        if incoming.depth[r] == 0 && incoming.passes[r] == 0 {
+            let path = incoming.path[r] as usize;
+            batch.paths.albedo[path] = albedo[k];
+            batch.paths.normal[path] = pts.nn[i];
+            batch.paths.depth[path] = pts.vlen[i];
+        }
+    }
+}
+
+/// Next-event estimation at the group's vertices (a light vertex sampled on a light, seen
+/// from the camera vertex), weighted against every other strategy.
+fn light_samples(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    at: &CameraVertices<'_>,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let (pts, incoming) = (at.pts, at.incoming);
+    let lights = &scene.lights;
+    let bounds = scene.geometry.bounds();
+    s.evals.clear();
+    s.evals_rev.clear();
+    s.light_hits.clear();
+    for (k, i) in at.range.clone().enumerate() {
+        let r = pts.ray_id[i] as usize;
+        // The path with the light sample has depth + 2 segments.
+        if incoming.depth[r] as u32 + 2 > scene.settings.max_depth {
+            continue;
+        }
+        let u = s.u4[k];
+        let Some(light) = lights.selected_light(u[2]) else {
+            continue;
+        };
+        let Some(ls) = lights.sample(&scene.geometry, pts.p[i], u[2], Vec2::new(u[0], u[1])) else {
+            continue;
+        };
+        // The light's own view of the sample: where it emits from, at which cosine.
+        let q = pts.p[i] + ls.wi * ls.distance;
+        let (n_light, cos_at_light) = match &lights.lights()[light as usize] {
+            Light::Area { prim, .. } => {
+                let n = area_light_normal(scene, *prim, q);
+                (n, n.dot(-ls.wi).abs())
+            }
+            _ => (Vec3::ZERO, 1.0),
+        };
+        let (pp, pd) = lights.emission_pdf(light, q, n_light, -ls.wi, bounds);
+        s.evals.push(pts, i, pts.vn[i], ls.wi);
+        s.evals_rev.push(pts, i, ls.wi, pts.vn[i]);
+        s.light_hits.push(LightHit {
+            k: k as u32,
+            sample: ls,
+            emission_pdf: pp * pd,
+            cos_at_light,
+        });
+    }
+    s.evals.run(scene, arena, counters);
+    s.evals_rev.run(scene, arena, counters);
+    for (e, h) in s.light_hits.iter().enumerate() {
+        let i = at.range.start + h.k as usize;
+        let r = pts.ray_id[i] as usize;
+        let ls = &h.sample;
+        let cos_to_light = cos_at(pts, i, ls.wi);
+        let path = incoming.path[r] as usize;
+        let weight = light_sample_weight(
+            &s.mis[path],
+            ls.pdf,
+            h.emission_pdf,
+            s.evals.pdf[e],
+            s.evals_rev.pdf[e],
+            cos_to_light,
+            h.cos_at_light,
+            ls.delta,
+            f.at(pts.shape[i] == u32::MAX),
+        );
+        let c = incoming.throughput[r] * s.evals.value[e] * ls.radiance * (weight / ls.pdf);
+        if c.is_black() || !c.is_finite() {
+            continue;
+        }
+        let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, ls.wi);
+        push_connection(
+            &mut s.connections,
+            pts,
+            i,
+            ls.wi,
+            ls.distance,
+            ls.margin,
+            c,
+            path as u32,
+            incoming.dimension[r],
+            stack,
+        );
+    }
+}
+
+/// Connections of the group's vertices to every stored vertex of their own light subpath.
+fn connect_light_vertices(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    light: &LightVertices,
+    at: &CameraVertices<'_>,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let (pts, incoming) = (at.pts, at.incoming);
+    let lp = &light.points;
+    for bounce in 0..light.bounces() {
+        let by_path = &light.by_bounce[bounce];
+        s.evals.clear();
+        s.evals_rev.clear();
+        s.light_evals.clear();
+        s.light_evals_rev.clear();
+        s.pairs.clear();
+        for (k, i) in at.range.clone().enumerate() {
+            let r = pts.ray_id[i] as usize;
+            let path = incoming.path[r] as usize;
+            let v = by_path.get(path).copied().unwrap_or(NO_VERTEX);
+            if v == NO_VERTEX {
+                continue;
+            }
+            let v = v as usize;
+            // Camera segments so far, the connection, and the light subpath's.
+            let segments = incoming.depth[r] as u32 + 1 + 1 + light.segments[v];
+            if segments > scene.settings.max_depth {
+                continue;
+            }
+            let d = lp.p[v] - pts.p[i];
+            let distance = d.length();
+            if distance.is_nan() || distance <= 0.0 || !distance.is_finite() {
+                continue;
+            }
+            let dir = d / distance;
+            s.evals.push(pts, i, pts.vn[i], dir);
+            s.evals_rev.push(pts, i, dir, pts.vn[i]);
+            s.light_evals.push(lp, v, lp.vn[v], -dir);
+            s.light_evals_rev.push(lp, v, -dir, lp.vn[v]);
+            s.pairs.push((k as u32, v as u32));
+        }
+        if s.pairs.is_empty() {
+            continue;
+        }
+        s.evals.run(scene, arena, counters);
+        s.evals_rev.run(scene, arena, counters);
+        s.light_evals.run(scene, arena, counters);
+        s.light_evals_rev.run(scene, arena, counters);
+        for (e, &(k, v)) in s.pairs.iter().enumerate() {
+            let (i, v) = (at.range.start + k as usize, v as usize);
+            let r = pts.ray_id[i] as usize;
+            let path = incoming.path[r] as usize;
+            let d = lp.p[v] - pts.p[i];
+            let distance = d.length();
+            let dir = d / distance;
+            let cos_camera = cos_at(pts, i, dir);
+            let cos_light = cos_at(lp, v, -dir);
+            let cos_light_in = cos_at(lp, v, lp.vn[v]);
+            if cos_light_in <= 0.0 {
+                continue;
+            }
+            // The light vertex seen from the camera vertex, light from its own subpath:
+            // `f |cos of its incident direction|`; the connection wants `|cos towards the
+            // camera vertex|`.
+            let f_light = s.light_evals_rev.value[e] * (cos_light / cos_light_in);
+            let pdfs = ConnectionPdfs {
+                camera_pdf_a: pdf_w_to_a(s.evals.pdf[e], distance, cos_light),
+                camera_rev_pdf_w: s.evals_rev.pdf[e],
+                light_pdf_a: pdf_w_to_a(s.light_evals.pdf[e], distance, cos_camera),
+                light_rev_pdf_w: s.light_evals_rev.pdf[e],
+            };
+            let (vc, vl) = (
+                f.at(pts.shape[i] == u32::MAX),
+                f.at(lp.shape[v] == u32::MAX),
+            );
+            let weight = connection_weight(&s.mis[path], &light.mis[v], &pdfs, vc, vl);
+            let c = incoming.throughput[r]
+                * s.evals.value[e]
+                * f_light
+                * light.throughput[v]
+                * (weight / (distance * distance));
+            if c.is_black() || !c.is_finite() {
+                continue;
+            }
+            let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, dir);
+            let margin = arrival_margin(lp, v, dir);
+            push_connection(
+                &mut s.connections,
+                pts,
+                i,
+                dir,
+                distance,
+                margin,
+                c,
+                path as u32,
+                incoming.dimension[r],
+                stack,
+            );
+        }
+    }
+}
+
+/// A light sample at a camera vertex (`k` of its group) and what its weight needs.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LightHit {
+    k: u32,
+    sample: LightSample,
+    emission_pdf: f32,
+    cos_at_light: f32,
+}
+
+/// The outward normal of the area light on `prim` at `q`.
+fn area_light_normal(scene: &CompiledScene, prim: u32, q: Vec3) -> Vec3 {
+    let g = &scene.geometry;
+    let p = prim as usize;
+    if p < g.num_triangles() {
+        g.sample_surface(prim, Vec2::ZERO).ng
+    } else {
+        let sphere = g.sphere(p - g.num_triangles());
+        (q - sphere.center).normalize_or_zero()
+    }
+}

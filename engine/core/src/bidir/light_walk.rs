@@ -1,0 +1,352 @@
+//! Light subpaths: one per camera sample of the batch, leaving a light sampled by power,
+//! traced through the same trace stage as camera paths (media answer it as a light path,
+//! without a lighting delegate), with every vertex that has a non-Dirac lobe stored for the
+//! camera subpaths and connected to the camera (the light-tracing strategy).
+//!
+//! Importance transport: a light subpath carries `Le cos / pdf` times the adjoint Bxdf
+//! `f*(wo, wi) = f(wi, wo)` of every vertex. The plug-in closures evaluate radiance
+//! transport; the two differ where a lobe refracts, by the squared relative IOR (Veach 1997,
+//! sec. 5.2; pbrt-v4's `TransportMode::Importance`), so a transmitted sample's weight is
+//! multiplied by `eta^2` here, and a connection's value is the closure seen from the camera
+//! side ([`super::evaluate`]).
+
+use super::evaluate::cos_at;
+use super::mis::{camera_connection_weight, SubpathMis};
+use super::walk::{push_connection, stack_toward, trace_bounce};
+use super::{BidirWorker, Bidirectional, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
+use crate::integrator::PathBatch;
+use crate::path_tracer::continue_group;
+use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
+use crate::scene::CompiledScene;
+use crate::shade_groups::ShadingMode;
+use crate::stats::SystemStats;
+use bumpalo::Bump;
+use glam::Vec2;
+use risotto_components::{LobeSampled, RayRow};
+use risotto_systems::path::Vertices;
+use risotto_systems::ray::offset_origin;
+use risotto_systems::sampler::{next_4d_column, sample_1d, sample_2d, PathSampler};
+
+/// Traces the light subpaths of `batch` (one per camera sample, row for row): stores their
+/// vertices in `w.light` and splats their connections to the camera into the integrator's
+/// splat film.
+pub(super) fn light_subpaths(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    batch: &PathBatch,
+    w: &mut BidirWorker,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let n = batch.paths.len();
+    // The light subpaths as a batch of their own: the camera samples' pixels and indices,
+    // seeds salted so that their numbers are not the camera paths'.
+    let lb = &mut w.light_batch;
+    lb.paths.clear();
+    lb.paths.extend_from(&batch.paths);
+    lb.seeds.clear();
+    lb.seeds
+        .extend(batch.seeds.iter().map(|s| s ^ LIGHT_SEED_SALT));
+    w.light.clear();
+    w.s.mis.clear();
+    w.s.mis.resize(n, SubpathMis::default());
+    w.s.at_infinity.clear();
+    w.s.at_infinity.resize(n, false);
+    let lights = &scene.lights;
+    let bounds = scene.geometry.bounds();
+    let q = &mut w.light_q;
+    q.rays.rays.clear();
+    for i in 0..n {
+        let (seed, sample) = (lb.seeds[i], lb.paths.sample[i]);
+        let u_position = sample_2d(seed, sample, 0);
+        let u_direction = sample_2d(seed, sample, 2);
+        let u_select = sample_1d(seed, sample, 4);
+        let Some(e) =
+            lights.sample_emission(&scene.geometry, bounds, u_select, u_position, u_direction)
+        else {
+            continue;
+        };
+        let emission_pdf = e.pdf_position * e.pdf_direction;
+        let throughput = e.radiance * (e.cos_at_light / emission_pdf);
+        if emission_pdf.is_nan()
+            || emission_pdf <= 0.0
+            || throughput.is_black()
+            || !throughput.is_finite()
+        {
+            continue;
+        }
+        // The density with which next-event estimation picks the start: per unit area for
+        // lights with a position (`pdf_position` includes the selection), per unit solid
+        // angle for the environment, the selection alone for Dirac lights.
+        let direct_pdf = if e.at_infinity && !e.delta_direction {
+            lights.environment_pdf(-e.direction)
+        } else {
+            e.pdf_position
+        };
+        let delta = e.delta_position || e.delta_direction;
+        w.s.mis[i] = SubpathMis::light_start(direct_pdf, emission_pdf, e.cos_at_light, delta);
+        w.s.at_infinity[i] = e.at_infinity;
+        let offset = e.n.abs().dot(e.p_error);
+        let origin = if e.n == glam::Vec3::ZERO {
+            e.p
+        } else {
+            offset_origin(e.p, e.n, offset, e.direction)
+        };
+        q.rays.rays.push(RayRow {
+            origin,
+            direction: e.direction,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+            path: i as u32,
+            throughput,
+            lobe: LobeSampled::NONE,
+            depth: 0,
+            passes: 0,
+            pdf: 0.0,
+            eta_scale: 1.0,
+            dimension: WALK_FIRST_DIMENSION,
+            shading_ctx_index: u32::MAX,
+            prev_p: e.p,
+            volume_stack: bd.light_stack(e.light).clone(),
+        });
+    }
+    stats.add_rays(q.rays.rays.len());
+    w.s.splats.clear();
+    w.s.splat_film_pos.clear();
+    let stages = super::walk::stages(bd.techniques);
+    let mut bounce = 0;
+    while !w.light_q.rays.rays.is_empty() {
+        trace_bounce(
+            &stages,
+            scene,
+            &mut w.light_batch,
+            &mut w.light_q,
+            &mut w.s.escaped,
+            stats,
+            arena,
+            counters,
+        );
+        scatter_light_vertices(bd, scene, w, bounce, stats, arena, counters);
+        let q = &mut w.light_q;
+        std::mem::swap(&mut q.rays, &mut q.next);
+        q.next.rays.clear();
+        stats.add_rays(q.rays.rays.len());
+        bounce += 1;
+    }
+    // The connections to the camera, through every volume and surface in between.
+    let splats = &w.s.splats;
+    if !splats.is_empty() {
+        let mut contribution = std::mem::take(&mut w.s.splat_contribution);
+        contribution.clear();
+        contribution.extend_from_slice(&splats.contribution);
+        crate::transmission::trace_shadow_rays(
+            scene,
+            splats,
+            &w.light_batch,
+            bd.techniques,
+            &mut contribution,
+            stats,
+            arena,
+        );
+        let film = bd.splat_film();
+        for (&pos, &c) in w.s.splat_film_pos.iter().zip(&contribution) {
+            film.add_filtered(&scene.camera.filter, pos, c);
+        }
+        w.s.splat_contribution = contribution;
+    }
+}
+
+/// The vertices of one bounce of the light subpaths: arrive (throughput, MIS), store, connect
+/// to the camera, sample the next direction and continue.
+fn scatter_light_vertices(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    w: &mut BidirWorker,
+    bounce: usize,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let max_depth = scene.settings.max_depth;
+    let q = &mut w.light_q;
+    let groups = std::mem::take(&mut q.hits.groups.groups);
+    let total: usize = groups.iter().map(|g| g.range.len()).sum();
+    let n_paths = w.light_batch.paths.len();
+    let mut next_len = 0;
+    let mut next_out = q.next.rays.reuse_rows(total);
+    // The dead rows reused here hold old bounds; continuing rays are unbounded.
+    next_out.tmin.fill(0.0);
+    next_out.tmax.fill(f32::INFINITY);
+    let by_bounce_len = n_paths;
+    for grp in &groups {
+        let range = grp.range.clone();
+        let pts = &q.hits.groups.points;
+        let incoming = &mut q.hits.incoming;
+        let m = range.len();
+        // Arrive: transmission of the segment, MIS sums.
+        for i in range.clone() {
+            let r = pts.ray_id[i] as usize;
+            incoming.throughput[r] *= pts.transmission[i];
+            let path = incoming.path[r] as usize;
+            let distance = (pts.p[i] - incoming.prev_p[r]).length();
+            let first_from_infinity = incoming.depth[r] == 0 && w.s.at_infinity[path];
+            let cos_in = cos_at(pts, i, pts.vn[i]);
+            w.s.mis[path].arrive(distance, cos_in, first_from_infinity);
+        }
+        let factory = scene.materials[grp.material as usize].factory.as_ref();
+        let cache = arena.alloc(ParamCache::new(arena, counters));
+        let ctx = ShadingContext::new(pts, range.clone(), grp.mode, grp.material, &[])
+            .with_factory(factory)
+            .with_cache(cache);
+        let bxdf = factory.begin_scatter(&ctx, grp.mode, arena);
+        let connectable = bxdf.lobes().contains(LobeSampled::DIFFUSE);
+        // Samplers at the vertex's dimensions: 0-1 the lens sample of the camera
+        // connection, 3 Russian roulette, 4.. the Bxdf.
+        w.s.samplers.clear();
+        w.s.samplers
+            .extend(pts.ray_id[range.clone()].iter().map(|&r| {
+                let r = r as usize;
+                let path = incoming.path[r] as usize;
+                PathSampler {
+                    seed: w.light_batch.seeds[path],
+                    sample: w.light_batch.paths.sample[path],
+                    dimension: incoming.dimension[r],
+                }
+            }));
+        w.s.u4.clear();
+        w.s.u4.resize(m, [0.0; 4]);
+        next_4d_column(&mut w.s.samplers, &mut w.s.u4);
+        if connectable {
+            // Store the vertices, and queue each one's view of the camera.
+            w.s.evals.clear();
+            w.s.eval_rows.clear();
+            for (k, i) in range.clone().enumerate() {
+                let r = pts.ray_id[i] as usize;
+                let path = incoming.path[r] as usize;
+                let segments = incoming.depth[r] as u32 + 1;
+                let v = w.light.len() as u32;
+                w.light.points.extend_from_range(pts, i..i + 1);
+                w.light.throughput.push(incoming.throughput[r]);
+                w.light.mis.push(w.s.mis[path]);
+                w.light.segments.push(segments);
+                w.light.stack.push(incoming.volume_stack[r].clone());
+                w.light.bounce_mut(bounce, by_bounce_len)[path] = v;
+                if segments + 1 > max_depth {
+                    continue;
+                }
+                let u_lens = Vec2::new(w.s.u4[k][0], w.s.u4[k][1]);
+                if let Some(c) = scene.camera.connect(pts.p[i], u_lens) {
+                    let e = w.s.evals.push(pts, i, c.wi, pts.vn[i]);
+                    w.s.eval_rows.push((k as u32, e as u32));
+                    w.s.camera_hits.push(c);
+                }
+            }
+            w.s.evals.run(scene, arena, counters);
+            for (j, &(k, e)) in w.s.eval_rows.iter().enumerate() {
+                let (k, e) = (k as usize, e as usize);
+                let c = w.s.camera_hits[j];
+                let i = range.start + k;
+                let r = pts.ray_id[i] as usize;
+                let path = incoming.path[r] as usize;
+                // The closure seen from the camera, light from the subpath: `f |cos wo|`;
+                // the connection wants `f |cos to the camera|`.
+                let cos_in = cos_at(pts, i, pts.vn[i]);
+                let cos_cam = cos_at(pts, i, c.wi);
+                if cos_in <= 0.0 {
+                    continue;
+                }
+                let fc = w.s.evals.value[e] * (cos_cam / cos_in);
+                let camera_pdf_a = c.pdf_dir * cos_cam / (c.distance * c.distance);
+                let weight = match bd.strategy {
+                    super::Strategy::Light => 1.0,
+                    _ => camera_connection_weight(
+                        &w.s.mis[path],
+                        camera_pdf_a,
+                        w.s.evals.pdf[e],
+                        f.at(pts.shape[i] == u32::MAX),
+                        f.light_paths_per_pixel,
+                    ),
+                };
+                let contribution = incoming.throughput[r] * fc * (c.importance * weight);
+                if contribution.is_black() || !contribution.is_finite() {
+                    continue;
+                }
+                let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, c.wi);
+                push_connection(
+                    &mut w.s.splats,
+                    pts,
+                    i,
+                    c.wi,
+                    c.distance,
+                    0.0,
+                    contribution,
+                    path as u32,
+                    incoming.dimension[r],
+                    stack,
+                );
+                w.s.splat_film_pos.push(c.film);
+            }
+            w.s.camera_hits.clear();
+        }
+        // Sample the next direction; the reverse pdf of each non-Dirac sample.
+        w.s.samples.reset(m);
+        bxdf.generate_samples(&ctx, &mut w.s.samplers, &mut w.s.samples);
+        w.s.evals.clear();
+        for (k, i) in range.clone().enumerate() {
+            let s = &w.s.samples;
+            if s.pdf[k] > 0.0 && !s.lobe[k].is_specular() {
+                w.s.evals.push(pts, i, s.wi[k], pts.vn[i]);
+            }
+        }
+        w.s.evals.run(scene, arena, counters);
+        let mut e = 0;
+        for (k, i) in range.clone().enumerate() {
+            let s = &mut w.s.samples;
+            if s.pdf[k] <= 0.0 {
+                continue;
+            }
+            let r = pts.ray_id[i] as usize;
+            let path = incoming.path[r] as usize;
+            let specular = s.lobe[k].is_specular();
+            let pdf_rev = if specular {
+                s.pdf[k]
+            } else {
+                e += 1;
+                w.s.evals.pdf[e - 1]
+            };
+            let cos_out = cos_at(pts, i, s.wi[k]);
+            w.s.mis[path].scatter(
+                s.pdf[k],
+                pdf_rev,
+                cos_out,
+                specular,
+                f.at(pts.shape[i] == u32::MAX),
+            );
+            if s.lobe[k].is_transmit() {
+                // Importance is not compressed by refraction as radiance is.
+                s.weight[k] = s.weight[k] * (s.eta[k] * s.eta[k]);
+            }
+        }
+        let vertices = Vertices {
+            points: pts,
+            range: range.clone(),
+            on_surface: grp.mode == ShadingMode::Scatter,
+            incoming,
+        };
+        next_len += continue_group(
+            scene,
+            &w.light_batch.paths,
+            vertices,
+            &w.s.samples,
+            &w.s.u4,
+            &mut w.s.stack_errors,
+            &mut next_out,
+            next_len,
+            stats,
+        );
+    }
+    q.next.rays.truncate(next_len);
+    q.hits.groups.groups = groups;
+}

@@ -1,0 +1,255 @@
+//! Bidirectional global integrators: light tracing, bidirectional path tracing and vertex
+//! connection and merging, over the same volume integrators as the path tracer.
+//!
+//! This is the seed's other kind of global integrator (its example is RenderMan's
+//! `PxrVCM`): it offers volume integrators **no lighting delegate**, so media return their
+//! scattering points as `VolumeScatter` groups ("the only way to perform volume scattering"
+//! then), and it traces paths that start at the lights through the same trace stage
+//! (`GetNearestHits(..., isLightPath)`).
+//!
+//! Each camera sample of a batch gets one light subpath ([`light_walk`]): a light chosen by
+//! power emits a ray, and the subpath scatters as a camera path would, its throughput
+//! carrying importance (the adjoint Bxdf). Every vertex with a non-Dirac lobe is stored and
+//! connected to the camera (splatted wherever it lands on the film). The camera subpath
+//! ([`camera_walk`]) then, at each vertex, adds the emitter it hit, a light sample, and a
+//! connection to every stored vertex of its own light subpath. The strategies are weighted
+//! with the power heuristic over all of them ([`mis`]).
+//!
+//! | strategy (`integrator =`) | camera subpaths | light subpaths | weights |
+//! |---|---|---|---|
+//! | `light` | first segment only (emitters seen directly) | splatted at every vertex | none needed |
+//! | `bdpt` | every strategy | splatted, and connected to | MIS over connections and light tracing |
+//!
+//! What media and materials do here:
+//! - Emissive media are not lights to a bidirectional integrator: camera subpaths gather what
+//!   they emit along their rays (the emission media report), no light subpath starts in
+//!   them, so `light` shows a medium's glow only where the camera sees it directly.
+//! - Volume integrators that walk many events per call (subsurface random walks and
+//!   diffusion, `scattering = "walk"`) hand back only the walk's exit: their inner events
+//!   are not vertices to connect to. The integrator refuses such scenes
+//!   ([`Bidirectional::supports`]) and the driver falls back to the path tracer.
+//! - The distance-sampling pdfs of media and Russian roulette are not in the MIS weights
+//!   (see [`mis`]): the estimate stays unbiased.
+
+mod camera_walk;
+pub mod evaluate;
+mod light_walk;
+pub mod mis;
+mod vertices;
+mod walk;
+
+use crate::integrator::{Integrator, PathBatch};
+use crate::path_tracer::queues::Queues;
+use crate::plugin::{PatternCounters, PluginTechniques};
+use crate::scene::CompiledScene;
+use crate::stats::SystemStats;
+use bumpalo::Bump;
+use evaluate::Evaluations;
+use glam::Vec2;
+use mis::{MisFactors, SubpathMis};
+use risotto_components::{Rgb, ShadowRays, StackEvent, VolumeStack};
+use risotto_systems::bxdf_samples::BxdfSamples;
+use risotto_systems::camera::CameraConnection;
+use risotto_systems::film::SplatFilm;
+use risotto_systems::sampler::PathSampler;
+use std::sync::atomic::{AtomicU64, Ordering};
+pub use vertices::LightVertices;
+
+/// Seed salt of light subpaths' sampler sequences (decorrelated from their camera sample's).
+const LIGHT_SEED_SALT: u32 = 0x9e37_79b9;
+
+/// The first sampler dimension of a light subpath's vertices: the emission draws 0-4.
+const WALK_FIRST_DIMENSION: u32 = 8;
+
+/// Which strategies a [`Bidirectional`] integrator combines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Light tracing: light subpaths splatted at the camera; camera rays only for what
+    /// they see directly.
+    Light,
+    /// Bidirectional path tracing: every connection strategy and light tracing, MIS-weighted.
+    Bdpt,
+}
+
+impl Strategy {
+    /// The technique name (`integrator = ...`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Light => "light",
+            Strategy::Bdpt => "bdpt",
+        }
+    }
+}
+
+/// A bidirectional global integrator.
+pub struct Bidirectional {
+    /// The strategies combined.
+    pub strategy: Strategy,
+    /// Technique choices handed to volume integrators.
+    pub techniques: PluginTechniques,
+    /// The volumes each light's subpaths start in.
+    light_stacks: Vec<VolumeStack>,
+    /// Light subpaths splatted to the camera, over the whole image.
+    splats: SplatFilm,
+    /// Light subpaths traced so far (the splats' normalisation).
+    light_paths: AtomicU64,
+    /// Light subpaths per iteration over the image's pixels ([`MisFactors`]).
+    light_paths_per_pixel: f32,
+}
+
+impl Bidirectional {
+    /// The integrator for `scene`, rendering the pixels `window_pixels` of its image per
+    /// sample index (light subpaths per iteration); `Err` when its splat film cannot be
+    /// allocated.
+    pub fn new(
+        scene: &CompiledScene,
+        strategy: Strategy,
+        techniques: PluginTechniques,
+        window_pixels: usize,
+    ) -> Result<Self, String> {
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let light_stacks = scene
+            .lights
+            .lights()
+            .iter()
+            .map(|l| light_stack(scene, l))
+            .collect();
+        let splats = SplatFilm::new(w, h)
+            .ok_or_else(|| format!("a {w} x {h} splat film cannot be allocated"))?;
+        Ok(Bidirectional {
+            strategy,
+            techniques,
+            light_stacks,
+            splats,
+            light_paths: AtomicU64::new(0),
+            light_paths_per_pixel: window_pixels as f32 / (w as f32 * h as f32),
+        })
+    }
+
+    /// Whether this integrator can render `scene`; `Err` says why not (a volume integrator
+    /// that walks many events per call, whose inner vertices no strategy can connect to).
+    pub fn supports(scene: &CompiledScene) -> Result<(), String> {
+        if scene.features.subsurface {
+            return Err(
+                "subsurface interiors walk inside the surface in one call; their \
+                        inner scattering events are not vertices a bidirectional \
+                        integrator can connect to"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+
+    /// The MIS constants.
+    fn factors(&self) -> MisFactors {
+        MisFactors::connections_only(self.light_paths_per_pixel)
+    }
+
+    /// The volumes subpaths of light `light` start in.
+    fn light_stack(&self, light: u32) -> &VolumeStack {
+        &self.light_stacks[light as usize]
+    }
+
+    fn splat_film(&self) -> &SplatFilm {
+        &self.splats
+    }
+
+    /// The light-traced image so far: pixel sums over the whole image and the factor that
+    /// makes them radiance (`width * height / light subpaths`).
+    pub fn splats(&self) -> (&SplatFilm, f64) {
+        let n = self.light_paths.load(Ordering::Relaxed).max(1) as f64;
+        let (w, h) = (self.splats.width() as f64, self.splats.height() as f64);
+        (&self.splats, w * h / n)
+    }
+}
+
+/// The volumes a light's subpaths start in: probed from a point of the light (its centre
+/// for lights with a position; outside everything for lights at infinity).
+fn light_stack(scene: &CompiledScene, light: &risotto_systems::lights::Light) -> VolumeStack {
+    use risotto_systems::lights::Light;
+    match light {
+        Light::Point { position, .. } | Light::Spot { position, .. } => {
+            scene.probe_stack(*position, glam::Vec3::Z)
+        }
+        Light::Area { prim, .. } => {
+            let s = scene.geometry.sample_surface(*prim, Vec2::splat(0.5));
+            // Just off the emitting side: an emitter on a medium's boundary emits into it.
+            let offset = s.ng * (s.ng.abs().dot(s.p_error) * 4.0 + 1e-4 * s.p.abs().max_element());
+            scene.probe_stack(s.p + offset, s.ng)
+        }
+        _ => VolumeStack::default(),
+    }
+}
+
+/// What a worker keeps across batches.
+#[derive(Default)]
+pub struct BidirWorker {
+    /// The light subpaths of the batch, one per camera sample.
+    light_batch: PathBatch,
+    /// The light subpaths' queues (the path tracer's).
+    light_q: Queues,
+    /// The camera subpaths' queues.
+    camera_q: Queues,
+    /// The batch's stored light vertices.
+    light: LightVertices,
+    /// Per-stage buffers.
+    s: Scratch,
+}
+
+/// The stages' buffers.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    /// MIS sums of every subpath of the walk in progress.
+    mis: Vec<SubpathMis>,
+    /// Light subpaths from lights at infinity.
+    at_infinity: Vec<bool>,
+    /// Rays that left the scene this bounce, with their last transmission.
+    escaped: Vec<(u32, Rgb)>,
+    samplers: Vec<PathSampler>,
+    u4: Vec<[f32; 4]>,
+    samples: BxdfSamples,
+    evals: Evaluations,
+    evals_rev: Evaluations,
+    light_evals: Evaluations,
+    light_evals_rev: Evaluations,
+    eval_rows: Vec<(u32, u32)>,
+    pairs: Vec<(u32, u32)>,
+    camera_hits: Vec<CameraConnection>,
+    light_hits: Vec<camera_walk::LightHit>,
+    /// Light vertices connected to the camera, and where on the film.
+    splats: ShadowRays,
+    splat_film_pos: Vec<Vec2>,
+    splat_contribution: Vec<Rgb>,
+    /// Camera vertices' light samples and connections.
+    connections: ShadowRays,
+    connection_contribution: Vec<Rgb>,
+    stack_errors: Vec<(u32, StackEvent)>,
+    albedo: Vec<Rgb>,
+}
+
+impl Integrator for Bidirectional {
+    type Worker = BidirWorker;
+
+    fn run_batch(
+        &self,
+        scene: &CompiledScene,
+        batch: &mut PathBatch,
+        worker: &mut BidirWorker,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        let counters: &PatternCounters = arena.alloc(PatternCounters::default());
+        light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
+        self.light_paths
+            .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
+        camera_walk::camera_subpaths(self, scene, batch, worker, stats, arena, counters);
+        stats.pattern_cache_hits += counters.hits.get();
+        stats.pattern_cache_shared += counters.shared.get();
+        stats.pattern_evals += counters.evals.get();
+        stats.volume_pattern_evals += counters.volume_evals.get();
+    }
+
+    fn splats(&self) -> Option<(&SplatFilm, f64)> {
+        Some(Bidirectional::splats(self))
+    }
+}

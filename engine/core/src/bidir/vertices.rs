@@ -1,0 +1,74 @@
+//! The light vertices of a batch's light subpaths: a table the camera subpaths connect to.
+//!
+//! Only vertices a connection can use are stored: those whose closure has a non-Dirac lobe.
+//! Each light subpath has at most one vertex per bounce, so the table is filled bounce by
+//! bounce and `by_bounce[b][path]` finds path `path`'s vertex of bounce `b` (or
+//! [`NO_VERTEX`]). Memory: one row (the shading point, about 120 bytes, plus 40 bytes of
+//! path state and the volume stack) per stored vertex, at most `max_depth - 1` per light
+//! subpath, so at most `batch size x (max_depth - 1)` rows per batch.
+
+use super::mis::SubpathMis;
+use risotto_components::{Rgb, ShadingPoints, VolumeStack};
+
+/// No vertex at this bounce of this path.
+pub const NO_VERTEX: u32 = u32::MAX;
+
+/// Stored light vertices.
+#[derive(Default)]
+pub struct LightVertices {
+    /// The shading point of each vertex; `vn` points back along the light subpath.
+    pub points: ShadingPoints,
+    /// Light subpath throughput arriving at the vertex (importance transport: light's
+    /// radiance from the start times every Bxdf and transmittance since, over the pdfs).
+    pub throughput: Vec<Rgb>,
+    /// The subpath's MIS sums at the vertex (after arriving).
+    pub mis: Vec<SubpathMis>,
+    /// Segments from the light to the vertex.
+    pub segments: Vec<u32>,
+    /// The volumes the arriving ray travelled in.
+    pub stack: Vec<VolumeStack>,
+    /// Per bounce, per light subpath: the vertex of that bounce.
+    pub by_bounce: Vec<Vec<u32>>,
+}
+
+impl LightVertices {
+    /// Empties the table for a batch of `paths` light subpaths.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.throughput.clear();
+        self.mis.clear();
+        self.segments.clear();
+        self.stack.clear();
+        for b in &mut self.by_bounce {
+            b.clear();
+        }
+    }
+
+    /// Number of stored vertices.
+    pub fn len(&self) -> usize {
+        self.throughput.len()
+    }
+
+    /// True when no vertex is stored.
+    pub fn is_empty(&self) -> bool {
+        self.throughput.is_empty()
+    }
+
+    /// The per-path index of bounce `bounce`, made (all [`NO_VERTEX`]) when new.
+    pub fn bounce_mut(&mut self, bounce: usize, paths: usize) -> &mut [u32] {
+        while self.by_bounce.len() <= bounce {
+            self.by_bounce.push(Vec::new());
+        }
+        let b = &mut self.by_bounce[bounce];
+        if b.len() != paths {
+            b.clear();
+            b.resize(paths, NO_VERTEX);
+        }
+        b
+    }
+
+    /// Bounces that hold some vertex.
+    pub fn bounces(&self) -> usize {
+        self.by_bounce.iter().take_while(|b| !b.is_empty()).count()
+    }
+}

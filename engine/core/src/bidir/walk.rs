@@ -1,0 +1,117 @@
+//! What camera and light subpaths share: tracing one bounce through the path tracer's own
+//! trace and pass-through stages (volumes handed to their integrators without a lighting
+//! delegate, so media return their scattering points), and the shadow rays of connections.
+
+use crate::integrator::{LightingTechnique, PathBatch};
+use crate::path_tracer::queues::Queues;
+use crate::path_tracer::{pass_through_boundaries, trace_nearest_hits, PathTracer};
+use crate::plugin::{PatternCounters, PluginTechniques};
+use crate::scene::CompiledScene;
+use crate::stats::SystemStats;
+use bumpalo::Bump;
+use glam::Vec3;
+use risotto_components::{Rgb, ShadingPoints, ShadowRayRow, ShadowRays, VolumeStack};
+use risotto_systems::ray::{shadow_ray, spawn_origin};
+
+/// The path tracer's stages configured as a bidirectional integrator uses them: no
+/// lighting delegate for volume integrators (`BxdfOnly` offers none), the render's plug-in
+/// technique choices.
+pub(super) fn stages(techniques: PluginTechniques) -> PathTracer {
+    PathTracer {
+        technique: LightingTechnique::BxdfOnly,
+        techniques,
+    }
+}
+
+/// Traces the rays of `q.rays` to their next scattering vertices (in `q.hits`), past
+/// index-matched boundaries, false boundaries and surfaces their opacity lets them pass.
+/// The rays that left the scene go to `escaped` (rows of `q.hits.incoming`, with the
+/// transmission of their last segment).
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+pub(super) fn trace_bounce(
+    stages: &PathTracer,
+    scene: &CompiledScene,
+    batch: &mut PathBatch,
+    q: &mut Queues,
+    escaped: &mut Vec<(u32, Rgb)>,
+    stats: &mut SystemStats,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    q.hits.recycle_into(&mut q.next);
+    escaped.clear();
+    while !q.rays.rays.is_empty() {
+        trace_nearest_hits(stages, scene, batch, q, stats, arena, counters);
+        let e = &mut q.escaped;
+        escaped.extend(e.ray.iter().copied().zip(e.transmission.iter().copied()));
+        e.ray.clear();
+        e.transmission.clear();
+        if scene.features.transmissive || scene.features.opacity {
+            pass_through_boundaries(stages, scene, q, batch, stats, arena, counters);
+        }
+    }
+}
+
+/// The volumes a straight ray leaving row `i` of `pts` in direction `w` travels in: the
+/// arriving ray's `stack`, crossed into the shape's interior (or out of it) when `w` leaves
+/// a surface on the side opposite its viewer.
+pub(super) fn stack_toward(
+    scene: &CompiledScene,
+    stack: &VolumeStack,
+    pts: &ShadingPoints,
+    i: usize,
+    w: Vec3,
+) -> VolumeStack {
+    let mut s = stack.clone();
+    let shape = pts.shape[i];
+    if shape != u32::MAX && scene.tracks_interior(shape) {
+        let ng = pts.ng[i];
+        if (w.dot(ng) > 0.0) != (pts.vn[i].dot(ng) > 0.0) {
+            let _ = s.cross(scene.volume_entry(shape), pts.front_face[i]);
+        }
+    }
+    s
+}
+
+/// Queues a shadow ray from row `i` of `pts` to the point `distance` away along unit `w`
+/// (stopping `margin` short of it), carrying `contribution` for `path`. It carries no
+/// weight for volume emission: a connection is not a light sample of emissive media
+/// (camera subpaths gather what media emit).
+#[allow(clippy::too_many_arguments, reason = "a shadow ray's fields, named")]
+pub(super) fn push_connection(
+    shadow: &mut ShadowRays,
+    pts: &ShadingPoints,
+    i: usize,
+    w: Vec3,
+    distance: f32,
+    margin: f32,
+    contribution: Rgb,
+    path: u32,
+    dimension: u32,
+    stack: VolumeStack,
+) {
+    let on_surface = pts.shape[i] != u32::MAX;
+    let p = pts.p[i];
+    let origin = spawn_origin(p, pts.ng[i], pts.p_offset[i], w, on_surface);
+    let (direction, tmax) = shadow_ray(p, origin, w, distance, margin);
+    shadow.push(ShadowRayRow {
+        origin,
+        direction,
+        tmax,
+        contribution,
+        weight: Rgb::BLACK,
+        path,
+        dimension,
+        volume_stack: stack,
+    });
+}
+
+/// How far short of a surface vertex at row `i` of `pts` a connection arriving along `w`
+/// stops: its error offset along the ray (clamped for grazing directions); 0 in a medium.
+pub(super) fn arrival_margin(pts: &ShadingPoints, i: usize, w: Vec3) -> f32 {
+    if pts.shape[i] == u32::MAX {
+        0.0
+    } else {
+        2.0 * pts.p_offset[i] / pts.ng[i].dot(w).abs().max(1e-3)
+    }
+}
