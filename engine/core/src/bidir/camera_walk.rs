@@ -386,9 +386,18 @@ fn light_samples(
         let ls = &h.sample;
         let cos_to_light = cos_at(pts, i, ls.wi);
         let path = incoming.path[r] as usize;
+        // Next-event estimation's solid-angle pdf as the weights compare it: a point or
+        // spot light's Dirac area density `P(light)` seen from `distance` away is
+        // `P(light) d^2` per unit solid angle (SmallVCM's `PointLight::Illuminate`); the
+        // sample's own `pdf` leaves the `d^2` in its radiance `I / d^2`.
+        let direct_pdf_w = if ls.delta && ls.distance.is_finite() {
+            ls.pdf * ls.distance * ls.distance
+        } else {
+            ls.pdf
+        };
         let weight = light_sample_weight(
             &s.mis[path],
-            ls.pdf,
+            direct_pdf_w,
             h.emission_pdf,
             s.evals.pdf[e],
             s.evals_rev.pdf[e],

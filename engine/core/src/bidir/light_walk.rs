@@ -76,13 +76,15 @@ pub(super) fn light_subpaths(
         {
             continue;
         }
-        // The density with which next-event estimation picks the start: per unit area for
-        // lights with a position (`pdf_position` includes the selection), per unit solid
-        // angle for the environment, the selection alone for Dirac lights.
-        let direct_pdf = if e.at_infinity && !e.delta_direction {
-            lights.environment_pdf(-e.direction)
-        } else {
-            e.pdf_position
+        // The density with which next-event estimation picks the start (SmallVCM's
+        // `directPdfA`): per unit area for lights with a position (`pdf_position` includes
+        // the selection; for point and spot lights it is the selection alone), per unit
+        // solid angle for the environment, the selection alone for distant lights.
+        let direct_pdf = match (e.at_infinity, e.delta_direction) {
+            // A distant light: next-event estimation picks it and its one direction.
+            (true, true) => lights.selection_pmf(e.light),
+            (true, false) => lights.environment_pdf(-e.direction),
+            _ => e.pdf_position,
         };
         let delta = e.delta_position || e.delta_direction;
         w.s.mis[i] = SubpathMis::light_start(direct_pdf, emission_pdf, e.cos_at_light, delta);
