@@ -3,7 +3,7 @@
 //! estimation, one light vertex), and connections to every stored vertex of the camera
 //! sample's own light subpath, each weighted by [`super::mis`] against all the others.
 
-use super::evaluate::cos_at;
+use super::evaluate::{cos_at, evaluate_runs};
 use super::mis::{
     connection_weight, emitter_hit_weight, light_sample_weight, pdf_w_to_a, ConnectionPdfs,
     SubpathMis,
@@ -233,26 +233,22 @@ fn camera_vertices(
         s.u4.clear();
         s.u4.resize(m, [0.0; 4]);
         next_4d_column(&mut s.samplers, &mut s.u4);
+        s.group_eval.bind(pts, range.clone());
+        let at = GroupVertices {
+            pts,
+            incoming,
+            range: range.clone(),
+            material: grp.material,
+            mode: grp.mode,
+        };
         if connectable {
-            let at = CameraVertices {
-                pts,
-                incoming,
-                range: range.clone(),
-            };
-            light_samples(bd, scene, s, &at, arena, counters);
-            connect_light_vertices(bd, scene, s, light, &at, arena, counters);
+            light_samples(bd, scene, s, &at, &ctx, &mut *bxdf, arena, counters);
+            connect_light_vertices(scene, s, light, &at, &ctx, &mut *bxdf, arena, counters);
         }
         s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
-        s.evals.clear();
-        for (k, i) in range.clone().enumerate() {
-            let smp = &s.samples;
-            if smp.pdf[k] > 0.0 && !smp.lobe[k].is_specular() {
-                s.evals.push(pts, i, smp.wi[k], pts.vn[i]);
-            }
-        }
-        s.evals.run(scene, arena, counters);
-        let mut e = 0;
+        // The reverse pdf of each sampled direction: the closure seen from it.
+        reverse_pdfs(scene, s, &at, arena, counters);
         for (k, i) in range.clone().enumerate() {
             let smp = &s.samples;
             if smp.pdf[k] <= 0.0 {
@@ -264,17 +260,11 @@ fn camera_vertices(
             let pdf_rev = if specular {
                 smp.pdf[k]
             } else {
-                e += 1;
-                s.evals.pdf[e - 1]
+                s.group_eval.pdf[k]
             };
             let cos_out = cos_at(pts, i, smp.wi[k]);
-            s.mis[path].scatter(
-                smp.pdf[k],
-                pdf_rev,
-                cos_out,
-                specular,
-                f.at(pts.shape[i] == u32::MAX),
-            );
+            let v = f.at(pts.shape[i] == u32::MAX);
+            s.mis[path].scatter(smp.pdf[k], pdf_rev, cos_out, specular, v);
         }
         let vertices = Vertices {
             points: pts,
@@ -295,14 +285,19 @@ fn camera_vertices(
         );
     }
     q.next.rays.truncate(next_len);
+    let (pts, incoming) = (&q.hits.groups.points, &q.hits.incoming);
+    finish_connections(bd, scene, s, light, pts, incoming, arena, counters);
     q.hits.groups.groups = groups;
 }
 
-/// The camera vertices of one group: rows `range` of `pts`, reached by rows of `incoming`.
-struct CameraVertices<'a> {
-    pts: &'a ShadingPoints,
-    incoming: &'a Rays,
-    range: std::ops::Range<usize>,
+/// The vertices of one shading group: rows `range` of `pts` (of `material`, in `mode`),
+/// reached by rows of `incoming`.
+pub(super) struct GroupVertices<'a> {
+    pub(super) pts: &'a ShadingPoints,
+    pub(super) incoming: &'a Rays,
+    pub(super) range: std::ops::Range<usize>,
+    pub(super) material: u32,
+    pub(super) mode: ShadingMode,
 }
 
 /// First-hit AOVs of the camera rays' vertices (as the path tracer's shade stage).
@@ -329,13 +324,40 @@ fn first_hit_aovs(
     }
 }
 
+/// The reverse pdf of every sampled direction of the group (into `s.group_eval.pdf`): the
+/// closure seen from the sample, light from the viewer. Rows without a non-Dirac sample
+/// are evaluated towards their own viewer and ignored.
+pub(super) fn reverse_pdfs(
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    at: &GroupVertices<'_>,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let vn = &at.pts.vn[at.range.clone()];
+    s.view.clear();
+    s.view.extend(vn.iter().enumerate().map(|(k, &vn)| {
+        let smp = &s.samples;
+        match smp.pdf[k] > 0.0 && !smp.lobe[k].is_specular() {
+            true => smp.wi[k],
+            false => vn,
+        }
+    }));
+    s.group_eval
+        .run(scene, at.material, at.mode, &s.view, vn, arena, counters);
+}
+
 /// Next-event estimation at the group's vertices (a light vertex sampled on a light, seen
-/// from the camera vertex), weighted against every other strategy.
+/// from the camera vertex), weighted against every other strategy. `bxdf` is the group's
+/// closure (bound to `ctx`).
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 fn light_samples(
     bd: &Bidirectional,
     scene: &CompiledScene,
     s: &mut Scratch,
-    at: &CameraVertices<'_>,
+    at: &GroupVertices<'_>,
+    ctx: &ShadingContext<'_>,
+    bxdf: &mut dyn Bxdf,
     arena: &Bump,
     counters: &PatternCounters,
 ) {
@@ -343,9 +365,12 @@ fn light_samples(
     let (pts, incoming) = (at.pts, at.incoming);
     let lights = &scene.lights;
     let bounds = scene.geometry.bounds();
-    s.evals.clear();
-    s.evals_rev.clear();
+    let m = at.range.len();
     s.light_hits.clear();
+    s.hit_of.clear();
+    s.hit_of.resize(m, u32::MAX);
+    s.wi.clear();
+    s.wi.extend_from_slice(&pts.vn[at.range.clone()]);
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;
         // The path with the light sample has depth + 2 segments.
@@ -369,8 +394,8 @@ fn light_samples(
             _ => (Vec3::ZERO, 1.0),
         };
         let (pp, pd) = lights.emission_pdf(light, q, n_light, -ls.wi, bounds);
-        s.evals.push(pts, i, pts.vn[i], ls.wi);
-        s.evals_rev.push(pts, i, ls.wi, pts.vn[i]);
+        s.wi[k] = ls.wi;
+        s.hit_of[k] = s.light_hits.len() as u32;
         s.light_hits.push(LightHit {
             k: k as u32,
             sample: ls,
@@ -378,10 +403,21 @@ fn light_samples(
             cos_at_light,
         });
     }
-    s.evals.run(scene, arena, counters);
-    s.evals_rev.run(scene, arena, counters);
-    for (e, h) in s.light_hits.iter().enumerate() {
-        let i = at.range.start + h.k as usize;
+    if s.light_hits.is_empty() {
+        return;
+    }
+    // Forward: the group's own closure towards the samples; reverse: seen from them.
+    s.value.clear();
+    s.value.resize(m, Rgb::BLACK);
+    s.pdf.clear();
+    s.pdf.resize(m, 0.0);
+    bxdf.evaluate_samples(ctx, &s.wi, &mut s.value, &mut s.pdf);
+    let vn = &pts.vn[at.range.clone()];
+    s.group_eval
+        .run(scene, at.material, at.mode, &s.wi, vn, arena, counters);
+    for h in &s.light_hits {
+        let k = h.k as usize;
+        let i = at.range.start + k;
         let r = pts.ray_id[i] as usize;
         let ls = &h.sample;
         let cos_to_light = cos_at(pts, i, ls.wi);
@@ -399,14 +435,14 @@ fn light_samples(
             &s.mis[path],
             direct_pdf_w,
             h.emission_pdf,
-            s.evals.pdf[e],
-            s.evals_rev.pdf[e],
+            s.pdf[k],
+            s.group_eval.pdf[k],
             cos_to_light,
             h.cos_at_light,
             ls.delta,
             f.at(pts.shape[i] == u32::MAX),
         );
-        let c = incoming.throughput[r] * s.evals.value[e] * ls.radiance * (weight / ls.pdf);
+        let c = incoming.throughput[r] * s.value[k] * ls.radiance * (weight / ls.pdf);
         if c.is_black() || !c.is_finite() {
             continue;
         }
@@ -426,26 +462,33 @@ fn light_samples(
     }
 }
 
-/// Connections of the group's vertices to every stored vertex of their own light subpath.
+/// The camera side of the connections of the group's vertices to every stored vertex of
+/// their own light subpath, one bounce of the light subpaths at a time (one light vertex
+/// per camera vertex): queued in `s.pending`, finished for the whole camera bounce by
+/// [`finish_connections`].
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 fn connect_light_vertices(
-    bd: &Bidirectional,
     scene: &CompiledScene,
     s: &mut Scratch,
     light: &LightVertices,
-    at: &CameraVertices<'_>,
+    at: &GroupVertices<'_>,
+    ctx: &ShadingContext<'_>,
+    bxdf: &mut dyn Bxdf,
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
     let (pts, incoming) = (at.pts, at.incoming);
     let lp = &light.points;
+    let m = at.range.len();
+    let vn = &pts.vn[at.range.clone()];
+    while s.pending.len() < light.bounces() {
+        s.pending.push(Vec::new());
+    }
     for bounce in 0..light.bounces() {
         let by_path = &light.by_bounce[bounce];
-        s.evals.clear();
-        s.evals_rev.clear();
-        s.light_evals.clear();
-        s.light_evals_rev.clear();
-        s.pairs.clear();
+        s.wi.clear();
+        s.wi.extend_from_slice(vn);
+        let first = s.pending[bounce].len();
         for (k, i) in at.range.clone().enumerate() {
             let r = pts.ray_id[i] as usize;
             let path = incoming.path[r] as usize;
@@ -453,33 +496,128 @@ fn connect_light_vertices(
             if v == NO_VERTEX {
                 continue;
             }
-            let v = v as usize;
             // Camera segments so far, the connection, and the light subpath's.
-            let segments = incoming.depth[r] as u32 + 1 + 1 + light.segments[v];
+            let segments = incoming.depth[r] as u32 + 1 + 1 + light.segments[v as usize];
             if segments > scene.settings.max_depth {
                 continue;
             }
-            let d = lp.p[v] - pts.p[i];
+            let d = lp.p[v as usize] - pts.p[i];
             let distance = d.length();
             if distance.is_nan() || distance <= 0.0 || !distance.is_finite() {
                 continue;
             }
-            let dir = d / distance;
-            s.evals.push(pts, i, pts.vn[i], dir);
-            s.evals_rev.push(pts, i, dir, pts.vn[i]);
-            s.light_evals.push(lp, v, lp.vn[v], -dir);
-            s.light_evals_rev.push(lp, v, -dir, lp.vn[v]);
-            s.pairs.push((k as u32, v as u32));
+            s.wi[k] = d / distance;
+            s.pending[bounce].push(PendingConnection {
+                i: i as u32,
+                v,
+                camera_mis: s.mis[path],
+                camera_value: Rgb::BLACK,
+                camera_pdf_w: 0.0,
+                camera_rev_pdf_w: 0.0,
+            });
         }
-        if s.pairs.is_empty() {
+        if s.pending[bounce].len() == first {
             continue;
         }
-        s.evals.run(scene, arena, counters);
-        s.evals_rev.run(scene, arena, counters);
-        s.light_evals.run(scene, arena, counters);
-        s.light_evals_rev.run(scene, arena, counters);
-        for (e, &(k, v)) in s.pairs.iter().enumerate() {
-            let (i, v) = (at.range.start + k as usize, v as usize);
+        // Forward: the group's own closure; reverse: seen from the light vertex.
+        s.value.clear();
+        s.value.resize(m, Rgb::BLACK);
+        s.pdf.clear();
+        s.pdf.resize(m, 0.0);
+        bxdf.evaluate_samples(ctx, &s.wi, &mut s.value, &mut s.pdf);
+        s.group_eval
+            .run(scene, at.material, at.mode, &s.wi, vn, arena, counters);
+        for c in &mut s.pending[bounce][first..] {
+            let k = c.i as usize - at.range.start;
+            c.camera_value = s.value[k];
+            c.camera_pdf_w = s.pdf[k];
+            c.camera_rev_pdf_w = s.group_eval.pdf[k];
+        }
+    }
+}
+
+/// Finishes the connections [`connect_light_vertices`] queued for one camera bounce (camera
+/// vertices: rows of `pts`, reached by rows of `incoming`): the light side of each, for a
+/// whole bounce of light vertices at a time (closures of the stored rows as they are for the
+/// forward pdf, a copy seen from the camera vertices for the value and reverse pdf), the
+/// weight and a shadow ray.
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
+fn finish_connections(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    light: &LightVertices,
+    pts: &ShadingPoints,
+    incoming: &Rays,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let lp = &light.points;
+    for bounce in 0..s.pending.len().min(light.bounces()) {
+        if s.pending[bounce].is_empty() {
+            continue;
+        }
+        let rows = light.bounce_rows(bounce);
+        let n = rows.len();
+        let runs = || {
+            light.runs[bounce]
+                .iter()
+                .map(|r| (r.material, r.mode, r.rows.clone()))
+        };
+        // Directions from each light vertex towards its camera vertex (its own `vn` where
+        // it has none: evaluated and ignored).
+        s.layer_wi.clear();
+        s.layer_wi.extend_from_slice(&lp.vn[rows.clone()]);
+        for c in &s.pending[bounce] {
+            let (i, v) = (c.i as usize, c.v as usize);
+            s.layer_wi[v - rows.start] = (pts.p[i] - lp.p[v]).normalize_or_zero();
+        }
+        // Forward: the light subpath's own view (its stored `vn`) towards the camera vertex.
+        s.layer_value.clear();
+        s.layer_value.resize(n, Rgb::BLACK);
+        s.layer_pdf.clear();
+        s.layer_pdf.resize(n, 0.0);
+        evaluate_runs(
+            scene,
+            lp,
+            runs(),
+            rows.start,
+            &s.layer_wi,
+            &mut s.layer_value,
+            &mut s.layer_pdf,
+            arena,
+            counters,
+        );
+        std::mem::swap(&mut s.layer_pdf, &mut s.layer_pdf_fwd);
+        // Reverse and the value: seen from the camera vertex, light from the subpath.
+        s.layer_copy.clear();
+        s.layer_copy.extend_from_range(lp, rows.clone());
+        for k in 0..n {
+            let view = s.layer_wi[k];
+            s.layer_copy.vn[k] = view;
+            if s.layer_copy.shape[k] != u32::MAX {
+                s.layer_copy.front_face[k] = view.dot(s.layer_copy.ng[k]) > 0.0;
+            }
+        }
+        s.layer_pdf.clear();
+        s.layer_pdf.resize(n, 0.0);
+        let copy_runs =
+            runs().map(|(m, mode, r)| (m, mode, r.start - rows.start..r.end - rows.start));
+        evaluate_runs(
+            scene,
+            &s.layer_copy,
+            copy_runs,
+            0,
+            &lp.vn[rows.clone()],
+            &mut s.layer_value,
+            &mut s.layer_pdf,
+            arena,
+            counters,
+        );
+        for c in &s.pending[bounce] {
+            let (i, v) = (c.i as usize, c.v as usize);
+            let k = v - rows.start;
             let r = pts.ray_id[i] as usize;
             let path = incoming.path[r] as usize;
             let d = lp.p[v] - pts.p[i];
@@ -494,24 +632,24 @@ fn connect_light_vertices(
             // The light vertex seen from the camera vertex, light from its own subpath:
             // `f |cos of its incident direction|`; the connection wants `|cos towards the
             // camera vertex|`.
-            let f_light = s.light_evals_rev.value[e] * (cos_light / cos_light_in);
+            let f_light = s.layer_value[k] * (cos_light / cos_light_in);
             let pdfs = ConnectionPdfs {
-                camera_pdf_a: pdf_w_to_a(s.evals.pdf[e], distance, cos_light),
-                camera_rev_pdf_w: s.evals_rev.pdf[e],
-                light_pdf_a: pdf_w_to_a(s.light_evals.pdf[e], distance, cos_camera),
-                light_rev_pdf_w: s.light_evals_rev.pdf[e],
+                camera_pdf_a: pdf_w_to_a(c.camera_pdf_w, distance, cos_light),
+                camera_rev_pdf_w: c.camera_rev_pdf_w,
+                light_pdf_a: pdf_w_to_a(s.layer_pdf_fwd[k], distance, cos_camera),
+                light_rev_pdf_w: s.layer_pdf[k],
             };
             let (vc, vl) = (
                 f.at(pts.shape[i] == u32::MAX),
                 f.at(lp.shape[v] == u32::MAX),
             );
-            let weight = connection_weight(&s.mis[path], &light.mis[v], &pdfs, vc, vl);
-            let c = incoming.throughput[r]
-                * s.evals.value[e]
+            let weight = connection_weight(&c.camera_mis, &light.mis[v], &pdfs, vc, vl);
+            let contribution = incoming.throughput[r]
+                * c.camera_value
                 * f_light
                 * light.throughput[v]
                 * (weight / (distance * distance));
-            if c.is_black() || !c.is_finite() {
+            if contribution.is_black() || !contribution.is_finite() {
                 continue;
             }
             let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, dir);
@@ -523,13 +661,29 @@ fn connect_light_vertices(
                 dir,
                 distance,
                 margin,
-                c,
+                contribution,
                 path as u32,
                 incoming.dimension[r],
                 stack,
             );
         }
+        s.pending[bounce].clear();
     }
+}
+
+/// A connection whose camera side is evaluated: camera vertex row `i`, light vertex `v`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PendingConnection {
+    i: u32,
+    v: u32,
+    /// The camera subpath's MIS sums at the vertex (before it scatters on).
+    camera_mis: SubpathMis,
+    /// `f |cos|` of the camera vertex towards the light vertex.
+    camera_value: Rgb,
+    /// The camera vertex's pdf of that direction.
+    camera_pdf_w: f32,
+    /// The camera vertex's pdf of its incident direction, seen from the light vertex.
+    camera_rev_pdf_w: f32,
 }
 
 /// A light sample at a camera vertex (`k` of its group) and what its weight needs.

@@ -10,10 +10,12 @@
 //! multiplied by `eta^2` here, and a connection's value is the closure seen from the camera
 //! side ([`super::evaluate`]).
 
+use super::camera_walk::{reverse_pdfs, GroupVertices};
 use super::evaluate::cos_at;
 use super::mis::{camera_connection_weight, SubpathMis};
+use super::vertices::LightVertices;
 use super::walk::{push_connection, stack_toward, trace_bounce};
-use super::{BidirWorker, Bidirectional, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
+use super::{BidirWorker, Bidirectional, Scratch, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
 use crate::integrator::PathBatch;
 use crate::path_tracer::continue_group;
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
@@ -171,7 +173,6 @@ fn scatter_light_vertices(
     counters: &PatternCounters,
 ) {
     let f = bd.factors();
-    let max_depth = scene.settings.max_depth;
     let q = &mut w.light_q;
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
@@ -220,90 +221,22 @@ fn scatter_light_vertices(
         w.s.u4.clear();
         w.s.u4.resize(m, [0.0; 4]);
         next_4d_column(&mut w.s.samplers, &mut w.s.u4);
+        w.s.group_eval.bind(pts, range.clone());
+        let at = GroupVertices {
+            pts,
+            incoming,
+            range: range.clone(),
+            material: grp.material,
+            mode: grp.mode,
+        };
         if connectable {
-            // Store the vertices, and queue each one's view of the camera.
-            w.s.evals.clear();
-            w.s.eval_rows.clear();
-            for (k, i) in range.clone().enumerate() {
-                let r = pts.ray_id[i] as usize;
-                let path = incoming.path[r] as usize;
-                let segments = incoming.depth[r] as u32 + 1;
-                let v = w.light.len() as u32;
-                w.light.points.extend_from_range(pts, i..i + 1);
-                w.light.throughput.push(incoming.throughput[r]);
-                w.light.mis.push(w.s.mis[path]);
-                w.light.segments.push(segments);
-                w.light.stack.push(incoming.volume_stack[r].clone());
-                w.light.bounce_mut(bounce, by_bounce_len)[path] = v;
-                if segments + 1 > max_depth {
-                    continue;
-                }
-                let u_lens = Vec2::new(w.s.u4[k][0], w.s.u4[k][1]);
-                if let Some(c) = scene.camera.connect(pts.p[i], u_lens) {
-                    let e = w.s.evals.push(pts, i, c.wi, pts.vn[i]);
-                    w.s.eval_rows.push((k as u32, e as u32));
-                    w.s.camera_hits.push(c);
-                }
-            }
-            w.s.evals.run(scene, arena, counters);
-            for (j, &(k, e)) in w.s.eval_rows.iter().enumerate() {
-                let (k, e) = (k as usize, e as usize);
-                let c = w.s.camera_hits[j];
-                let i = range.start + k;
-                let r = pts.ray_id[i] as usize;
-                let path = incoming.path[r] as usize;
-                // The closure seen from the camera, light from the subpath: `f |cos wo|`;
-                // the connection wants `f |cos to the camera|`.
-                let cos_in = cos_at(pts, i, pts.vn[i]);
-                let cos_cam = cos_at(pts, i, c.wi);
-                if cos_in <= 0.0 {
-                    continue;
-                }
-                let fc = w.s.evals.value[e] * (cos_cam / cos_in);
-                let camera_pdf_a = c.pdf_dir * cos_cam / (c.distance * c.distance);
-                let weight = match bd.strategy {
-                    super::Strategy::Light => 1.0,
-                    _ => camera_connection_weight(
-                        &w.s.mis[path],
-                        camera_pdf_a,
-                        w.s.evals.pdf[e],
-                        f.at(pts.shape[i] == u32::MAX),
-                        f.light_paths_per_pixel,
-                    ),
-                };
-                let contribution = incoming.throughput[r] * fc * (c.importance * weight);
-                if contribution.is_black() || !contribution.is_finite() {
-                    continue;
-                }
-                let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, c.wi);
-                push_connection(
-                    &mut w.s.splats,
-                    pts,
-                    i,
-                    c.wi,
-                    c.distance,
-                    0.0,
-                    contribution,
-                    path as u32,
-                    incoming.dimension[r],
-                    stack,
-                );
-                w.s.splat_film_pos.push(c.film);
-            }
-            w.s.camera_hits.clear();
+            store_vertices(&mut w.light, &w.s.mis, &at, bounce, by_bounce_len);
+            connect_to_camera(bd, scene, &mut w.s, &at, arena, counters);
         }
         // Sample the next direction; the reverse pdf of each non-Dirac sample.
         w.s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut w.s.samplers, &mut w.s.samples);
-        w.s.evals.clear();
-        for (k, i) in range.clone().enumerate() {
-            let s = &w.s.samples;
-            if s.pdf[k] > 0.0 && !s.lobe[k].is_specular() {
-                w.s.evals.push(pts, i, s.wi[k], pts.vn[i]);
-            }
-        }
-        w.s.evals.run(scene, arena, counters);
-        let mut e = 0;
+        reverse_pdfs(scene, &mut w.s, &at, arena, counters);
         for (k, i) in range.clone().enumerate() {
             let s = &mut w.s.samples;
             if s.pdf[k] <= 0.0 {
@@ -315,17 +248,11 @@ fn scatter_light_vertices(
             let pdf_rev = if specular {
                 s.pdf[k]
             } else {
-                e += 1;
-                w.s.evals.pdf[e - 1]
+                w.s.group_eval.pdf[k]
             };
             let cos_out = cos_at(pts, i, s.wi[k]);
-            w.s.mis[path].scatter(
-                s.pdf[k],
-                pdf_rev,
-                cos_out,
-                specular,
-                f.at(pts.shape[i] == u32::MAX),
-            );
+            let v = f.at(pts.shape[i] == u32::MAX);
+            w.s.mis[path].scatter(s.pdf[k], pdf_rev, cos_out, specular, v);
             if s.lobe[k].is_transmit() {
                 // Importance is not compressed by refraction as radiance is.
                 s.weight[k] = s.weight[k] * (s.eta[k] * s.eta[k]);
@@ -351,4 +278,108 @@ fn scatter_light_vertices(
     }
     q.next.rays.truncate(next_len);
     q.hits.groups.groups = groups;
+}
+
+/// Stores the group's vertices as light vertices of bounce `bounce` (`paths` light
+/// subpaths).
+fn store_vertices(
+    light: &mut LightVertices,
+    mis: &[SubpathMis],
+    at: &GroupVertices<'_>,
+    bounce: usize,
+    paths: usize,
+) {
+    let (pts, incoming) = (at.pts, at.incoming);
+    let first = light.len();
+    light.points.extend_from_range(pts, at.range.clone());
+    for i in at.range.clone() {
+        let r = pts.ray_id[i] as usize;
+        let path = incoming.path[r] as usize;
+        let v = light.throughput.len() as u32;
+        light.throughput.push(incoming.throughput[r]);
+        light.mis.push(mis[path]);
+        light.segments.push(incoming.depth[r] as u32 + 1);
+        light.stack.push(incoming.volume_stack[r].clone());
+        light.bounce_mut(bounce, paths)[path] = v;
+    }
+    light.push_run(bounce, at.material, at.mode, first..light.len());
+}
+
+/// Connects the group's vertices to the camera (light tracing): a lens point and film
+/// position each, the closure seen from the camera, a shadow ray to trace and splat.
+fn connect_to_camera(
+    bd: &Bidirectional,
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    at: &GroupVertices<'_>,
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = bd.factors();
+    let (pts, incoming) = (at.pts, at.incoming);
+    let vn = &pts.vn[at.range.clone()];
+    s.view.clear();
+    s.view.extend_from_slice(vn);
+    s.camera_hits.clear();
+    s.eval_rows.clear();
+    for (k, i) in at.range.clone().enumerate() {
+        let r = pts.ray_id[i] as usize;
+        if incoming.depth[r] as u32 + 2 > scene.settings.max_depth {
+            continue;
+        }
+        let u_lens = Vec2::new(s.u4[k][0], s.u4[k][1]);
+        if let Some(c) = scene.camera.connect(pts.p[i], u_lens) {
+            s.view[k] = c.wi;
+            s.eval_rows.push((k as u32, s.camera_hits.len() as u32));
+            s.camera_hits.push(c);
+        }
+    }
+    if s.camera_hits.is_empty() {
+        return;
+    }
+    s.group_eval
+        .run(scene, at.material, at.mode, &s.view, vn, arena, counters);
+    for &(k, j) in &s.eval_rows {
+        let (k, c) = (k as usize, s.camera_hits[j as usize]);
+        let i = at.range.start + k;
+        let r = pts.ray_id[i] as usize;
+        let path = incoming.path[r] as usize;
+        // The closure seen from the camera, light from the subpath: `f |cos wo|`; the
+        // connection wants `f |cos to the camera|`.
+        let cos_in = cos_at(pts, i, pts.vn[i]);
+        let cos_cam = cos_at(pts, i, c.wi);
+        if cos_in <= 0.0 {
+            continue;
+        }
+        let fc = s.group_eval.value[k] * (cos_cam / cos_in);
+        let camera_pdf_a = c.pdf_dir * cos_cam / (c.distance * c.distance);
+        let weight = match bd.strategy {
+            super::Strategy::Light => 1.0,
+            _ => camera_connection_weight(
+                &s.mis[path],
+                camera_pdf_a,
+                s.group_eval.pdf[k],
+                f.at(pts.shape[i] == u32::MAX),
+                f.light_paths_per_pixel,
+            ),
+        };
+        let contribution = incoming.throughput[r] * fc * (c.importance * weight);
+        if contribution.is_black() || !contribution.is_finite() {
+            continue;
+        }
+        let stack = stack_toward(scene, &incoming.volume_stack[r], pts, i, c.wi);
+        push_connection(
+            &mut s.splats,
+            pts,
+            i,
+            c.wi,
+            c.distance,
+            0.0,
+            contribution,
+            path as u32,
+            incoming.dimension[r],
+            stack,
+        );
+        s.splat_film_pos.push(c.film);
+    }
 }

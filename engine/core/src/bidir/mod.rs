@@ -44,7 +44,6 @@ use crate::plugin::{PatternCounters, PluginTechniques};
 use crate::scene::CompiledScene;
 use crate::stats::SystemStats;
 use bumpalo::Bump;
-use evaluate::Evaluations;
 use glam::Vec2;
 use mis::{MisFactors, SubpathMis};
 use risotto_components::{Rgb, ShadowRays, StackEvent, VolumeStack};
@@ -208,12 +207,23 @@ pub(crate) struct Scratch {
     samplers: Vec<PathSampler>,
     u4: Vec<[f32; 4]>,
     samples: BxdfSamples,
-    evals: Evaluations,
-    evals_rev: Evaluations,
-    light_evals: Evaluations,
-    light_evals_rev: Evaluations,
+    group_eval: evaluate::GroupEvaluations,
     eval_rows: Vec<(u32, u32)>,
-    pairs: Vec<(u32, u32)>,
+    /// Per-point query columns of a group (viewer and light directions) and answers.
+    view: Vec<glam::Vec3>,
+    wi: Vec<glam::Vec3>,
+    value: Vec<Rgb>,
+    pdf: Vec<f32>,
+    /// Per point of a group: its light sample (`u32::MAX`: none).
+    hit_of: Vec<u32>,
+    /// Per light bounce: the connections of this camera bounce waiting for their light side.
+    pending: Vec<Vec<camera_walk::PendingConnection>>,
+    /// One light bounce's rows: directions, a copy, answers.
+    layer_wi: Vec<glam::Vec3>,
+    layer_copy: risotto_components::ShadingPoints,
+    layer_value: Vec<Rgb>,
+    layer_pdf: Vec<f32>,
+    layer_pdf_fwd: Vec<f32>,
     camera_hits: Vec<CameraConnection>,
     light_hits: Vec<camera_walk::LightHit>,
     /// Light vertices connected to the camera, and where on the film.

@@ -29,6 +29,20 @@ pub struct LightVertices {
     pub stack: Vec<VolumeStack>,
     /// Per bounce, per light subpath: the vertex of that bounce.
     pub by_bounce: Vec<Vec<u32>>,
+    /// Per bounce: its vertices' rows (contiguous: a bounce's groups are stored one after
+    /// the other), as runs of one material and mode each.
+    pub runs: Vec<Vec<LightRun>>,
+}
+
+/// Rows of [`LightVertices::points`] of one material and mode.
+#[derive(Clone, Debug)]
+pub struct LightRun {
+    /// The material.
+    pub material: u32,
+    /// Surface or medium points.
+    pub mode: crate::shade_groups::ShadingMode,
+    /// The rows.
+    pub rows: std::ops::Range<usize>,
 }
 
 impl LightVertices {
@@ -41,6 +55,35 @@ impl LightVertices {
         self.stack.clear();
         for b in &mut self.by_bounce {
             b.clear();
+        }
+        for r in &mut self.runs {
+            r.clear();
+        }
+    }
+
+    /// Records that rows `rows` (just stored) of bounce `bounce` are of `material`, `mode`.
+    pub fn push_run(
+        &mut self,
+        bounce: usize,
+        material: u32,
+        mode: crate::shade_groups::ShadingMode,
+        rows: std::ops::Range<usize>,
+    ) {
+        while self.runs.len() <= bounce {
+            self.runs.push(Vec::new());
+        }
+        self.runs[bounce].push(LightRun {
+            material,
+            mode,
+            rows,
+        });
+    }
+
+    /// The rows of bounce `bounce`'s vertices.
+    pub fn bounce_rows(&self, bounce: usize) -> std::ops::Range<usize> {
+        match self.runs.get(bounce).map(|r| (r.first(), r.last())) {
+            Some((Some(a), Some(b))) => a.rows.start..b.rows.end,
+            _ => 0..0,
         }
     }
 
