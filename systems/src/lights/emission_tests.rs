@@ -6,8 +6,9 @@ use super::*;
 use crate::distribution::tests::{chi_square, chi_square_limit};
 use crate::environment_map::{dir_to_uv, uv_to_dir};
 use crate::geometry::Sphere;
-use crate::pattern::{Axis, Node, PatternGraph, Texture};
+use crate::pattern::Texture;
 use crate::sampler::SplitMix64 as Rng;
+use crate::volume_lights::tests::gradient_emitter;
 use crate::volume_lights::{EmissionField, EmitterSupport, VolumeEmitter};
 use std::f64::consts::PI as PI64;
 
@@ -20,7 +21,7 @@ fn scene_radius() -> f32 {
     17.0f32.sqrt() * 0.5
 }
 
-/// One triangle (prim 0, area 0.6, normal `+y`... up to winding) and one sphere (prim 1).
+/// One triangle (prim 0, area 0.6, in the plane `y = 1`) and one sphere (prim 1).
 fn geometry() -> SceneGeometry {
     let tri = [
         Vec3::new(0.0, 1.0, 0.0),
@@ -53,37 +54,6 @@ fn sky_map() -> EnvironmentMap {
         })
         .collect();
     EnvironmentMap::new(px, w, h)
-}
-
-/// `j(x) = (2, 1, 0.5) clamp(x.y, 0, 1)` over `[-1, 1] x [0, 2] x [-1, 1]` in two cells:
-/// `int j dV = (2, 1, 0.5) (4 * 1/2 + 4 * 1) = (12, 6, 3)`. Both cells are given the same
-/// bound, so they are sampled equally often although the lower one emits half as much:
-/// `j / p_V` varies, and an estimator that sampled the wrong cells or the wrong points
-/// in them would be biased.
-fn gradient_emitter() -> VolumeEmitter {
-    let graph = PatternGraph::new(vec![Node::Gradient {
-        axis: Axis::Y,
-        from: 0.0,
-        to: 1.0,
-        a: Rgb::BLACK,
-        b: Rgb::WHITE,
-    }])
-    .unwrap();
-    let field = EmissionField::Pattern {
-        graph: Arc::new(graph),
-        scale: Rgb::new(2.0, 1.0, 0.5),
-    };
-    let b = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
-    let j_max = [Rgb::new(2.0, 1.0, 0.5); 2];
-    VolumeEmitter::new(
-        b,
-        [1, 2, 1],
-        &j_max,
-        vec![1.0; 2],
-        field,
-        EmitterSupport::Box,
-    )
-    .unwrap()
 }
 
 /// `j = 3` inside the unit ball in `[-1, 1]^3` (eight cells): `int j dV = 4 pi`.
@@ -352,13 +322,19 @@ fn emission_pdf_is_zero_where_sampling_never_goes() {
     );
 }
 
-/// `E[radiance cos_at_light / (pdf_position pdf_direction)]` per channel over `n` samples,
-/// with its standard error.
-fn power_estimate(set: &LightSet, g: &SceneGeometry, n: usize, seed: u64) -> [(f64, f64); 3] {
+/// `E[radiance cos_at_light / (pdf_position pdf_direction)]` per channel over `n` samples
+/// (counting only the rays `keep` keeps: the power they carry), with its standard error.
+fn power_estimate(
+    set: &LightSet,
+    g: &SceneGeometry,
+    n: usize,
+    seed: u64,
+    keep: impl Fn(&EmissionSample) -> bool,
+) -> [(f64, f64); 3] {
     let mut rng = Rng(seed);
     let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
     for _ in 0..n {
-        let Some(s) = random_sample(set, g, &mut rng) else {
+        let Some(s) = random_sample(set, g, &mut rng).filter(&keep) else {
             continue;
         };
         let w = s.cos_at_light as f64 / (s.pdf_position as f64 * s.pdf_direction as f64);
@@ -375,20 +351,26 @@ fn power_estimate(set: &LightSet, g: &SceneGeometry, n: usize, seed: u64) -> [(f
     })
 }
 
+/// `got` is `want` per channel within four standard errors (and a relative `1e-4` for
+/// zero-variance estimates).
+fn assert_within_noise(got: [(f64, f64); 3], want: [f64; 3], what: &str) {
+    for c in 0..3 {
+        let (mean, se) = got[c];
+        assert!(
+            (mean - want[c]).abs() <= 4.0 * se + 1e-4 * want[c],
+            "{what}, channel {c}: {mean} +- {se} vs {}",
+            want[c]
+        );
+    }
+}
+
 #[test]
 fn the_estimated_emitted_power_is_each_lights_analytic_power() {
     let g = geometry();
     for (k, (name, light, want)) in lights_and_powers().into_iter().enumerate() {
         let set = LightSet::new(vec![light], &g, scene_radius());
-        let got = power_estimate(&set, &g, 200_000, 11 + k as u64);
-        for c in 0..3 {
-            let (mean, se) = got[c];
-            assert!(
-                (mean - want[c]).abs() <= 4.0 * se + 1e-4 * want[c],
-                "{name}, channel {c}: {mean} +- {se} vs {}",
-                want[c]
-            );
-        }
+        let got = power_estimate(&set, &g, 200_000, 11 + k as u64, |_| true);
+        assert_within_noise(got, want, name);
     }
 }
 
@@ -428,27 +410,9 @@ fn lights_at_infinity_carry_their_flux_into_the_scene() {
     ];
     for (light, k) in cases {
         let set = LightSet::new(vec![light], &g, scene_radius());
-        let mut rng = Rng(5);
-        let n = 400_000;
-        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let Some(s) = random_sample(&set, &g, &mut rng) else {
-                continue;
-            };
-            if hits(s.p, s.direction) {
-                let x = s.radiance.r as f64 / (s.pdf_position as f64 * s.pdf_direction as f64);
-                sum += x;
-                sum2 += x * x;
-            }
-        }
-        let mean = sum / n as f64;
-        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        let want = k * le.r as f64;
-        assert!(
-            (mean - want).abs() <= 4.0 * se,
-            "{:?}: {mean} +- {se} vs {want}",
-            set.lights()[0]
-        );
+        let got = power_estimate(&set, &g, 400_000, 5, |s| hits(s.p, s.direction));
+        let want = le.to_array().map(|l| k * l as f64);
+        assert_within_noise(got, want, &format!("{:?}", set.lights()[0]));
     }
 }
 
@@ -653,9 +617,10 @@ fn selection_follows_selection_pmf_and_picks_what_sample_picks() {
 
 #[test]
 fn a_volume_light_beside_another_light_samples_its_cells_from_the_rescaled_selection() {
-    // The volume light's power share and its cells: the power estimate over the set is
-    // the sum of both lights' powers, which fails if the cell sample were not uniform
-    // within the light's selection interval.
+    // The volume light takes the middle of the selection interval: the power estimate
+    // over the set is the sum of the three lights' powers only if the volume light's cell
+    // sample is `u_select` rescaled to [0, 1) within its interval (it would otherwise
+    // reach only some of the cells, at the wrong rates).
     let g = geometry();
     let lights = vec![
         Light::Point {
@@ -672,17 +637,10 @@ fn a_volume_light_beside_another_light_samples_its_cells_from_the_rescaled_selec
     ];
     let set = LightSet::new(lights, &g, scene_radius());
     assert_eq!(set.environment_light(), Some(2));
-    let got = power_estimate(&set, &g, 400_000, 29);
+    let got = power_estimate(&set, &g, 400_000, 29, |_| true);
     let r2 = (scene_radius() as f64).powi(2);
     // 4 pi I + 4 pi int j dV + L 4 pi pi R^2.
     let want = [12.0, 6.0, 3.0]
         .map(|j: f64| 4.0 * PI64 * 2.0 + 4.0 * PI64 * j + 0.01 * 4.0 * PI64 * PI64 * r2);
-    for c in 0..3 {
-        let (mean, se) = got[c];
-        assert!(
-            (mean - want[c]).abs() <= 4.0 * se,
-            "channel {c}: {mean} +- {se} vs {}",
-            want[c]
-        );
-    }
+    assert_within_noise(got, want, "point, volume and environment");
 }
