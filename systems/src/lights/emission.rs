@@ -318,3 +318,7 @@ impl LightSet {
 #[cfg(test)]
 #[path = "emission_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "emission_direction_tests.rs"]
+mod direction_tests;
