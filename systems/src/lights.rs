@@ -7,6 +7,10 @@
 //! map, importance sampled). One light is chosen per sample in proportion to an estimate of
 //! its power; the returned pdf includes that choice. Pdfs are per unit solid angle at the
 //! shading point, Dirac lights (distant, point, spot) report `delta = true` and pdf 1 x selection.
+//!
+//! The lights also emit: [`LightSet::sample_emission`] samples a ray leaving a light (the
+//! start of a light subpath for light tracing, BDPT and VCM) with the same selection, and
+//! [`LightSet::emission_pdf`] gives its densities (`lights/emission.rs`).
 
 use crate::distribution::{Distribution1D, ONE_MINUS_EPSILON};
 use crate::environment_map::EnvironmentMap;

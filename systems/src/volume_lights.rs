@@ -417,11 +417,11 @@ pub(crate) mod tests {
         assert_eq!(e.emission(Vec3::splat(0.9)), Rgb::BLACK);
     }
 
-    #[test]
-    fn a_pattern_field_emits_the_pattern_at_world_points_times_its_scale() {
+    /// `j(x) = (2, 1, 0.5) * clamp(x.y, 0, 1)` over the box `[-1, 1] x [0, 2] x [-1, 1]` in
+    /// two cells along `y`, both with the bound `(2, 1, 0.5)` (so sampled equally often
+    /// although the lower one emits half as much): `int j dV = (12, 6, 3)`.
+    pub(crate) fn gradient_emitter() -> VolumeEmitter {
         use crate::pattern::{Axis, Node};
-        // j(x) = (2, 1, 0.5) * clamp(x.y, 0, 1) over the box [-1, 1] x [0, 2] x [-1, 1]:
-        // the graph sees world x (not the box's unit cube, where uvw.y = x.y / 2).
         let graph = PatternGraph::new(vec![Node::Gradient {
             axis: Axis::Y,
             from: 0.0,
@@ -435,15 +435,22 @@ pub(crate) mod tests {
             scale: Rgb::new(2.0, 1.0, 0.5),
         };
         let b = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
-        let e = VolumeEmitter::new(
+        let j_max = [Rgb::new(2.0, 1.0, 0.5); 2];
+        VolumeEmitter::new(
             b,
             [1, 2, 1],
-            &[Rgb::WHITE; 2],
+            &j_max,
             vec![1.0; 2],
             field,
             EmitterSupport::Box,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn a_pattern_field_emits_the_pattern_at_world_points_times_its_scale() {
+        // The graph sees world x (not the box's unit cube, where uvw.y = x.y / 2).
+        let e = gradient_emitter();
         let j = e.emission(Vec3::new(0.3, 0.25, -0.2));
         assert_eq!(j, Rgb::new(0.5, 0.25, 0.125));
         assert_eq!(

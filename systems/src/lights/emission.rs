@@ -113,21 +113,21 @@ impl LightSet {
     ) -> Option<EmissionSample> {
         let index = self.selected_light(u_select)?;
         let pmf = self.pmf[index as usize];
-        let at_surface =
-            |p: Vec3, p_error: Vec3, n: Vec3, direction: Vec3, cos: f32| EmissionSample {
-                light: index,
-                p,
-                p_error,
-                n,
-                direction,
-                radiance: Rgb::BLACK,
-                pdf_position: pmf,
-                pdf_direction: 0.0,
-                cos_at_light: cos,
-                delta_position: false,
-                delta_direction: false,
-                at_infinity: false,
-            };
+        // The fields every kind sets; the rest are overridden per kind below.
+        let ray = |p: Vec3, p_error: Vec3, n: Vec3, direction: Vec3, cos: f32| EmissionSample {
+            light: index,
+            p,
+            p_error,
+            n,
+            direction,
+            radiance: Rgb::BLACK,
+            pdf_position: pmf,
+            pdf_direction: 0.0,
+            cos_at_light: cos,
+            delta_position: false,
+            delta_direction: false,
+            at_infinity: false,
+        };
         let sample = match &self.lights[index as usize] {
             Light::Area { prim, radiance } => {
                 let surf = geometry.sample_surface(*prim, u_position);
@@ -144,7 +144,7 @@ impl LightSet {
                     radiance: *radiance,
                     pdf_position: self.pmf_over_area[index as usize],
                     pdf_direction: cos.max(0.0) * FRAC_1_PI,
-                    ..at_surface(surf.p, surf.p_error, n, direction, cos.abs())
+                    ..ray(surf.p, surf.p_error, n, direction, cos.abs())
                 }
             }
             Light::Point {
@@ -154,7 +154,7 @@ impl LightSet {
                 radiance: *intensity,
                 pdf_direction: INV_4PI,
                 delta_position: true,
-                ..at_surface(
+                ..ray(
                     *position,
                     Vec3::ZERO,
                     Vec3::ZERO,
@@ -183,7 +183,7 @@ impl LightSet {
                     radiance,
                     pdf_direction: uniform_cone_pdf(cos_max),
                     delta_position: true,
-                    ..at_surface(*position, Vec3::ZERO, Vec3::ZERO, direction, 1.0)
+                    ..ray(*position, Vec3::ZERO, Vec3::ZERO, direction, 1.0)
                 }
             }
             Light::Distant {
@@ -198,7 +198,7 @@ impl LightSet {
                     pdf_direction: 1.0,
                     delta_direction: true,
                     at_infinity: true,
-                    ..at_surface(p, Vec3::ZERO, *direction, *direction, 1.0)
+                    ..ray(p, Vec3::ZERO, *direction, *direction, 1.0)
                 }
             }
             Light::Environment { radiance, map } => {
@@ -219,7 +219,7 @@ impl LightSet {
                     pdf_position: pmf / (PI * radius * radius),
                     pdf_direction,
                     at_infinity: true,
-                    ..at_surface(p, Vec3::ZERO, direction, direction, 1.0)
+                    ..ray(p, Vec3::ZERO, direction, direction, 1.0)
                 }
             }
             Light::Volume { emitter } => {
@@ -229,7 +229,7 @@ impl LightSet {
                     radiance: emitter.emission(x),
                     pdf_position: pmf * pdf_v,
                     pdf_direction: INV_4PI,
-                    ..at_surface(
+                    ..ray(
                         x,
                         Vec3::ZERO,
                         Vec3::ZERO,
@@ -318,3 +318,7 @@ impl LightSet {
 #[cfg(test)]
 #[path = "emission_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "emission_direction_tests.rs"]
+mod direction_tests;

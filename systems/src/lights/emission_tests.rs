@@ -1,27 +1,28 @@
 //! Tests of `emission.rs`: each light kind's emission densities against `emission_pdf`,
 //! the emitted power against its analytic value, the sampled directions against their pdf
-//! (chi-square), the flux lights at infinity carry through the scene, and the selection.
+//! (the flux lights at infinity carry through the scene), and the selection; the
+//! chi-square tests of the sampled directions are in `emission_direction_tests.rs`.
 
 use super::*;
 use crate::distribution::tests::{chi_square, chi_square_limit};
-use crate::environment_map::{dir_to_uv, uv_to_dir};
 use crate::geometry::Sphere;
-use crate::pattern::{Axis, Node, PatternGraph, Texture};
+use crate::pattern::Texture;
 use crate::sampler::SplitMix64 as Rng;
+use crate::volume_lights::tests::gradient_emitter;
 use crate::volume_lights::{EmissionField, EmitterSupport, VolumeEmitter};
 use std::f64::consts::PI as PI64;
 
 /// The scene box of every test: its bounding sphere has centre `(0, 0.5, 0)` and radius
 /// `sqrt(2^2 + 3^2 + 2^2) / 2`.
-const BOUNDS: (Vec3, Vec3) = (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
+pub(super) const BOUNDS: (Vec3, Vec3) = (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
 const CENTER: Vec3 = Vec3::new(0.0, 0.5, 0.0);
 
-fn scene_radius() -> f32 {
+pub(super) fn scene_radius() -> f32 {
     17.0f32.sqrt() * 0.5
 }
 
-/// One triangle (prim 0, area 0.6, normal `+y`... up to winding) and one sphere (prim 1).
-fn geometry() -> SceneGeometry {
+/// One triangle (prim 0, area 0.6, in the plane `y = 1`) and one sphere (prim 1).
+pub(super) fn geometry() -> SceneGeometry {
     let tri = [
         Vec3::new(0.0, 1.0, 0.0),
         Vec3::new(0.0, 1.0, 1.0),
@@ -35,7 +36,7 @@ fn geometry() -> SceneGeometry {
 }
 
 /// A Nearest-filtered 16 x 8 map: a brighter upper half, a sun, some black texels.
-fn sky_map() -> EnvironmentMap {
+pub(super) fn sky_map() -> EnvironmentMap {
     let (w, h) = (16, 8);
     let mut rng = Rng(42);
     let px = (0..w * h)
@@ -53,37 +54,6 @@ fn sky_map() -> EnvironmentMap {
         })
         .collect();
     EnvironmentMap::new(px, w, h)
-}
-
-/// `j(x) = (2, 1, 0.5) clamp(x.y, 0, 1)` over `[-1, 1] x [0, 2] x [-1, 1]` in two cells:
-/// `int j dV = (2, 1, 0.5) (4 * 1/2 + 4 * 1) = (12, 6, 3)`. Both cells are given the same
-/// bound, so they are sampled equally often although the lower one emits half as much:
-/// `j / p_V` varies, and an estimator that sampled the wrong cells or the wrong points
-/// in them would be biased.
-fn gradient_emitter() -> VolumeEmitter {
-    let graph = PatternGraph::new(vec![Node::Gradient {
-        axis: Axis::Y,
-        from: 0.0,
-        to: 1.0,
-        a: Rgb::BLACK,
-        b: Rgb::WHITE,
-    }])
-    .unwrap();
-    let field = EmissionField::Pattern {
-        graph: Arc::new(graph),
-        scale: Rgb::new(2.0, 1.0, 0.5),
-    };
-    let b = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
-    let j_max = [Rgb::new(2.0, 1.0, 0.5); 2];
-    VolumeEmitter::new(
-        b,
-        [1, 2, 1],
-        &j_max,
-        vec![1.0; 2],
-        field,
-        EmitterSupport::Box,
-    )
-    .unwrap()
 }
 
 /// `j = 3` inside the unit ball in `[-1, 1]^3` (eight cells): `int j dV = 4 pi`.
@@ -109,7 +79,7 @@ fn ball_emitter() -> VolumeEmitter {
     .unwrap()
 }
 
-fn spot(cutoff: f32, beam: f32, texture: Option<Arc<SpotTexture>>) -> Light {
+pub(super) fn spot(cutoff: f32, beam: f32, texture: Option<Arc<SpotTexture>>) -> Light {
     Light::Spot {
         position: Vec3::new(0.2, 1.5, -0.3),
         direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
@@ -220,11 +190,15 @@ fn lights_and_powers() -> Vec<(&'static str, Light, [f64; 3])> {
     ]
 }
 
-fn random_sample(set: &LightSet, g: &SceneGeometry, rng: &mut Rng) -> Option<EmissionSample> {
+pub(super) fn random_sample(
+    set: &LightSet,
+    g: &SceneGeometry,
+    rng: &mut Rng,
+) -> Option<EmissionSample> {
     set.sample_emission(g, BOUNDS, rng.f32(), rng.vec2(), rng.vec2())
 }
 
-fn close(a: f32, b: f32, rel: f32) -> bool {
+pub(super) fn close(a: f32, b: f32, rel: f32) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs())
 }
 
@@ -352,13 +326,19 @@ fn emission_pdf_is_zero_where_sampling_never_goes() {
     );
 }
 
-/// `E[radiance cos_at_light / (pdf_position pdf_direction)]` per channel over `n` samples,
-/// with its standard error.
-fn power_estimate(set: &LightSet, g: &SceneGeometry, n: usize, seed: u64) -> [(f64, f64); 3] {
+/// `E[radiance cos_at_light / (pdf_position pdf_direction)]` per channel over `n` samples
+/// (counting only the rays `keep` keeps: the power they carry), with its standard error.
+fn power_estimate(
+    set: &LightSet,
+    g: &SceneGeometry,
+    n: usize,
+    seed: u64,
+    keep: impl Fn(&EmissionSample) -> bool,
+) -> [(f64, f64); 3] {
     let mut rng = Rng(seed);
     let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
     for _ in 0..n {
-        let Some(s) = random_sample(set, g, &mut rng) else {
+        let Some(s) = random_sample(set, g, &mut rng).filter(&keep) else {
             continue;
         };
         let w = s.cos_at_light as f64 / (s.pdf_position as f64 * s.pdf_direction as f64);
@@ -375,20 +355,26 @@ fn power_estimate(set: &LightSet, g: &SceneGeometry, n: usize, seed: u64) -> [(f
     })
 }
 
+/// `got` is `want` per channel within four standard errors (and a relative `1e-4` for
+/// zero-variance estimates).
+fn assert_within_noise(got: [(f64, f64); 3], want: [f64; 3], what: &str) {
+    for c in 0..3 {
+        let (mean, se) = got[c];
+        assert!(
+            (mean - want[c]).abs() <= 4.0 * se + 1e-4 * want[c],
+            "{what}, channel {c}: {mean} +- {se} vs {}",
+            want[c]
+        );
+    }
+}
+
 #[test]
 fn the_estimated_emitted_power_is_each_lights_analytic_power() {
     let g = geometry();
     for (k, (name, light, want)) in lights_and_powers().into_iter().enumerate() {
         let set = LightSet::new(vec![light], &g, scene_radius());
-        let got = power_estimate(&set, &g, 200_000, 11 + k as u64);
-        for c in 0..3 {
-            let (mean, se) = got[c];
-            assert!(
-                (mean - want[c]).abs() <= 4.0 * se + 1e-4 * want[c],
-                "{name}, channel {c}: {mean} +- {se} vs {}",
-                want[c]
-            );
-        }
+        let got = power_estimate(&set, &g, 200_000, 11 + k as u64, |_| true);
+        assert_within_noise(got, want, name);
     }
 }
 
@@ -428,179 +414,10 @@ fn lights_at_infinity_carry_their_flux_into_the_scene() {
     ];
     for (light, k) in cases {
         let set = LightSet::new(vec![light], &g, scene_radius());
-        let mut rng = Rng(5);
-        let n = 400_000;
-        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let Some(s) = random_sample(&set, &g, &mut rng) else {
-                continue;
-            };
-            if hits(s.p, s.direction) {
-                let x = s.radiance.r as f64 / (s.pdf_position as f64 * s.pdf_direction as f64);
-                sum += x;
-                sum2 += x * x;
-            }
-        }
-        let mean = sum / n as f64;
-        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        let want = k * le.r as f64;
-        assert!(
-            (mean - want).abs() <= 4.0 * se,
-            "{:?}: {mean} +- {se} vs {want}",
-            set.lights()[0]
-        );
+        let got = power_estimate(&set, &g, 400_000, 5, |s| hits(s.p, s.direction));
+        let want = le.to_array().map(|l| k * l as f64);
+        assert_within_noise(got, want, &format!("{:?}", set.lights()[0]));
     }
-}
-
-/// Chi-square of directions in `(cos theta, phi)` about `axis`, `cos theta` in `[z_lo, 1]`
-/// cut in `NT` equal bins (equal solid angle), against `pdf` integrated over each bin by a
-/// sub-grid. Directions outside the band fall in a bin of probability 0.
-fn chi_square_about_axis(dirs: &[Vec3], axis: Vec3, z_lo: f32, pdf: impl Fn(Vec3) -> f32) {
-    const NT: usize = 12;
-    const NP: usize = 16;
-    const SUB: usize = 8;
-    let frame = Frame::from_normal(axis);
-    let dz = (1.0 - z_lo as f64) / NT as f64;
-    let dphi = 2.0 * PI64 / NP as f64;
-    let mut probs = vec![0.0f64; NT * NP + 1];
-    for i in 0..NT {
-        for j in 0..NP {
-            let mut p = 0.0;
-            for a in 0..SUB {
-                for b in 0..SUB {
-                    let z = z_lo as f64 + (i as f64 + (a as f64 + 0.5) / SUB as f64) * dz;
-                    let phi = (j as f64 + (b as f64 + 0.5) / SUB as f64) * dphi;
-                    let s = (1.0 - z * z).max(0.0).sqrt();
-                    let local = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, z as f32);
-                    p += pdf(frame.to_world(local)) as f64;
-                }
-            }
-            probs[i * NP + j] = p * dz * dphi / (SUB * SUB) as f64;
-        }
-    }
-    let total: f64 = probs.iter().sum();
-    assert!((total - 1.0).abs() < 2e-3, "the pdf integrates to {total}");
-    let mut counts = vec![0u64; probs.len()];
-    for d in dirs {
-        let l = frame.to_local(*d);
-        let bin = if l.z < z_lo {
-            NT * NP
-        } else {
-            let i = (((l.z - z_lo) as f64 / dz) as usize).min(NT - 1);
-            let phi = (l.y as f64).atan2(l.x as f64).rem_euclid(2.0 * PI64);
-            i * NP + ((phi / dphi) as usize).min(NP - 1)
-        };
-        counts[bin] += 1;
-    }
-    let (stat, df) = chi_square(&counts, &probs, dirs.len() as u64);
-    assert!(stat < chi_square_limit(df), "chi2 {stat} with {df} dof");
-}
-
-fn sampled_directions(
-    set: &LightSet,
-    g: &SceneGeometry,
-    n: usize,
-    seed: u64,
-) -> Vec<EmissionSample> {
-    let mut rng = Rng(seed);
-    (0..n)
-        .filter_map(|_| random_sample(set, g, &mut rng))
-        .collect()
-}
-
-#[test]
-fn area_light_directions_are_cosine_distributed_chi_square() {
-    let g = geometry();
-    let set = LightSet::new(
-        vec![Light::Area {
-            prim: 0,
-            radiance: Rgb::WHITE,
-        }],
-        &g,
-        1.0,
-    );
-    let samples = sampled_directions(&set, &g, 200_000, 21);
-    let n = samples[0].n;
-    let dirs: Vec<Vec3> = samples.iter().map(|s| s.direction).collect();
-    // The whole sphere (z_lo = -1): nothing may go behind the emitter.
-    chi_square_about_axis(&dirs, n, -1.0, |d| {
-        set.emission_pdf(0, Vec3::ZERO, n, d, BOUNDS).1
-    });
-    // The pdf itself is cos / pi (an independent value, not the code's).
-    let d = Frame::from_normal(n).to_world(Vec3::new(0.6, 0.0, 0.8));
-    let pdf = set.emission_pdf(0, Vec3::ZERO, n, d, BOUNDS).1;
-    assert!(close(pdf, 0.8 / std::f32::consts::PI, 1e-5), "{pdf}");
-}
-
-#[test]
-fn spot_light_directions_are_uniform_in_the_cutoff_cone_chi_square() {
-    let g = geometry();
-    let set = LightSet::new(vec![spot(35.0, 10.0, None)], &g, 1.0);
-    let Light::Spot {
-        direction: axis, ..
-    } = set.lights()[0]
-    else {
-        unreachable!()
-    };
-    let dirs: Vec<Vec3> = sampled_directions(&set, &g, 200_000, 22)
-        .iter()
-        .map(|s| s.direction)
-        .collect();
-    let z_lo = 35f32.to_radians().cos();
-    chi_square_about_axis(&dirs, axis, z_lo, |d| {
-        set.emission_pdf(0, Vec3::ZERO, Vec3::ZERO, d, BOUNDS).1
-    });
-    let want = 1.0 / (2.0 * PI64 * (1.0 - z_lo as f64));
-    assert!(close(
-        set.emission_pdf(0, Vec3::ZERO, Vec3::ZERO, axis, BOUNDS).1,
-        want as f32,
-        1e-4
-    ));
-}
-
-/// Directions of a non-uniform environment map, binned by the map texel (four quadrants
-/// each) of the direction they come *from* (`-direction`), against `emission_pdf` at the
-/// texel centre times its `(u, v)` Jacobian `2 pi^2 sin theta` (the Nearest map's density
-/// is constant in `(u, v)` per texel). A sampler that forgot the light travels away from
-/// the map, or a pdf read at the wrong direction, fails.
-#[test]
-fn environment_directions_follow_the_maps_pdf_chi_square() {
-    let g = geometry();
-    let map = sky_map();
-    let (w, h) = (map.width(), map.height());
-    let light = Light::Environment {
-        radiance: Rgb::WHITE,
-        map: Some(Box::new(map)),
-    };
-    let set = LightSet::new(vec![light], &g, 1.0);
-    let mut probs = vec![0.0f64; 4 * w * h];
-    for j in 0..h {
-        for i in 0..w {
-            let uv = Vec2::new((i as f32 + 0.5) / w as f32, (j as f32 + 0.5) / h as f32);
-            let towards = uv_to_dir(uv);
-            let sin_theta = (1.0 - towards.y as f64 * towards.y as f64).sqrt();
-            let pdf = set
-                .emission_pdf(0, Vec3::ZERO, Vec3::ZERO, -towards, BOUNDS)
-                .1;
-            let cell = pdf as f64 * 2.0 * PI64 * PI64 * sin_theta / (w * h) as f64;
-            for q in 0..4 {
-                probs[4 * (j * w + i) + q] = cell / 4.0;
-            }
-        }
-    }
-    let total: f64 = probs.iter().sum();
-    assert!((total - 1.0).abs() < 1e-4, "{total}");
-    let samples = sampled_directions(&set, &g, 300_000, 23);
-    let mut counts = vec![0u64; probs.len()];
-    for s in &samples {
-        let uv = dir_to_uv(-s.direction);
-        let (x, y) = (uv.x * w as f32, uv.y * h as f32);
-        let (i, j) = ((x as usize).min(w - 1), (y as usize).min(h - 1));
-        let q = usize::from(x - i as f32 >= 0.5) + 2 * usize::from(y - j as f32 >= 0.5);
-        counts[4 * (j * w + i) + q] += 1;
-    }
-    let (stat, df) = chi_square(&counts, &probs, samples.len() as u64);
-    assert!(stat < chi_square_limit(df), "chi2 {stat} with {df} dof");
 }
 
 #[test]
@@ -653,9 +470,10 @@ fn selection_follows_selection_pmf_and_picks_what_sample_picks() {
 
 #[test]
 fn a_volume_light_beside_another_light_samples_its_cells_from_the_rescaled_selection() {
-    // The volume light's power share and its cells: the power estimate over the set is
-    // the sum of both lights' powers, which fails if the cell sample were not uniform
-    // within the light's selection interval.
+    // The volume light takes the middle of the selection interval: the power estimate
+    // over the set is the sum of the three lights' powers only if the volume light's cell
+    // sample is `u_select` rescaled to [0, 1) within its interval (it would otherwise
+    // reach only some of the cells, at the wrong rates).
     let g = geometry();
     let lights = vec![
         Light::Point {
@@ -672,17 +490,10 @@ fn a_volume_light_beside_another_light_samples_its_cells_from_the_rescaled_selec
     ];
     let set = LightSet::new(lights, &g, scene_radius());
     assert_eq!(set.environment_light(), Some(2));
-    let got = power_estimate(&set, &g, 400_000, 29);
+    let got = power_estimate(&set, &g, 400_000, 29, |_| true);
     let r2 = (scene_radius() as f64).powi(2);
     // 4 pi I + 4 pi int j dV + L 4 pi pi R^2.
     let want = [12.0, 6.0, 3.0]
         .map(|j: f64| 4.0 * PI64 * 2.0 + 4.0 * PI64 * j + 0.01 * 4.0 * PI64 * PI64 * r2);
-    for c in 0..3 {
-        let (mean, se) = got[c];
-        assert!(
-            (mean - want[c]).abs() <= 4.0 * se,
-            "channel {c}: {mean} +- {se} vs {}",
-            want[c]
-        );
-    }
+    assert_within_noise(got, want, "point, volume and environment");
 }
