@@ -17,6 +17,7 @@ pub mod environment_map;
 pub mod film;
 pub mod geometry;
 pub mod grid;
+pub mod hash_grid;
 pub mod independent_sampler;
 pub mod intersect;
 pub mod layered;

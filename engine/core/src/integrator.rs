@@ -37,14 +37,17 @@ pub enum GlobalIntegrator {
     Light,
     /// Bidirectional path tracing ([`Strategy::Bdpt`](crate::bidir::Strategy::Bdpt)).
     Bdpt,
+    /// Vertex connection and merging ([`Strategy::Vcm`](crate::bidir::Strategy::Vcm)).
+    Vcm,
 }
 
 impl GlobalIntegrator {
     /// Every integrator, in listing order.
-    pub const ALL: [GlobalIntegrator; 3] = [
+    pub const ALL: [GlobalIntegrator; 4] = [
         GlobalIntegrator::Path,
         GlobalIntegrator::Light,
         GlobalIntegrator::Bdpt,
+        GlobalIntegrator::Vcm,
     ];
 
     /// The name scene files and `--technique integrator=NAME` use.
@@ -53,6 +56,7 @@ impl GlobalIntegrator {
             GlobalIntegrator::Path => "path",
             GlobalIntegrator::Light => "light",
             GlobalIntegrator::Bdpt => "bdpt",
+            GlobalIntegrator::Vcm => "vcm",
         }
     }
 

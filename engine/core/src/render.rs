@@ -355,6 +355,7 @@ fn render_dispatch(
         }
         GlobalIntegrator::Light => Strategy::Light,
         GlobalIntegrator::Bdpt => Strategy::Bdpt,
+        GlobalIntegrator::Vcm => Strategy::Vcm,
     };
     if let Err(reason) = Bidirectional::supports(scene) {
         // The documented fallback: the path tracer renders what the bidirectional

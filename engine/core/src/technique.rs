@@ -99,6 +99,11 @@ pub static INTEGRATOR: Technique = Technique {
             summary: "bidirectional path tracing: camera and light subpaths, every connection, MIS (Veach 1997)",
             converges: always,
         },
+        TechniqueValue {
+            name: "vcm",
+            summary: "vertex connection and merging: bdpt and merging of light vertices within a shrinking radius (Georgiev et al. 2012); consistent",
+            converges: always,
+        },
     ],
     default: "path",
     applies_to: "scenes with lights (emitters, distant, point, spot, environment, emissive media)",

@@ -113,7 +113,8 @@ pub struct RenderSettings {
     /// The pixel reconstruction filter (`filter`, `filter_radius`, `filter_stddev`;
     /// default the box of radius 1/2, uniform over each pixel).
     pub filter: PixelFilter,
-    /// The global integrator (`integrator = "path" | "light" | "bdpt"`, default `"path"`).
+    /// The global integrator (`integrator = "path" | "light" | "bdpt" | "vcm"`, default
+    /// `"path"`).
     pub integrator: GlobalIntegrator,
 }
 

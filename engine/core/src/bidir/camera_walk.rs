@@ -5,7 +5,8 @@
 
 use super::evaluate::{cos_at, evaluate_runs};
 use super::mis::{
-    connection_weight, emitter_hit_weight, light_sample_weight, pdf_w_to_a, ConnectionPdfs,
+    connection_weight, emitter_hit_weight, light_sample_weight, merge_weight, pdf_w_to_a,
+    ConnectionPdfs,
     SubpathMis,
 };
 use super::vertices::{LightVertices, NO_VERTEX};
@@ -37,7 +38,7 @@ pub(super) fn camera_subpaths(
     counters: &PatternCounters,
 ) {
     let n = batch.paths.len();
-    let f = bd.factors();
+    let f = w.s.factors;
     let q = &mut w.camera_q;
     q.rays.rays.clear();
     push_camera_rays(
@@ -144,9 +145,9 @@ fn camera_vertices(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
     let settings = scene.settings;
     let (q, s, light) = (&mut w.camera_q, &mut w.s, &w.light);
+    let f = s.factors;
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
     let mut next_len = 0;
@@ -242,8 +243,12 @@ fn camera_vertices(
             mode: grp.mode,
         };
         if connectable {
-            light_samples(bd, scene, s, &at, &ctx, &mut *bxdf, arena, counters);
+            light_samples(scene, s, &at, &ctx, &mut *bxdf, arena, counters);
             connect_light_vertices(scene, s, light, &at, &ctx, &mut *bxdf, arena, counters);
+            if s.merge_radius > 0.0 {
+                let radiance = &mut batch.paths.radiance;
+                merge_light_vertices(scene, s, light, &at, radiance, arena, counters);
+            }
         }
         s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
@@ -286,7 +291,7 @@ fn camera_vertices(
     }
     q.next.rays.truncate(next_len);
     let (pts, incoming) = (&q.hits.groups.points, &q.hits.incoming);
-    finish_connections(bd, scene, s, light, pts, incoming, arena, counters);
+    finish_connections(scene, s, light, pts, incoming, arena, counters);
     q.hits.groups.groups = groups;
 }
 
@@ -352,7 +357,6 @@ pub(super) fn reverse_pdfs(
 /// closure (bound to `ctx`).
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 fn light_samples(
-    bd: &Bidirectional,
     scene: &CompiledScene,
     s: &mut Scratch,
     at: &GroupVertices<'_>,
@@ -361,7 +365,7 @@ fn light_samples(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
+    let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
     let lights = &scene.lights;
     let bounds = scene.geometry.bounds();
@@ -543,7 +547,6 @@ fn connect_light_vertices(
 /// weight and a shadow ray.
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 fn finish_connections(
-    bd: &Bidirectional,
     scene: &CompiledScene,
     s: &mut Scratch,
     light: &LightVertices,
@@ -552,7 +555,7 @@ fn finish_connections(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
+    let f = s.factors;
     let lp = &light.points;
     for bounce in 0..s.pending.len().min(light.bounces()) {
         if s.pending[bounce].is_empty() {
@@ -668,6 +671,87 @@ fn finish_connections(
             );
         }
         s.pending[bounce].clear();
+    }
+}
+
+/// Vertex merging at the group's vertices: every light vertex of the batch within the merge
+/// radius (of the same kind: surface points with surface points, points in media with
+/// points in media) is taken as light arriving at the camera vertex, a density estimate
+/// with the kernel `1 / (pi r^2 N_L)` on surfaces and `1 / (4/3 pi r^3 N_L)` in media
+/// (photon mapping; Georgiev et al. 2012, eq. 9; the point-point estimator of Křivánek et
+/// al. 2014), weighted against every other strategy. Added to the paths' `radiance`.
+fn merge_light_vertices(
+    scene: &CompiledScene,
+    s: &mut Scratch,
+    light: &LightVertices,
+    at: &GroupVertices<'_>,
+    radiance: &mut [Rgb],
+    arena: &Bump,
+    counters: &PatternCounters,
+) {
+    let f = s.factors;
+    let (pts, incoming) = (at.pts, at.incoming);
+    let lp = &light.points;
+    let (grid, merges) = (&s.grid, &mut s.merges);
+    merges.clear();
+    for (k, i) in at.range.clone().enumerate() {
+        let r = pts.ray_id[i] as usize;
+        let in_medium = pts.shape[i] == u32::MAX;
+        let camera_segments = incoming.depth[r] as u32 + 1;
+        grid.query(&lp.p, pts.p[i], |v| {
+            let fits = camera_segments + light.segments[v] <= scene.settings.max_depth;
+            if fits && (lp.shape[v] == u32::MAX) == in_medium {
+                merges.push((k as u32, v as u32));
+            }
+        });
+    }
+    if merges.is_empty() {
+        return;
+    }
+    let rows = merges.iter().map(|&(k, _)| at.range.start + k as usize);
+    s.pair_eval.bind_rows(pts, rows);
+    // Forward: the camera vertex's closure towards each light vertex's incident direction;
+    // reverse: seen from there, towards the camera vertex's own incident direction.
+    s.view.clear();
+    s.view.extend(merges.iter().map(|&(k, _)| pts.vn[at.range.start + k as usize]));
+    s.wi.clear();
+    s.wi.extend(merges.iter().map(|&(_, v)| lp.vn[v as usize]));
+    s.pair_eval
+        .run(scene, at.material, at.mode, &s.view, &s.wi, arena, counters);
+    std::mem::swap(&mut s.value, &mut s.pair_eval.value);
+    std::mem::swap(&mut s.pdf, &mut s.pair_eval.pdf);
+    s.pair_eval
+        .run(scene, at.material, at.mode, &s.wi, &s.view, arena, counters);
+    let pi = std::f32::consts::PI;
+    let r = s.merge_radius;
+    let light_paths = f.light_paths_in_batch;
+    for (e, &(k, v)) in s.merges.iter().enumerate() {
+        let (i, v) = (at.range.start + k as usize, v as usize);
+        let ray = pts.ray_id[i] as usize;
+        let path = incoming.path[ray] as usize;
+        let in_medium = pts.shape[i] == u32::MAX;
+        let cos = cos_at(pts, i, lp.vn[v]);
+        if cos <= 0.0 {
+            continue;
+        }
+        let kernel = if in_medium {
+            4.0 / 3.0 * pi * r * r * r * light_paths
+        } else {
+            pi * r * r * light_paths
+        };
+        let weight = merge_weight(
+            &s.mis[path],
+            &light.mis[v],
+            s.pdf[e],
+            s.pair_eval.pdf[e],
+            f.at(in_medium),
+        );
+        // `f` without the cosine: the light vertices' flux already is per unit projected
+        // area of their own surface.
+        let c = incoming.throughput[ray] * s.value[e] * light.throughput[v] * (weight / (cos * kernel));
+        if c.is_finite() {
+            radiance[path] += c;
+        }
     }
 }
 

@@ -51,6 +51,14 @@ impl GroupEvaluations {
         self.points.extend_from_range(pts, range);
     }
 
+    /// Copies the rows `rows` of `pts` (all of one material and mode), in order.
+    pub fn bind_rows(&mut self, pts: &ShadingPoints, rows: impl Iterator<Item = usize>) {
+        self.points.clear();
+        for i in rows {
+            self.points.push_from(pts, i);
+        }
+    }
+
     /// Evaluates every row's closure seen from `view[k]` for light from `wi[k]`; `mode` and
     /// `material` are the group's.
     #[allow(

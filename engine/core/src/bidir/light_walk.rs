@@ -172,7 +172,7 @@ fn scatter_light_vertices(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
+    let f = w.s.factors;
     let q = &mut w.light_q;
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
@@ -315,7 +315,7 @@ fn connect_to_camera(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = bd.factors();
+    let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
     let vn = &pts.vn[at.range.clone()];
     s.view.clear();

@@ -50,6 +50,7 @@ use risotto_components::{Rgb, ShadowRays, StackEvent, VolumeStack};
 use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::camera::CameraConnection;
 use risotto_systems::film::SplatFilm;
+use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 use risotto_systems::sampler::PathSampler;
 use std::sync::atomic::{AtomicU64, Ordering};
 pub use vertices::LightVertices;
@@ -60,6 +61,14 @@ const LIGHT_SEED_SALT: u32 = 0x9e37_79b9;
 /// The first sampler dimension of a light subpath's vertices: the emission draws 0-4.
 const WALK_FIRST_DIMENSION: u32 = 8;
 
+/// The first iteration's merge radius as a fraction of the scene's bounding-sphere radius
+/// (SmallVCM's default).
+pub const MERGE_RADIUS_FACTOR: f32 = 0.003;
+
+/// How fast the merge radius shrinks (`alpha` of progressive photon mapping, Hachisuka and
+/// Jensen 2009; SmallVCM's default).
+pub const RADIUS_ALPHA: f32 = 0.75;
+
 /// Which strategies a [`Bidirectional`] integrator combines.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Strategy {
@@ -68,6 +77,10 @@ pub enum Strategy {
     Light,
     /// Bidirectional path tracing: every connection strategy and light tracing, MIS-weighted.
     Bdpt,
+    /// Vertex connection and merging: bidirectional path tracing and, at every camera
+    /// vertex, the light vertices of the batch's light subpaths within a shrinking radius
+    /// (Georgiev et al. 2012).
+    Vcm,
 }
 
 impl Strategy {
@@ -76,6 +89,7 @@ impl Strategy {
         match self {
             Strategy::Light => "light",
             Strategy::Bdpt => "bdpt",
+            Strategy::Vcm => "vcm",
         }
     }
 }
@@ -94,6 +108,8 @@ pub struct Bidirectional {
     light_paths: AtomicU64,
     /// Light subpaths per iteration over the image's pixels ([`MisFactors`]).
     light_paths_per_pixel: f32,
+    /// The first iteration's merge radius ([`MERGE_RADIUS_FACTOR`]).
+    merge_radius: f32,
 }
 
 impl Bidirectional {
@@ -122,6 +138,7 @@ impl Bidirectional {
             splats,
             light_paths: AtomicU64::new(0),
             light_paths_per_pixel: window_pixels as f32 / (w as f32 * h as f32),
+            merge_radius: MERGE_RADIUS_FACTOR * scene.radius,
         })
     }
 
@@ -139,9 +156,22 @@ impl Bidirectional {
         Ok(())
     }
 
-    /// The MIS constants.
-    fn factors(&self) -> MisFactors {
-        MisFactors::connections_only(self.light_paths_per_pixel)
+    /// The MIS constants of a batch of `paths` camera samples whose first sample index is
+    /// `first_sample`, and its merge radius (0 without merging).
+    fn factors(&self, paths: usize, first_sample: u32) -> (MisFactors, f32) {
+        match self.strategy {
+            Strategy::Vcm => {
+                // The batch is an iteration of progressive merging (Hachisuka and Jensen
+                // 2009; Georgiev et al. 2012, sec. 5): the radius shrinks as
+                // `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`, so the merged estimate's bias
+                // vanishes as its variance does.
+                let i = first_sample as f32;
+                let r = self.merge_radius / (i + 1.0).powf(0.5 * (1.0 - RADIUS_ALPHA));
+                let f = MisFactors::vcm(r, paths as f32, self.light_paths_per_pixel);
+                (f, r)
+            }
+            _ => (MisFactors::connections_only(self.light_paths_per_pixel), 0.0),
+        }
     }
 
     /// The volumes subpaths of light `light` start in.
@@ -198,6 +228,14 @@ pub struct BidirWorker {
 /// The stages' buffers.
 #[derive(Default)]
 pub(crate) struct Scratch {
+    /// The batch's MIS constants.
+    factors: MisFactors,
+    /// The batch's merge radius (0 without merging).
+    merge_radius: f32,
+    /// The batch's light vertices hashed for merging.
+    grid: risotto_systems::hash_grid::HashGrid,
+    /// Per camera vertex of a group: the light vertices to merge.
+    merges: Vec<(u32, u32)>,
     /// MIS sums of every subpath of the walk in progress.
     mis: Vec<SubpathMis>,
     /// Light subpaths from lights at infinity.
@@ -208,6 +246,7 @@ pub(crate) struct Scratch {
     u4: Vec<[f32; 4]>,
     samples: BxdfSamples,
     group_eval: evaluate::GroupEvaluations,
+    pair_eval: evaluate::GroupEvaluations,
     eval_rows: Vec<(u32, u32)>,
     /// Per-point query columns of a group (viewer and light directions) and answers.
     view: Vec<glam::Vec3>,
@@ -249,7 +288,14 @@ impl Integrator for Bidirectional {
         arena: &Bump,
     ) {
         let counters: &PatternCounters = arena.alloc(PatternCounters::default());
+        let first_sample = batch.paths.sample.iter().map(|s| s & !INDEPENDENT_BIT).min();
+        let (factors, radius) = self.factors(batch.paths.len(), first_sample.unwrap_or(0));
+        worker.s.factors = factors;
+        worker.s.merge_radius = radius;
         light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
+        if radius > 0.0 {
+            worker.s.grid.build(&worker.light.points.p, radius);
+        }
         self.light_paths
             .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
         camera_walk::camera_subpaths(self, scene, batch, worker, stats, arena, counters);
