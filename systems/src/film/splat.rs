@@ -85,12 +85,16 @@ impl SplatFilm {
     /// Adds the finite `v` to one channel's sum, saturating.
     #[inline(always)]
     fn add_fixed(&self, sum: &AtomicI64, v: f32) {
-        let scaled = (f64::from(v) * Self::SCALE).round();
-        if scaled == 0.0 {
+        // `v 2^32` is exact (a power-of-two scale of an f32: 24 significant bits), so adding
+        // 1/2 towards its sign is exact below 2^52 and leaves the integers above it alone,
+        // and truncation then rounds half away from zero as `f64::round` does, without
+        // its libm call. `as` saturates at the i64 range: a value beyond it saturates the
+        // sum by itself.
+        let scaled = f64::from(v) * Self::SCALE;
+        let q = (scaled + 0.5f64.copysign(scaled)) as i64;
+        if q == 0 {
             return;
         }
-        // `as` saturates at the i64 range: a value beyond it saturates the sum by itself.
-        let q = scaled as i64;
         let too_large = scaled.abs() >= I64_RANGE;
         // A compare-and-swap loop rather than `fetch_add`: a wrapped sum could not be
         // repaired afterwards without a race.
