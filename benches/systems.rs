@@ -7,8 +7,8 @@ use criterion::{black_box, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Vec2, Vec3};
 use risotto::systems::camera::{generate_camera_rays, Camera, Projection};
 use risotto::systems::film::{splat, Film, SplatFilm};
-use risotto::systems::pixel_filter::PixelFilter;
 use risotto::systems::partition::partition_by_key;
+use risotto::systems::pixel_filter::PixelFilter;
 use risotto::systems::sampler::pixel_seed;
 use risotto_components::Rgb;
 
