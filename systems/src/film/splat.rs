@@ -138,6 +138,18 @@ impl SplatFilm {
         [0, 1, 2].map(|c| self.sums[base + c].load(Ordering::Relaxed) as f64 / Self::SCALE)
     }
 
+    /// Pixel `pixel`'s value after `light_paths` light subpaths were traced and splatted
+    /// with [`crate::camera::CameraConnection::importance`]: the sum times `width * height
+    /// / light_paths` (the normalisation of `camera/importance.rs`), the pixel's
+    /// filter-weighted mean radiance. Black for no paths.
+    pub fn pixel_value(&self, pixel: u32, light_paths: u64) -> [f64; 3] {
+        if light_paths == 0 {
+            return [0.0; 3];
+        }
+        let scale = f64::from(self.width) * f64::from(self.height) / light_paths as f64;
+        self.sum(pixel).map(|s| s * scale)
+    }
+
     /// The raw fixed-point sums of pixel `pixel` (`sum * SCALE`): what order independence
     /// is stated of.
     pub fn sum_fixed(&self, pixel: u32) -> [i64; 3] {
