@@ -1,13 +1,14 @@
 //! Criterion benches of the systems that are not benched elsewhere: camera ray generation,
-//! partition and splat (light sampling is in `benches/path.rs`, with the other per-vertex
+//! partition and splat (the tile film and the light tracer's shared `SplatFilm`) (light sampling is in `benches/path.rs`, with the other per-vertex
 //! systems). Realistic batch size (4096 items), black_box on
 //! inputs and outputs, throughput in elements.
 
 use criterion::{black_box, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use risotto::systems::camera::{generate_camera_rays, Camera, Projection};
-use risotto::systems::film::{splat, Film};
+use risotto::systems::film::{splat, Film, SplatFilm};
 use risotto::systems::partition::partition_by_key;
+use risotto::systems::pixel_filter::PixelFilter;
 use risotto::systems::sampler::pixel_seed;
 use risotto_components::Rgb;
 
@@ -93,6 +94,30 @@ fn splat_bench(c: &mut Criterion) {
     g.bench_function("film_4096", |b| {
         b.iter(|| black_box(splat(&mut film, black_box(&pixel), black_box(&radiance))))
     });
+    // The light tracer's shared film: fixed-point atomic additions (a compare-and-swap per
+    // channel) at scattered pixels, one thread; and through a tent filter of radius 1 (four
+    // pixels per splat, most of the time).
+    let shared = SplatFilm::new(256, 256).unwrap();
+    g.bench_function("splat_film_add_4096", |b| {
+        b.iter(|| {
+            for (&p, &l) in pixel.iter().zip(&radiance) {
+                shared.add(black_box(p), black_box(l));
+            }
+        })
+    });
+    let films: Vec<Vec2> = pixel
+        .iter()
+        .map(|&p| Vec2::new((p % 256) as f32 + 0.37, (p / 256) as f32 + 0.61))
+        .collect();
+    let tent = PixelFilter::Tent { radius: 1.0 };
+    g.bench_function("splat_film_add_filtered_tent_4096", |b| {
+        b.iter(|| {
+            for (&f, &l) in films.iter().zip(&radiance) {
+                shared.add_filtered(black_box(&tent), black_box(f), black_box(l));
+            }
+        })
+    });
+    black_box(shared.sum(0));
     g.finish();
 }
 

@@ -85,12 +85,16 @@ impl SplatFilm {
     /// Adds the finite `v` to one channel's sum, saturating.
     #[inline(always)]
     fn add_fixed(&self, sum: &AtomicI64, v: f32) {
-        let scaled = (f64::from(v) * Self::SCALE).round();
-        if scaled == 0.0 {
+        // `v 2^32` is exact (a power-of-two scale of an f32: 24 significant bits), so adding
+        // 1/2 towards its sign is exact below 2^52 and leaves the integers above it alone,
+        // and truncation then rounds half away from zero as `f64::round` does, without
+        // its libm call. `as` saturates at the i64 range: a value beyond it saturates the
+        // sum by itself.
+        let scaled = f64::from(v) * Self::SCALE;
+        let q = (scaled + 0.5f64.copysign(scaled)) as i64;
+        if q == 0 {
             return;
         }
-        // `as` saturates at the i64 range: a value beyond it saturates the sum by itself.
-        let q = scaled as i64;
         let too_large = scaled.abs() >= I64_RANGE;
         // A compare-and-swap loop rather than `fetch_add`: a wrapped sum could not be
         // repaired afterwards without a race.
@@ -132,6 +136,18 @@ impl SplatFilm {
     pub fn sum(&self, pixel: u32) -> [f64; 3] {
         let base = 3 * pixel as usize;
         [0, 1, 2].map(|c| self.sums[base + c].load(Ordering::Relaxed) as f64 / Self::SCALE)
+    }
+
+    /// Pixel `pixel`'s value after `light_paths` light subpaths were traced and splatted
+    /// with [`crate::camera::CameraConnection::importance`]: the sum times `width * height
+    /// / light_paths` (the normalisation of `camera/importance.rs`), the pixel's
+    /// filter-weighted mean radiance. Black for no paths.
+    pub fn pixel_value(&self, pixel: u32, light_paths: u64) -> [f64; 3] {
+        if light_paths == 0 {
+            return [0.0; 3];
+        }
+        let scale = f64::from(self.width) * f64::from(self.height) / light_paths as f64;
+        self.sum(pixel).map(|s| s * scale)
     }
 
     /// The raw fixed-point sums of pixel `pixel` (`sum * SCALE`): what order independence

@@ -1,5 +1,6 @@
 use super::*;
 use crate::sampler::SplitMix64;
+use glam::Vec3;
 
 /// Contributions spanning the documented range, `2^-24` to `2^20` (log-uniform), to random
 /// pixels of a small film: `(pixel, value)`.
@@ -164,4 +165,48 @@ fn add_filtered_spreads_by_the_splat_weights() {
     }
     assert!((total - 0.5 * f64::from(weights.iter().map(|q| q.1).sum::<f32>())).abs() < 1e-6);
     assert!(SplatFilm::new(1 << 14, 1 << 14).is_none());
+}
+
+/// The whole light-tracing chain the integrator uses: points of a uniformly emitting
+/// Lambertian plane (radiance 1.5) filling a pinhole camera's view, connected with
+/// `Camera::connect`, added with `add_filtered` (a tent of radius 1) and read with
+/// `pixel_value`: every pixel is 1.5.
+#[test]
+fn light_traced_plane_reads_back_its_radiance() {
+    use crate::camera::{Camera, Projection};
+    let cam = Camera::look_at(
+        Projection::Perspective { fov_deg: 50.0 },
+        Vec3::new(0.2, 0.1, 3.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        10,
+        8,
+    )
+    .unwrap()
+    .with_filter(PixelFilter::Tent { radius: 1.0 });
+    let film = SplatFilm::new(cam.width, cam.height).unwrap();
+    let (l, side, n) = (1.5f32, 6.0f32, 1200u32);
+    let mut rng = SplitMix64(4);
+    for i in 0..n {
+        for j in 0..n {
+            let u = (Vec2::new(i as f32, j as f32) + rng.vec2()) / n as f32 - Vec2::splat(0.5);
+            let p = Vec3::new(u.x * side, u.y * side, -0.5);
+            if let Some(c) = cam.connect(p, Vec2::ZERO) {
+                let value = l * c.wi.z * c.importance * side * side;
+                film.add_filtered(&cam.filter, c.film, Rgb::splat(value));
+            }
+        }
+    }
+    let paths = u64::from(n * n);
+    // The border pixels too: their footprints reach half a pixel out of the image, and
+    // `connect` accepts the points there, as the camera's filtered rays go there.
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let v = film.pixel_value(y * cam.width + x, paths);
+            for c in v {
+                assert!((c / f64::from(l) - 1.0).abs() < 0.02, "({x}, {y}): {v:?}");
+            }
+        }
+    }
+    assert_eq!(film.pixel_value(0, 0), [0.0; 3]);
 }
