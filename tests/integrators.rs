@@ -215,6 +215,7 @@ fn volume_hits(
             factory,
             arena,
             volume_light: None,
+            light_path: false,
         },
         out,
     );

@@ -277,6 +277,13 @@ pub struct VolumeServices<'a, 's> {
     /// to weight the emission gathered along the rays against those light samples
     /// ([`crate::plugin::volume_light`]). `None`: weight 1.
     pub volume_light: Option<VolumeLightMis<'a>>,
+    /// The rays start at the lights (the seed's `isLightPath`): a bidirectional integrator's
+    /// light subpaths, which carry importance rather than radiance. A volume integrator
+    /// answers them as it answers camera rays (transmittance and scattering points are the
+    /// same); what it may skip is radiance it would gather for the rays (emission along
+    /// them, which the global integrator ignores on light paths), and a lighting delegate is
+    /// never offered with them.
+    pub light_path: bool,
 }
 
 /// A volume integrator bound to one volumetric domain (RIS `RixVolumeIntegrator`).

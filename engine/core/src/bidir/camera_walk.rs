@@ -6,14 +6,13 @@
 use super::evaluate::{cos_at, evaluate_runs};
 use super::mis::{
     connection_weight, emitter_hit_weight, light_sample_weight, merge_weight, pdf_w_to_a,
-    ConnectionPdfs,
-    SubpathMis,
+    ConnectionPdfs, SubpathMis,
 };
 use super::vertices::{LightVertices, NO_VERTEX};
 use super::walk::{arrival_margin, push_connection, stack_toward, trace_bounce};
 use super::{BidirWorker, Bidirectional, Scratch, Strategy};
 use crate::integrator::PathBatch;
-use crate::path_tracer::{continue_group, hit_prim};
+use crate::path_tracer::{continue_group, discard_bxdf_samples, hit_prim};
 use crate::plugin::{Bxdf, ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
@@ -51,9 +50,11 @@ pub(super) fn camera_subpaths(
     );
     stats.add_rays(n);
     w.s.mis.clear();
-    w.s.mis.extend(q.rays.rays.direction.iter().map(|&d| {
-        SubpathMis::camera_start(scene.camera.pdf_direction(d), f.light_paths_per_pixel)
-    }));
+    let rays = &q.rays.rays;
+    w.s.mis
+        .extend(rays.origin.iter().zip(&rays.direction).map(|(&o, &d)| {
+            SubpathMis::camera_start(scene.camera.pdf_ray(o, d), f.light_paths_per_pixel)
+        }));
     w.s.connections.clear();
     let stages = super::walk::stages(bd.techniques);
     let mut first = true;
@@ -67,6 +68,7 @@ pub(super) fn camera_subpaths(
             stats,
             arena,
             counters,
+            false,
         );
         environment(bd, scene, batch, w);
         camera_vertices(bd, scene, batch, w, first, stats, arena, counters);
@@ -148,6 +150,10 @@ fn camera_vertices(
     let settings = scene.settings;
     let (q, s, light) = (&mut w.camera_q, &mut w.s, &w.light);
     let f = s.factors;
+    let orthographic = matches!(
+        scene.camera.projection,
+        risotto_systems::camera::Projection::Orthographic { .. }
+    );
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
     let mut next_len = 0;
@@ -166,7 +172,10 @@ fn camera_vertices(
             incoming.throughput[r] *= pts.transmission[i];
             let path = incoming.path[r] as usize;
             let distance = (pts.p[i] - incoming.prev_p[r]).length();
-            s.mis[path].arrive(distance, cos_at(pts, i, pts.vn[i]), false);
+            // An orthographic camera's density is per unit film area: it reaches the first
+            // vertex along parallel rays, without a distance term (`Camera::pdf_area`).
+            let parallel = orthographic && incoming.depth[r] == 0;
+            s.mis[path].arrive(distance, cos_at(pts, i, pts.vn[i]), parallel);
             // An emitter hit: the strategy that finds the light by following the camera.
             let shape = pts.shape[i];
             if shape == u32::MAX || !pts.front_face[i] {
@@ -252,6 +261,9 @@ fn camera_vertices(
         }
         s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
+        if scene.features.vertex_normals && grp.mode == ShadingMode::Scatter {
+            discard_bxdf_samples(pts, range.clone(), &mut s.samples);
+        }
         // The reverse pdf of each sampled direction: the closure seen from it.
         reverse_pdfs(scene, s, &at, arena, counters);
         for (k, i) in range.clone().enumerate() {
@@ -369,6 +381,7 @@ fn light_samples(
     let (pts, incoming) = (at.pts, at.incoming);
     let lights = &scene.lights;
     let bounds = scene.geometry.bounds();
+    let normals = scene.features.vertex_normals;
     let m = at.range.len();
     s.light_hits.clear();
     s.hit_of.clear();
@@ -388,6 +401,9 @@ fn light_samples(
         let Some(ls) = lights.sample(&scene.geometry, pts.p[i], u[2], Vec2::new(u[0], u[1])) else {
             continue;
         };
+        if normals && !sides_agree(pts, i, ls.wi) {
+            continue;
+        }
         // The light's own view of the sample: where it emits from, at which cosine.
         let q = pts.p[i] + ls.wi * ls.distance;
         let (n_light, cos_at_light) = match &lights.lights()[light as usize] {
@@ -485,6 +501,7 @@ fn connect_light_vertices(
     let lp = &light.points;
     let m = at.range.len();
     let vn = &pts.vn[at.range.clone()];
+    let normals = scene.features.vertex_normals;
     while s.pending.len() < light.bounces() {
         s.pending.push(Vec::new());
     }
@@ -510,7 +527,11 @@ fn connect_light_vertices(
             if distance.is_nan() || distance <= 0.0 || !distance.is_finite() {
                 continue;
             }
-            s.wi[k] = d / distance;
+            let dir = d / distance;
+            if normals && !(sides_agree(pts, i, dir) && sides_agree(lp, v as usize, -dir)) {
+                continue;
+            }
+            s.wi[k] = dir;
             s.pending[bounce].push(PendingConnection {
                 i: i as u32,
                 v,
@@ -628,14 +649,13 @@ fn finish_connections(
             let dir = d / distance;
             let cos_camera = cos_at(pts, i, dir);
             let cos_light = cos_at(lp, v, -dir);
-            let cos_light_in = cos_at(lp, v, lp.vn[v]);
-            if cos_light_in <= 0.0 {
+            let Some(adjoint) = adjoint_cosines(lp, v, -dir) else {
                 continue;
-            }
+            };
             // The light vertex seen from the camera vertex, light from its own subpath:
-            // `f |cos of its incident direction|`; the connection wants `|cos towards the
-            // camera vertex|`.
-            let f_light = s.layer_value[k] * (cos_light / cos_light_in);
+            // `f |cos of its incident direction|`, made the adjoint's `f |cos towards the
+            // camera vertex|` ([`adjoint_cosines`]).
+            let f_light = s.layer_value[k] * adjoint;
             let pdfs = ConnectionPdfs {
                 camera_pdf_a: pdf_w_to_a(c.camera_pdf_w, distance, cos_light),
                 camera_rev_pdf_w: c.camera_rev_pdf_w,
@@ -693,6 +713,7 @@ fn merge_light_vertices(
     let (pts, incoming) = (at.pts, at.incoming);
     let lp = &light.points;
     let (grid, merges) = (&s.grid, &mut s.merges);
+    let normals = scene.features.vertex_normals;
     merges.clear();
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;
@@ -700,7 +721,8 @@ fn merge_light_vertices(
         let camera_segments = incoming.depth[r] as u32 + 1;
         grid.query(&lp.p, pts.p[i], |v| {
             let fits = camera_segments + light.segments[v] <= scene.settings.max_depth;
-            if fits && (lp.shape[v] == u32::MAX) == in_medium {
+            let agree = !normals || sides_agree(pts, i, lp.vn[v]);
+            if fits && agree && (lp.shape[v] == u32::MAX) == in_medium {
                 merges.push((k as u32, v as u32));
             }
         });
@@ -713,7 +735,11 @@ fn merge_light_vertices(
     // Forward: the camera vertex's closure towards each light vertex's incident direction;
     // reverse: seen from there, towards the camera vertex's own incident direction.
     s.view.clear();
-    s.view.extend(merges.iter().map(|&(k, _)| pts.vn[at.range.start + k as usize]));
+    s.view.extend(
+        merges
+            .iter()
+            .map(|&(k, _)| pts.vn[at.range.start + k as usize]),
+    );
     s.wi.clear();
     s.wi.extend(merges.iter().map(|&(_, v)| lp.vn[v as usize]));
     s.pair_eval
@@ -748,11 +774,34 @@ fn merge_light_vertices(
         );
         // `f` without the cosine: the light vertices' flux already is per unit projected
         // area of their own surface.
-        let c = incoming.throughput[ray] * s.value[e] * light.throughput[v] * (weight / (cos * kernel));
+        let c =
+            incoming.throughput[ray] * s.value[e] * light.throughput[v] * (weight / (cos * kernel));
         if c.is_finite() {
             radiance[path] += c;
         }
     }
+}
+
+/// The factor that makes a radiance closure's value at a light vertex (row `i` of `pts`),
+/// seen from `w` with light from its `vn`, `f |vn . Nn|`, the adjoint's `f* |w . Ng|`
+/// for the geometry term: `|w . Ng| / |vn . Ng|`. With shading normals the adjoint is not
+/// the closure seen backwards (Veach 1997, sec. 5.3, eq. 5.19): the shading cosine belongs
+/// to the incident direction, the geometric one to the outgoing; inside a medium both are
+/// 1. `None` where the factor is undefined (grazing `vn`).
+pub(super) fn adjoint_cosines(pts: &ShadingPoints, i: usize, w: Vec3) -> Option<f32> {
+    if pts.shape[i] == u32::MAX {
+        return Some(1.0);
+    }
+    let ng = pts.ng[i];
+    let cos_in = pts.vn[i].dot(ng).abs();
+    (cos_in > 0.0).then(|| w.dot(ng).abs() / cos_in)
+}
+
+/// Whether leaving row `i` of `pts` towards `w` is reflection by both its normals or
+/// transmission by both (the path tracer's rule for shading normals, see
+/// `path_tracer::shading_normals`); always inside a medium.
+pub(super) fn sides_agree(pts: &ShadingPoints, i: usize, w: Vec3) -> bool {
+    pts.shape[i] == u32::MAX || crate::path_tracer::sides_agree(pts.ng[i], pts.nn[i], pts.vn[i], w)
 }
 
 /// A connection whose camera side is evaluated: camera vertex row `i`, light vertex `v`.

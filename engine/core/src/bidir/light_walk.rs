@@ -10,21 +10,22 @@
 //! multiplied by `eta^2` here, and a connection's value is the closure seen from the camera
 //! side ([`super::evaluate`]).
 
-use super::camera_walk::{reverse_pdfs, GroupVertices};
+use super::camera_walk::{adjoint_cosines, reverse_pdfs, sides_agree, GroupVertices};
 use super::evaluate::cos_at;
 use super::mis::{camera_connection_weight, SubpathMis};
 use super::vertices::LightVertices;
 use super::walk::{push_connection, stack_toward, trace_bounce};
 use super::{BidirWorker, Bidirectional, Scratch, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
 use crate::integrator::PathBatch;
-use crate::path_tracer::continue_group;
+use crate::path_tracer::{continue_group, discard_bxdf_samples};
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
 use crate::stats::SystemStats;
 use bumpalo::Bump;
 use glam::Vec2;
-use risotto_components::{LobeSampled, RayRow};
+use risotto_components::{LobeSampled, RayRow, Rgb};
+use risotto_systems::camera::CameraConnection;
 use risotto_systems::path::Vertices;
 use risotto_systems::ray::offset_origin;
 use risotto_systems::sampler::{next_4d_column, sample_1d, sample_2d, PathSampler};
@@ -130,6 +131,7 @@ pub(super) fn light_subpaths(
             stats,
             arena,
             counters,
+            true,
         );
         scatter_light_vertices(bd, scene, w, bounce, stats, arena, counters);
         let q = &mut w.light_q;
@@ -173,6 +175,7 @@ fn scatter_light_vertices(
     counters: &PatternCounters,
 ) {
     let f = w.s.factors;
+    let normals = scene.features.vertex_normals;
     let q = &mut w.light_q;
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
@@ -236,6 +239,9 @@ fn scatter_light_vertices(
         // Sample the next direction; the reverse pdf of each non-Dirac sample.
         w.s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut w.s.samplers, &mut w.s.samples);
+        if normals && grp.mode == ShadingMode::Scatter {
+            discard_bxdf_samples(pts, range.clone(), &mut w.s.samples);
+        }
         reverse_pdfs(scene, &mut w.s, &at, arena, counters);
         for (k, i) in range.clone().enumerate() {
             let s = &mut w.s.samples;
@@ -256,6 +262,19 @@ fn scatter_light_vertices(
             if s.lobe[k].is_transmit() {
                 // Importance is not compressed by refraction as radiance is.
                 s.weight[k] = s.weight[k] * (s.eta[k] * s.eta[k]);
+            }
+            // With shading normals, the adjoint's cosines (Veach 1997, eq. 5.19):
+            // `|wo . Nn| |wi . Ng| / (|wo . Ng| |wi . Nn|)` for the subpath's incident `wo`
+            // and sampled `wi`.
+            if normals && grp.mode == ShadingMode::Scatter {
+                let (ng, nn, wo, wi) = (pts.ng[i], pts.nn[i], pts.vn[i], s.wi[k]);
+                let den = wo.dot(ng).abs() * wi.dot(nn).abs();
+                let num = wo.dot(nn).abs() * wi.dot(ng).abs();
+                s.weight[k] = if den > 0.0 {
+                    s.weight[k] * (num / den)
+                } else {
+                    Rgb::BLACK
+                };
             }
         }
         let vertices = Vertices {
@@ -318,6 +337,7 @@ fn connect_to_camera(
     let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
     let vn = &pts.vn[at.range.clone()];
+    let normals = scene.features.vertex_normals;
     s.view.clear();
     s.view.extend_from_slice(vn);
     s.camera_hits.clear();
@@ -328,7 +348,9 @@ fn connect_to_camera(
             continue;
         }
         let u_lens = Vec2::new(s.u4[k][0], s.u4[k][1]);
-        if let Some(c) = scene.camera.connect(pts.p[i], u_lens) {
+        let connection = scene.camera.connect(pts.p[i], u_lens);
+        let agrees = |c: &CameraConnection| !normals || sides_agree(pts, i, c.wi);
+        if let Some(c) = connection.filter(agrees) {
             s.view[k] = c.wi;
             s.eval_rows.push((k as u32, s.camera_hits.len() as u32));
             s.camera_hits.push(c);
@@ -344,15 +366,14 @@ fn connect_to_camera(
         let i = at.range.start + k;
         let r = pts.ray_id[i] as usize;
         let path = incoming.path[r] as usize;
-        // The closure seen from the camera, light from the subpath: `f |cos wo|`; the
-        // connection wants `f |cos to the camera|`.
-        let cos_in = cos_at(pts, i, pts.vn[i]);
-        let cos_cam = cos_at(pts, i, c.wi);
-        if cos_in <= 0.0 {
+        // The closure seen from the camera, light from the subpath, made the adjoint's
+        // `f* |cos to the camera|`.
+        let Some(adjoint) = adjoint_cosines(pts, i, c.wi) else {
             continue;
-        }
-        let fc = s.group_eval.value[k] * (cos_cam / cos_in);
-        let camera_pdf_a = c.pdf_dir * cos_cam / (c.distance * c.distance);
+        };
+        let fc = s.group_eval.value[k] * adjoint;
+        let cos_cam = cos_at(pts, i, c.wi);
+        let camera_pdf_a = scene.camera.pdf_area(c.pdf_dir, c.distance, cos_cam);
         let weight = match bd.strategy {
             super::Strategy::Light => 1.0,
             _ => camera_connection_weight(

@@ -170,7 +170,10 @@ impl Bidirectional {
                 let f = MisFactors::vcm(r, paths as f32, self.light_paths_per_pixel);
                 (f, r)
             }
-            _ => (MisFactors::connections_only(self.light_paths_per_pixel), 0.0),
+            _ => (
+                MisFactors::connections_only(self.light_paths_per_pixel),
+                0.0,
+            ),
         }
     }
 
@@ -288,7 +291,12 @@ impl Integrator for Bidirectional {
         arena: &Bump,
     ) {
         let counters: &PatternCounters = arena.alloc(PatternCounters::default());
-        let first_sample = batch.paths.sample.iter().map(|s| s & !INDEPENDENT_BIT).min();
+        let first_sample = batch
+            .paths
+            .sample
+            .iter()
+            .map(|s| s & !INDEPENDENT_BIT)
+            .min();
         let (factors, radius) = self.factors(batch.paths.len(), first_sample.unwrap_or(0));
         worker.s.factors = factors;
         worker.s.merge_radius = radius;

@@ -26,7 +26,8 @@ pub(super) fn stages(techniques: PluginTechniques) -> PathTracer {
 /// Traces the rays of `q.rays` to their next scattering vertices (in `q.hits`), past
 /// index-matched boundaries, false boundaries and surfaces their opacity lets them pass.
 /// The rays that left the scene go to `escaped` (rows of `q.hits.incoming`, with the
-/// transmission of their last segment).
+/// transmission of their last segment). `light_path`: the rays are a light subpath's (the
+/// seed's `isLightPath`, [`VolumeServices::light_path`](crate::plugin::VolumeServices)).
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub(super) fn trace_bounce(
     stages: &PathTracer,
@@ -37,11 +38,12 @@ pub(super) fn trace_bounce(
     stats: &mut SystemStats,
     arena: &Bump,
     counters: &PatternCounters,
+    light_path: bool,
 ) {
     q.hits.recycle_into(&mut q.next);
     escaped.clear();
     while !q.rays.rays.is_empty() {
-        trace_nearest_hits(stages, scene, batch, q, stats, arena, counters);
+        trace_nearest_hits(stages, scene, batch, q, stats, arena, counters, light_path);
         let e = &mut q.escaped;
         escaped.extend(e.ray.iter().copied().zip(e.transmission.iter().copied()));
         e.ray.clear();

@@ -33,6 +33,7 @@ pub mod queues;
 mod recorder;
 mod shade;
 mod shading_normals;
+pub(crate) use shading_normals::{discard_bxdf_samples, sides_agree};
 mod surface_caches;
 mod trace;
 mod transmission;
@@ -102,7 +103,9 @@ impl Integrator for PathTracer {
                 r.begin_bounce(batch, stats);
             }
             while !q.rays.rays.is_empty() {
-                trace::nearest_hits(self, scene, batch, q, stats, arena, counters, &surfaces);
+                trace::nearest_hits(
+                    self, scene, batch, q, stats, arena, counters, &surfaces, false,
+                );
                 // Later rounds trace rays past boundaries, which left no shaded point.
                 surfaces.clear();
                 if let Some(r) = &mut rec {
@@ -164,7 +167,8 @@ impl Integrator for PathTracer {
 
 /// The trace stage for other global integrators (`crate::bidir`): traces `q.rays` into
 /// `q.hits` and `q.escaped` with `tracer`'s techniques (a `BxdfOnly` tracer offers volume
-/// integrators no lighting delegate), no surface caches shared.
+/// integrators no lighting delegate), no surface caches shared; `light_path` tells volume
+/// integrators that the rays come from the lights.
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub(crate) fn trace_nearest_hits(
     tracer: &PathTracer,
@@ -174,9 +178,12 @@ pub(crate) fn trace_nearest_hits(
     stats: &mut SystemStats,
     arena: &Bump,
     counters: &PatternCounters,
+    light_path: bool,
 ) {
     let surfaces = SurfaceCaches::default();
-    trace::nearest_hits(tracer, scene, batch, q, stats, arena, counters, &surfaces);
+    trace::nearest_hits(
+        tracer, scene, batch, q, stats, arena, counters, &surfaces, light_path,
+    );
 }
 
 /// The pass-through stage for other global integrators (`crate::bidir`): moves the points

@@ -16,11 +16,10 @@
 //! normals disagree strongly (the discarded directions), which vanishes as the mesh is
 //! refined (`tests/mesh_attributes.rs` measures both).
 //!
-//! These checks are only for paths traced from the camera. An integrator that traces light
-//! from the lights (none yet) must also apply Veach's adjoint correction (1997, sec. 5.3,
-//! eq. 5.19): scattering of importance with shading normals is not symmetric, and the
-//! light-path throughput is multiplied by `|wo . Nn| |wi . Ng| / (|wo . Ng| |wi . Nn|)`. It
-//! would go beside these functions, applied to the light path's Bxdf samples.
+//! The bidirectional integrators (`crate::bidir`) apply the same checks to both subpaths
+//! and their connections, and Veach's adjoint correction (1997, sec. 5.3, eq. 5.19) to
+//! light subpaths: scattering of importance with shading normals is not symmetric, and the
+//! light-path throughput is multiplied by `|wo . Nn| |wi . Ng| / (|wo . Ng| |wi . Nn|)`.
 
 use risotto_components::{LobeSampled, Rgb, ShadingPoints};
 use risotto_systems::bxdf_samples::BxdfSamples;
@@ -37,7 +36,7 @@ pub(crate) fn sides_agree(ng: glam::Vec3, nn: glam::Vec3, vn: glam::Vec3, wi: gl
 
 /// Makes the Bxdf samples of the points `range` whose direction the normals disagree on
 /// "no sample" (the path ends there, as for an absorbed sample).
-pub(super) fn discard_bxdf_samples(
+pub(crate) fn discard_bxdf_samples(
     points: &ShadingPoints,
     range: Range<usize>,
     samples: &mut BxdfSamples,

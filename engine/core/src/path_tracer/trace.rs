@@ -36,11 +36,13 @@ pub(super) fn nearest_hits<'a>(
     arena: &'a Bump,
     counters: &'a PatternCounters,
     surfaces: &SurfaceCaches<'a>,
+    light_path: bool,
 ) {
     let (rays, hits, t) = (&mut q.rays.rays, &mut q.hits, &mut q.trace);
     if scene.features.volumes {
         partitioned(
             tracer,
+            light_path,
             scene,
             batch,
             rays,
@@ -135,6 +137,7 @@ fn add_emitted(
 )]
 fn partitioned<'a>(
     tracer: &PathTracer,
+    light_path: bool,
     scene: &CompiledScene,
     batch: &mut PathBatch,
     rays: &mut Rays,
@@ -261,6 +264,7 @@ fn partitioned<'a>(
                             entry.shape,
                             tracer.technique == LightingTechnique::Mis,
                         ),
+                        light_path,
                     },
                     &mut t.answers,
                 );

@@ -267,6 +267,7 @@ fn defaults_when_render_section_is_absent() {
             seed: 0,
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
+            integrator: risotto_engine::integrator::GlobalIntegrator::Path,
         }
     );
     assert_eq!(s.camera.up, Vec3::Y);
@@ -1554,6 +1555,7 @@ fn mitsuba_suite_cornell_matches_the_readme() {
             seed: 0,
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
+            integrator: risotto_engine::integrator::GlobalIntegrator::Path,
         }
     );
     assert_eq!(
