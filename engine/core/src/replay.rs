@@ -111,6 +111,17 @@ pub fn replay(
             "sample {sample} is not below the scene's {spp} samples per pixel"
         )));
     }
+    let integrator = options.integrator.unwrap_or(scene.settings.integrator);
+    if integrator != crate::integrator::GlobalIntegrator::Path {
+        // A bidirectional sample is two subpaths and every connection between them, and
+        // light tracing lands on other pixels: there is no one path to record.
+        return Err(err(format!(
+            "replay records the path tracer's paths; integrator {} makes each sample from \
+             a camera and a light subpath and their connections, which a path record cannot \
+             hold (replay with --technique integrator=path)",
+            integrator.name()
+        )));
+    }
     let start = std::time::Instant::now();
     let tracer = PathTracer {
         technique: options.technique,

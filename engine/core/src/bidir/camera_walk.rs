@@ -16,7 +16,7 @@ use crate::path_tracer::{continue_group, discard_bxdf_samples, hit_prim};
 use crate::plugin::{Bxdf, ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
-use crate::stats::SystemStats;
+use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPoints, NO_HIT};
@@ -252,11 +252,15 @@ fn camera_vertices(
             mode: grp.mode,
         };
         if connectable {
+            let start = std::time::Instant::now();
             light_samples(scene, s, &at, &ctx, &mut *bxdf, arena, counters);
             connect_light_vertices(scene, s, light, &at, &ctx, &mut *bxdf, arena, counters);
+            stats.record(System::Connect, m, start.elapsed().as_secs_f64());
             if s.merge_radius > 0.0 {
+                let start = std::time::Instant::now();
                 let radiance = &mut batch.paths.radiance;
                 merge_light_vertices(scene, s, light, &at, radiance, arena, counters);
+                stats.record(System::Merge, m, start.elapsed().as_secs_f64());
             }
         }
         s.samples.reset(m);
@@ -303,7 +307,9 @@ fn camera_vertices(
     }
     q.next.rays.truncate(next_len);
     let (pts, incoming) = (&q.hits.groups.points, &q.hits.incoming);
+    let start = std::time::Instant::now();
     finish_connections(scene, s, light, pts, incoming, arena, counters);
+    stats.record(System::Connect, 0, start.elapsed().as_secs_f64());
     q.hits.groups.groups = groups;
 }
 

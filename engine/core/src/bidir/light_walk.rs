@@ -21,7 +21,7 @@ use crate::path_tracer::{continue_group, discard_bxdf_samples};
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
-use crate::stats::SystemStats;
+use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec2;
 use risotto_components::{LobeSampled, RayRow, Rgb};
@@ -60,6 +60,7 @@ pub(super) fn light_subpaths(
     let bounds = scene.geometry.bounds();
     let q = &mut w.light_q;
     q.rays.rays.clear();
+    let start = std::time::Instant::now();
     for i in 0..n {
         let (seed, sample) = (lb.seeds[i], lb.paths.sample[i]);
         let u_position = sample_2d(seed, sample, 0);
@@ -116,6 +117,7 @@ pub(super) fn light_subpaths(
             volume_stack: bd.light_stack(e.light).clone(),
         });
     }
+    stats.record(System::Emit, n, start.elapsed().as_secs_f64());
     stats.add_rays(q.rays.rays.len());
     w.s.splats.clear();
     w.s.splat_film_pos.clear();
@@ -156,9 +158,11 @@ pub(super) fn light_subpaths(
             arena,
         );
         let film = bd.splat_film();
-        for (&pos, &c) in w.s.splat_film_pos.iter().zip(&contribution) {
-            film.add_filtered(&scene.camera.filter, pos, c);
-        }
+        stats.time(System::Splat, contribution.len(), || {
+            for (&pos, &c) in w.s.splat_film_pos.iter().zip(&contribution) {
+                film.add_filtered(&scene.camera.filter, pos, c);
+            }
+        });
         w.s.splat_contribution = contribution;
     }
 }
@@ -233,8 +237,10 @@ fn scatter_light_vertices(
             mode: grp.mode,
         };
         if connectable {
+            let start = std::time::Instant::now();
             store_vertices(&mut w.light, &w.s.mis, &at, bounce, by_bounce_len);
             connect_to_camera(bd, scene, &mut w.s, &at, arena, counters);
+            stats.record(System::Connect, m, start.elapsed().as_secs_f64());
         }
         // Sample the next direction; the reverse pdf of each non-Dirac sample.
         w.s.samples.reset(m);

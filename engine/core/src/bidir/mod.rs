@@ -42,7 +42,7 @@ use crate::integrator::{Integrator, PathBatch};
 use crate::path_tracer::queues::Queues;
 use crate::plugin::{PatternCounters, PluginTechniques};
 use crate::scene::CompiledScene;
-use crate::stats::SystemStats;
+use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec2;
 use mis::{MisFactors, SubpathMis};
@@ -302,7 +302,8 @@ impl Integrator for Bidirectional {
         worker.s.merge_radius = radius;
         light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
         if radius > 0.0 {
-            worker.s.grid.build(&worker.light.points.p, radius);
+            let (grid, points) = (&mut worker.s.grid, &worker.light.points.p);
+            stats.time(System::Merge, points.len(), || grid.build(points, radius));
         }
         self.light_paths
             .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);

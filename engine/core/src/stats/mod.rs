@@ -78,11 +78,21 @@ pub enum System {
     Phase,
     /// Splatting samples into the film.
     Splat,
+    /// Light subpaths leaving the lights (emission sampling); never runs under the path
+    /// tracer.
+    Emit,
+    /// Connections of bidirectional integrators: light vertices to the camera, camera
+    /// vertices to light samples and to light vertices (the Bxdf evaluations and MIS
+    /// weights; their shadow rays count as transmission); never runs under the path tracer.
+    Connect,
+    /// Vertex merging (`integrator = vcm`): hashing the light vertices and gathering them
+    /// at camera vertices; never runs otherwise.
+    Merge,
 }
 
 impl System {
     /// Number of systems.
-    pub const COUNT: usize = 11;
+    pub const COUNT: usize = 14;
     /// Every system, in discriminant order.
     pub const ALL: [System; System::COUNT] = [
         System::Camera,
@@ -96,6 +106,9 @@ impl System {
         System::Volume,
         System::Phase,
         System::Splat,
+        System::Emit,
+        System::Connect,
+        System::Merge,
     ];
 
     /// The lower-case name used in JSON and in the summary table.
@@ -112,6 +125,9 @@ impl System {
             System::Volume => "volume",
             System::Phase => "phase",
             System::Splat => "splat",
+            System::Emit => "emit",
+            System::Connect => "connect",
+            System::Merge => "merge",
         }
     }
 }

@@ -30,7 +30,10 @@ fn names_follow_the_schema() {
             "partition",
             "volume",
             "phase",
-            "splat"
+            "splat",
+            "emit",
+            "connect",
+            "merge"
         ]
     );
     for (i, s) in System::ALL.iter().enumerate() {
