@@ -115,3 +115,33 @@ impl LightVertices {
         self.by_bounce.iter().take_while(|b| !b.is_empty()).count()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use risotto_components::ShadingPointRow;
+    use std::mem::size_of;
+
+    /// The per-vertex memory the README states (at most 200 bytes a stored vertex), from
+    /// the columns' element sizes.
+    #[test]
+    fn a_stored_vertex_takes_at_most_200_bytes() {
+        let row = size_of::<ShadingPointRow>()
+            + size_of::<Rgb>()
+            + size_of::<SubpathMis>()
+            + size_of::<u32>()
+            + size_of::<VolumeStack>();
+        assert!(row <= 200, "{row} bytes a vertex");
+    }
+
+    #[test]
+    fn bounces_index_their_paths_vertices() {
+        let mut v = LightVertices::default();
+        v.bounce_mut(0, 3)[1] = 0;
+        v.bounce_mut(1, 3)[2] = 1;
+        assert_eq!(v.bounces(), 2);
+        assert_eq!(v.by_bounce[0], [NO_VERTEX, 0, NO_VERTEX]);
+        v.clear();
+        assert_eq!(v.bounces(), 0, "a cleared table has no bounce");
+    }
+}
