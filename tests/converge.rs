@@ -104,10 +104,13 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
 
     let (header, rows) = csv_rows(&out_dir);
     assert_eq!(header, risotto::tools::converge::CSV_COLUMNS);
-    // `all` on cornell: the defaults, lighting nee and bxdf, the independent sampler; each at
-    // spp 1, 2, 4 in that order.
+    // `all` on cornell: the defaults, the light tracer, bdpt and vcm, lighting nee and bxdf,
+    // the independent sampler; each at spp 1, 2, 4 in that order.
     let labels = [
         "lighting=mis+sampler=sobol",
+        "integrator=light",
+        "integrator=bdpt",
+        "integrator=vcm",
         "lighting=nee",
         "lighting=bxdf",
         "sampler=independent",
@@ -150,7 +153,7 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     assert_eq!(json["reference"]["source"], "rendered");
     assert_eq!(json["reference"]["spp"], 64);
     assert!(json["reference"]["noise_mse"].as_f64().unwrap() > 0.0);
-    assert_eq!(json["comparison"]["rows"].as_array().unwrap().len(), 4);
+    assert_eq!(json["comparison"]["rows"].as_array().unwrap().len(), labels.len());
 
     // The plots: a PNG that decodes to the plot size, not blank, and an SVG of that size.
     let decoder = png::Decoder::new(std::fs::File::open(out_dir.join("converge.png")).unwrap());
@@ -307,8 +310,8 @@ fn listed(scene: &Path) -> Vec<String> {
 fn techniques_lists_only_what_applies() {
     let dir = scratch_dir("converge", "listing");
     let scene = cornell(&dir, 16);
-    // Cornell has no volumes: lighting and sampler, nothing else.
-    assert_eq!(listed(&scene), ["lighting", "sampler"]);
+    // Cornell has no volumes: the integrator, lighting and sampler, nothing else.
+    assert_eq!(listed(&scene), ["integrator", "lighting", "sampler"]);
     let out = risotto(&["techniques", scene.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     for v in [
@@ -317,6 +320,9 @@ fn techniques_lists_only_what_applies() {
         "lighting=bxdf",
         "sampler=sobol",
         "sampler=independent",
+        "integrator=path",
+        "integrator=bdpt",
+        "integrator=vcm",
     ] {
         assert!(text.contains(v), "listing lacks {v}: {text}");
     }
@@ -389,7 +395,7 @@ fn bad_techniques_and_references_are_named_in_the_error() {
     assert_fails(
         "unknown technique",
         &risotto(&["render", s, "--technique", "shading=fast", "--out", e]),
-        &["shading", "known in this scene: lighting, sampler"],
+        &["shading", "known in this scene: integrator, lighting, sampler"],
     );
     assert_fails(
         "bad value",

@@ -331,12 +331,17 @@ impl Techniques {
         })
     }
 
-    /// A short label: the non-default assignments (`lighting=nee`), or the global
-    /// integrator's defaults joined by `+` when all are defaults.
+    /// A short label: the non-default assignments (`lighting=nee`, `integrator=bdpt`), or
+    /// the path tracer's defaults joined by `+` when all are defaults
+    /// (`lighting=mis+sampler=sobol`).
     pub fn label(&self) -> String {
         let pairs = self.non_default();
         let pairs = if pairs.is_empty() {
-            CORE.iter().map(|(t, _)| (t.name, t.default)).collect()
+            // The default integrator's own techniques: the path tracer is implied.
+            CORE.iter()
+                .filter(|(t, _)| t.name != INTEGRATOR.name)
+                .map(|(t, _)| (t.name, t.default))
+                .collect()
         } else {
             pairs
         };
