@@ -153,7 +153,10 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     assert_eq!(json["reference"]["source"], "rendered");
     assert_eq!(json["reference"]["spp"], 64);
     assert!(json["reference"]["noise_mse"].as_f64().unwrap() > 0.0);
-    assert_eq!(json["comparison"]["rows"].as_array().unwrap().len(), labels.len());
+    assert_eq!(
+        json["comparison"]["rows"].as_array().unwrap().len(),
+        labels.len()
+    );
 
     // The plots: a PNG that decodes to the plot size, not blank, and an SVG of that size.
     let decoder = png::Decoder::new(std::fs::File::open(out_dir.join("converge.png")).unwrap());
@@ -395,7 +398,10 @@ fn bad_techniques_and_references_are_named_in_the_error() {
     assert_fails(
         "unknown technique",
         &risotto(&["render", s, "--technique", "shading=fast", "--out", e]),
-        &["shading", "known in this scene: integrator, lighting, sampler"],
+        &[
+            "shading",
+            "known in this scene: integrator, lighting, sampler",
+        ],
     );
     assert_fails(
         "bad value",

@@ -142,7 +142,7 @@ fn a_declared_technique_is_listed_parsed_and_swept_like_a_built_in_one() {
     let scene = smoke_scene(8, 1);
     let registry = TechniqueRegistry::for_scene(&scene);
     let names: Vec<_> = registry.applicable().map(|t| t.name).collect();
-    assert_eq!(names, ["lighting", "sampler", "absorption"]);
+    assert_eq!(names, ["integrator", "lighting", "sampler", "absorption"]);
     let text = listing(&registry);
     assert!(
         text.contains("absorption: how strongly the smoke absorbs (applies to scenes with smoke)")

@@ -476,7 +476,10 @@ mod tests {
         let names = |r: &TechniqueRegistry| r.applicable().map(|t| t.name).collect::<Vec<_>>();
         let lit = TechniqueRegistry::new(lit(), [&QUALITY, &QUALITY]);
         let dark = TechniqueRegistry::new(Features::default(), []);
-        assert_eq!(names(&lit), ["lighting", "sampler", "quality"]);
+        assert_eq!(
+            names(&lit),
+            ["integrator", "lighting", "sampler", "quality"]
+        );
         assert_eq!(names(&dark), ["sampler"]);
         let nee = Techniques::parse(&lit, "lighting=nee").unwrap();
         assert!(nee.check_applicable(&lit).is_ok());
@@ -506,6 +509,9 @@ mod tests {
             labels(&TechniqueRegistry::new(env, [&QUALITY])),
             [
                 "lighting=mis+sampler=sobol",
+                "integrator=light",
+                "integrator=bdpt",
+                "integrator=vcm",
                 "lighting=nee",
                 "lighting=bxdf",
                 "sampler=independent",

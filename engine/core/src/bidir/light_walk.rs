@@ -15,7 +15,7 @@ use super::evaluate::cos_at;
 use super::mis::{camera_connection_weight, SubpathMis};
 use super::vertices::LightVertices;
 use super::walk::{push_connection, stack_toward, trace_bounce};
-use super::{BidirWorker, Bidirectional, Scratch, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
+use super::{BidirWorker, Bidirectional, Scratch, Strategy, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
 use crate::integrator::PathBatch;
 use crate::path_tracer::{continue_group, discard_bxdf_samples};
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
@@ -236,9 +236,13 @@ fn scatter_light_vertices(
             material: grp.material,
             mode: grp.mode,
         };
+        // Light tracing alone connects only to the camera: nothing to store, no weights.
+        let bidirectional = bd.strategy != Strategy::Light;
         if connectable {
             let start = std::time::Instant::now();
-            store_vertices(&mut w.light, &w.s.mis, &at, bounce, by_bounce_len);
+            if bidirectional {
+                store_vertices(&mut w.light, &w.s.mis, &at, bounce, by_bounce_len);
+            }
             connect_to_camera(bd, scene, &mut w.s, &at, arena, counters);
             stats.record(System::Connect, m, start.elapsed().as_secs_f64());
         }
@@ -248,23 +252,27 @@ fn scatter_light_vertices(
         if normals && grp.mode == ShadingMode::Scatter {
             discard_bxdf_samples(pts, range.clone(), &mut w.s.samples);
         }
-        reverse_pdfs(scene, &mut w.s, &at, arena, counters);
+        if bidirectional {
+            reverse_pdfs(scene, &mut w.s, &at, arena, counters);
+        }
         for (k, i) in range.clone().enumerate() {
             let s = &mut w.s.samples;
             if s.pdf[k] <= 0.0 {
                 continue;
             }
-            let r = pts.ray_id[i] as usize;
-            let path = incoming.path[r] as usize;
-            let specular = s.lobe[k].is_specular();
-            let pdf_rev = if specular {
-                s.pdf[k]
-            } else {
-                w.s.group_eval.pdf[k]
-            };
-            let cos_out = cos_at(pts, i, s.wi[k]);
-            let v = f.at(pts.shape[i] == u32::MAX);
-            w.s.mis[path].scatter(s.pdf[k], pdf_rev, cos_out, specular, v);
+            if bidirectional {
+                let r = pts.ray_id[i] as usize;
+                let path = incoming.path[r] as usize;
+                let specular = s.lobe[k].is_specular();
+                let pdf_rev = if specular {
+                    s.pdf[k]
+                } else {
+                    w.s.group_eval.pdf[k]
+                };
+                let cos_out = cos_at(pts, i, s.wi[k]);
+                let v = f.at(pts.shape[i] == u32::MAX);
+                w.s.mis[path].scatter(s.pdf[k], pdf_rev, cos_out, specular, v);
+            }
             if s.lobe[k].is_transmit() {
                 // Importance is not compressed by refraction as radiance is.
                 s.weight[k] = s.weight[k] * (s.eta[k] * s.eta[k]);
@@ -381,7 +389,7 @@ fn connect_to_camera(
         let cos_cam = cos_at(pts, i, c.wi);
         let camera_pdf_a = scene.camera.pdf_area(c.pdf_dir, c.distance, cos_cam);
         let weight = match bd.strategy {
-            super::Strategy::Light => 1.0,
+            Strategy::Light => 1.0,
             _ => camera_connection_weight(
                 &s.mis[path],
                 camera_pdf_a,
