@@ -91,8 +91,8 @@ pub static INTEGRATOR: Technique = Technique {
         },
         TechniqueValue {
             name: "light",
-            summary: "light tracing: paths from the lights, splatted where they meet the camera",
-            converges: |f| !f.emissive_media,
+            summary: "light tracing: paths from the lights, splatted where they meet the camera (not through glass: a Dirac surface between a vertex and the camera blocks it)",
+            converges: |f| !f.emissive_media && !f.transmissive,
         },
         TechniqueValue {
             name: "bdpt",
