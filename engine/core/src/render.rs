@@ -381,7 +381,17 @@ fn render_dispatch(
     let integrator =
         Bidirectional::new(scene, strategy, options.plugin_techniques, window.pixels())
             .map_err(|reason| RenderError::Samples { samples, reason })?;
-    render_passes(&integrator, scene, options, progress, checkpoints)
+    let mut out = render_passes(&integrator, scene, options, progress, checkpoints)?;
+    let walked = out.stats.counters.walked_subpath_rays;
+    if strategy == Strategy::Light && walked > 0 {
+        out.stats.warnings.push(format!(
+            "{walked} rays of light subpaths were walked through a medium in one call \
+             (scattering = \"walk\", or a dense medium inside glass): light tracing cannot \
+             connect the walks' inner events to the camera, so the image lacks the light \
+             those media scatter towards it; bdpt and vcm render it"
+        ));
+    }
+    Ok(out)
 }
 
 /// Renders `scene` with any global integrator (`options.technique` is the path tracer's and

@@ -69,6 +69,8 @@ pub(super) fn camera_subpaths(
             arena,
             counters,
             false,
+            &mut w.s.sent_depth,
+            &mut w.s.mis,
         );
         environment(bd, scene, batch, w);
         camera_vertices(bd, scene, batch, w, first, stats, arena, counters);

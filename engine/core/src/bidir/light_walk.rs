@@ -134,6 +134,8 @@ pub(super) fn light_subpaths(
             arena,
             counters,
             true,
+            &mut w.s.sent_depth,
+            &mut w.s.mis,
         );
         scatter_light_vertices(bd, scene, w, bounce, stats, arena, counters);
         let q = &mut w.light_q;

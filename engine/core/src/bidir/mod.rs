@@ -24,10 +24,11 @@
 //! - Emissive media are not lights to a bidirectional integrator: camera subpaths gather what
 //!   they emit along their rays (the emission media report), no light subpath starts in
 //!   them, so `light` shows a medium's glow only where the camera sees it directly.
-//! - Volume integrators that walk many events per call (subsurface random walks and
-//!   diffusion, `scattering = "walk"`) hand back only the walk's exit: their inner events
-//!   are not vertices to connect to. The integrator refuses such scenes
-//!   ([`Bidirectional::supports`]) and the driver falls back to the path tracer.
+//! - Volume integrators that walk many events per call (`scattering = "walk"`, dense media
+//!   inside glass) hand back only the walk's exit: their inner events are not vertices to
+//!   connect to, and the weights treat the walk as a chain of Dirac vertices (`walk.rs`,
+//!   `forget_walks`). Subsurface interiors are refused ([`Bidirectional::supports`]) and the
+//!   render falls back to the path tracer.
 //! - The distance-sampling pdfs of media and Russian roulette are not in the MIS weights
 //!   (see [`mis`]): the estimate stays unbiased.
 
@@ -245,6 +246,8 @@ pub(crate) struct Scratch {
     at_infinity: Vec<bool>,
     /// Rays that left the scene this bounce, with their last transmission.
     escaped: Vec<(u32, Rgb)>,
+    /// Each path's ray depth as it was sent to the trace stage (walks add to it).
+    sent_depth: Vec<u16>,
     samplers: Vec<PathSampler>,
     u4: Vec<[f32; 4]>,
     samples: BxdfSamples,

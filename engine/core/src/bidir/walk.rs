@@ -2,6 +2,7 @@
 //! trace and pass-through stages (volumes handed to their integrators without a lighting
 //! delegate, so media return their scattering points), and the shadow rays of connections.
 
+use super::mis::SubpathMis;
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::path_tracer::queues::Queues;
 use crate::path_tracer::{pass_through_boundaries, trace_nearest_hits, PathTracer};
@@ -10,7 +11,7 @@ use crate::scene::CompiledScene;
 use crate::stats::SystemStats;
 use bumpalo::Bump;
 use glam::Vec3;
-use risotto_components::{Rgb, ShadingPoints, ShadowRayRow, ShadowRays, VolumeStack};
+use risotto_components::{Rays, Rgb, ShadingPoints, ShadowRayRow, ShadowRays, VolumeStack};
 use risotto_systems::ray::{shadow_ray, spawn_origin};
 
 /// The path tracer's stages configured as a bidirectional integrator uses them: no
@@ -39,9 +40,17 @@ pub(super) fn trace_bounce(
     arena: &Bump,
     counters: &PatternCounters,
     light_path: bool,
+    sent_depth: &mut Vec<u16>,
+    mis: &mut [SubpathMis],
 ) {
     q.hits.recycle_into(&mut q.next);
     escaped.clear();
+    // Each path's depth as it leaves, to find the rays a volume integrator walked.
+    sent_depth.clear();
+    sent_depth.resize(batch.paths.len(), 0);
+    for (&path, &depth) in q.rays.rays.path.iter().zip(&q.rays.rays.depth) {
+        sent_depth[path as usize] = depth;
+    }
     while !q.rays.rays.is_empty() {
         trace_nearest_hits(stages, scene, batch, q, stats, arena, counters, light_path);
         let e = &mut q.escaped;
@@ -52,6 +61,28 @@ pub(super) fn trace_bounce(
             pass_through_boundaries(stages, scene, q, batch, stats, arena, counters);
         }
     }
+    stats.walked_subpath_rays += forget_walks(&q.hits.incoming, sent_depth, mis);
+}
+
+/// A volume integrator that walks many scattering events in one call (a random walk in a
+/// dense medium or under a surface) hands back only the walk's exit: its events are not
+/// vertices any strategy can connect or merge at, and their pdfs are unknown. Such a walk is
+/// what a chain of Dirac vertices is to the weights (strategies that would end inside it
+/// cannot make the path, and its pdfs cancel between the two directions, see
+/// [`SubpathMis::scatter`]), so a walked path's `dVCM` is set to 0, as a Dirac vertex sets
+/// it; `dVC` is unchanged (cosines in a medium are 1). Walked rays are those whose depth
+/// grew in the trace (`WalkedRays::apply` adds the walk's events).
+/// Returns the number of walked rays.
+fn forget_walks(incoming: &Rays, sent_depth: &[u16], mis: &mut [SubpathMis]) -> u64 {
+    let mut walked = 0;
+    for (&path, &depth) in incoming.path.iter().zip(&incoming.depth) {
+        let path = path as usize;
+        if depth > sent_depth[path] {
+            mis[path].vcm = 0.0;
+            walked += 1;
+        }
+    }
+    walked
 }
 
 /// The volumes a straight ray leaving row `i` of `pts` in direction `w` travels in: the

@@ -309,6 +309,10 @@ pub struct SystemStats {
     pub opacity_passes: u64,
     /// Shadow-ray crossings of surfaces with opacity (each attenuates by `1 - opacity`).
     pub opacity_shadow_crossings: u64,
+    /// Rays of a bidirectional integrator's subpaths that a volume integrator walked
+    /// through many events in one call (whose inner events no strategy connects to): 0 under
+    /// the path tracer and where no medium walks.
+    pub walked_subpath_rays: u64,
 }
 
 /// Adds 1 to `v[i]`, growing `v`.
@@ -471,6 +475,7 @@ impl SystemStats {
         self.pattern_evals += other.pattern_evals;
         self.volume_pattern_evals += other.volume_pattern_evals;
         self.opacity_tests += other.opacity_tests;
+        self.walked_subpath_rays += other.walked_subpath_rays;
         self.opacity_passes += other.opacity_passes;
         self.opacity_shadow_crossings += other.opacity_shadow_crossings;
     }

@@ -153,6 +153,9 @@ impl Serialize for RenderStats {
             m.serialize_entry("opacity_passes", &c.opacity_passes)?;
             m.serialize_entry("opacity_shadow_crossings", &c.opacity_shadow_crossings)?;
         }
+        if c.walked_subpath_rays > 0 {
+            m.serialize_entry("walked_subpath_rays", &c.walked_subpath_rays)?;
+        }
         m.serialize_entry("wall_seconds", &self.wall_seconds)?;
         m.serialize_entry("features", &self.features)?;
         if !self.warnings.is_empty() {
