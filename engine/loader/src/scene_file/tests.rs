@@ -11,6 +11,7 @@ use super::*;
 
 mod disk;
 mod environment;
+mod integrator;
 mod objects;
 mod pixel_filter;
 mod triangles;
@@ -267,6 +268,7 @@ fn defaults_when_render_section_is_absent() {
             seed: 0,
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
+            integrator: risotto_engine::integrator::GlobalIntegrator::Path,
         }
     );
     assert_eq!(s.camera.up, Vec3::Y);
@@ -1554,6 +1556,7 @@ fn mitsuba_suite_cornell_matches_the_readme() {
             seed: 0,
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
+            integrator: risotto_engine::integrator::GlobalIntegrator::Path,
         }
     );
     assert_eq!(
