@@ -509,3 +509,57 @@ fn the_scene_files_integrator_is_used() {
     assert!(by_file.beauty.pixels == by_option.beauty.pixels);
     assert!(by_file.beauty.pixels != by_path.beauty.pixels);
 }
+
+/// A medium whose volume integrator walks every event inside one call
+/// (`scattering = "walk"`) returns only the walk's exits: no strategy can connect to its
+/// inner scattering points. The bidirectional integrators must either render it correctly
+/// or refuse it (fall back to the path tracer with a warning, as `engine/core/src/bidir`'s
+/// docs say such scenes are refused). `smoke_homog` with its smoke walked (the path tracer
+/// renders it within 0.5 % of Mitsuba, measured when written: the walk itself is right).
+#[test]
+#[ignore = "bidir bug: Bidirectional::supports refuses only subsurface interiors, not media \
+            with scattering = \"walk\"; on smoke_homog bdpt is 7 % and light 10 % dark, \
+            without a warning"]
+fn walked_media_render_correctly_or_fall_back() {
+    let path = root().join("scenes/mitsuba-suite/smoke_homog.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replacen(
+        "phase = { type = \"isotropic\" } }",
+        "phase = { type = \"isotropic\" }, scattering = \"walk\" }",
+        1,
+    );
+    assert!(text.contains("scattering = \"walk\""));
+    for integrator in [GlobalIntegrator::Bdpt, GlobalIntegrator::Light] {
+        let outs: Vec<RenderOutput> = [1, 2]
+            .map(|seed| {
+                let mut desc = risotto::loader::scene_file::parse_scene(&text, &path).unwrap();
+                desc.render.width = 64;
+                desc.render.height = 64;
+                desc.render.spp = 16;
+                desc.render.seed = seed;
+                let scene = scene_from_desc(desc, &MaterialRegistry::with_builtins())
+                    .unwrap()
+                    .compile()
+                    .unwrap();
+                run(&scene, integrator, None)
+            })
+            .into();
+        if outs[0]
+            .stats
+            .warnings
+            .iter()
+            .any(|w| w.contains("path tracer rendered it"))
+        {
+            continue;
+        }
+        let v = Verdict::of(
+            &Estimate::pair(&outs[0], &outs[1]),
+            &mitsuba("smoke_homog", 0.0),
+        );
+        eprintln!("smoke_homog walked, {}: {v:?}", integrator.name());
+        assert!(
+            v.tight_enough() && v.matches(),
+            "{}: {v:?}",
+            integrator.name()
+        );
+    }
+}
