@@ -423,9 +423,11 @@ fn bdpt_renders_the_same_bits_on_one_and_two_threads() {
 }
 
 /// `subsurface_like`'s dielectric sphere of dense medium: the bidirectional integrators
-/// render it themselves (the medium's default `scattering = "multiple"` answers with
-/// per-event `VolumeScatter` groups when there is no lighting delegate), without a warning,
-/// and bdpt matches Mitsuba (checked in [`bdpt_matches_mitsuba`]). The fallback to the path
+/// render it themselves, without a warning (checked in [`bdpt_matches_mitsuba`], which
+/// fails on any warning), and bdpt matches Mitsuba. The medium's default
+/// `scattering = "multiple"` walks inside the sphere (its boundary blocks shadow rays), and
+/// the walk's exits come out through a smooth dielectric, a Dirac boundary no connection
+/// uses anyway (compare [`walked_media_render_correctly_or_fall_back`]). The fallback to the path
 /// tracer is for subsurface interiors (`type = "subsurface"`, which walk inside the surface
 /// in one call, `scenes/subsurface-thin.toml`): it is taken, and said in the stats' warnings.
 #[test]
@@ -491,7 +493,6 @@ fn the_scene_files_integrator_is_used() {
     assert_eq!(from_file.settings.integrator, GlobalIntegrator::Bdpt);
     let options = |integrator| RenderOptions {
         integrator,
-        crop: None,
         ..RenderOptions::default()
     };
     let mut small =
