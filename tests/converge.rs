@@ -104,10 +104,12 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
 
     let (header, rows) = csv_rows(&out_dir);
     assert_eq!(header, risotto::tools::converge::CSV_COLUMNS);
-    // `all` on cornell: the defaults, lighting nee and bxdf, the independent sampler; each at
-    // spp 1, 2, 4 in that order.
+    // `all` on cornell: the defaults, integrator light and bdpt, lighting nee and bxdf, the
+    // independent sampler; each at spp 1, 2, 4 in that order.
     let labels = [
-        "lighting=mis+sampler=sobol",
+        "integrator=path+lighting=mis+sampler=sobol",
+        "integrator=light",
+        "integrator=bdpt",
         "lighting=nee",
         "lighting=bxdf",
         "sampler=independent",
@@ -150,7 +152,10 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     assert_eq!(json["reference"]["source"], "rendered");
     assert_eq!(json["reference"]["spp"], 64);
     assert!(json["reference"]["noise_mse"].as_f64().unwrap() > 0.0);
-    assert_eq!(json["comparison"]["rows"].as_array().unwrap().len(), 4);
+    assert_eq!(
+        json["comparison"]["rows"].as_array().unwrap().len(),
+        labels.len()
+    );
 
     // The plots: a PNG that decodes to the plot size, not blank, and an SVG of that size.
     let decoder = png::Decoder::new(std::fs::File::open(out_dir.join("converge.png")).unwrap());
@@ -198,7 +203,7 @@ fn mse_falls_with_spp_and_sobol_beats_the_independent_sampler() {
     );
     assert_ok("converge", &out);
     let (_, rows) = csv_rows(&out_dir);
-    let mis = "lighting=mis+sampler=sobol";
+    let mis = "integrator=path+lighting=mis+sampler=sobol";
     let (m1, m16) = (mse(&rows, mis, 1), mse(&rows, mis, 16));
     assert!(m16 < m1 / 4.0, "MIS: MSE {m1} at 1 spp, {m16} at 16 spp");
     let ind = "sampler=independent";
@@ -307,8 +312,8 @@ fn listed(scene: &Path) -> Vec<String> {
 fn techniques_lists_only_what_applies() {
     let dir = scratch_dir("converge", "listing");
     let scene = cornell(&dir, 16);
-    // Cornell has no volumes: lighting and sampler, nothing else.
-    assert_eq!(listed(&scene), ["lighting", "sampler"]);
+    // Cornell has no volumes: integrator, lighting and sampler, nothing else.
+    assert_eq!(listed(&scene), ["integrator", "lighting", "sampler"]);
     let out = risotto(&["techniques", scene.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     for v in [
@@ -389,7 +394,10 @@ fn bad_techniques_and_references_are_named_in_the_error() {
     assert_fails(
         "unknown technique",
         &risotto(&["render", s, "--technique", "shading=fast", "--out", e]),
-        &["shading", "known in this scene: lighting, sampler"],
+        &[
+            "shading",
+            "known in this scene: integrator, lighting, sampler",
+        ],
     );
     assert_fails(
         "bad value",
@@ -515,7 +523,10 @@ fn a_time_budget_doubles_spp_until_a_render_takes_that_long() {
     );
     assert_ok("converge --budget", &out);
     let (_, rows) = csv_rows(&out_dir);
-    for label in ["lighting=mis+sampler=sobol", "lighting=bxdf"] {
+    for label in [
+        "integrator=path+lighting=mis+sampler=sobol",
+        "lighting=bxdf",
+    ] {
         let curve: Vec<_> = rows.iter().filter(|r| r["technique"] == label).collect();
         assert!(!curve.is_empty(), "{label}: no rows");
         for (i, r) in curve.iter().enumerate() {

@@ -142,7 +142,7 @@ fn a_declared_technique_is_listed_parsed_and_swept_like_a_built_in_one() {
     let scene = smoke_scene(8, 1);
     let registry = TechniqueRegistry::for_scene(&scene);
     let names: Vec<_> = registry.applicable().map(|t| t.name).collect();
-    assert_eq!(names, ["lighting", "sampler", "absorption"]);
+    assert_eq!(names, ["integrator", "lighting", "sampler", "absorption"]);
     let text = listing(&registry);
     assert!(
         text.contains("absorption: how strongly the smoke absorbs (applies to scenes with smoke)")
@@ -202,7 +202,7 @@ fn converge_sweeps_a_declared_technique_and_keeps_it_out_of_the_reference() {
             .filter(|t| {
                 matches!(
                     t.label().as_str(),
-                    "lighting=mis+sampler=sobol" | "absorption=double"
+                    "integrator=path+lighting=mis+sampler=sobol" | "absorption=double"
                 )
             })
             .collect(),
@@ -221,7 +221,13 @@ fn converge_sweeps_a_declared_technique_and_keeps_it_out_of_the_reference() {
     };
     let sweep = run(&mut scene, &options, &progress).unwrap();
     let labels: Vec<_> = sweep.curves.iter().map(|c| c.label.as_str()).collect();
-    assert_eq!(labels, ["lighting=mis+sampler=sobol", "absorption=double"]);
+    assert_eq!(
+        labels,
+        [
+            "integrator=path+lighting=mis+sampler=sobol",
+            "absorption=double"
+        ]
+    );
     // Each curve names every applicable technique's value, the declared one included.
     let doubled = &sweep.curves[1];
     assert_eq!(
@@ -231,7 +237,7 @@ fn converge_sweeps_a_declared_technique_and_keeps_it_out_of_the_reference() {
     // The reference is rendered with a variant that converges: not `double`.
     assert_eq!(
         sweep.reference.techniques.as_deref(),
-        Some("lighting=mis+sampler=sobol")
+        Some("integrator=path+lighting=mis+sampler=sobol")
     );
     // The doubled smoke is darker than the reference: its error does not vanish.
     assert!(doubled.points.iter().all(|p| p.mse > 0.0));

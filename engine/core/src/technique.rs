@@ -466,7 +466,10 @@ mod tests {
         let names = |r: &TechniqueRegistry| r.applicable().map(|t| t.name).collect::<Vec<_>>();
         let lit = TechniqueRegistry::new(lit(), [&QUALITY, &QUALITY]);
         let dark = TechniqueRegistry::new(Features::default(), []);
-        assert_eq!(names(&lit), ["lighting", "sampler", "quality"]);
+        assert_eq!(
+            names(&lit),
+            ["integrator", "lighting", "sampler", "quality"]
+        );
         assert_eq!(names(&dark), ["sampler"]);
         let nee = Techniques::parse(&lit, "lighting=nee").unwrap();
         assert!(nee.check_applicable(&lit).is_ok());
@@ -495,7 +498,9 @@ mod tests {
         assert_eq!(
             labels(&TechniqueRegistry::new(env, [&QUALITY])),
             [
-                "lighting=mis+sampler=sobol",
+                "integrator=path+lighting=mis+sampler=sobol",
+                "integrator=light",
+                "integrator=bdpt",
                 "lighting=nee",
                 "lighting=bxdf",
                 "sampler=independent",
@@ -504,7 +509,10 @@ mod tests {
         );
         assert_eq!(
             labels(&TechniqueRegistry::new(Features::default(), [])),
-            ["lighting=mis+sampler=sobol", "sampler=independent"]
+            [
+                "integrator=path+lighting=mis+sampler=sobol",
+                "sampler=independent"
+            ]
         );
     }
 
