@@ -13,6 +13,8 @@ use risotto_components::Paths;
 use risotto_systems::film::{splat, AovFilm, Film, SplatFilm};
 use risotto_systems::sampler::pixel_seed;
 
+pub use crate::global_integrator::GlobalIntegrator;
+
 /// How direct lighting is estimated; a named technique so its cost and error can be compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightingTechnique {
@@ -24,42 +26,6 @@ pub enum LightingTechnique {
     NeeOnly,
     /// Bxdf sampling only (no shadow rays; Dirac lights are invisible).
     BxdfOnly,
-}
-
-/// Which global integrator renders (the `integrator` technique; `[render] integrator` in a
-/// scene file).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum GlobalIntegrator {
-    /// The path tracer ([`PathTracer`](crate::path_tracer::PathTracer)).
-    #[default]
-    Path,
-    /// Light tracing alone ([`Strategy::Light`](crate::bidir::Strategy::Light)).
-    Light,
-    /// Bidirectional path tracing ([`Strategy::Bdpt`](crate::bidir::Strategy::Bdpt)).
-    Bdpt,
-}
-
-impl GlobalIntegrator {
-    /// Every integrator, in listing order.
-    pub const ALL: [GlobalIntegrator; 3] = [
-        GlobalIntegrator::Path,
-        GlobalIntegrator::Light,
-        GlobalIntegrator::Bdpt,
-    ];
-
-    /// The name scene files and `--technique integrator=NAME` use.
-    pub fn name(self) -> &'static str {
-        match self {
-            GlobalIntegrator::Path => "path",
-            GlobalIntegrator::Light => "light",
-            GlobalIntegrator::Bdpt => "bdpt",
-        }
-    }
-
-    /// The integrator called `name`.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|g| g.name() == name)
-    }
 }
 
 /// The camera samples of one batch: one path per pixel and sample, with the pixel seeds of

@@ -12,6 +12,7 @@ pub mod bidir;
 pub mod context;
 pub mod diagnostics;
 pub mod features;
+pub mod global_integrator;
 pub mod integrator;
 mod interior;
 pub mod opacity;

@@ -130,7 +130,7 @@ pub struct RenderSettings {
     /// The global integrator the scene asks for (`[render] integrator`); a render's
     /// [`RenderOptions::integrator`](crate::render::RenderOptions::integrator) overrides it.
     /// Defaults to the path tracer.
-    pub integrator: crate::integrator::GlobalIntegrator,
+    pub integrator: crate::global_integrator::GlobalIntegrator,
 }
 
 impl Default for RenderSettings {
@@ -143,7 +143,7 @@ impl Default for RenderSettings {
             rr_depth: 5,
             seed: 0,
             max_passes: 1024,
-            integrator: crate::integrator::GlobalIntegrator::Path,
+            integrator: crate::global_integrator::GlobalIntegrator::Path,
         }
     }
 }
