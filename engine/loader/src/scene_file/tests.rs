@@ -11,6 +11,7 @@ use super::*;
 
 mod disk;
 mod environment;
+mod integrator;
 mod objects;
 mod pixel_filter;
 mod triangles;
