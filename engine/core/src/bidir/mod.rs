@@ -7,11 +7,11 @@
 //! then), and it traces paths that start at the lights through the same trace stage
 //! (`GetNearestHits(..., isLightPath)`).
 //!
-//! Each camera sample of a batch gets one light subpath ([`light_walk`]): a light chosen by
+//! Each camera sample of a batch gets one light subpath (`light_walk.rs`): a light chosen by
 //! power emits a ray, and the subpath scatters as a camera path would, its throughput
 //! carrying importance (the adjoint Bxdf). Every vertex with a non-Dirac lobe is stored and
 //! connected to the camera (splatted wherever it lands on the film). The camera subpath
-//! ([`camera_walk`]) then, at each vertex, adds the emitter it hit, a light sample, and a
+//! (`camera_walk.rs`) then, at each vertex, adds the emitter it hit, a light sample, and a
 //! connection to every stored vertex of its own light subpath. The strategies are weighted
 //! with the power heuristic over all of them ([`mis`]).
 //!
@@ -36,7 +36,7 @@ mod camera_walk;
 pub mod evaluate;
 mod light_walk;
 pub mod mis;
-mod vertices;
+pub mod vertices;
 mod walk;
 
 use crate::integrator::{Integrator, PathBatch};
