@@ -130,3 +130,25 @@ pub fn evaluate_runs<'r>(
         );
     }
 }
+
+/// The factor that makes a radiance closure's value at a light vertex (row `i` of `pts`),
+/// seen from `w` with light from its `vn`, `f |vn . Nn|`, the adjoint's `f* |w . Ng|`
+/// for the geometry term: `|w . Ng| / |vn . Ng|`. With shading normals the adjoint is not
+/// the closure seen backwards (Veach 1997, sec. 5.3, eq. 5.19): the shading cosine belongs
+/// to the incident direction, the geometric one to the outgoing; inside a medium both are
+/// 1. `None` where the factor is undefined (grazing `vn`).
+pub(super) fn adjoint_cosines(pts: &ShadingPoints, i: usize, w: Vec3) -> Option<f32> {
+    if pts.shape[i] == u32::MAX {
+        return Some(1.0);
+    }
+    let ng = pts.ng[i];
+    let cos_in = pts.vn[i].dot(ng).abs();
+    (cos_in > 0.0).then(|| w.dot(ng).abs() / cos_in)
+}
+
+/// Whether leaving row `i` of `pts` towards `w` is reflection by both its normals or
+/// transmission by both (the path tracer's rule for shading normals, see
+/// `path_tracer::shading_normals`); always inside a medium.
+pub(super) fn sides_agree(pts: &ShadingPoints, i: usize, w: Vec3) -> bool {
+    pts.shape[i] == u32::MAX || crate::path_tracer::sides_agree(pts.ng[i], pts.nn[i], pts.vn[i], w)
+}

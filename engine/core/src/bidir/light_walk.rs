@@ -10,8 +10,8 @@
 //! multiplied by `eta^2` here, and a connection's value is the closure seen from the camera
 //! side ([`super::evaluate`]).
 
-use super::camera_walk::{adjoint_cosines, reverse_pdfs, sides_agree, GroupVertices};
-use super::evaluate::cos_at;
+use super::camera_walk::{reverse_pdfs, GroupVertices};
+use super::evaluate::{adjoint_cosines, cos_at, sides_agree};
 use super::mis::{camera_connection_weight, SubpathMis};
 use super::vertices::LightVertices;
 use super::walk::{push_connection, stack_toward, trace_bounce};

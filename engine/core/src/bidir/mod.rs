@@ -33,8 +33,10 @@
 //!   (see [`mis`]): the estimate stays unbiased.
 
 mod camera_walk;
+mod connect;
 pub mod evaluate;
 mod light_walk;
+mod merge;
 pub mod mis;
 pub mod vertices;
 mod walk;
@@ -262,7 +264,7 @@ pub(crate) struct Scratch {
     /// Per point of a group: its light sample (`u32::MAX`: none).
     hit_of: Vec<u32>,
     /// Per light bounce: the connections of this camera bounce waiting for their light side.
-    pending: Vec<Vec<camera_walk::PendingConnection>>,
+    pending: Vec<Vec<connect::PendingConnection>>,
     /// One light bounce's rows: directions, a copy, answers.
     layer_wi: Vec<glam::Vec3>,
     layer_copy: risotto_components::ShadingPoints,
@@ -270,7 +272,7 @@ pub(crate) struct Scratch {
     layer_pdf: Vec<f32>,
     layer_pdf_fwd: Vec<f32>,
     camera_hits: Vec<CameraConnection>,
-    light_hits: Vec<camera_walk::LightHit>,
+    light_hits: Vec<connect::LightHit>,
     /// Light vertices connected to the camera, and where on the film.
     splats: ShadowRays,
     splat_film_pos: Vec<Vec2>,
