@@ -1,8 +1,10 @@
 //! End-to-end bench: `scenes/mitsuba-suite/cornell.toml` at 64x64, 16 spp (65536 camera
-//! samples per iteration), throughput in samples. The full-size comparison with Mitsuba 3
+//! samples per iteration), throughput in samples, with each global integrator (`path`, `light`,
+//! `bdpt`, `vcm`: their cost per sample side by side). The full-size comparison with Mitsuba 3
 //! (256x256, 64 spp) is a driver run; see benches/README.md.
 
 use criterion::{criterion_main, Criterion, Throughput};
+use risotto::engine::integrator::GlobalIntegrator;
 use risotto::engine::render::{render, RenderOptions};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::load_scene;
@@ -24,6 +26,20 @@ fn cornell(c: &mut Criterion) {
     g.bench_function("cornell_64x64_16spp", |b| {
         b.iter(|| render(&scene, &RenderOptions::default(), &|_| {}).unwrap())
     });
+    for integrator in [
+        GlobalIntegrator::Light,
+        GlobalIntegrator::Bdpt,
+        GlobalIntegrator::Vcm,
+    ] {
+        let options = RenderOptions {
+            integrator: Some(integrator),
+            ..RenderOptions::default()
+        };
+        let name = format!("cornell_64x64_16spp_{}", integrator.name());
+        g.bench_function(name, |b| {
+            b.iter(|| render(&scene, &options, &|_| {}).unwrap())
+        });
+    }
     g.finish();
 }
 

@@ -1,5 +1,7 @@
 //! Criterion benches of the systems that are not benched elsewhere: camera ray generation,
-//! partition and splat (the tile film and the light tracer's shared `SplatFilm`) (light sampling is in `benches/path.rs`, with the other per-vertex
+//! partition and splat (the tile film and the light tracer's shared `SplatFilm`), the
+//! bidirectional integrators' camera connection and hash grid (light sampling is in
+//! `benches/path.rs`, with the other per-vertex
 //! systems). Realistic batch size (4096 items), black_box on
 //! inputs and outputs, throughput in elements.
 
@@ -7,6 +9,7 @@ use criterion::{black_box, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Vec2, Vec3};
 use risotto::systems::camera::{generate_camera_rays, Camera, Projection};
 use risotto::systems::film::{splat, Film, SplatFilm};
+use risotto::systems::hash_grid::HashGrid;
 use risotto::systems::partition::partition_by_key;
 use risotto::systems::pixel_filter::PixelFilter;
 use risotto::systems::sampler::pixel_seed;
@@ -121,9 +124,65 @@ fn splat_bench(c: &mut Criterion) {
     g.finish();
 }
 
+/// The bidirectional integrators' systems: a scene point connected to the camera (light
+/// tracing), and the hash grid of light vertices merging builds and queries (4096 points in a
+/// unit cube, radius 0.02: a few neighbours each).
+fn bidirectional(c: &mut Criterion) {
+    let mut g = c.benchmark_group("bidirectional");
+    g.throughput(Throughput::Elements(N as u64));
+    let camera = Camera::look_at(
+        Projection::Perspective { fov_deg: 40.0 },
+        Vec3::new(0.0, 0.0, 3.9),
+        Vec3::ZERO,
+        Vec3::Y,
+        256,
+        256,
+    )
+    .unwrap();
+    let mut state = 1u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let points: Vec<Vec3> = (0..N).map(|_| Vec3::new(next(), next(), next())).collect();
+    let scene_points: Vec<Vec3> = points.iter().map(|p| *p * 2.0 - 1.0).collect();
+    g.bench_function("camera_connect_4096", |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for &p in &scene_points {
+                hits += camera.connect(black_box(p), Vec2::splat(0.5)).is_some() as u32;
+            }
+            black_box(hits)
+        })
+    });
+    let mut grid = HashGrid::default();
+    g.bench_function("hash_grid_build_4096", |b| {
+        b.iter(|| grid.build(black_box(&points), 0.02))
+    });
+    grid.build(&points, 0.02);
+    g.bench_function("hash_grid_query_4096", |b| {
+        b.iter(|| {
+            let mut found = 0usize;
+            for &p in &points {
+                grid.query(&points, black_box(p), |_| found += 1);
+            }
+            black_box(found)
+        })
+    });
+    g.finish();
+}
+
 // criterion_group! expands to an undocumented `pub fn`; a private module keeps it out of the
 // `missing_docs` lint without an allow attribute.
 mod group {
-    criterion::criterion_group!(benches, super::camera, super::partition, super::splat_bench);
+    criterion::criterion_group!(
+        benches,
+        super::camera,
+        super::partition,
+        super::splat_bench,
+        super::bidirectional
+    );
 }
 criterion_main!(group::benches);
