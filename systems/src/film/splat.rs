@@ -125,6 +125,21 @@ impl SplatFilm {
             self.non_finite.fetch_add(1, Ordering::Relaxed);
             return;
         }
+        if filter.is_pixel_box() {
+            // The default filter: the one pixel whose half-open square holds the position,
+            // weight 1 (what `splat_weights` gives it), without building the footprint.
+            let (x, y) = (film.x.floor(), film.y.floor());
+            let (w, h) = (self.width as f32, self.height as f32);
+            if x >= 0.0 && y >= 0.0 && x < w && y < h {
+                self.add(y as u32 * self.width + x as u32, value);
+            }
+            return;
+        }
+        self.add_weighted(filter, film, value);
+    }
+
+    /// [`Self::add_filtered`] through the general footprint of any filter.
+    fn add_weighted(&self, filter: &PixelFilter, film: Vec2, value: Rgb) {
         let mut weights = SmallVec::new();
         splat_weights(filter, film, self.width, self.height, &mut weights);
         for (pixel, w) in weights {

@@ -210,3 +210,28 @@ fn light_traced_plane_reads_back_its_radiance() {
     }
     assert_eq!(film.pixel_value(0, 0), [0.0; 3]);
 }
+
+/// The pixel box's fast path adds exactly what the general footprint adds, at random
+/// positions inside, on and outside the image's edges.
+#[test]
+fn the_pixel_boxs_fast_path_is_the_general_footprint() {
+    let (fast, general) = (SplatFilm::new(7, 5).unwrap(), SplatFilm::new(7, 5).unwrap());
+    let mut state = 99u64;
+    let mut next = move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+        ((state >> 40) as f32) / (1u64 << 24) as f32
+    };
+    let filter = PixelFilter::PIXEL_BOX;
+    for k in 0..2000 {
+        let film = match k % 4 {
+            0 => Vec2::new((next() * 9.0).floor() - 1.0, (next() * 7.0).floor() - 1.0),
+            _ => Vec2::new(next() * 9.0 - 1.0, next() * 7.0 - 1.0),
+        };
+        let value = Rgb::new(next(), next() * 3.0, next() * 0.1);
+        fast.add_filtered(&filter, film, value);
+        general.add_weighted(&filter, film, value);
+    }
+    for p in 0..35 {
+        assert_eq!(fast.sum_fixed(p), general.sum_fixed(p), "pixel {p}");
+    }
+}
