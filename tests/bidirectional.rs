@@ -593,3 +593,53 @@ fn walked_media_render_correctly_or_say_so() {
         light.stats.warnings
     );
 }
+
+/// Stages a render does not need never run, and the stats show it: the path tracer runs no
+/// `emit`, `connect` or `merge`; `light` and `bdpt` no `merge`; `vcm` all three.
+#[test]
+fn the_stats_show_which_integrator_stages_ran() {
+    use risotto::engine::stats::System;
+    let scene = suite_scene("cornell", 16, 4, 1, None);
+    let calls = |out: &RenderOutput, s: System| out.stats.counters.systems[s as usize].calls;
+    for (integrator, emit, merge) in [
+        (GlobalIntegrator::Path, false, false),
+        (GlobalIntegrator::Light, true, false),
+        (GlobalIntegrator::Bdpt, true, false),
+        (GlobalIntegrator::Vcm, true, true),
+    ] {
+        let out = run(&scene, integrator, Some(1));
+        let name = integrator.name();
+        assert_eq!(calls(&out, System::Emit) > 0, emit, "{name}: emit");
+        assert_eq!(calls(&out, System::Connect) > 0, emit, "{name}: connect");
+        assert_eq!(calls(&out, System::Merge) > 0, merge, "{name}: merge");
+    }
+}
+
+/// `--replay` records the path tracer's paths: with a bidirectional integrator it is an
+/// error that says so, and with the path tracer it works.
+#[test]
+fn replay_says_it_records_the_path_tracer_only() {
+    use risotto::engine::replay::replay;
+    let scene = suite_scene("cornell", 16, 4, 1, None);
+    for integrator in [
+        GlobalIntegrator::Light,
+        GlobalIntegrator::Bdpt,
+        GlobalIntegrator::Vcm,
+    ] {
+        let options = RenderOptions {
+            integrator: Some(integrator),
+            ..RenderOptions::default()
+        };
+        let e = replay(&scene, &options, 8, 8, 0).err().expect("an error");
+        let text = e.to_string();
+        assert!(
+            text.contains("records the path tracer's paths") && text.contains(integrator.name()),
+            "{text}"
+        );
+    }
+    let path = RenderOptions {
+        integrator: Some(GlobalIntegrator::Path),
+        ..RenderOptions::default()
+    };
+    assert!(replay(&scene, &path, 8, 8, 0).is_ok());
+}
