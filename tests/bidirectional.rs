@@ -630,7 +630,9 @@ fn replay_says_it_records_the_path_tracer_only() {
             integrator: Some(integrator),
             ..RenderOptions::default()
         };
-        let e = replay(&scene, &options, 8, 8, 0).err().expect("an error");
+        let Err(e) = replay(&scene, &options, 8, 8, 0) else {
+            panic!("{}: replay did not refuse", integrator.name());
+        };
         let text = e.to_string();
         assert!(
             text.contains("records the path tracer's paths") && text.contains(integrator.name()),
