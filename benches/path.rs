@@ -2,7 +2,9 @@
 //! alone over one group of 4096 points: the sampler's column draws (and single draws, one
 //! dimension at a time, as tracking takes them), light sampling
 //! (`LightSet::sample_column`, the kernel the renderer runs, against the per-point
-//! `sample_lights` reference; and from `scenes/fire.toml`'s volume emitter), shadow-ray spawning and path continuation.
+//! `sample_lights` reference; and from `scenes/fire.toml`'s volume emitter), emission sampling
+//! (the start of the bidirectional integrators' light subpaths), shadow-ray spawning and path
+//! continuation.
 //!
 //! The points are camera hits on `scenes/mitsuba-suite/cornell.toml`'s floor (`y = -1`,
 //! uniform in the square), lit by its area light; the incoming rays come from the camera;
@@ -240,6 +242,26 @@ fn light_sampling(c: &mut Criterion) {
                 &mut out,
             );
             black_box(&out.pdf);
+        })
+    });
+    // Emission sampling, the start of light subpaths (`integrator = light | bdpt | vcm`):
+    // a ray leaving cornell's area light, 4096 per iteration.
+    let bounds = scene.geometry.bounds();
+    let u_dir: Vec<Vec2> = u4.iter().map(|u| Vec2::new(u[3], u[0])).collect();
+    g.bench_function("cornell_area_light_4096_emission", |b| {
+        b.iter(|| {
+            let mut emitted = 0u32;
+            for k in 0..N {
+                let e = scene.lights.sample_emission(
+                    &scene.geometry,
+                    bounds,
+                    black_box(u_select[k]),
+                    black_box(u[k]),
+                    black_box(u_dir[k]),
+                );
+                emitted += e.is_some() as u32;
+            }
+            black_box(emitted)
         })
     });
     // The per-point reference the column kernel equals bit for bit.
