@@ -18,9 +18,13 @@ use crate::stats::{RenderStats, SystemStats};
 use bumpalo::Bump;
 use rayon::prelude::*;
 use risotto_components::Rgb;
-use risotto_systems::adaptive::AdaptiveSummary;
 use risotto_systems::film::{AovFilm, Film, SplatFilm};
 use risotto_systems::independent_sampler::SamplerKind;
+
+mod adaptive;
+mod splats;
+use adaptive::{adaptive_summary, stop_converged_pixels};
+use splats::add_splats;
 
 /// A pixel window of the full image: columns `x0..x1`, rows `y0..y1` (half-open; row 0 is
 /// the top).
@@ -611,78 +615,6 @@ fn render_passes<I: Integrator>(
     ))
 }
 
-/// The means and variances of the means of the window's pixels, gathered from `tiles`.
-fn window_estimates(tiles: &[Tile], window: Window) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
-    let (w, h) = (window.width() as usize, window.height() as usize);
-    let mut value = vec![[0.0f32; 3]; w * h];
-    let mut variance = vec![[0.0f32; 3]; w * h];
-    for (tile, _) in tiles {
-        let film = &tile.film;
-        for ty in 0..film.height {
-            for tx in 0..film.width {
-                let src = (ty * film.width + tx) as usize;
-                let x = (tile.x0 - window.x0 + tx) as usize;
-                let y = (tile.y0 - window.y0 + ty) as usize;
-                value[y * w + x] = film.mean(src).to_array();
-                variance[y * w + x] = film.variance_of_mean(src).to_array();
-            }
-        }
-    }
-    (value, variance)
-}
-
-/// The estimated relative error of each pixel of the window ([`NoiseTarget`]).
-fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> Vec<f32> {
-    let (w, h) = (window.width() as usize, window.height() as usize);
-    let floor = risotto_systems::adaptive::error_floor(value, NOISE_FLOOR_FRACTION);
-    let mut error = vec![0.0; w * h];
-    risotto_systems::adaptive::windowed_relative_error(w, h, value, variance, floor, &mut error);
-    error
-}
-
-/// Stops, for good, the pixels whose estimated error has been at or below the target at two
-/// consecutive pass ends (the guard against stopping on an unluckily low estimate: the
-/// second look has twice the samples); returns how many still take samples.
-fn stop_converged_pixels(tiles: &mut [Tile], window: Window, target: NoiseTarget) -> usize {
-    let (value, variance) = window_estimates(tiles, window);
-    let error = window_errors(&value, &variance, window);
-    let w = window.width() as usize;
-    let mut active = 0;
-    for (tile, _) in tiles.iter_mut() {
-        let (tw, th) = (tile.film.width as usize, tile.film.height as usize);
-        if tile.active.is_empty() {
-            tile.active = vec![true; tw * th];
-            tile.converged_passes = vec![0; tw * th];
-        }
-        for ty in 0..th {
-            for tx in 0..tw {
-                let local = ty * tw + tx;
-                let x = (tile.x0 - window.x0) as usize + tx;
-                let y = (tile.y0 - window.y0) as usize + ty;
-                if tile.active[local] {
-                    let passes = &mut tile.converged_passes[local];
-                    *passes = if error[y * w + x] <= target.relative_error {
-                        *passes + 1
-                    } else {
-                        0
-                    };
-                    tile.active[local] = *passes < 2;
-                }
-                active += usize::from(tile.active[local]);
-            }
-        }
-    }
-    active
-}
-
-/// The stats of an adaptive render: its sample counts and final error estimates.
-fn adaptive_summary(out: &RenderOutput, target: NoiseTarget) -> AdaptiveSummary {
-    let value: Vec<[f32; 3]> = out.beauty.pixels.iter().map(|p| p.to_array()).collect();
-    let variance: Vec<[f32; 3]> = out.variance.pixels.iter().map(|p| p.to_array()).collect();
-    let error = window_errors(&value, &variance, out.window);
-    AdaptiveSummary::new(target.relative_error, &out.film.count, &error)
-}
-
 /// Samples per pixel of the next pass of a render in passes: the time between checkpoints,
 /// `every` seconds, counts the last checkpoint's gathering and writing (`write_seconds`), and
 /// the pass renders at least 9 times as long as that write, so checkpoints never take more
@@ -750,24 +682,6 @@ fn gather(
             end: samples.end,
         },
         stats,
-    }
-}
-
-/// Adds the light-traced image `splat` (sums over the whole image, times `scale`) to the
-/// window's film: each pixel's sum grows by its splat value times its sample count, so
-/// that its mean is the camera paths' mean plus the splats'. The sums of squares are the
-/// camera paths' alone: the variance layer does not include the splats' noise.
-fn add_splats(film: &mut Film, window: Window, splat: &SplatFilm, scale: f64) {
-    let w = window.width();
-    for y in window.y0..window.y1 {
-        for x in window.x0..window.x1 {
-            let j = ((y - window.y0) * w + (x - window.x0)) as usize;
-            let s = splat.sum(y * splat.width() + x);
-            let count = f64::from(film.count[j]);
-            for c in 0..3 {
-                film.sum[j][c] += s[c] * scale * count;
-            }
-        }
     }
 }
 

@@ -146,7 +146,6 @@ fn camera_vertices(
 ) {
     let settings = scene.settings;
     let (q, s, light) = (&mut w.camera_q, &mut w.s, &w.light);
-    let f = s.factors;
     let orthographic = matches!(
         scene.camera.projection,
         risotto_systems::camera::Projection::Orthographic { .. }
@@ -226,20 +225,7 @@ fn camera_vertices(
             continue;
         }
         let connectable = bxdf.lobes().contains(LobeSampled::DIFFUSE);
-        s.samplers.clear();
-        s.samplers
-            .extend(pts.ray_id[range.clone()].iter().map(|&r| {
-                let r = r as usize;
-                let path = incoming.path[r] as usize;
-                PathSampler {
-                    seed: batch.seeds[path],
-                    sample: batch.paths.sample[path],
-                    dimension: incoming.dimension[r],
-                }
-            }));
-        s.u4.clear();
-        s.u4.resize(m, [0.0; 4]);
-        next_4d_column(&mut s.samplers, &mut s.u4);
+        vertex_samplers(s, batch, pts, range.clone(), incoming);
         s.group_eval.bind(pts, range.clone());
         let at = GroupVertices {
             pts,
@@ -265,25 +251,7 @@ fn camera_vertices(
         if scene.features.vertex_normals && grp.mode == ShadingMode::Scatter {
             discard_bxdf_samples(pts, range.clone(), &mut s.samples);
         }
-        // The reverse pdf of each sampled direction: the closure seen from it.
-        reverse_pdfs(scene, s, &at, arena, counters);
-        for (k, i) in range.clone().enumerate() {
-            let smp = &s.samples;
-            if smp.pdf[k] <= 0.0 {
-                continue;
-            }
-            let r = pts.ray_id[i] as usize;
-            let path = incoming.path[r] as usize;
-            let specular = smp.lobe[k].is_specular();
-            let pdf_rev = if specular {
-                smp.pdf[k]
-            } else {
-                s.group_eval.pdf[k]
-            };
-            let cos_out = cos_at(pts, i, smp.wi[k]);
-            let v = f.at(pts.shape[i] == u32::MAX);
-            s.mis[path].scatter(smp.pdf[k], pdf_rev, cos_out, specular, v);
-        }
+        scatter_mis(scene, s, &at, arena, counters);
         let vertices = Vertices {
             points: pts,
             range: range.clone(),
@@ -344,10 +312,38 @@ fn first_hit_aovs(
     }
 }
 
-/// The reverse pdf of every sampled direction of the group (into `s.group_eval.pdf`): the
-/// closure seen from the sample, light from the viewer. Rows without a non-Dirac sample
-/// are evaluated towards their own viewer and ignored.
-pub(super) fn reverse_pdfs(
+/// Samplers at the vertex dimensions of the group's points (rows `range` of `pts`, reached
+/// by rows of `incoming`, paths of `batch`) and their first four dimensions, drawn into
+/// `s.u4` (light sample or lens sample, selection, Russian roulette); the samplers are left
+/// where the Bxdf starts.
+pub(super) fn vertex_samplers(
+    s: &mut Scratch,
+    batch: &PathBatch,
+    pts: &ShadingPoints,
+    range: std::ops::Range<usize>,
+    incoming: &Rays,
+) {
+    s.samplers.clear();
+    s.samplers
+        .extend(pts.ray_id[range.clone()].iter().map(|&r| {
+            let r = r as usize;
+            let path = incoming.path[r] as usize;
+            PathSampler {
+                seed: batch.seeds[path],
+                sample: batch.paths.sample[path],
+                dimension: incoming.dimension[r],
+            }
+        }));
+    s.u4.clear();
+    s.u4.resize(range.len(), [0.0; 4]);
+    next_4d_column(&mut s.samplers, &mut s.u4);
+}
+
+/// Updates the subpaths' MIS sums for the group's sampled directions (`s.samples`), with
+/// the reverse pdf of each non-Dirac sample: the closure seen from the sample, light from
+/// the viewer (evaluated into `s.group_eval`, bound to the group; rows without such a
+/// sample are evaluated towards their own viewer and ignored).
+pub(super) fn scatter_mis(
     scene: &CompiledScene,
     s: &mut Scratch,
     at: &GroupVertices<'_>,
@@ -365,4 +361,20 @@ pub(super) fn reverse_pdfs(
     }));
     s.group_eval
         .run(scene, at.material, at.mode, &s.view, vn, arena, counters);
+    let (pts, f, smp) = (at.pts, s.factors, &s.samples);
+    for (k, i) in at.range.clone().enumerate() {
+        if smp.pdf[k] <= 0.0 {
+            continue;
+        }
+        let path = at.incoming.path[pts.ray_id[i] as usize] as usize;
+        let specular = smp.lobe[k].is_specular();
+        let pdf_rev = if specular {
+            smp.pdf[k]
+        } else {
+            s.group_eval.pdf[k]
+        };
+        let cos_out = cos_at(pts, i, smp.wi[k]);
+        let v = f.at(pts.shape[i] == u32::MAX);
+        s.mis[path].scatter(smp.pdf[k], pdf_rev, cos_out, specular, v);
+    }
 }

@@ -10,7 +10,7 @@
 //! multiplied by `eta^2` here, and a connection's value is the closure seen from the camera
 //! side ([`super::evaluate`]).
 
-use super::camera_walk::{reverse_pdfs, GroupVertices};
+use super::camera_walk::{scatter_mis, vertex_samplers, GroupVertices};
 use super::evaluate::{adjoint_cosines, cos_at, sides_agree};
 use super::mis::{camera_connection_weight, SubpathMis};
 use super::vertices::LightVertices;
@@ -28,7 +28,7 @@ use risotto_components::{LobeSampled, RayRow, Rgb};
 use risotto_systems::camera::CameraConnection;
 use risotto_systems::path::Vertices;
 use risotto_systems::ray::offset_origin;
-use risotto_systems::sampler::{next_4d_column, sample_1d, sample_2d, PathSampler};
+use risotto_systems::sampler::{sample_1d, sample_2d};
 
 /// Traces the light subpaths of `batch` (one per camera sample, row for row): stores their
 /// vertices in `w.light` and splats their connections to the camera into the integrator's
@@ -180,7 +180,6 @@ fn scatter_light_vertices(
     arena: &Bump,
     counters: &PatternCounters,
 ) {
-    let f = w.s.factors;
     let normals = scene.features.vertex_normals;
     let q = &mut w.light_q;
     let groups = std::mem::take(&mut q.hits.groups.groups);
@@ -216,20 +215,7 @@ fn scatter_light_vertices(
         let connectable = bxdf.lobes().contains(LobeSampled::DIFFUSE);
         // Samplers at the vertex's dimensions: 0-1 the lens sample of the camera
         // connection, 3 Russian roulette, 4.. the Bxdf.
-        w.s.samplers.clear();
-        w.s.samplers
-            .extend(pts.ray_id[range.clone()].iter().map(|&r| {
-                let r = r as usize;
-                let path = incoming.path[r] as usize;
-                PathSampler {
-                    seed: w.light_batch.seeds[path],
-                    sample: w.light_batch.paths.sample[path],
-                    dimension: incoming.dimension[r],
-                }
-            }));
-        w.s.u4.clear();
-        w.s.u4.resize(m, [0.0; 4]);
-        next_4d_column(&mut w.s.samplers, &mut w.s.u4);
+        vertex_samplers(&mut w.s, &w.light_batch, pts, range.clone(), incoming);
         w.s.group_eval.bind(pts, range.clone());
         let at = GroupVertices {
             pts,
@@ -255,25 +241,12 @@ fn scatter_light_vertices(
             discard_bxdf_samples(pts, range.clone(), &mut w.s.samples);
         }
         if bidirectional {
-            reverse_pdfs(scene, &mut w.s, &at, arena, counters);
+            scatter_mis(scene, &mut w.s, &at, arena, counters);
         }
         for (k, i) in range.clone().enumerate() {
             let s = &mut w.s.samples;
             if s.pdf[k] <= 0.0 {
                 continue;
-            }
-            if bidirectional {
-                let r = pts.ray_id[i] as usize;
-                let path = incoming.path[r] as usize;
-                let specular = s.lobe[k].is_specular();
-                let pdf_rev = if specular {
-                    s.pdf[k]
-                } else {
-                    w.s.group_eval.pdf[k]
-                };
-                let cos_out = cos_at(pts, i, s.wi[k]);
-                let v = f.at(pts.shape[i] == u32::MAX);
-                w.s.mis[path].scatter(s.pdf[k], pdf_rev, cos_out, specular, v);
             }
             if s.lobe[k].is_transmit() {
                 // Importance is not compressed by refraction as radiance is.
