@@ -39,13 +39,7 @@ pub(crate) fn peak_resident_bytes() -> Option<u64> {
 
 /// `VmHWM:   123456 kB` in a `/proc/PID/status` text, in bytes.
 fn parse_vm_hwm(status: &str) -> Option<u64> {
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let mut parts = line["VmHWM:".len()..].split_whitespace();
-    let value: u64 = parts.next()?.parse().ok()?;
-    match parts.next() {
-        Some("kB") => value.checked_mul(1024),
-        _ => None,
-    }
+    risotto::engine::render::proc_bytes(status, "VmHWM")
 }
 
 #[cfg(test)]

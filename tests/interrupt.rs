@@ -186,4 +186,11 @@ fn a_second_signal_exits_at_once() {
     // Only the first pass's checkpoint (one sample per pixel) was written.
     let part = read_partial(&out).unwrap();
     assert_eq!(part.header.samples.end, 1, "{:?}", part.header.samples);
+    // And no temporary is left (the exit removes those of writes in flight).
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|f| f.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporaries left: {left:?}");
 }

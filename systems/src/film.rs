@@ -13,9 +13,10 @@
 //! finite, and the variance of the mean saturates at `f32::MAX` (reached for radiance
 //! varying by more than about 1e19), the film's documented maximum.
 
-/// Largest `width * height` of a film: 2^26 pixels (8192 x 8192), whose film and output
-/// layers take about 7 GB. What asks for more (a scene, a partial render) is refused with
-/// the value rather than aborting an allocation.
+/// Largest `width * height` of a film: 2^26 pixels (8192 x 8192), whose render takes about
+/// 15 GB (the engine's measured `FILM_BYTES_PER_PIXEL`, 224 bytes a pixel). What asks for
+/// more (a scene, a partial render) is refused with the value rather than aborting an
+/// allocation; the engine also refuses a film larger than the machine's memory.
 pub const MAX_PIXELS: u64 = 1 << 26;
 
 use risotto_components::Rgb;

@@ -636,47 +636,8 @@ pub fn write_png(path: &Path, img: &Image, exposure_stops: f32) -> Result<(), Ou
     })
 }
 
-/// `bytes` as the file `path`, written as a whole or not at all ([`write_atomically`]).
-pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    write_atomically(path, |tmp| {
-        std::fs::write(tmp, bytes).map_err(|cause| OutputError::Io {
-            path: path.to_path_buf(),
-            cause,
-        })
-    })
-}
-
-/// Writes `path` as a whole or not at all: `write` fills a temporary file beside it
-/// (`.NAME.PID.tmp`, same directory, so the rename cannot cross file systems), which is
-/// flushed to disk (`fsync`) and then renamed over `path`. A process stopped during the
-/// write leaves `path` as it was (and at most the temporary); a failed write removes the
-/// temporary. Readers never see a half-written image under the final name.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), OutputError>,
-) -> Result<(), OutputError> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let io = |cause| OutputError::Io {
-        path: path.to_path_buf(),
-        cause,
-    };
-    let result = write(&tmp)
-        .and_then(|()| File::open(&tmp).and_then(|f| f.sync_all()).map_err(io))
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(io));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    } else if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        // The rename itself is durable once the directory is (best effort: not every
-        // platform can open a directory).
-        if let Ok(d) = File::open(dir) {
-            let _ = d.sync_all();
-        }
-    }
-    result
-}
+mod atomic_write;
+pub use atomic_write::{remove_temporaries_for_exit, write_atomically, write_file_atomically};
 
 #[cfg(test)]
 mod tests;

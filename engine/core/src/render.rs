@@ -22,8 +22,12 @@ use risotto_systems::film::{AovFilm, Film, SplatFilm};
 use risotto_systems::independent_sampler::SamplerKind;
 
 mod adaptive;
+mod film_memory;
 mod splats;
 use adaptive::{adaptive_summary, stop_converged_pixels};
+pub use film_memory::{
+    check_film_memory, film_bytes, physical_memory, proc_bytes, FILM_BYTES_PER_PIXEL,
+};
 use splats::add_splats;
 
 /// A pixel window of the full image: columns `x0..x1`, rows `y0..y1` (half-open; row 0 is
@@ -113,9 +117,10 @@ impl std::fmt::Display for SampleRange {
 }
 
 /// Largest `width * height` of a render's image ([`risotto_systems::film::MAX_PIXELS`]:
-/// 2^26 pixels, 8192 x 8192, whose film and output layers take about 7 GB). Scene files,
-/// scenes built in code and partial renders asking for more are an error naming the value
-/// rather than an allocation abort.
+/// 2^26 pixels, 8192 x 8192, whose render takes about 15 GB at [`FILM_BYTES_PER_PIXEL`]).
+/// Scene files, scenes built in code and partial renders asking for more are an error
+/// naming the value rather than an allocation abort; a smaller film that needs more than
+/// the machine's memory is refused when the render starts ([`check_film_memory`]).
 pub const MAX_FILM_PIXELS: u64 = risotto_systems::film::MAX_PIXELS;
 
 /// The most worker threads a render starts. Far above any core count a render uses; a
@@ -290,6 +295,15 @@ pub enum RenderError {
         /// What is wrong with it.
         reason: String,
     },
+    /// The film of the window asked for needs more memory than the machine has
+    /// ([`check_film_memory`]).
+    #[error("image {window}: {reason}")]
+    FilmMemory {
+        /// The window asked for.
+        window: Window,
+        /// The memory it needs and the machine has.
+        reason: String,
+    },
     /// A checkpoint could not be written.
     #[error("checkpoint: {0}")]
     Checkpoint(String),
@@ -424,6 +438,8 @@ pub fn checked_extent(
     if window.x1 > w || window.y1 > h {
         return Err(crop_err(format!("outside the {w}x{h} image")));
     }
+    check_film_memory(window.pixels() as u64, physical_memory())
+        .map_err(|reason| RenderError::FilmMemory { window, reason })?;
     let spp = scene.settings.spp;
     let samples = options
         .samples
@@ -609,7 +625,7 @@ fn render_passes<I: Integrator>(
         scene,
         window,
         samples.start..done,
-        &tiles,
+        tiles,
         start,
         integrator.splats(),
     ))
@@ -635,7 +651,7 @@ fn gather(
     scene: &CompiledScene,
     window: Window,
     samples: std::ops::Range<u32>,
-    tiles: &[Tile],
+    tiles: impl IntoIterator<Item = impl std::borrow::Borrow<Tile>>,
     start: std::time::Instant,
     splats: Option<(&SplatFilm, f64)>,
 ) -> RenderOutput {
@@ -644,7 +660,9 @@ fn gather(
     let mut aovs = AovFilm::new(w, h);
     let n = (w * h) as usize;
     let mut counters = SystemStats::default();
-    for (tile, stats) in tiles {
+    // A final gather is handed the tiles by value and frees each once added.
+    for tile in tiles {
+        let (tile, stats) = std::borrow::Borrow::<Tile>::borrow(&tile);
         let (x0, y0) = (tile.x0 - window.x0, tile.y0 - window.y0);
         film.add_tile(&tile.film, x0, y0);
         aovs.add_tile(&tile.aovs, x0, y0);

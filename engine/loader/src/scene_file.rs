@@ -452,10 +452,11 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
             key,
             node,
             &format!(
-                "{width} x {height} = {} pixels exceeds the limit of {} (8192 x 8192; the \
-                 film and its layers take about 100 bytes a pixel)",
+                "{width} x {height} = {} pixels exceeds the limit of {} (8192 x 8192; a \
+                 render takes about {} bytes a pixel)",
                 u64::from(width) * u64::from(height),
-                RenderSettings::MAX_PIXELS
+                RenderSettings::MAX_PIXELS,
+                risotto_engine::render::FILM_BYTES_PER_PIXEL
             ),
         ));
     }

@@ -1,0 +1,81 @@
+//! What a film costs in memory, and the check that a render's film fits the machine.
+//!
+//! A render's film (the per-pixel sums of every tile, gathered into one image of sums,
+//! then the means and the output layers made from it) peaks at about
+//! [`FILM_BYTES_PER_PIXEL`] of resident memory per pixel of the window, measured by
+//! `tests/film_memory.rs` (the peak resident memory of renders of 512^2 and 1024^2 films of
+//! an otherwise trivial scene, differenced). The pixel limit
+//! ([`MAX_FILM_PIXELS`](super::MAX_FILM_PIXELS)) bounds any request a file can make; this
+//! check refuses, before anything is allocated, a film that the machine's memory cannot
+//! hold, with both figures in the message, rather than letting the operating system kill
+//! the process part way through.
+
+/// Peak resident bytes a render's film takes per pixel of its window (measured: see the
+/// module docs). A bidirectional integrator's splat film adds
+/// [`SplatFilm`](risotto_systems::film::SplatFilm)'s 24 bytes.
+pub const FILM_BYTES_PER_PIXEL: u64 = 224;
+
+/// The memory a film of `pixels` pixels needs, in bytes (saturating).
+pub fn film_bytes(pixels: u64) -> u64 {
+    pixels.saturating_mul(FILM_BYTES_PER_PIXEL)
+}
+
+/// `Err(message)` when a film of `pixels` pixels needs more than `physical` bytes of memory.
+pub fn check_film_memory(pixels: u64, physical: Option<u64>) -> Result<(), String> {
+    let need = film_bytes(pixels);
+    match physical {
+        Some(have) if need > have => Err(format!(
+            "a film of {pixels} pixels needs about {:.1} GB ({FILM_BYTES_PER_PIXEL} bytes a \
+             pixel), more than this machine's {:.1} GB of memory; render it in parts \
+             (`--crop`, then `risotto merge`)",
+            need as f64 / 1e9,
+            have as f64 / 1e9
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The machine's physical memory in bytes: `MemTotal` of `/proc/meminfo` (Linux); `None`
+/// where that cannot be read (the check is then the pixel limit alone).
+pub fn physical_memory() -> Option<u64> {
+    proc_bytes(&std::fs::read_to_string("/proc/meminfo").ok()?, "MemTotal")
+}
+
+/// The line `KEY:  123456 kB` of a Linux `/proc` text (`/proc/meminfo`,
+/// `/proc/PID/status`), in bytes; `None` without it or in another unit.
+pub fn proc_bytes(text: &str, key: &str) -> Option<u64> {
+    let line = text
+        .lines()
+        .find(|l| l.strip_prefix(key).is_some_and(|r| r.starts_with(':')))?;
+    let mut parts = line[key.len() + 1..].split_whitespace();
+    let kib: u64 = parts.next()?.parse().ok()?;
+    (parts.next()? == "kB").then(|| kib.saturating_mul(1024))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mem_total_parses_in_bytes_and_rejects_other_units() {
+        let text = "MemTotal:       24576000 kB\nMemFree:         1000 kB\n";
+        assert_eq!(proc_bytes(text, "MemTotal"), Some(24_576_000 * 1024));
+        assert_eq!(proc_bytes("MemTotal: 12 MB\n", "MemTotal"), None);
+        assert_eq!(proc_bytes("MemFree: 12 kB\n", "MemTotal"), None);
+        assert_eq!(proc_bytes("MemTotalX: 12 kB\n", "MemTotal"), None);
+    }
+
+    #[test]
+    fn a_film_larger_than_memory_is_refused_with_both_figures() {
+        // 8192^2 pixels need about 15 GB: refused on an 8 GB machine, accepted on 32 GB and
+        // where the memory is unknown.
+        let pixels = 8192 * 8192;
+        let err = check_film_memory(pixels, Some(8 << 30)).unwrap_err();
+        assert!(err.contains("67108864 pixels"), "{err}");
+        assert!(err.contains("15.0 GB"), "{err}");
+        assert!(err.contains("8.6 GB"), "{err}");
+        assert!(check_film_memory(pixels, Some(32 << 30)).is_ok());
+        assert!(check_film_memory(pixels, None).is_ok());
+        assert!(check_film_memory(u64::MAX, Some(1)).is_err());
+    }
+}
