@@ -76,6 +76,20 @@ impl DenseSegments for TrackAll {
     }
 }
 
+/// A medium that may know its exact depth (`None` tracks every segment).
+impl<D: DenseSegments> DenseSegments for Option<D> {
+    #[inline]
+    fn takes(&mut self, seg: &MajorantSegment) -> bool {
+        self.as_mut().is_some_and(|d| d.takes(seg))
+    }
+    fn depth(&self, t0: f32, t1: f32) -> f64 {
+        self.as_ref().map_or(0.0, |d| d.depth(t0, t1))
+    }
+    fn invert(&self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
+        self.as_ref().map_or(Err(0.0), |d| d.invert(t0, t1, target))
+    }
+}
+
 /// A grid's dense segments, integrated exactly along the ray ([`GridRay`]): the
 /// heterogeneous medium's density grid scaled to extinction.
 #[derive(Clone, Copy, Debug)]
