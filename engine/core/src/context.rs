@@ -44,8 +44,8 @@ pub struct RenderContext<'s> {
     emission_wanted: bool,
     /// Majorant violations a volume's `transmission` reported (it sees the context shared).
     violations: std::cell::Cell<u64>,
-    /// Dense majorant segments a volume's `transmission` integrated exactly.
-    dense_segments: std::cell::Cell<u64>,
+    /// Dense majorant segments a volume integrated exactly, and their lookups.
+    dense_segments: std::cell::Cell<(u64, u64)>,
     /// Tentative collisions of a volume's `transmission`.
     shadow_collisions: std::cell::Cell<u64>,
 }
@@ -69,7 +69,7 @@ impl<'s> RenderContext<'s> {
             techniques: PluginTechniques::default(),
             emission_wanted: true,
             violations: std::cell::Cell::new(0),
-            dense_segments: std::cell::Cell::new(0),
+            dense_segments: std::cell::Cell::new((0, 0)),
             shadow_collisions: std::cell::Cell::new(0),
         }
     }
@@ -79,9 +79,10 @@ impl<'s> RenderContext<'s> {
         self.violations.replace(0)
     }
 
-    /// The dense segments [`Self::count_dense_segments`] recorded so far, reset to 0.
-    pub fn take_dense_segments(&self) -> u64 {
-        self.dense_segments.replace(0)
+    /// The dense segments and their lookups [`Self::count_dense_segments`] recorded so far,
+    /// reset to 0.
+    pub fn take_dense_segments(&self) -> (u64, u64) {
+        self.dense_segments.replace((0, 0))
     }
 
     /// The collisions [`Self::count_shadow_collisions`] recorded so far, reset to 0.
@@ -114,8 +115,9 @@ impl IntegratorContext for RenderContext<'_> {
         self.violations.set(self.violations.get() + n);
     }
 
-    fn count_dense_segments(&self, n: u64) {
-        self.dense_segments.set(self.dense_segments.get() + n);
+    fn count_dense_segments(&self, segments: u64, lookups: u64) {
+        let (s, l) = self.dense_segments.get();
+        self.dense_segments.set((s + segments, l + lookups));
     }
 
     fn count_shadow_collisions(&self, n: u64) {
@@ -363,7 +365,9 @@ impl IntegratorContext for RenderContext<'_> {
 impl Drop for RenderContext<'_> {
     fn drop(&mut self) {
         self.stats.majorant_violations += self.violations.replace(0);
-        self.stats.dense_segments += self.dense_segments.replace(0);
+        let (segments, lookups) = self.dense_segments.replace((0, 0));
+        self.stats.dense_segments += segments;
+        self.stats.dense_lookups += lookups;
         self.stats.shadow_collisions += self.shadow_collisions.replace(0);
     }
 }

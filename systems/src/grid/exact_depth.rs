@@ -107,20 +107,25 @@ impl GridRay<'_> {
     }
 
     /// The optical depth `int_t0^t1 scale field(o + t d) dt` (exact up to rounding; 0 for
-    /// `t1 <= t0`).
-    pub fn depth(&self, t0: f32, t1: f32) -> f64 {
+    /// `t1 <= t0`). Adds the grid lookups it made to `lookups`.
+    pub fn depth(&self, t0: f32, t1: f32, lookups: &mut u32) -> f64 {
         self.pieces(t0, t1)
-            .map(|(a, b)| self.piece_depth(a, b))
+            .map(|(a, b)| {
+                *lookups += 2;
+                self.piece_depth(a, b)
+            })
             .sum()
     }
 
     /// Where the optical depth from `t0` reaches `target` (>= 0) before `t1`: `Ok(t)`, or
     /// `Err(depth)` with the whole interval's depth (below `target`). Bisection inside the
-    /// piece where the target is crossed (about 50 halvings of an `f64` interval, stopping
-    /// when the `f32` parameter no longer changes).
-    pub fn invert(&self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
+    /// piece where the target is crossed (at most 64 halvings of an `f64` interval, stopping
+    /// when the `f32` parameter no longer changes). Adds the grid lookups it made to
+    /// `lookups`.
+    pub fn invert(&self, t0: f32, t1: f32, target: f64, lookups: &mut u32) -> Result<f32, f64> {
         let mut done = 0.0;
         for (a, b) in self.pieces(t0, t1) {
+            *lookups += 2;
             let piece = self.piece_depth(a, b);
             if done + piece < target {
                 done += piece;
@@ -133,6 +138,7 @@ impl GridRay<'_> {
                 if mid as f32 == lo as f32 || mid as f32 == hi as f32 {
                     break;
                 }
+                *lookups += 2;
                 if self.piece_depth(a, mid) < want {
                     lo = mid;
                 } else {
@@ -179,7 +185,7 @@ mod tests {
                     scale: 2.5,
                 };
                 let (t0, t1) = (0.1 * rng.f32(), 0.2 + rng.f32());
-                let exact = r.depth(t0, t1);
+                let exact = r.depth(t0, t1, &mut 0);
                 let fine = midpoint(&r, t0, t1, 20000);
                 assert!(
                     (exact - fine).abs() < 1e-4 * (1.0 + fine),
@@ -202,13 +208,17 @@ mod tests {
             scale: 10.0,
         };
         assert!(r.pieces(0.0, 1.0).count() <= 12);
-        let total = r.depth(0.0, 1.0);
+        let mut lookups = 0;
+        let total = r.depth(0.0, 1.0, &mut lookups);
+        assert!(lookups <= 24, "{lookups}");
         let fine = midpoint(&r, 0.0, 1.0, 200000);
         assert!((total - fine).abs() < 1e-3 * fine, "{total} vs {fine}");
         assert!(total > 1e8);
         for target in [0.5, 3.0, 1e3, 1e8] {
-            let t = r.invert(0.0, 1.0, target).unwrap();
-            let got = r.depth(0.0, t);
+            let mut lookups = 0;
+            let t = r.invert(0.0, 1.0, target, &mut lookups).unwrap();
+            assert!(lookups <= 24 + 2 * 64, "{lookups}");
+            let got = r.depth(0.0, t, &mut 0);
             // At the found point, up to one f32 step of depth (the field there times an ulp).
             let slack = r.sigma(t as f64) * (t.abs() * f32::EPSILON * 4.0) as f64;
             assert!(
@@ -216,6 +226,6 @@ mod tests {
                 "{target}: {got} at {t}"
             );
         }
-        assert_eq!(r.invert(0.0, 1.0, 2.0 * total), Err(total));
+        assert_eq!(r.invert(0.0, 1.0, 2.0 * total, &mut 0), Err(total));
     }
 }

@@ -53,10 +53,10 @@ pub trait DenseSegments {
     /// [`TRACKING_CAP`], for a medium that knows its exact depth.
     fn takes(&mut self, seg: &MajorantSegment) -> bool;
     /// The optical depth of `[t0, t1]`.
-    fn depth(&self, t0: f32, t1: f32) -> f64;
+    fn depth(&mut self, t0: f32, t1: f32) -> f64;
     /// Where the optical depth from `t0` reaches `target` before `t1` (`Ok(t)`), else the
     /// depth of `[t0, t1]` (`Err`).
-    fn invert(&self, t0: f32, t1: f32, target: f64) -> Result<f32, f64>;
+    fn invert(&mut self, t0: f32, t1: f32, target: f64) -> Result<f32, f64>;
 }
 
 /// Tracks every segment (no exact depth): the trackers as they always were.
@@ -68,10 +68,10 @@ impl DenseSegments for TrackAll {
     fn takes(&mut self, _: &MajorantSegment) -> bool {
         false
     }
-    fn depth(&self, _: f32, _: f32) -> f64 {
+    fn depth(&mut self, _: f32, _: f32) -> f64 {
         0.0
     }
-    fn invert(&self, _: f32, _: f32, _: f64) -> Result<f32, f64> {
+    fn invert(&mut self, _: f32, _: f32, _: f64) -> Result<f32, f64> {
         Err(0.0)
     }
 }
@@ -82,11 +82,11 @@ impl<D: DenseSegments> DenseSegments for Option<D> {
     fn takes(&mut self, seg: &MajorantSegment) -> bool {
         self.as_mut().is_some_and(|d| d.takes(seg))
     }
-    fn depth(&self, t0: f32, t1: f32) -> f64 {
-        self.as_ref().map_or(0.0, |d| d.depth(t0, t1))
+    fn depth(&mut self, t0: f32, t1: f32) -> f64 {
+        self.as_mut().map_or(0.0, |d| d.depth(t0, t1))
     }
-    fn invert(&self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
-        self.as_ref().map_or(Err(0.0), |d| d.invert(t0, t1, target))
+    fn invert(&mut self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
+        self.as_mut().map_or(Err(0.0), |d| d.invert(t0, t1, target))
     }
 }
 
@@ -99,12 +99,18 @@ pub struct DenseGrid<'g> {
     pub ray: GridRay<'g>,
     /// Segments taken so far (the stats' `dense_segments`).
     pub taken: u32,
+    /// Grid lookups their exact depths took (the stats' `dense_lookups`).
+    pub lookups: u32,
 }
 
 impl<'g> DenseGrid<'g> {
     /// No segment taken yet.
     pub fn new(ray: GridRay<'g>) -> Self {
-        DenseGrid { ray, taken: 0 }
+        DenseGrid {
+            ray,
+            taken: 0,
+            lookups: 0,
+        }
     }
 }
 
@@ -115,18 +121,18 @@ impl DenseSegments for DenseGrid<'_> {
         self.taken += dense as u32;
         dense
     }
-    fn depth(&self, t0: f32, t1: f32) -> f64 {
-        self.ray.depth(t0, t1)
+    fn depth(&mut self, t0: f32, t1: f32) -> f64 {
+        self.ray.depth(t0, t1, &mut self.lookups)
     }
-    fn invert(&self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
-        self.ray.invert(t0, t1, target)
+    fn invert(&mut self, t0: f32, t1: f32, target: f64) -> Result<f32, f64> {
+        self.ray.invert(t0, t1, target, &mut self.lookups)
     }
 }
 
 /// A free flight across a dense segment (module docs): the real collision's distance, or
 /// `None` with the carried draw reduced by the segment's depth.
 pub(crate) fn dense_flight(
-    dense: &impl DenseSegments,
+    dense: &mut impl DenseSegments,
     seg: &MajorantSegment,
     depth: &mut DepthToNext,
     rand: &mut impl FnMut() -> f32,
@@ -255,7 +261,7 @@ mod tests {
         }
         assert!(taken > 0);
         ts.sort_by(f32::total_cmp);
-        let cdf = |t: f32| 1.0 - (-ray.depth(0.0, t.min(1.0))).exp();
+        let cdf = |t: f32| 1.0 - (-ray.depth(0.0, t.min(1.0), &mut 0)).exp();
         let ks = ts
             .iter()
             .enumerate()

@@ -315,7 +315,7 @@ impl HeterogeneousInterior<'_> {
         length: f32,
         tracking: Tracking,
         s: &mut PathSampler,
-    ) -> (RgbTransmittance, u32) {
+    ) -> (RgbTransmittance, (u32, u32)) {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
         let smax = m.majorant_scale();
@@ -366,7 +366,7 @@ impl HeterogeneousInterior<'_> {
             })
         };
         align(s, start);
-        (r, dense.map_or(0, |g| g.taken))
+        (r, dense.map_or((0, 0), |g| (g.taken, g.lookups)))
     }
 }
 
@@ -463,7 +463,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
-        let (mut nulls, mut violations, mut dense_taken) = (0u64, 0u64, 0u64);
+        let (mut nulls, mut violations) = (0u64, 0u64);
+        let (mut dense_taken, mut dense_lookups) = (0u64, 0u64);
         let tracking = services
             .ictx
             .technique(super::TRACKING.name)
@@ -570,7 +571,10 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     // dense segments are integrated exactly.
                     let mut dense = self.dense_grid(o, d);
                     let f = delta_tracking_dense(segs, sigma, &mut dense, || stream.next_1d());
-                    dense_taken += dense.map_or(0, |g| g.taken) as u64;
+                    if let Some(g) = dense {
+                        dense_taken += g.taken as u64;
+                        dense_lookups += g.lookups as u64;
+                    }
                     f
                 }
             };
@@ -596,7 +600,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         let ictx = &mut *services.ictx;
         ictx.count_majorant_violations(violations);
-        ictx.count_dense_segments(dense_taken);
+        ictx.count_dense_segments(dense_taken, dense_lookups);
         ictx.count_volume_pattern_evals(fields.evals());
         if emits {
             ictx.count_volume_events(VolumeEvent::Emission, n);
@@ -707,7 +711,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             );
             trans[i] = r.value;
             ictx.count_majorant_violations(r.violations as u64);
-            ictx.count_dense_segments(dense as u64);
+            ictx.count_dense_segments(dense.0 as u64, dense.1 as u64);
             ictx.count_shadow_collisions(r.nulls as u64);
         }
         self.ctx.count_pattern_evals(fields.evals());

@@ -306,6 +306,9 @@ pub struct SystemStats {
     /// cell of extreme bound, e.g. one voxel far denser than its neighbours), integrated
     /// exactly instead (unbiased, bounded work): 0 in ordinary media.
     pub dense_segments: u64,
+    /// The density lookups of `dense_segments`' exact integrals (two per voxel piece, and
+    /// two per bisection step locating a collision).
+    pub dense_lookups: u64,
     /// Tentative collisions (density lookups) of the transmittance estimators of shadow
     /// rays in heterogeneous media (the free flights' are the `null` volume events): with
     /// them, the tracking work of a render.
@@ -468,6 +471,7 @@ impl SystemStats {
         self.nan_dropped += other.nan_dropped;
         self.majorant_violations += other.majorant_violations;
         self.dense_segments += other.dense_segments;
+        self.dense_lookups += other.dense_lookups;
         self.shadow_collisions += other.shadow_collisions;
         for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
             *a += b;

@@ -147,6 +147,7 @@ impl Serialize for RenderStats {
         }
         if c.dense_segments > 0 {
             m.serialize_entry("dense_segments", &c.dense_segments)?;
+            m.serialize_entry("dense_lookups", &c.dense_lookups)?;
         }
         if c.pattern_cache_hits + c.pattern_evals > 0 {
             m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
