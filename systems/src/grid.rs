@@ -25,7 +25,9 @@
 use glam::Vec3;
 
 mod channels;
+mod exact_depth;
 pub use channels::DensityChannels;
+pub use exact_depth::GridRay;
 
 /// A value [`DensityGrid::new`] rejects.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -25,6 +25,9 @@ use crate::grid::MajorantSegment;
 use crate::medium::sample_optical_depth;
 use risotto_components::Rgb;
 
+pub mod dense;
+use dense::{dense_flight, DenseSegments, TrackAll};
+
 /// `x > 0` (false for NaN).
 #[inline]
 fn positive(x: f32) -> bool {
@@ -169,13 +172,33 @@ pub(crate) fn tentative<R: FnMut() -> f32>(
 /// `sigma_t(t) / majorant`.
 pub fn delta_tracking(
     segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma_t: impl FnMut(f32) -> f32,
+    rand: impl FnMut() -> f32,
+) -> FreeFlight {
+    delta_tracking_dense(segments, sigma_t, &mut TrackAll, rand)
+}
+
+/// [`delta_tracking`] that integrates the segments `dense` takes exactly instead of
+/// tracking them ([`dense`]: the same distance distribution, at a cost bounded by the
+/// segment's exact depth, not its `majorant x length`).
+pub fn delta_tracking_dense(
+    segments: impl IntoIterator<Item = MajorantSegment>,
     mut sigma_t: impl FnMut(f32) -> f32,
+    dense: &mut impl DenseSegments,
     mut rand: impl FnMut() -> f32,
 ) -> FreeFlight {
     let mut out = FreeFlight::default();
     let mut depth = DepthToNext::NONE;
     for seg in segments {
         out.t = seg.t1;
+        if dense.takes(&seg) {
+            if let Some(t) = dense_flight(dense, &seg, &mut depth, &mut rand) {
+                out.t = t;
+                out.collided = true;
+                return out;
+            }
+            continue;
+        }
         let mut nulls = 0;
         let hit = tentative(
             &seg,
@@ -218,7 +241,17 @@ pub fn delta_tracking_transmittance(
     sigma_t: impl FnMut(f32) -> f32,
     rand: impl FnMut() -> f32,
 ) -> Transmittance {
-    let f = delta_tracking(segments, sigma_t, rand);
+    delta_tracking_transmittance_dense(segments, sigma_t, &mut TrackAll, rand)
+}
+
+/// [`delta_tracking_transmittance`] over [`delta_tracking_dense`]'s flights.
+pub fn delta_tracking_transmittance_dense(
+    segments: impl IntoIterator<Item = MajorantSegment>,
+    sigma_t: impl FnMut(f32) -> f32,
+    dense: &mut impl DenseSegments,
+    rand: impl FnMut() -> f32,
+) -> Transmittance {
+    let f = delta_tracking_dense(segments, sigma_t, dense, rand);
     Transmittance {
         value: if f.collided { 0.0 } else { 1.0 },
         nulls: f.nulls + f.collided as u32,
@@ -237,7 +270,7 @@ pub fn ratio_tracking(
     sigma_t: impl FnMut(f32) -> f32,
     rand: impl FnMut() -> f32,
 ) -> Transmittance {
-    ratio_tracking_with_control(segments, sigma_t, rand, false)
+    ratio_tracking_dense(segments, sigma_t, &mut TrackAll, rand, false)
 }
 
 /// Residual ratio tracking (Novák et al. 2014, sec. 4): with each segment's `minorant` as
@@ -250,14 +283,18 @@ pub fn residual_ratio_tracking(
     sigma_t: impl FnMut(f32) -> f32,
     rand: impl FnMut() -> f32,
 ) -> Transmittance {
-    ratio_tracking_with_control(segments, sigma_t, rand, true)
+    ratio_tracking_dense(segments, sigma_t, &mut TrackAll, rand, true)
 }
 
 /// Ratio tracking of `sigma_t - control` against `majorant - control`, times
-/// `exp(-int control)`; the control is the segment's minorant, or 0 without `residual`.
-fn ratio_tracking_with_control(
+/// `exp(-int control)`; the control is the segment's minorant, or 0 without `residual`
+/// ([`ratio_tracking`], [`residual_ratio_tracking`]). The segments `dense` takes are not
+/// tracked: their factor is their exact `exp(-depth)`, then one roulette decision
+/// ([`dense`]).
+pub fn ratio_tracking_dense(
     segments: impl IntoIterator<Item = MajorantSegment>,
     mut sigma_t: impl FnMut(f32) -> f32,
+    dense: &mut impl DenseSegments,
     mut rand: impl FnMut() -> f32,
     residual: bool,
 ) -> Transmittance {
@@ -268,6 +305,15 @@ fn ratio_tracking_with_control(
     let mut control_depth = 0.0f32;
     let mut depth = DepthToNext::NONE;
     for seg in segments {
+        if dense.takes(&seg) {
+            out.value *= (-dense.depth(seg.t0, seg.t1)).exp() as f32;
+            let low = out.value < roulette_limit(control_depth);
+            out.value *= roulette(low, out.value == 0.0, &mut rand);
+            if out.value == 0.0 {
+                break;
+            }
+            continue;
+        }
         let control = control_extinction(&seg, residual);
         if control > 0.0 {
             control_depth += control * (seg.t1 - seg.t0);

@@ -44,6 +44,10 @@ pub struct RenderContext<'s> {
     emission_wanted: bool,
     /// Majorant violations a volume's `transmission` reported (it sees the context shared).
     violations: std::cell::Cell<u64>,
+    /// Dense majorant segments a volume integrated exactly, and their lookups.
+    dense_segments: std::cell::Cell<(u64, u64)>,
+    /// Tentative collisions of a volume's `transmission`.
+    shadow_collisions: std::cell::Cell<u64>,
 }
 
 impl<'s> RenderContext<'s> {
@@ -65,12 +69,25 @@ impl<'s> RenderContext<'s> {
             techniques: PluginTechniques::default(),
             emission_wanted: true,
             violations: std::cell::Cell::new(0),
+            dense_segments: std::cell::Cell::new((0, 0)),
+            shadow_collisions: std::cell::Cell::new(0),
         }
     }
 
     /// The violations [`Self::count_majorant_violations`] recorded so far, reset to 0.
     pub fn take_majorant_violations(&self) -> u64 {
         self.violations.replace(0)
+    }
+
+    /// The dense segments and their lookups [`Self::count_dense_segments`] recorded so far,
+    /// reset to 0.
+    pub fn take_dense_segments(&self) -> (u64, u64) {
+        self.dense_segments.replace((0, 0))
+    }
+
+    /// The collisions [`Self::count_shadow_collisions`] recorded so far, reset to 0.
+    pub fn take_shadow_collisions(&self) -> u64 {
+        self.shadow_collisions.replace(0)
     }
 
     /// The context with the render's choices for plug-in techniques, which plug-ins read
@@ -96,6 +113,15 @@ impl<'s> RenderContext<'s> {
 impl IntegratorContext for RenderContext<'_> {
     fn count_majorant_violations(&self, n: u64) {
         self.violations.set(self.violations.get() + n);
+    }
+
+    fn count_dense_segments(&self, segments: u64, lookups: u64) {
+        let (s, l) = self.dense_segments.get();
+        self.dense_segments.set((s + segments, l + lookups));
+    }
+
+    fn count_shadow_collisions(&self, n: u64) {
+        self.shadow_collisions.set(self.shadow_collisions.get() + n);
     }
 
     fn count_volume_events(&mut self, event: VolumeEvent, n: usize) {
@@ -334,11 +360,15 @@ impl IntegratorContext for RenderContext<'_> {
     }
 }
 
-/// The majorant violations counted through the shared context and not taken yet go to the
-/// worker's stats when the context ends.
+/// The majorant violations, dense segments and shadow collisions counted through the shared context and not
+/// taken yet go to the worker's stats when the context ends.
 impl Drop for RenderContext<'_> {
     fn drop(&mut self) {
         self.stats.majorant_violations += self.violations.replace(0);
+        let (segments, lookups) = self.dense_segments.replace((0, 0));
+        self.stats.dense_segments += segments;
+        self.stats.dense_lookups += lookups;
+        self.stats.shadow_collisions += self.shadow_collisions.replace(0);
     }
 }
 

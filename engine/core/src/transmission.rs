@@ -511,6 +511,10 @@ fn attenuate_in_volumes(
             .with_emission_wanted(gathers);
         integrator.transmission(segments, samplers, &ictx, trans, emission);
         stats.majorant_violations += ictx.take_majorant_violations();
+        let (segments, lookups) = ictx.take_dense_segments();
+        stats.dense_segments += segments;
+        stats.dense_lookups += lookups;
+        stats.shadow_collisions += ictx.take_shadow_collisions();
         if gathers {
             stats.volume_event(VolumeEvent::Emission, m);
         }

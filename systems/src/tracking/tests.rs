@@ -246,7 +246,7 @@ fn ratio_tracking_through_a_thick_medium_is_unbiased_and_stops_early() {
         let mut rng = SplitMix64(23 + residual as u64);
         let mut nulls = 0u64;
         let (mean, se) = mean_se(n, || {
-            let t = ratio_tracking_with_control(seg, sigma, || rng.f32(), residual);
+            let t = ratio_tracking_dense(seg, sigma, &mut dense::TrackAll, || rng.f32(), residual);
             nulls += t.nulls as u64;
             t.value
         });

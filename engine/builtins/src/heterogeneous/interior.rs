@@ -9,6 +9,7 @@ use glam::{Affine3A, Vec3};
 use risotto_components::{LobeSampled, Rays, Rgb, ShadingPointRow, ShadingPoints};
 use risotto_engine::plugin::*;
 use risotto_engine::stats::VolumeEvent;
+use risotto_systems::grid::GridRay;
 use risotto_systems::grid::{Dda, MajorantGrid, MajorantSegment};
 use risotto_systems::medium::channel_pdf;
 use risotto_systems::ray_marching::{
@@ -21,9 +22,10 @@ use risotto_systems::spectral_tracking::{
     spectral_tracking_channels, spectral_tracking_emitting, unbiased_ray_marching_rgb, PerChannel,
     RgbTransmittance,
 };
+use risotto_systems::tracking::dense::DenseGrid;
 use risotto_systems::tracking::{
-    delta_tracking, delta_tracking_emitting, delta_tracking_transmittance, ratio_tracking,
-    ratio_tracking_emitting, residual_ratio_tracking, FreeFlight, Transmittance,
+    delta_tracking_dense, delta_tracking_emitting, delta_tracking_transmittance_dense,
+    ratio_tracking_dense, ratio_tracking_emitting, FreeFlight, Transmittance,
 };
 use std::sync::Arc;
 
@@ -286,7 +288,25 @@ impl HeterogeneousInterior<'_> {
         })
     }
 
-    /// Transmittance of one world-space segment with `tracking`, per channel.
+    /// The exact optical depth along the grid-space ray `(o, d)` for the trackers' dense
+    /// segments ([`risotto_systems::tracking::dense`]): for a grey medium over a density
+    /// grid, whose field is trilinear; `None` (every segment tracked) for a pattern or a
+    /// per-channel density, and for a chromatic scale.
+    fn dense_grid(&self, o: Vec3, d: Vec3) -> Option<DenseGrid<'_>> {
+        let m = self.medium;
+        let grid = m.density_pattern.is_none() && m.density_channels.is_none();
+        (grid && !m.is_chromatic()).then(|| {
+            DenseGrid::new(GridRay {
+                grid: &m.density,
+                origin: o,
+                direction: d,
+                scale: m.majorant_scale(),
+            })
+        })
+    }
+
+    /// Transmittance of one world-space segment with `tracking`, per channel, and the
+    /// dense segments integrated exactly on the way.
     fn segment_transmittance(
         &self,
         fields: &Fields<'_>,
@@ -295,10 +315,11 @@ impl HeterogeneousInterior<'_> {
         length: f32,
         tracking: Tracking,
         s: &mut PathSampler,
-    ) -> RgbTransmittance {
+    ) -> (RgbTransmittance, (u32, u32)) {
         let m = self.medium;
         let (o, d) = self.to_grid(o, d);
         let smax = m.majorant_scale();
+        let mut dense = self.dense_grid(o, d);
         let segs = || {
             fields
                 .grids
@@ -331,9 +352,11 @@ impl HeterogeneousInterior<'_> {
             }
         } else {
             grey(match tracking {
-                Tracking::Ratio => ratio_tracking(segs(), sigma, rand),
-                Tracking::Residual => residual_ratio_tracking(segs(), sigma, rand),
-                Tracking::Delta => delta_tracking_transmittance(segs(), sigma, rand),
+                Tracking::Ratio => ratio_tracking_dense(segs(), sigma, &mut dense, rand, false),
+                Tracking::Residual => ratio_tracking_dense(segs(), sigma, &mut dense, rand, true),
+                Tracking::Delta => {
+                    delta_tracking_transmittance_dense(segs(), sigma, &mut dense, rand)
+                }
                 Tracking::RayMarching => {
                     ray_marching_transmittance(segs(), sigma, rand, self.march_step())
                 }
@@ -343,7 +366,7 @@ impl HeterogeneousInterior<'_> {
             })
         };
         align(s, start);
-        r
+        (r, dense.map_or((0, 0), |g| (g.taken, g.lookups)))
     }
 }
 
@@ -441,6 +464,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         let mut scattered = vec![false; n];
         let mut t = vec![0.0f32; n];
         let (mut nulls, mut violations) = (0u64, 0u64);
+        let (mut dense_taken, mut dense_lookups) = (0u64, 0u64);
         let tracking = services
             .ictx
             .technique(super::TRACKING.name)
@@ -543,7 +567,15 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 if tracking == Tracking::RayMarching {
                     ray_marching_free_flight(segs, sigma, || stream.next_1d(), step)
                 } else {
-                    delta_tracking(segs, sigma, || stream.next_1d())
+                    // Grey here (chromatic media took the branch above): a density grid's
+                    // dense segments are integrated exactly.
+                    let mut dense = self.dense_grid(o, d);
+                    let f = delta_tracking_dense(segs, sigma, &mut dense, || stream.next_1d());
+                    if let Some(g) = dense {
+                        dense_taken += g.taken as u64;
+                        dense_lookups += g.lookups as u64;
+                    }
+                    f
                 }
             };
             align(s, start);
@@ -568,6 +600,7 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         }
         let ictx = &mut *services.ictx;
         ictx.count_majorant_violations(violations);
+        ictx.count_dense_segments(dense_taken, dense_lookups);
         ictx.count_volume_pattern_evals(fields.evals());
         if emits {
             ictx.count_volume_events(VolumeEvent::Emission, n);
@@ -661,13 +694,14 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                 );
                 trans[i] = r.value;
                 ictx.count_majorant_violations(r.violations as u64);
+                ictx.count_shadow_collisions(r.nulls as u64);
                 emission[i] = e;
             }
             self.ctx.count_pattern_evals(fields.evals());
             return;
         }
         for i in 0..segments.len() {
-            let r = self.segment_transmittance(
+            let (r, dense) = self.segment_transmittance(
                 &fields,
                 segments.origin[i],
                 segments.direction[i],
@@ -677,6 +711,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
             );
             trans[i] = r.value;
             ictx.count_majorant_violations(r.violations as u64);
+            ictx.count_dense_segments(dense.0 as u64, dense.1 as u64);
+            ictx.count_shadow_collisions(r.nulls as u64);
         }
         self.ctx.count_pattern_evals(fields.evals());
         emission.fill(Rgb::BLACK);

@@ -19,6 +19,18 @@ pub trait IntegratorContext {
     /// which sees the context shared. They reach the render's stats when the context ends.
     fn count_majorant_violations(&self, n: u64);
 
+    /// Records `segments` majorant segments too dense to track that a volume integrated
+    /// exactly instead, with `lookups` density lookups
+    /// ([`SystemStats::dense_segments`](crate::stats::SystemStats::dense_segments),
+    /// `risotto_systems::tracking::dense`); callable from a volume's `transmission`, as
+    /// [`Self::count_majorant_violations`].
+    fn count_dense_segments(&self, segments: u64, lookups: u64);
+
+    /// Records `n` tentative collisions (lookups) a volume's `transmission` took to estimate
+    /// shadow rays' transmittance
+    /// ([`SystemStats::shadow_collisions`](crate::stats::SystemStats::shadow_collisions)).
+    fn count_shadow_collisions(&self, n: u64);
+
     /// Counts `n` volume events of kind `event` (the stats' `volume_events`).
     fn count_volume_events(&mut self, event: VolumeEvent, n: usize);
 

@@ -301,6 +301,18 @@ pub struct SystemStats {
     /// bounds are right. The estimators stay finite but lose their guarantees: reported,
     /// never clamped silently.
     pub majorant_violations: u64,
+    /// Majorant segments on which null-collision tracking would have taken more than
+    /// `risotto_systems::tracking::dense::TRACKING_CAP` tentative collisions (a majorant
+    /// cell of extreme bound, e.g. one voxel far denser than its neighbours), integrated
+    /// exactly instead (unbiased, bounded work): 0 in ordinary media.
+    pub dense_segments: u64,
+    /// The density lookups of `dense_segments`' exact integrals (two per voxel piece, and
+    /// two per bisection step locating a collision).
+    pub dense_lookups: u64,
+    /// Tentative collisions (density lookups) of the transmittance estimators of shadow
+    /// rays in heterogeneous media (the free flights' are the `null` volume events): with
+    /// them, the tracking work of a render.
+    pub shadow_collisions: u64,
     /// Path-ray hits on surfaces with opacity whose opacity was tested (stochastic
     /// pass-through, [`InstanceHints::OPACITY`](crate::plugin::InstanceHints::OPACITY)): 0
     /// in a scene without opacity, where no opacity stage runs.
@@ -458,6 +470,9 @@ impl SystemStats {
         }
         self.nan_dropped += other.nan_dropped;
         self.majorant_violations += other.majorant_violations;
+        self.dense_segments += other.dense_segments;
+        self.dense_lookups += other.dense_lookups;
+        self.shadow_collisions += other.shadow_collisions;
         for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
             *a += b;
         }

@@ -142,6 +142,13 @@ impl Serialize for RenderStats {
         if heterogeneous || c.majorant_violations > 0 {
             m.serialize_entry("majorant_violations", &c.majorant_violations)?;
         }
+        if heterogeneous {
+            m.serialize_entry("shadow_collisions", &c.shadow_collisions)?;
+        }
+        if c.dense_segments > 0 {
+            m.serialize_entry("dense_segments", &c.dense_segments)?;
+            m.serialize_entry("dense_lookups", &c.dense_lookups)?;
+        }
         if c.pattern_cache_hits + c.pattern_evals > 0 {
             m.serialize_entry("pattern_cache_hits", &c.pattern_cache_hits)?;
             m.serialize_entry("pattern_cache_shared", &c.pattern_cache_shared)?;
@@ -280,6 +287,17 @@ impl fmt::Display for RenderStats {
                 "\nwarning: {} sampled extinctions above their majorant (a wrong bound: the \
                  heterogeneous estimators are not unbiased there)",
                 c.majorant_violations
+            )?;
+        }
+        if c.dense_segments > 0 {
+            write!(
+                f,
+                "\nwarning: {} majorant segments were too dense to track (more than {} \
+                 expected collisions each: a majorant cell of extreme bound, e.g. one voxel far \
+                 denser than its neighbours) and were integrated exactly along the voxel grid \
+                 instead (unbiased, bounded work; see docs/scene-format.md, `majorant_grid`)",
+                c.dense_segments,
+                risotto_systems::tracking::dense::TRACKING_CAP
             )?;
         }
         let frozen = c.volume_events[VolumeEvent::Frozen as usize];
