@@ -4,7 +4,7 @@
 use glam::{Vec3, Vec3A};
 use obvhs::{aabb::Aabb, bvh2::Bvh2, BvhBuildParams};
 
-use super::{build_bvh2, ploc, radix_sort, stalled_runs, STALL_RUN};
+use super::{build_bvh2, ploc, sort_by_code, stalled_runs, STALL_RUN};
 use crate::bvh2_build::ReinsertionOptimizer;
 use crate::bvh8::bvh2_depth;
 
@@ -49,7 +49,11 @@ fn fan(n: usize) -> Vec<[Vec3; 3]> {
 /// its depth.
 fn check_tree(bvh2: &Bvh2, aabbs: &[Aabb]) -> usize {
     let n = aabbs.len();
-    assert_eq!(bvh2.nodes.len(), 2 * n - 1, "a binary tree of one-primitive leaves");
+    assert_eq!(
+        bvh2.nodes.len(),
+        2 * n - 1,
+        "a binary tree of one-primitive leaves"
+    );
     let mut seen = vec![false; n];
     let mut stack = vec![0usize];
     while let Some(i) = stack.pop() {
@@ -114,7 +118,11 @@ fn degenerate_triangles_on_one_line_build_a_tree_of_logarithmic_depth() {
     let tris: Vec<_> = (0..n)
         .map(|k| {
             let x = k as f32;
-            [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 0.5, 0.0, 0.0), Vec3::new(x + 1.0, 0.0, 0.0)]
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 0.5, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.0, 0.0),
+            ]
         })
         .collect();
     let aabbs = boxes(&tris);
@@ -169,7 +177,10 @@ fn meshes_take_plocs_path_unchanged() {
         assert_eq!(ours.primitive_indices, plain.primitive_indices);
         assert_eq!(ours.nodes.len(), plain.nodes.len());
         for (a, b) in ours.nodes.iter().zip(&plain.nodes) {
-            assert_eq!((a.aabb, a.prim_count, a.first_index), (b.aabb, b.prim_count, b.first_index));
+            assert_eq!(
+                (a.aabb, a.prim_count, a.first_index),
+                (b.aabb, b.prim_count, b.first_index)
+            );
         }
     }
 }
@@ -185,23 +196,20 @@ fn short_stalls_are_left_to_ploc() {
 }
 
 #[test]
-fn radix_sort_orders_pairs_by_key() {
+fn sort_by_code_orders_codes_and_keeps_equal_codes_in_order() {
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut pairs: Vec<(u64, u32)> = (0..5000)
+    let mut keys: Vec<u64> = (0..5000u64)
         .map(|i| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            // Repeated keys (low bits dropped) and keys differing in every byte.
-            (state >> (i % 3 * 20), i)
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            // Codes of 30 bits, some repeated (low digits dropped every third key).
+            let code = (state >> 34) & !(if i % 3 == 0 { 0xfffff } else { 0 });
+            (code << 32) | i
         })
         .collect();
-    let mut expected = pairs.clone();
-    expected.sort_by_key(|p| p.0);
-    radix_sort(&mut pairs);
-    assert_eq!(
-        pairs.iter().map(|p| p.0).collect::<Vec<_>>(),
-        expected.iter().map(|p| p.0).collect::<Vec<_>>()
-    );
-    let mut indices: Vec<u32> = pairs.iter().map(|p| p.1).collect();
-    indices.sort_unstable();
-    assert_eq!(indices, (0..5000).collect::<Vec<u32>>());
+    let mut expected = keys.clone();
+    expected.sort_unstable(); // by code, then position: what a stable sort by code gives
+    sort_by_code(&mut keys);
+    assert_eq!(keys, expected);
 }
