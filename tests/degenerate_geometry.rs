@@ -47,7 +47,9 @@ irradiance = 3
 
 /// A `[[shapes]]` table of the mesh `path`.
 fn mesh_shape(name: &str, path: &str) -> String {
-    format!("[[shapes]]\nname = \"{name}\"\ntype = \"mesh\"\npath = \"{path}\"\nmaterial = \"grey\"\n")
+    format!(
+        "[[shapes]]\nname = \"{name}\"\ntype = \"mesh\"\npath = \"{path}\"\nmaterial = \"grey\"\n"
+    )
 }
 
 /// The number of pixels whose colour differs between `a` and `b`, and the largest relative
@@ -82,8 +84,15 @@ fn one_triangle_listed_100000_times_renders_as_one_triangle() {
     let once = common::render_scene_text(&dir, &scene(&mesh_shape("t", "once.obj")));
     let repeated = common::render_scene_text(&dir, &scene(&mesh_shape("t", "repeated.obj")));
     let (pixels, rel) = difference(&once, &repeated);
-    assert!(common::image_mean(&once).0.max_channel() > 0.05, "the triangle is lit");
-    assert_eq!((pixels, rel), (0, 0.0), "copies of one triangle are that triangle");
+    assert!(
+        common::image_mean(&once).0.max_channel() > 0.05,
+        "the triangle is lit"
+    );
+    assert_eq!(
+        (pixels, rel),
+        (0, 0.0),
+        "copies of one triangle are that triangle"
+    );
 }
 
 #[test]
@@ -102,7 +111,10 @@ fn a_mesh_listed_10000_times_renders_as_the_mesh() {
     }
     let repeated = common::render_scene_text(&dir, &scene(&shapes));
     let (pixels, rel) = difference(&once, &repeated);
-    assert!(common::image_mean(&once).0.max_channel() > 0.05, "the mesh is lit");
+    assert!(
+        common::image_mean(&once).0.max_channel() > 0.05,
+        "the mesh is lit"
+    );
     assert_eq!((pixels, rel), (0, 0.0), "copies of one mesh are that mesh");
 }
 
@@ -129,10 +141,16 @@ fn a_polygon_of_200000_vertices_renders_as_a_disc() {
     let fine = common::render_scene_text(&dir, &scene(&mesh_shape("disc", "fine.obj")));
     let coarse = common::render_scene_text(&dir, &scene(&mesh_shape("disc", "coarse.obj")));
     let (pixels, rel) = difference(&fine, &coarse);
-    assert!(common::image_mean(&fine).0.max_channel() > 0.05, "the disc is lit");
+    assert!(
+        common::image_mean(&fine).0.max_channel() > 0.05,
+        "the disc is lit"
+    );
     // The two discs differ by at most 1.2e-6 in radius (1 - cos(pi / 2000)): a camera sample
     // lands between them with probability ~1e-5 a pixel. Hits on slivers differ from hits on
     // wider triangles by rounding, which may carry into a bounce: a few pixels, and means
     // equal within a hundredth.
-    assert!(pixels <= 16 && rel < 0.01, "{pixels} pixels differ, means by {rel}");
+    assert!(
+        pixels <= 16 && rel < 0.01,
+        "{pixels} pixels differ, means by {rel}"
+    );
 }
