@@ -2,6 +2,10 @@
 //! same BVH with the same triangle test, on a ~100k-triangle displaced sphere.
 //!
 //! Run: `cargo bench --bench intersect -- --warm-up-time 1 --measurement-time 3`
+//!
+//! The `bvh_build` group times the BVH build (`SceneGeometry::build`) on a ~200k-triangle
+//! displaced sphere against input that made obvhs' PLOC quadratic (issue 37): one triangle
+//! 100,000 times, and the 200,000-sliver fan of one polygon.
 #![allow(
     missing_docs,
     reason = "criterion_group! generates an undocumented function"
@@ -393,5 +397,34 @@ fn bench_sphere(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_intersect, bench_sphere);
+/// The one-polygon fan an OBJ loader makes of `n` vertices on the unit circle.
+fn polygon_fan(n: usize) -> Vec<[Vec3; 3]> {
+    let v = |k: usize| {
+        let a = 2.0 * PI * k as f32 / n as f32;
+        Vec3::new(a.cos(), a.sin(), 0.0)
+    };
+    (1..n - 1).map(|k| [v(0), v(k), v(k + 1)]).collect()
+}
+
+fn bench_build(c: &mut Criterion) {
+    let mut group = c.benchmark_group("bvh_build");
+    group.sample_size(10);
+    let cases = [
+        ("mesh_200k", displaced_sphere(450, 225)),
+        (
+            "coincident_100k",
+            vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 100_000],
+        ),
+        ("fan_200k", polygon_fan(200_000)),
+    ];
+    for (name, tris) in cases {
+        group.throughput(Throughput::Elements(tris.len() as u64));
+        group.bench_function(name, |b| {
+            b.iter(|| SceneGeometry::build(black_box(tris.clone()), Vec::new()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_intersect, bench_sphere, bench_build);
 criterion_main!(benches);

@@ -14,13 +14,12 @@ use std::f32::consts::PI;
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
-    bvh2::reinsertion::ReinsertionOptimizer,
     cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh},
-    ploc::PlocBuilder,
     BvhBuildParams,
 };
 
-use crate::bvh8::{bvh2_depth, median_bvh2, Bvh8, InstanceLeaf, MAX_BVH2_DEPTH};
+use crate::bvh2_build::build_bvh2;
+use crate::bvh8::{bvh2_depth, Bvh8, InstanceLeaf};
 use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
@@ -188,25 +187,8 @@ impl SceneGeometry {
 
             // Same pipeline as obvhs' `build_cwbvh_from_tris` (PLOC, reinsertion, collapse
             // to 8-wide nodes with up to 3 primitives per leaf), but over our own boxes so
-            // spheres can share the tree.
-            let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-                params.ploc_search_distance,
-                &aabbs,
-                indices,
-                params.sort_precision,
-                params.search_depth_threshold,
-            );
-            if bvh2_depth(&bvh2) <= MAX_BVH2_DEPTH {
-                ReinsertionOptimizer::default().run(
-                    &mut bvh2,
-                    params.reinsertion_batch_ratio,
-                    None,
-                );
-            }
-            // PLOC chains equal boxes (see `MAX_BVH2_DEPTH`); a median split bounds the depth.
-            if bvh2_depth(&bvh2) > MAX_BVH2_DEPTH {
-                bvh2 = median_bvh2(&aabbs, &(0..aabbs.len() as u32).collect::<Vec<_>>());
-            }
+            // spheres can share the tree, and with the runs PLOC stalls on built apart.
+            let bvh2 = build_bvh2(&aabbs, indices, &params);
             // obvhs' collapse prices nodes by f32 half areas summed over the tree: infinite
             // costs leave its slot assignment undefined (out-of-bounds panics). It is only
             // kept for benchmarks and diagnostics, so scenes that would overflow go without.

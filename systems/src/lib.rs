@@ -4,6 +4,7 @@
 
 pub mod adaptive;
 pub mod bssrdf;
+mod bvh2_build;
 mod bvh8;
 pub mod bxdf;
 pub mod bxdf_samples;
