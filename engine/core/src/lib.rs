@@ -11,6 +11,7 @@
 pub mod bidir;
 pub mod context;
 pub mod diagnostics;
+pub mod expected_panic;
 pub mod features;
 pub mod global_integrator;
 pub mod integrator;
