@@ -26,6 +26,7 @@ pub mod replay;
 pub mod scene;
 pub mod scratch_dir;
 pub mod shade_groups;
+pub mod side_files;
 pub mod stats;
 pub mod technique;
 pub mod transmission;
