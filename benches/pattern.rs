@@ -8,6 +8,7 @@ use risotto::components::{Rgb, Vec3};
 use risotto::systems::grid::DensityGrid;
 use risotto::systems::pattern::{bounds, eval_with, Axis, Fbm, Node, PatternGraph, Space, Texture};
 use risotto::systems::sampler::SplitMix64;
+use std::sync::Arc;
 
 const N: usize = 4096;
 
@@ -24,11 +25,11 @@ fn graphs() -> Vec<(&'static str, PatternGraph)> {
         ("constant", g(vec![Node::Constant(Rgb::splat(0.5))])),
         ("noise_1_octave", g(vec![noise(1)])),
         ("fbm_5_octaves", g(vec![noise(5)])),
-        ("image_bilinear", g(vec![Node::Image(texture)])),
+        ("image_bilinear", g(vec![Node::Image(Arc::new(texture))])),
         (
             "grid_trilinear",
             g(vec![Node::Grid {
-                grid,
+                grid: Arc::new(grid),
                 min: Vec3::splat(-2.0),
                 max: Vec3::splat(2.0),
             }]),

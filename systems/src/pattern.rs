@@ -43,6 +43,7 @@ pub use texture::Texture;
 use crate::grid::DensityGrid;
 use glam::Vec3;
 use risotto_components::Rgb;
+use std::sync::Arc;
 
 /// A graph or node that cannot be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -115,13 +116,13 @@ pub enum Node {
         /// Colour at `to` and after.
         b: Rgb,
     },
-    /// A texture by `(u, v)` ([`Texture::lookup`]).
-    Image(Texture),
+    /// A texture by `(u, v)` ([`Texture::lookup`]), shared with every graph naming its file.
+    Image(Arc<Texture>),
     /// A density grid placed in the box `[min, max]` of `P` (its unit cube mapped onto the
     /// box; outside, the grid's clamp convention extends the faces), grey.
     Grid {
-        /// The grid.
-        grid: DensityGrid,
+        /// The grid (shared with every graph and medium naming its file).
+        grid: Arc<DensityGrid>,
         /// The box's low corner.
         min: Vec3,
         /// The box's high corner (> `min` on every axis).

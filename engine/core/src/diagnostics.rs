@@ -122,6 +122,9 @@ pub struct Source {
     pub text: String,
     /// Every file path resolved from the text (and noted by factories).
     pub files: ReferencedFiles,
+    /// The side files decoded so far, shared by every entity that names them
+    /// ([`crate::side_files`]).
+    pub side_files: crate::side_files::SideFiles,
     /// What reading the scene and its files found that a user should know without it being
     /// an error (an OBJ's points and lines skipped); every render's stats repeat them.
     pub warnings: SceneWarnings,
@@ -178,6 +181,7 @@ impl Source {
             dir,
             text: text.to_owned(),
             files: ReferencedFiles::default(),
+            side_files: Default::default(),
             warnings: SceneWarnings::default(),
             overrides_at: None,
             origins: None,

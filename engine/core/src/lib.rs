@@ -11,6 +11,7 @@
 pub mod bidir;
 pub mod context;
 pub mod diagnostics;
+pub mod expected_panic;
 pub mod features;
 pub mod global_integrator;
 pub mod integrator;
@@ -25,6 +26,7 @@ pub mod replay;
 pub mod scene;
 pub mod scratch_dir;
 pub mod shade_groups;
+pub mod side_files;
 pub mod stats;
 pub mod technique;
 pub mod transmission;

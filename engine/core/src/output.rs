@@ -382,13 +382,26 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// tiles and multi-part files).
 const MIN_BYTES_PER_CHUNK: u64 = 16;
 
+/// Opens `path` for reading if it is a regular file (after symbolic links): opening a FIFO
+/// blocks until a writer comes, and a device such as `/dev/zero` reads forever.
+fn open_regular(path: &Path) -> Result<File, OutputError> {
+    let io = |cause| OutputError::Io {
+        path: path.to_path_buf(),
+        cause,
+    };
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(invalid(
+            path,
+            "not a regular file (a directory, device, FIFO or socket)".to_string(),
+        ));
+    }
+    File::open(path).map_err(io)
+}
+
 /// The names of the parts (layers) of the EXR at `path`, from its headers alone: no pixel is
 /// read, so a caller can refuse a file without the part it needs before decoding it.
 pub fn exr_part_names(path: &Path) -> Result<Vec<String>, OutputError> {
-    let file = File::open(path).map_err(|cause| OutputError::Io {
-        path: path.to_path_buf(),
-        cause,
-    })?;
+    let file = open_regular(path)?;
     let meta = exr::meta::MetaData::read_from_unbuffered(file, false)
         .map_err(|source| exr_error(path, source))?;
     Ok(meta
@@ -406,10 +419,7 @@ pub fn exr_part_names(path: &Path) -> Result<Vec<String>, OutputError> {
 /// Reads only the headers of `path` and checks the claimed sizes (see [`read_exr_rgb`] and
 /// [`read_exr_all_within`]).
 fn check_exr_header(path: &Path, max_pixels: u64) -> Result<(), OutputError> {
-    let file = File::open(path).map_err(|cause| OutputError::Io {
-        path: path.to_path_buf(),
-        cause,
-    })?;
+    let file = open_regular(path)?;
     let file_len = file
         .metadata()
         .map_err(|cause| OutputError::Io {

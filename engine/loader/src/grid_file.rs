@@ -33,6 +33,9 @@ pub mod vdb;
 /// Largest grid accepted (voxels): 2^28, i.e. 1 GiB of float32 (e.g. 640^3).
 pub const MAX_VOXELS: usize = 1 << 28;
 
+/// The largest JSON header of a raw grid read (1 MiB; a real one is a line).
+const MAX_HEADER_BYTES: u64 = 1 << 20;
+
 /// Bytes before the data of a `.vol` file.
 const VOL_HEADER: u64 = 48;
 
@@ -282,6 +285,18 @@ pub fn read_raw(path: &Path, header: &Path) -> Result<DensityGrid, GridFileError
 
 /// Reads a raw float32 grid of 1 or 3 channels with its JSON header (see the module docs).
 pub fn read_raw_channels(path: &Path, header: &Path) -> Result<GridChannels, GridFileError> {
+    // The header is named by no key when it sits beside the data, so the scene's check of
+    // named files has not seen it: a FIFO would block, a device read forever.
+    crate::side_file::check(header).map_err(|m| format(header, m))?;
+    let size = std::fs::metadata(header).map_err(io(header))?.len();
+    if size > MAX_HEADER_BYTES {
+        return Err(format(
+            header,
+            format!(
+                "a {size}-byte header; a raw grid's JSON header has at most {MAX_HEADER_BYTES}"
+            ),
+        ));
+    }
     let text = std::fs::read_to_string(header).map_err(io(header))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format(header, format!("not JSON: {e}")))?;
@@ -421,6 +436,37 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(a.dims(), [2, 3, 4]);
         assert_eq!(a.voxel(1, 2, 3), 23.0 * 0.25);
+    }
+
+    /// The header beside a raw grid is named by no scene key: a FIFO there (found by the
+    /// file fuzzer, `tests/fuzz_files.rs`) blocked the load forever; a directory or an
+    /// oversized header is refused as well, each naming the header.
+    #[cfg(unix)]
+    #[test]
+    fn a_raw_header_that_is_not_a_small_regular_file_is_refused() {
+        let d = dir("raw-header");
+        std::fs::write(d.join("g.raw"), floats(&[1.0; 24])).unwrap();
+        let made = std::process::Command::new("mkfifo")
+            .arg(d.join("g.json"))
+            .status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = read_grid(&d.join("g.raw"), None).unwrap_err().to_string();
+            assert!(
+                e.contains("g.json") && e.contains("not a regular file"),
+                "{e}"
+            );
+        }
+        std::fs::create_dir(d.join("h.json")).unwrap();
+        let e = read_grid(&d.join("g.raw"), Some(&d.join("h.json")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("h.json") && e.contains("a directory"), "{e}");
+        let big = format!("{{\"dims\": [2, 3, 4]}}{}", " ".repeat(1 << 20));
+        std::fs::write(d.join("big.json"), big).unwrap();
+        let e = read_grid(&d.join("g.raw"), Some(&d.join("big.json")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("big.json") && e.contains("at most"), "{e}");
     }
 
     #[test]

@@ -9,17 +9,17 @@ fn fbm(frequency: f32, octaves: u32) -> Fbm {
     Fbm::new(frequency, octaves, 2.0, 0.5, 7).unwrap()
 }
 
-fn texture() -> Texture {
+fn texture() -> Arc<Texture> {
     // 4 x 2 texels with distinct channels.
     let texels = (0..8)
         .map(|i| Rgb::new(i as f32 / 8.0, 1.0 - i as f32 / 8.0, (i % 3) as f32))
         .collect();
-    Texture::new(4, 2, texels).unwrap()
+    Arc::new(Texture::new(4, 2, texels).unwrap())
 }
 
-fn density_grid() -> DensityGrid {
+fn density_grid() -> Arc<DensityGrid> {
     let data = (0..4 * 3 * 2).map(|i| ((i * 7) % 11) as f32).collect();
-    DensityGrid::new([4, 3, 2], data).unwrap()
+    Arc::new(DensityGrid::new([4, 3, 2], data).unwrap())
 }
 
 fn one(g: &PatternGraph, p: Vec3, u: f32, v: f32) -> Rgb {
@@ -329,7 +329,7 @@ fn image_texel_centres_read_back_the_texels() {
 fn grid_nodes_place_the_grid_in_their_box() {
     let grid = DensityGrid::new([2, 1, 1], vec![0.0, 1.0]).unwrap();
     let g = graph(vec![Node::Grid {
-        grid,
+        grid: Arc::new(grid),
         min: Vec3::new(10.0, 0.0, 0.0),
         max: Vec3::new(12.0, 1.0, 1.0),
     }]);

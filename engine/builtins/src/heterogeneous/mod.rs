@@ -292,21 +292,23 @@ pub enum HeterogeneousEmission {
 pub use crate::media::emission::{emission_floor, EMISSION_COLLISIONS_PER_CELL};
 
 impl HeterogeneousMedium {
-    /// A medium over `density` with a majorant grid of `majorant_cells` per axis (clamped to
+    /// A medium over `density` (moved in, or an `Arc` shared with other media naming the
+    /// same file) with a majorant grid of `majorant_cells` per axis (clamped to
     /// `[1, voxels]` per axis) and a grey `scale` ([`HeterogeneousMedium::with_scale`] makes
     /// it chromatic).
     pub fn new(
-        density: DensityGrid,
+        density: impl Into<Arc<DensityGrid>>,
         majorant_cells: usize,
         scale: f32,
         albedo: Rgb,
         phase: PhaseFunction,
         tracking: Tracking,
     ) -> Self {
+        let density = density.into();
         let res = density.dims().map(|n| majorant_cells.clamp(1, n));
         let majorants = MajorantGrid::new(&density, res);
         HeterogeneousMedium {
-            density: Arc::new(density),
+            density,
             majorants: Arc::new(majorants),
             scale: Rgb::splat(scale),
             albedo,
@@ -440,11 +442,12 @@ impl HeterogeneousMedium {
 
     /// The medium emitting `j(p) = scale * grid(p)`, `grid` placed like the density (a
     /// black `scale` or an all-zero grid: no emission).
-    pub fn with_emission_grid(mut self, grid: DensityGrid, scale: Rgb) -> Self {
+    pub fn with_emission_grid(mut self, grid: impl Into<Arc<DensityGrid>>, scale: Rgb) -> Self {
+        let grid = grid.into();
         self.emission = (!scale.is_black() && grid.max() > 0.0).then(|| {
             let majorants = MajorantGrid::new(&grid, self.majorant_res());
             HeterogeneousEmission::Grid {
-                grid: Arc::new(grid),
+                grid,
                 scale,
                 majorants: Arc::new(majorants),
             }

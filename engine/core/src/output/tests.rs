@@ -368,3 +368,27 @@ fn reader_bounds_are_checked_from_the_header() {
         "{e}"
     );
 }
+
+/// A FIFO or a directory given as an EXR (a texture, an environment map, a part to merge)
+/// is refused before it is opened: opening a FIFO would block until a writer came.
+#[cfg(unix)]
+#[test]
+fn special_files_are_refused_before_opening() {
+    let dir = crate::scratch_dir::ScratchDir::new("exr-special");
+    let fifo = dir.join("pipe.exr");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let e = exr_part_names(&fifo).unwrap_err().to_string();
+        assert!(
+            e.contains("pipe.exr") && e.contains("not a regular file"),
+            "{e}"
+        );
+        let e = read_exr_rgb(&fifo).unwrap_err().to_string();
+        assert!(
+            e.contains("pipe.exr") && e.contains("not a regular file"),
+            "{e}"
+        );
+    }
+    let e = read_exr_rgb(&dir.join(".")).unwrap_err().to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+}

@@ -18,39 +18,37 @@
 //! The grid must be a float grid (`Tree_float_5_4_3`, half-float storage included), with
 //! finite, non-negative active values and a dense size of at most
 //! [`crate::grid_file::MAX_VOXELS`]. The background value is taken as 0 (the crate does not
-//! expose it); root-level tiles are not read. The crate itself panics on some malformed
-//! files: the panic is caught and reported as a format error naming the file.
+//! expose it); root-level tiles are not read. The file version must be 218 or later (OpenVDB
+//! 3 on). Before the crate sees the file, [`structure`] checks every size and count it
+//! declares against its length (the crate would allocate what a corrupt header asks for,
+//! and an allocation failure aborts). The crate still panics on some malformed files: the
+//! panic is caught without being printed ([`risotto_engine::expected_panic`]) and reported
+//! as a format error naming the file.
 
 use crate::grid_file::{format, GridFileError, MAX_VOXELS};
 use risotto_systems::grid::DensityGrid;
 use std::fs::File;
 use std::io::BufReader;
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+
+mod structure;
 
 /// The grid read when the scene names none and the file has several.
 pub const DEFAULT_GRID: &str = "density";
 
-/// Runs the crate's `f`, turning its errors and panics into format errors.
+/// Runs the crate's `f`, turning its errors and (silenced) panics into format errors.
 fn guarded<T, E: std::fmt::Display>(
     path: &Path,
     what: &str,
     f: impl FnOnce() -> Result<T, E>,
 ) -> Result<T, GridFileError> {
-    match catch_unwind(AssertUnwindSafe(f)) {
+    match risotto_engine::expected_panic::catch(f) {
         Ok(Ok(v)) => Ok(v),
         Ok(Err(e)) => Err(format(path, format!("{what}: {e}"))),
-        Err(panic) => {
-            let msg = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unreadable data");
-            Err(format(
-                path,
-                format!("{what}: not a readable OpenVDB file ({msg})"),
-            ))
-        }
+        Err(msg) => Err(format(
+            path,
+            format!("{what}: not a readable OpenVDB file ({msg})"),
+        )),
     }
 }
 
@@ -68,6 +66,7 @@ pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFile
         path: PathBuf::from(path),
         cause,
     })?;
+    let archive = structure::check_archive(path).map_err(|e| format(path, e))?;
     let mut reader = guarded(path, "header", || {
         vdb_rs::VdbReader::new(BufReader::new(file))
     })?;
@@ -110,6 +109,8 @@ pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFile
             format!("grid \"{chosen}\" is a {grid_type} grid, not a float grid"),
         ));
     }
+    structure::check_float_grid(path, &archive, &chosen)
+        .map_err(|e| format(path, format!("grid \"{chosen}\": {e}")))?;
     let grid = guarded(path, &format!("grid \"{chosen}\""), || {
         reader.read_grid::<f32>(&chosen)
     })?;
@@ -235,6 +236,66 @@ mod tests {
         let t = read_vdb(&data("small.vdb"), Some("temperature")).unwrap();
         assert_eq!(t.dims(), [3, 3, 3]);
         assert_eq!(t.max(), 2.0);
+    }
+
+    /// Every 100th byte of `small.vdb` flipped (all bits, then the top bit), and lengths
+    /// past the end written where the crate trusts them: each an error naming the file or
+    /// the original grid, never an abort (which would end this test) nor a crate panic
+    /// (which the structure check should have turned into a located error first).
+    #[test]
+    fn flipped_bytes_and_lying_sizes_are_errors_not_aborts() {
+        let small = data("small.vdb");
+        let bytes = std::fs::read(&small).unwrap();
+        let dir = risotto_engine::scratch_dir::ScratchDir::new("vdb-flips");
+        let p = dir.join("flipped.vdb");
+        let (mut errors, mut panics) = (0, 0);
+        for at in (0..bytes.len()).step_by(100) {
+            for flip in [0xff, 0x80] {
+                let mut b = bytes.clone();
+                b[at] ^= flip;
+                std::fs::write(&p, &b).unwrap();
+                match read_vdb(&p, None) {
+                    // A flipped mask bit or value is another well-formed grid.
+                    Ok(g) => assert!(g.max().is_finite(), "byte {at} ^ {flip:#x}"),
+                    Err(e) => {
+                        let e = e.to_string();
+                        assert!(e.contains("flipped.vdb"), "{e}");
+                        errors += 1;
+                        panics += e.contains("not a readable OpenVDB file") as usize;
+                    }
+                }
+            }
+        }
+        assert!(errors > 100, "{errors}");
+        // The structure check catches what the crate would panic on, nearly always.
+        eprintln!("{errors} errors, {panics} crate panics");
+        assert!(
+            panics * 20 < errors,
+            "{panics} crate panics of {errors} errors"
+        );
+        // A compressed size of 2^62 bytes in the first node buffer (the 3.6 PB allocation of
+        // issue 37): the 8 bytes after the first root child's masks and metadata byte.
+        let mut b = bytes.clone();
+        let at = find_first_blosc_size(&b);
+        b[at..at + 8].copy_from_slice(&(1i64 << 62).to_le_bytes());
+        std::fs::write(&p, &b).unwrap();
+        let e = read_vdb(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("flipped.vdb") && e.contains("compressed node values needs"),
+            "{e}"
+        );
+    }
+
+    /// The offset of the first node buffer's compressed size in `small.vdb`: after the
+    /// density grid's transform, topology header (16 bytes), root origin (12), two 4096-byte
+    /// masks and the metadata byte.
+    fn find_first_blosc_size(b: &[u8]) -> usize {
+        let map = b"UniformScaleMap";
+        let t = b
+            .windows(map.len())
+            .position(|w| w == map)
+            .expect("the density grid's transform");
+        t + map.len() + 5 * 24 + 16 + 12 + 8192 + 1
     }
 
     #[test]

@@ -11,6 +11,7 @@ use risotto_components::Rgb;
 use risotto_systems::grid::{DensityChannels, DensityGrid};
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::phase::PhaseFunction;
+use std::path::Path;
 use std::sync::Arc;
 
 /// Reads `interior = { type = "heterogeneous", ... }` (see `docs/scene-format.md`).
@@ -42,8 +43,10 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
                 None
             };
             match grid_file_channels(&d, &path, header, name)? {
-                GridChannels::One(g) => g,
-                GridChannels::Three(c) => return parse_channel_density(t, c),
+                SharedGrid::One(g) => g,
+                // The per-voxel maximum the medium derives is its own; the channels are
+                // copied (only one-channel grids are shared).
+                SharedGrid::Three(c) => return parse_channel_density(t, (*c).clone()),
             }
         }
         (None, true) => {
@@ -51,8 +54,10 @@ pub(crate) fn parse(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneErro
                 return Err(d.error(Some("header"), "`header` belongs to a raw `grid` file"));
             }
             let c = d.f32_where("constant", None, "must be >= 0", |v| v >= 0.0)?;
-            DensityGrid::constant([1, 1, 1], c)
-                .map_err(|e| d.error(Some("constant"), e.to_string()))?
+            Arc::new(
+                DensityGrid::constant([1, 1, 1], c)
+                    .map_err(|e| d.error(Some("constant"), e.to_string()))?,
+            )
         }
         (Some(_), true) => {
             return Err(d.error(
@@ -362,10 +367,10 @@ fn grid_file(
     path: &std::path::Path,
     header: Option<std::path::PathBuf>,
     name: Option<String>,
-) -> Result<DensityGrid, SceneError> {
+) -> Result<Arc<DensityGrid>, SceneError> {
     match grid_file_channels(t, path, header, name)? {
-        GridChannels::One(g) => Ok(g),
-        GridChannels::Three(_) => Err(t.error(
+        SharedGrid::One(g) => Ok(g),
+        SharedGrid::Three(_) => Err(t.error(
             Some("grid"),
             format!(
                 "{}: 3 channels, but this grid needs one value per voxel (a density per RGB \
@@ -376,14 +381,22 @@ fn grid_file(
     }
 }
 
+/// A grid file's values, shared by every medium of the scene that names the file with the
+/// same `header` and `name` ([`risotto_engine::side_files`]).
+enum SharedGrid {
+    One(Arc<DensityGrid>),
+    Three(Arc<DensityChannels>),
+}
+
 /// Reads the grid file of a `{ grid = .., header = .., name = .. }` table `t` (density or
 /// emission), of 1 or 3 channels: `header` only for raw files, `name` only for `.vdb` ones.
+/// The file is decoded once per scene load and shared ([`SharedGrid`]).
 fn grid_file_channels(
     t: &MaterialParams,
-    path: &std::path::Path,
+    path: &Path,
     header: Option<std::path::PathBuf>,
     name: Option<String>,
-) -> Result<GridChannels, SceneError> {
+) -> Result<SharedGrid, SceneError> {
     if is_vdb(path) && header.is_some() {
         return Err(t.error(
             Some("header"),
@@ -400,8 +413,20 @@ fn grid_file_channels(
         // A raw grid's header beside it is read too.
         t.note_file(&path.with_extension("json"));
     }
-    read_grid_channels(path, header.as_deref(), name.as_deref())
-        .map_err(|e| t.error(Some("grid"), e.to_string()))
+    let params = format!("grid header={header:?} name={name:?}");
+    let shared = t
+        .side_files()
+        .get_or_load(path, &params, || {
+            read_grid_channels(path, header.as_deref(), name.as_deref()).map(|c| match c {
+                GridChannels::One(g) => SharedGrid::One(Arc::new(g)),
+                GridChannels::Three(c) => SharedGrid::Three(Arc::new(c)),
+            })
+        })
+        .map_err(|e| t.error(Some("grid"), e.to_string()))?;
+    Ok(match &*shared {
+        SharedGrid::One(g) => SharedGrid::One(Arc::clone(g)),
+        SharedGrid::Three(c) => SharedGrid::Three(Arc::clone(c)),
+    })
 }
 
 /// The two forms of a heterogeneous interior's `emission` key.
@@ -409,7 +434,7 @@ enum EmissionKey {
     /// `emission = colour`.
     Colour(Rgb),
     /// `emission = { grid = "file", scale = colour }`.
-    Grid(DensityGrid, Rgb),
+    Grid(Arc<DensityGrid>, Rgb),
     /// `emission = { pattern = .., .. }`.
     Pattern(PatternGraph),
 }

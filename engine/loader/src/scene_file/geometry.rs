@@ -329,15 +329,20 @@ pub(crate) fn mesh(
     let face_normals = r.bool("face_normals", Some(false))?;
     let flip_normals = r.bool("flip_normals", Some(false))?;
     let m = read_transform(r)?;
-    let data = load_mesh(&path).map_err(|msg| {
-        r.error(
-            SceneErrorKind::ExternalFile,
-            &node.span(),
-            Some("path"),
-            msg,
-        )
-    })?;
-    mesh_from_data(r, &path, data, face_normals, flip_normals, m)
+    // Parsed once per scene load, however many shapes name the file.
+    let data = r
+        .src
+        .side_files
+        .get_or_load(&path, "mesh", || load_mesh(&path))
+        .map_err(|msg| {
+            r.error(
+                SceneErrorKind::ExternalFile,
+                &node.span(),
+                Some("path"),
+                msg,
+            )
+        })?;
+    mesh_from_data(r, &path, &data, face_normals, flip_normals, m)
 }
 
 /// `triangles`: an indexed mesh written in the scene itself (a converted pbrt
@@ -431,7 +436,7 @@ pub(crate) fn triangles(
     mesh_from_data(
         r,
         std::path::Path::new("triangles"),
-        data,
+        &data,
         face_normals,
         false,
         m,
@@ -443,7 +448,7 @@ pub(crate) fn triangles(
 fn mesh_from_data(
     r: &Reader<'_>,
     path: &std::path::Path,
-    data: crate::mesh_file::MeshData,
+    data: &crate::mesh_file::MeshData,
     face_normals: bool,
     flip_normals: bool,
     m: DAffine3,
@@ -483,7 +488,7 @@ fn mesh_from_data(
     };
     let mut attributes = VertexAttributes {
         normals,
-        uvs: data.uvs,
+        uvs: data.uvs.clone(),
         corners: Vec::new(),
     };
     if !attributes.is_empty() {

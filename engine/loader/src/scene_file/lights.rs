@@ -330,14 +330,20 @@ fn read_spot(r: &Reader<'_>, node: &Node, name: String) -> Result<LightDesc, Sce
             None
         }
         Some((path, path_node)) => {
-            let image = crate::texture_file::read_texture(&path).map_err(|message| {
-                r.error(
-                    SceneErrorKind::ExternalFile,
-                    &path_node.span(),
-                    Some("texture"),
-                    message,
-                )
-            })?;
+            let image = r
+                .src
+                .side_files
+                .get_or_load(&path, "texture Rgb", || {
+                    crate::texture_file::read_texture(&path)
+                })
+                .map_err(|message| {
+                    r.error(
+                        SceneErrorKind::ExternalFile,
+                        &path_node.span(),
+                        Some("texture"),
+                        message,
+                    )
+                })?;
             let up = r.vec3("up", Some(Vec3::Y))?;
             if up.cross(direction).length() <= 1e-6 * up.length() {
                 return Err(r.invalid(
@@ -346,7 +352,7 @@ fn read_spot(r: &Reader<'_>, node: &Node, name: String) -> Result<LightDesc, Sce
                     "must not be parallel to the spot's direction (it orients the texture)",
                 ));
             }
-            Some((Arc::new(image), up))
+            Some((image, up))
         }
     };
     Ok(LightDesc::Spot {

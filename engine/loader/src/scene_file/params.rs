@@ -566,6 +566,12 @@ impl MaterialParams {
         Ok(self.reader().path_opt(key)?.map(|(p, _)| p))
     }
 
+    /// The scene's decoded side files: a file named by many entities is read once
+    /// ([`risotto_engine::side_files`]).
+    pub fn side_files(&self) -> &risotto_engine::side_files::SideFiles {
+        &self.src.side_files
+    }
+
     /// Notes a file the material reads that no key names (e.g. a header found next to a
     /// data file), so that split renders hash it ([`ReferencedFiles`](super::ReferencedFiles)).
     pub fn note_file(&self, path: &std::path::Path) {

@@ -184,9 +184,14 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                 (TextureChannels::Rgb, true) => TextureChannels::RawRgb,
                 (c, _) => c,
             };
-            Node::Image(
-                read_texture_channels(&path, channels).map_err(|e| t.error(Some("path"), e))?,
-            )
+            // Decoded once per scene load, shared by every pattern naming the file.
+            let texture = t
+                .side_files()
+                .get_or_load(&path, &format!("texture {channels:?}"), || {
+                    read_texture_channels(&path, channels)
+                })
+                .map_err(|e| t.error(Some("path"), e))?;
+            Node::Image(texture)
         }
         "grid" => grid(t)?,
         "mix" => {
@@ -274,7 +279,13 @@ fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
         // A raw grid's header beside it is read too.
         t.note_file(&path.with_extension("json"));
     }
-    let grid = read_grid_named(&path, header.as_deref(), name.as_deref())
+    let grid = t
+        .side_files()
+        .get_or_load(
+            &path,
+            &format!("grid header={header:?} name={name:?}"),
+            || read_grid_named(&path, header.as_deref(), name.as_deref()),
+        )
         .map_err(|e| t.error(Some("path"), e.to_string()))?;
     let min = t.vec3("min", Some(Vec3::splat(-1.0)))?;
     let max = t.vec3("max", Some(Vec3::ONE))?;
