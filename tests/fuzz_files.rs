@@ -94,10 +94,10 @@ fn ply_binary() -> Vec<u8> {
             b.extend(v.to_le_bytes());
         }
     }
-    for f in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+    for f in [[0i32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
         b.push(3);
         for i in f {
-            b.extend((i as i32).to_le_bytes());
+            b.extend(i.to_le_bytes());
         }
     }
     b

@@ -151,16 +151,17 @@ fn a_file_named_by_thousands_of_entities_is_read_once() {
     std::fs::copy(&png, d.join("ball.png")).unwrap();
     let obj = "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n";
     std::fs::write(d.join("tri.obj"), obj).unwrap();
-    let fog = |i: usize| {
-        format!(
+    let fog =
+        |i: usize| {
+            format!(
             "[materials.fog{i}]\ntype = \"interface\"\ninterior = {{ type = \"heterogeneous\", \
              density = {{ grid = \"{}\" }}, scale = 3 }}\n\
              [materials.tex{i}]\ntype = \"diffuse\"\n\
              reflectance = {{ pattern = \"image\", path = \"ball.png\" }}\n",
             // Another spelling of the same file for half of them.
-            if i % 2 == 0 { "g.vol" } else { "./g.vol" }
+            if i.is_multiple_of(2) { "g.vol" } else { "./g.vol" }
         )
-    };
+        };
     let shapes = "[[shapes]]\nname = \"fog\"\ntype = \"box\"\nmaterial = \"fog0\"\n\
                   min = [-0.5, 0.2, -0.5]\nmax = [0.5, 1.2, 0.5]\n";
     let tris = |k: usize| -> String {

@@ -152,7 +152,7 @@ fn stalls(aabbs: &[Aabb], prims: impl Iterator<Item = usize> + Clone, run: usize
             f32::NEG_INFINITY
         };
         // `i` points right (ties included), `i + 1` left (always, if it is the last node).
-        if !(left < here) && here < right {
+        if left.partial_cmp(&here) != Some(std::cmp::Ordering::Less) && here < right {
             if i - start > run {
                 stalls.push((start, i));
             }
@@ -253,8 +253,9 @@ fn ploc_around_runs(
             };
             Bvh2Node::new(n.aabb, n.prim_count, first)
         };
-        nodes[dst] = moved(&sub.nodes[0]);
-        nodes.extend(sub.nodes[1..].iter().map(moved));
+        let mut moved_nodes = sub.nodes.iter().map(moved);
+        nodes[dst] = moved_nodes.next().expect("a subtree has a root");
+        nodes.extend(moved_nodes);
         primitive_indices.extend_from_slice(&sub.primitive_indices);
     }
     let mut bvh2 = Bvh2 {

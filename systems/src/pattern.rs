@@ -85,6 +85,11 @@ pub type NodeId = u32;
 
 /// One node of a [`PatternGraph`].
 #[derive(Clone, Debug, PartialEq)]
+#[allow(
+    clippy::large_enum_variant,
+    reason = "graphs hold a handful of nodes, built once per scene; the fBm's tables stay \
+              inline, next to the node its lookups read (no pointer chased per shading point)"
+)]
 pub enum Node {
     /// One colour everywhere.
     Constant(Rgb),
