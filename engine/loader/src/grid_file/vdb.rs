@@ -19,7 +19,7 @@
 //! finite, non-negative active values and a dense size of at most
 //! [`crate::grid_file::MAX_VOXELS`]. The background value is taken as 0 (the crate does not
 //! expose it); root-level tiles are not read. The file version must be 218 or later (OpenVDB
-//! 3 on). Before the crate sees the file, [`structure`] checks every size and count it
+//! 3 on). Before the crate sees the file, `structure` (the submodule) checks every size and count it
 //! declares against its length (the crate would allocate what a corrupt header asks for,
 //! and an allocation failure aborts). The crate still panics on some malformed files: the
 //! panic is caught without being printed ([`risotto_engine::expected_panic`]) and reported
