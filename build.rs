@@ -19,4 +19,23 @@ fn main() {
     if let Some(commit) = commit {
         println!("cargo:rustc-env=RISOTTO_COMMIT={commit}");
     }
+    denoise_rpath();
+}
+
+/// With the `denoise` feature and `OIDN_DIR` (the Open Image Denoise install the `oidn` crate
+/// links, README "Denoising"), the binaries, tests and examples find the library at run time
+/// through an rpath to `OIDN_DIR/lib`, so no `LD_LIBRARY_PATH` is needed.
+fn denoise_rpath() {
+    println!("cargo:rerun-if-env-changed=OIDN_DIR");
+    if std::env::var_os("CARGO_FEATURE_DENOISE").is_none() {
+        return;
+    }
+    let Some(dir) = std::env::var_os("OIDN_DIR") else {
+        return;
+    };
+    let lib = std::path::Path::new(&dir).join("lib");
+    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("windows") {
+        return;
+    }
+    println!("cargo:rustc-link-arg=-Wl,-rpath,{}", lib.display());
 }

@@ -3,11 +3,13 @@
 //! This crate is the one an embedder depends on: it re-exports the workspace's crates under
 //! short paths, and [`glam`] and [`bumpalo`] at the versions the contract uses, so a plug-in
 //! needs nothing else. The `risotto` command-line driver is the default feature `cli`
-//! (clap, indicatif, signal-hook, ...); a library user turns it off:
+//! (clap, indicatif, signal-hook, ...); a library user turns it off. The package is
+//! `risotto-renderer` (the crates.io name `risotto` is another project's); its library is
+//! `risotto`:
 //!
 //! ```toml
 //! [dependencies]
-//! risotto = { git = "...", default-features = false }
+//! risotto-renderer = { git = "...", default-features = false }
 //! ```
 //!
 //! | path | crate | what |
@@ -72,6 +74,9 @@
 //! A scene can also be built in code ([`engine::scene::Scene`]), and materials and volume
 //! integrators of your own implement [`engine::plugin::BxdfFactory`]: see the README's
 //! "Embedding" and the examples (`cargo run --release --example custom_bxdf`).
+#[cfg(feature = "denoise")]
+pub mod denoise;
+
 pub use bumpalo;
 pub use glam;
 pub use risotto_builtins as builtins;

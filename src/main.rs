@@ -20,7 +20,9 @@ use split::{grid_tile, info_command, merge_command, parse_crop, sample_chunk};
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
-use risotto::engine::output::{read_exr_rgb, write_exr, write_png};
+use risotto::engine::output::{
+    read_exr_rgb, rgb_part, write_exr, write_exr_placed, write_png, Image,
+};
 use risotto::engine::render::{
     checked_extent, render, render_checkpointed, Checkpoints, NoiseTarget, RenderError,
     RenderOptions, RenderOutput,
@@ -168,6 +170,11 @@ const DISPLAY_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
 fn render_command(args: RenderArgs) -> Result<()> {
     check_exposure(args.exposure)?;
     check_threads(args.threads)?;
+    anyhow::ensure!(
+        !args.denoise || cfg!(feature = "denoise"),
+        "--denoise: this risotto was built without the `denoise` feature (Intel Open Image \
+         Denoise); README, \"Denoising\", says how to build it"
+    );
     let input = SceneInput::read(&args.scene, &args.defines, args.size.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| input.default_output());
     if args.replay.is_none() {
@@ -410,6 +417,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     // Interrupted: the passes done are written as a partial render that `merge` finishes.
     // An adaptive render ends early by design; only a signal interrupts it, and what it has
     // is written as a whole image (its pixels' sample counts differ: not a partial render).
+    let mut denoised = None;
     let interrupted = match noise_target {
         Some(_) => interrupt::requested(),
         None => result.samples.end < range.end,
@@ -423,12 +431,21 @@ fn render_command(args: RenderArgs) -> Result<()> {
         write_partial(&out, &part)?;
     } else if partial {
         write_partial(&out, &to_partial(&result))?;
+    } else if args.denoise {
+        let image = denoise_render(&mut result)?;
+        let part = rgb_part("denoised", &image, Vec::new());
+        write_exr_placed(&out, &result.film_output(args.aovs), None, Some(part))?;
+        denoised = Some(image);
     } else {
         write_exr(&out, &result.film_output(args.aovs))?;
     }
     let png = (!args.no_preview).then(|| out.with_extension("png"));
     if let Some(png) = &png {
-        write_png(png, &result.beauty, args.exposure)?;
+        write_png(
+            png,
+            denoised.as_ref().unwrap_or(&result.beauty),
+            args.exposure,
+        )?;
     }
     if let Some(path) = &args.stats {
         result
@@ -471,6 +488,23 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// The render's beauty denoised (`--denoise`), with the time it took in the stats.
+#[cfg(feature = "denoise")]
+fn denoise_render(result: &mut RenderOutput) -> Result<Image> {
+    let start = std::time::Instant::now();
+    let image = risotto::denoise::denoise(&result.beauty, &result.albedo, &result.normal)?;
+    if let Some(run) = &mut result.stats.run {
+        run.denoise_seconds = Some(start.elapsed().as_secs_f64());
+    }
+    Ok(image)
+}
+
+/// Without the `denoise` feature `--denoise` is refused before the render starts.
+#[cfg(not(feature = "denoise"))]
+fn denoise_render(_: &mut RenderOutput) -> Result<Image> {
+    anyhow::bail!("--denoise: built without the `denoise` feature")
 }
 
 /// The command that renders what an interrupted render left: the options that decide a

@@ -48,6 +48,14 @@ pub(crate) struct RenderArgs {
     /// then carry the AOVs' f64 sums too, and `risotto merge` writes the same layers.
     #[arg(long)]
     pub(crate) aovs: bool,
+    /// Denoise the image with Intel Open Image Denoise, guided by the albedo and normal
+    /// layers: the EXR keeps the noisy beauty and gains a `denoised` part, and the PNG
+    /// preview shows the denoised image. Needs a build with the `denoise` feature (README,
+    /// "Denoising"); not with the flags of partial renders.
+    #[arg(long, conflicts_with_all = [
+        "crop", "grid", "tile", "chunks", "chunk", "samples", "checkpoint", "partial",
+    ])]
+    pub(crate) denoise: bool,
     /// Direct-lighting technique: mis (the default), nee, bxdf. An alias of
     /// `--technique lighting=VALUE`.
     #[arg(long)]
@@ -132,7 +140,7 @@ pub(crate) struct RenderArgs {
         value_name = "X,Y,SAMPLE",
         conflicts_with_all = [
             "out", "stats", "crop", "grid", "tile", "chunks", "chunk", "samples",
-            "checkpoint", "partial", "aovs",
+            "checkpoint", "partial", "aovs", "denoise",
         ]
     )]
     pub(crate) replay: Option<String>,

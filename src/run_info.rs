@@ -26,6 +26,7 @@ pub(crate) fn run_info(
         load_seconds,
         build_seconds,
         render_seconds: result.stats.wall_seconds,
+        denoise_seconds: None,
         peak_resident_bytes: peak_resident_bytes(),
     }
 }

@@ -270,3 +270,23 @@ fn convert_refuses_toml_input_and_overwriting_the_scene() {
         "<scene version=\"3.0.0\"/>"
     );
 }
+
+/// `--denoise` with a partial-render flag is a usage error naming both; in a build without
+/// the `denoise` feature it is refused before anything renders, naming the feature and the
+/// README section that says how to build it (with the feature: `tests/denoise.rs`).
+#[test]
+fn denoise_is_refused_with_partial_renders_and_without_its_feature() {
+    let (dir, scene) = setup("denoise");
+    let out = dir.join("d.exr");
+    let crop = render(&scene, &out, &["--denoise", "--crop", "0,0,4,4"]);
+    assert_fails("--denoise --crop", &crop, &["--denoise", "--crop"]);
+    if !cfg!(feature = "denoise") {
+        let refused = render(&scene, &out, &["--denoise"]);
+        assert_fails(
+            "--denoise without the feature",
+            &refused,
+            &["--denoise", "`denoise` feature", "\"Denoising\""],
+        );
+        assert!(!out.exists(), "a refused --denoise wrote {}", out.display());
+    }
+}

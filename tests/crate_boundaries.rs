@@ -158,4 +158,20 @@ fn the_driver_s_crates_are_behind_the_cli_feature() {
         bin["required-features"].as_array().unwrap()[0].as_str(),
         Some("cli")
     );
+    // Publishable: the package name is free on crates.io (`risotto` is another project's),
+    // while the library and the command keep the name `risotto`.
+    assert_eq!(
+        manifest["package"]["name"].as_str(),
+        Some("risotto-renderer")
+    );
+    assert_eq!(manifest["lib"]["name"].as_str(), Some("risotto"));
+    assert_eq!(bin["name"].as_str(), Some("risotto"));
+    // Every workspace crate a published crate depends on carries a version beside its path.
+    let workspace = manifest["workspace"]["dependencies"].as_table().unwrap();
+    for (name, dep) in workspace.iter().filter(|(n, _)| n.starts_with("risotto-")) {
+        assert!(
+            dep.get("version").is_some(),
+            "{name} has a path but no version"
+        );
+    }
 }

@@ -195,6 +195,22 @@ pub struct ExtraPart {
     pub attributes: Vec<(&'static str, String)>,
 }
 
+/// An [`ExtraPart`] named `name` holding `img` as channels `R`, `G`, `B` (a denoised image,
+/// say), with the header text `attributes`.
+pub fn rgb_part(
+    name: &'static str,
+    img: &Image,
+    attributes: Vec<(&'static str, String)>,
+) -> ExtraPart {
+    let mut channels = SmallVec::new();
+    push_rgb(&mut channels, "", ["R", "G", "B"], img);
+    ExtraPart {
+        name,
+        channels: channels.into_vec(),
+        attributes,
+    }
+}
+
 /// [`write_exr`] with the data window placed in a larger display window and an optional
 /// extra part.
 pub fn write_exr_placed(

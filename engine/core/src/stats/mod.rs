@@ -549,6 +549,9 @@ pub struct RunInfo {
     pub build_seconds: f64,
     /// The render itself (`wall_seconds`), in seconds.
     pub render_seconds: f64,
+    /// Denoising the image (`render --denoise`), in seconds; absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub denoise_seconds: Option<f64>,
     /// Peak resident memory of the process in bytes (Linux `VmHWM`), when the platform
     /// reports it.
     pub peak_resident_bytes: Option<u64>,

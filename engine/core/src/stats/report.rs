@@ -264,6 +264,9 @@ impl fmt::Display for RenderStats {
                 "load {:.3} s, build {:.3} s, render {:.3} s on {} threads",
                 run.load_seconds, run.build_seconds, run.render_seconds, run.threads
             )?;
+            if let Some(s) = run.denoise_seconds {
+                write!(f, ", denoise {s:.3} s")?;
+            }
             if let Some(bytes) = run.peak_resident_bytes {
                 write!(
                     f,
