@@ -171,10 +171,15 @@ fn bad_medium_patterns_are_located_errors() {
             r#"density = { pattern = "scale", a = 10, factor = 3e38 }"#,
             &["density", "inf", "finite"][..],
         ),
-        // Colour densities are refused.
+        // A colour density (one per channel) is bounded below in every channel...
         (
-            r#"density = { pattern = "constant", value = [1, 0.5, 0.2] }"#,
-            &["density", "grey", "scale = [r, g, b]"][..],
+            r#"density = { pattern = "multiply", a = { pattern = "noise", frequency = 2 }, b = { pattern = "constant", value = [1, 0.5, 0.2] } }"#,
+            &["scene.toml", "density", ">= 0", "remap"][..],
+        ),
+        // ... and has no one density for a colour emission to follow.
+        (
+            r#"density = { pattern = "constant", value = [1, 0.5, 0.2] }, emission = [1, 1, 1]"#,
+            &["emission", "one density per channel", "pattern"][..],
         ),
         // u and v do not exist inside a medium.
         (
@@ -504,10 +509,6 @@ fn bad_scattering_patterns_are_located_errors() {
         (
             r#"type = "homogeneous", sigma_t = { pattern = "constant", value = 1 }, scattering = "walk""#,
             &["scattering", "walk", "heterogeneous"][..],
-        ),
-        (
-            r#"type = "homogeneous", sigma_t = { pattern = "constant", value = [1, 2, 3] }"#,
-            &["sigma_t", "grey"][..],
         ),
         (
             r#"type = "homogeneous", sigma_t = 1, emission = { grid = "x.vol" }"#,

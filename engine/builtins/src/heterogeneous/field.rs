@@ -14,12 +14,21 @@ use std::sync::{Arc, RwLock};
 /// are refused when the scene is read). Its majorant grid is made per box (the shape's
 /// object-space bounds and transform, known only once the scene is compiled, and one
 /// material may fill several shapes), on first use, and kept.
+///
+/// A colour graph as a density is a density per channel (`sigma_t,c = scale_c
+/// density_c(P)`): its bounds are then weighted per channel by `k = scale / max(scale)`
+/// ([`PatternField::with_channel_weights`]), so that `max(scale)` times a cell's bound is the
+/// largest channel's extinction bound and the low end the smallest channel's, as a
+/// 3-channel grid's majorants are ([`risotto_systems::grid::DensityChannels::majorants`]).
 #[derive(Debug)]
 pub struct PatternField {
     /// The graph (shared with the medium's volume emitter).
     pub graph: Arc<PatternGraph>,
     /// Majorant cells per axis.
     pub res: [usize; 3],
+    /// Per-channel weights of the bounds, for a density per channel; `None`: the bounds are
+    /// the lowest channel's low end and the highest channel's high end, unweighted.
+    pub channel_weights: Option<Rgb>,
     /// Majorant grids made so far, by object box and object-to-world transform.
     grids: RwLock<Vec<GridKey>>,
 }
@@ -29,30 +38,60 @@ type GridKey = (Vec3, Vec3, Option<Affine3A>, Arc<MajorantGrid>);
 
 impl Clone for PatternField {
     fn clone(&self) -> Self {
-        PatternField::new((*self.graph).clone(), self.res)
+        PatternField::shared(self.graph.clone(), self.res)
+            .with_channel_weights(self.channel_weights)
     }
 }
 
 impl PartialEq for PatternField {
     fn eq(&self, other: &Self) -> bool {
-        self.graph == other.graph && self.res == other.res
+        self.graph == other.graph
+            && self.res == other.res
+            && self.channel_weights == other.channel_weights
     }
 }
 
 impl PatternField {
     /// The field of `graph` with majorant grids of `res` cells per axis (each at least 1).
     pub fn new(graph: PatternGraph, res: [usize; 3]) -> Self {
+        PatternField::shared(Arc::new(graph), res)
+    }
+
+    /// [`PatternField::new`] of a graph shared with others.
+    pub fn shared(graph: Arc<PatternGraph>, res: [usize; 3]) -> Self {
         PatternField {
-            graph: Arc::new(graph),
+            graph,
             res: res.map(|r| r.max(1)),
+            channel_weights: None,
             grids: RwLock::new(Vec::new()),
         }
     }
 
-    /// The field's bounds over all of space: `(lowest channel, highest channel)`.
+    /// The field with its bounds weighted per channel by `weights` (a density per channel:
+    /// `scale / max(scale)`; the type docs), its majorant grids made afresh.
+    pub fn with_channel_weights(self, weights: Option<Rgb>) -> Self {
+        PatternField {
+            channel_weights: weights,
+            grids: RwLock::new(Vec::new()),
+            ..self
+        }
+    }
+
+    /// `(low, high)` of the graph's channel intervals `[lo, hi]`: the lowest channel's low
+    /// end and the highest channel's high end, each channel weighted first for a density
+    /// per channel.
+    fn span(&self, lo: Rgb, hi: Rgb) -> (f32, f32) {
+        match self.channel_weights {
+            None => (lo.min_channel(), hi.max_channel()),
+            Some(k) => ((lo * k).min_channel(), (hi * k).max_channel()),
+        }
+    }
+
+    /// The field's bounds over all of space: `(lowest channel, highest channel)` (weighted
+    /// for a density per channel).
     pub fn global_bounds(&self) -> (f32, f32) {
         let (lo, hi) = pattern::bounds(&self.graph, Vec3::NEG_INFINITY, Vec3::INFINITY);
-        (lo.min_channel(), hi.max_channel())
+        self.span(lo, hi)
     }
 
     /// The majorant grid of the field over the world box `[lo, hi]` (the grid's unit cube
@@ -111,7 +150,8 @@ impl PatternField {
                 }
             };
             let (l, h) = pattern::bounds(&self.graph, a, b);
-            (l.min_channel().max(0.0), h.max_channel())
+            let (l, h) = self.span(l, h);
+            (l.max(0.0), h)
         }));
         let mut write = self.grids.write().unwrap_or_else(|e| e.into_inner());
         write.push((lo, hi, to_world, grid.clone()));
@@ -129,9 +169,10 @@ pub(super) enum Field<'a> {
     Grid(&'a DensityGrid),
     /// A per-channel grid lookup (a 3-channel density).
     Channels(&'a DensityChannels),
-    /// A pattern.
+    /// A pattern (`per_channel`: a colour density, one per channel).
     Pattern {
         graph: &'a PatternGraph,
+        per_channel: bool,
         lo: Vec3,
         extent: Vec3,
         to_world: Option<Affine3A>,
@@ -145,12 +186,14 @@ impl<'a> Field<'a> {
     /// world by `to_world` (`None`: the identity).
     pub(super) fn pattern(
         graph: &'a PatternGraph,
+        per_channel: bool,
         lo: Vec3,
         hi: Vec3,
         to_world: Option<Affine3A>,
     ) -> Self {
         Field::Pattern {
             graph,
+            per_channel,
             lo,
             extent: hi - lo,
             to_world,
@@ -173,6 +216,7 @@ impl<'a> Field<'a> {
                 to_world,
                 scratch,
                 evals,
+                ..
             } => {
                 evals.set(evals.get() + 1);
                 let mut p = *lo + uvw * *extent;
@@ -195,6 +239,9 @@ impl<'a> Field<'a> {
             Field::Grid(g) => g.lookup(uvw),
             // The largest channel (not read by the per-channel trackers, which take colour).
             Field::Channels(g) => g.lookup(uvw).max_channel(),
+            Field::Pattern {
+                per_channel: true, ..
+            } => self.colour(uvw).max_channel(),
             Field::Pattern { .. } => self.colour(uvw).r,
         }
     }

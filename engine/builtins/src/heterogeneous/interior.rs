@@ -126,13 +126,13 @@ impl HeterogeneousInterior<'_> {
         let (lo, hi) = self.bounds();
         let to_world = self.to_world();
         let density = match (&m.density_pattern, &m.density_channels) {
-            (Some(p), _) => Field::pattern(&p.graph, lo, hi, to_world),
+            (Some(p), _) => Field::pattern(&p.graph, p.channel_weights.is_some(), lo, hi, to_world),
             (None, Some(c)) => Field::Channels(c),
             (None, None) => Field::Grid(&m.density),
         };
         let emission = match &m.emission {
             Some(HeterogeneousEmission::Pattern(p)) => {
-                Some(Field::pattern(&p.graph, lo, hi, to_world))
+                Some(Field::pattern(&p.graph, false, lo, hi, to_world))
             }
             _ => None,
         };
@@ -210,9 +210,9 @@ impl HeterogeneousInterior<'_> {
         let rand = || stream.next_1d();
         // The ray-marching estimators gather no emission: emissive media ratio-track.
         let residual = tracking == Tracking::Residual;
-        let r = if let Some(channels) = &m.density_channels {
+        let r = if m.per_channel_density() {
             let scale = m.scale;
-            let sigma = PerChannel(|t: f32| scale * channels.lookup(o + d * t));
+            let sigma = PerChannel(|t: f32| scale * fields.density.colour(o + d * t));
             match tracking {
                 Tracking::Delta => {
                     let (f, e) = spectral_tracking_channels(segs, sigma, [1.0; 3], emission, rand);
@@ -331,9 +331,9 @@ impl HeterogeneousInterior<'_> {
         let start = s.dimension;
         let mut stream = s.stream();
         let mut rand = || stream.next_1d();
-        let r = if let Some(channels) = &m.density_channels {
+        let r = if m.per_channel_density() {
             let scale = m.scale;
-            let sigma_c = |t: f32| scale * channels.lookup(o + d * t);
+            let sigma_c = |t: f32| scale * fields.density.colour(o + d * t);
             channel_transmittance(segs, sigma_c, tracking, &mut rand, self.march_step())
         } else if m.is_chromatic() {
             // One grey majorant (the densest channel's), three running estimates
@@ -476,8 +476,8 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
         // A chromatic medium's flights carry per-channel weights (spectral MIS); a grey one's
         // are 1 on passing and the albedo at a collision, as before. A per-channel density
         // is chromatic whatever its scale (its channels' ratios vary in space).
-        let channels = m.density_channels.as_deref();
-        let chromatic = m.is_chromatic() || channels.is_some();
+        let per_channel = m.per_channel_density();
+        let chromatic = m.is_chromatic() || per_channel;
         let scale = m.scale;
         let k = m.channel_ratios();
         let mut weight = vec![Rgb::WHITE; if chromatic { n } else { 0 }];
@@ -527,15 +527,11 @@ impl VolumeIntegrator for HeterogeneousInterior<'_> {
                     }
                 };
                 let rand = || stream.next_1d();
-                let (f, e) = match channels {
-                    Some(c) => spectral_tracking_channels(
-                        segs,
-                        PerChannel(|t: f32| scale * c.lookup(o + d * t)),
-                        p,
-                        emission,
-                        rand,
-                    ),
-                    None => spectral_tracking_emitting(segs, sigma, k, p, emission, rand),
+                let (f, e) = if per_channel {
+                    let sigma_c = PerChannel(|t: f32| scale * fields.density.colour(o + d * t));
+                    spectral_tracking_channels(segs, sigma_c, p, emission, rand)
+                } else {
+                    spectral_tracking_emitting(segs, sigma, k, p, emission, rand)
                 };
                 if emits {
                     out.emitted.push(i as u32, e);

@@ -6,14 +6,14 @@
 //! # Pattern coefficients
 //! `density` and `emission` may be pattern graphs ([`PatternField`], `field.rs`) of the
 //! **world-space position `P`** (the `P` surface patterns see; `u`, `v` are refused inside a
-//! medium). A density pattern must be grey (the density is one number; chromatic extinction
-//! is the `scale`, and averaging a colour would drop it silently) and bounded in
-//! `[0, inf)` with a finite upper bound, checked with the graph's interval bounds at load
-//! time. It is evaluated one point per tentative collision (the trackers ask for one point at
-//! a time) and counted in the stats' `pattern_evals`. Its majorant grid holds, per cell, the
-//! graph's interval bounds over the cell's world box ([`risotto_systems::pattern::bounds`];
-//! Lipschitz bounds for `noise`): built per shape on first use, since the shape's bounds
-//! are known only after the scene is compiled.
+//! medium). A density pattern is grey (one density) or a colour graph (a density per
+//! channel, see Per-channel density), bounded in `[0, inf)` with a finite upper bound,
+//! checked with the graph's interval bounds at load time. It is evaluated one point per
+//! tentative collision (the trackers ask for one point at a time) and counted in the
+//! stats' `pattern_evals`. Its majorant grid holds, per cell, the graph's interval bounds
+//! over the cell's world box ([`risotto_systems::pattern::bounds`]; Lipschitz bounds for
+//! `noise`): built per shape on first use, since the shape's bounds are known only after
+//! the scene is compiled.
 //!
 //! # Estimators
 //! - **Free flights** ([`HeterogeneousInterior::nearest_hits`]): delta tracking (Woodcock)
@@ -96,6 +96,13 @@
 //! (a per-channel majorant would need three sequences of tentative collisions, and lose
 //! the shared one spectral MIS is built on). A medium with one density channel never enters
 //! these paths.
+//!
+//! A **colour density pattern** is the same per point (`sigma_t,c = scale_c P_c(P)`, the
+//! graph's channels): the same estimators, its majorant cells from the graph's interval
+//! bounds weighted per channel by `scale / max(scale)` ([`PatternField`]), so that they are
+//! the largest channel's extinction bound over `max(scale)` and the smallest channel's low
+//! end, as a 3-channel grid's. Its emission cannot follow the density (there is no one
+//! density to follow): an emission pattern says what it is.
 //!
 //! # Files
 //! `interior.rs` is the volume integrator (free flights, transmittance, emission), `field.rs`
@@ -230,7 +237,8 @@ pub struct HeterogeneousMedium {
     /// is 1). `None` (the default): one density.
     pub density_channels: Option<Arc<DensityChannels>>,
     /// A density given by a pattern of the world position instead of `density`'s grid
-    /// (`density = { pattern = .. }`), grey; `None` (the default): the grid.
+    /// (`density = { pattern = .. }`): grey, or a colour graph, one density per channel
+    /// (module docs, Per-channel density); `None` (the default): the grid.
     pub density_pattern: Option<Arc<PatternField>>,
     /// `sigma_t = scale * density` per channel, per world unit, >= 0 (grey: the same in
     /// every channel; chromatic: spectral tracking, see the module docs).
@@ -324,16 +332,26 @@ impl HeterogeneousMedium {
         }
     }
 
-    /// The medium with the grey pattern `graph` of the world position as its density
-    /// (replacing the grid), with majorant grids of `majorant_cells` per axis (at least 1)
-    /// from the graph's interval bounds. `graph` must be grey and bounded in `[0, inf)` with
-    /// a finite upper bound (the scene reader checks all three with located errors).
+    /// The medium with the pattern `graph` of the world position as its density (replacing
+    /// the grid; a colour graph is a density per channel, module docs), with majorant grids
+    /// of `majorant_cells` per axis (at least 1) from the graph's interval bounds. `graph`
+    /// must be bounded in `[0, inf)` in every channel with a finite upper bound (the scene
+    /// reader checks both with located errors).
     pub fn with_density_pattern(
         self,
         graph: risotto_systems::pattern::PatternGraph,
         majorant_cells: usize,
     ) -> Self {
-        let field = PatternField::new(graph, [majorant_cells.max(1); 3]);
+        // A colour graph is a density per channel (module docs, Per-channel density).
+        let weights = (!graph.is_grey()).then(|| self.pattern_channel_weights());
+        let field =
+            PatternField::new(graph, [majorant_cells.max(1); 3]).with_channel_weights(weights);
+        self.with_pattern_field(field)
+    }
+
+    /// The medium over the density pattern `field` (its one-voxel `density` grid and global
+    /// majorant cell holding the field's global upper bound).
+    fn with_pattern_field(self, field: PatternField) -> Self {
         let max = field.global_bounds().1.max(0.0);
         let grid = DensityGrid::constant([1, 1, 1], if max.is_finite() { max } else { 0.0 })
             .expect("a finite, non-negative constant");
@@ -371,6 +389,28 @@ impl HeterogeneousMedium {
         }
     }
 
+    /// The weights of a per-channel density pattern's bounds: `scale / max(scale)` (white for
+    /// a black scale), so that `max(scale)` times a weighted bound bounds every channel's
+    /// extinction ([`PatternField::with_channel_weights`]).
+    fn pattern_channel_weights(&self) -> Rgb {
+        let s = self.max_scale();
+        if s > 0.0 {
+            self.scale * (1.0 / s)
+        } else {
+            Rgb::WHITE
+        }
+    }
+
+    /// Whether the density is one per channel, a 3-channel grid or a colour pattern: the
+    /// medium is then tracked by the per-channel spectral estimators (module docs).
+    pub fn per_channel_density(&self) -> bool {
+        self.density_channels.is_some()
+            || self
+                .density_pattern
+                .as_ref()
+                .is_some_and(|p| p.channel_weights.is_some())
+    }
+
     /// The factor from the majorant grid's bounds to extinction bounds: the densest
     /// channel's scale for one density, 1 for a per-channel density (whose majorant grid
     /// is already in extinction units).
@@ -405,6 +445,14 @@ impl HeterogeneousMedium {
         self.scale = scale;
         if let Some(c) = &self.density_channels {
             self.majorants = Arc::new(c.majorants(scale, self.majorants.res()));
+        }
+        if let Some(p) = self.density_pattern.clone() {
+            if p.channel_weights.is_some() {
+                let weights = Some(self.pattern_channel_weights());
+                let field =
+                    PatternField::shared(p.graph.clone(), p.res).with_channel_weights(weights);
+                return self.with_pattern_field(field);
+            }
         }
         self
     }

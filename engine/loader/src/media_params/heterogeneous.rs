@@ -203,27 +203,34 @@ fn scale(t: &MaterialParams) -> Result<Rgb, SceneError> {
     )
 }
 
-/// `density = { pattern = .., .. }`: a grey pattern of the world position `P`, bounded in
-/// `[0, inf)` by its interval bounds over all of space (module docs).
+/// `density = { pattern = .., .. }`: a pattern of the world position `P`, grey (one density)
+/// or a colour graph (a density per channel), bounded in `[0, inf)` by its interval bounds
+/// over all of space (module docs).
 fn parse_pattern_density(t: &MaterialParams) -> Result<HeterogeneousMedium, SceneError> {
     let scale = scale(t)?;
-    let graph = grey_density_pattern(t, "density", scale.max_channel())?;
+    let graph = density_pattern(t, "density", scale.max_channel())?;
     let c = common(t)?;
     let unit = DensityGrid::constant([1, 1, 1], 1.0).expect("a valid constant");
     let medium = HeterogeneousMedium::new(unit, 1, 1.0, c.albedo, c.phase, c.tracking)
         .with_density_pattern(graph, c.cells)
         .with_scale(scale);
+    // A colour (not a table: a grid or a pattern) follows the density.
+    if medium.per_channel_density() && t.has("emission") && !t.is_table("emission") {
+        return Err(t.error(
+            Some("emission"),
+            "a colour emission follows the density, and a colour density pattern is one \
+             density per channel: write the emission as a pattern instead (e.g. `emission = \
+             { pattern = \"multiply\", a = <the density pattern>, b = { pattern = \"constant\", \
+             value = [r, g, b] } }`)",
+        ));
+    }
     with_emission(t, c.apply(medium))
 }
 
-/// The pattern table at `key` as a density: grey, of `P` only, bounded in `[0, inf)` with a
-/// finite upper bound (times `scale`) by its interval bounds over all of space; each a
-/// located error.
-fn grey_density_pattern(
-    t: &MaterialParams,
-    key: &str,
-    scale: f32,
-) -> Result<PatternGraph, SceneError> {
+/// The pattern table at `key` as a density: of `P` only, bounded in `[0, inf)` in every
+/// channel with a finite upper bound (times `scale`) by its interval bounds over all of
+/// space; each a located error. A colour graph is a density per channel.
+fn density_pattern(t: &MaterialParams, key: &str, scale: f32) -> Result<PatternGraph, SceneError> {
     let graph = t.pattern(key)?.expect("checked: a table");
     if graph.reads_uv() {
         return Err(t.error(
@@ -232,34 +239,29 @@ fn grey_density_pattern(
              use `space = \"P\"` and an axis x, y or z",
         ));
     }
-    if !graph.is_grey() {
-        return Err(t.error(
-            Some(key),
-            format!(
-                "a {key} pattern must be grey (every colour in it a single number): the \
-                 density is one number per point, and a colour extinction is `scale = [r, g, b]`"
-            ),
-        ));
-    }
     let (lo, hi) = pattern::bounds(&graph, Vec3::NEG_INFINITY, Vec3::INFINITY);
-    // NaN reads as not >= 0.
-    if lo.r.is_nan() || lo.r < 0.0 {
+    // NaN reads as not >= 0; the lowest channel (every channel of a grey graph is equal).
+    let low =
+        [lo.r, lo.g, lo.b].into_iter().fold(
+            f32::INFINITY,
+            |m, v| if v.is_nan() || v < m { v } else { m },
+        );
+    if low.is_nan() || low < 0.0 {
         return Err(t.error(
             Some(key),
             format!(
-                "the {key} pattern may reach {} (interval bounds over all of space), but it \
+                "the {key} pattern may reach {low} (interval bounds over all of space), but it \
                  must be >= 0: wrap it in `remap` (e.g. from = [-1, 1], to = [0, 1])",
-                lo.r
             ),
         ));
     }
-    if !(hi.r.is_finite() && (scale * hi.r).is_finite()) {
+    let high = hi.max_channel();
+    if !([hi.r, hi.g, hi.b].iter().all(|v| v.is_finite()) && (scale * high).is_finite()) {
         return Err(t.error(
             Some(key),
             format!(
-                "the {key} pattern's upper bound {} (times scale {scale}) is not finite: the \
-                 trackers need a finite majorant",
-                hi.r,
+                "the {key} pattern's upper bound {high} (times scale {scale}) is not finite: \
+                 the trackers need a finite majorant",
             ),
         ));
     }
@@ -304,7 +306,7 @@ pub(crate) fn homogeneous_with_patterns(
     let (phase, g_pattern) = parse_phase(t)?;
     let (medium, albedo, albedo_pattern) = match constant {
         None => {
-            let graph = grey_density_pattern(t, "sigma_t", 1.0)?;
+            let graph = density_pattern(t, "sigma_t", 1.0)?;
             let (albedo, albedo_pattern) = parse_albedo(t)?;
             let m = HeterogeneousMedium::new(unit, 1, 1.0, albedo, phase, Tracking::Ratio)
                 .with_density_pattern(graph, DEFAULT_MAJORANT_CELLS);
