@@ -56,6 +56,24 @@ fn channel_means(out: &RenderOutput) -> [(f64, f64); 3] {
     })
 }
 
+/// `out`'s channel means agree with `reference`'s within 3 combined standard errors (the
+/// reference converged to 2 %), with no non-finite sample and no majorant violated.
+fn assert_agrees(label: &str, reference: &[(f64, f64); 3], out: &RenderOutput) {
+    let means = channel_means(out);
+    for c in 0..3 {
+        let ((m0, s0), (m1, s1)) = (reference[c], means[c]);
+        let z = (m1 - m0) / (s0 * s0 + s1 * s1).sqrt();
+        eprintln!("{label}, channel {c}: {m1:.5} +- {s1:.5} vs {m0:.5} +- {s0:.5}, z {z:.2}");
+        assert!(
+            z.abs() < 3.0,
+            "{label}, channel {c}: {m1} +- {s1} vs {m0} +- {s0}"
+        );
+        assert!(s0 < 0.02 * m0, "converged enough to test: {m0} +- {s0}");
+    }
+    assert_eq!(out.stats.counters.nan_dropped, 0, "{label}");
+    assert_eq!(out.stats.counters.majorant_violations, 0, "{label}");
+}
+
 /// The absorbing cube `[-1, 1]^3` (index-matched, albedo 0) seen along z by a 16 x 16
 /// orthographic camera narrower than the cube, in front of a white environment: every
 /// pixel is the transmittance through 2 world units, `exp(-2 sigma_t)` per channel.
@@ -162,21 +180,7 @@ fn a_constant_three_channel_grid_renders_the_homogeneous_colour_medium() {
             r#"{{ type = "heterogeneous", density = {{ grid = "rgb.vol" }}, scale = 2, majorant_grid = 4, tracking = "{tracking}", {common} }}"#
         );
         let out = render_text(&d, &scene(&interior, 2 + k as u64));
-        let means = channel_means(&out);
-        for c in 0..3 {
-            let ((m0, s0), (m1, s1)) = (reference[c], means[c]);
-            let z = (m1 - m0) / (s0 * s0 + s1 * s1).sqrt();
-            eprintln!(
-                "{tracking}, channel {c}: {m1:.5} +- {s1:.5} vs {m0:.5} +- {s0:.5}, z {z:.2}"
-            );
-            assert!(
-                z.abs() < 3.0,
-                "{tracking}, channel {c}: {m1} +- {s1} vs {m0} +- {s0}"
-            );
-            assert!(s0 < 0.02 * m0, "converged enough to test: {m0} +- {s0}");
-        }
-        assert_eq!(out.stats.counters.nan_dropped, 0, "{tracking}");
-        assert_eq!(out.stats.counters.majorant_violations, 0, "{tracking}");
+        assert_agrees(tracking, &reference, &out);
     }
 }
 
@@ -246,21 +250,7 @@ fn a_colour_density_pattern_renders_its_grey_pattern_times_colour_twin() {
         );
         let reference = channel_means(&render_text(&d, &scene(&twin, 40 + k as u64)));
         let out = render_text(&d, &scene(&colour, 50 + k as u64));
-        let means = channel_means(&out);
-        for c in 0..3 {
-            let ((m0, s0), (m1, s1)) = (reference[c], means[c]);
-            let z = (m1 - m0) / (s0 * s0 + s1 * s1).sqrt();
-            eprintln!(
-                "{tracking}, channel {c}: {m1:.5} +- {s1:.5} vs {m0:.5} +- {s0:.5}, z {z:.2}"
-            );
-            assert!(
-                z.abs() < 3.0,
-                "{tracking}, channel {c}: {m1} +- {s1} vs {m0} +- {s0}"
-            );
-            assert!(s0 < 0.02 * m0, "converged enough to test: {m0} +- {s0}");
-        }
-        assert_eq!(out.stats.counters.nan_dropped, 0, "{tracking}");
-        assert_eq!(out.stats.counters.majorant_violations, 0, "{tracking}");
+        assert_agrees(tracking, &reference, &out);
     }
 }
 
