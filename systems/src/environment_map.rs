@@ -24,6 +24,13 @@
 //! pdf reported is the sampler's own, exactly, so MIS weights are right. The change of
 //! variables from `(u, v)` to solid angle is `p(ω) = p(u, v) / (2π² sin θ)` (PBR 3rd ed.
 //! §14.2.4). A rotation preserves solid angle, so it changes no density.
+//!
+//! **Equal-area octahedral maps** ([`EnvProjection::EqualArea`], pbrt-v4's image infinite
+//! lights; the mapping is in [`equal_area`]) are square, looked up nearest-texel as pbrt
+//! does, and sampled piecewise constant over their texels in proportion to the texel's
+//! channel average: every texel covers the same solid angle, `4π / (w h)`, so no `sin θ`
+//! enters, and `p(ω) = p(u, v) / 4π`. Their own frame is pbrt's light frame (`+z` the
+//! centre of the square), carried into the world by the same rotation.
 
 use std::f32::consts::PI;
 
@@ -32,8 +39,20 @@ use risotto_components::Rgb;
 
 use crate::distribution::{bin_of, Distribution2D};
 
+pub mod equal_area;
 #[cfg(test)]
 mod tests;
+
+/// How an [`EnvironmentMap`]'s texels are laid over the sphere of directions.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EnvProjection {
+    /// Latitude-longitude ([`dir_to_uv`]), `+y` up: the scene format's and Mitsuba's.
+    #[default]
+    LatLong,
+    /// pbrt-v4's equal-area octahedral square ([`equal_area`]), `+z` at its centre;
+    /// nearest-texel only.
+    EqualArea,
+}
 
 /// How an [`EnvironmentMap`] is looked up between texel centres.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -83,6 +102,7 @@ pub struct EnvironmentMap {
     height: usize,
     pixels: Vec<Rgb>,
     filter: EnvFilter,
+    projection: EnvProjection,
     /// Map frame to world (a rotation); `None` for the identity, which then costs nothing.
     rotation: Option<Rotation>,
     /// Over texels (nearest) or over the bilinear lattice's cells, `width x cell_rows`.
@@ -139,13 +159,46 @@ impl EnvironmentMap {
         filter: EnvFilter,
         to_world: Mat3,
     ) -> Self {
+        Self::with_projection(
+            pixels,
+            width,
+            height,
+            EnvProjection::LatLong,
+            filter,
+            to_world,
+        )
+    }
+
+    /// [`Self::with_filter`] for a map laid out by `projection`. An
+    /// [`EnvProjection::EqualArea`] map is looked up nearest-texel whatever `filter` says
+    /// (the loader refuses a bilinear one).
+    ///
+    /// # Panics
+    /// When the dimensions are zero or do not match `pixels.len()`.
+    pub fn with_projection(
+        pixels: Vec<Rgb>,
+        width: usize,
+        height: usize,
+        projection: EnvProjection,
+        filter: EnvFilter,
+        to_world: Mat3,
+    ) -> Self {
         assert!(
             width > 0 && height > 0 && pixels.len() == width * height,
             "EnvironmentMap::new: {} texels for {width}x{height}",
             pixels.len()
         );
-        let dist = match filter {
-            EnvFilter::Nearest => {
+        let filter = match projection {
+            EnvProjection::LatLong => filter,
+            EnvProjection::EqualArea => EnvFilter::Nearest,
+        };
+        let dist = match (projection, filter) {
+            // Every texel covers the same solid angle.
+            (EnvProjection::EqualArea, _) => {
+                let weights: Vec<f32> = pixels.iter().map(|&p| weight_of(p)).collect();
+                Distribution2D::new(&weights, width, height)
+            }
+            (_, EnvFilter::Nearest) => {
                 let mut weights = Vec::with_capacity(pixels.len());
                 for (j, row) in pixels.chunks_exact(width).enumerate() {
                     let sin_theta = (PI * (j as f32 + 0.5) / height as f32).sin();
@@ -153,7 +206,7 @@ impl EnvironmentMap {
                 }
                 Distribution2D::new(&weights, width, height)
             }
-            EnvFilter::Bilinear => {
+            (_, EnvFilter::Bilinear) => {
                 let rows = cell_rows(height);
                 let mut weights = Vec::with_capacity(width * rows);
                 for j in 0..rows {
@@ -183,8 +236,23 @@ impl EnvironmentMap {
             height,
             pixels,
             filter,
+            projection,
             rotation,
             dist,
+        }
+    }
+
+    /// How the texels are laid over the sphere.
+    pub fn projection(&self) -> EnvProjection {
+        self.projection
+    }
+
+    /// Map coordinates of the map-frame direction `local`.
+    #[inline]
+    fn uv_of(&self, local: Vec3) -> Vec2 {
+        match self.projection {
+            EnvProjection::LatLong => dir_to_uv(local),
+            EnvProjection::EqualArea => equal_area::sphere_to_square(local),
         }
     }
 
@@ -256,7 +324,7 @@ impl EnvironmentMap {
     /// in world space).
     #[inline]
     pub fn eval(&self, dir: Vec3) -> Rgb {
-        self.filtered(dir_to_uv(self.to_local(dir)))
+        self.filtered(self.uv_of(self.to_local(dir)))
     }
 
     /// Samples a direction proportionally to (approximately, for the bilinear filter)
@@ -267,11 +335,14 @@ impl EnvironmentMap {
     /// the sample.
     pub fn sample(&self, u: Vec2) -> (Vec3, Rgb, f32) {
         let (cell_uv, _) = self.dist.sample(u);
-        let uv = match self.filter {
-            EnvFilter::Nearest => cell_uv,
-            EnvFilter::Bilinear => Vec2::new(wrap_unit(cell_uv.x + self.half_texel()), cell_uv.y),
+        let local = match (self.projection, self.filter) {
+            (EnvProjection::EqualArea, _) => equal_area::square_to_sphere(cell_uv),
+            (_, EnvFilter::Nearest) => uv_to_dir(cell_uv),
+            (_, EnvFilter::Bilinear) => uv_to_dir(Vec2::new(
+                wrap_unit(cell_uv.x + self.half_texel()),
+                cell_uv.y,
+            )),
         };
-        let local = uv_to_dir(uv);
         let dir = match &self.rotation {
             Some(r) => (r.to_world * local).normalize_or_zero(),
             None => local,
@@ -279,15 +350,16 @@ impl EnvironmentMap {
         // Re-derive (u, v) from the direction (once) so radiance and pdf are those that
         // `eval(dir)` / `pdf(dir)` compute, even where rounding crosses a cell edge.
         let local = self.to_local(dir);
-        let uv = dir_to_uv(local);
+        let uv = self.uv_of(local);
         (dir, self.filtered(uv), self.pdf_uv_dir(uv, local))
     }
 
     /// Solid-angle density of [`sample`](Self::sample) in (world) direction `dir`:
-    /// `p(ω) = p(u, v) / (2π² sin θ)` (the Jacobian of `(u, v) -> ω` is `2π · π · sin θ`).
+    /// `p(ω) = p(u, v) / (2π² sin θ)` (the Jacobian of `(u, v) -> ω` is `2π · π · sin θ`),
+    /// or `p(u, v) / 4π` for an equal-area map.
     pub fn pdf(&self, dir: Vec3) -> f32 {
         let local = self.to_local(dir);
-        self.pdf_uv_dir(dir_to_uv(local), local)
+        self.pdf_uv_dir(self.uv_of(local), local)
     }
 
     /// Half a texel in `u`: the bilinear lattice's cells start at column centres.
@@ -299,6 +371,9 @@ impl EnvironmentMap {
     /// [`pdf`](Self::pdf) with `local` in the map's frame and `uv = dir_to_uv(local)`.
     #[inline]
     fn pdf_uv_dir(&self, uv: Vec2, local: Vec3) -> f32 {
+        if self.projection == EnvProjection::EqualArea {
+            return self.dist.pdf(uv) * (1.0 / (4.0 * PI));
+        }
         let sin_theta = (1.0 - local.y * local.y).max(0.0).sqrt();
         if sin_theta.is_nan() || sin_theta <= 0.0 {
             return 0.0;
@@ -324,8 +399,14 @@ impl EnvironmentMap {
                 *s += f64::from(c) * omega;
             }
         };
-        match self.filter {
-            EnvFilter::Nearest => {
+        match (self.projection, self.filter) {
+            (EnvProjection::EqualArea, _) => {
+                let omega = 4.0 * PI64 / (w * h) as f64;
+                for &p in &self.pixels {
+                    add(p, omega);
+                }
+            }
+            (_, EnvFilter::Nearest) => {
                 for (j, row) in self.pixels.chunks_exact(w).enumerate() {
                     let t0 = PI64 * j as f64 / h as f64;
                     let t1 = PI64 * (j + 1) as f64 / h as f64;
@@ -335,7 +416,7 @@ impl EnvironmentMap {
                     }
                 }
             }
-            EnvFilter::Bilinear => {
+            (_, EnvFilter::Bilinear) => {
                 let rows = cell_rows(h);
                 for j in 0..rows {
                     let t0 = PI64 * j as f64 / rows as f64;
