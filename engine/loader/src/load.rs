@@ -33,7 +33,7 @@ use risotto_engine::output::{read_exr_rgb_within, Image, OutputError};
 use risotto_engine::plugin::BxdfFactory;
 use risotto_engine::scene::{CompileError, LightComponent, RenderSettings, Scene, ShapeGeometry};
 use risotto_systems::camera::{Camera, Projection};
-use risotto_systems::environment_map::EnvironmentMap;
+use risotto_systems::environment_map::{EnvProjection, EnvironmentMap};
 use risotto_systems::geometry::Sphere;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -549,6 +549,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 map,
                 map_at,
                 filter,
+                projection,
                 to_world,
                 ..
             } => {
@@ -556,6 +557,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                     Some(p) => {
                         let img = read_exr_rgb_within(&p, MAX_ENVIRONMENT_PIXELS)
                             .and_then(|img| check_radiance_map(&p, img))
+                            .and_then(|img| check_projection(&p, img, projection))
                             .map_err(|e| {
                                 let message = format!("cannot read environment map: {e}");
                                 match &map_at {
@@ -568,8 +570,8 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                                     ),
                                 }
                             })?;
-                        Some(Arc::new(EnvironmentMap::with_filter(
-                            img.pixels, img.width, img.height, filter, to_world,
+                        Some(Arc::new(EnvironmentMap::with_projection(
+                            img.pixels, img.width, img.height, projection, filter, to_world,
                         )))
                     }
                     None => None,
@@ -580,6 +582,25 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         scene.add_light(&name, light);
     }
     Ok(scene)
+}
+
+/// An equal-area map is square (pbrt-v4's octahedral layout has no other shape): anything
+/// else is an error naming the map and its size.
+fn check_projection(
+    path: &Path,
+    img: Image,
+    projection: EnvProjection,
+) -> Result<Image, OutputError> {
+    if projection == EnvProjection::EqualArea && img.width != img.height {
+        return Err(OutputError::Invalid {
+            path: path.to_path_buf(),
+            reason: format!(
+                "an equal_area map is square, this one is {} x {}",
+                img.width, img.height
+            ),
+        });
+    }
+    Ok(img)
 }
 
 /// An environment map's texels are radiance: every channel finite and `>= 0`. The first

@@ -6,9 +6,9 @@
 //! The square `[0, 1]^2`, recentred to `[-1, 1]^2`, is folded as an octahedron: the diamond
 //! `|u| + |v| <= 1` is the hemisphere `z >= 0` (its centre `+z`), the four corner triangles
 //! the hemisphere `z < 0` (the corners `-z`); the signs of `u` and `v` are those of `x` and
-//! `y`. Within a quadrant, the radius `r = 1 - |1 - (|u| + |v|)|` (the distance from the
-//! diamond's edge, measured to the nearer pole) sets `z = ±(1 - r^2)`, and the position
-//! along the diamond's edge the azimuth. Area is preserved exactly: the Jacobian of square
+//! `y`. The radius `r = 1 - |1 - (|u| + |v|)|` (0 at the poles, the centre and the
+//! corners; 1 on the diamond's edge, the equator) sets `z = ±(1 - r^2)`, and the position
+//! along the square ring of radius `r` the azimuth. Area is preserved exactly: the Jacobian of square
 //! to sphere is `4π` (the sphere's area over the square's), so a density `p(u, v)` on the
 //! square is `p(u, v) / 4π` per unit solid angle. The map is continuous across the square's
 //! edges when it is read with its octahedral wrap, and `+-x`, `+-y` lie on the diamond's

@@ -3,7 +3,7 @@
 use super::geometry::read_transform;
 use super::*;
 use glam::{DMat3, Mat3};
-use risotto_systems::environment_map::EnvFilter;
+use risotto_systems::environment_map::{EnvFilter, EnvProjection};
 
 /// A light that is not a shape.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,8 +57,11 @@ pub enum LightDesc {
         map: Option<PathBuf>,
         /// Where `map` is written, for the errors of reading the map (`None` without one).
         map_at: Option<Location>,
-        /// How the map is looked up between texels (`filter`, default bilinear).
+        /// How the map is looked up between texels (`filter`, default bilinear; nearest
+        /// for an equal-area map).
         filter: EnvFilter,
+        /// How the map's texels lie on the sphere (`projection`, default latitude-longitude).
+        projection: EnvProjection,
         /// The map's frame to world: the rotation of `transform`, composed with the half
         /// turn about `y` of `convention = "mitsuba"` (identity by default).
         to_world: Mat3,
@@ -160,10 +163,10 @@ pub(super) fn read_lights(
 }
 
 /// Keys of an environment light that only mean something with a `map`.
-const MAP_KEYS: &[&str] = &["filter", "transform", "convention"];
+const MAP_KEYS: &[&str] = &["filter", "transform", "convention", "projection"];
 
 /// An `environment` light's keys: `radiance`, and with a `map` its `filter`, `transform`
-/// (a rotation) and `convention`.
+/// (a rotation), `convention` and `projection`.
 fn read_environment(
     r: &Reader<'_>,
     src: &Arc<Source>,
@@ -177,6 +180,7 @@ fn read_environment(
         "filter",
         "transform",
         "convention",
+        "projection",
     ])?;
     let Some((path, map_node)) = r.path_opt("map")? else {
         if let Some(key) = MAP_KEYS.iter().find(|k| r.has(k)) {
@@ -193,6 +197,7 @@ fn read_environment(
             map: None,
             map_at: None,
             filter: EnvFilter::default(),
+            projection: EnvProjection::default(),
             to_world: Mat3::IDENTITY,
         });
     };
@@ -205,10 +210,32 @@ fn read_environment(
         ));
     }
     let map_at = Some(Location::new(src, map_node.span(), r.entity, Some("map")));
-    let filter = match r.str_opt("filter")? {
-        None | Some("bilinear") => EnvFilter::Bilinear,
-        Some("nearest") => EnvFilter::Nearest,
+    let projection = match r.str_opt("projection")? {
+        None | Some("latlong") => EnvProjection::LatLong,
+        Some("equal_area") => EnvProjection::EqualArea,
         Some(_) => {
+            let node = r.get("projection").unwrap_or(r.node);
+            return Err(r.invalid(
+                "projection",
+                node,
+                "must be \"latlong\" or \"equal_area\" (pbrt-v4's octahedral square)",
+            ));
+        }
+    };
+    let filter = match (r.str_opt("filter")?, projection) {
+        (None | Some("nearest"), EnvProjection::EqualArea) => EnvFilter::Nearest,
+        (Some("bilinear"), EnvProjection::EqualArea) => {
+            let node = r.get("filter").unwrap_or(r.node);
+            return Err(r.invalid(
+                "filter",
+                node,
+                "an equal_area map is looked up nearest-texel, as pbrt-v4 does (bilinear \
+                 would blend across the octahedron's folds)",
+            ));
+        }
+        (None | Some("bilinear"), _) => EnvFilter::Bilinear,
+        (Some("nearest"), _) => EnvFilter::Nearest,
+        (Some(_), _) => {
             let node = r.get("filter").unwrap_or(r.node);
             return Err(r.invalid("filter", node, "must be \"bilinear\" or \"nearest\""));
         }
@@ -216,6 +243,15 @@ fn read_environment(
     // Mitsuba 3's `u = 0` is at -z, ours at +z: its map is ours turned half about y.
     let half_turn = match r.str_opt("convention")? {
         None | Some("risotto") => false,
+        Some("mitsuba") if projection == EnvProjection::EqualArea => {
+            let node = r.get("convention").unwrap_or(r.node);
+            return Err(r.invalid(
+                "convention",
+                node,
+                "Mitsuba's maps are latitude-longitude: \"mitsuba\" does not apply to an \
+                 equal_area map",
+            ));
+        }
         Some("mitsuba") => true,
         Some(_) => {
             let node = r.get("convention").unwrap_or(r.node);
@@ -232,6 +268,7 @@ fn read_environment(
         map: Some(path),
         map_at,
         filter,
+        projection,
         to_world: to_world.as_mat3(),
     })
 }

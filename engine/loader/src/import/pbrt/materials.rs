@@ -609,14 +609,27 @@ impl Converter<'_> {
                 e.set("irradiance", rgb("L")?);
             }
             "infinite" => {
-                if let Some(q) = p.ignore("filename") {
-                    return Err(p.error(lx, q, "image infinite lights are not converted yet (pbrt-v4's maps are equal-area octahedral, risotto's latitude-longitude); give a constant L"));
-                }
                 if let Some(q) = p.ignore("portal") {
                     return Err(p.error(lx, q, "portals are not supported"));
                 }
                 e.set("type", "environment");
-                e.set("radiance", rgb("L")?);
+                match p.string(lx, "filename")? {
+                    // pbrt-v4's `ImageInfiniteLight`: an equal-area octahedral square in the
+                    // light's frame (`renderFromLight`, here the CTM), looked up nearest-texel,
+                    // its RGB times `scale` the radiance (no photometric normalisation for
+                    // images, unlike `L`).
+                    Some((file, q)) => {
+                        if p.has("L") {
+                            return Err(p.error(lx, q, "give either L or a filename, not both"));
+                        }
+                        let path = self.lx.resolve(at, file);
+                        e.set("map", path_for_toml(&path, self.options.toml_dir));
+                        e.set("projection", "equal_area");
+                        e.set("radiance", scale);
+                        e.set("transform", self.transform_value(&m, at, &p.entity)?);
+                    }
+                    None => e.set("radiance", rgb("L")?),
+                }
             }
             _ => {
                 return Err(self.error(

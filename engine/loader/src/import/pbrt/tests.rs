@@ -284,7 +284,7 @@ fn errors_are_located() {
         ("Include \"missing.pbrt\"", "6:1", "missing.pbrt"),
         ("Shape \"sphere\" \"string x\" \"abc", "6:27", "unterminated string"),
         ("LightSource \"goniometric\"", "6:1", "light \"goniometric\" is not supported"),
-        ("LightSource \"infinite\" \"string filename\" \"sky.exr\"", "6:24", "octahedral"),
+        ("LightSource \"infinite\" \"string filename\" \"sky.exr\" \"rgb L\" [1 1 1]", "6:24", "either L or a filename"),
         ("Shape \"curve\"", "6:1", "shape \"curve\" is not supported"),
         ("Shape \"loopsubdiv\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"integer indices\" [0 1 2 0 1 3 1 0 2]", "6:1", "more than two triangles"),
         ("AttributeEnd", "6:1", "has no matching Begin"),
@@ -416,4 +416,38 @@ fn spectra_become_rgb_and_light_spectra_have_unit_luminance() {
         e.contains("scene.pbrt:6:20:") && e.contains("bad.spd` line 2: `x`"),
         "{e}"
     );
+}
+
+/// An image infinite light becomes an equal-area environment map whose frame is carried
+/// into the world exactly as the scene's geometry is (the same CTM and world mirror): the
+/// map's `transform` takes the light frame's axes where a point light placed on them under
+/// the same CTM lands, and its radiance is the `scale`.
+#[test]
+fn image_infinite_lights_are_equal_area_maps_in_the_light_frame() {
+    let text = format!(
+        "{HEAD}WorldBegin\nAttributeBegin\nRotate -90 1 0 0\nRotate 30 0 0 1\n\
+         LightSource \"infinite\" \"string filename\" \"sky.exr\" \"float scale\" 2.5\n\
+         LightSource \"point\" \"point3 from\" [1 0 0]\n\
+         LightSource \"point\" \"point3 from\" [0 1 0]\n\
+         LightSource \"point\" \"point3 from\" [0 0 1]\n\
+         AttributeEnd\n"
+    );
+    let scene = convert("infinite-image", &text);
+    let lights: Vec<&toml::Table> = scene.lights.iter().map(|e| &e.table).collect();
+    let env = lights[0];
+    assert_eq!(env["type"].as_str(), Some("environment"));
+    assert_eq!(env["projection"].as_str(), Some("equal_area"));
+    assert!(env["map"].as_str().unwrap().ends_with("sky.exr"), "{env:?}");
+    assert_eq!(env["radiance"].as_float(), Some(2.5));
+    let m = matrix(env);
+    for (axis, light) in lights[1..].iter().enumerate() {
+        let landed = floats(&light["position"]);
+        let column: Vec<f64> = (0..3).map(|row| m[row][axis]).collect();
+        for k in 0..3 {
+            assert!(
+                (landed[k] - m[k][3] - column[k]).abs() < 1e-9,
+                "axis {axis}: the map's frame takes it to {column:?}, the point light lands at {landed:?}"
+            );
+        }
+    }
 }
