@@ -63,6 +63,59 @@ pub struct DensityGrid {
     mean: f64,
 }
 
+/// Independent accumulator lanes of [`scan`] and [`bounds_of`]: eight running maxima (or
+/// sums) have no dependency on each other, so a pass over a large grid is not bound by
+/// the latency of one chain of `max` (or f64 add) operations, and the lanes vectorise.
+const LANES: usize = 8;
+
+/// One pass over `values`: whether every value is finite and `>= 0`, the largest (at least
+/// 0) and the sum in f64 (lane-wise partial sums added at the end).
+fn scan(values: &[f32]) -> (bool, f32, f64) {
+    let (mut valid, mut hi, mut sum) = (true, [0.0f32; LANES], [0.0f64; LANES]);
+    let chunks = values.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..LANES {
+            let v = c[k];
+            valid &= v.is_finite() & (v >= 0.0);
+            hi[k] = hi[k].max(v);
+            sum[k] += v as f64;
+        }
+    }
+    for (k, &v) in rest.iter().enumerate() {
+        valid &= v.is_finite() & (v >= 0.0);
+        hi[k] = hi[k].max(v);
+        sum[k] += v as f64;
+    }
+    (
+        valid,
+        hi.into_iter().fold(0.0, f32::max),
+        sum.into_iter().sum(),
+    )
+}
+
+/// `(max, min)` of `values` (a row of a validated grid: no NaN), `(0, inf)` when empty.
+#[inline]
+fn bounds_of(values: &[f32], (mut hi, mut lo): (f32, f32)) -> (f32, f32) {
+    let (mut his, mut los) = ([hi; LANES], [lo; LANES]);
+    let chunks = values.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..LANES {
+            his[k] = his[k].max(c[k]);
+            los[k] = los[k].min(c[k]);
+        }
+    }
+    for &v in rest {
+        hi = hi.max(v);
+        lo = lo.min(v);
+    }
+    (
+        his.into_iter().fold(hi, f32::max),
+        los.into_iter().fold(lo, f32::min),
+    )
+}
+
 impl DensityGrid {
     /// A grid of `dims = [nx, ny, nz]` voxels, `data[ix + nx (iy + ny iz)]`. Every dimension
     /// must be at least 1, `data` must hold `nx ny nz` values, each finite and >= 0.
@@ -78,15 +131,19 @@ impl DensityGrid {
                 got: data.len(),
             });
         }
-        if let Some(index) = data.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        let (valid, max, sum) = scan(&data);
+        if !valid {
+            let index = data
+                .iter()
+                .position(|v| !(v.is_finite() && *v >= 0.0))
+                .expect("scan found a value that is not finite and >= 0");
             return Err(GridValueError::Value {
                 index,
                 voxel: voxel_of(dims, index),
                 value: data[index],
             });
         }
-        let max = data.iter().copied().fold(0.0f32, f32::max);
-        let mean = data.iter().map(|&v| v as f64).sum::<f64>() / data.len() as f64;
+        let mean = sum / data.len() as f64;
         Ok(DensityGrid {
             dims,
             data,
@@ -233,18 +290,15 @@ impl MajorantGrid {
         for &(z0, z1) in &sz {
             for &(y0, y1) in &sy {
                 for &(x0, x1) in &sx {
-                    let (mut hi, mut lo) = (0.0f32, f32::INFINITY);
+                    let mut bounds = (0.0f32, f32::INFINITY);
                     for z in z0..=z1 {
                         for y in y0..=y1 {
-                            for x in x0..=x1 {
-                                let v = grid.voxel(x, y, z);
-                                hi = hi.max(v);
-                                lo = lo.min(v);
-                            }
+                            let row = dims[0] * (y + dims[1] * z);
+                            bounds = bounds_of(&grid.data[row + x0..=row + x1], bounds);
                         }
                     }
-                    max.push(hi);
-                    min.push(lo);
+                    max.push(bounds.0);
+                    min.push(bounds.1);
                 }
             }
         }
@@ -421,6 +475,32 @@ impl Iterator for Dda<'_> {
 mod tests {
     use super::*;
     use crate::sampler::SplitMix64;
+
+    #[test]
+    fn lane_wise_scans_agree_with_plain_folds() {
+        // Lengths around the lane count (the remainder path) and a long one; the first bad
+        // value anywhere (in a lane or in the remainder) is found.
+        let mut rng = SplitMix64(9);
+        for n in [1usize, 7, 8, 9, 17, 1000, 4099] {
+            let values: Vec<f32> = (0..n).map(|_| rng.f32() * 5.0).collect();
+            let (valid, max, sum) = scan(&values);
+            assert!(valid);
+            assert_eq!(max, values.iter().copied().fold(0.0, f32::max), "n = {n}");
+            let plain: f64 = values.iter().map(|&v| v as f64).sum();
+            assert!((sum - plain).abs() <= 1e-12 * plain.max(1.0), "n = {n}");
+            let (hi, lo) = bounds_of(&values, (0.0, f32::INFINITY));
+            assert_eq!(hi, values.iter().copied().fold(0.0, f32::max));
+            assert_eq!(lo, values.iter().copied().fold(f32::INFINITY, f32::min));
+            for bad in [-1.0, f32::NAN, f32::INFINITY] {
+                for at in [0, n / 2, n - 1] {
+                    let mut v = values.clone();
+                    v[at] = bad;
+                    assert!(!scan(&v).0, "n = {n}, {bad} at {at} not seen");
+                }
+            }
+        }
+        assert_eq!(bounds_of(&[], (0.0, f32::INFINITY)), (0.0, f32::INFINITY));
+    }
 
     #[test]
     fn the_harness_two_voxel_check() {

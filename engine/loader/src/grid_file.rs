@@ -223,14 +223,36 @@ fn read_values(
     if actual != expected {
         return Err(size_error(actual));
     }
-    let bytes = std::fs::read(path).map_err(io(path))?;
-    if bytes.len() as u64 != expected {
-        return Err(size_error(bytes.len() as u64));
-    }
-    let data: Vec<f32> = bytes[offset as usize..]
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect();
+    // Streamed into the values in blocks, so the file's bytes and the grid are never held
+    // at once (a 512^3 grid peaked at twice its 537 MB when the file was read whole).
+    let data = {
+        use std::io::{Read, Seek, SeekFrom};
+        let mut f = std::fs::File::open(path).map_err(io(path))?;
+        f.seek(SeekFrom::Start(offset)).map_err(io(path))?;
+        let count = n * channels;
+        let mut data: Vec<f32> = Vec::with_capacity(count);
+        // A multiple of 4 bytes, so no value straddles two blocks.
+        let mut block = vec![0u8; (4 * count).min(1 << 20)];
+        let mut remaining = 4 * count;
+        while remaining > 0 {
+            let take = remaining.min(block.len());
+            f.read_exact(&mut block[..take]).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                    // The file shrank after its length was checked.
+                    size_error(expected - (remaining - take) as u64)
+                } else {
+                    io(path)(e)
+                }
+            })?;
+            data.extend(
+                block[..take]
+                    .chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            );
+            remaining -= take;
+        }
+        data
+    };
     let located = |e: GridValueError| match e {
         GridValueError::Value { index, value, .. } => GridFileError::Value {
             path: path.to_path_buf(),
