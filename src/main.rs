@@ -585,8 +585,9 @@ fn techniques_command(scene_path: &Path, defines: &[String]) -> Result<()> {
     let input = SceneInput::read(scene_path, defines, None)?;
     let compiled = compile_scene(input.load(&registry)?)?;
     print!(
-        "{}",
-        technique::listing(&TechniqueRegistry::for_scene(&compiled))
+        "{}{}",
+        technique::listing(&TechniqueRegistry::for_scene(&compiled)),
+        risotto::tools::converge::listing(&compiled)
     );
     Ok(())
 }

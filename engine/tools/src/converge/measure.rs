@@ -38,11 +38,11 @@ pub fn combine_halves(a: &Image, b: &Image) -> (Image, f64, f64) {
 
 /// A point from its repeats.
 pub(super) fn point(
-    spp: u32,
-    renders: &[Sample],
+    raw: &RawPoint,
     reference: &Image,
     info: &ReferenceInfo,
 ) -> Result<Point, ConvergeError> {
+    let renders = &raw.renders;
     let mut mse = Vec::new();
     let mut relmse = Vec::new();
     let mut bias = [0.0f64; 3];
@@ -62,8 +62,9 @@ pub(super) fn point(
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (m, t) = (mean(&mse), min(&seconds));
+    let spp_mean: Vec<f64> = renders.iter().map(|s| s.spp_mean).collect();
     Ok(Point {
-        spp,
+        spp: raw.spp,
         repeats: renders.len() as u32,
         seconds: t,
         seconds_mean: mean(&seconds),
@@ -77,6 +78,8 @@ pub(super) fn point(
         relmse_max: max(&relmse),
         bias,
         efficiency: efficiency(m, t),
+        noise_target: raw.noise_target,
+        spp_mean: raw.noise_target.map(|_| mean(&spp_mean)),
     })
 }
 
@@ -108,25 +111,25 @@ pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 /// A curve from its points.
-pub(super) fn curve(
-    registry: &TechniqueRegistry,
-    techniques: &Techniques,
-    points: Vec<Point>,
-) -> Curve {
+pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec<Point>) -> Curve {
     let valid = || points.iter().filter(|p| p.mse > 0.0 && p.seconds > 0.0);
     let mse_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.mse.ln())).collect();
-    let rmse_spp: Vec<(f64, f64)> = valid()
-        .map(|p| ((p.spp as f64).ln(), p.rmse.ln()))
-        .collect();
+    let rmse_spp: Vec<(f64, f64)> = valid().map(|p| (p.samples().ln(), p.rmse.ln())).collect();
     let last = points.last();
+    let techniques = &variant.techniques;
+    let adaptive = match variant.adaptive {
+        true => "on",
+        false => ADAPTIVE.default,
+    };
     Curve {
-        label: techniques.label(),
+        label: variant.label(),
         techniques: registry
             .applicable()
             .map(|t| {
                 let v = techniques.get(registry, t.name).unwrap_or("?");
                 (t.name.to_string(), v.to_string())
             })
+            .chain([(ADAPTIVE.name.to_string(), adaptive.to_string())])
             .collect(),
         efficiency: last.map_or(f64::NAN, |p| p.efficiency),
         mse_time_slope: fit_line(&mse_time).map_or(f64::NAN, |(_, b)| b),
@@ -141,6 +144,12 @@ pub(super) fn curve(
 /// Monte Carlo), and time is taken proportional to spp at the curve's mean seconds per
 /// sample (total seconds over total spp, so its largest renders weigh most). `None` without
 /// a valid point.
+///
+/// An adaptive curve's points are fitted the same way against the **mean** spp its pixels
+/// took ([`Point::samples`]), not its cap: its time is about proportional to the samples
+/// taken (the passes' bookkeeping is one sweep over the film per pass), and its seconds per
+/// sample, total seconds over total mean spp, charge that bookkeeping and the less parallel
+/// late passes to it.
 pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
     let valid: Vec<&Point> = c
         .points
@@ -149,14 +158,14 @@ pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
         .collect();
     let pts: Vec<(f64, f64)> = valid
         .iter()
-        .map(|p| ((p.spp as f64).ln(), p.mse.ln()))
+        .map(|p| (p.samples().ln(), p.mse.ln()))
         .collect();
     let (a, b) = match fit_line(&pts) {
         Some((a, b)) if b < 0.0 => (a, b),
         _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,
     };
     let per_spp = valid.iter().map(|p| p.seconds).sum::<f64>()
-        / valid.iter().map(|p| p.spp as f64).sum::<f64>();
+        / valid.iter().map(|p| p.samples()).sum::<f64>();
     // ln MSE = a + b ln spp, spp = seconds / per_spp.
     Some((a - b * per_spp.ln(), b))
 }
