@@ -139,33 +139,40 @@ pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec
 }
 
 /// The line `ln MSE = a + b ln seconds` of a curve. Render times of small images are
-/// dominated by timer and scheduling noise, so the error is not fitted against them: `b` is
-/// the least-squares slope of ln MSE against ln spp (-1 when that is not negative, as for
-/// Monte Carlo), and time is taken proportional to spp at the curve's mean seconds per
-/// sample (total seconds over total spp, so its largest renders weigh most). `None` without
-/// a valid point.
+/// dominated by timer and scheduling noise, so a uniform curve's error is not fitted
+/// against them: `b` is the least-squares slope of ln MSE against ln spp (-1 when that is
+/// not negative, as for Monte Carlo), and time is taken proportional to spp at the curve's
+/// mean seconds per sample (total seconds over total spp, so its largest renders weigh
+/// most). `None` without a valid point.
 ///
-/// An adaptive curve's points are fitted the same way against the **mean** spp its pixels
-/// took ([`Point::samples`]), not its cap: its time is about proportional to the samples
-/// taken (the passes' bookkeeping is one sweep over the film per pass), and its seconds per
-/// sample, total seconds over total mean spp, charge that bookkeeping and the less parallel
-/// late passes to it.
+/// An adaptive curve (its points have noise targets) is fitted against its **seconds**
+/// directly: its time is not proportional to its samples, since its samples go where the
+/// noise is, in the paths that cost most. On `scenes/adaptive-smoke-ball.toml` (README,
+/// "Accuracy and its cost") a mean of 429 spp took 1.9 ms per spp and 934 spp 1.4 ms,
+/// while the uniform renders took 0.9 to 1.0 ms per spp, so a fit against the mean spp
+/// with one cost per sample would misplace its early points in time by up to 2x. Its renders take at least `2 min_spp` samples per pixel, so they are not
+/// the millisecond renders whose times are noise.
 pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
     let valid: Vec<&Point> = c
         .points
         .iter()
         .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
         .collect();
-    let pts: Vec<(f64, f64)> = valid
-        .iter()
-        .map(|p| (p.samples().ln(), p.mse.ln()))
-        .collect();
+    let adaptive = valid.iter().any(|p| p.noise_target.is_some());
+    let x = |p: &Point| match adaptive {
+        true => p.seconds,
+        false => p.spp as f64,
+    };
+    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), p.mse.ln())).collect();
     let (a, b) = match fit_line(&pts) {
         Some((a, b)) if b < 0.0 => (a, b),
         _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,
     };
+    if adaptive {
+        return Some((a, b));
+    }
     let per_spp = valid.iter().map(|p| p.seconds).sum::<f64>()
-        / valid.iter().map(|p| p.samples()).sum::<f64>();
+        / valid.iter().map(|p| p.spp as f64).sum::<f64>();
     // ln MSE = a + b ln spp, spp = seconds / per_spp.
     Some((a - b * per_spp.ln(), b))
 }

@@ -29,8 +29,8 @@ pub struct ComparisonTable {
 
 impl Sweep {
     /// Equal-time error and equal-error time of every curve relative to the best, read off
-    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp, an adaptive
-    /// curve's against its mean spp, with time proportional to it; see `error_time_model`)
+    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp with time
+    /// proportional to spp, an adaptive curve's against its seconds; see `error_time_model`)
     /// at the largest time all curves reach and at the smallest MSE all reach.
     pub fn comparison(&self) -> ComparisonTable {
         let models: Vec<Option<(f64, f64)>> = self.curves.iter().map(error_time_model).collect();
