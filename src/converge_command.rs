@@ -178,6 +178,12 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
                 );
             }
             let techniques = match &args.reference_technique {
+                Some(spec) if Variant::parse(&compiled, spec).is_ok_and(|v| v.adaptive) => {
+                    anyhow::bail!(
+                        "--reference-technique {spec}: a reference is rendered uniformly \
+                         (adaptive sampling's stopping rule is biased)"
+                    )
+                }
                 Some(spec) => Some(
                     Techniques::parse(&registry, spec)
                         .with_context(|| format!("--reference-technique {spec}"))?,

@@ -60,7 +60,8 @@ enum Command {
         reference: PathBuf,
     },
     /// List the techniques (estimator choices that trade time for error) that apply to a
-    /// scene, with their values; `*` marks the default.
+    /// scene, with their values; `*` marks the default. `adaptive` (converge's adaptive
+    /// sampling) follows them where the scene's integrator is the path tracer.
     Techniques {
         /// The scene file, or `-` to read it from standard input.
         scene: PathBuf,

@@ -219,4 +219,8 @@ fn adaptive_with_a_bidirectional_integrator_and_bad_plans_are_refused() {
         &["--techniques", "adaptive=on", "--min-spp", "0"],
         &["--min-spp 0"],
     );
+    refused(
+        &["--reference-technique", "lighting=nee+adaptive=on"],
+        &["--reference-technique", "rendered uniformly", "biased"],
+    );
 }
