@@ -45,8 +45,8 @@
 //! mean). A curve stops at the first target at which every pixel took the cap: a smaller
 //! one renders the same image. With a time budget the cap is not known in advance: the
 //! adaptive curves render after the uniform ones, capped at the largest spp those reached
-//! (at least `4 x min_spp`, so that pixels can stop early), their first target halved until
-//! a render takes the budget. Adaptive sampling's stopping rule is biased (it reads the
+//! (at least `4 x min_spp`, so that pixels can stop early; `MAX_SPP` without a uniform
+//! curve), their first target halved until a render takes the budget. Adaptive sampling's stopping rule is biased (it reads the
 //! samples it stops on), so an adaptive variant never renders the reference.
 
 use crate::compare::{compare, CompareError, DEFAULT_RELMSE_EPS};
