@@ -10,7 +10,7 @@ use risotto::engine::output::read_exr_rgb;
 use risotto::engine::render::RenderOptions;
 use risotto::engine::technique::{TechniqueRegistry, Techniques};
 use risotto::loader::load::{compile_scene, MaterialRegistry};
-use risotto::tools::converge::{self, ConvergeOptions, Reference, SppPlan};
+use risotto::tools::converge::{self, AdaptivePlan, ConvergeOptions, Reference, SppPlan, Variant};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -35,8 +35,9 @@ pub(crate) struct ConvergeArgs {
     #[arg(long)]
     reference_technique: Option<String>,
     /// The variants to sweep, comma-separated, each NAME=VALUE[+NAME=VALUE...] on top of the
-    /// defaults; `all`: the defaults and every other value of every technique that applies
-    /// to the scene, one at a time.
+    /// defaults, `adaptive=on` among them (adaptive sampling, points at --noise-targets);
+    /// `all`: the defaults, every other value of every technique that applies to the scene
+    /// one at a time, and adaptive=on where the scene's integrator is the path tracer.
     #[arg(long, default_value = "all")]
     techniques: String,
     /// Samples per pixel of the sweep, comma-separated.
@@ -46,6 +47,14 @@ pub(crate) struct ConvergeArgs {
     /// least this many seconds.
     #[arg(long)]
     budget: Option<f64>,
+    /// The noise targets (relative errors, descending) of the adaptive=on curves, one point
+    /// each, at most the sweep's largest spp per pixel. With --budget the first is halved
+    /// until a render takes the budget.
+    #[arg(long, default_value = "0.4,0.2,0.1,0.05,0.025,0.0125,0.00625")]
+    noise_targets: String,
+    /// The samples every pixel of an adaptive=on point takes before any stops.
+    #[arg(long, default_value_t = converge::DEFAULT_MIN_SPP)]
+    min_spp: u32,
     /// Renders per point, with different seeds (min/max error bars).
     #[arg(long, default_value_t = 1)]
     repeats: u32,
@@ -83,30 +92,75 @@ fn parse_spp_list(s: &str) -> Result<Vec<u32>> {
     Ok(v)
 }
 
+/// Parses `--noise-targets 0.4,0.2`: positive, descending.
+fn parse_noise_targets(s: &str) -> Result<Vec<f64>> {
+    let mut v = Vec::new();
+    for item in s.split(',') {
+        let x: f64 = item
+            .trim()
+            .parse()
+            .with_context(|| format!("--noise-targets {s}: \"{item}\" is not a number"))?;
+        anyhow::ensure!(
+            x.is_finite() && x > 0.0,
+            "--noise-targets {s}: {x} is not a positive relative error (e.g. 0.1)"
+        );
+        v.push(x);
+    }
+    v.sort_unstable_by(|a, b| b.total_cmp(a));
+    v.dedup();
+    Ok(v)
+}
+
 pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
     let registry = MaterialRegistry::with_builtins();
     let input = SceneInput::read(&args.scene, &args.defines, None)?;
     let mut compiled = compile_scene(input.load(&registry)?)?;
     let registry = TechniqueRegistry::for_scene(&compiled);
     let variants = if args.techniques.trim() == "all" {
-        Techniques::variants(&registry)
+        Variant::all(&compiled)
     } else {
         let mut v = Vec::new();
         for spec in args.techniques.split(',') {
-            let t = Techniques::parse(&registry, spec.trim())
-                .with_context(|| format!("--techniques {}", args.techniques))?;
-            t.check_applicable(&registry)
-                .with_context(|| format!("--techniques {spec} on {}", args.scene.display()))?;
+            let t = Variant::parse(&compiled, spec.trim()).with_context(|| {
+                format!(
+                    "--techniques {} on {}",
+                    args.techniques,
+                    args.scene.display()
+                )
+            })?;
             if !v.contains(&t) {
                 v.push(t);
             }
         }
         v
     };
+    anyhow::ensure!(
+        args.min_spp >= 1,
+        "--min-spp {}: must be at least 1",
+        args.min_spp
+    );
+    let adaptive = AdaptivePlan {
+        noise_targets: parse_noise_targets(&args.noise_targets)?,
+        min_spp: args.min_spp,
+    };
     let plan = match args.budget {
         Some(b) => SppPlan::Budget(b),
         None => SppPlan::List(parse_spp_list(&args.spp)?),
     };
+    let mut variants = variants;
+    if let (true, SppPlan::List(spps)) = (args.techniques.trim() == "all", &plan) {
+        // `all` asks for adaptive=on only where it can show something; asked for by name
+        // with too small a cap it is an error (converge::run).
+        let cap = spps.iter().copied().max().unwrap_or(1);
+        if variants.iter().any(|v| v.adaptive) && !adaptive.can_stop_below(cap) {
+            variants.retain(|v| !v.adaptive);
+            eprintln!(
+                "note: adaptive=on left out: with --spp up to {cap} no pixel can stop before \
+                 the cap (a pixel stops at 2 x --min-spp {} samples at the earliest)",
+                adaptive.min_spp
+            );
+        }
+    }
     let reference = match &args.reference {
         Some(path) => {
             let image = read_exr_rgb(path).context("--reference")?;
@@ -124,6 +178,12 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
                 );
             }
             let techniques = match &args.reference_technique {
+                Some(spec) if Variant::parse(&compiled, spec).is_ok_and(|v| v.adaptive) => {
+                    anyhow::bail!(
+                        "--reference-technique {spec}: a reference is rendered uniformly \
+                         (adaptive sampling's stopping rule is biased)"
+                    )
+                }
                 Some(spec) => Some(
                     Techniques::parse(&registry, spec)
                         .with_context(|| format!("--reference-technique {spec}"))?,
@@ -144,6 +204,7 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
     let options = ConvergeOptions {
         variants,
         plan,
+        adaptive,
         repeats: args.repeats,
         reference,
         render: RenderOptions {

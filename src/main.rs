@@ -60,7 +60,8 @@ enum Command {
         reference: PathBuf,
     },
     /// List the techniques (estimator choices that trade time for error) that apply to a
-    /// scene, with their values; `*` marks the default.
+    /// scene, with their values; `*` marks the default. `adaptive` (converge's adaptive
+    /// sampling) follows them where the scene's integrator is the path tracer.
     Techniques {
         /// The scene file, or `-` to read it from standard input.
         scene: PathBuf,
@@ -585,8 +586,9 @@ fn techniques_command(scene_path: &Path, defines: &[String]) -> Result<()> {
     let input = SceneInput::read(scene_path, defines, None)?;
     let compiled = compile_scene(input.load(&registry)?)?;
     print!(
-        "{}",
-        technique::listing(&TechniqueRegistry::for_scene(&compiled))
+        "{}{}",
+        technique::listing(&TechniqueRegistry::for_scene(&compiled)),
+        risotto::tools::converge::listing(&compiled)
     );
     Ok(())
 }

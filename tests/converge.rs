@@ -5,80 +5,12 @@
 //! input rejected with a message naming it.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::Output;
+use std::path::Path;
 
 mod common;
 use common::cli::{assert_fails, risotto};
+use common::converge::{assert_ok, converge, cornell, csv_rows, num, CORNELL_ALL};
 use common::scratch_dir;
-
-/// The cornell box of the Mitsuba suite at `size` x `size` pixels.
-fn cornell(dir: &Path, size: u32) -> PathBuf {
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mitsuba-suite/cornell.toml"),
-    )
-    .unwrap();
-    for key in ["width = 256", "height = 256"] {
-        assert!(text.contains(key), "test bug: {key} not in cornell.toml");
-    }
-    let text = text
-        .replacen("width = 256", &format!("width = {size}"), 1)
-        .replacen("height = 256", &format!("height = {size}"), 1);
-    let path = dir.join(format!("cornell-{size}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn assert_ok(what: &str, out: &Output) {
-    assert!(
-        out.status.success(),
-        "{what}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// Runs `risotto converge SCENE --out DIR --quiet ARGS`.
-fn converge(scene: &Path, dir: &Path, args: &[&str]) -> Output {
-    let mut all = vec![
-        "converge",
-        scene.to_str().unwrap(),
-        "--out",
-        dir.to_str().unwrap(),
-        "--quiet",
-    ];
-    all.extend_from_slice(args);
-    risotto(&all)
-}
-
-/// The rows of `converge.csv` as column name -> text maps.
-fn csv_rows(dir: &Path) -> (Vec<String>, Vec<BTreeMap<String, String>>) {
-    let text = std::fs::read_to_string(dir.join("converge.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            assert_eq!(cells.len(), header.len(), "row {l}");
-            header
-                .iter()
-                .cloned()
-                .zip(cells.iter().map(|c| c.to_string()))
-                .collect()
-        })
-        .collect();
-    (header, rows)
-}
-
-fn num(row: &BTreeMap<String, String>, col: &str) -> f64 {
-    row[col]
-        .parse()
-        .unwrap_or_else(|_| panic!("{col}: {}", row[col]))
-}
 
 /// The MSE of `technique` at `spp` in the sweep in `dir`.
 fn mse(rows: &[BTreeMap<String, String>], technique: &str, spp: u32) -> f64 {
@@ -104,17 +36,9 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
 
     let (header, rows) = csv_rows(&out_dir);
     assert_eq!(header, risotto::tools::converge::CSV_COLUMNS);
-    // `all` on cornell: the defaults, the light tracer, bdpt and vcm, lighting nee and bxdf,
-    // the independent sampler; each at spp 1, 2, 4 in that order.
-    let labels = [
-        "lighting=mis+sampler=sobol",
-        "integrator=light",
-        "integrator=bdpt",
-        "integrator=vcm",
-        "lighting=nee",
-        "lighting=bxdf",
-        "sampler=independent",
-    ];
+    // `all` on cornell, each at spp 1, 2, 4 in that order (no adaptive=on: with at most 4
+    // spp no pixel could stop early).
+    let labels = CORNELL_ALL;
     assert_eq!(rows.len(), 3 * labels.len());
     for (i, row) in rows.iter().enumerate() {
         assert_eq!(row["technique"], labels[i / 3]);
@@ -313,8 +237,12 @@ fn listed(scene: &Path) -> Vec<String> {
 fn techniques_lists_only_what_applies() {
     let dir = scratch_dir("converge", "listing");
     let scene = cornell(&dir, 16);
-    // Cornell has no volumes: the integrator, lighting and sampler, nothing else.
-    assert_eq!(listed(&scene), ["integrator", "lighting", "sampler"]);
+    // Cornell has no volumes: the integrator, lighting and sampler, nothing else, and
+    // converge's adaptive sampling (the path tracer renders it).
+    assert_eq!(
+        listed(&scene),
+        ["integrator", "lighting", "sampler", "adaptive"]
+    );
     let out = risotto(&["techniques", scene.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     for v in [
@@ -326,6 +254,8 @@ fn techniques_lists_only_what_applies() {
         "integrator=path",
         "integrator=bdpt",
         "integrator=vcm",
+        "adaptive=off",
+        "adaptive=on",
     ] {
         assert!(text.contains(v), "listing lacks {v}: {text}");
     }
@@ -336,7 +266,7 @@ fn techniques_lists_only_what_applies() {
     let end = start + text[start..].find("\n\n").unwrap_or(text.len() - start);
     let dark = dir.join("dark.toml");
     std::fs::write(&dark, format!("{}{}", &text[..start], &text[end..])).unwrap();
-    assert_eq!(listed(&dark), ["sampler"]);
+    assert_eq!(listed(&dark), ["sampler", "adaptive"]);
     let out = risotto(&[
         "render",
         dark.to_str().unwrap(),

@@ -22,7 +22,9 @@ use risotto::engine::scene::{CompiledScene, Scene, ShapeGeometry};
 use risotto::engine::technique::{listing, TechniqueRegistry, Techniques};
 use risotto::systems::geometry::Sphere;
 use risotto::systems::sampler::PathSampler;
-use risotto::tools::converge::{run, ConvergeOptions, Progress, Reference, SppPlan};
+use risotto::tools::converge::{
+    run, AdaptivePlan, ConvergeOptions, Progress, Reference, SppPlan, Variant,
+};
 
 /// The declaration, as data.
 static ABSORPTION: Technique = Technique {
@@ -205,8 +207,10 @@ fn converge_sweeps_a_declared_technique_and_keeps_it_out_of_the_reference() {
                     "lighting=mis+sampler=sobol" | "absorption=double"
                 )
             })
+            .map(Variant::from)
             .collect(),
         plan: SppPlan::List(vec![1, 2]),
+        adaptive: AdaptivePlan::default(),
         repeats: 1,
         reference: Reference::Render {
             spp: Some(8),

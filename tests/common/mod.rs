@@ -2,6 +2,7 @@
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
 pub mod cli;
+pub mod converge;
 pub mod images;
 
 use glam::Vec3;

@@ -383,20 +383,24 @@ impl Techniques {
 /// The listing `risotto techniques SCENE` prints: each applicable technique with its values
 /// (`*` marks the default) and what it applies to.
 pub fn listing(registry: &TechniqueRegistry) -> String {
-    let mut s = String::new();
-    for t in registry.applicable() {
-        s += &format!("{}: {} (applies to {})\n", t.name, t.summary, t.applies_to);
-        let width = t
-            .values
-            .iter()
-            .map(|v| v.name.len())
-            .max()
-            .unwrap_or(0)
-            .max(12);
-        for v in t.values {
-            let mark = if v.name == t.default { "*" } else { " " };
-            s += &format!("  {mark} {}={:<width$} {}\n", t.name, v.name, v.summary);
-        }
+    registry.applicable().map(listing_entry).collect()
+}
+
+/// One technique's lines of [`listing`]: `NAME: summary (applies to ...)`, then one
+/// indented line per value (`*` marks the default). Also for choices listed beside the
+/// techniques, such as `converge`'s `adaptive`.
+pub fn listing_entry(t: &Technique) -> String {
+    let mut s = format!("{}: {} (applies to {})\n", t.name, t.summary, t.applies_to);
+    let width = t
+        .values
+        .iter()
+        .map(|v| v.name.len())
+        .max()
+        .unwrap_or(0)
+        .max(12);
+    for v in t.values {
+        let mark = if v.name == t.default { "*" } else { " " };
+        s += &format!("  {mark} {}={:<width$} {}\n", t.name, v.name, v.summary);
     }
     s
 }

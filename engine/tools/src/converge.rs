@@ -1,8 +1,9 @@
 //! The convergence sweep behind `risotto converge`: what accuracy costs in time, per
 //! technique ([`risotto_engine::technique`]).
 //!
-//! One compiled scene is rendered with every variant (a [`Techniques`] choice) at every
-//! samples-per-pixel count, `repeats` times with seeds `seed, seed + 1, ...`, and each
+//! One compiled scene is rendered with every variant (a [`Variant`]: a [`Techniques`]
+//! choice, uniform or adaptive) at every samples-per-pixel count (an adaptive one at every
+//! noise target), `repeats` times with seeds `seed, seed + 1, ...`, and each
 //! render's wall time (the [`render`] call alone: no loading, compiling or writing) and
 //! error against a reference are recorded. A point's time is its fastest repeat's (the
 //! least disturbed by other load; the mean and the slowest are reported too). Before the sweep one uncounted 1-spp render warms
@@ -34,10 +35,23 @@
 //! variant's largest spp, with the MSE of an unbiased estimator taken as its variance,
 //! `mean (a - b)^2 / 2` over two renders with different seeds (the first two repeats, or one
 //! extra render when the sweep has a single repeat).
+//!
+//! # Adaptive curves
+//! A variant with `adaptive=on` ([`Variant`]) renders with a noise target
+//! ([`NoiseTarget`]: a pixel stops once its estimated relative error is at the target)
+//! instead of a fixed spp: its points are the targets of [`AdaptivePlan`], descending, each
+//! with its `min_spp` and the sweep's largest spp as the most a pixel takes (the cap), and
+//! each records its target and the mean spp its pixels took (the `sampleCount` layer's
+//! mean). A curve stops at the first target at which every pixel took the cap: a smaller
+//! one renders the same image. With a time budget the cap is not known in advance: the
+//! adaptive curves render after the uniform ones, capped at the largest spp those reached
+//! (at least `4 x min_spp`, so that pixels can stop early; `MAX_SPP` without a uniform
+//! curve), their first target halved until a render takes the budget. Adaptive sampling's stopping rule is biased (it reads the
+//! samples it stops on), so an adaptive variant never renders the reference.
 
 use crate::compare::{compare, CompareError, DEFAULT_RELMSE_EPS};
 use risotto_engine::output::Image;
-use risotto_engine::render::{render, RenderError, RenderOptions};
+use risotto_engine::render::{render, NoiseTarget, RenderError, RenderOptions};
 use risotto_engine::scene::CompiledScene;
 use risotto_engine::technique::{TechniqueError, TechniqueRegistry, Techniques};
 use risotto_systems::sampler::MAX_SPP;
@@ -85,9 +99,11 @@ pub enum Reference {
 #[derive(Clone, Debug)]
 pub struct ConvergeOptions {
     /// The variants, one curve each.
-    pub variants: Vec<Techniques>,
-    /// The spp counts.
+    pub variants: Vec<Variant>,
+    /// The spp counts (of the uniform variants; the adaptive ones' cap is the largest).
     pub plan: SppPlan,
+    /// The noise targets and minimum spp of the adaptive variants.
+    pub adaptive: AdaptivePlan,
     /// Renders per point (different seeds).
     pub repeats: u32,
     /// The reference.
@@ -134,10 +150,10 @@ pub enum ConvergeError {
     },
 }
 
-/// One point of a curve: one spp count, over the repeats.
+/// One point of a curve: one spp count (or noise target), over the repeats.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Point {
-    /// Samples per pixel.
+    /// Samples per pixel (of an adaptive point: the most a pixel may take, the cap).
     pub spp: u32,
     /// Renders averaged.
     pub repeats: u32,
@@ -166,23 +182,39 @@ pub struct Point {
     pub bias: [f64; 3],
     /// `1 / (mse x seconds)` (NaN, `null` in JSON, when `mse <= 0`).
     pub efficiency: f64,
+    /// The relative error an adaptive point's pixels stop at; `None` (absent in JSON) for
+    /// a uniform point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise_target: Option<f64>,
+    /// The mean samples per pixel an adaptive point took (the `sampleCount` layer's mean,
+    /// averaged over the repeats); `None` (absent in JSON) for a uniform point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spp_mean: Option<f64>,
+}
+
+impl Point {
+    /// The samples per pixel the point took: its mean for an adaptive point, else its spp.
+    pub fn samples(&self) -> f64 {
+        self.spp_mean.unwrap_or(self.spp as f64)
+    }
 }
 
 /// One variant's curve.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Curve {
-    /// The variant's label ([`Techniques::label`]).
+    /// The variant's label ([`Variant::label`]).
     pub label: String,
     /// Every technique's value.
     pub techniques: BTreeMap<String, String>,
-    /// Points in ascending spp.
+    /// Points in ascending spp (descending noise target).
     pub points: Vec<Point>,
     /// `1 / (MSE x seconds)` at the largest spp.
     pub efficiency: f64,
     /// Least-squares slope of ln MSE against ln seconds (about -1 for Monte Carlo; noisy
     /// where renders take milliseconds).
     pub mse_time_slope: f64,
-    /// Least-squares slope of ln RMSE against ln spp (about -1/2 for Monte Carlo).
+    /// Least-squares slope of ln RMSE against ln spp (about -1/2 for Monte Carlo); of an
+    /// adaptive curve, against ln of the mean spp.
     pub rmse_spp_slope: f64,
 }
 
@@ -218,8 +250,9 @@ pub struct Sweep {
     pub curves: Vec<Curve>,
 }
 
-/// The columns of `converge.csv`, in order.
-pub const CSV_COLUMNS: [&str; 17] = [
+/// The columns of `converge.csv`, in order. `noise_target` and `spp_mean` are empty in the
+/// rows of uniform points.
+pub const CSV_COLUMNS: [&str; 19] = [
     "technique",
     "spp",
     "repeats",
@@ -237,40 +270,64 @@ pub const CSV_COLUMNS: [&str; 17] = [
     "bias_g",
     "bias_b",
     "efficiency",
+    "noise_target",
+    "spp_mean",
 ];
 
 /// One finished render of the sweep.
 struct Sample {
     image: Image,
     seconds: f64,
+    /// Mean samples per pixel (the `sampleCount` layer's mean).
+    spp_mean: f64,
+    /// Fewest samples a pixel took.
+    spp_min: u32,
 }
 
-/// Renders `scene` with `techniques` at `spp` and `seed`, timing the render call.
+/// The renders of one point: its spp (an adaptive point's cap) and noise target.
+struct RawPoint {
+    spp: u32,
+    noise_target: Option<f64>,
+    renders: Vec<Sample>,
+}
+
+/// Renders `scene` with `techniques` at `spp` (with a noise target: at most) and `seed`,
+/// timing the render call.
 fn timed_render(
     scene: &mut CompiledScene,
     base: &RenderOptions,
     techniques: &Techniques,
-    spp: u32,
+    (spp, noise_target): (u32, Option<NoiseTarget>),
     seed: u64,
     progress: &Progress,
 ) -> Result<Sample, RenderError> {
     scene.settings.spp = spp;
     scene.settings.seed = seed;
-    let options = techniques.render_options(*base);
+    let options = techniques.render_options(RenderOptions {
+        noise_target,
+        ..*base
+    });
     let start = Instant::now();
     let out = render(scene, &options, progress.samples)?;
     let seconds = start.elapsed().as_secs_f64();
+    let counts = &out.film.count;
     Ok(Sample {
         image: out.beauty,
         seconds,
+        spp_mean: counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len().max(1) as f64,
+        spp_min: counts.iter().copied().min().unwrap_or(0),
     })
 }
 
-/// The samples that [`run`] renders, for a progress bar; `None` with a time budget.
+/// The samples that [`run`] renders, for a progress bar; `None` with a time budget or an
+/// adaptive variant (whose samples are known only once rendered).
 pub fn total_samples(options: &ConvergeOptions, pixels: u64) -> Option<u64> {
     let SppPlan::List(spps) = &options.plan else {
         return None;
     };
+    if options.variants.iter().any(|v| v.adaptive) {
+        return None;
+    }
     let sweep: u64 = spps.iter().map(|&s| s as u64).sum::<u64>()
         * options.variants.len() as u64
         * options.repeats as u64;
@@ -296,25 +353,37 @@ fn reference_spp(requested: Option<u32>, largest: u32) -> u32 {
 /// grow without bound.
 pub const MAX_KEPT_BYTES: u64 = 4 << 30;
 
-/// Errors when the images the sweep keeps would exceed [`MAX_KEPT_BYTES`]: one per spp
-/// count (a budget doubles from 1 to at most `MAX_SPP`), technique and repeat.
+/// The most points a curve of a time budget has: spp doubling from 1 to `MAX_SPP`, or
+/// as many halvings of the first noise target.
+const BUDGET_LEVELS: usize = MAX_SPP.ilog2() as usize + 1;
+
+/// Errors when the images the sweep keeps would exceed [`MAX_KEPT_BYTES`]: one per point
+/// (an spp count of a uniform variant, a noise target of an adaptive one; a budget's
+/// curves have up to [`BUDGET_LEVELS`] points) and repeat.
 fn check_kept_images(options: &ConvergeOptions, w: usize, h: usize) -> Result<(), ConvergeError> {
-    let (counts, up_to) = match &options.plan {
-        SppPlan::List(spps) => (spps.len() as u64, ""),
-        SppPlan::Budget(_) => (MAX_SPP.ilog2() as u64 + 1, "up to "),
+    let adaptive = options.variants.iter().filter(|v| v.adaptive).count() as u64;
+    let uniform = options.variants.len() as u64 - adaptive;
+    let (counts, targets, up_to) = match &options.plan {
+        SppPlan::List(spps) => (
+            spps.len() as u64,
+            options.adaptive.noise_targets.len() as u64,
+            "",
+        ),
+        SppPlan::Budget(_) => (BUDGET_LEVELS as u64, BUDGET_LEVELS as u64, "up to "),
     };
-    let images = counts
-        .saturating_mul(options.variants.len() as u64)
-        .saturating_mul(options.repeats as u64);
+    let points = counts
+        .saturating_mul(uniform)
+        .saturating_add(targets.saturating_mul(adaptive));
+    let images = points.saturating_mul(options.repeats as u64);
     let bytes =
         images.saturating_mul((w * h * std::mem::size_of::<risotto_components::Rgb>()) as u64);
     if bytes > MAX_KEPT_BYTES {
         return Err(ConvergeError::Options(format!(
-            "--repeats {} x {} techniques x {up_to}{counts} spp counts = {images} renders \
-             of {w}x{h} would keep {:.1} GiB of images (at most {} GiB): fewer repeats, \
-             techniques or spp counts, or a smaller image",
+            "--repeats {} x ({uniform} techniques x {up_to}{counts} spp counts + {adaptive} \
+             adaptive x {up_to}{targets} noise targets) = {images} renders of {w}x{h} would \
+             keep {:.1} GiB of images (at most {} GiB): fewer repeats, techniques, spp \
+             counts or noise targets, or a smaller image",
             options.repeats,
-            options.variants.len(),
             bytes as f64 / (1u64 << 30) as f64,
             MAX_KEPT_BYTES >> 30
         )));
@@ -342,7 +411,7 @@ pub fn run(
     }
     let registry = TechniqueRegistry::for_scene(scene);
     for v in &options.variants {
-        v.check_applicable(&registry)?;
+        v.check(scene)?;
     }
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     if let Reference::Image { image, path } = &options.reference {
@@ -360,11 +429,25 @@ pub fn run(
     {
         techniques.check_applicable(&registry)?;
     }
+    let any_adaptive = options.variants.iter().any(|v| v.adaptive);
+    if any_adaptive {
+        options.adaptive.check()?;
+    }
     match &options.plan {
         SppPlan::List(spps) => {
             if spps.is_empty() || spps.iter().any(|&s| s == 0 || s > MAX_SPP) {
                 return Err(ConvergeError::Options(format!(
                     "--spp {spps:?}: need one or more counts between 1 and {MAX_SPP}"
+                )));
+            }
+            let cap = spps.iter().copied().max().unwrap_or(1);
+            let min = options.adaptive.min_spp;
+            if any_adaptive && !options.adaptive.can_stop_below(cap) {
+                return Err(ConvergeError::Options(format!(
+                    "adaptive=on with --min-spp {min} and --spp up to {cap}: a pixel stops at \
+                     2 x {min} samples at the earliest, so the cap, the largest spp, must be \
+                     above {}; raise --spp or lower --min-spp",
+                    2 * min
                 )));
             }
         }
@@ -382,63 +465,32 @@ pub fn run(
 
     // Warm-up: thread pool, sampler tables, allocator.
     (progress.stage)("warm-up");
-    timed_render(scene, &base, &options.variants[0], 1, seed, progress)?;
+    let first = &options.variants[0].techniques;
+    timed_render(scene, &base, first, (1, None), seed, progress)?;
 
-    // The renders: spp outermost, so that slow drifts of the machine's load spread over all
-    // variants alike.
-    let mut raw: Vec<Vec<(u32, Vec<Sample>)>> =
-        (0..options.variants.len()).map(|_| Vec::new()).collect();
-    let mut active = vec![true; options.variants.len()];
-    let mut spp = 1u32;
-    for level in 0.. {
-        let this = match &options.plan {
-            SppPlan::List(spps) => match spps.get(level) {
-                Some(&s) => s,
-                None => break,
-            },
-            SppPlan::Budget(_) => {
-                if !active.iter().any(|&a| a) || spp > MAX_SPP {
-                    break;
-                }
-                spp
-            }
-        };
-        for (v, techniques) in options.variants.iter().enumerate() {
-            if !active[v] {
-                continue;
-            }
-            let mut renders = Vec::new();
-            for r in 0..options.repeats {
-                (progress.stage)(&format!(
-                    "{}, {this} spp, repeat {}/{}",
-                    techniques.label(),
-                    r + 1,
-                    options.repeats
-                ));
-                renders.push(timed_render(
-                    scene,
-                    &base,
-                    techniques,
-                    this,
-                    seed.wrapping_add(r as u64),
-                    progress,
-                )?);
-            }
-            if let SppPlan::Budget(budget) = options.plan {
-                let mean = renders.iter().map(|s| s.seconds).sum::<f64>() / renders.len() as f64;
-                if mean >= budget {
-                    active[v] = false;
-                }
-            }
-            raw[v].push((this, renders));
+    let mut raw: Vec<Vec<RawPoint>> = (0..options.variants.len()).map(|_| Vec::new()).collect();
+    let sweep = Levels {
+        options,
+        seed,
+        progress,
+    };
+    match &options.plan {
+        SppPlan::List(spps) => {
+            // Every curve at once: the cap of the adaptive ones is known.
+            let cap = spps.iter().copied().max().unwrap_or(1);
+            sweep.render(scene, &mut raw, |_| true, cap)?;
         }
-        spp = spp.saturating_mul(2);
+        SppPlan::Budget(_) => {
+            sweep.render(scene, &mut raw, |v| !v.adaptive, MAX_SPP)?;
+            let reached = largest_spp(&raw, &options.variants, false);
+            let cap = reached
+                .unwrap_or(MAX_SPP)
+                .max(options.adaptive.min_spp.saturating_mul(4))
+                .min(MAX_SPP);
+            sweep.render(scene, &mut raw, |v| v.adaptive, cap)?;
+        }
     }
-    let largest = raw
-        .iter()
-        .flat_map(|c| c.iter().map(|(s, _)| *s))
-        .max()
-        .unwrap_or(1);
+    let largest = largest_spp(&raw, &options.variants, true).unwrap_or(1);
 
     // The reference.
     let (reference, info) = match &options.reference {
@@ -481,7 +533,7 @@ pub fn run(
                     scene,
                     &base,
                     techniques,
-                    n / 2,
+                    (n / 2, None),
                     seed.wrapping_add(REFERENCE_SEED_OFFSET + k),
                     progress,
                 )
@@ -506,12 +558,12 @@ pub fn run(
     scene.settings.seed = seed;
 
     let mut curves = Vec::new();
-    for (techniques, points) in options.variants.iter().zip(&raw) {
+    for (variant, points) in options.variants.iter().zip(&raw) {
         let mut pts = Vec::new();
-        for (spp, renders) in points {
-            pts.push(point(*spp, renders, &reference, &info)?);
+        for p in points {
+            pts.push(point(p, &reference, &info)?);
         }
-        curves.push(curve(&registry, techniques, pts));
+        curves.push(curve(&registry, variant, pts));
     }
     Ok(Sweep {
         width: w,
@@ -521,67 +573,22 @@ pub fn run(
     })
 }
 
-/// The variant that renders a reference best: among those that converge to the exact image
-/// ([`Techniques::converges`]), the one with the largest `1 / (MSE x seconds)` at its
-/// largest spp, its MSE estimated without a reference from two independent renders `a`, `b`
-/// (seeds) of that point as `mean (a - b)^2 / 2` (for an unbiased estimator
-/// `E (a - b)^2 = 2 Var`, and its MSE is its variance). A sweep with one repeat renders the
-/// second image of each candidate with `extra_seed`.
-fn most_efficient_converging(
-    scene: &mut CompiledScene,
-    base: &RenderOptions,
-    variants: &[Techniques],
-    raw: &[Vec<(u32, Vec<Sample>)>],
-    extra_seed: u64,
-    progress: &Progress,
-) -> Result<Techniques, ConvergeError> {
-    let registry = TechniqueRegistry::for_scene(scene);
-    let mut best: Option<(f64, &Techniques)> = None;
-    for (techniques, points) in variants.iter().zip(raw) {
-        if !techniques.converges(&registry) {
-            continue;
-        }
-        let Some((spp, renders)) = points.last() else {
-            continue;
-        };
-        let extra;
-        let (a, b) = match renders.as_slice() {
-            [a, b, ..] => (a, b),
-            [a] => {
-                (progress.stage)(&format!(
-                    "{}, {spp} spp, second seed (choosing the reference's technique)",
-                    techniques.label()
-                ));
-                extra = timed_render(scene, base, techniques, *spp, extra_seed, progress)?;
-                (a, &extra)
-            }
-            [] => continue,
-        };
-        let (_, noise_mse, _) = combine_halves(&a.image, &b.image);
-        // combine_halves gives mean (a - b)^2 / 4.
-        let mse = 2.0 * noise_mse;
-        let seconds = a.seconds.min(b.seconds);
-        let efficiency = 1.0 / (mse * seconds).max(f64::MIN_POSITIVE);
-        if best.is_none_or(|(e, _)| efficiency > e) {
-            best = Some((efficiency, techniques));
-        }
-    }
-    best.map(|(_, t)| *t).ok_or_else(|| {
-        ConvergeError::Options(
-            "no swept technique converges to the exact image to render the reference with; \
-             give one with --reference-technique"
-                .into(),
-        )
-    })
-}
-
+mod levels;
+use levels::{largest_spp, Levels};
 mod measure;
 #[cfg(feature = "plots")]
 pub mod plot;
 pub use measure::{combine_halves, fit_line};
 use measure::{curve, error_time_model, point};
+mod reference;
+use reference::most_efficient_converging;
 mod report;
 pub use report::{Comparison, ComparisonTable};
+mod variant;
+pub use variant::{
+    adaptive_applies, listing, AdaptivePlan, Variant, ADAPTIVE, DEFAULT_MIN_SPP,
+    DEFAULT_NOISE_TARGETS,
+};
 
 #[cfg(test)]
 mod tests;

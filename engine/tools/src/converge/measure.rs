@@ -38,11 +38,11 @@ pub fn combine_halves(a: &Image, b: &Image) -> (Image, f64, f64) {
 
 /// A point from its repeats.
 pub(super) fn point(
-    spp: u32,
-    renders: &[Sample],
+    raw: &RawPoint,
     reference: &Image,
     info: &ReferenceInfo,
 ) -> Result<Point, ConvergeError> {
+    let renders = &raw.renders;
     let mut mse = Vec::new();
     let mut relmse = Vec::new();
     let mut bias = [0.0f64; 3];
@@ -62,8 +62,9 @@ pub(super) fn point(
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (m, t) = (mean(&mse), min(&seconds));
+    let spp_mean: Vec<f64> = renders.iter().map(|s| s.spp_mean).collect();
     Ok(Point {
-        spp,
+        spp: raw.spp,
         repeats: renders.len() as u32,
         seconds: t,
         seconds_mean: mean(&seconds),
@@ -77,6 +78,8 @@ pub(super) fn point(
         relmse_max: max(&relmse),
         bias,
         efficiency: efficiency(m, t),
+        noise_target: raw.noise_target,
+        spp_mean: raw.noise_target.map(|_| mean(&spp_mean)),
     })
 }
 
@@ -108,25 +111,25 @@ pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 /// A curve from its points.
-pub(super) fn curve(
-    registry: &TechniqueRegistry,
-    techniques: &Techniques,
-    points: Vec<Point>,
-) -> Curve {
+pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec<Point>) -> Curve {
     let valid = || points.iter().filter(|p| p.mse > 0.0 && p.seconds > 0.0);
     let mse_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.mse.ln())).collect();
-    let rmse_spp: Vec<(f64, f64)> = valid()
-        .map(|p| ((p.spp as f64).ln(), p.rmse.ln()))
-        .collect();
+    let rmse_spp: Vec<(f64, f64)> = valid().map(|p| (p.samples().ln(), p.rmse.ln())).collect();
     let last = points.last();
+    let techniques = &variant.techniques;
+    let adaptive = match variant.adaptive {
+        true => "on",
+        false => ADAPTIVE.default,
+    };
     Curve {
-        label: techniques.label(),
+        label: variant.label(),
         techniques: registry
             .applicable()
             .map(|t| {
                 let v = techniques.get(registry, t.name).unwrap_or("?");
                 (t.name.to_string(), v.to_string())
             })
+            .chain([(ADAPTIVE.name.to_string(), adaptive.to_string())])
             .collect(),
         efficiency: last.map_or(f64::NAN, |p| p.efficiency),
         mse_time_slope: fit_line(&mse_time).map_or(f64::NAN, |(_, b)| b),
@@ -136,25 +139,38 @@ pub(super) fn curve(
 }
 
 /// The line `ln MSE = a + b ln seconds` of a curve. Render times of small images are
-/// dominated by timer and scheduling noise, so the error is not fitted against them: `b` is
-/// the least-squares slope of ln MSE against ln spp (-1 when that is not negative, as for
-/// Monte Carlo), and time is taken proportional to spp at the curve's mean seconds per
-/// sample (total seconds over total spp, so its largest renders weigh most). `None` without
-/// a valid point.
+/// dominated by timer and scheduling noise, so a uniform curve's error is not fitted
+/// against them: `b` is the least-squares slope of ln MSE against ln spp (-1 when that is
+/// not negative, as for Monte Carlo), and time is taken proportional to spp at the curve's
+/// mean seconds per sample (total seconds over total spp, so its largest renders weigh
+/// most). `None` without a valid point.
+///
+/// An adaptive curve (its points have noise targets) is fitted against its **seconds**
+/// directly: its time is not proportional to its samples, since its samples go where the
+/// noise is, in the paths that cost most. On `scenes/adaptive-smoke-ball.toml` (README,
+/// "Accuracy and its cost") a mean of 429 spp took 1.9 ms per spp and 934 spp 1.4 ms,
+/// while the uniform renders took 0.9 to 1.0 ms per spp, so a fit against the mean spp
+/// with one cost per sample would misplace its early points in time by up to 2x. Its renders take at least `2 min_spp` samples per pixel, so they are not
+/// the millisecond renders whose times are noise.
 pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
     let valid: Vec<&Point> = c
         .points
         .iter()
         .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
         .collect();
-    let pts: Vec<(f64, f64)> = valid
-        .iter()
-        .map(|p| ((p.spp as f64).ln(), p.mse.ln()))
-        .collect();
+    let adaptive = valid.iter().any(|p| p.noise_target.is_some());
+    let x = |p: &Point| match adaptive {
+        true => p.seconds,
+        false => p.spp as f64,
+    };
+    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), p.mse.ln())).collect();
     let (a, b) = match fit_line(&pts) {
         Some((a, b)) if b < 0.0 => (a, b),
         _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,
     };
+    if adaptive {
+        return Some((a, b));
+    }
     let per_spp = valid.iter().map(|p| p.seconds).sum::<f64>()
         / valid.iter().map(|p| p.spp as f64).sum::<f64>();
     // ln MSE = a + b ln spp, spp = seconds / per_spp.

@@ -29,9 +29,9 @@ pub struct ComparisonTable {
 
 impl Sweep {
     /// Equal-time error and equal-error time of every curve relative to the best, read off
-    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp, with time
-    /// proportional to spp; see `error_time_model`) at the largest time all curves reach
-    /// and at the smallest MSE all reach.
+    /// each curve's line `ln MSE = a + b ln seconds` (fitted against spp with time
+    /// proportional to spp, an adaptive curve's against its seconds; see `error_time_model`)
+    /// at the largest time all curves reach and at the smallest MSE all reach.
     pub fn comparison(&self) -> ComparisonTable {
         let models: Vec<Option<(f64, f64)>> = self.curves.iter().map(error_time_model).collect();
         let t = self
@@ -146,7 +146,8 @@ impl Sweep {
         s
     }
 
-    /// `converge.csv`: a header of [`CSV_COLUMNS`], then one row per point.
+    /// `converge.csv`: a header of [`CSV_COLUMNS`], then one row per point (`noise_target`
+    /// and `spp_mean` empty for a uniform point).
     pub fn csv(&self) -> String {
         let mut s = CSV_COLUMNS.join(",");
         s.push('\n');
@@ -172,6 +173,10 @@ impl Sweep {
                 for x in nums {
                     let _ = write!(s, ",{x:e}");
                 }
+                // Adaptive points only; empty cells for uniform ones.
+                let target = p.noise_target.map_or(String::new(), |x| format!("{x:e}"));
+                let mean = p.spp_mean.map_or(String::new(), |x| format!("{x:e}"));
+                let _ = write!(s, ",{target},{mean}");
                 s.push('\n');
             }
         }

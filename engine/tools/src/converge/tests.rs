@@ -41,15 +41,22 @@ fn a_point_against_itself_has_zero_error_and_bias() {
         noise_mse: 0.0,
         noise_relmse: 0.0,
     };
-    let s = [Sample {
-        image: img.clone(),
-        seconds: 0.5,
-    }];
-    let p = point(4, &s, &img, &info).unwrap();
+    let raw = RawPoint {
+        spp: 4,
+        noise_target: None,
+        renders: vec![Sample {
+            image: img.clone(),
+            seconds: 0.5,
+            spp_mean: 4.0,
+            spp_min: 4,
+        }],
+    };
+    let p = point(&raw, &img, &info).unwrap();
     assert_eq!((p.mse, p.relmse, p.bias), (0.0, 0.0, [0.0; 3]));
     assert!(p.efficiency.is_nan());
+    assert_eq!((p.noise_target, p.spp_mean), (None, None));
     let other = noisy(4, 0.1);
-    let q = point(4, &s, &other, &info).unwrap();
+    let q = point(&raw, &other, &info).unwrap();
     assert!(q.mse > 0.0 && q.relmse > 0.0 && q.efficiency > 0.0);
 }
 
@@ -77,6 +84,8 @@ fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
                 relmse_max: k / t,
                 bias: [0.0; 3],
                 efficiency: 1.0 / k,
+                noise_target: None,
+                spp_mean: None,
             })
             .collect(),
         efficiency: 1.0 / k,
@@ -109,4 +118,176 @@ fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
     assert!(csv
         .lines()
         .all(|l| l.split(',').count() == CSV_COLUMNS.len()));
+}
+
+/// A reference that is exact (a file), for hand-made sweeps.
+fn exact() -> ReferenceInfo {
+    ReferenceInfo {
+        source: "file".into(),
+        path: None,
+        spp: None,
+        techniques: None,
+        seconds: None,
+        noise_mse: 0.0,
+        noise_relmse: 0.0,
+    }
+}
+
+/// A hand-made point of `seconds` and `mse`, adaptive when `target` is given.
+fn made(spp: u32, seconds: f64, mse: f64, target: Option<(f64, f64)>) -> Point {
+    Point {
+        spp,
+        repeats: 1,
+        seconds,
+        seconds_mean: seconds,
+        seconds_max: seconds,
+        mse,
+        mse_min: mse,
+        mse_max: mse,
+        rmse: mse.sqrt(),
+        relmse: mse,
+        relmse_min: mse,
+        relmse_max: mse,
+        bias: [0.0; 3],
+        efficiency: 1.0 / (mse * seconds),
+        noise_target: target.map(|(t, _)| t),
+        spp_mean: target.map(|(_, m)| m),
+    }
+}
+
+#[test]
+fn an_adaptive_point_records_its_target_and_mean_spp_in_csv_and_json() {
+    let img = noisy(5, 0.1);
+    let sample = |spp_mean: f64| Sample {
+        image: noisy(6, 0.1),
+        seconds: 0.25,
+        spp_mean,
+        spp_min: 32,
+    };
+    let raw = RawPoint {
+        spp: 256,
+        noise_target: Some(0.1),
+        renders: vec![sample(40.0), sample(50.0)],
+    };
+    let p = point(&raw, &img, &exact()).unwrap();
+    // The mean over the repeats of each render's mean spp; the cap stays the spp.
+    assert_eq!(
+        (p.spp, p.noise_target, p.spp_mean),
+        (256, Some(0.1), Some(45.0))
+    );
+    assert_eq!(p.samples(), 45.0);
+    let adaptive = Variant {
+        techniques: Techniques::default(),
+        adaptive: true,
+    };
+    assert_eq!(adaptive.label(), "adaptive=on");
+    let uniform = made(4, 0.1, 0.01, None);
+    let sweep = Sweep {
+        width: 64,
+        height: 64,
+        reference: exact(),
+        curves: vec![
+            curve(
+                &TechniqueRegistry::new(Default::default(), []),
+                &Variant::from(Techniques::default()),
+                vec![uniform],
+            ),
+            curve(
+                &TechniqueRegistry::new(Default::default(), []),
+                &adaptive,
+                vec![p],
+            ),
+        ],
+    };
+    assert_eq!(sweep.curves[1].techniques["adaptive"], "on");
+    assert_eq!(sweep.curves[0].techniques["adaptive"], "off");
+    let csv = sweep.csv();
+    let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
+    let col = |name: &str| CSV_COLUMNS.iter().position(|c| *c == name).unwrap();
+    // The new columns come last, after the existing ones in their order.
+    assert_eq!(&CSV_COLUMNS[17..], ["noise_target", "spp_mean"]);
+    assert_eq!(CSV_COLUMNS[16], "efficiency");
+    assert_eq!(rows[0], CSV_COLUMNS);
+    assert_eq!(
+        (rows[1][col("noise_target")], rows[1][col("spp_mean")]),
+        ("", "")
+    );
+    assert_eq!(rows[2][col("technique")], "adaptive=on");
+    assert_eq!(rows[2][col("spp")], "256");
+    assert_eq!(rows[2][col("noise_target")], "1e-1");
+    assert_eq!(rows[2][col("spp_mean")].parse::<f64>(), Ok(45.0));
+    let json = sweep.json();
+    let points = |c: usize| json["curves"][c]["points"][0].clone();
+    assert!(points(0).get("noise_target").is_none() && points(0).get("spp_mean").is_none());
+    assert_eq!(points(1)["spp_mean"], 45.0);
+    assert_eq!(points(1)["noise_target"], 0.1);
+}
+
+#[test]
+fn the_comparison_fits_an_adaptive_curve_against_its_seconds() {
+    // Uniform: MSE = 1 / t at spp = t. Adaptive: every point capped at 256 spp, MSE =
+    // 2 / t^2, its pixels taking a mean of 3, 4 and 8 samples (not proportional to its
+    // time: its samples cost more where the noise is). At the common time 4 s: 0.25
+    // against 0.125, so the uniform curve has 2x the MSE; the common MSE 0.25 the adaptive
+    // curve reaches at sqrt(8) s, so the uniform one takes 4 / sqrt(8) = sqrt(2) x its
+    // time. Fitted against the cap or the mean spp these would be lost.
+    let times = [1.0f64, 2.0, 4.0];
+    let uniform: Vec<Point> = times
+        .iter()
+        .map(|&t| made(t as u32, t, 1.0 / t, None))
+        .collect();
+    let adaptive: Vec<Point> = times
+        .iter()
+        .zip([(0.4, 3.0), (0.2, 4.0), (0.1, 8.0)])
+        .map(|(&t, target)| made(256, t, 2.0 / (t * t), Some(target)))
+        .collect();
+    let registry = TechniqueRegistry::new(Default::default(), []);
+    let on = Variant {
+        techniques: Techniques::default(),
+        adaptive: true,
+    };
+    let sweep = Sweep {
+        width: 1,
+        height: 1,
+        reference: exact(),
+        curves: vec![
+            curve(&registry, &Techniques::default().into(), uniform),
+            curve(&registry, &on, adaptive),
+        ],
+    };
+    let c = sweep.comparison();
+    assert!((c.equal_time_seconds - 4.0).abs() < 1e-12);
+    assert!((c.rows[0].equal_time_mse_ratio - 2.0).abs() < 1e-9, "{c:?}");
+    assert!((c.rows[1].equal_time_mse_ratio - 1.0).abs() < 1e-9, "{c:?}");
+    let r = c.rows[0].equal_error_time_ratio;
+    assert!((r - 2f64.sqrt()).abs() < 1e-9, "{c:?}");
+}
+
+#[test]
+fn the_image_memory_guard_counts_the_adaptive_points() {
+    // 4096 x 4096 pixels of 12 bytes: 21.3 images fit in 4 GiB. Ten uniform spp counts and
+    // eleven adaptive targets are 21 images; a twelfth target is one too many.
+    let options = |targets: usize| ConvergeOptions {
+        variants: vec![
+            Techniques::default().into(),
+            Variant {
+                techniques: Techniques::default(),
+                adaptive: true,
+            },
+        ],
+        plan: SppPlan::List((0..10).map(|i| 1 << i).collect()),
+        adaptive: AdaptivePlan {
+            noise_targets: (0..targets).map(|i| 0.5f64.powi(i as i32)).collect(),
+            min_spp: 4,
+        },
+        repeats: 1,
+        reference: Reference::Render {
+            spp: None,
+            techniques: None,
+        },
+        render: RenderOptions::default(),
+    };
+    assert!(check_kept_images(&options(11), 4096, 4096).is_ok());
+    let e = check_kept_images(&options(12), 4096, 4096).unwrap_err();
+    assert!(e.to_string().contains("12 noise targets"), "{e}");
 }
