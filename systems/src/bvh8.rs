@@ -538,30 +538,32 @@ impl Bvh8 {
     /// and `spheres` after them, then instance leaves: primitive `triangles.len() +
     /// spheres.len() + k` is instance `k`, priced as a sphere) into 8-wide nodes with the SAH-optimal assignment of
     /// binary subtrees to child slots and leaves ([`Collapse`]).
-    pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
+    /// The binary tree is taken, and dropped as soon as it is copied into one-primitive
+    /// leaves: at most one of the two is alive at a time (issue 36, peak memory).
+    pub(crate) fn from_bvh2(bvh2: Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
         let tri_count = triangles.len() as u32;
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
-        let s = cost_scale(&bvh2.nodes[0].aabb);
-        let bins = binary_tree(bvh2);
+        let root = bvh2.nodes[0].aabb;
+        let s = cost_scale(&root);
+        let mut bins = binary_tree(&bvh2);
+        let sweep = (bvh2.primitive_indices.len() <= SWEEP_MAX).then(|| sweep_tree(&bvh2, s));
+        drop(bvh2);
         let mut collapse = Collapse::new(&bins, s, is_sphere);
-        let mut bins = bins;
-        if bvh2.primitive_indices.len() <= SWEEP_MAX {
-            let sweep = sweep_tree(bvh2, s);
+        if let Some(sweep) = sweep {
             let sweep_collapse = Collapse::new(&sweep, s, is_sphere);
             if sweep_collapse.root_cost() < collapse.root_cost() {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
-        let root = &bvh2.nodes[0];
         let mut out = Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
             spheres: Vec::new(),
             instances: Vec::new(),
             objects: Vec::new(),
-            max_abs: root.aabb.min.abs().max(root.aabb.max.abs()),
+            max_abs: root.min.abs().max(root.max.abs()),
             depth: 0,
         };
         let src = Source {
@@ -761,7 +763,7 @@ mod tests {
             primitive_indices: all.clone(),
             ..Default::default()
         };
-        let bvh = Bvh8::from_bvh2(&bvh2, &tris, &spheres);
+        let bvh = Bvh8::from_bvh2(bvh2, &tris, &spheres);
         let mut seen = [0u32; 16];
         for node in &bvh.nodes {
             for c in 0..WIDTH {
