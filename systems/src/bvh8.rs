@@ -150,12 +150,27 @@ const SPHERE_COST: f32 = 2.0;
 /// leaves of obvhs' tree are split, their box repeated).
 #[derive(Clone, Copy, Debug)]
 struct Bin {
-    aabb: Aabb,
+    /// The box as two `Vec3`s, not an [`Aabb`] (two padded `Vec3A`s): 32 bytes a node
+    /// instead of 48, and the tree has two nodes per primitive (issue 36, peak memory).
+    min: Vec3,
+    max: Vec3,
     /// Children (inner node) or `[primitive, u32::MAX]` (leaf).
     kids: [u32; 2],
 }
 
 impl Bin {
+    fn new(aabb: Aabb, kids: [u32; 2]) -> Self {
+        Bin {
+            min: aabb.min.into(),
+            max: aabb.max.into(),
+            kids,
+        }
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb::new(self.min.into(), self.max.into())
+    }
+
     fn is_leaf(&self) -> bool {
         self.kids[1] == u32::MAX
     }
@@ -261,15 +276,9 @@ const SWEEP_MAX: usize = 4096;
 /// appended to `out`; returns the index of the first.
 fn split_slot(out: &mut Vec<Bin>, slot: usize, aabb: Aabb) -> usize {
     let l = out.len();
-    let empty = Bin {
-        aabb: Aabb::INVALID,
-        kids: [0, 0],
-    };
+    let empty = Bin::new(Aabb::INVALID, [0, 0]);
     out.extend([empty, empty]);
-    out[slot] = Bin {
-        aabb,
-        kids: [l as u32, l as u32 + 1],
-    };
+    out[slot] = Bin::new(aabb, [l as u32, l as u32 + 1]);
     l
 }
 
@@ -283,20 +292,14 @@ fn sweep_tree(bvh2: &Bvh2, s: f32) -> Vec<Bin> {
             prims.push((n.aabb, bvh2.primitive_indices[(n.first_index + k) as usize]));
         }
     }
-    let mut out = vec![Bin {
-        aabb: Aabb::INVALID,
-        kids: [0, 0],
-    }];
+    let mut out = vec![Bin::new(Aabb::INVALID, [0, 0])];
     let mut stack = vec![(0usize, prims.len(), 0usize)];
     let mut areas = vec![0.0f32; prims.len() + 1];
     while let Some((lo, hi, slot)) = stack.pop() {
         let set = &mut prims[lo..hi];
         let aabb = set.iter().fold(Aabb::INVALID, |a, p| a.union(&p.0));
         if set.len() == 1 {
-            out[slot] = Bin {
-                aabb,
-                kids: [set[0].1, u32::MAX],
-            };
+            out[slot] = Bin::new(aabb, [set[0].1, u32::MAX]);
             continue;
         }
         let n = set.len();
@@ -334,10 +337,7 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
         Node(u32),
         Prims(Aabb, u32, u32),
     }
-    out.push(Bin {
-        aabb: bvh2.nodes[0].aabb,
-        kids: [0, 0],
-    });
+    out.push(Bin::new(bvh2.nodes[0].aabb, [0, 0]));
     let mut stack = vec![(Src::Node(0), 0usize)];
     while let Some((src, slot)) = stack.pop() {
         let (aabb, kids) = match src {
@@ -351,10 +351,10 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
                 } else {
                     let (first, count) = (node.first_index, node.prim_count);
                     if count == 1 {
-                        out[slot] = Bin {
-                            aabb: node.aabb,
-                            kids: [bvh2.primitive_indices[first as usize], u32::MAX],
-                        };
+                        out[slot] = Bin::new(
+                            node.aabb,
+                            [bvh2.primitive_indices[first as usize], u32::MAX],
+                        );
                         continue;
                     }
                     let half = count / 2;
@@ -369,10 +369,7 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
             }
             Src::Prims(aabb, first, count) => {
                 if count == 1 {
-                    out[slot] = Bin {
-                        aabb,
-                        kids: [bvh2.primitive_indices[first as usize], u32::MAX],
-                    };
+                    out[slot] = Bin::new(aabb, [bvh2.primitive_indices[first as usize], u32::MAX]);
                     continue;
                 }
                 let half = count / 2;
@@ -402,8 +399,41 @@ enum Split {
     /// One slot: an 8-wide node whose children are the subtree's split into 8 slots.
     Node,
     /// `k` slots to the left binary child and `i - k` to the right one.
-    Distribute(u8),
+    Distribute(LeftSlots),
 }
+
+/// The `k` of [`Split::Distribute`], 1 to 7: an enum rather than a `u8` so that `Split`
+/// fits one byte (the compiler puts `Leaf` and `Node` in the values it leaves unused), and
+/// the collapse stores eight per binary node (issue 36, peak memory).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(u8)]
+enum LeftSlots {
+    K1 = 1,
+    K2,
+    K3,
+    K4,
+    K5,
+    K6,
+    K7,
+}
+
+impl LeftSlots {
+    /// `k` in 1..WIDTH.
+    fn new(k: usize) -> Self {
+        match k {
+            1 => Self::K1,
+            2 => Self::K2,
+            3 => Self::K3,
+            4 => Self::K4,
+            5 => Self::K5,
+            6 => Self::K6,
+            7 => Self::K7,
+            _ => unreachable!("{k} slots of {WIDTH} to the left child"),
+        }
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Split>() == 1 && WIDTH == 8);
 
 /// The SAH-optimal collapse of a binary BVH into 8-wide nodes by dynamic programming over
 /// (binary node, number of child slots), the method of Ylitie, Karras and Laine 2017
@@ -422,7 +452,7 @@ impl Collapse {
     /// The collapse of `bins` (root first) with costs computed on boxes scaled by `s`
     /// ([`cost_scale`]).
     fn new(bins: &[Bin], s: f32, is_sphere: impl Fn(u32) -> bool) -> Self {
-        let root = scaled(&bins[0].aabb, s);
+        let root = scaled(&bins[0].aabb(), s);
         let volume = |b: &Aabb| {
             let e = (b.max - b.min).max(Vec3A::ZERO);
             e.x * e.y * e.z
@@ -452,7 +482,7 @@ impl Collapse {
             }
         }
         let mut c = Collapse {
-            root_weight: weight(&bins[0].aabb),
+            root_weight: weight(&bins[0].aabb()),
             cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
         };
@@ -461,7 +491,7 @@ impl Collapse {
         for &n in order.iter().rev() {
             let n = n as usize;
             let b = &bins[n];
-            let area = weight(&b.aabb);
+            let area = weight(&b.aabb());
             if b.is_leaf() {
                 let sphere = is_sphere(b.kids[0]);
                 tris[n] = if sphere { u32::MAX } else { 1 };
@@ -477,7 +507,7 @@ impl Collapse {
                 for k in 1..i {
                     let v = c.cost[l][k - 1] + c.cost[r][i - k - 1];
                     if v < best {
-                        (best, how) = (v, Split::Distribute(k as u8));
+                        (best, how) = (v, Split::Distribute(LeftSlots::new(k)));
                     }
                 }
                 c.cost[n][i - 1] = best;
@@ -517,6 +547,7 @@ impl Collapse {
             Split::Leaf => out.push((n, true)),
             Split::Node => out.push((n, false)),
             Split::Distribute(k) => {
+                let k = k as u8;
                 let [l, r] = bins[n as usize].kids;
                 self.slots(bins, l, k as usize, out);
                 self.slots(bins, r, i - k as usize, out);
@@ -638,7 +669,7 @@ impl Bvh8 {
             tri_only: 0,
         });
         for (c, &(k, is_leaf)) in kids.iter().enumerate() {
-            let aabb = bins[k as usize].aabb;
+            let aabb = bins[k as usize].aabb();
             let node = &mut self.nodes[index as usize];
             for a in 0..3 {
                 node.bounds[2 * a].0[c] = aabb.min[a];
