@@ -176,6 +176,13 @@ impl Bin {
     }
 }
 
+/// The box of an obvhs node with its padding lanes zeroed: with obvhs' `small_bvh2_node`
+/// (32-byte nodes, issue 36) they hold the node's primitive count and first index.
+pub(crate) fn node_box(node: &Bvh2Node) -> Aabb {
+    let b = node.aabb();
+    Aabb::new(Vec3::from(b.min).into(), Vec3::from(b.max).into())
+}
+
 /// The power of two that maps the largest coordinate magnitude of `root` into `[1, 2)` (1
 /// for a box at the origin): the SAH costs of the build are computed on boxes scaled by it.
 ///
@@ -289,7 +296,10 @@ fn sweep_tree(bvh2: &Bvh2, s: f32) -> Vec<Bin> {
     let mut prims: Vec<(Aabb, u32)> = Vec::new();
     for n in &bvh2.nodes {
         for k in 0..n.prim_count {
-            prims.push((n.aabb, bvh2.primitive_indices[(n.first_index + k) as usize]));
+            prims.push((
+                node_box(n),
+                bvh2.primitive_indices[(n.first_index + k) as usize],
+            ));
         }
     }
     let mut out = vec![Bin::new(Aabb::INVALID, [0, 0])];
@@ -337,7 +347,7 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
         Node(u32),
         Prims(Aabb, u32, u32),
     }
-    out.push(Bin::new(bvh2.nodes[0].aabb, [0, 0]));
+    out.push(Bin::new(node_box(&bvh2.nodes[0]), [0, 0]));
     let mut stack = vec![(Src::Node(0), 0usize)];
     while let Some((src, slot)) = stack.pop() {
         let (aabb, kids) = match src {
@@ -345,24 +355,24 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
                 let node = &bvh2.nodes[n as usize];
                 if node.prim_count == 0 {
                     (
-                        node.aabb,
+                        node_box(node),
                         [Src::Node(node.first_index), Src::Node(node.first_index + 1)],
                     )
                 } else {
                     let (first, count) = (node.first_index, node.prim_count);
                     if count == 1 {
                         out[slot] = Bin::new(
-                            node.aabb,
+                            node_box(node),
                             [bvh2.primitive_indices[first as usize], u32::MAX],
                         );
                         continue;
                     }
                     let half = count / 2;
                     (
-                        node.aabb,
+                        node_box(node),
                         [
-                            Src::Prims(node.aabb, first, half),
-                            Src::Prims(node.aabb, first + half, count - half),
+                            Src::Prims(node_box(node), first, half),
+                            Src::Prims(node_box(node), first + half, count - half),
                         ],
                     )
                 }
@@ -444,8 +454,14 @@ const _: () = assert!(std::mem::size_of::<Split>() == 1 && WIDTH == 8);
 struct Collapse {
     /// Visit-probability weight of the root box.
     root_weight: f32,
+    /// Emptied by [`Self::release_costs`] once the tree to collapse is chosen: with two
+    /// binary nodes per primitive it is the largest array of the collapse, and the 8-wide
+    /// tree built next needs only `split` and `node_split` (issue 36, peak memory).
     cost: Vec<[f32; WIDTH]>,
     split: Vec<[Split; WIDTH]>,
+    /// For an inner node that becomes an 8-wide node: the slots (1 to 7) of its left child,
+    /// the rest going to the right one, at the least cost.
+    node_split: Vec<u8>,
 }
 
 impl Collapse {
@@ -485,6 +501,7 @@ impl Collapse {
             root_weight: weight(&bins[0].aabb()),
             cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
+            node_split: vec![0; bins.len()],
         };
         // Triangles under each node, or `u32::MAX` if a sphere is among its primitives.
         let mut tris = vec![0u32; bins.len()];
@@ -513,6 +530,11 @@ impl Collapse {
                 c.cost[n][i - 1] = best;
                 c.split[n][i - 1] = how;
             }
+            // As an 8-wide node, at least one slot to each child (the first of equal costs).
+            let spread = |k: usize| c.cost[l][k - 1] + c.cost[r][WIDTH - 1 - k];
+            c.node_split[n] = (1..WIDTH)
+                .min_by(|&a, &b| spread(a).total_cmp(&spread(b)))
+                .expect("non-empty range") as u8;
             // One slot: a leaf, or a node with all slots below it.
             let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
             let fits = tris[n] as usize <= WIDTH;
@@ -533,6 +555,11 @@ impl Collapse {
             }
         }
         c
+    }
+
+    /// Frees the costs (the split decisions stay).
+    fn release_costs(&mut self) {
+        self.cost = Vec::new();
     }
 
     /// SAH cost of the 8-wide tree: the root node and everything below it.
@@ -576,7 +603,7 @@ impl Bvh8 {
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
-        let root = bvh2.nodes[0].aabb;
+        let root = node_box(&bvh2.nodes[0]);
         let s = cost_scale(&root);
         let mut bins = binary_tree(&bvh2);
         let sweep = (bvh2.primitive_indices.len() <= SWEEP_MAX).then(|| sweep_tree(&bvh2, s));
@@ -588,6 +615,7 @@ impl Bvh8 {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
+        collapse.release_costs();
         let mut out = Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
@@ -647,12 +675,7 @@ impl Bvh8 {
             kids.push((n, true));
         } else {
             let [l, r] = bins[n as usize].kids;
-            let cost = |k: usize| {
-                collapse.cost[l as usize][k - 1] + collapse.cost[r as usize][WIDTH - 1 - k]
-            };
-            let best = (1..WIDTH)
-                .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
-                .expect("non-empty range");
+            let best = collapse.node_split[n as usize] as usize;
             collapse.slots(bins, l, best, &mut kids);
             collapse.slots(bins, r, WIDTH - best, &mut kids);
         }
@@ -740,12 +763,7 @@ mod tests {
     use super::*;
 
     fn leaf_node(aabb: Aabb, first: u32, count: u32) -> Bvh2Node {
-        Bvh2Node {
-            aabb,
-            prim_count: count,
-            first_index: first,
-            ..Default::default()
-        }
+        Bvh2Node::new(aabb, count, first)
     }
 
     /// obvhs' builder makes one-primitive leaves, but a binary tree with larger leaves (13
@@ -782,12 +800,7 @@ mod tests {
         let all: Vec<u32> = (0..16).collect();
         let bvh2 = Bvh2 {
             nodes: vec![
-                Bvh2Node {
-                    aabb: bounds(&all),
-                    prim_count: 0,
-                    first_index: 1,
-                    ..Default::default()
-                },
+                Bvh2Node::new(bounds(&all), 0, 1),
                 leaf_node(bounds(&left), 0, 13),
                 leaf_node(bounds(&right), 13, 3),
             ],
