@@ -37,7 +37,7 @@ use obvhs::{
     BvhBuildParams,
 };
 
-use crate::bvh8::{bvh2_depth, median_bvh2, MAX_BVH2_DEPTH};
+use crate::bvh8::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
 
 /// Longest stretch of primitives, consecutive on the Morton curve, that PLOC's first pass
 /// may leave entirely unmerged before they are built apart. On meshes the stretches are a
@@ -217,7 +217,7 @@ fn ploc_around_runs(
             median_bvh2(&run_boxes, &run_indices)
         })
         .collect();
-    boxes.extend(subtrees.iter().map(|t| t.nodes[0].aabb));
+    boxes.extend(subtrees.iter().map(|t| node_box(&t.nodes[0])));
     let top = ploc(&boxes, (0..boxes.len() as u32).collect(), params);
 
     // Copy the top tree from its root down, children after parents as PLOC lays them out,
@@ -230,14 +230,14 @@ fn ploc_around_runs(
         if node.prim_count == 0 {
             let first = nodes.len();
             nodes.extend([Bvh2Node::default(); 2]);
-            nodes[dst] = Bvh2Node::new(node.aabb, 0, first as u32);
+            nodes[dst] = Bvh2Node::new(node_box(&node), 0, first as u32);
             stack.push((node.first_index as usize + 1, first + 1));
             stack.push((node.first_index as usize, first));
             continue;
         }
         let local = top.primitive_indices[node.first_index as usize] as usize;
         if let Some(&p) = loose.get(local) {
-            nodes[dst] = Bvh2Node::new(node.aabb, 1, primitive_indices.len() as u32);
+            nodes[dst] = Bvh2Node::new(node_box(&node), 1, primitive_indices.len() as u32);
             primitive_indices.push(indices[p as usize]);
             continue;
         }
@@ -251,7 +251,7 @@ fn ploc_around_runs(
             } else {
                 n.first_index + prim_base
             };
-            Bvh2Node::new(n.aabb, n.prim_count, first)
+            Bvh2Node::new(node_box(n), n.prim_count, first)
         };
         let mut moved_nodes = sub.nodes.iter().map(moved);
         nodes[dst] = moved_nodes.next().expect("a subtree has a root");

@@ -150,15 +150,37 @@ const SPHERE_COST: f32 = 2.0;
 /// leaves of obvhs' tree are split, their box repeated).
 #[derive(Clone, Copy, Debug)]
 struct Bin {
-    aabb: Aabb,
+    /// The box as two `Vec3`s, not an [`Aabb`] (two padded `Vec3A`s): 32 bytes a node
+    /// instead of 48, and the tree has two nodes per primitive (issue 36, peak memory).
+    min: Vec3,
+    max: Vec3,
     /// Children (inner node) or `[primitive, u32::MAX]` (leaf).
     kids: [u32; 2],
 }
 
 impl Bin {
+    fn new(aabb: Aabb, kids: [u32; 2]) -> Self {
+        Bin {
+            min: aabb.min.into(),
+            max: aabb.max.into(),
+            kids,
+        }
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb::new(self.min.into(), self.max.into())
+    }
+
     fn is_leaf(&self) -> bool {
         self.kids[1] == u32::MAX
     }
+}
+
+/// The box of an obvhs node with its padding lanes zeroed: with obvhs' `small_bvh2_node`
+/// (32-byte nodes, issue 36) they hold the node's primitive count and first index.
+pub(crate) fn node_box(node: &Bvh2Node) -> Aabb {
+    let b = node.aabb();
+    Aabb::new(Vec3::from(b.min).into(), Vec3::from(b.max).into())
 }
 
 /// The power of two that maps the largest coordinate magnitude of `root` into `[1, 2)` (1
@@ -261,15 +283,9 @@ const SWEEP_MAX: usize = 4096;
 /// appended to `out`; returns the index of the first.
 fn split_slot(out: &mut Vec<Bin>, slot: usize, aabb: Aabb) -> usize {
     let l = out.len();
-    let empty = Bin {
-        aabb: Aabb::INVALID,
-        kids: [0, 0],
-    };
+    let empty = Bin::new(Aabb::INVALID, [0, 0]);
     out.extend([empty, empty]);
-    out[slot] = Bin {
-        aabb,
-        kids: [l as u32, l as u32 + 1],
-    };
+    out[slot] = Bin::new(aabb, [l as u32, l as u32 + 1]);
     l
 }
 
@@ -280,23 +296,20 @@ fn sweep_tree(bvh2: &Bvh2, s: f32) -> Vec<Bin> {
     let mut prims: Vec<(Aabb, u32)> = Vec::new();
     for n in &bvh2.nodes {
         for k in 0..n.prim_count {
-            prims.push((n.aabb, bvh2.primitive_indices[(n.first_index + k) as usize]));
+            prims.push((
+                node_box(n),
+                bvh2.primitive_indices[(n.first_index + k) as usize],
+            ));
         }
     }
-    let mut out = vec![Bin {
-        aabb: Aabb::INVALID,
-        kids: [0, 0],
-    }];
+    let mut out = vec![Bin::new(Aabb::INVALID, [0, 0])];
     let mut stack = vec![(0usize, prims.len(), 0usize)];
     let mut areas = vec![0.0f32; prims.len() + 1];
     while let Some((lo, hi, slot)) = stack.pop() {
         let set = &mut prims[lo..hi];
         let aabb = set.iter().fold(Aabb::INVALID, |a, p| a.union(&p.0));
         if set.len() == 1 {
-            out[slot] = Bin {
-                aabb,
-                kids: [set[0].1, u32::MAX],
-            };
+            out[slot] = Bin::new(aabb, [set[0].1, u32::MAX]);
             continue;
         }
         let n = set.len();
@@ -334,10 +347,7 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
         Node(u32),
         Prims(Aabb, u32, u32),
     }
-    out.push(Bin {
-        aabb: bvh2.nodes[0].aabb,
-        kids: [0, 0],
-    });
+    out.push(Bin::new(node_box(&bvh2.nodes[0]), [0, 0]));
     let mut stack = vec![(Src::Node(0), 0usize)];
     while let Some((src, slot)) = stack.pop() {
         let (aabb, kids) = match src {
@@ -345,34 +355,31 @@ fn binary_tree(bvh2: &Bvh2) -> Vec<Bin> {
                 let node = &bvh2.nodes[n as usize];
                 if node.prim_count == 0 {
                     (
-                        node.aabb,
+                        node_box(node),
                         [Src::Node(node.first_index), Src::Node(node.first_index + 1)],
                     )
                 } else {
                     let (first, count) = (node.first_index, node.prim_count);
                     if count == 1 {
-                        out[slot] = Bin {
-                            aabb: node.aabb,
-                            kids: [bvh2.primitive_indices[first as usize], u32::MAX],
-                        };
+                        out[slot] = Bin::new(
+                            node_box(node),
+                            [bvh2.primitive_indices[first as usize], u32::MAX],
+                        );
                         continue;
                     }
                     let half = count / 2;
                     (
-                        node.aabb,
+                        node_box(node),
                         [
-                            Src::Prims(node.aabb, first, half),
-                            Src::Prims(node.aabb, first + half, count - half),
+                            Src::Prims(node_box(node), first, half),
+                            Src::Prims(node_box(node), first + half, count - half),
                         ],
                     )
                 }
             }
             Src::Prims(aabb, first, count) => {
                 if count == 1 {
-                    out[slot] = Bin {
-                        aabb,
-                        kids: [bvh2.primitive_indices[first as usize], u32::MAX],
-                    };
+                    out[slot] = Bin::new(aabb, [bvh2.primitive_indices[first as usize], u32::MAX]);
                     continue;
                 }
                 let half = count / 2;
@@ -402,8 +409,41 @@ enum Split {
     /// One slot: an 8-wide node whose children are the subtree's split into 8 slots.
     Node,
     /// `k` slots to the left binary child and `i - k` to the right one.
-    Distribute(u8),
+    Distribute(LeftSlots),
 }
+
+/// The `k` of [`Split::Distribute`], 1 to 7: an enum rather than a `u8` so that `Split`
+/// fits one byte (the compiler puts `Leaf` and `Node` in the values it leaves unused), and
+/// the collapse stores eight per binary node (issue 36, peak memory).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(u8)]
+enum LeftSlots {
+    K1 = 1,
+    K2,
+    K3,
+    K4,
+    K5,
+    K6,
+    K7,
+}
+
+impl LeftSlots {
+    /// `k` in 1..WIDTH.
+    fn new(k: usize) -> Self {
+        match k {
+            1 => Self::K1,
+            2 => Self::K2,
+            3 => Self::K3,
+            4 => Self::K4,
+            5 => Self::K5,
+            6 => Self::K6,
+            7 => Self::K7,
+            _ => unreachable!("{k} slots of {WIDTH} to the left child"),
+        }
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Split>() == 1 && WIDTH == 8);
 
 /// The SAH-optimal collapse of a binary BVH into 8-wide nodes by dynamic programming over
 /// (binary node, number of child slots), the method of Ylitie, Karras and Laine 2017
@@ -414,15 +454,21 @@ enum Split {
 struct Collapse {
     /// Visit-probability weight of the root box.
     root_weight: f32,
+    /// Emptied by [`Self::release_costs`] once the tree to collapse is chosen: with two
+    /// binary nodes per primitive it is the largest array of the collapse, and the 8-wide
+    /// tree built next needs only `split` and `node_split` (issue 36, peak memory).
     cost: Vec<[f32; WIDTH]>,
     split: Vec<[Split; WIDTH]>,
+    /// For an inner node that becomes an 8-wide node: the slots (1 to 7) of its left child,
+    /// the rest going to the right one, at the least cost.
+    node_split: Vec<u8>,
 }
 
 impl Collapse {
     /// The collapse of `bins` (root first) with costs computed on boxes scaled by `s`
     /// ([`cost_scale`]).
     fn new(bins: &[Bin], s: f32, is_sphere: impl Fn(u32) -> bool) -> Self {
-        let root = scaled(&bins[0].aabb, s);
+        let root = scaled(&bins[0].aabb(), s);
         let volume = |b: &Aabb| {
             let e = (b.max - b.min).max(Vec3A::ZERO);
             e.x * e.y * e.z
@@ -452,16 +498,17 @@ impl Collapse {
             }
         }
         let mut c = Collapse {
-            root_weight: weight(&bins[0].aabb),
+            root_weight: weight(&bins[0].aabb()),
             cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
+            node_split: vec![0; bins.len()],
         };
         // Triangles under each node, or `u32::MAX` if a sphere is among its primitives.
         let mut tris = vec![0u32; bins.len()];
         for &n in order.iter().rev() {
             let n = n as usize;
             let b = &bins[n];
-            let area = weight(&b.aabb);
+            let area = weight(&b.aabb());
             if b.is_leaf() {
                 let sphere = is_sphere(b.kids[0]);
                 tris[n] = if sphere { u32::MAX } else { 1 };
@@ -477,12 +524,17 @@ impl Collapse {
                 for k in 1..i {
                     let v = c.cost[l][k - 1] + c.cost[r][i - k - 1];
                     if v < best {
-                        (best, how) = (v, Split::Distribute(k as u8));
+                        (best, how) = (v, Split::Distribute(LeftSlots::new(k)));
                     }
                 }
                 c.cost[n][i - 1] = best;
                 c.split[n][i - 1] = how;
             }
+            // As an 8-wide node, at least one slot to each child (the first of equal costs).
+            let spread = |k: usize| c.cost[l][k - 1] + c.cost[r][WIDTH - 1 - k];
+            c.node_split[n] = (1..WIDTH)
+                .min_by(|&a, &b| spread(a).total_cmp(&spread(b)))
+                .expect("non-empty range") as u8;
             // One slot: a leaf, or a node with all slots below it.
             let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
             let fits = tris[n] as usize <= WIDTH;
@@ -505,6 +557,11 @@ impl Collapse {
         c
     }
 
+    /// Frees the costs (the split decisions stay).
+    fn release_costs(&mut self) {
+        self.cost = Vec::new();
+    }
+
     /// SAH cost of the 8-wide tree: the root node and everything below it.
     fn root_cost(&self) -> f32 {
         self.root_weight * NODE_COST + self.cost[0][WIDTH - 1]
@@ -517,6 +574,7 @@ impl Collapse {
             Split::Leaf => out.push((n, true)),
             Split::Node => out.push((n, false)),
             Split::Distribute(k) => {
+                let k = k as u8;
                 let [l, r] = bins[n as usize].kids;
                 self.slots(bins, l, k as usize, out);
                 self.slots(bins, r, i - k as usize, out);
@@ -538,30 +596,33 @@ impl Bvh8 {
     /// and `spheres` after them, then instance leaves: primitive `triangles.len() +
     /// spheres.len() + k` is instance `k`, priced as a sphere) into 8-wide nodes with the SAH-optimal assignment of
     /// binary subtrees to child slots and leaves ([`Collapse`]).
-    pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
+    /// The binary tree is taken, and dropped as soon as it is copied into one-primitive
+    /// leaves: at most one of the two is alive at a time (issue 36, peak memory).
+    pub(crate) fn from_bvh2(bvh2: Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
         let tri_count = triangles.len() as u32;
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
-        let s = cost_scale(&bvh2.nodes[0].aabb);
-        let bins = binary_tree(bvh2);
+        let root = node_box(&bvh2.nodes[0]);
+        let s = cost_scale(&root);
+        let mut bins = binary_tree(&bvh2);
+        let sweep = (bvh2.primitive_indices.len() <= SWEEP_MAX).then(|| sweep_tree(&bvh2, s));
+        drop(bvh2);
         let mut collapse = Collapse::new(&bins, s, is_sphere);
-        let mut bins = bins;
-        if bvh2.primitive_indices.len() <= SWEEP_MAX {
-            let sweep = sweep_tree(bvh2, s);
+        if let Some(sweep) = sweep {
             let sweep_collapse = Collapse::new(&sweep, s, is_sphere);
             if sweep_collapse.root_cost() < collapse.root_cost() {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
-        let root = &bvh2.nodes[0];
+        collapse.release_costs();
         let mut out = Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
             spheres: Vec::new(),
             instances: Vec::new(),
             objects: Vec::new(),
-            max_abs: root.aabb.min.abs().max(root.aabb.max.abs()),
+            max_abs: root.min.abs().max(root.max.abs()),
             depth: 0,
         };
         let src = Source {
@@ -614,12 +675,7 @@ impl Bvh8 {
             kids.push((n, true));
         } else {
             let [l, r] = bins[n as usize].kids;
-            let cost = |k: usize| {
-                collapse.cost[l as usize][k - 1] + collapse.cost[r as usize][WIDTH - 1 - k]
-            };
-            let best = (1..WIDTH)
-                .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
-                .expect("non-empty range");
+            let best = collapse.node_split[n as usize] as usize;
             collapse.slots(bins, l, best, &mut kids);
             collapse.slots(bins, r, WIDTH - best, &mut kids);
         }
@@ -636,7 +692,7 @@ impl Bvh8 {
             tri_only: 0,
         });
         for (c, &(k, is_leaf)) in kids.iter().enumerate() {
-            let aabb = bins[k as usize].aabb;
+            let aabb = bins[k as usize].aabb();
             let node = &mut self.nodes[index as usize];
             for a in 0..3 {
                 node.bounds[2 * a].0[c] = aabb.min[a];
@@ -707,12 +763,7 @@ mod tests {
     use super::*;
 
     fn leaf_node(aabb: Aabb, first: u32, count: u32) -> Bvh2Node {
-        Bvh2Node {
-            aabb,
-            prim_count: count,
-            first_index: first,
-            ..Default::default()
-        }
+        Bvh2Node::new(aabb, count, first)
     }
 
     /// obvhs' builder makes one-primitive leaves, but a binary tree with larger leaves (13
@@ -749,19 +800,14 @@ mod tests {
         let all: Vec<u32> = (0..16).collect();
         let bvh2 = Bvh2 {
             nodes: vec![
-                Bvh2Node {
-                    aabb: bounds(&all),
-                    prim_count: 0,
-                    first_index: 1,
-                    ..Default::default()
-                },
+                Bvh2Node::new(bounds(&all), 0, 1),
                 leaf_node(bounds(&left), 0, 13),
                 leaf_node(bounds(&right), 13, 3),
             ],
             primitive_indices: all.clone(),
             ..Default::default()
         };
-        let bvh = Bvh8::from_bvh2(&bvh2, &tris, &spheres);
+        let bvh = Bvh8::from_bvh2(bvh2, &tris, &spheres);
         let mut seen = [0u32; 16];
         for node in &bvh.nodes {
             for c in 0..WIDTH {

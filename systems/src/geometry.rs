@@ -12,14 +12,10 @@
 use std::f32::consts::PI;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec3A};
-use obvhs::{
-    aabb::Aabb,
-    cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh},
-    BvhBuildParams,
-};
+use obvhs::{aabb::Aabb, BvhBuildParams};
 
 use crate::bvh2_build::build_bvh2;
-use crate::bvh8::{bvh2_depth, Bvh8, InstanceLeaf};
+use crate::bvh8::{Bvh8, InstanceLeaf};
 use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
@@ -39,17 +35,15 @@ pub use instances::Instance;
 ///
 /// One binary BVH (obvhs' PLOC builder and reinsertion optimizer) over the triangles and the
 /// spheres' bounding boxes, so a ray visits every primitive kind in a single traversal. The
-/// intersection systems traverse it collapsed to uncompressed 8-wide nodes; the obvhs
-/// CWBVH collapse (Ylitie et al. 2017, "Efficient Incoherent Ray Traversal on GPUs Through
-/// Compressed Wide BVHs") is kept alongside for [`Self::bvh`].
+/// intersection systems traverse it collapsed to uncompressed 8-wide nodes; the binary tree
+/// is dropped once collapsed (only the 8-wide one is kept: issue 36, memory per triangle).
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
     triangles: Vec<Triangle>,
     spheres: Vec<Sphere>,
-    /// `None` for an empty scene (obvhs cannot build an empty tree).
-    bvh: Option<CwBvh>,
-    /// The same binary BVH collapsed to an uncompressed 8-wide BVH with triangle-packet
-    /// leaves (what the intersection systems traverse; see [`crate::intersect`]).
+    /// The binary BVH collapsed to an uncompressed 8-wide BVH with triangle-packet
+    /// leaves (what the intersection systems traverse; see [`crate::intersect`]); `None`
+    /// for an empty scene (obvhs cannot build an empty tree).
     bvh8: Option<Bvh8>,
     /// The intersection kernel, checked to run on this CPU.
     backend: Backend,
@@ -163,8 +157,8 @@ impl SceneGeometry {
         }
 
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
-        let (bvh, bvh8) = if aabbs.is_empty() {
-            (None, None)
+        let bvh8 = if aabbs.is_empty() {
+            None
         } else {
             let mut lo = Vec3::splat(f32::INFINITY);
             let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -185,21 +179,13 @@ impl SceneGeometry {
             }
             bounds = (lo, hi);
 
-            // Same pipeline as obvhs' `build_cwbvh_from_tris` (PLOC, reinsertion, collapse
-            // to 8-wide nodes with up to 3 primitives per leaf), but over our own boxes so
-            // spheres can share the tree, and with the runs PLOC stalls on built apart.
+            // obvhs' PLOC and reinsertion over our own boxes, so spheres can share the tree,
+            // with the runs PLOC stalls on built apart. Each intermediate is freed as soon as
+            // the next is built (the boxes here, the binary tree inside the collapse): the
+            // peak, not the total, is what a large mesh runs out of.
             let bvh2 = build_bvh2(&aabbs, indices, &params);
-            // obvhs' collapse prices nodes by f32 half areas summed over the tree: infinite
-            // costs leave its slot assignment undefined (out-of-bounds panics). It is only
-            // kept for benchmarks and diagnostics, so scenes that would overflow go without.
-            let depth = bvh2_depth(&bvh2) as f64;
-            let root = &bvh2.nodes[0].aabb;
-            let e = |a: usize| (root.max[a] as f64 - root.min[a] as f64).max(0.0);
-            let half_area = (e(0) + e(1)) * e(2) + e(0) * e(1);
-            let cwbvh_cost = half_area * (aabbs.len() as f64) * (depth + 1.0) * 2.0;
-            let bvh = (cwbvh_cost < f32::MAX as f64)
-                .then(|| bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false));
-            let mut bvh8 = Bvh8::from_bvh2(&bvh2, &triangles, &spheres);
+            drop(aabbs);
+            let mut bvh8 = Bvh8::from_bvh2(bvh2, &triangles, &spheres);
             if !placed.instances.is_empty() {
                 bvh8.instances = placed
                     .instances
@@ -210,24 +196,19 @@ impl SceneGeometry {
                         prim_base: i.prim_base,
                     })
                     .collect();
-                // The objects' BVHs move to where the traversal reads them; their CWBVHs
-                // (diagnostics only) are dropped: memory scales with the objects.
+                // The objects' BVHs move to where the traversal reads them.
                 bvh8.objects = objects
                     .iter_mut()
-                    .map(|o| {
-                        o.bvh = None;
-                        o.bvh8.take().expect("objects are not empty")
-                    })
+                    .map(|o| o.bvh8.take().expect("objects are not empty"))
                     .collect();
             }
-            (bvh, Some(bvh8))
+            Some(bvh8)
         };
 
         let any_attributes = objects.iter().any(|o| o.any_attributes);
         Self {
             triangles: triangles.into_iter().map(Triangle::new).collect(),
             spheres,
-            bvh,
             bvh8,
             backend: Kernel::best().backend().expect("the best kernel runs here"),
             bounds,
@@ -299,15 +280,6 @@ impl SceneGeometry {
     /// Sphere number `i` (primitive `num_triangles() + i`).
     pub fn sphere(&self, i: usize) -> Sphere {
         self.spheres[i]
-    }
-
-    /// The scene's BVH collapsed to obvhs' compressed 8-wide CWBVH (`None` for an empty
-    /// scene, and for one so large that obvhs' f32 SAH costs would overflow: extents beyond
-    /// about 1e17 units). Its `primitive_indices` map leaf slots to primitive indices. Exposed for
-    /// benchmarks and diagnostics; the intersection systems traverse an uncompressed 8-wide
-    /// collapse of the same binary BVH instead.
-    pub fn bvh(&self) -> Option<&CwBvh> {
-        self.bvh.as_ref()
     }
 
     /// The 8-wide BVH (`None` for an empty scene) and the kernel that traverses it.

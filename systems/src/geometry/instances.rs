@@ -329,18 +329,13 @@ impl SceneGeometry {
         self.objects.iter().map(Self::memory_bytes).sum::<usize>() + bvhs
     }
 
-    /// Bytes this geometry holds: triangles, spheres, both BVHs, mesh attributes, and the
+    /// Bytes this geometry holds: triangles, spheres, the BVH, mesh attributes, and the
     /// objects and instances (an object counted once, however many instances place it).
     pub fn memory_bytes(&self) -> usize {
         use std::mem::size_of;
-        let cwbvh = self.bvh.as_ref().map_or(0, |b| {
-            b.nodes.capacity() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
-                + b.primitive_indices.capacity() * size_of::<u32>()
-        });
         size_of::<Self>()
             + self.triangles.capacity() * size_of::<super::Triangle>()
             + self.spheres.capacity() * size_of::<super::Sphere>()
-            + cwbvh
             + self.bvh8.as_ref().map_or(0, |b| b.bytes())
             + self.attributes.bytes()
             + self.objects.iter().map(Self::memory_bytes).sum::<usize>()

@@ -24,12 +24,14 @@ impl Scene {
         // primitive numbering is stable).
         let mut shape_entities: Vec<(hecs::Entity, String, ShapeGeometry, u32, Option<Rgb>)> =
             Vec::new();
-        for (e, (name, geom, mat)) in world
-            .query::<(&Name, &ShapeGeometry, &MaterialRef)>()
-            .iter()
+        // The geometry is moved out of the world, not copied: a mesh's triangles are the
+        // largest thing a scene holds, and the world is dropped with the compiled scene's
+        // build (issue 36, peak memory).
+        for (e, (name, geom, mat, emission)) in
+            world.query_mut::<(&Name, &mut ShapeGeometry, &MaterialRef, Option<&Emission>)>()
         {
-            let emission = world.get::<&Emission>(e).ok().map(|em| em.0);
-            shape_entities.push((e, name.0.clone(), geom.clone(), mat.0, emission));
+            let geom = std::mem::replace(geom, ShapeGeometry::Triangles(Vec::new()));
+            shape_entities.push((e, name.0.clone(), geom, mat.0, emission.map(|em| em.0)));
         }
         shape_entities.sort_by_key(|s| s.0.id());
         let mut transforms: Vec<Option<glam::Affine3A>> = shape_entities

@@ -1,7 +1,11 @@
 //! Wavefront OBJ through tobj: positions, `vn` normals and `vt` texture coordinates, with
 //! every `(v, vt, vn)` combination a face uses made one vertex (tobj's `single_index`), so
 //! the position, normal and uv streams share one index and stay in step.
+//!
+//! The file is streamed into tobj line by line, never held whole: a 2-million-triangle
+//! mesh is about 150 MB of text, as much again as its parsed form (issue 36, peak memory).
 
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use glam::{DVec3, Vec2};
@@ -14,25 +18,31 @@ use super::{check_normals, MeshData};
 /// not exist, the line and the index.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
     let shown = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
-    // Files written on Windows may start with a UTF-8 byte-order mark, and comments in
-    // Latin-1 are common: the mark is dropped and bytes that are not UTF-8 become U+FFFD,
-    // harmless in a comment and still an error in a number.
-    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
-    let text = String::from_utf8_lossy(bytes).into_owned();
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
+    let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file));
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
+    let (models, _materials) = tobj::load_obj_buf(&mut lines, &options, |_| {
         Err(tobj::LoadError::OpenFileFailed)
     })
     .map_err(|e| {
+        if let Some(e) = lines.error.take() {
+            return format!("cannot read OBJ file `{shown}`: {e}");
+        }
+        // Located by a second reading of the file, on this error path only.
+        let text = || std::fs::read(path).map(|b| lossy_text(&b)).ok();
         let located = match e {
-            tobj::LoadError::FaceTexCoordOutOfBounds => bad_face_index(&text, "vt", 1),
-            tobj::LoadError::FaceNormalOutOfBounds => bad_face_index(&text, "vn", 2),
+            tobj::LoadError::FaceTexCoordOutOfBounds => {
+                text().and_then(|t| bad_face_index(&t, "vt", 1))
+            }
+            tobj::LoadError::FaceNormalOutOfBounds => {
+                text().and_then(|t| bad_face_index(&t, "vn", 2))
+            }
             _ => None,
         };
         match located {
@@ -41,7 +51,7 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
         }
     })?;
     let mut mesh = MeshData {
-        skipped: count_skipped(&text),
+        skipped: lines.skipped,
         ..MeshData::default()
     };
     let what = format!("cannot parse OBJ file `{shown}`");
@@ -175,17 +185,97 @@ fn bad_face_index(text: &str, kind: &str, slot: usize) -> Option<String> {
     None
 }
 
-/// The OBJ statements that are not surfaces, which tobj is told to ignore: points (`p`) and
-/// lines (`l`), counted so the scene can warn that they were skipped.
-fn count_skipped(text: &str) -> super::Skipped {
-    let mut skipped = super::Skipped::default();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("p") => skipped.points += 1,
-            Some("l") => skipped.lines += 1,
-            _ => {}
+/// The file as tobj reads it, one line at a time: files written on Windows may start with
+/// a UTF-8 byte-order mark, and comments in Latin-1 are common, so the mark is dropped and
+/// bytes that are not UTF-8 become U+FFFD (harmless in a comment, still an error in a
+/// number; per line as for the whole file, since a newline never belongs to a multi-byte
+/// sequence). On the way, the statements tobj is told to ignore are counted.
+struct Lines<R> {
+    inner: R,
+    /// The current line (UTF-8) and how much of it tobj has consumed.
+    line: Vec<u8>,
+    at: usize,
+    first: bool,
+    /// Points (`p`) and lines (`l`): not surfaces, counted so the scene can warn that they
+    /// were skipped.
+    skipped: super::Skipped,
+    /// The read error, if any: tobj reports it only as a failed line.
+    error: Option<std::io::Error>,
+}
+
+/// `bytes` as [`Lines`] reads them: byte-order mark dropped, invalid UTF-8 replaced.
+fn lossy_text(bytes: &[u8]) -> String {
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+impl<R: BufRead> Lines<R> {
+    fn new(inner: R) -> Self {
+        Lines {
+            inner,
+            line: Vec::new(),
+            at: 0,
+            first: true,
+            skipped: super::Skipped::default(),
+            error: None,
         }
     }
-    skipped
+
+    /// Reads the next line into `self.line` (empty at the end of the file).
+    fn next_line(&mut self) -> std::io::Result<()> {
+        self.line.clear();
+        self.at = 0;
+        self.inner.read_until(b'\n', &mut self.line)?;
+        if self.first {
+            self.first = false;
+            if self.line.starts_with(b"\xef\xbb\xbf") {
+                self.line.drain(..3);
+            }
+        }
+        if std::str::from_utf8(&self.line).is_err() {
+            self.line = String::from_utf8_lossy(&self.line)
+                .into_owned()
+                .into_bytes();
+        }
+        let mut words = self
+            .line
+            .split(u8::is_ascii_whitespace)
+            .filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"p") => self.skipped.points += 1,
+            Some(b"l") => self.skipped.lines += 1,
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+impl<R: BufRead> Read for Lines<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let n = {
+            let available = self.fill_buf()?;
+            let n = available.len().min(out.len());
+            out[..n].copy_from_slice(&available[..n]);
+            n
+        };
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for Lines<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.at == self.line.len() {
+            if let Err(e) = self.next_line() {
+                let kind = e.kind();
+                self.error = Some(e);
+                return Err(std::io::Error::new(kind, "read error"));
+            }
+        }
+        Ok(&self.line[self.at..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.at = (self.at + n).min(self.line.len());
+    }
 }
