@@ -72,6 +72,9 @@ pub(super) struct MaterialDef {
 
 /// The converter's state.
 pub(super) struct Converter<'o> {
+    /// The `alpha` of the shape being converted, as the `opacity` its material takes
+    /// (taken by `material_for_shape`; `None`: opaque).
+    pub shape_opacity: Option<toml::Value>,
     pub lx: Lexer,
     pub options: &'o ImportOptions<'o>,
     pub scene: TomlScene,
@@ -108,6 +111,7 @@ impl<'o> Converter<'o> {
     /// A converter for the top-level file.
     pub fn new(path: &Path, text: &str, options: &'o ImportOptions<'o>) -> Converter<'o> {
         Converter {
+            shape_opacity: None,
             lx: Lexer::new(path, text),
             options,
             scene: TomlScene::default(),

@@ -15,7 +15,7 @@ const METALS: &[&str] = &["Ag", "Al", "Au", "Cu", "MgO", "TiO2"];
 
 impl Converter<'_> {
     /// A colour parameter as a TOML value (a colour or, with `textures`, a pattern).
-    fn colour_value(
+    pub(super) fn colour_value(
         &self,
         p: &Params,
         name: &str,
@@ -295,12 +295,16 @@ impl Converter<'_> {
             },
         };
         let inside = self.gs.inside.clone();
+        let opacity = self.shape_opacity.take();
         let key = (
             format!(
-                "{}@{}:{}",
+                "{}@{}:{}{}",
                 def.name,
                 def.origin.file.display(),
-                def.origin.line
+                def.origin.line,
+                opacity
+                    .as_ref()
+                    .map_or(String::new(), |o| format!(" opacity {o}"))
             ),
             inside.clone(),
         );
@@ -316,10 +320,18 @@ impl Converter<'_> {
             table.insert("interior".into(), toml::Value::Table(medium));
             self.media_used.push(inside.clone());
         }
+        if let Some(o) = opacity {
+            table.insert("opacity".into(), o);
+        }
         let base = if inside.is_empty() {
             def.name.clone()
         } else {
             format!("{} in {inside}", def.name)
+        };
+        let base = if table.contains_key("opacity") {
+            format!("{base} cut out")
+        } else {
+            base
         };
         let name = self.unique(&base);
         self.scene.materials.push((

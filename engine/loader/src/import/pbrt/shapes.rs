@@ -54,18 +54,20 @@ impl Converter<'_> {
     /// `Shape "..."`.
     pub(super) fn shape(&mut self, ty: &str, p: &Params, at: &At) -> Result<(), SceneError> {
         let entity = p.entity.clone();
-        if let Some(q) = p.ignore("alpha") {
-            let a = p
-                .float(&self.lx, "alpha", 1.0)
-                .map_err(|_| p.error(&self.lx, q, "a texture alpha is not supported"))?;
-            if a != 1.0 {
-                return Err(p.error(
-                    &self.lx,
-                    q,
-                    "alpha (cut-outs) on pbrt shapes is not supported",
-                ));
+        // pbrt-v4's `alpha` (a float or a float texture: 1 opaque, 0 absent, stochastic in
+        // between) is risotto's `opacity`, which lives on materials: the shape gets its
+        // material with `opacity` set (one such copy per material and alpha).
+        self.shape_opacity = match self.colour_value(p, "alpha", true)? {
+            Some(toml::Value::Array(c)) => {
+                let a = c.first().and_then(|v| v.as_float()).unwrap_or(1.0);
+                if !(0.0..=1.0).contains(&a) {
+                    let q = p.list.iter().find(|q| q.name == "alpha").expect("given");
+                    return Err(p.error(&self.lx, q, format!("alpha {a} must be in [0, 1]")));
+                }
+                (a < 1.0).then_some(toml::Value::Float(a))
             }
-        }
+            other => other,
+        };
         for k in ["emissionfilename", "displacement", "edgelength"] {
             if let Some(q) = p.ignore(k) {
                 return Err(p.error(&self.lx, q, "is not supported"));

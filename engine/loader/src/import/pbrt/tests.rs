@@ -451,3 +451,45 @@ fn image_infinite_lights_are_equal_area_maps_in_the_light_frame() {
         }
     }
 }
+
+/// A shape's `alpha` (pbrt-v4's cut-out: 1 opaque, 0 absent) becomes its material's
+/// `opacity`, on a copy of the material made once per material and alpha; a shape without
+/// alpha keeps the plain material; a float texture alpha becomes the texture's pattern.
+#[test]
+fn shape_alpha_becomes_the_materials_opacity() {
+    let text = format!(
+        "{HEAD}WorldBegin\nTexture \"mask\" \"float\" \"checkerboard\"\n\
+         Material \"diffuse\"\n\
+         Shape \"sphere\" \"float alpha\" 0.25\n\
+         Shape \"sphere\" \"float alpha\" 0.25 \"float radius\" 2\n\
+         Shape \"sphere\"\n\
+         Shape \"sphere\" \"texture alpha\" \"mask\"\n\
+         Shape \"sphere\" \"float alpha\" 1\n"
+    );
+    let scene = convert("shape-alpha", &text);
+    let material = |i: usize| {
+        scene.shapes[i].table["material"]
+            .as_str()
+            .unwrap()
+            .to_string()
+    };
+    let opacity = |name: &str| {
+        let (_, m) = scene.materials.iter().find(|(n, _)| n == name).unwrap();
+        m.table.get("opacity").cloned()
+    };
+    assert_eq!(opacity(&material(0)), Some(toml::Value::Float(0.25)));
+    assert_eq!(material(0), material(1), "one copy per material and alpha");
+    assert_eq!(opacity(&material(2)), None);
+    assert_ne!(material(0), material(2));
+    let pattern = opacity(&material(3)).expect("a texture alpha");
+    assert_eq!(pattern["pattern"].as_str(), Some("checker"), "{pattern:?}");
+    assert_eq!(material(4), material(2), "alpha 1 is opaque");
+    let e = error(
+        "shape-alpha-range",
+        &format!("{HEAD}WorldBegin\nShape \"sphere\" \"float alpha\" 1.5\n"),
+    );
+    assert!(
+        e.contains("scene.pbrt:6:16:") && e.contains("alpha 1.5 must be in [0, 1]"),
+        "{e}"
+    );
+}
