@@ -56,6 +56,32 @@ fn channel_means(out: &RenderOutput) -> [(f64, f64); 3] {
     })
 }
 
+/// Every channel's image mean is `exp(-2 sigma_t)` (the slab's transmittance) within 3
+/// standard errors, converged to 6 %, with no non-finite sample.
+fn assert_transmits(label: &str, out: &RenderOutput, sigma: [f64; 3]) {
+    let means = channel_means(out);
+    for c in 0..3 {
+        let exact: f64 = (-2.0 * sigma[c]).exp();
+        let (m, se) = means[c];
+        eprintln!("{label}, channel {c}: {m:.5} +- {se:.5} vs {exact:.5}");
+        assert!(
+            (m - exact).abs() < 3.0 * se.max(1e-4),
+            "{label}, channel {c}: {m} +- {se} vs exp(-2 sigma_t) = {exact}"
+        );
+        assert!(se < 0.06 * exact, "converged enough to test: {se}");
+    }
+    assert_eq!(out.stats.counters.nan_dropped, 0);
+}
+
+/// The five transmittance estimators a heterogeneous medium's `tracking` names.
+const TRACKINGS: [&str; 5] = [
+    "ratio",
+    "residual",
+    "delta",
+    "ray_marching",
+    "unbiased_ray_marching",
+];
+
 /// `out`'s channel means agree with `reference`'s within 3 combined standard errors (the
 /// reference converged to 2 %), with no non-finite sample and no majorant violated.
 fn assert_agrees(label: &str, reference: &[(f64, f64); 3], out: &RenderOutput) {
@@ -133,18 +159,7 @@ fn three_channel_grids_transmit_beer_lamberts_closed_form() {
             r#"{{ type = "heterogeneous", density = {{ {density}, albedo = 0, majorant_grid = 4 }}"#
         );
         let out = render_text(&d, &slab_scene(&interior, 128, 1 + k as u64));
-        let means = channel_means(&out);
-        for c in 0..3 {
-            let exact: f64 = (-2.0 * sigma[c]).exp();
-            let (m, se) = means[c];
-            eprintln!("{density}, channel {c}: {m:.5} +- {se:.5} vs {exact:.5}");
-            assert!(
-                (m - exact).abs() < 3.0 * se.max(1e-4),
-                "{density}, channel {c}: {m} +- {se} vs exp(-2 sigma_t) = {exact}"
-            );
-            assert!(se < 0.06 * exact, "converged enough to test: {se}");
-        }
-        assert_eq!(out.stats.counters.nan_dropped, 0);
+        assert_transmits(density, &out, *sigma);
     }
 }
 
@@ -166,16 +181,7 @@ fn a_constant_three_channel_grid_renders_the_homogeneous_colour_medium() {
         ),
     );
     let reference = channel_means(&homogeneous);
-    for (k, tracking) in [
-        "ratio",
-        "residual",
-        "delta",
-        "ray_marching",
-        "unbiased_ray_marching",
-    ]
-    .iter()
-    .enumerate()
-    {
+    for (k, tracking) in TRACKINGS.iter().enumerate() {
         let interior = format!(
             r#"{{ type = "heterogeneous", density = {{ grid = "rgb.vol" }}, scale = 2, majorant_grid = 4, tracking = "{tracking}", {common} }}"#
         );
@@ -205,18 +211,7 @@ fn colour_density_patterns_transmit_beer_lamberts_closed_form() {
     for (k, density) in cases.iter().enumerate() {
         let interior = format!(r#"{{ {density}, albedo = 0 }}"#);
         let out = render_text(&d, &slab_scene(&interior, 128, 11 + k as u64));
-        let means = channel_means(&out);
-        for c in 0..3 {
-            let exact: f64 = (-2.0 * sigma[c]).exp();
-            let (m, se) = means[c];
-            eprintln!("{density}, channel {c}: {m:.5} +- {se:.5} vs {exact:.5}");
-            assert!(
-                (m - exact).abs() < 3.0 * se.max(1e-4),
-                "{density}, channel {c}: {m} +- {se} vs exp(-2 sigma_t) = {exact}"
-            );
-            assert!(se < 0.06 * exact, "converged enough to test: {se}");
-        }
-        assert_eq!(out.stats.counters.nan_dropped, 0);
+        assert_transmits(density, &out, sigma);
         assert_eq!(out.stats.counters.majorant_violations, 0, "{density}");
     }
 }
@@ -232,16 +227,7 @@ fn a_colour_density_pattern_renders_its_grey_pattern_times_colour_twin() {
     let d = scratch_dir("channels", "pattern-twin");
     let common = r#"albedo = [0.9, 0.8, 0.6], phase = { type = "hg", g = 0.3 }, majorant_grid = 4"#;
     let scene = |interior: &str, seed| common::medium_ball_scene(interior, 16, 64, seed, 3.0);
-    for (k, tracking) in [
-        "ratio",
-        "residual",
-        "delta",
-        "ray_marching",
-        "unbiased_ray_marching",
-    ]
-    .iter()
-    .enumerate()
-    {
+    for (k, tracking) in TRACKINGS.iter().enumerate() {
         let twin = format!(
             r#"{{ type = "heterogeneous", density = {{ pattern = "gradient", axis = "y", from = -1, to = 1, a = 0.5, b = 1.5 }}, scale = [1, 2, 4], tracking = "{tracking}", {common} }}"#
         );
