@@ -15,7 +15,9 @@
 //! VDB's world bounds, `voxel_size * (hi - lo + 3)`, for undistorted voxels.
 //!
 //! # Limits
-//! The grid must be a float grid (`Tree_float_5_4_3`, half-float storage included), with
+//! The grid must be a float grid (`Tree_float_5_4_3`, half-float storage included; vec3
+//! grids are refused: `vdb-rs` 0.6 reads every tree's background and tile values as four
+//! bytes and so reads a vec3 tree as empty, checked on `tests/data/small.vdb`), with
 //! finite, non-negative active values and a dense size of at most
 //! [`crate::grid_file::MAX_VOXELS`]. The background value is taken as 0 (the crate does not
 //! expose it); root-level tiles are not read. The file version must be 218 or later (OpenVDB
@@ -105,9 +107,17 @@ pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFile
     };
     let grid_type = reader.grid_descriptors[&chosen].grid_type.clone();
     if !is_float(&chosen) {
+        // vdb-rs 0.6 reads a tree's background and tile values as 4 bytes whatever the value
+        // type, so it misreads every vec3 tree as empty: refused rather than read wrong.
+        let hint = if grid_type.starts_with("Tree_vec3") {
+            ": vec3 grids are not read (the OpenVDB reader, vdb-rs 0.6, misreads their \
+             trees); give a density per RGB channel as a 3-channel .vol or raw grid"
+        } else {
+            ""
+        };
         return Err(format(
             path,
-            format!("grid \"{chosen}\" is a {grid_type} grid, not a float grid"),
+            format!("grid \"{chosen}\" is a {grid_type} grid, not a float grid{hint}"),
         ));
     }
     structure::check_float_grid(path, &archive, &chosen)
@@ -350,7 +360,9 @@ mod tests {
         );
         let e = err(&small, Some("velocity"));
         assert!(
-            e.contains("Tree_vec3s") && e.contains("not a float grid"),
+            e.contains("Tree_vec3s")
+                && e.contains("not a float grid")
+                && e.contains("3-channel .vol"),
             "{e}"
         );
         let dir = risotto_engine::scratch_dir::ScratchDir::new("vdb");
