@@ -22,7 +22,10 @@ use std::sync::Arc;
 mod compile;
 mod instances;
 mod volume_lights;
+mod within;
+
 pub use instances::{InstanceOf, InstancedShapes, ObjectDef, ObjectShape};
+pub use within::WithinCheck;
 
 /// Name of an entity (shape or light), used in messages and stats.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -210,6 +213,10 @@ pub struct Scene {
     /// Where [`Self::camera_volume`] was written (`camera.inside` in a scene file), so its
     /// errors name the file and line; `None` for scenes built in code.
     pub camera_volume_at: Option<crate::diagnostics::Location>,
+    /// Statements of the volume the camera or a shape sits in, checked when compiling
+    /// ([`WithinCheck`]; `within` in scene files, written by importers of formats that name
+    /// media explicitly).
+    pub within_checks: Vec<WithinCheck>,
     /// Objects: shapes defined once and placed by instance entities ([`InstanceOf`];
     /// [`Self::add_object`], [`Self::add_instance`]).
     pub objects: Vec<ObjectDef>,
@@ -314,6 +321,10 @@ pub enum CompileError {
     /// (no file to name).
     #[error("camera_volume: {0}")]
     CameraVolume(String),
+    /// A [`WithinCheck`] of a scene built in code failed (the camera or a shape is not in
+    /// the volume stated).
+    #[error("within: {0}")]
+    Within(String),
     /// An error located in the scene file (`camera.inside`).
     #[error(transparent)]
     Scene(#[from] crate::diagnostics::SceneError),
@@ -344,6 +355,7 @@ impl Scene {
             settings,
             camera_volume: None,
             camera_volume_at: None,
+            within_checks: Vec::new(),
             objects: Vec::new(),
         }
     }
@@ -578,6 +590,17 @@ impl CompiledScene {
     /// point, the crossings are measured from it, to the triangle test's double-precision
     /// accuracy near the origin.
     pub fn probe_stack(&self, point: Vec3, forward: Vec3) -> VolumeStack {
+        self.probe_stack_excluding(point, forward, None)
+    }
+
+    /// [`Self::probe_stack`] with the crossings of shape `exclude` left out (the volumes
+    /// around a point on that shape).
+    fn probe_stack_excluding(
+        &self,
+        point: Vec3,
+        forward: Vec3,
+        exclude: Option<u32>,
+    ) -> VolumeStack {
         let mut stack = VolumeStack::new();
         if !self.features.volumes && !self.features.transmissive {
             return stack;
@@ -611,7 +634,7 @@ impl CompiledScene {
             let s = self
                 .geometry
                 .surface_at(prim[0], origin, d, t[0], b1[0], b2[0]);
-            if self.tracks_interior(shape) {
+            if self.tracks_interior(shape) && exclude != Some(shape) {
                 // Seen along `forward`, the opposite of the walk's direction.
                 crossings.push((shape, forward.dot(s.ng) < 0.0));
             }

@@ -452,6 +452,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
     scene.source = Some(desc.path.clone());
     scene.camera_volume = desc.camera_volume.clone();
     scene.camera_volume_at = desc.camera_volume_at.clone();
+    scene.within_checks = desc.within.clone();
     for m in &desc.materials {
         // Located at the `type` value: the registry is only known here, after parsing.
         let ctor = registry.constructors.get(&m.type_name).ok_or_else(|| {

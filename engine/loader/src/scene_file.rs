@@ -28,6 +28,7 @@ mod pixel_filter;
 mod raw;
 #[cfg(test)]
 mod tests;
+mod within;
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -90,6 +91,8 @@ pub struct SceneDesc {
     /// Where `camera.inside` is written, for the compiler's check of it against the volumes
     /// the camera is really in (`None` when the key is absent).
     pub camera_volume_at: Option<Location>,
+    /// `within` statements of the camera and the shapes, checked when compiling.
+    pub within: Vec<risotto_engine::scene::WithinCheck>,
 }
 
 /// The `[render]` section.
@@ -383,6 +386,7 @@ fn parse_source(
     objects::warn_unused(&src, &objects, &instances);
     let lights = read_lights(&top, &src)?;
     let (camera, camera_volume, camera_volume_at) = camera::read_camera(&top, &shapes, &src)?;
+    let within = within::read_within(&top, &shapes, &src)?;
     Ok(SceneDesc {
         path: path.to_path_buf(),
         files: src.files.clone(),
@@ -396,6 +400,7 @@ fn parse_source(
         lights,
         camera_volume,
         camera_volume_at,
+        within,
     })
 }
 
@@ -611,7 +616,14 @@ fn read_shapes(
             instances.push(objects::read_instance(&r, node, name, objects)?);
             continue;
         }
-        out.push(read_shape(&r, node, type_name, name, materials)?);
+        out.push(read_shape(
+            &r,
+            node,
+            type_name,
+            name,
+            materials,
+            &["within"],
+        )?);
     }
     Ok((out, instances))
 }
@@ -624,6 +636,7 @@ fn read_shape(
     type_name: &str,
     name: String,
     materials: &[MaterialDesc],
+    extra: &[&str],
 ) -> Result<ShapeDesc, SceneError> {
     let common = ["type", "name", "material", "emission"];
     let specific: &[&str] = match type_name {
@@ -653,7 +666,12 @@ fn read_shape(
             ))
         }
     };
-    let allowed: Vec<&str> = common.iter().chain(specific).copied().collect();
+    let allowed: Vec<&str> = common
+        .iter()
+        .chain(specific)
+        .chain(extra)
+        .copied()
+        .collect();
     r.deny_unknown(&allowed)?;
 
     let material_name = r.str_req("material")?;

@@ -17,6 +17,7 @@ impl Scene {
             settings,
             camera_volume,
             camera_volume_at,
+            within_checks,
             objects,
             source: _,
         } = self;
@@ -362,6 +363,16 @@ impl Scene {
             }
             None => probed,
         };
+        for check in &within_checks {
+            compiled
+                .check_within(check)
+                .map_err(|message| match &check.at {
+                    Some(at) => CompileError::Scene(
+                        at.error(crate::diagnostics::SceneErrorKind::InvalidValue, message),
+                    ),
+                    None => CompileError::Within(message),
+                })?;
+        }
         Ok(compiled)
     }
 }

@@ -30,7 +30,7 @@ pub(super) fn read_camera(
     let forward = to - from;
     let distance = forward.length();
     let projection_name = r.str_opt("projection")?.unwrap_or("perspective");
-    const COMMON: [&str; 4] = ["from", "to", "up", "inside"];
+    const COMMON: [&str; 5] = ["from", "to", "up", "inside", "within"];
     let fov = || {
         r.f32_where(
             "fov",

@@ -102,7 +102,7 @@ pub(super) fn read_objects(
                     NOT_IN_OBJECTS,
                 ));
             }
-            let shape = read_shape(&s, item, type_name, shape_name, materials)?;
+            let shape = read_shape(&s, item, type_name, shape_name, materials, &[])?;
             let m = &materials[shape.material];
             if m.params.has("interior") || m.type_name == "subsurface" {
                 return Err(s.error(

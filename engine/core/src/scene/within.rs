@@ -1,0 +1,86 @@
+//! Statements of the volume the camera or a shape sits in ([`WithinCheck`]), checked when
+//! the scene is compiled.
+//!
+//! risotto infers every medium from geometry: a volume is the interior of a closed shape,
+//! and what surrounds a point is found by walking out of the scene from it
+//! ([`CompiledScene::probe_stack`]). Formats that state media explicitly instead (Mitsuba
+//! 3's sensor medium and shape `exterior`, pbrt-v4's `MediumInterface` outside medium) say
+//! where the camera or a shape is; an importer writes that statement as a check, so that a
+//! scene whose geometry says otherwise is an error naming both, never an image rendered
+//! with the wrong medium around the camera or the shape.
+
+use super::*;
+
+/// "The innermost volume around `subject` is the interior of one of `within`": checked by
+/// [`Scene::compile`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct WithinCheck {
+    /// The camera (`None`) or the shape of this name.
+    pub subject: Option<String>,
+    /// Shape names; the innermost volume around the subject must be the interior of one of
+    /// them. Empty: the subject is in no volume.
+    pub within: Vec<String>,
+    /// Where the statement was written (`within` in a scene file), for errors.
+    pub at: Option<crate::diagnostics::Location>,
+}
+
+impl CompiledScene {
+    /// The volumes around shape `shape` just outside it: the walk of [`Self::probe_stack`]
+    /// from a point of its first primitive along its normal, its own crossings left out.
+    pub fn stack_around(&self, shape: u32) -> Option<VolumeStack> {
+        let prim =
+            (0..self.geometry.num_flat_prims() as u32).find(|&p| self.shape_of_prim(p) == shape)?;
+        let (point, normal) = self
+            .geometry
+            .sample_prim(prim, risotto_components::Vec2::splat(1.0 / 3.0));
+        Some(self.probe_stack_excluding(point, -normal, Some(shape)))
+    }
+
+    /// Runs one [`WithinCheck`]; the message of a failed one.
+    pub(super) fn check_within(&self, check: &WithinCheck) -> Result<(), String> {
+        let index = |name: &str| {
+            self.shapes
+                .iter()
+                .position(|s| s.name == name)
+                .map(|s| s as u32)
+                .ok_or_else(|| format!("shape \"{name}\" does not exist"))
+        };
+        for name in &check.within {
+            if !self.tracks_interior(index(name)?) {
+                return Err(format!(
+                    "shape \"{name}\" has no interior (its material neither transmits nor \
+                     computes a volume), so nothing is within it"
+                ));
+            }
+        }
+        let (what, stack) = match &check.subject {
+            None => ("the camera".to_owned(), self.camera_stack.clone()),
+            Some(name) => {
+                let s = index(name)?;
+                let stack = self.stack_around(s).ok_or_else(|| {
+                    format!("shape \"{name}\" is instanced or empty: it cannot be checked")
+                })?;
+                (format!("shape \"{name}\""), stack)
+            }
+        };
+        let innermost = stack
+            .innermost()
+            .map(|e| self.shapes[e.shape as usize].name.as_str());
+        if innermost.is_some_and(|n| check.within.iter().any(|w| w == n))
+            || (innermost.is_none() && check.within.is_empty())
+        {
+            return Ok(());
+        }
+        let stated = if check.within.is_empty() {
+            "in no volume".to_owned()
+        } else {
+            let names: Vec<String> = check.within.iter().map(|n| format!("\"{n}\"")).collect();
+            format!("within the interior of {}", names.join(" or "))
+        };
+        let found = match innermost {
+            Some(n) => format!("the innermost volume around it is the interior of \"{n}\""),
+            None => "it is in no volume (no closed shape with an interior encloses it)".to_owned(),
+        };
+        Err(format!("{what} is stated to be {stated}, but {found}"))
+    }
+}

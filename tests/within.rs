@@ -1,0 +1,122 @@
+//! `within` on the camera and on shapes (the statements Mitsuba's sensor medium and shape
+//! `exterior` become): checked against the volumes the geometry puts them in when the scene
+//! is compiled, so a statement the geometry contradicts is a located error, never a render
+//! with the wrong medium around the camera or the shape.
+
+use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
+use std::path::Path;
+
+/// A haze box (-4..4) around the camera and a glass ball in it; a second ball outside the
+/// box; `camera` and `ball` / `far` keys added by the caller.
+fn scene(camera: &str, ball: &str, far: &str) -> String {
+    format!(
+        r#"
+[render]
+width = 8
+height = 8
+spp = 1
+
+[camera]
+from = [0, 0, 3]
+to = [0, 0, 0]
+fov = 40
+{camera}
+
+[materials.haze]
+type = "interface"
+interior = {{ type = "beer", sigma_a = 0.1 }}
+
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+interior = {{ type = "beer", sigma_a = 0.5 }}
+
+[materials.white]
+type = "diffuse"
+
+[[shapes]]
+name = "haze"
+type = "box"
+min = [-4, -4, -4]
+max = [4, 4, 4]
+material = "haze"
+
+[[shapes]]
+name = "ball"
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "glass"
+{ball}
+
+[[shapes]]
+name = "far"
+type = "sphere"
+center = [10, 0, 0]
+radius = 1
+material = "white"
+{far}
+"#
+    )
+}
+
+/// Loads and compiles `text`; the error's text if either fails.
+fn compile(text: &str) -> Result<(), String> {
+    let desc = parse_scene(text, Path::new("scene.toml")).map_err(|e| e.to_string())?;
+    scene_from_desc(desc, &MaterialRegistry::with_builtins())
+        .map_err(|e| e.to_string())?
+        .compile()
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+#[test]
+fn statements_the_geometry_agrees_with_load() {
+    compile(&scene(
+        r#"within = ["haze"]"#,
+        r#"within = ["haze"]"#,
+        "within = []",
+    ))
+    .unwrap();
+    // One of several shapes is enough (Mitsuba's medium may be the interior of several).
+    compile(&scene(r#"within = ["ball", "haze"]"#, "", "")).unwrap();
+}
+
+#[test]
+fn statements_the_geometry_contradicts_are_located_errors() {
+    for (camera, ball, far, want) in [
+        // The camera is in the haze, not in no volume.
+        (
+            "within = []",
+            "",
+            "",
+            "the camera is stated to be in no volume, but the innermost volume around it is the interior of \"haze\"",
+        ),
+        // The camera is not inside the glass ball.
+        ("within = [\"ball\"]", "", "", "the interior of \"ball\", but"),
+        // The ball sits in the haze.
+        ("", "within = []", "", "shape \"ball\" is stated to be in no volume"),
+        // The far ball is outside the haze box.
+        (
+            "",
+            "",
+            "within = [\"haze\"]",
+            "shape \"far\" is stated to be within the interior of \"haze\", but it is in no volume",
+        ),
+    ] {
+        let e = compile(&scene(camera, ball, far)).expect_err(want);
+        assert!(e.contains(want) && e.contains("scene.toml"), "{e}");
+        assert!(e.contains("within"), "{e}");
+    }
+    // Names are checked when read, and a shape without an interior is no volume.
+    let e = compile(&scene("within = [\"fog\"]", "", "")).unwrap_err();
+    assert!(
+        e.contains("unknown shape `fog`") && e.contains("scene.toml:"),
+        "{e}"
+    );
+    let e = compile(&scene("within = [\"far\"]", "", "")).unwrap_err();
+    assert!(e.contains("\"far\" has no interior"), "{e}");
+    let e = compile(&scene("within = [\"haze\", \"haze\"]", "", "")).unwrap_err();
+    assert!(e.contains("listed twice"), "{e}");
+}
