@@ -63,7 +63,12 @@ material = "white"
 
 /// Loads and compiles `text`; the error's text if either fails.
 fn compile(text: &str) -> Result<(), String> {
-    let desc = parse_scene(text, Path::new("scene.toml")).map_err(|e| e.to_string())?;
+    compile_as(text, "scene.toml")
+}
+
+/// [`compile`] of a scene read as the file `name` (its extension picks the format).
+fn compile_as(text: &str, name: &str) -> Result<(), String> {
+    let desc = parse_scene(text, Path::new(name)).map_err(|e| e.to_string())?;
     scene_from_desc(desc, &MaterialRegistry::with_builtins())
         .map_err(|e| e.to_string())?
         .compile()
@@ -119,4 +124,53 @@ fn statements_the_geometry_contradicts_are_located_errors() {
     assert!(e.contains("\"far\" has no interior"), "{e}");
     let e = compile(&scene("within = [\"haze\", \"haze\"]", "", "")).unwrap_err();
     assert!(e.contains("listed twice"), "{e}");
+}
+
+/// A Mitsuba scene: the camera at z = 5 with the sensor in `fog` (if `sensor`), a fog box of
+/// half size `half` at the origin and a glass ball bordered by the fog.
+fn mitsuba(half: f32, sensor: bool) -> String {
+    let medium = if sensor {
+        r#"<ref id="fog" name="medium"/>"#
+    } else {
+        ""
+    };
+    format!(
+        r#"<scene version="3.0.0">
+    <medium type="homogeneous" id="fog"><rgb name="sigma_t" value="0.1"/></medium>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+        {medium}
+    </sensor>
+    <shape type="cube" id="box"><bsdf type="null"/><ref id="fog" name="interior"/>
+        <transform name="to_world"><scale value="{half}"/></transform></shape>
+    <shape type="sphere" id="ball"><bsdf type="dielectric"/><ref id="fog" name="exterior"/></shape>
+</scene>"#
+    )
+}
+
+#[test]
+fn mitsuba_sensor_and_exterior_media_are_checked_against_the_geometry() {
+    let load = |text: &str| compile_as(text, "scene.xml");
+    // The fog box encloses camera and ball: as Mitsuba states.
+    load(&mitsuba(8.0, true)).unwrap();
+    // A box of half size 3 leaves the camera (at z = 5) outside: Mitsuba would render the
+    // camera rays in fog up to the box, risotto in vacuum; refused, at the sensor's medium.
+    let e = load(&mitsuba(3.0, true)).unwrap_err();
+    assert!(
+        e.contains("the camera is stated to be within the interior of \"box\"")
+            && e.contains("in no volume")
+            && e.contains("scene.xml:3"),
+        "{e}"
+    );
+    // A box of half size 0.5 sits inside the ball: the ball's outside is no volume, refused
+    // at the ball.
+    let e = load(&mitsuba(0.5, false)).unwrap_err();
+    assert!(
+        e.contains("shape \"ball\" is stated to be within the interior of \"box\"")
+            && e.contains("scene.xml:11"),
+        "{e}"
+    );
+    load(&mitsuba(3.0, false)).unwrap();
 }

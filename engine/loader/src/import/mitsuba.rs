@@ -44,6 +44,8 @@ pub fn import(
         names: Vec::new(),
         has_media: false,
         sensor_medium: None,
+        medium_holders: Vec::new(),
+        exteriors: Vec::new(),
         path_integrator: None,
         clip_planes: None,
         shape_bounds: Vec::new(),
@@ -141,6 +143,12 @@ struct Converter<'a> {
     has_media: bool,
     /// A medium the sensor sits in.
     sensor_medium: Option<Rc<xml::Node>>,
+    /// Each top-level shape with an interior medium: the medium (by identity) and the
+    /// shape's name.
+    medium_holders: Vec<(Rc<xml::Node>, String)>,
+    /// Each top-level shape with an exterior medium: the medium and the shape's index in
+    /// `scene.shapes`.
+    exteriors: Vec<(Rc<xml::Node>, usize)>,
     /// The `path` integrator, when the scene uses it (it ignores media in Mitsuba).
     path_integrator: Option<Rc<xml::Node>>,
     /// The sensor, its position and its near and far clip distances.
@@ -223,13 +231,43 @@ impl Converter<'_> {
                 }
             }
         }
-        if let Some(m) = &self.sensor_medium {
-            return Err(self.cx.error(
+        // Mitsuba states the medium around the sensor and outside shapes; risotto infers
+        // them from the closed shapes enclosing each point. Each statement becomes a
+        // `within` check (the innermost volume there must be the interior of a shape holding
+        // that medium), so geometry that disagrees is an error at load, not another image.
+        let holders = |m: &Rc<xml::Node>| -> Vec<toml::Value> {
+            self.medium_holders
+                .iter()
+                .filter(|(h, _)| Rc::ptr_eq(h, m))
+                .map(|(_, name)| toml::Value::from(name.as_str()))
+                .collect()
+        };
+        let unheld = |m: &Rc<xml::Node>, what: &str| {
+            self.cx.error(
                 m,
                 None,
-                "a medium on the sensor (the camera inside a medium) is not converted yet: \
-                 enclose the scene in a shape with a null BSDF and this medium as its interior",
-            ));
+                format!(
+                    "{what} is not the interior of any shape: risotto's media fill closed \
+                     shapes, so a medium without a boundary (Mitsuba's medium filling all \
+                     space) cannot be converted; give it as the interior of a closed shape \
+                     enclosing that region (a null BSDF makes the boundary invisible) and \
+                     refer to it from there"
+                ),
+            )
+        };
+        if let Some(m) = &self.sensor_medium {
+            let within = holders(m);
+            if within.is_empty() {
+                return Err(unheld(m, "the sensor's medium"));
+            }
+            self.scene.camera.set("within", within);
+        }
+        for (m, shape) in &self.exteriors {
+            let within = holders(m);
+            if within.is_empty() {
+                return Err(unheld(m, "this exterior medium"));
+            }
+            self.scene.shapes[*shape].set("within", within);
         }
         Ok(())
     }

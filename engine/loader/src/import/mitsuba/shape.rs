@@ -210,10 +210,6 @@ impl Converter<'_> {
                 ))
             }
         }
-        if let Some(id) = node.attr("id") {
-            let name = Converter::unique(&mut self.names, id);
-            e.set("name", name);
-        }
         let bsdf = p.one_unnamed("bsdf")?;
         let interior = match p.object("interior", "medium")? {
             Some(m) => {
@@ -229,15 +225,32 @@ impl Converter<'_> {
             }
             None => None,
         };
-        if let Some(ext) = p.object("exterior", "medium")? {
+        let exterior = p.object("exterior", "medium")?;
+        if let (Some(ext), Some(_)) = (&exterior, &self.group_shapes) {
             return Err(self.cx.error(
-                &ext,
+                ext,
                 Some("exterior"),
-                "exterior media are not converted: risotto infers the medium outside a shape \
-                 from the shapes enclosing it (give that medium as the interior of an \
-                 enclosing shape with a null BSDF)",
+                "a shape in a shapegroup cannot state an exterior medium (its instances may \
+                 sit anywhere)",
             ));
         }
+        // A shape that holds or borders a medium is named, so that `within` checks can
+        // refer to it (finish_media).
+        let name = match node.attr("id") {
+            Some(id) => Some(Converter::unique(&mut self.names, id)),
+            None if self.group_shapes.is_none() && (interior.is_some() || exterior.is_some()) => {
+                let line = self.cx.doc.origin(node).1;
+                Some(Converter::unique(
+                    &mut self.names,
+                    &format!("{kind} at line {line}"),
+                ))
+            }
+            None => None,
+        };
+        if let Some(name) = &name {
+            e.set("name", name.as_str());
+        }
+        let interior_medium = interior.as_ref().map(|(m, _)| m.clone());
         let material = self.material(bsdf, interior, node)?;
         e.set("material", material);
         if let Some(em) = p.one_unnamed("emitter")? {
@@ -284,6 +297,12 @@ impl Converter<'_> {
         match &mut self.group_shapes {
             Some(group) => group.push(e),
             None => {
+                if let (Some(m), Some(name)) = (interior_medium, &name) {
+                    self.medium_holders.push((m, name.clone()));
+                }
+                if let Some(m) = exterior {
+                    self.exteriors.push((m, self.scene.shapes.len()));
+                }
                 self.shape_bounds.push((node.clone(), world));
                 self.scene.shapes.push(e);
             }

@@ -345,7 +345,7 @@ fn unsupported_plugins_values_and_parameters_are_located_errors() {
         (r#"<shape type="sphere"><float name="radios" value="1"/></shape>"#, 7, "parameter `radios` of shape (sphere) is not supported"),
         (r#"<shape type="sphere"><string name="radius" value="1"/></shape>"#, 7, "must be a <float>"),
         ("<shape type=\"sphere\">\n<bsdf type=\"dielectric\"><string name=\"int_ior\" value=\"glass\"/></bsdf></shape>", 8, "one of Mitsuba's named indices"),
-        (r#"<shape type="cube"><medium type="homogeneous" name="exterior"/></shape>"#, 7, "exterior media are not converted"),
+        (r#"<shape type="cube"><medium type="homogeneous" name="exterior"/></shape>"#, 7, "this exterior medium is not the interior of any shape"),
         (r#"<integrator type="bdpt"/>"#, 7, "integrator type \"bdpt\" is not supported"),
         (r#"<shape type="rectangle"><bsdf type="twosided"><bsdf type="dielectric"/></bsdf></shape>"#, 7, "twosided around"),
     ] {
@@ -462,13 +462,16 @@ fn clip_planes_filters_and_sensor_media_are_stated() {
     assert_eq!(tent.render.table["filter_radius"].as_float(), Some(1.5));
     let box_ = convert(&scene("")).unwrap().scene;
     assert!(!box_.render.table.contains_key("filter"));
-    // A camera inside a medium is not converted yet: an error saying what to do.
+    // A camera in a medium no shape bounds: an error saying what to do.
     let e = convert(&scene("").replace(
         "</sensor>",
         r#"<medium type="homogeneous" name="medium"/></sensor>"#,
     ))
     .unwrap_err();
-    assert!(e.contains("a medium on the sensor"), "{e}");
+    assert!(
+        e.contains("the sensor's medium is not the interior of any shape"),
+        "{e}"
+    );
     // A cropped film is an error.
     let e = convert(&scene("").replace(
         r#"<rfilter type="box"/>"#,
@@ -476,4 +479,42 @@ fn clip_planes_filters_and_sensor_media_are_stated() {
     ))
     .unwrap_err();
     assert!(e.contains("cropped film"), "{e}");
+}
+
+#[test]
+fn sensor_and_exterior_media_become_within_checks() {
+    // A fog box holding the camera (by reference) and a glass ball bordered by the fog; the
+    // second box holds the same medium; the ball without an id gets a name.
+    let body = r#"
+<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="0.1"/></medium>
+<shape type="cube" id="box"><bsdf type="null"/><ref id="fog" name="interior"/>
+    <transform name="to_world"><scale value="8"/></transform></shape>
+<shape type="cube" id="box2"><bsdf type="null"/><ref id="fog" name="interior"/>
+    <transform name="to_world"><translate value="30, 0, 0"/></transform></shape>
+<shape type="sphere"><bsdf type="dielectric"/><ref id="fog" name="exterior"/></shape>"#;
+    let text = scene(body).replace("</sensor>", r#"<ref id="fog" name="medium"/></sensor>"#);
+    let s = convert(&text).unwrap().scene;
+    let names = |v: &toml::Value| -> Vec<String> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap().to_owned())
+            .collect()
+    };
+    assert_eq!(names(&s.camera.table["within"]), ["box", "box2"]);
+    let ball = &s.shapes[2].table;
+    assert_eq!(ball["name"].as_str(), Some("sphere at line 13"));
+    assert_eq!(names(&ball["within"]), ["box", "box2"]);
+    // A shape that holds the medium but states no exterior gets no check.
+    assert!(!s.shapes[0].table.contains_key("within"));
+    // An exterior in a shapegroup cannot be placed.
+    let group = r#"
+<medium type="homogeneous" id="fog"/>
+<shape type="cube"><bsdf type="null"/><ref id="fog" name="interior"/></shape>
+<shape type="shapegroup" id="g"><shape type="sphere"><ref id="fog" name="exterior"/></shape></shape>"#;
+    let e = convert(&scene(group)).unwrap_err();
+    assert!(
+        e.contains("shapegroup cannot state an exterior medium"),
+        "{e}"
+    );
 }
