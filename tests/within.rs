@@ -174,3 +174,36 @@ fn mitsuba_sensor_and_exterior_media_are_checked_against_the_geometry() {
     );
     load(&mitsuba(3.0, false)).unwrap();
 }
+
+#[test]
+fn pbrt_camera_and_outside_media_are_checked_against_the_geometry() {
+    // The camera at z = 5 in fog, a fog ball of radius `r` at the origin, and a small ball
+    // at z = `z` whose outside is the fog.
+    let pbrt = |r: f32, z: f32| {
+        format!(
+            "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+         MediumInterface \"\" \"fog\"\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n\
+             Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+             WorldBegin\n\
+             AttributeBegin\nMaterial \"interface\"\nMediumInterface \"fog\" \"\"\n\
+             Shape \"sphere\" \"float radius\" {r}\nAttributeEnd\n\
+             MediumInterface \"\" \"fog\"\nTranslate 0 0 {z}\nShape \"sphere\" \"float radius\" 0.5\n"
+        )
+    };
+    compile_as(&pbrt(10.0, 2.0), "scene.pbrt").unwrap();
+    // Radius 4: the camera is outside the fog, the small ball inside it.
+    let e = compile_as(&pbrt(4.0, 2.0), "scene.pbrt").unwrap_err();
+    assert!(
+        e.contains("the camera is stated to be within the interior of \"sphere at line 10\"")
+            && e.contains("scene.pbrt:4"),
+        "{e}"
+    );
+    // The small ball at z = -20, outside the fog the camera is in.
+    let e = compile_as(&pbrt(10.0, -20.0), "scene.pbrt").unwrap_err();
+    assert!(
+        e.contains("shape \"sphere at line 14\" is stated to be within")
+            && e.contains("in no volume")
+            && e.contains("scene.pbrt:14"),
+        "{e}"
+    );
+}

@@ -100,6 +100,11 @@ pub(super) struct Converter<'o> {
     pub media: HashMap<String, (toml::Table, At)>,
     /// Media some shape holds (for the camera's medium check).
     pub media_used: Vec<String>,
+    /// Each top-level shape holding a medium: the medium and the shape's name.
+    pub medium_holders: Vec<(String, String)>,
+    /// Each top-level shape with an outside medium other than its inside: the medium, the
+    /// shape's index in `scene.shapes` and where it was written.
+    pub outsides: Vec<(String, usize, At)>,
     /// The object being defined: name, shapes, where.
     pub object: Option<(String, Vec<toml::Value>, At)>,
     /// The camera's medium (`MediumInterface` outside at `Camera`) and where it was set.
@@ -138,6 +143,8 @@ impl<'o> Converter<'o> {
             media_used: Vec::new(),
             object: None,
             camera_medium: None,
+            medium_holders: Vec::new(),
+            outsides: Vec::new(),
             names: HashMap::new(),
         }
     }
@@ -560,10 +567,29 @@ impl<'o> Converter<'o> {
         } else {
             self.default_camera(&render);
         }
+        // pbrt states the medium around the camera and outside each shape; risotto infers
+        // both from the closed shapes enclosing a point, so each statement becomes a
+        // `within` check of the geometry (docs/scene-format.md).
+        let holders = |m: &str| -> Vec<toml::Value> {
+            self.medium_holders
+                .iter()
+                .filter(|(h, _)| h == m)
+                .map(|(_, name)| toml::Value::from(name.as_str()))
+                .collect()
+        };
         if let Some((m, at)) = self.camera_medium.clone() {
-            if !self.media_used.contains(&m) {
+            let within = holders(&m);
+            if within.is_empty() {
                 return Err(self.error(&at, "Camera", format!("the camera is in medium \"{m}\", but no shape has it inside (risotto's media are the interiors of closed shapes: put the camera inside a shape with `MediumInterface \"{m}\" \"\"`)")));
             }
+            self.scene.camera.set("within", within);
+        }
+        for (m, shape, at) in &self.outsides {
+            let within = holders(m);
+            if within.is_empty() {
+                return Err(self.error(at, "Shape", format!("the shape's outside medium \"{m}\" is no shape's inside (risotto's media are the interiors of closed shapes: enclose the shape in one with `MediumInterface \"{m}\" \"\"`)")));
+            }
+            self.scene.shapes[*shape].set("within", within);
         }
         self.scene.render = render;
         self.scene.header = vec![format!(

@@ -173,9 +173,33 @@ impl Converter<'_> {
             }
             e.set("emission", light.radiance.to_vec());
         }
+        let (inside, outside) = (self.gs.inside.clone(), self.gs.outside.clone());
+        let holds = !inside.is_empty() && inside != outside;
+        let borders = !outside.is_empty() && inside != outside;
         match &mut self.object {
-            Some((_, shapes, _)) => shapes.push(toml::Value::Table(e.table)),
-            None => self.scene.shapes.push(e),
+            Some((_, shapes, _)) => {
+                if borders {
+                    return Err(self.error(at, entity, format!("a shape in an object (ObjectBegin) cannot have an outside medium (\"{outside}\"): its instances may sit anywhere")));
+                }
+                shapes.push(toml::Value::Table(e.table))
+            }
+            None => {
+                // A shape holding or bordering a medium is named for `within` checks.
+                if holds || borders {
+                    let line = self.lx.line(at);
+                    let kind = entity.trim_start_matches("Shape ").trim_matches('"');
+                    let name = self.unique(&format!("{kind} at line {line}"));
+                    e.set("name", name.as_str());
+                    if holds {
+                        self.medium_holders.push((inside, name));
+                    }
+                    if borders {
+                        self.outsides
+                            .push((outside, self.scene.shapes.len(), at.clone()));
+                    }
+                }
+                self.scene.shapes.push(e)
+            }
         }
         Ok(())
     }

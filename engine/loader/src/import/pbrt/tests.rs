@@ -268,6 +268,25 @@ fn media_become_interiors_of_their_shapes() {
     assert_eq!(interior["phase"]["g"].as_float(), Some(0.5));
 }
 
+#[test]
+fn the_camera_medium_and_outside_media_become_within_checks() {
+    let s = convert(
+        "within",
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+         MediumInterface \"\" \"fog\"\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n\
+         WorldBegin\n\
+         AttributeBegin\nMaterial \"interface\"\nMediumInterface \"fog\" \"\"\n\
+         Shape \"sphere\" \"float radius\" 10\nAttributeEnd\n\
+         MediumInterface \"\" \"fog\"\nShape \"sphere\"\n",
+    );
+    let name = |i: usize| s.shapes[i].table["name"].as_str().unwrap().to_owned();
+    assert_eq!(name(0), "sphere at line 9");
+    let within = |t: &toml::Table| t["within"].as_array().unwrap().clone();
+    assert_eq!(within(&s.camera.table), vec![toml::Value::from(name(0))]);
+    assert_eq!(within(&s.shapes[1].table), vec![toml::Value::from(name(0))]);
+    assert!(!s.shapes[0].table.contains_key("within"));
+}
+
 /// Each error names the file, line and column of what is wrong.
 #[test]
 fn errors_are_located() {
