@@ -6,7 +6,9 @@
 use criterion::{black_box, criterion_main, Criterion, Throughput};
 use risotto::components::{Rgb, Vec3};
 use risotto::systems::grid::DensityGrid;
-use risotto::systems::pattern::{bounds, eval_with, Axis, Fbm, Node, PatternGraph, Space, Texture};
+use risotto::systems::pattern::{
+    bounds, eval_with, Axis, Fbm, GridBorder, Node, PatternGraph, Space, Texture,
+};
 use risotto::systems::sampler::SplitMix64;
 use std::sync::Arc;
 
@@ -32,6 +34,8 @@ fn graphs() -> Vec<(&'static str, PatternGraph)> {
                 grid: Arc::new(grid),
                 min: Vec3::splat(-2.0),
                 max: Vec3::splat(2.0),
+                to_box: None,
+                border: GridBorder::Clamp,
             }]),
         ),
         (

@@ -150,6 +150,46 @@ fn bad_patterns_are_located_errors_naming_key_and_value() {
             &["`path`", "missing.vol"],
         ),
         (
+            r#"{ pattern = "grid", values = [1, 2, 3], dims = [2, 1, 1] }"#,
+            &[
+                "scene.toml:15:",
+                "`values`",
+                "has 3 numbers; dims [2, 1, 1] need 2",
+            ],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1, 2], dims = [2, 1] }"#,
+            &["`dims`", "expected 3 integers"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1, 2], dims = [2, 0, 1] }"#,
+            &["`dims`", "integer >= 1"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1, -2], dims = [2, 1, 1] }"#,
+            &["`values`", "-2"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1], dims = [1, 1, 1], path = "g.vol" }"#,
+            &["give `path` or `values`, not both"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1], dims = [1, 1, 1], name = "density" }"#,
+            &["`name`", "belongs to a grid file"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1], dims = [1, 1, 1], border = "wrap" }"#,
+            &["`border`", "unknown border `wrap`"],
+        ),
+        (
+            r#"{ pattern = "grid", values = [1], dims = [1, 1, 1], transform = [{ scale = 0 }] }"#,
+            &["`transform`", "singular"],
+        ),
+        (
+            r#"{ pattern = "grid" }"#,
+            &["needs `path = \"file.vol\"` or `values = [..]` with `dims`"],
+        ),
+        (
             r#"{ pattern = "noise" }"#,
             &[
                 "`reflectance`",

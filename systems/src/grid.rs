@@ -152,6 +152,29 @@ impl DensityGrid {
         })
     }
 
+    /// This grid with one voxel of 0 added on every side (`[nx + 2, ny + 2, nz + 2]`): read
+    /// over the same cell centres, its field is the one of a grid whose voxels beyond the
+    /// edge are 0 (pbrt-v4's `SampledGrid`, OpenVDB's background) instead of the clamp.
+    pub fn padded_with_zeros(&self) -> Self {
+        let [nx, ny, nz] = self.dims;
+        let dims = [nx + 2, ny + 2, nz + 2];
+        let mut data = vec![0.0; dims[0] * dims[1] * dims[2]];
+        for z in 0..nz {
+            for y in 0..ny {
+                let to = 1 + dims[0] * ((y + 1) + dims[1] * (z + 1));
+                let from = nx * (y + ny * z);
+                data[to..to + nx].copy_from_slice(&self.data[from..from + nx]);
+            }
+        }
+        let n = data.len() as f64;
+        DensityGrid {
+            dims,
+            data,
+            max: self.max.max(0.0),
+            mean: self.mean * (nx * ny * nz) as f64 / n,
+        }
+    }
+
     /// A grid of one value everywhere (`dims` voxels of `value`).
     pub fn constant(dims: [usize; 3], value: f32) -> Result<Self, GridValueError> {
         let n = dims.iter().product();

@@ -83,6 +83,19 @@ pub enum Axis {
 /// Index of a node in its graph.
 pub type NodeId = u32;
 
+/// What a [`Node::Grid`] reads beyond its outermost voxel centres and outside its box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridBorder {
+    /// The outermost voxels extend: outside the box the faces extend outward (Mitsuba 3's
+    /// `clamp` wrap mode, the convention of risotto's grid media).
+    Clamp,
+    /// Voxels beyond the grid read 0 and the pattern is 0 outside the box: pbrt-v4's
+    /// `SampledGrid` in its cuboid media (`GridMedium`). The node's grid is then the file's
+    /// grid [padded with one voxel of 0](DensityGrid::padded_with_zeros), the box being the
+    /// unpadded grid's.
+    Zero,
+}
+
 /// One node of a [`PatternGraph`].
 #[derive(Clone, Debug, PartialEq)]
 #[allow(
@@ -124,7 +137,9 @@ pub enum Node {
     /// A texture by `(u, v)` ([`Texture::lookup`]), shared with every graph naming its file.
     Image(Arc<Texture>),
     /// A density grid placed in the box `[min, max]` of `P` (its unit cube mapped onto the
-    /// box; outside, the grid's clamp convention extends the faces), grey.
+    /// box; outside, the grid's clamp convention extends the faces), grey. With `to_box`, the
+    /// box is in a space of its own: `P` is first mapped by `to_box` (world to box space; the
+    /// inverse of the box's placement), so a grid can be rotated, mirrored or sheared.
     Grid {
         /// The grid (shared with every graph and medium naming its file).
         grid: Arc<DensityGrid>,
@@ -132,6 +147,11 @@ pub enum Node {
         min: Vec3,
         /// The box's high corner (> `min` on every axis).
         max: Vec3,
+        /// World to box space (`None`: the box is in world space, the common case, which
+        /// then costs no transform).
+        to_box: Option<glam::Affine3A>,
+        /// What the grid reads beyond its edge and outside the box.
+        border: GridBorder,
     },
     /// `a + (b - a) t` per channel, `t` clamped to [0, 1].
     Mix {
@@ -214,6 +234,17 @@ impl Node {
                     "grid: the box needs min < max on every axis, got {min} and {max}"
                 ))
             }
+            Node::Grid {
+                to_box: Some(t), ..
+            } if !t.is_finite() => bad(format!("grid: the box's transform {t} is not finite")),
+            Node::Grid {
+                ref grid,
+                border: GridBorder::Zero,
+                ..
+            } if grid.dims().iter().any(|&d| d < 3) => bad(format!(
+                "grid: a zero-border grid holds its padding (at least 3 voxels per axis), got {:?}",
+                grid.dims()
+            )),
             Node::Scale { factor, .. } if !colour_ok(factor) => {
                 bad(format!("scale: factor {factor:?} must be finite and >= 0"))
             }
@@ -416,12 +447,34 @@ fn eval_node(
                 out[i] = texture.lookup(u[i], v[i]);
             }
         }
-        Node::Grid { grid, min, max } => {
+        Node::Grid {
+            grid,
+            min,
+            max,
+            to_box,
+            border,
+        } => {
             let extent = *max - *min;
-            for (o, p) in out.iter_mut().zip(p) {
-                // The lookup is a convex combination of voxels; the clamp keeps rounding
-                // within the grid's range, which the bounds rely on.
-                *o = Rgb::splat(grid.lookup((*p - *min) / extent).min(grid.max()));
+            // The lookup is a convex combination of voxels; the clamp keeps rounding within
+            // the grid's range, which the bounds rely on.
+            let at = |q: Vec3| {
+                let u = (q - *min) / extent;
+                Rgb::splat(match border {
+                    GridBorder::Clamp => grid.lookup(u).min(grid.max()),
+                    GridBorder::Zero => zero_border_lookup(grid, u),
+                })
+            };
+            match to_box {
+                None => {
+                    for (o, p) in out.iter_mut().zip(p) {
+                        *o = at(*p);
+                    }
+                }
+                Some(t) => {
+                    for (o, p) in out.iter_mut().zip(p) {
+                        *o = at(t.transform_point3(*p));
+                    }
+                }
             }
         }
         Node::Mix { a, b, t } => {
@@ -497,3 +550,22 @@ pub use bounds::bounds;
 
 #[cfg(test)]
 mod tests;
+
+/// A [`GridBorder::Zero`] node's value at unit-box coordinates `u` of its padded `grid`: 0
+/// outside the box, else the padded grid read at the same cell centres (`(u n + 1) / (n + 2)`
+/// on an axis of `n` inner voxels).
+#[inline]
+pub(crate) fn zero_border_lookup(grid: &DensityGrid, u: Vec3) -> f32 {
+    if !(u.cmpge(Vec3::ZERO).all() && u.cmple(Vec3::ONE).all()) {
+        return 0.0;
+    }
+    grid.lookup(padded_coordinates(grid, u)).min(grid.max())
+}
+
+/// Unit coordinates `u` of an inner grid as coordinates of its zero-padded `grid`.
+#[inline]
+pub(crate) fn padded_coordinates(grid: &DensityGrid, u: Vec3) -> Vec3 {
+    let d = grid.dims();
+    let n = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
+    (u * (n - 2.0) + 1.0) / n
+}

@@ -7,7 +7,7 @@
 //! it evaluated anywhere inside; where it interpolates (grid, mix), the bound is widened by
 //! a few ulps of its magnitude, within a hull the node clamps its values to.
 
-use super::{cell_parity, gradient_at, mix, remap, Axis, Node, PatternGraph, Space};
+use super::{cell_parity, gradient_at, mix, remap, Axis, GridBorder, Node, PatternGraph, Space};
 use crate::grid::DensityGrid;
 use glam::Vec3;
 use risotto_components::Rgb;
@@ -89,9 +89,50 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
             )
         }
         Node::Image(texture) => texture.range(),
-        Node::Grid { grid, min, max } => {
+        Node::Grid {
+            grid,
+            min,
+            max,
+            to_box,
+            border,
+        } => {
             let extent = *max - *min;
-            let (g0, g1) = grid_range(grid, (lo - *min) / extent, (hi - *min) / extent);
+            // In box space the region is the bounding box of its eight mapped corners (an
+            // affine map takes the box to a parallelepiped inside that box).
+            let (lo, hi) = match to_box {
+                None => (lo, hi),
+                // An unbounded region (an infinite corner, or 0 x inf in the map) may reach
+                // every voxel.
+                Some(_) if !(lo.is_finite() && hi.is_finite()) => {
+                    (Vec3::NEG_INFINITY, Vec3::INFINITY)
+                }
+                Some(t) => (0..8).fold(
+                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                    |(l, h), i| {
+                        let c = Vec3::new(
+                            if i & 1 == 0 { lo.x } else { hi.x },
+                            if i & 2 == 0 { lo.y } else { hi.y },
+                            if i & 4 == 0 { lo.z } else { hi.z },
+                        );
+                        let q = t.transform_point3(c);
+                        (l.min(q), h.max(q))
+                    },
+                ),
+            };
+            let (ulo, uhi) = ((lo - *min) / extent, (hi - *min) / extent);
+            let (g0, g1) = match border {
+                GridBorder::Clamp => grid_range(grid, ulo, uhi),
+                GridBorder::Zero => {
+                    // 0 outside the box; inside, the padded grid over the clamped region.
+                    let leaves = !(ulo.cmpge(Vec3::ZERO).all() && uhi.cmple(Vec3::ONE).all());
+                    let (a, b) = (
+                        super::padded_coordinates(grid, ulo.clamp(Vec3::ZERO, Vec3::ONE)),
+                        super::padded_coordinates(grid, uhi.clamp(Vec3::ZERO, Vec3::ONE)),
+                    );
+                    let (g0, g1) = grid_range(grid, a, b);
+                    (if leaves { 0.0 } else { g0 }, g1)
+                }
+            };
             // Widened for the lerps' rounding, within the grid's range [0, max], to which
             // the node clamps.
             let (l, h) = widen((Rgb::splat(g0), Rgb::splat(g1)));

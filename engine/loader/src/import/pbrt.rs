@@ -13,6 +13,7 @@ mod convert;
 mod lexer;
 mod loop_subdiv;
 mod materials;
+mod media;
 mod params;
 mod shapes;
 mod spectra;

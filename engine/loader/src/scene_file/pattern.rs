@@ -6,7 +6,11 @@ use super::params::MaterialParams;
 use super::SceneError;
 use glam::Vec3;
 use risotto_components::Rgb;
-use risotto_systems::pattern::{self, Axis, Fbm, Node, NodeId, PatternGraph, Space, MAX_OCTAVES};
+use risotto_systems::grid::DensityGrid;
+use risotto_systems::pattern::{
+    self, Axis, Fbm, GridBorder, Node, NodeId, PatternGraph, Space, MAX_OCTAVES,
+};
+use std::sync::Arc;
 
 /// A colour parameter as written: a constant or a pattern graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -263,13 +267,77 @@ fn input(
     Ok((nodes.len() - 1) as NodeId)
 }
 
-/// `{ pattern = "grid", path = "file", header = .., name = .., min = [..], max = [..] }`.
+/// `{ pattern = "grid", path = "file", header = .., name = .., min = [..], max = [..],
+/// transform = [..] }`, or with the values inline: `values = [..], dims = [nx, ny, nz]`.
 fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
+    t.deny_unknown(&[
+        "pattern",
+        "path",
+        "header",
+        "name",
+        "values",
+        "dims",
+        "min",
+        "max",
+        "transform",
+        "border",
+    ])?;
+    let grid = match (t.has("path"), t.has("values")) {
+        (true, false) => grid_file(t)?,
+        (false, true) => inline_grid(t)?,
+        (true, true) => return Err(t.error(Some("values"), "give `path` or `values`, not both")),
+        (false, false) => {
+            return Err(t.error(
+                None,
+                "a grid pattern needs `path = \"file.vol\"` or `values = [..]` with `dims`",
+            ))
+        }
+    };
+    let min = t.vec3("min", Some(Vec3::splat(-1.0)))?;
+    let max = t.vec3("max", Some(Vec3::ONE))?;
+    if !min.cmplt(max).all() {
+        return Err(t.error(
+            Some("max"),
+            format!("must be > `min` on every axis, got {max} and {min}"),
+        ));
+    }
+    // The box's placement (box space to world), read as a shape's; the node keeps its
+    // inverse. Absent: the box is in world space and no transform is applied.
+    let to_box = if t.has("transform") {
+        let m = super::geometry::read_transform(&t.reader())?.inverse();
+        Some(glam::Affine3A::from_mat3_translation(
+            m.matrix3.as_mat3(),
+            m.translation.as_vec3(),
+        ))
+    } else {
+        None
+    };
+    let (grid, border) = match t.string("border", Some("clamp"))?.as_str() {
+        "clamp" => (grid, GridBorder::Clamp),
+        "zero" => (Arc::new(grid.padded_with_zeros()), GridBorder::Zero),
+        other => {
+            return Err(t.error(
+                Some("border"),
+                format!("unknown border `{other}`; expected `clamp` or `zero`"),
+            ))
+        }
+    };
+    Ok(Node::Grid {
+        grid,
+        min,
+        max,
+        to_box,
+        border,
+    })
+}
+
+/// A grid pattern's file (`path`, with `header` and `name`), shared with every graph and
+/// medium naming it.
+fn grid_file(t: &MaterialParams) -> Result<Arc<DensityGrid>, SceneError> {
     use crate::grid_file::{is_vdb, read_grid_named};
-    t.deny_unknown(&["pattern", "path", "header", "name", "min", "max"])?;
     let path = t
         .path("path")?
-        .ok_or_else(|| t.error(None, "a grid pattern needs `path = \"file.vol\"`"))?;
+        .ok_or_else(|| t.error(Some("path"), "expected a file name"))?;
     let header = t.path("header")?;
     let name = t.has("name").then(|| t.string("name", None)).transpose()?;
     let vol = path
@@ -279,23 +347,64 @@ fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
         // A raw grid's header beside it is read too.
         t.note_file(&path.with_extension("json"));
     }
-    let grid = t
-        .side_files()
+    t.side_files()
         .get_or_load(
             &path,
             &format!("grid header={header:?} name={name:?}"),
             || read_grid_named(&path, header.as_deref(), name.as_deref()),
         )
-        .map_err(|e| t.error(Some("path"), e.to_string()))?;
-    let min = t.vec3("min", Some(Vec3::splat(-1.0)))?;
-    let max = t.vec3("max", Some(Vec3::ONE))?;
-    if !min.cmplt(max).all() {
-        return Err(t.error(
-            Some("max"),
-            format!("must be > `min` on every axis, got {max} and {min}"),
+        .map_err(|e| t.error(Some("path"), e.to_string()))
+}
+
+/// `values = [..]` (x fastest, then y, then z; each finite and >= 0) of `dims = [nx, ny,
+/// nz]` voxels, as a grid file's (what importers write for grids given in the scene file
+/// itself, such as pbrt-v4's `uniformgrid`).
+fn inline_grid(t: &MaterialParams) -> Result<Arc<DensityGrid>, SceneError> {
+    for key in ["header", "name"] {
+        if t.has(key) {
+            return Err(t.error(
+                Some(key),
+                "belongs to a grid file (`path`), not to `values`",
+            ));
+        }
+    }
+    let r = t.reader();
+    let items = r
+        .array_opt("dims")?
+        .ok_or_else(|| t.error(Some("dims"), "inline `values` need `dims = [nx, ny, nz]`"))?;
+    let node = r.get("dims").expect("present: an array");
+    if items.len() != 3 {
+        return Err(r.invalid("dims", node, "expected 3 integers [nx, ny, nz]"));
+    }
+    let mut dims = [0usize; 3];
+    for (d, item) in dims.iter_mut().zip(items) {
+        match item.value {
+            super::raw::Value::Integer(n) if n >= 1 => *d = n as usize,
+            _ => return Err(r.invalid("dims", item, "each must be an integer >= 1")),
+        }
+    }
+    let values = r
+        .array_opt("values")?
+        .expect("present: checked by the caller");
+    let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    if count != Some(values.len()) {
+        return Err(r.invalid(
+            "values",
+            r.get("values").expect("present"),
+            &format!(
+                "has {} numbers; dims {dims:?} need {}",
+                values.len(),
+                count.map_or_else(|| "more than can be counted".to_owned(), |n| n.to_string())
+            ),
         ));
     }
-    Ok(Node::Grid { grid, min, max })
+    let data = values
+        .iter()
+        .map(|v| r.f32_of("values", v))
+        .collect::<Result<Vec<f32>, _>>()?;
+    DensityGrid::new(dims, data)
+        .map(Arc::new)
+        .map_err(|e| t.error(Some("values"), e.to_string()))
 }
 
 /// Two finite numbers `[a, b]`.

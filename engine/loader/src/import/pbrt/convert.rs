@@ -389,7 +389,8 @@ impl<'o> Converter<'o> {
                     let n = self.string_arg(&at, &name)?;
                     let p = Params::read(&mut self.lx, &format!("MakeNamedMedium \"{n}\""))?
                         .with_defaults(self.gs.attributes.get("medium"));
-                    let table = self.medium(&p)?;
+                    let medium_space = self.world_root * self.gs.ctm;
+                    let table = self.medium(&p, &at, &medium_space)?;
                     p.finish(&self.lx)?;
                     self.media.insert(n, (table, at));
                 }

@@ -1,5 +1,5 @@
-//! pbrt-v4 materials, textures, media and lights, as risotto materials, patterns,
-//! interiors and lights.
+//! pbrt-v4 materials, textures and lights, as risotto materials, patterns and lights
+//! (media: `media.rs`).
 
 use glam::DVec3;
 use risotto_engine::diagnostics::SceneError;
@@ -482,73 +482,6 @@ impl Converter<'_> {
             _ => return Err(self.error(at, entity, format!("texture \"{ty}\" is not supported (imagemap, constant, scale, mix, checkerboard)"))),
         }
         Ok(toml::Value::Table(t))
-    }
-
-    /// `MakeNamedMedium`: an `interior` table.
-    pub(super) fn medium(&mut self, p: &Params) -> Result<toml::Table, SceneError> {
-        let lx = &self.lx;
-        let Some((ty, q)) = p.string(lx, "type")? else {
-            return Err(lx.error(
-                risotto_engine::diagnostics::SceneErrorKind::MissingField,
-                &p.list.first().map_or_else(
-                    || super::lexer::At {
-                        file: 0,
-                        span: 0..0,
-                    },
-                    |q| q.at.clone(),
-                ),
-                &p.entity,
-                "needs \"string type\"",
-            ));
-        };
-        if ty != "homogeneous" {
-            return Err(p.error(lx, q, format!("medium \"{ty}\" is not supported (only \"homogeneous\"; grids are not converted yet)")));
-        }
-        if let Some(q) = p.ignore("preset") {
-            return Err(p.error(
-                lx,
-                q,
-                "named scattering presets are not supported; give sigma_a and sigma_s",
-            ));
-        }
-        let rgb = |name: &str| -> Result<[f64; 3], SceneError> {
-            match p.colour(lx, name, false, &|q| self.spectrum_colour(p, q))? {
-                None => Ok([1.0; 3]),
-                Some(Colour::Rgb(c)) => Ok(c),
-                Some(_) => {
-                    let q = p.list.iter().find(|q| q.name == name).expect("given");
-                    Err(p.error(lx, q, "give an rgb value"))
-                }
-            }
-        };
-        let scale = p.float(lx, "scale", 1.0)?;
-        let sa = rgb("sigma_a")?.map(|c| c * scale);
-        let ss = rgb("sigma_s")?.map(|c| c * scale);
-        let g = p.float_where(lx, "g", 0.0, "in (-1, 1)", |g| g.abs() < 1.0)?;
-        let mut t = Entity::new(None)
-            .with("type", "homogeneous")
-            .with("sigma_a", sa.to_vec())
-            .with("sigma_s", ss.to_vec());
-        if g != 0.0 {
-            let mut phase = toml::Table::new();
-            phase.insert("type".into(), "hg".into());
-            phase.insert("g".into(), g.into());
-            t.set("phase", phase);
-        }
-        if p.has("Le") {
-            let le = match p.colour(lx, "Le", false, &|q| self.spectrum_colour(p, q))? {
-                Some(Colour::Rgb(c)) => c,
-                _ => [0.0; 3],
-            };
-            let ls = p.float(lx, "Lescale", 1.0)?;
-            // pbrt's source term is sigma_a Le (`HomogeneousMedium`); risotto's is the
-            // emission coefficient itself.
-            let j: Vec<f64> = (0..3).map(|i| sa[i] * le[i] * ls).collect();
-            if j.iter().any(|&x| x > 0.0) {
-                t.set("emission", j);
-            }
-        }
-        Ok(t.table)
     }
 
     /// `LightSource`.

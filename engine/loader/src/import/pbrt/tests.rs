@@ -269,6 +269,34 @@ fn media_become_interiors_of_their_shapes() {
 }
 
 #[test]
+fn a_uniformgrid_becomes_a_zero_border_grid_pattern_in_its_box() {
+    let s = convert(
+        "uniformgrid",
+        &format!(
+            "{HEAD}WorldBegin\nTranslate 1 2 3\nMakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \
+             \"rgb sigma_a\" [1 2 0] \"rgb sigma_s\" [3 2 0] \"float scale\" 2 \
+             \"integer nx\" 2 \"integer ny\" 1 \"integer nz\" 1 \"float density\" [0.25 4] \
+             \"point3 p0\" [0 0 0] \"point3 p1\" [2 1 1]\n\
+             Material \"interface\"\nMediumInterface \"g\" \"\"\nShape \"sphere\" \"float radius\" 5\n"
+        ),
+    );
+    let interior = s.materials[0].1.table["interior"].as_table().unwrap();
+    assert_eq!(interior["type"].as_str(), Some("heterogeneous"));
+    // sigma_t = (sigma_a + sigma_s) scale; albedo sigma_s / sigma_t (0 where sigma_t is 0).
+    assert_eq!(floats(&interior["scale"]), vec![8.0, 8.0, 0.0]);
+    assert_eq!(floats(&interior["albedo"]), vec![0.75, 0.5, 0.0]);
+    let d = interior["density"].as_table().unwrap();
+    assert_eq!(d["pattern"].as_str(), Some("grid"));
+    assert_eq!(d["border"].as_str(), Some("zero"));
+    assert_eq!(floats(&d["dims"]), vec![2.0, 1.0, 1.0]);
+    assert_eq!(floats(&d["values"]), vec![0.25, 4.0]);
+    assert_eq!(floats(&d["max"]), vec![2.0, 1.0, 1.0]);
+    // Placed by the CTM at MakeNamedMedium: the translation is in the transform's matrix.
+    let t = d["transform"][0]["matrix"].as_array().unwrap();
+    assert_eq!(floats(&t[1])[3], 2.0);
+}
+
+#[test]
 fn the_camera_medium_and_outside_media_become_within_checks() {
     let s = convert(
         "within",
@@ -312,6 +340,13 @@ fn errors_are_located() {
         ("Scale 1 0 1\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]", "7:1", "singular"),
         ("Shape \"sphere\" \"float radius\" 1e999", "6:31", "not a finite number"),
         ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\" \"spectrum k\" \"metal-Zz-k\"", "6:1", "not a metal risotto knows"),
+        ("MakeNamedMedium \"g\" \"string type\" \"nanovdb\"", "6:21", "NanoVDB files are not read"),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"float density\" [1]", "6:64", "has 1 values; nx * ny * nz = 2"),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\"", "6:1", "needs \"float density\""),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [-1]", "6:49", "value 0 is -1"),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \"point3 p1\" [1 0 1]", "6:69", "p1 > p0"),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \"rgb Le\" [1 1 1]", "6:69", "emission of a grid medium"),
+        ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nz\" 0 \"float density\" [1]", "6:49", "must be in [1,"),
     ];
     for (i, (body, at, message)) in cases.iter().enumerate() {
         let e = error(&format!("err{i}"), &format!("{HEAD}WorldBegin\n{body}\n"));
