@@ -55,7 +55,7 @@ pub use risotto_systems::sampler::SplitMix64;
 use risotto_systems::sampler::{seed_from, PathSampler};
 pub use shading_context::{
     Builtin, OverlappingVolume, ParamCache, ParamValue, PatternCounters, ShadingContext,
-    VolumeSampling, VolumeSpace,
+    VolumeSampling, VolumeSpace, MAX_COMPONENTS,
 };
 use std::any::Any;
 pub use technique::{always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue};

@@ -11,6 +11,7 @@ pub mod import;
 pub mod load;
 pub mod media_params;
 pub mod mesh_file;
+mod mix_params;
 mod rough_params;
 pub mod scene_file;
 pub mod side_file;

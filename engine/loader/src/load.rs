@@ -21,7 +21,7 @@
 //! ```
 
 use crate::scene_file::{
-    load_scene, load_scene_with, ColourParam, LightDesc, MaterialParams,
+    load_scene, load_scene_with, ColourParam, LightDesc, MaterialDesc, MaterialParams,
     Projection as DescProjection, SceneDesc, SceneError, SceneErrorKind,
     ShapeGeometry as DescGeometry,
 };
@@ -194,6 +194,36 @@ impl MaterialRegistry {
     ) {
         self.constructors
             .insert(type_name.to_string(), Box::new(constructor));
+    }
+
+    /// The factory of material `m` of `materials` (with its opacity): the registered
+    /// constructor of its type, or a [`crate::mix_params`] mix (`depth`: how many mixes
+    /// contain this one).
+    pub(crate) fn build(
+        &self,
+        m: &MaterialDesc,
+        materials: &[MaterialDesc],
+        depth: usize,
+    ) -> Result<Box<dyn BxdfFactory>, SceneError> {
+        let factory = match self.constructors.get(&m.type_name) {
+            Some(ctor) => ctor(&m.params)?,
+            None if m.type_name == crate::mix_params::MIX => {
+                crate::mix_params::mix(m, materials, self, depth)?
+            }
+            // Located at the `type` value: the registry is only known here, after parsing.
+            None => {
+                return Err(m.params.location(Some("type")).error(
+                    SceneErrorKind::UnknownReference,
+                    format!(
+                        "unknown material type \"{}\" (known: {}, {})",
+                        m.type_name,
+                        self.types().collect::<Vec<_>>().join(", "),
+                        crate::mix_params::MIX
+                    ),
+                ))
+            }
+        };
+        with_opacity(&m.params, factory)
     }
 
     /// True when `type_name` is registered.
@@ -454,18 +484,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
     scene.camera_volume_at = desc.camera_volume_at.clone();
     scene.within_checks = desc.within.clone();
     for m in &desc.materials {
-        // Located at the `type` value: the registry is only known here, after parsing.
-        let ctor = registry.constructors.get(&m.type_name).ok_or_else(|| {
-            m.params.location(Some("type")).error(
-                SceneErrorKind::UnknownReference,
-                format!(
-                    "unknown material type \"{}\" (known: {})",
-                    m.type_name,
-                    registry.types().collect::<Vec<_>>().join(", ")
-                ),
-            )
-        })?;
-        let factory = with_opacity(&m.params, ctor(&m.params)?)?;
+        let factory = registry.build(m, &desc.materials, 0)?;
         scene.add_material(&m.name, m.priority, factory);
     }
     for s in desc.shapes {

@@ -75,6 +75,10 @@ pub enum ParamValue<'a> {
     Pattern(&'a PatternGraph),
 }
 
+/// Components a material built of others may have per level ([`ShadingContext::component`]).
+/// The component path is kept in 8 bits: components nest at most 3 levels deep.
+pub const MAX_COMPONENTS: u32 = 3;
+
 /// A group of shading points that share a material, with the RIS builtins as columns
 /// (`P`, `Ng`, `Nn`, `Vn`, `VLen`, `u`, `v`, `w`, `transmission`, ray id).
 pub struct ShadingContext<'a> {
@@ -90,6 +94,9 @@ pub struct ShadingContext<'a> {
     volume_space: Option<VolumeSpace>,
     /// Shading normals that replace the points' own ([`ShadingContext::with_shading_normals`]).
     nn: Option<&'a [Vec3]>,
+    /// 0 for the material itself; `k` for its `k`-th component material
+    /// ([`ShadingContext::component`]), whose parameters are cached apart.
+    component: u32,
 }
 
 impl<'a> ShadingContext<'a> {
@@ -112,6 +119,7 @@ impl<'a> ShadingContext<'a> {
             cache_parts: None,
             volume_space: None,
             nn: None,
+            component: 0,
         }
     }
     /// Binds the factory of the context's material: [`eval_param`](Self::eval_param) asks it
@@ -218,7 +226,45 @@ impl<'a> ShadingContext<'a> {
             cache_parts: self.cache_parts,
             volume_space: self.volume_space,
             nn: Some(nn),
+            component: self.component,
         }
+    }
+
+    /// The same points seen by component `index` (1 to [`MAX_COMPONENTS`]) of the context's
+    /// material: a material built of other materials (a `mix`) hands each its own view, in
+    /// which [`eval_param`](Self::eval_param) asks `factory` (the component's) and caches its
+    /// columns apart from the material's and the other components' (so two components may
+    /// both have a `reflectance`).
+    ///
+    /// # Panics
+    /// When `index` is 0 or above [`MAX_COMPONENTS`].
+    pub fn component<'b>(&self, factory: &'b dyn BxdfFactory, index: u32) -> ShadingContext<'b>
+    where
+        'a: 'b,
+    {
+        assert!(
+            (1..=MAX_COMPONENTS).contains(&index),
+            "component {index} of a material (1 to {MAX_COMPONENTS})"
+        );
+        ShadingContext {
+            points: self.points,
+            range: self.range.clone(),
+            mode: self.mode,
+            material: self.material,
+            overlapping: self.overlapping,
+            factory: Some(factory),
+            cache: self.cache,
+            cache_parts: self.cache_parts,
+            volume_space: self.volume_space,
+            nn: self.nn,
+            component: self.component * (MAX_COMPONENTS + 1) + index,
+        }
+    }
+
+    /// The parameter cache's key of this context's parameters: the material, and the
+    /// component path in the high bits (materials number below 2^24).
+    fn param_owner(&self) -> u32 {
+        self.material | (self.component << 24)
     }
     /// Unit tangents orthogonal to `Nn`, one per point: with `Nn` they fix the frame of an
     /// anisotropic Bxdf (`s = tangent`, `t = Nn x tangent`), so its roughness along `s`
@@ -287,7 +333,7 @@ impl<'a> ShadingContext<'a> {
             v: self.v(),
         };
         let in_volume = self.mode != ShadingMode::Scatter;
-        Some(cache.column(self.material, name, value, at, in_volume))
+        Some(cache.column(self.param_owner(), name, value, at, in_volume))
     }
 
     /// Counts `n` pattern evaluations made outside [`eval_param`](Self::eval_param) (a
@@ -428,6 +474,7 @@ impl<'a> VolumeSampling<'a> {
             cache_parts: self.cache.as_ref().map(|c| (c.arena, c.counters)),
             volume_space: self.volume_space,
             nn: None,
+            component: 0,
         }
     }
 

@@ -220,7 +220,34 @@ impl Converter<'_> {
                 }
             }
             "mix" => {
-                return Err(self.error(at, &p.entity, "\"mix\" materials (pbrt-v4 picks one of two materials per hit at random) are not supported"));
+                // pbrt-v4 picks `materials[1]` with probability `amount` per hit (by a hash
+                // of the hit); risotto's `mix` blends the two: the same expectation.
+                let names = match p.ignore("materials").map(|q| (&q.values, q)) {
+                    Some((super::params::Values::Strs(v), _)) if v.len() == 2 => v.clone(),
+                    Some((_, q)) => return Err(p.error(lx, q, "expected two material names")),
+                    None => {
+                        return Err(self.error(
+                            at,
+                            &p.entity,
+                            "a mix needs \"string materials\" [ \"a\" \"b\" ]",
+                        ))
+                    }
+                };
+                let amount = self.colour_value(p, "amount", true)?;
+                let mut parts = Vec::new();
+                for n in &names {
+                    let Some(def) = self.named_materials.get(n).cloned() else {
+                        let q = p.ignore("materials").expect("read above");
+                        return Err(p.error(&self.lx, q, format!("no material named \"{n}\" (define it with MakeNamedMaterial first)")));
+                    };
+                    parts.push(self.emit_component(&def));
+                }
+                t.set("type", "mix");
+                t.set("a", parts[0].as_str());
+                t.set("b", parts[1].as_str());
+                if let Some(amount) = amount {
+                    t.set("amount", amount);
+                }
             }
             _ => {
                 return Err(self.error(at, &p.entity, format!("material \"{ty}\" is not supported (diffuse, conductor, dielectric, thindielectric, interface, coateddiffuse, coatedconductor)")));
@@ -262,6 +289,33 @@ impl Converter<'_> {
             }
         }
         Ok((au, av))
+    }
+
+    /// The TOML name of named material `def` as a component of a mix (written on first use,
+    /// without interior or opacity; shared with shapes that use it plainly).
+    fn emit_component(&mut self, def: &MaterialDef) -> String {
+        let key = (
+            format!(
+                "{}@{}:{}",
+                def.name,
+                def.origin.file.display(),
+                def.origin.line
+            ),
+            String::new(),
+        );
+        if let Some(name) = self.emitted.get(&key) {
+            return name.clone();
+        }
+        let name = self.unique(&def.name);
+        self.scene.materials.push((
+            name.clone(),
+            Entity {
+                table: def.table.clone(),
+                origin: Some(def.origin.clone()),
+            },
+        ));
+        self.emitted.insert(key, name.clone());
+        name
     }
 
     /// The TOML name of the material a shape gets here (written on first use, with the

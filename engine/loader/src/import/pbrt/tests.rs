@@ -297,6 +297,32 @@ fn a_uniformgrid_becomes_a_zero_border_grid_pattern_in_its_box() {
 }
 
 #[test]
+fn mix_materials_blend_their_named_components() {
+    let s = convert(
+        "mix",
+        &format!(
+            "{HEAD}WorldBegin\nMakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.8 0.1 0.1]\n\
+             MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\n\
+             Material \"mix\" \"string materials\" [\"red\" \"gold\"] \"float amount\" 0.3\nShape \"sphere\"\n\
+             NamedMaterial \"red\"\nShape \"sphere\"\n"
+        ),
+    );
+    // The components are written once (the plain red sphere shares its material) and
+    // the mix names them; pbrt's `amount` is the weight of `materials[1]`.
+    let names: Vec<&str> = s.materials.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+    let (_, mix) = s
+        .materials
+        .iter()
+        .find(|(_, m)| m.table["type"].as_str() == Some("mix"))
+        .unwrap();
+    assert_eq!(mix.table["a"].as_str(), Some("red"));
+    assert_eq!(mix.table["b"].as_str(), Some("gold"));
+    assert_eq!(floats(&mix.table["amount"]), vec![0.3; 3]);
+    assert_eq!(s.shapes[1].table["material"].as_str(), Some("red"));
+}
+
+#[test]
 fn the_camera_medium_and_outside_media_become_within_checks() {
     let s = convert(
         "within",
@@ -325,7 +351,9 @@ fn errors_are_located() {
         ("Shape \"sphere\" \"float radius\" -1", "6:16", "must be > 0"),
         ("Shape \"sphere\" \"float radios\" 1", "6:16", "`float radios` is not supported"),
         ("Shape \"sphere\" \"floot radius\" 1", "6:16", "unknown parameter type `floot`"),
-        ("Material \"mix\"", "6:1", "\"mix\" materials"),
+        ("Material \"mix\"", "6:1", "a mix needs \"string materials\""),
+        ("Material \"mix\" \"string materials\" [\"x\" \"y\"]", "6:16", "no material named \"x\""),
+        ("Material \"mix\" \"string materials\" [\"x\"]", "6:16", "expected two material names"),
         ("Material \"hair\"", "6:1", "material \"hair\" is not supported"),
         ("NamedMaterial \"nope\"\nShape \"sphere\"", "6:1", "no material named \"nope\""),
         ("Include \"missing.pbrt\"", "6:1", "missing.pbrt"),
