@@ -86,7 +86,7 @@ impl Converter<'_> {
     }
 
     /// The material table of one BSDF element (wrappers included).
-    fn bsdf_table(&self, node: &Rc<Node>) -> Result<Entity, SceneError> {
+    fn bsdf_table(&mut self, node: &Rc<Node>) -> Result<Entity, SceneError> {
         let p = props(self.cx, node)?;
         let kind = p.kind()?;
         let mut e = Entity::new(self.origin(&p.node));
@@ -266,6 +266,38 @@ impl Converter<'_> {
                 e.origin = self.origin(&p.node);
                 return Ok(e);
             }
+            "blendbsdf" => {
+                // Mitsuba's blend, (1 - weight) first + weight second: risotto's `mix` of
+                // the two nested BSDFs, each written as a material of its own.
+                let weight = self
+                    .colour(&p, "weight", SpectrumUse::Reflectance)?
+                    .ok_or_else(|| {
+                        p.error(
+                            Some("weight"),
+                            "a blendbsdf needs its weight (a float or a texture)",
+                        )
+                    })?;
+                let weight = match weight {
+                    toml::Value::Array(a) if a.len() == 3 && a[0] == a[1] && a[1] == a[2] => {
+                        a[0].clone()
+                    }
+                    other => other,
+                };
+                let inner = p.unnamed("bsdf")?;
+                let [a, b] = &inner[..] else {
+                    return Err(p.error(None, "a blendbsdf blends two nested BSDFs"));
+                };
+                p.finish(&[])?;
+                let node = p.node.clone();
+                let a = self.material(Some(a.clone()), None, &node)?;
+                let b = self.material(Some(b.clone()), None, &node)?;
+                let mut e = Entity::new(self.origin(&node));
+                e.set("type", "mix");
+                e.set("a", a);
+                e.set("b", b);
+                e.set("amount", weight);
+                return Ok(e);
+            }
             "mask" => {
                 let opacity = self
                     .colour(&p, "opacity", SpectrumUse::Reflectance)?
@@ -291,7 +323,7 @@ impl Converter<'_> {
                     format!(
                         "bsdf type \"{other}\" is not supported (diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic, null, twosided, mask)"
+                         roughplastic, null, twosided, mask, blendbsdf)"
                     ),
                 ))
             }

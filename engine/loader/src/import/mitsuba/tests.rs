@@ -395,6 +395,35 @@ fn bsdfs_map_to_risotto_materials() {
 }
 
 #[test]
+fn blendbsdf_becomes_a_mix_of_its_two_bsdfs() {
+    let s = convert(&scene(
+        r#"<bsdf type="diffuse" id="matte"><rgb name="reflectance" value="0.8"/></bsdf>
+    <shape type="sphere"><bsdf type="blendbsdf" id="blend"><float name="weight" value="0.3"/>
+        <ref id="matte"/><bsdf type="conductor"/></bsdf></shape>
+    <shape type="sphere"><ref id="matte"/></shape>"#,
+    ))
+    .unwrap()
+    .scene;
+    let by_name = |n: &str| &s.materials.iter().find(|(m, _)| m == n).unwrap().1.table;
+    let mix = &s.shapes[0].table["material"];
+    let mix = by_name(mix.as_str().unwrap());
+    assert_eq!(mix["type"].as_str(), Some("mix"));
+    assert_eq!(mix["amount"].as_float(), Some(0.3));
+    assert_eq!(mix["a"].as_str(), Some("matte"));
+    assert_eq!(
+        by_name(mix["b"].as_str().unwrap())["type"].as_str(),
+        Some("conductor")
+    );
+    // The plain use of the first BSDF shares its material.
+    assert_eq!(s.shapes[1].table["material"].as_str(), Some("matte"));
+    let e = convert(&scene(
+        r#"<shape type="sphere"><bsdf type="blendbsdf"><float name="weight" value="0.3"/><bsdf type="diffuse"/></bsdf></shape>"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("blends two nested BSDFs"), "{e}");
+}
+
+#[test]
 fn aov_wrappers_are_unwrapped_with_a_warning_and_path_with_media_warns() {
     let out = convert(&scene(
         r#"<integrator type="aov"><string name="aovs" value="dd.y:depth"/><integrator type="path"><integer name="max_depth" value="4"/></integrator></integrator>
