@@ -88,37 +88,53 @@ fn convert_then_render_is_byte_identical_to_rendering_the_pbrt() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pbrt-convert");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("out")).unwrap();
-    let scene = data("twin.pbrt");
-    let converted = dir.join("out/twin.toml");
-    ok(
-        "convert",
-        risotto(&[
-            "convert",
-            scene.to_str().unwrap(),
-            converted.to_str().unwrap(),
-        ]),
-    );
-    let text = std::fs::read_to_string(&converted).unwrap();
-    // Paths are written for the TOML's directory (the PLY lies elsewhere: absolute).
-    assert!(text.contains("tetra.ply"), "{text}");
-    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-    for (s, out) in [(&scene, &a), (&converted, &b)] {
+    // twin.pbrt has every directive of the first importer; grid_mix.pbrt a uniformgrid
+    // medium, a mix material and media stated around the camera and a shape (within).
+    for name in ["twin", "grid_mix"] {
+        let scene = data(&format!("{name}.pbrt"));
+        let converted = dir.join(format!("out/{name}.toml"));
         ok(
-            "render",
+            "convert",
             risotto(&[
-                "render",
-                s.to_str().unwrap(),
-                "--spp",
-                "2",
-                "--threads",
-                "1",
-                "--quiet",
-                "--out",
-                out.to_str().unwrap(),
+                "convert",
+                scene.to_str().unwrap(),
+                converted.to_str().unwrap(),
             ]),
         );
+        let text = std::fs::read_to_string(&converted).unwrap();
+        if name == "twin" {
+            // Paths are written for the TOML's directory (the PLY lies elsewhere: absolute).
+            assert!(text.contains("tetra.ply"), "{text}");
+        } else {
+            assert!(
+                text.contains("border = \"zero\"")
+                    && text.contains("type = \"mix\"")
+                    && text.contains("within"),
+                "{text}"
+            );
+        }
+        let (a, b) = (
+            dir.join(format!("{name}-a.exr")),
+            dir.join(format!("{name}-b.exr")),
+        );
+        for (s, out) in [(&scene, &a), (&converted, &b)] {
+            ok(
+                "render",
+                risotto(&[
+                    "render",
+                    s.to_str().unwrap(),
+                    "--spp",
+                    "2",
+                    "--threads",
+                    "1",
+                    "--quiet",
+                    "--out",
+                    out.to_str().unwrap(),
+                ]),
+            );
+        }
+        assert_eq!(bits(&a), bits(&b), "{name}");
     }
-    assert_eq!(bits(&a), bits(&b));
     // Rendering the pbrt file wrote nothing beside it.
     assert!(!data("twin.toml.exr").exists() && !data("twin.exr").exists());
 }
