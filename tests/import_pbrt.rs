@@ -319,41 +319,29 @@ fn sampled_grid(values: &[f64], n: [usize; 3], p: [f64; 3]) -> f64 {
     sum
 }
 
-#[test]
-fn a_uniformgrid_medium_transmits_as_pbrts_sampled_grid() {
-    // An absorbing 2 x 3 x 2 grid in [-1, 1]^3 moved up by 0.3 (the CTM at MakeNamedMedium),
-    // inside an index-matched ball, seen by an orthographic camera along -z against a white
-    // sky: each pixel is the mean over its area of exp(-sigma_a int density dz).
-    let n = [2usize, 3, 2];
-    let values: Vec<f64> = (0..12)
-        .map(|i| {
-            let (y, z) = ((i / 2) % 3, i / 6);
-            1.0 + y as f64 + 0.5 * z as f64
-        })
-        .collect();
-    let listed: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+/// Renders an absorbing grid medium `medium` (its `MakeNamedMedium` parameters after the
+/// name) in `[-1, 1]^3` moved up by 0.3, inside an index-matched ball, seen by an
+/// orthographic camera along -z against a white sky, and checks each pixel's channels
+/// against the mean over its area of `exp(-int sigma_a,c dz)`, `sigma_a,c` pbrt's
+/// `SampledGrid` of `values[c]` (`n` voxels) times 0.3.
+fn assert_grid_transmits(name: &str, medium: &str, n: [usize; 3], values: [&[f64]; 3]) {
     let text = format!(
         "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\"\n\
          Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n\
          PixelFilter \"box\"\nSampler \"independent\" \"integer pixelsamples\" 256\n\
          WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n\
-         AttributeBegin\nTranslate 0 0.3 0\n\
-         MakeNamedMedium \"grid\" \"string type\" \"uniformgrid\" \"rgb sigma_a\" [0.3 0.3 0.3] \
-         \"rgb sigma_s\" [0 0 0] \"integer nx\" 2 \"integer ny\" 3 \"integer nz\" 2 \
-         \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"float density\" [{}]\n\
-         AttributeEnd\n\
+         AttributeBegin\nTranslate 0 0.3 0\nMakeNamedMedium \"grid\" {medium}\nAttributeEnd\n\
          AttributeBegin\nMaterial \"interface\"\nMediumInterface \"grid\" \"\"\n\
-         Shape \"sphere\" \"float radius\" 3\nAttributeEnd\n",
-        listed.join(" ")
+         Shape \"sphere\" \"float radius\" 3\nAttributeEnd\n"
     );
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("import-pbrt-uniformgrid");
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("import-pbrt-{name}"));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("grid.pbrt");
     std::fs::write(&path, text).unwrap();
     let out = render_file(&path, 1);
     // The reference: 6 x 6 positions per pixel, the depth by the midpoint rule in z (the
     // field is piecewise linear in z, 400 steps).
-    let expected = |px: usize, py: usize| {
+    let expected = |px: usize, py: usize, c: usize| {
         let mut t = 0.0;
         for a in 0..6 {
             for b in 0..6 {
@@ -362,7 +350,7 @@ fn a_uniformgrid_medium_transmits_as_pbrts_sampled_grid() {
                 let depth: f64 = (0..400)
                     .map(|k| {
                         let z = -1.0 + (k as f64 + 0.5) / 200.0;
-                        sampled_grid(&values, n, [x, y - 0.3, z]) / 200.0
+                        sampled_grid(values[c], n, [x, y - 0.3, z]) / 200.0
                     })
                     .sum();
                 t += (-0.3 * depth).exp() / 36.0;
@@ -370,23 +358,68 @@ fn a_uniformgrid_medium_transmits_as_pbrts_sampled_grid() {
         }
         t
     };
-    let (mut worst, mut differs_unmoved) = (0.0f64, 0usize);
+    let (mut worst, mut differs_flipped) = (0.0f64, 0usize);
     for py in 0..16 {
         for px in 0..16 {
             let i = px + 16 * py;
-            let (got, var) = (
-                out.beauty.pixels[i].g as f64,
-                out.variance.pixels[i].g as f64,
-            );
-            let want = expected(px, py);
-            let z = (got - want) / var.sqrt().max(1e-4);
-            worst = worst.max(z.abs());
-            // The grid moved down instead of up would be visible (the test can fail).
-            let mirrored = expected(px, 15 - py);
-            differs_unmoved += ((got - mirrored).abs() > 6.0 * var.sqrt().max(1e-4)) as usize;
+            for c in 0..3 {
+                let got = out.beauty.pixels[i].to_array()[c] as f64;
+                let sd = (out.variance.pixels[i].to_array()[c] as f64)
+                    .sqrt()
+                    .max(1e-4);
+                worst = worst.max(((got - expected(px, py, c)) / sd).abs());
+                // The grid moved down instead of up would be visible (the test can fail).
+                differs_flipped += ((got - expected(px, 15 - py, c)).abs() > 6.0 * sd) as usize;
+            }
         }
     }
-    eprintln!("max |z| {worst:.2}, {differs_unmoved} pixels off the flipped grid");
-    assert!(worst < 5.0, "max |z| {worst}");
-    assert!(differs_unmoved > 20, "{differs_unmoved}");
+    eprintln!("{name}: max |z| {worst:.2}, {differs_flipped} values off the flipped grid");
+    assert!(worst < 5.0, "{name}: max |z| {worst}");
+    assert!(differs_flipped > 60, "{name}: {differs_flipped}");
+}
+
+#[test]
+fn a_uniformgrid_medium_transmits_as_pbrts_sampled_grid() {
+    // An absorbing 2 x 3 x 2 grid (symmetric in x, pbrt's mirrored image axis).
+    let values: Vec<f64> = (0..12)
+        .map(|i| 1.0 + ((i / 2) % 3) as f64 + 0.5 * (i / 6) as f64)
+        .collect();
+    let listed: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+    let medium = format!(
+        "\"string type\" \"uniformgrid\" \"rgb sigma_a\" [0.3 0.3 0.3] \"rgb sigma_s\" [0 0 0] \
+         \"integer nx\" 2 \"integer ny\" 3 \"integer nz\" 2 \
+         \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"float density\" [{}]",
+        listed.join(" ")
+    );
+    assert_grid_transmits(
+        "uniformgrid",
+        &medium,
+        [2, 3, 2],
+        [&values, &values, &values],
+    );
+}
+
+#[test]
+fn an_rgbgrid_medium_transmits_each_channel_as_pbrts_sampled_grid() {
+    // A colour sigma_a per voxel (sigma_s 0: the albedo fraction is 0), each channel its own
+    // field, all scaled by 0.3.
+    let channel = |c: usize| -> Vec<f64> {
+        (0..12)
+            .map(|i| (1 + c) as f64 * (0.5 + ((i / 2) % 3) as f64) + c as f64 * (i / 6) as f64)
+            .collect()
+    };
+    let (r, g, b) = (channel(0), channel(1), channel(2));
+    let sa: Vec<String> = (0..12)
+        .map(|i| format!("{} {} {}", r[i], g[i], b[i]))
+        .collect();
+    let ss = ["0 0 0"; 12];
+    let medium = format!(
+        "\"string type\" \"rgbgrid\" \"float scale\" 0.3 \
+         \"integer nx\" 2 \"integer ny\" 3 \"integer nz\" 2 \
+         \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"rgb sigma_a\" [{}] \"rgb sigma_s\" [{}]",
+        sa.join(" "),
+        ss.join(" ")
+    );
+    // The reference multiplies by 0.3 itself: values given unscaled.
+    assert_grid_transmits("rgbgrid", &medium, [2, 3, 2], [&r, &g, &b]);
 }

@@ -186,6 +186,14 @@ fn bad_patterns_are_located_errors_naming_key_and_value() {
             &["`transform`", "singular"],
         ),
         (
+            r#"{ pattern = "fraction", a = 0.5 }"#,
+            &["missing required field `b`"],
+        ),
+        (
+            r#"{ pattern = "add", a = 0.5, b = 0.6 }"#,
+            &["`reflectance`", "every channel in [0, 1]"],
+        ),
+        (
             r#"{ pattern = "grid" }"#,
             &["needs `path = \"file.vol\"` or `values = [..]` with `dims`"],
         ),

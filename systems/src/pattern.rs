@@ -169,6 +169,22 @@ pub enum Node {
         /// The other factor.
         b: NodeId,
     },
+    /// `a + b` per channel.
+    Add {
+        /// A term.
+        a: NodeId,
+        /// The other term.
+        b: NodeId,
+    },
+    /// `a / (a + b)` per channel, 0 where `a + b` is 0 (a fraction of two non-negative
+    /// fields, such as a scattering albedo `sigma_s / (sigma_s + sigma_a)` from interpolated
+    /// coefficients; in [0, 1] when both inputs are >= 0).
+    Fraction {
+        /// The part.
+        a: NodeId,
+        /// The rest.
+        b: NodeId,
+    },
     /// `a factor` per channel.
     Scale {
         /// The input.
@@ -193,7 +209,9 @@ impl Node {
     fn children(&self) -> impl Iterator<Item = NodeId> {
         let (a, b, c) = match *self {
             Node::Mix { a, b, t } => (Some(a), Some(b), Some(t)),
-            Node::Multiply { a, b } => (Some(a), Some(b), None),
+            Node::Multiply { a, b } | Node::Add { a, b } | Node::Fraction { a, b } => {
+                (Some(a), Some(b), None)
+            }
             Node::Scale { a, .. } | Node::Remap { a, .. } => (Some(a), None, None),
             _ => (None, None, None),
         };
@@ -334,6 +352,8 @@ impl PatternGraph {
             | Node::Grid { .. }
             | Node::Mix { .. }
             | Node::Multiply { .. }
+            | Node::Add { .. }
+            | Node::Fraction { .. }
             | Node::Remap { .. } => true,
         })
     }
@@ -487,6 +507,16 @@ fn eval_node(
                 *o = *a * *b;
             }
         }
+        Node::Add { a, b } => {
+            for (o, (a, b)) in out.iter_mut().zip(col(*a).iter().zip(col(*b))) {
+                *o = *a + *b;
+            }
+        }
+        Node::Fraction { a, b } => {
+            for (o, (a, b)) in out.iter_mut().zip(col(*a).iter().zip(col(*b))) {
+                *o = zip2(*a, *b, fraction);
+            }
+        }
         Node::Scale { a, factor } => {
             for (o, a) in out.iter_mut().zip(col(*a)) {
                 *o = *a * *factor;
@@ -568,4 +598,21 @@ pub(crate) fn padded_coordinates(grid: &DensityGrid, u: Vec3) -> Vec3 {
     let d = grid.dims();
     let n = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
     (u * (n - 2.0) + 1.0) / n
+}
+
+/// `a / (a + b)`, 0 where `a + b` is not > 0, clamped to [0, 1] (rounding).
+#[inline]
+pub(crate) fn fraction(a: f32, b: f32) -> f32 {
+    let sum = a + b;
+    if sum > 0.0 {
+        (a / sum).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// `f` per channel of `a` and `b`.
+#[inline]
+fn zip2(a: Rgb, b: Rgb, f: impl Fn(f32, f32) -> f32) -> Rgb {
+    Rgb::new(f(a.r, b.r), f(a.g, b.g), f(a.b, b.b))
 }

@@ -166,6 +166,38 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
             };
             per_channel(a, b, t, channel)
         }
+        Node::Add { a, b } => {
+            let ((al, ah), (bl, bh)) = (at(*a), at(*b));
+            let (l, h) = widen((al + bl, ah + bh));
+            // The sum of two non-negative floats is never below 0: no widening there.
+            let floor = |l: f32, x: f32, y: f32| if x >= 0.0 && y >= 0.0 { l.max(0.0) } else { l };
+            (
+                Rgb::new(
+                    floor(l.r, al.r, bl.r),
+                    floor(l.g, al.g, bl.g),
+                    floor(l.b, al.b, bl.b),
+                ),
+                h,
+            )
+        }
+        Node::Fraction { a, b } => {
+            // Increasing in `a`, decreasing in `b` (for non-negative inputs): the corners
+            // give the range; anything below 0 or unbounded reads as the whole of [0, 1].
+            let ((al, ah), (bl, bh)) = (at(*a), at(*b));
+            let ch = |al: f32, ah: f32, bl: f32, bh: f32| {
+                if !(al >= 0.0 && bl >= 0.0 && ah.is_finite() && bh.is_finite()) {
+                    return (0.0, 1.0);
+                }
+                (
+                    super::fraction(al, bh) * (1.0 - WIDEN),
+                    (super::fraction(ah, bl) * (1.0 + WIDEN)).min(1.0),
+                )
+            };
+            let r = ch(al.r, ah.r, bl.r, bh.r);
+            let g = ch(al.g, ah.g, bl.g, bh.g);
+            let bb = ch(al.b, ah.b, bl.b, bh.b);
+            (Rgb::new(r.0, g.0, bb.0), Rgb::new(r.1, g.1, bb.1))
+        }
         Node::Multiply { a, b } => {
             let (a, b) = (at(*a), at(*b));
             let ch = |al: f32, ah: f32, bl: f32, bh: f32, _: f32, _: f32| {

@@ -64,6 +64,21 @@ fn test_graphs() -> Vec<(&'static str, PatternGraph)> {
         ("rotated grid", graph(vec![rotated_grid()])),
         ("zero-border grid", graph(vec![zero_border_grid()])),
         (
+            "fraction(grid, add(noise remapped, gradient))",
+            graph(vec![
+                zero_border_grid(),
+                Node::Noise(fbm(1.0, 3)),
+                Node::Remap {
+                    a: 1,
+                    from: [-1.0, 1.0],
+                    to: [0.0, 2.0],
+                },
+                gradient(Axis::X),
+                Node::Add { a: 2, b: 3 },
+                Node::Fraction { a: 0, b: 4 },
+            ]),
+        ),
+        (
             "mix(checker, image, noise)",
             graph(vec![
                 checker(Space::P),
@@ -155,7 +170,7 @@ fn evaluated_values_lie_within_the_bounds_of_random_boxes() {
         }
         assert_eq!(violations, 0, "{name}: values outside their bounds");
     }
-    assert_eq!(checked, 15 * 200 * 64);
+    assert_eq!(checked, 16 * 200 * 64);
 }
 
 #[test]
@@ -429,6 +444,31 @@ fn a_zero_border_grid_is_pbrts_sampled_grid_in_its_box() {
         border: GridBorder::Zero,
     };
     assert!(PatternGraph::new(vec![thin]).is_err());
+}
+
+#[test]
+fn add_and_fraction_are_the_sum_and_the_part_of_the_whole() {
+    let c = |r, g, b| Node::Constant(Rgb::new(r, g, b));
+    let nodes = [
+        c(0.2, 0.0, 3.0),
+        c(0.6, 0.0, 1.0),
+        Node::Add { a: 0, b: 1 },
+        Node::Fraction { a: 0, b: 1 },
+        Node::Fraction { a: 2, b: 0 },
+    ];
+    let at = |root: usize| one(&graph(nodes[..=root].to_vec()), Vec3::ZERO, 0.0, 0.0);
+    assert_eq!(at(2), Rgb::new(0.8, 0.0, 4.0));
+    // 0.2 / 0.8, 0 / 0 read as 0, 3 / 4.
+    let f = at(3);
+    assert!(
+        (f.r - 0.25).abs() < 1e-6 && f.g == 0.0 && (f.b - 0.75).abs() < 1e-6,
+        "{f:?}"
+    );
+    let f = at(4);
+    assert!(
+        (f.r - 0.8).abs() < 1e-6 && f.g == 0.0 && (f.b - 4.0 / 7.0).abs() < 1e-6,
+        "{f:?}"
+    );
 }
 
 #[test]

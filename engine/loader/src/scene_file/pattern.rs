@@ -22,9 +22,9 @@ pub enum ColourParam {
 }
 
 /// The pattern types, in the order messages list them.
-const PATTERNS: [&str; 10] = [
-    "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "scale",
-    "remap",
+const PATTERNS: [&str; 12] = [
+    "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "add",
+    "fraction", "scale", "remap",
 ];
 
 /// Nesting deeper than this is refused (no scene needs it; it bounds the recursion).
@@ -210,6 +210,18 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
             let a = input(t, "a", None, nodes, depth)?;
             let b = input(t, "b", None, nodes, depth)?;
             Node::Multiply { a, b }
+        }
+        "add" => {
+            t.deny_unknown(&["pattern", "a", "b"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let b = input(t, "b", None, nodes, depth)?;
+            Node::Add { a, b }
+        }
+        "fraction" => {
+            t.deny_unknown(&["pattern", "a", "b"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let b = input(t, "b", None, nodes, depth)?;
+            Node::Fraction { a, b }
         }
         "scale" => {
             t.deny_unknown(&["pattern", "a", "factor"])?;

@@ -1,6 +1,6 @@
 //! pbrt-v4 media (`MakeNamedMedium`) as risotto interiors: `homogeneous` as the homogeneous
-//! interior, and `uniformgrid` (`GridMedium`) as a heterogeneous interior whose density is
-//! an inline grid pattern.
+//! interior, `uniformgrid` (`GridMedium`) and `rgbgrid` (`RGBGridMedium`) as heterogeneous
+//! interiors whose density (and for `rgbgrid` albedo) are inline grid patterns.
 //!
 //! pbrt looks the density up in the box `[p0, p1]` of medium space (the CTM at
 //! `MakeNamedMedium`) with `SampledGrid::Lookup`: voxel `i` sits at `(i + 1/2) / n` of the
@@ -49,11 +49,11 @@ impl Converter<'_> {
         if ty == "nanovdb" {
             return Err(p.error(lx, q, "medium \"nanovdb\": NanoVDB files are not read (there is no maintained Rust NanoVDB reader); convert the grid to OpenVDB (.vdb) or Mitsuba's .vol and give it to a risotto heterogeneous medium"));
         }
-        if ty != "homogeneous" && ty != "uniformgrid" {
+        if !["homogeneous", "uniformgrid", "rgbgrid"].contains(&ty) {
             return Err(p.error(
                 lx,
                 q,
-                format!("medium \"{ty}\" is not supported (\"homogeneous\", \"uniformgrid\")"),
+                format!("medium \"{ty}\" is not supported (\"homogeneous\", \"uniformgrid\", \"rgbgrid\")"),
             ));
         }
         if let Some(q) = p.ignore("preset") {
@@ -74,8 +74,6 @@ impl Converter<'_> {
             }
         };
         let scale = p.float(lx, "scale", 1.0)?;
-        let sa = rgb("sigma_a")?.map(|c| c * scale);
-        let ss = rgb("sigma_s")?.map(|c| c * scale);
         let g = p.float_where(lx, "g", 0.0, "in (-1, 1)", |g| g.abs() < 1.0)?;
         let phase = (g != 0.0).then(|| {
             let mut phase = toml::Table::new();
@@ -83,6 +81,11 @@ impl Converter<'_> {
             phase.insert("g".into(), g.into());
             phase
         });
+        if ty == "rgbgrid" {
+            return self.rgb_grid_medium(p, at, m, scale, phase);
+        }
+        let sa = rgb("sigma_a")?.map(|c| c * scale);
+        let ss = rgb("sigma_s")?.map(|c| c * scale);
         if ty == "uniformgrid" {
             return self.grid_medium(p, at, m, sa, ss, phase);
         }
@@ -109,17 +112,9 @@ impl Converter<'_> {
         Ok(t.table)
     }
 
-    /// `MakeNamedMedium "name" "string type" "uniformgrid"` in medium space `m`, with the
-    /// scaled coefficients and phase the caller read: a heterogeneous `interior` table.
-    pub(super) fn grid_medium(
-        &self,
-        p: &Params,
-        at: &At,
-        m: &DMat4,
-        sigma_a: [f64; 3],
-        sigma_s: [f64; 3],
-        phase: Option<toml::Table>,
-    ) -> Result<toml::Table, SceneError> {
+    /// The grid's voxel counts (`nx`, `ny`, `nz`), checked, and its box and placement as the
+    /// keys of a grid pattern (`dims`, `min`, `max`, `border = "zero"`, `transform`).
+    fn grid_box(&self, p: &Params, at: &At, m: &DMat4) -> Result<GridBox, SceneError> {
         let lx = &self.lx;
         for key in [
             "temperature",
@@ -145,40 +140,9 @@ impl Converter<'_> {
             }
             *d = v as usize;
         }
-        let Some((density, q)) = p.nums(lx, "density", &["float"], 1)? else {
-            return Err(self.error(
-                at,
-                &p.entity,
-                "a uniformgrid medium needs \"float density\" (nx * ny * nz values)",
-            ));
-        };
-        let count = dims.iter().product::<usize>();
-        if density.len() != count {
-            return Err(p.error(
-                lx,
-                q,
-                format!("has {} values; nx * ny * nz = {count}", density.len()),
-            ));
-        }
-        if dims.iter().map(|d| d + 2).product::<usize>() > MAX_VALUES {
-            return Err(p.error(lx, q, format!("a grid of {dims:?} voxels is larger than risotto reads ({MAX_VALUES} with its border)")));
-        }
-        if let Some((i, v)) = density
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
-        {
-            return Err(p.error(
-                lx,
-                q,
-                format!("value {i} is {v}: densities must be finite and >= 0"),
-            ));
-        }
-        let values: Vec<toml::Value> = density.iter().map(|&v| v.into()).collect();
         let p0 = DVec3::from(p.vec3(lx, "p0")?.unwrap_or([0.0; 3]));
         let p1 = DVec3::from(p.vec3(lx, "p1")?.unwrap_or([1.0; 3]));
-        let voxel = (p1 - p0) / DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64);
-        if !(voxel.cmpgt(DVec3::ZERO).all() && voxel.is_finite()) {
+        if !((p1 - p0).cmpgt(DVec3::ZERO).all() && (p1 - p0).is_finite()) {
             let q = p
                 .list
                 .iter()
@@ -190,6 +154,84 @@ impl Converter<'_> {
                 None => self.error(at, &p.entity, message),
             });
         }
+        let mut keys = Entity::new(None)
+            .with("dims", dims.iter().map(|&d| d as i64).collect::<Vec<_>>())
+            .with("border", "zero")
+            .with("min", p0.to_array().to_vec())
+            .with("max", p1.to_array().to_vec());
+        if *m != DMat4::IDENTITY {
+            keys.set("transform", self.transform_value(m, at, &p.entity)?);
+        }
+        Ok(GridBox {
+            count: dims.iter().product(),
+            padded: dims.iter().map(|d| d + 2).product(),
+            keys: keys.table,
+        })
+    }
+
+    /// The values of `name` (`per` numbers per voxel, finite and >= 0), as many as `grid`
+    /// has voxels.
+    fn grid_values<'p>(
+        &self,
+        p: &'p Params,
+        at: &At,
+        grid: &GridBox,
+        name: &str,
+        per: usize,
+    ) -> Result<&'p [f64], SceneError> {
+        let lx = &self.lx;
+        let types: &[&str] = if per == 1 { &["float"] } else { &["rgb"] };
+        let Some((values, q)) = p.nums(lx, name, types, per)? else {
+            return Err(self.error(
+                at,
+                &p.entity,
+                format!("needs \"{} {name}\" (nx * ny * nz values)", types[0]),
+            ));
+        };
+        if values.len() != grid.count * per {
+            return Err(p.error(
+                lx,
+                q,
+                format!(
+                    "has {} values; nx * ny * nz = {} {}",
+                    values.len() / per,
+                    grid.count,
+                    if per == 1 { "" } else { "colours" }
+                )
+                .trim_end()
+                .to_owned(),
+            ));
+        }
+        if grid.padded > MAX_VALUES {
+            return Err(p.error(lx, q, format!("a grid of {} voxels is larger than risotto reads ({MAX_VALUES} with its border)", grid.count)));
+        }
+        if let Some((i, v)) = values
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(p.error(
+                lx,
+                q,
+                format!("value {i} is {v}: densities must be finite and >= 0"),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// `MakeNamedMedium "name" "string type" "uniformgrid"` in medium space `m`, with the
+    /// scaled coefficients and phase the caller read: a heterogeneous `interior` table.
+    pub(super) fn grid_medium(
+        &self,
+        p: &Params,
+        at: &At,
+        m: &DMat4,
+        sigma_a: [f64; 3],
+        sigma_s: [f64; 3],
+        phase: Option<toml::Table>,
+    ) -> Result<toml::Table, SceneError> {
+        let grid = self.grid_box(p, at, m)?;
+        let density = self.grid_values(p, at, &grid, "density", 1)?;
         let sigma_t: Vec<f64> = (0..3).map(|c| sigma_a[c] + sigma_s[c]).collect();
         let albedo: Vec<f64> = (0..3)
             .map(|c| {
@@ -200,24 +242,92 @@ impl Converter<'_> {
                 }
             })
             .collect();
-        let mut density = Entity::new(None)
-            .with("pattern", "grid")
-            .with("dims", dims.iter().map(|&d| d as i64).collect::<Vec<_>>())
-            .with("values", values)
-            .with("border", "zero")
-            .with("min", p0.to_array().to_vec())
-            .with("max", p1.to_array().to_vec());
-        if *m != DMat4::IDENTITY {
-            density.set("transform", self.transform_value(m, at, &p.entity)?);
-        }
         let mut t = Entity::new(None)
             .with("type", "heterogeneous")
-            .with("density", density.table)
+            .with("density", grid.pattern(density.iter().copied()))
             .with("scale", sigma_t)
             .with("albedo", albedo);
         if let Some(phase) = phase {
             t.set("phase", phase);
         }
         Ok(t.table)
+    }
+
+    /// `MakeNamedMedium "name" "string type" "rgbgrid"` in medium space `m`: a colour
+    /// `sigma_a` and `sigma_s` per voxel (pbrt-v4's `RGBGridMedium`, both looked up by the
+    /// same `SampledGrid` as `uniformgrid`'s density), times `scale`. risotto's heterogeneous
+    /// interior with a density per channel, `sigma_t = sigma_a + sigma_s` (trilinear, so the
+    /// sum of the two looked-up fields is the lookup of the summed voxels), and the albedo
+    /// `sigma_s / (sigma_s + sigma_a)` of the two looked-up fields (a `fraction` pattern),
+    /// as pbrt evaluates them.
+    fn rgb_grid_medium(
+        &self,
+        p: &Params,
+        at: &At,
+        m: &DMat4,
+        scale: f64,
+        phase: Option<toml::Table>,
+    ) -> Result<toml::Table, SceneError> {
+        let grid = self.grid_box(p, at, m)?;
+        let sa = self.grid_values(p, at, &grid, "sigma_a", 3)?;
+        let ss = self.grid_values(p, at, &grid, "sigma_s", 3)?;
+        let colour = |f: &dyn Fn(usize) -> f64| {
+            let channel = |c: usize| {
+                let mut factor = [0.0; 3];
+                factor[c] = 1.0;
+                let mut t = toml::Table::new();
+                t.insert("pattern".into(), "scale".into());
+                t.insert(
+                    "a".into(),
+                    grid.pattern((0..grid.count).map(|i| f(3 * i + c))),
+                );
+                t.insert("factor".into(), factor.to_vec().into());
+                toml::Value::Table(t)
+            };
+            let add = |a: toml::Value, b: toml::Value| {
+                let mut t = toml::Table::new();
+                t.insert("pattern".into(), "add".into());
+                t.insert("a".into(), a);
+                t.insert("b".into(), b);
+                toml::Value::Table(t)
+            };
+            add(add(channel(0), channel(1)), channel(2))
+        };
+        let sigma_t = colour(&|k| (sa[k] + ss[k]) * scale);
+        let mut albedo = toml::Table::new();
+        albedo.insert("pattern".into(), "fraction".into());
+        albedo.insert("a".into(), colour(&|k| ss[k]));
+        albedo.insert("b".into(), colour(&|k| sa[k]));
+        let mut t = Entity::new(None)
+            .with("type", "heterogeneous")
+            .with("density", sigma_t)
+            .with("albedo", albedo);
+        if let Some(phase) = phase {
+            t.set("phase", phase);
+        }
+        Ok(t.table)
+    }
+}
+
+/// A grid medium's voxel counts and the placement keys of its grid patterns.
+struct GridBox {
+    /// `nx ny nz`.
+    count: usize,
+    /// `(nx + 2) (ny + 2) (nz + 2)`: with the zero border.
+    padded: usize,
+    /// `dims`, `border`, `min`, `max` and `transform` of its grid patterns.
+    keys: toml::Table,
+}
+
+impl GridBox {
+    /// A grey grid pattern of `values` (one per voxel, x fastest) in the box.
+    fn pattern(&self, values: impl Iterator<Item = f64>) -> toml::Value {
+        let mut t = self.keys.clone();
+        t.insert("pattern".into(), "grid".into());
+        t.insert(
+            "values".into(),
+            values.map(toml::Value::from).collect::<Vec<_>>().into(),
+        );
+        toml::Value::Table(t)
     }
 }

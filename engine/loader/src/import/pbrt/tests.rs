@@ -375,6 +375,8 @@ fn errors_are_located() {
         ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \"point3 p1\" [1 0 1]", "6:69", "p1 > p0"),
         ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"float density\" [1] \"rgb Le\" [1 1 1]", "6:69", "emission of a grid medium"),
         ("MakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nz\" 0 \"float density\" [1]", "6:49", "must be in [1,"),
+        ("MakeNamedMedium \"g\" \"string type\" \"rgbgrid\" \"rgb sigma_a\" [1 1 1]", "6:1", "needs \"rgb sigma_s\""),
+        ("MakeNamedMedium \"g\" \"string type\" \"rgbgrid\" \"integer nx\" 2 \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 1 1 1 1 1]", "6:60", "has 1 values; nx * ny * nz = 2 colours"),
     ];
     for (i, (body, at, message)) in cases.iter().enumerate() {
         let e = error(&format!("err{i}"), &format!("{HEAD}WorldBegin\n{body}\n"));
