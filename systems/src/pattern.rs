@@ -291,14 +291,14 @@ impl PatternGraph {
     /// leaves are grey (constants and the colours of `checker` and `gradient` with equal
     /// channels; `noise` and `grid` always) and its `scale` factors are grey (`mix`,
     /// `multiply` and `remap` act per channel, so they keep grey inputs grey). An `image`
-    /// counts as not grey (its texels are not inspected).
+    /// is grey when every texel is (checked once when it was read).
     pub fn is_grey(&self) -> bool {
         let grey = |c: &Rgb| c.r == c.g && c.g == c.b;
         self.nodes.iter().all(|n| match n {
             Node::Constant(c) => grey(c),
             Node::Checker { a, b, .. } | Node::Gradient { a, b, .. } => grey(a) && grey(b),
             Node::Scale { factor, .. } => grey(factor),
-            Node::Image(_) => false,
+            Node::Image(t) => t.is_grey(),
             Node::Noise(_)
             | Node::Grid { .. }
             | Node::Mix { .. }
