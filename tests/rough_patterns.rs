@@ -68,8 +68,9 @@ fn assert_halves(what: &str, split: &RenderOutput, left: &RenderOutput, right: &
     );
 }
 
-/// A roughness written as a `constant` pattern takes the pattern path (per-point lobes,
-/// a one-point table grid) and renders bit for bit as the number.
+/// A roughness or index written as a `constant` pattern takes the pattern path (per-point
+/// lobes, a one-point table grid) and renders bit for bit as the number, for the three
+/// microfacet materials.
 #[test]
 fn a_constant_roughness_or_index_pattern_renders_as_the_number() {
     let number = render(
@@ -98,10 +99,19 @@ fn a_constant_roughness_or_index_pattern_renders_as_the_number() {
         ),
     );
     assert_eq!(number.beauty.pixels, index.beauty.pixels);
+    for base in ["type = \"rough_dielectric\"", "type = \"rough_plastic\""] {
+        let number = render(
+            "constant",
+            &sphere_scene(&format!("{base}\nalpha = 0.3"), 4),
+        );
+        let body = format!("{base}\nalpha = {{ pattern = \"constant\", value = 0.3 }}");
+        let pattern = render("constant", &sphere_scene(&body, 4));
+        assert_eq!(number.beauty.pixels, pattern.beauty.pixels, "{base}");
+    }
 }
 
 /// A roughness switching from 0.08 to 0.6 across the sphere renders each half as the
-/// material with that roughness, for the conductor and the dielectric. Light refracted into
+/// material with that roughness, for the conductor, the dielectric and the plastic. Light refracted into
 /// the glass crosses to the other half, so the glass's paths stop after their second
 /// bounce (what each half reflects and transmits there is its own).
 #[test]
@@ -109,6 +119,10 @@ fn a_roughness_split_renders_each_half_as_its_constant() {
     for (base, depth) in [
         ("type = \"rough_conductor\"\nmaterial = \"Cu\"", 8),
         ("type = \"rough_dielectric\"\nior = 1.5", 2),
+        (
+            "type = \"rough_plastic\"\ndiffuse_reflectance = [0.6, 0.2, 0.2]",
+            8,
+        ),
     ] {
         let with = |alpha: &str| {
             let body = format!("{base}\nalpha = {alpha}");
@@ -212,8 +226,8 @@ fn bad_roughness_and_index_patterns_are_located_errors() {
             &["`k`", ">= 0", "-2.8", "remap"],
         ),
         (
-            "type = \"rough_plastic\"\nalpha = { pattern = \"constant\", value = 0.2 }",
-            &["alpha"],
+            "type = \"rough_plastic\"\nalpha = { pattern = \"checker\", a = 0.2, b = 1.2 }",
+            &["alpha", "(0, 1]", "1.2"],
         ),
     ];
     common::assert_located_errors(&d, &cases);

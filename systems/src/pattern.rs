@@ -166,6 +166,14 @@ pub enum Node {
         /// The output range.
         to: [f32; 2],
     },
+    /// `max(a, 0)^exponent` per channel (pbrt-v4's `remaproughness`, `alpha =
+    /// sqrt(roughness)`, on a roughness texture is `exponent = 0.5`).
+    Power {
+        /// The input.
+        a: NodeId,
+        /// The exponent, finite and > 0.
+        exponent: f32,
+    },
 }
 
 impl Node {
@@ -174,7 +182,9 @@ impl Node {
         let (a, b, c) = match *self {
             Node::Mix { a, b, t } => (Some(a), Some(b), Some(t)),
             Node::Multiply { a, b } => (Some(a), Some(b), None),
-            Node::Scale { a, .. } | Node::Remap { a, .. } => (Some(a), None, None),
+            Node::Scale { a, .. } | Node::Remap { a, .. } | Node::Power { a, .. } => {
+                (Some(a), None, None)
+            }
             _ => (None, None, None),
         };
         [a, b, c].into_iter().flatten()
@@ -217,6 +227,9 @@ impl Node {
             Node::Scale { factor, .. } if !colour_ok(factor) => {
                 bad(format!("scale: factor {factor:?} must be finite and >= 0"))
             }
+            Node::Power { exponent, .. } if !(exponent.is_finite() && exponent > 0.0) => bad(
+                format!("power: exponent must be finite and > 0, got {exponent}"),
+            ),
             Node::Remap { from, to, .. } => {
                 if !(from.iter().chain(&to).all(|v| v.is_finite())) {
                     bad(format!(
@@ -303,7 +316,8 @@ impl PatternGraph {
             | Node::Grid { .. }
             | Node::Mix { .. }
             | Node::Multiply { .. }
-            | Node::Remap { .. } => true,
+            | Node::Remap { .. }
+            | Node::Power { .. } => true,
         })
     }
 
@@ -444,6 +458,11 @@ fn eval_node(
                 *o = a.map(|x| remap(x, *from, *to));
             }
         }
+        Node::Power { a, exponent } => {
+            for (o, a) in out.iter_mut().zip(col(*a)) {
+                *o = a.map(|x| power(x, *exponent));
+            }
+        }
     }
 }
 
@@ -475,6 +494,13 @@ pub(crate) fn mix(a: f32, b: f32, t: f32) -> f32 {
 pub(crate) fn remap(x: f32, from: [f32; 2], to: [f32; 2]) -> f32 {
     let t = unit((x - from[0]) / (from[1] - from[0]));
     to[0] + (to[1] - to[0]) * t
+}
+
+/// `max(x, 0)^exponent` (NaN reads as 0): increasing in `x`, so the bounds of an
+/// interval are the powers of its ends.
+#[inline]
+pub(crate) fn power(x: f32, exponent: f32) -> f32 {
+    x.max(0.0).powf(exponent)
 }
 
 /// `t` clamped to [0, 1], NaN to 0 (`f32::clamp` keeps NaN).

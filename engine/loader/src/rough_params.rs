@@ -7,7 +7,7 @@ use crate::scene_file::{ColourParam, MaterialParams, SceneError};
 use crate::surface_params::{coat_eta, specular_reflectance};
 use glam::Vec3;
 use risotto_builtins::builtin::{
-    Surface, Varying, VaryingConductor, VaryingDielectric, VaryingRoughness,
+    Surface, Varying, VaryingConductor, VaryingDielectric, VaryingPlastic, VaryingRoughness,
 };
 use risotto_components::Rgb;
 use risotto_systems::conductor::{metal, METALS};
@@ -16,7 +16,7 @@ use risotto_systems::microfacet::{Beckmann, Ggx, Microfacet};
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
-use risotto_systems::rough_plastic::RoughPlastic;
+use risotto_systems::rough_plastic::{CoatTables, RoughPlastic};
 use risotto_systems::roughness_grid::{RoughnessAxis, RoughnessGrid, POINTS_1D, POINTS_2D};
 use std::sync::Arc;
 
@@ -338,7 +338,8 @@ pub(crate) const ROUGH_PLASTIC_KEYS: [&str; 7] = [
 ];
 
 /// `type = "rough_plastic"`: Mitsuba 3's `roughplastic`. `distribution` (default `"ggx"`),
-/// `alpha` (isotropic only, as Mitsuba's), `diffuse_reflectance` (a colour or a pattern in
+/// `alpha` (isotropic only, as Mitsuba's; a number or a grey pattern, whose coat tables
+/// are interpolated per point from a grid over its bounds), `diffuse_reflectance` (a colour or a pattern in
 /// [0, 1], default 0.5), `specular_reflectance`, `int_ior`, `ext_ior` and `nonlinear` as
 /// the smooth `plastic`; `int_ior` must differ from `ext_ior`. No energy compensation (the
 /// model's diffuse lobe is its own account of the coat's transmission).
@@ -360,7 +361,7 @@ pub(crate) fn rough_plastic(p: &MaterialParams) -> Result<Surface, SceneError> {
         ));
     }
     let family = family(p)?;
-    let a = alpha(p, "alpha")?;
+    let alpha = varying_alpha(p, "alpha")?;
     let eta = coat_eta(p)?;
     if eta == 1.0 {
         return Err(p.error(
@@ -368,19 +369,38 @@ pub(crate) fn rough_plastic(p: &MaterialParams) -> Result<Surface, SceneError> {
             "int_ior equals ext_ior: an index-matched coat reflects nothing (use `diffuse`)",
         ));
     }
-    let lobe = RoughPlastic::new(
-        family.with(a, a),
-        eta,
-        specular_reflectance(p)?,
-        p.bool("nonlinear", Some(false))?,
-    );
-    Ok(
-        match p.colour_or_pattern("diffuse_reflectance", Rgb::splat(0.5), [0.0, 1.0])? {
-            ColourParam::Constant(diffuse) => Surface::RoughPlastic { lobe, diffuse },
-            ColourParam::Pattern(graph) => Surface::RoughPlasticPattern {
-                lobe,
-                diffuse: Arc::new(graph),
-            },
+    let specular = specular_reflectance(p)?;
+    let nonlinear = p.bool("nonlinear", Some(false))?;
+    let diffuse = p.colour_or_pattern("diffuse_reflectance", Rgb::splat(0.5), [0.0, 1.0])?;
+    let a = match alpha {
+        Varying::Constant(a) => a,
+        alpha => {
+            let roughness = VaryingRoughness {
+                family: family.with(DEFAULT_ALPHA, DEFAULT_ALPHA),
+                alpha_u: alpha,
+                alpha_v: None,
+            };
+            let grid = Roughness::grid(&roughness, |d| CoatTables::new(d, eta));
+            let diffuse = match diffuse {
+                ColourParam::Constant(c) => Varying::Constant(c),
+                ColourParam::Pattern(g) => Varying::Pattern(Arc::new(g)),
+            };
+            return Ok(Surface::RoughPlasticVarying(Box::new(VaryingPlastic {
+                roughness,
+                eta,
+                specular,
+                nonlinear,
+                grid,
+                diffuse,
+            })));
+        }
+    };
+    let lobe = RoughPlastic::new(family.with(a, a), eta, specular, nonlinear);
+    Ok(match diffuse {
+        ColourParam::Constant(diffuse) => Surface::RoughPlastic { lobe, diffuse },
+        ColourParam::Pattern(graph) => Surface::RoughPlasticPattern {
+            lobe,
+            diffuse: Arc::new(graph),
         },
-    )
+    })
 }

@@ -7,7 +7,7 @@ use super::coated::{CoatedBase, CoatedBxdf};
 use super::interiors::*;
 use super::plastic::PlasticBxdf;
 use super::rough::*;
-use super::rough_patterns::{VaryingConductor, VaryingDielectric};
+use super::rough_patterns::{VaryingConductor, VaryingDielectric, VaryingPlastic};
 use super::thin_dielectric::ThinDielectricBxdf;
 use super::two_sided::{facing_normals, TwoSidedBxdf};
 use crate::phase::{phase_bxdf, PhaseBxdf};
@@ -116,6 +116,9 @@ pub enum Surface {
         /// The base-reflectance graph.
         diffuse: Arc<PatternGraph>,
     },
+    /// Rough plastic whose roughness is a pattern ([`super::rough_patterns`]); its base
+    /// reflectance a colour or a pattern.
+    RoughPlasticVarying(Box<VaryingPlastic>),
     /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no interior, no
     /// refraction offset, shadow rays blocked.
     ThinDielectric {
@@ -168,6 +171,7 @@ impl Surface {
             },
             Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
             Surface::RoughConductorPattern(c) => c.hints(),
+            Surface::RoughPlasticVarying(p) => p.hints(),
             Surface::RoughDielectricPattern(d) => d.hints(),
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
@@ -232,6 +236,7 @@ impl Surface {
             Surface::RoughConductor(ref lobe) => arena.alloc(RoughConductorBxdf { lobe }),
             Surface::RoughDielectric(ref lobe) => arena.alloc(RoughDielectricBxdf { lobe }),
             Surface::RoughConductorPattern(ref c) => c.scatter(ctx, arena),
+            Surface::RoughPlasticVarying(ref p) => p.scatter(ctx, arena),
             Surface::RoughDielectricPattern(ref d) => d.scatter(ctx, arena),
             Surface::Interface => arena.alloc(NullBxdf),
             Surface::Plastic { coat, diffuse } => arena.alloc(PlasticBxdf { coat, diffuse }),
@@ -305,6 +310,7 @@ impl Surface {
                 Some(ParamValue::Color(c.tint))
             }
             (Surface::RoughConductorPattern(c), _) => c.param(name),
+            (Surface::RoughPlasticVarying(p), _) => p.param(name),
             (Surface::RoughDielectricPattern(d), "ior") => Some(ParamValue::Float(d.eta)),
             (Surface::RoughDielectricPattern(d), "tint") => Some(ParamValue::Color(d.tint)),
             (Surface::RoughDielectricPattern(d), _) => d.param(name),

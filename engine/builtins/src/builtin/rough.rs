@@ -209,16 +209,17 @@ impl<L: Lobes<RoughDielectric>> Bxdf for RoughDielectricBxdf<L> {
 
 /// The rough plastic closure (one-sided, as Mitsuba 3's `roughplastic`). The base
 /// reflectance is one colour (`R = Rgb`) or one per point (`R = &[Rgb]`, a pattern's
-/// column), as [`super::PlasticBxdf`]'s.
+/// column), as [`super::PlasticBxdf`]'s; the coat is the material's (`L = &RoughPlastic`)
+/// or one per point (`L = &[RoughPlastic]`, a roughness pattern).
 #[derive(Clone, Copy, Debug)]
-pub struct RoughPlasticBxdf<'a, R = Rgb> {
-    /// The coat (the material's, with its tables).
-    pub lobe: &'a RoughPlastic,
+pub struct RoughPlasticBxdf<L, R = Rgb> {
+    /// The coat (with its tables).
+    pub lobe: L,
     /// The base's (diffuse) reflectance, in [0, 1].
     pub diffuse: R,
 }
 
-impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
+impl<L: Lobes<RoughPlastic>, R: Reflectance> Bxdf for RoughPlasticBxdf<L, R> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::DIFFUSE
     }
@@ -229,7 +230,7 @@ impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
         out: &mut BxdfSamples,
     ) {
         generate(ctx, samplers, out, |i, wo, u, u_lobe| {
-            self.lobe.sample(self.diffuse.at(i), wo, u, u_lobe)
+            self.lobe.at(i).sample(self.diffuse.at(i), wo, u, u_lobe)
         });
     }
     fn evaluate_samples(
@@ -240,7 +241,7 @@ impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
         pdf: &mut [f32],
     ) {
         evaluate(ctx, wi, value, pdf, |i, wo, wi| {
-            self.lobe.eval(self.diffuse.at(i), wo, wi)
+            self.lobe.at(i).eval(self.diffuse.at(i), wo, wi)
         });
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {

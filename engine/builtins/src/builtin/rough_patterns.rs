@@ -1,5 +1,6 @@
 //! Microfacet materials whose roughness (`alpha`, `alpha_u`, `alpha_v`) or, for the rough
-//! conductor, complex index (`eta`, `k`) is a pattern, evaluated per shading point.
+//! conductor, complex index (`eta`, `k`) is a pattern, evaluated per shading point; and
+//! `rough_plastic` with an `alpha` pattern (its coat's tables follow the roughness the same way).
 //!
 //! A context's lobes are built once per point into the worker's arena (one
 //! [`RoughConductor`] or [`RoughDielectric`] per point), then sampled and evaluated by the
@@ -14,7 +15,7 @@
 //! exact to its 1e-4. Materials whose parameters are all numbers never reach this file.
 
 use super::material::pattern_column;
-use super::rough::{RoughConductorBxdf, RoughDielectricBxdf};
+use super::rough::{RoughConductorBxdf, RoughDielectricBxdf, RoughPlasticBxdf};
 use bumpalo::Bump;
 use risotto_components::Rgb;
 use risotto_engine::plugin::*;
@@ -23,6 +24,7 @@ use risotto_systems::microfacet::Microfacet;
 use risotto_systems::pattern::PatternGraph;
 use risotto_systems::rough_conductor::{fresnel_average, RoughConductor};
 use risotto_systems::rough_dielectric::RoughDielectric;
+use risotto_systems::rough_plastic::{CoatTables, RoughPlastic};
 use risotto_systems::roughness_grid::RoughnessGrid;
 use std::sync::Arc;
 
@@ -105,14 +107,21 @@ impl VaryingRoughness {
         reads(&self.alpha_u) || self.alpha_v.as_ref().is_some_and(reads)
     }
 
-    /// `(alpha_u, alpha_v)` at every point of `ctx`, in the arena.
-    fn columns<'a>(&self, ctx: &ShadingContext<'a>, arena: &'a Bump) -> &'a [(f32, f32)] {
+    /// One lobe per point of `ctx`, in the arena: `make(i, distribution, alpha_u,
+    /// alpha_v)` with the point's roughnesses and its distribution of the family.
+    fn per_point<'a, T>(
+        &self,
+        ctx: &ShadingContext<'a>,
+        arena: &'a Bump,
+        make: impl Fn(usize, Microfacet, f32, f32) -> T,
+    ) -> &'a [T] {
         let (ku, kv) = self.keys();
         let u = self.alpha_u.column(ctx, ku, arena);
         let v = self.alpha_v.as_ref().map(|v| v.column(ctx, kv, arena));
         arena.alloc_slice_fill_with(ctx.num_points(), |i| {
             let au = at(&u, i, |c| c.r);
-            (au, v.as_ref().map_or(au, |v| at(v, i, |c| c.r)))
+            let av = v.as_ref().map_or(au, |v| at(v, i, |c| c.r));
+            make(i, self.family.with_alphas(au, av), au, av)
         })
     }
 }
@@ -136,7 +145,6 @@ pub struct VaryingConductor {
 impl VaryingConductor {
     /// The per-point lobes over `ctx`.
     fn lobes<'a>(&self, ctx: &ShadingContext<'a>, arena: &'a Bump) -> &'a [RoughConductor] {
-        let alphas = self.roughness.columns(ctx, arena);
         let eta = self.eta.column(ctx, "eta", arena);
         let k = self.k.column(ctx, "k", arena);
         // F_avg once when the index is constant (module docs).
@@ -144,15 +152,14 @@ impl VaryingConductor {
             (Err(eta), Err(k), Some(_)) => Some(fresnel_average(*eta, *k)),
             _ => None,
         };
-        arena.alloc_slice_fill_with(ctx.num_points(), |i| {
-            let (au, av) = alphas[i];
-            let (eta, k) = (at(&eta, i, |c| c), at(&k, i, |c| c));
-            let table = self.grid.as_ref().map(|g| g.at(au, av));
-            let distribution = self.roughness.family.with_alphas(au, av);
-            RoughConductor::with_table(distribution, eta, k, self.tint, table, || {
-                shared_f_avg.unwrap_or_else(|| fresnel_average(eta, k))
+        self.roughness
+            .per_point(ctx, arena, |i, distribution, au, av| {
+                let (eta, k) = (at(&eta, i, |c| c), at(&k, i, |c| c));
+                let table = self.grid.as_ref().map(|g| g.at(au, av));
+                RoughConductor::with_table(distribution, eta, k, self.tint, table, || {
+                    shared_f_avg.unwrap_or_else(|| fresnel_average(eta, k))
+                })
             })
-        })
     }
 
     /// The instance hints' share of the patterns.
@@ -223,13 +230,80 @@ impl VaryingDielectric {
         ctx: &'a ShadingContext<'a>,
         arena: &'a Bump,
     ) -> &'a mut (dyn Bxdf + 'a) {
-        let alphas = self.roughness.columns(ctx, arena);
-        let lobes = arena.alloc_slice_fill_with(ctx.num_points(), |i| {
-            let (au, av) = alphas[i];
-            let distribution = self.roughness.family.with_alphas(au, av);
-            let tables = self.grid.as_ref().map(|g| g.at(au, av));
-            RoughDielectric::with_tables(distribution, self.eta, self.tint, tables)
-        });
-        arena.alloc(RoughDielectricBxdf { lobe: &lobes[..] })
+        let lobes = self
+            .roughness
+            .per_point(ctx, arena, |_, distribution, au, av| {
+                let tables = self.grid.as_ref().map(|g| g.at(au, av));
+                RoughDielectric::with_tables(distribution, self.eta, self.tint, tables)
+            });
+        arena.alloc(RoughDielectricBxdf { lobe: lobes })
+    }
+}
+
+/// `rough_plastic` with a roughness pattern (isotropic, as the constant one).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VaryingPlastic {
+    /// The roughness (`alpha_v` is `None`).
+    pub roughness: VaryingRoughness,
+    /// `n_coat / n_outside`.
+    pub eta: f32,
+    /// The coat's specular colour.
+    pub specular: Rgb,
+    /// The internal-scattering model ([`RoughPlastic::nonlinear`]).
+    pub nonlinear: bool,
+    /// The coat's tables over the roughness interval.
+    pub grid: RoughnessGrid<CoatTables>,
+    /// The base's reflectance.
+    pub diffuse: Varying<Rgb>,
+}
+
+impl VaryingPlastic {
+    /// The instance hints' share of the patterns.
+    pub fn hints(&self) -> InstanceHints {
+        let diffuse = self.diffuse.pattern().is_some_and(|g| g.reads_uv());
+        if self.roughness.reads_uv() || diffuse {
+            InstanceHints::READS_SURFACE_UV
+        } else {
+            InstanceHints::NONE
+        }
+    }
+
+    /// The parameter `name` (`alpha`, `diffuse_reflectance`).
+    pub fn param(&self, name: &str) -> Option<ParamValue<'_>> {
+        match (name, &self.diffuse) {
+            ("diffuse_reflectance", Varying::Constant(c)) => Some(ParamValue::Color(*c)),
+            ("diffuse_reflectance", Varying::Pattern(g)) => Some(ParamValue::Pattern(g)),
+            _ => self.roughness.param(name).map(ParamValue::Pattern),
+        }
+    }
+
+    /// The closure at the points of `ctx`: a coat per point with interpolated tables.
+    pub fn scatter<'a>(
+        &'a self,
+        ctx: &'a ShadingContext<'a>,
+        arena: &'a Bump,
+    ) -> &'a mut (dyn Bxdf + 'a) {
+        let coats = self
+            .roughness
+            .per_point(ctx, arena, |_, distribution, a, _| {
+                let tables = self.grid.at(a, a);
+                RoughPlastic::with_tables(
+                    distribution,
+                    self.eta,
+                    self.specular,
+                    self.nonlinear,
+                    tables,
+                )
+            });
+        match self.diffuse.column(ctx, "diffuse_reflectance", arena) {
+            Err(diffuse) => arena.alloc(RoughPlasticBxdf {
+                lobe: coats,
+                diffuse,
+            }),
+            Ok(diffuse) => arena.alloc(RoughPlasticBxdf {
+                lobe: coats,
+                diffuse,
+            }),
+        }
     }
 }

@@ -14,6 +14,7 @@ mod lexer;
 mod loop_subdiv;
 mod materials;
 mod params;
+mod roughness;
 mod shapes;
 mod spectra;
 

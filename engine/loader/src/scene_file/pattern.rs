@@ -18,9 +18,9 @@ pub enum ColourParam {
 }
 
 /// The pattern types, in the order messages list them.
-const PATTERNS: [&str; 10] = [
+const PATTERNS: [&str; 11] = [
     "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "scale",
-    "remap",
+    "remap", "power",
 ];
 
 /// Nesting deeper than this is refused (no scene needs it; it bounds the recursion).
@@ -233,6 +233,12 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                 from,
                 to: pair(t, "to", [0.0, 1.0])?,
             }
+        }
+        "power" => {
+            t.deny_unknown(&["pattern", "a", "exponent"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let exponent = t.f32_where("exponent", None, "must be > 0", |e| e > 0.0)?;
+            Node::Power { a, exponent }
         }
         other => {
             return Err(t.error(
