@@ -11,43 +11,10 @@ use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::load_scene;
 use std::path::Path;
 
-/// A unit sphere of material `body` filling a 16x16 view, under a white environment.
-fn furnace_scene(body: &str) -> String {
-    format!(
-        r#"[render]
-width = 16
-height = 16
-spp = 64
-max_depth = 200
-rr_depth = 50
-
-[camera]
-fov = 10
-from = [0, 0, 5]
-to = [0, 0, 0]
-up = [0, 1, 0]
-
-[materials.ball]
-{body}
-
-[[shapes]]
-name = "ball"
-type = "sphere"
-material = "ball"
-center = [0, 0, 0]
-radius = 1
-
-[[lights]]
-type = "environment"
-radiance = 1
-"#
-    )
-}
-
 /// The furnace image's mean per channel.
 fn furnace(body: &str) -> [f64; 3] {
     let d = common::scratch_dir("coated", "furnace");
-    let out = common::render_scene_text(&d, &furnace_scene(body));
+    let out = common::render_scene_text(&d, &common::sphere_furnace_scene(body, 64));
     assert_eq!(out.stats.counters.nan_dropped, 0, "{body}");
     let px = &out.beauty.pixels;
     let n = px.len() as f64;
@@ -203,7 +170,7 @@ fn bad_coated_parameters_are_located_errors() {
             &["materials.ball", "roughnes", "roughness"][..],
         ),
     ] {
-        let err = match common::load_scene_text(&d, &furnace_scene(body)) {
+        let err = match common::load_scene_text(&d, &common::sphere_furnace_scene(body, 64)) {
             Ok(_) => panic!("{body}: loaded"),
             Err(e) => e.to_string(),
         };

@@ -6,43 +6,10 @@
 
 mod common;
 
-/// A unit sphere of material `body` filling a 16x16 view, under a white environment.
-fn furnace_scene(body: &str, spp: u32) -> String {
-    format!(
-        r#"[render]
-width = 16
-height = 16
-spp = {spp}
-max_depth = 200
-rr_depth = 50
-
-[camera]
-fov = 10
-from = [0, 0, 5]
-to = [0, 0, 0]
-up = [0, 1, 0]
-
-[materials.ball]
-{body}
-
-[[shapes]]
-name = "ball"
-type = "sphere"
-material = "ball"
-center = [0, 0, 0]
-radius = 1
-
-[[lights]]
-type = "environment"
-radiance = 1
-"#
-    )
-}
-
 /// The image's mean, per channel averaged.
 fn mean_radiance(body: &str, spp: u32) -> f64 {
     let d = common::scratch_dir("rough", "furnace");
-    let out = common::render_scene_text(&d, &furnace_scene(body, spp));
+    let out = common::render_scene_text(&d, &common::sphere_furnace_scene(body, spp));
     assert_eq!(out.stats.counters.nan_dropped, 0, "{body}");
     let px = &out.beauty.pixels;
     px.iter().map(|c| c.average() as f64).sum::<f64>() / px.len() as f64
@@ -162,21 +129,7 @@ fn bad_rough_parameters_are_located_errors() {
             &["specular_reflectance", "[0, 1]"],
         ),
     ];
-    for (body, needles) in cases {
-        let text = furnace_scene(body, 1);
-        let err = match common::load_scene_text(&d, &text) {
-            Ok(_) => panic!("{body}: loaded"),
-            Err(e) => e.to_string(),
-        };
-        assert!(err.contains("scene.toml:"), "{body}: no file in {err}");
-        assert!(
-            err.contains("materials.ball"),
-            "{body}: no material in {err}"
-        );
-        for n in needles {
-            assert!(err.contains(n), "{body}: `{n}` missing from: {err}");
-        }
-    }
+    common::assert_located_errors(&d, &cases);
     // Defaults load: alpha 0.1, material "none", ior 1.5; and either distribution.
     for body in [
         "type = \"rough_conductor\"",
@@ -186,7 +139,7 @@ fn bad_rough_parameters_are_located_errors() {
         "type = \"rough_plastic\"\ndistribution = \"beckmann\"\ntwo_sided = true",
     ] {
         assert!(
-            common::load_scene_text(&d, &furnace_scene(body, 1)).is_ok(),
+            common::load_scene_text(&d, &common::sphere_furnace_scene(body, 1)).is_ok(),
             "{body}"
         );
     }

@@ -38,6 +38,7 @@ pub mod ray_marching;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
+pub mod roughness_grid;
 pub mod sampler;
 mod simd8;
 pub mod spectral_tracking;

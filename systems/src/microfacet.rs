@@ -206,6 +206,16 @@ impl Microfacet {
         forward!(self, d => d.alpha_v)
     }
 
+    /// The distribution of the same family with roughnesses `alpha_u`, `alpha_v` (for a
+    /// roughness given per shading point by a pattern).
+    #[inline]
+    pub fn with_alphas(&self, alpha_u: f32, alpha_v: f32) -> Microfacet {
+        match self {
+            Microfacet::Ggx(_) => Ggx::new(alpha_u, alpha_v).into(),
+            Microfacet::Beckmann(_) => Beckmann::new(alpha_u, alpha_v).into(),
+        }
+    }
+
     /// True when both roughnesses are equal.
     #[inline]
     pub fn is_isotropic(&self) -> bool {

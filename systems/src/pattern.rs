@@ -202,6 +202,14 @@ pub enum Node {
         /// The output range.
         to: [f32; 2],
     },
+    /// `max(a, 0)^exponent` per channel (pbrt-v4's `remaproughness`, `alpha =
+    /// sqrt(roughness)`, on a roughness texture is `exponent = 0.5`).
+    Power {
+        /// The input.
+        a: NodeId,
+        /// The exponent, finite and > 0.
+        exponent: f32,
+    },
 }
 
 impl Node {
@@ -212,7 +220,9 @@ impl Node {
             Node::Multiply { a, b } | Node::Add { a, b } | Node::Fraction { a, b } => {
                 (Some(a), Some(b), None)
             }
-            Node::Scale { a, .. } | Node::Remap { a, .. } => (Some(a), None, None),
+            Node::Scale { a, .. } | Node::Remap { a, .. } | Node::Power { a, .. } => {
+                (Some(a), None, None)
+            }
             _ => (None, None, None),
         };
         [a, b, c].into_iter().flatten()
@@ -266,6 +276,9 @@ impl Node {
             Node::Scale { factor, .. } if !colour_ok(factor) => {
                 bad(format!("scale: factor {factor:?} must be finite and >= 0"))
             }
+            Node::Power { exponent, .. } if !(exponent.is_finite() && exponent > 0.0) => bad(
+                format!("power: exponent must be finite and > 0, got {exponent}"),
+            ),
             Node::Remap { from, to, .. } => {
                 if !(from.iter().chain(&to).all(|v| v.is_finite())) {
                     bad(format!(
@@ -340,21 +353,22 @@ impl PatternGraph {
     /// leaves are grey (constants and the colours of `checker` and `gradient` with equal
     /// channels; `noise` and `grid` always) and its `scale` factors are grey (`mix`,
     /// `multiply` and `remap` act per channel, so they keep grey inputs grey). An `image`
-    /// counts as not grey (its texels are not inspected).
+    /// is grey when every texel is (checked once when it was read).
     pub fn is_grey(&self) -> bool {
         let grey = |c: &Rgb| c.r == c.g && c.g == c.b;
         self.nodes.iter().all(|n| match n {
             Node::Constant(c) => grey(c),
             Node::Checker { a, b, .. } | Node::Gradient { a, b, .. } => grey(a) && grey(b),
             Node::Scale { factor, .. } => grey(factor),
-            Node::Image(_) => false,
+            Node::Image(t) => t.is_grey(),
             Node::Noise(_)
             | Node::Grid { .. }
             | Node::Mix { .. }
             | Node::Multiply { .. }
             | Node::Add { .. }
             | Node::Fraction { .. }
-            | Node::Remap { .. } => true,
+            | Node::Remap { .. }
+            | Node::Power { .. } => true,
         })
     }
 
@@ -527,6 +541,11 @@ fn eval_node(
                 *o = a.map(|x| remap(x, *from, *to));
             }
         }
+        Node::Power { a, exponent } => {
+            for (o, a) in out.iter_mut().zip(col(*a)) {
+                *o = a.map(|x| power(x, *exponent));
+            }
+        }
     }
 }
 
@@ -558,6 +577,13 @@ pub(crate) fn mix(a: f32, b: f32, t: f32) -> f32 {
 pub(crate) fn remap(x: f32, from: [f32; 2], to: [f32; 2]) -> f32 {
     let t = unit((x - from[0]) / (from[1] - from[0]));
     to[0] + (to[1] - to[0]) * t
+}
+
+/// `max(x, 0)^exponent` (NaN reads as 0): increasing in `x`, so the bounds of an
+/// interval are the powers of its ends.
+#[inline]
+pub(crate) fn power(x: f32, exponent: f32) -> f32 {
+    x.max(0.0).powf(exponent)
 }
 
 /// `t` clamped to [0, 1], NaN to 0 (`f32::clamp` keeps NaN).

@@ -54,30 +54,46 @@ impl RoughConductor {
         energy_compensation: bool,
     ) -> Self {
         let distribution = distribution.into();
-        let compensation = energy_compensation
-            .then(|| {
-                let table = AlbedoTable::conductor(&distribution);
-                let loss = 1.0 - table.e_avg;
-                // Smooth enough that single scattering keeps everything: no lobe.
-                if loss <= 1e-5 {
-                    return None;
-                }
-                let f_avg = fresnel_average(eta, k) * tint;
-                let e_avg = table.e_avg;
-                let f_ms = f_avg
-                    * f_avg
-                    * e_avg
-                    * Rgb::new(
-                        1.0 / (1.0 - f_avg.r * loss),
-                        1.0 / (1.0 - f_avg.g * loss),
-                        1.0 / (1.0 - f_avg.b * loss),
-                    );
-                Some(MultipleScattering {
-                    table,
-                    scale: f_ms * (FRAC_1_PI / loss),
-                })
+        let table = energy_compensation.then(|| AlbedoTable::conductor(&distribution));
+        RoughConductor::with_table(distribution, eta, k, tint, table, || {
+            fresnel_average(eta, k)
+        })
+    }
+
+    /// [`RoughConductor::new`] with the white lobe's albedo `table` given (`None`: no
+    /// energy compensation) instead of integrated, and `F_avg` of `eta + i k` from
+    /// `fresnel_avg` (called only when the lobe is compensated): for a roughness or an index
+    /// that varies per shading point, whose tables are interpolated from a
+    /// [`crate::roughness_grid::RoughnessGrid`] and whose `F_avg` may be shared.
+    pub fn with_table(
+        distribution: Microfacet,
+        eta: Rgb,
+        k: Rgb,
+        tint: Rgb,
+        table: Option<AlbedoTable>,
+        fresnel_avg: impl FnOnce() -> Rgb,
+    ) -> Self {
+        let compensation = table.and_then(|table| {
+            let loss = 1.0 - table.e_avg;
+            // Smooth enough that single scattering keeps everything: no lobe.
+            if loss <= 1e-5 {
+                return None;
+            }
+            let f_avg = fresnel_avg() * tint;
+            let e_avg = table.e_avg;
+            let f_ms = f_avg
+                * f_avg
+                * e_avg
+                * Rgb::new(
+                    1.0 / (1.0 - f_avg.r * loss),
+                    1.0 / (1.0 - f_avg.g * loss),
+                    1.0 / (1.0 - f_avg.b * loss),
+                );
+            Some(MultipleScattering {
+                table,
+                scale: f_ms * (FRAC_1_PI / loss),
             })
-            .flatten();
+        });
         RoughConductor {
             distribution,
             eta,
@@ -171,7 +187,7 @@ impl RoughConductor {
 
 /// `F_avg = 2 int_0^1 F(mu) mu dmu` per channel, by a 64-point midpoint rule (the
 /// integrand is smooth; 1e-4 accurate).
-fn fresnel_average(eta: Rgb, k: Rgb) -> Rgb {
+pub fn fresnel_average(eta: Rgb, k: Rgb) -> Rgb {
     const N: usize = 64;
     let mut sum = Rgb::BLACK;
     for i in 0..N {

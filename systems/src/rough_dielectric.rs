@@ -42,7 +42,9 @@ pub struct RoughDielectric {
     pub tint: Rgb,
     /// When energy compensation is on: the single-scattering albedo seen from outside
     /// (`[0]`, relative index `eta`) and from inside (`[1]`, `1 / eta`).
-    compensation: Option<Box<[AlbedoTable; 2]>>,
+    /// Held inline (no heap) so that per-point lobes of a roughness pattern can live in a
+    /// worker's arena, which drops nothing.
+    compensation: Option<[AlbedoTable; 2]>,
 }
 
 impl RoughDielectric {
@@ -64,16 +66,29 @@ impl RoughDielectric {
     ) -> Self {
         let distribution = distribution.into();
         let compensation = (energy_compensation && eta != 1.0).then(|| {
-            Box::new([
+            [
                 AlbedoTable::dielectric(&distribution, eta),
                 AlbedoTable::dielectric(&distribution, 1.0 / eta),
-            ])
+            ]
         });
+        RoughDielectric::with_tables(distribution, eta, tint, compensation)
+    }
+
+    /// [`RoughDielectric::new`] with the albedo tables seen from outside and from inside
+    /// given (`None`: no energy compensation; ignored at `eta = 1`) instead of integrated:
+    /// for a roughness that varies per shading point, whose tables are interpolated from a
+    /// [`crate::roughness_grid::RoughnessGrid`].
+    pub fn with_tables(
+        distribution: Microfacet,
+        eta: f32,
+        tint: Rgb,
+        tables: Option<[AlbedoTable; 2]>,
+    ) -> Self {
         RoughDielectric {
             distribution,
             eta,
             tint,
-            compensation,
+            compensation: tables.filter(|_| eta != 1.0),
         }
     }
 

@@ -45,6 +45,7 @@
 use crate::bxdf::{fresnel_dielectric, sample_cosine_hemisphere, BxdfSample};
 use crate::energy_compensation::strata_of;
 use crate::microfacet::{positive, reflection_half_vector, refract_about, Microfacet};
+use crate::roughness_grid::Lerp;
 use risotto_components::{LobeSampled, Rgb, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -72,6 +73,48 @@ pub struct RoughPlastic {
     transmittance: [f32; TRANSMITTANCE_POINTS],
     /// `R_int`.
     internal_reflectance: f32,
+}
+
+/// A rough coat's tables at one roughness and index: `T(mu_k)` and `R_int` (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoatTables {
+    /// `T(mu_k)` at the grid cosines.
+    pub transmittance: [f32; TRANSMITTANCE_POINTS],
+    /// `R_int`.
+    pub internal_reflectance: f32,
+}
+
+impl CoatTables {
+    /// The tables of a coat with microfacet `distribution` and relative index `eta`, by
+    /// the midpoint rule over visible normals (64^2 per `T` entry, 128^2 per `R` entry).
+    pub fn new(distribution: &Microfacet, eta: f32) -> Self {
+        let mut transmittance = [0.0; TRANSMITTANCE_POINTS];
+        let mut internal = 0.0f64;
+        for (k, t) in transmittance.iter_mut().enumerate() {
+            let mu = grid_cosine(k);
+            let wo = direction(mu);
+            *t = rough_transmittance(distribution, eta, wo, 64).clamp(0.0, 1.0);
+            internal += (rough_reflectance(distribution, 1.0 / eta, wo, 128) * mu) as f64;
+        }
+        let internal_reflectance =
+            (2.0 * internal / TRANSMITTANCE_POINTS as f64).clamp(0.0, 1.0) as f32;
+        CoatTables {
+            transmittance,
+            internal_reflectance,
+        }
+    }
+}
+
+impl Lerp for CoatTables {
+    fn lerp(&self, other: &Self, t: f32) -> Self {
+        CoatTables {
+            transmittance: std::array::from_fn(|k| {
+                self.transmittance[k] * (1.0 - t) + other.transmittance[k] * t
+            }),
+            internal_reflectance: self.internal_reflectance * (1.0 - t)
+                + other.internal_reflectance * t,
+        }
+    }
 }
 
 /// The grid cosine `k`.
@@ -130,23 +173,27 @@ impl RoughPlastic {
         nonlinear: bool,
     ) -> Self {
         let distribution = distribution.into();
-        let mut transmittance = [0.0; TRANSMITTANCE_POINTS];
-        let mut internal = 0.0f64;
-        for (k, t) in transmittance.iter_mut().enumerate() {
-            let mu = grid_cosine(k);
-            let wo = direction(mu);
-            *t = rough_transmittance(&distribution, eta, wo, 64).clamp(0.0, 1.0);
-            internal += (rough_reflectance(&distribution, 1.0 / eta, wo, 128) * mu) as f64;
-        }
-        let internal_reflectance =
-            (2.0 * internal / TRANSMITTANCE_POINTS as f64).clamp(0.0, 1.0) as f32;
+        let tables = CoatTables::new(&distribution, eta);
+        RoughPlastic::with_tables(distribution, eta, specular, nonlinear, tables)
+    }
+
+    /// [`RoughPlastic::new`] with the coat's tables given instead of integrated: for a
+    /// roughness that varies per shading point, whose tables are interpolated from a
+    /// [`crate::roughness_grid::RoughnessGrid`].
+    pub fn with_tables(
+        distribution: Microfacet,
+        eta: f32,
+        specular: Rgb,
+        nonlinear: bool,
+        tables: CoatTables,
+    ) -> Self {
         RoughPlastic {
             distribution,
             eta,
             specular,
             nonlinear,
-            transmittance,
-            internal_reflectance,
+            transmittance: tables.transmittance,
+            internal_reflectance: tables.internal_reflectance,
         }
     }
 

@@ -395,3 +395,71 @@ pub fn scratch_dir(binary: &str, test: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// A unit sphere of material `body` (the lines of a `[materials.ball]` table) at the
+/// origin, seen from `z = 5` with field of view `fov` degrees on a `size x size` image,
+/// `spp` samples, paths of at most `max_depth` bounces, lit by `lights` (`[[lights]]`
+/// tables).
+pub fn sphere_scene(
+    body: &str,
+    size: u32,
+    fov: f32,
+    spp: u32,
+    max_depth: u32,
+    lights: &str,
+) -> String {
+    format!(
+        r#"[render]
+width = {size}
+height = {size}
+spp = {spp}
+max_depth = {max_depth}
+rr_depth = 50
+
+[camera]
+fov = {fov}
+from = [0, 0, 5]
+to = [0, 0, 0]
+up = [0, 1, 0]
+
+[materials.ball]
+{body}
+
+[[shapes]]
+name = "ball"
+type = "sphere"
+material = "ball"
+center = [0, 0, 0]
+radius = 1
+
+{lights}
+"#
+    )
+}
+
+/// [`sphere_scene`] filling a 16x16 view under a white environment of radiance 1, paths up
+/// to 200 bounces: a white furnace, whose image mean is the material's energy balance.
+pub fn sphere_furnace_scene(body: &str, spp: u32) -> String {
+    let sky = "[[lights]]\ntype = \"environment\"\nradiance = 1";
+    sphere_scene(body, 16, 10.0, spp, 200, sky)
+}
+
+/// Each material `body` of `cases` fails to load in a [`sphere_furnace_scene`] (under
+/// `dir`) with an error naming the file, the material `materials.ball` and every one of
+/// its needles.
+pub fn assert_located_errors(dir: &std::path::Path, cases: &[(&str, &[&str])]) {
+    for (body, needles) in cases {
+        let err = match load_scene_text(dir, &sphere_furnace_scene(body, 1)) {
+            Ok(_) => panic!("{body}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(err.contains("scene.toml:"), "{body}: no file in {err}");
+        assert!(
+            err.contains("materials.ball"),
+            "{body}: no material in {err}"
+        );
+        for n in needles.iter() {
+            assert!(err.contains(n), "{body}: `{n}` missing from: {err}");
+        }
+    }
+}

@@ -60,8 +60,9 @@ pub enum Coat {
         /// `n_inside / n_outside`.
         eta: f32,
     },
-    /// A rough interface (no energy compensation: pbrt-v4 has none).
-    Rough(RoughDielectric),
+    /// A rough interface (no energy compensation: pbrt-v4 has none). Boxed: the interface
+    /// holds its (unused here) compensation tables inline, 260 bytes.
+    Rough(Box<RoughDielectric>),
 }
 
 impl Coat {
@@ -70,7 +71,7 @@ impl Coat {
         if eta == 1.0 || ggx.alpha_u.max(ggx.alpha_v) < SMOOTH_ALPHA {
             Coat::Smooth { eta }
         } else {
-            Coat::Rough(RoughDielectric::new(ggx, eta, Rgb::WHITE, false))
+            Coat::Rough(Box::new(RoughDielectric::new(ggx, eta, Rgb::WHITE, false)))
         }
     }
 

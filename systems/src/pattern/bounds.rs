@@ -7,7 +7,9 @@
 //! it evaluated anywhere inside; where it interpolates (grid, mix), the bound is widened by
 //! a few ulps of its magnitude, within a hull the node clamps its values to.
 
-use super::{cell_parity, gradient_at, mix, remap, Axis, GridBorder, Node, PatternGraph, Space};
+use super::{
+    cell_parity, gradient_at, mix, power, remap, Axis, GridBorder, Node, PatternGraph, Space,
+};
 use crate::grid::DensityGrid;
 use glam::Vec3;
 use risotto_components::Rgb;
@@ -215,6 +217,13 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
         Node::Scale { a, factor } => {
             let (l, h) = at(*a);
             (l * *factor, h * *factor)
+        }
+        Node::Power { a, exponent } => {
+            let (l, h) = at(*a);
+            (
+                l.map(|x| power(x, *exponent)),
+                h.map(|x| power(x, *exponent)),
+            )
         }
         Node::Remap { a, from, to } => {
             let (l, h) = at(*a);

@@ -126,7 +126,50 @@ fn test_graphs() -> Vec<(&'static str, PatternGraph)> {
                 },
             ]),
         ),
+        (
+            "power(noise, 0.5) (negative inputs read as 0)",
+            graph(vec![
+                Node::Noise(fbm(2.1, 3)),
+                Node::Power {
+                    a: 0,
+                    exponent: 0.5,
+                },
+            ]),
+        ),
     ]
+}
+
+#[test]
+fn power_raises_each_channel_and_clamps_negatives_to_zero() {
+    let g = graph(vec![
+        Node::Gradient {
+            axis: Axis::X,
+            from: 0.0,
+            to: 1.0,
+            a: Rgb::splat(-0.5),
+            b: Rgb::new(0.25, 0.64, 1.0),
+        },
+        Node::Power {
+            a: 0,
+            exponent: 0.5,
+        },
+    ]);
+    assert_eq!(one(&g, Vec3::X, 0.0, 0.0), Rgb::new(0.5, 0.8, 1.0));
+    assert_eq!(one(&g, Vec3::ZERO, 0.0, 0.0), Rgb::BLACK);
+    let (lo, hi) = bounds(&g, Vec3::NEG_INFINITY, Vec3::INFINITY);
+    assert_eq!(lo, Rgb::BLACK);
+    assert!(
+        (hi - Rgb::new(0.5, 0.8, 1.0)).max_channel().abs() < 1e-3,
+        "{hi:?}"
+    );
+    assert!(PatternGraph::new(vec![
+        Node::Constant(Rgb::WHITE),
+        Node::Power {
+            a: 0,
+            exponent: 0.0
+        },
+    ])
+    .is_err());
 }
 
 #[test]
@@ -170,7 +213,7 @@ fn evaluated_values_lie_within_the_bounds_of_random_boxes() {
         }
         assert_eq!(violations, 0, "{name}: values outside their bounds");
     }
-    assert_eq!(checked, 16 * 200 * 64);
+    assert_eq!(checked, 17 * 200 * 64);
 }
 
 #[test]

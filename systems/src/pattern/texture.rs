@@ -17,6 +17,9 @@ pub struct Texture {
     texels: Vec<Rgb>,
     min: Rgb,
     max: Rgb,
+    /// Every texel has equal channels (a grey PNG, or a mask): the texture can be one
+    /// number per point (a roughness).
+    grey: bool,
 }
 
 impl Texture {
@@ -46,13 +49,20 @@ impl Texture {
             })
         };
         let (min, max) = (fold(f32::min, f32::INFINITY), fold(f32::max, 0.0));
+        let grey = texels.iter().all(|t| t.r == t.g && t.g == t.b);
         Ok(Texture {
             width,
             height,
             texels,
             min,
             max,
+            grey,
         })
+    }
+
+    /// True when every texel has equal channels (so does every lookup).
+    pub fn is_grey(&self) -> bool {
+        self.grey
     }
 
     /// `(width, height)`.

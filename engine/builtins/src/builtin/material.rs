@@ -7,6 +7,7 @@ use super::coated::{CoatedBase, CoatedBxdf};
 use super::interiors::*;
 use super::plastic::PlasticBxdf;
 use super::rough::*;
+use super::rough_patterns::{VaryingConductor, VaryingDielectric, VaryingPlastic};
 use super::thin_dielectric::ThinDielectricBxdf;
 use super::two_sided::{facing_normals, TwoSidedBxdf};
 use crate::phase::{phase_bxdf, PhaseBxdf};
@@ -73,6 +74,11 @@ pub enum Surface {
     RoughConductor(RoughConductor),
     /// Rough dielectric, GGX or Beckmann; its `eta` is the material's index (against vacuum).
     RoughDielectric(RoughDielectric),
+    /// Rough conductor whose roughness or complex index is a pattern
+    /// ([`super::rough_patterns`]); parameters `alpha` / `alpha_u` / `alpha_v`, `eta`, `k`.
+    RoughConductorPattern(Box<VaryingConductor>),
+    /// Rough dielectric whose roughness is a pattern ([`super::rough_patterns`]).
+    RoughDielectricPattern(Box<VaryingDielectric>),
     /// Index-matched boundary: rays pass unchanged.
     Interface,
     /// Smooth plastic: a Lambertian base under a smooth dielectric coat
@@ -110,6 +116,9 @@ pub enum Surface {
         /// The base-reflectance graph.
         diffuse: Arc<PatternGraph>,
     },
+    /// Rough plastic whose roughness is a pattern ([`super::rough_patterns`]); its base
+    /// reflectance a colour or a pattern.
+    RoughPlasticVarying(Box<VaryingPlastic>),
     /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no interior, no
     /// refraction offset, shadow rays blocked.
     ThinDielectric {
@@ -161,6 +170,9 @@ impl Surface {
                 _ => InstanceHints::NONE,
             },
             Surface::RoughDielectric(_) => InstanceHints::TRANSMITS,
+            Surface::RoughConductorPattern(c) => c.hints(),
+            Surface::RoughPlasticVarying(p) => p.hints(),
+            Surface::RoughDielectricPattern(d) => d.hints(),
             Surface::DiffusePattern { reflectance } | Surface::MirrorPattern { reflectance }
                 if reflectance.reads_uv() =>
             {
@@ -223,6 +235,9 @@ impl Surface {
             }),
             Surface::RoughConductor(ref lobe) => arena.alloc(RoughConductorBxdf { lobe }),
             Surface::RoughDielectric(ref lobe) => arena.alloc(RoughDielectricBxdf { lobe }),
+            Surface::RoughConductorPattern(ref c) => c.scatter(ctx, arena),
+            Surface::RoughPlasticVarying(ref p) => p.scatter(ctx, arena),
+            Surface::RoughDielectricPattern(ref d) => d.scatter(ctx, arena),
             Surface::Interface => arena.alloc(NullBxdf),
             Surface::Plastic { coat, diffuse } => arena.alloc(PlasticBxdf { coat, diffuse }),
             Surface::PlasticPattern { coat, ref diffuse } => arena.alloc(PlasticBxdf {
@@ -291,6 +306,14 @@ impl Surface {
             (Surface::RoughConductor(lobe), "specular_reflectance") => {
                 Some(ParamValue::Color(lobe.tint))
             }
+            (Surface::RoughConductorPattern(c), "specular_reflectance") => {
+                Some(ParamValue::Color(c.tint))
+            }
+            (Surface::RoughConductorPattern(c), _) => c.param(name),
+            (Surface::RoughPlasticVarying(p), _) => p.param(name),
+            (Surface::RoughDielectricPattern(d), "ior") => Some(ParamValue::Float(d.eta)),
+            (Surface::RoughDielectricPattern(d), "tint") => Some(ParamValue::Color(d.tint)),
+            (Surface::RoughDielectricPattern(d), _) => d.param(name),
             (Surface::Coated(c), "reflectance") => match &c.reflectance {
                 CoatedReflectance::Color(r) => Some(ParamValue::Color(*r)),
                 CoatedReflectance::Pattern(g) => Some(ParamValue::Pattern(g)),
@@ -400,6 +423,7 @@ impl BxdfFactory for BuiltinMaterial {
         match self.surface {
             Surface::Dielectric { ior, .. } | Surface::DielectricPattern { ior, .. } => ior,
             Surface::RoughDielectric(ref lobe) => lobe.eta,
+            Surface::RoughDielectricPattern(ref d) => d.eta,
             _ => 1.0,
         }
     }
@@ -422,7 +446,7 @@ impl BxdfFactory for BuiltinMaterial {
 /// The column of pattern parameter `name` (the material's `graph`) over `ctx`'s points:
 /// through the context's cache, or, for a context without one (a plug-in's own), evaluated
 /// here.
-fn pattern_column<'a>(
+pub(super) fn pattern_column<'a>(
     ctx: &ShadingContext<'a>,
     name: &str,
     graph: &PatternGraph,

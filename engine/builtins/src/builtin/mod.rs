@@ -11,7 +11,8 @@
 //! Any material may be wrapped in an [`OpacityMask`] ([`mask`]): opacity.
 //!
 //! Files: [`bxdfs`] (the first closures), [`coated`] (the layered closure), [`rough`] (the
-//! microfacet closures: rough conductor, dielectric and plastic), [`plastic`],
+//! microfacet closures: rough conductor, dielectric and plastic), [`rough_patterns`] (the
+//! same with a roughness or complex-index pattern), [`plastic`],
 //! [`thin_dielectric`] and [`two_sided`] (one closure each), [`interiors`] (which volume
 //! integrator a material's inside gets, and the `null` and `beer` ones), [`mask`] (opacity)
 //! and [`material`] (the factory).
@@ -25,6 +26,7 @@ pub mod material;
 pub mod mix;
 pub mod plastic;
 pub mod rough;
+pub mod rough_patterns;
 pub mod thin_dielectric;
 pub mod two_sided;
 
@@ -36,5 +38,6 @@ pub use material::*;
 pub use mix::{MixAmount, MixBxdf, MixMaterial};
 pub use plastic::PlasticBxdf;
 pub use rough::*;
+pub use rough_patterns::*;
 pub use thin_dielectric::ThinDielectricBxdf;
 pub use two_sided::TwoSidedBxdf;

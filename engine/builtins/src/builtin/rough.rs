@@ -67,15 +67,48 @@ pub(super) fn evaluate(
     }
 }
 
-/// The rough conductor closure (one-sided, as Mitsuba 3's `roughconductor`: black seen
-/// from behind the shading normal).
-#[derive(Clone, Copy, Debug)]
-pub struct RoughConductorBxdf<'a> {
-    /// The lobe's parameters (the material's).
-    pub lobe: &'a RoughConductor,
+/// The lobes of a context's points: one shared by every point (`&T`, a material whose
+/// parameters are numbers: no per-point cost) or one per point (`&[T]`, built from
+/// patterns by [`super::rough_patterns`]), as [`super::bxdfs::Reflectance`] is for colours.
+pub trait Lobes<T>: Copy {
+    /// The lobe of point `i` of the context.
+    fn at(&self, i: usize) -> &T;
+    /// `out[i] = f(lobe of point i)` for every point (`f` called once when shared).
+    fn fill(&self, out: &mut [Rgb], f: impl Fn(&T) -> Rgb);
 }
 
-impl Bxdf for RoughConductorBxdf<'_> {
+impl<T> Lobes<T> for &T {
+    #[inline]
+    fn at(&self, _i: usize) -> &T {
+        self
+    }
+    fn fill(&self, out: &mut [Rgb], f: impl Fn(&T) -> Rgb) {
+        out.fill(f(self));
+    }
+}
+
+impl<T> Lobes<T> for &[T] {
+    #[inline]
+    fn at(&self, i: usize) -> &T {
+        &self[i]
+    }
+    fn fill(&self, out: &mut [Rgb], f: impl Fn(&T) -> Rgb) {
+        for (o, lobe) in out.iter_mut().zip(self.iter()) {
+            *o = f(lobe);
+        }
+    }
+}
+
+/// The rough conductor closure (one-sided, as Mitsuba 3's `roughconductor`: black seen
+/// from behind the shading normal), over one lobe (`L = &RoughConductor`) or one per
+/// point (`L = &[RoughConductor]`).
+#[derive(Clone, Copy, Debug)]
+pub struct RoughConductorBxdf<L> {
+    /// The lobe's parameters (the material's, or each point's).
+    pub lobe: L,
+}
+
+impl<L: Lobes<RoughConductor>> Bxdf for RoughConductorBxdf<L> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::DIFFUSE
     }
@@ -85,8 +118,8 @@ impl Bxdf for RoughConductorBxdf<'_> {
         samplers: &mut [PathSampler],
         out: &mut BxdfSamples,
     ) {
-        generate(ctx, samplers, out, |_, wo, u, u_lobe| {
-            self.lobe.sample(wo, u, u_lobe)
+        generate(ctx, samplers, out, |i, wo, u, u_lobe| {
+            self.lobe.at(i).sample(wo, u, u_lobe)
         });
     }
     fn evaluate_samples(
@@ -96,42 +129,51 @@ impl Bxdf for RoughConductorBxdf<'_> {
         value: &mut [Rgb],
         pdf: &mut [f32],
     ) {
-        evaluate(ctx, wi, value, pdf, |_, wo, wi| self.lobe.eval(wo, wi));
+        evaluate(ctx, wi, value, pdf, |i, wo, wi| {
+            self.lobe.at(i).eval(wo, wi)
+        });
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
-        out.fill(self.lobe.normal_reflectance());
+        self.lobe.fill(out, RoughConductor::normal_reflectance);
     }
 }
 
-/// The rough dielectric closure. `eta` is the material's index over the index outside the
-/// shape (the context's `ior_outside`), computed per point, as the smooth dielectric's.
+/// The rough dielectric closure, over one lobe (`L = &RoughDielectric`) or one per point
+/// (`L = &[RoughDielectric]`). Each lobe's `eta` is the material's index over 1; the
+/// relative index over the index outside the shape (the context's `ior_outside`) is
+/// applied per point, as the smooth dielectric's.
 #[derive(Clone, Copy, Debug)]
-pub struct RoughDielectricBxdf<'a> {
+pub struct RoughDielectricBxdf<L> {
     /// The lobe's parameters, with the material's index over 1 (vacuum outside).
-    pub lobe: &'a RoughDielectric,
+    pub lobe: L,
 }
 
-impl RoughDielectricBxdf<'_> {
-    /// The lobe at point `i`: the material's own when the outside is vacuum (the common
-    /// case, with its compensation tables), else one for the relative index there.
+impl<L: Lobes<RoughDielectric>> RoughDielectricBxdf<L> {
+    /// The lobe at point `i`: its own when the outside is vacuum (the common case, with
+    /// its compensation tables), else one for the relative index there (kept in `scratch`
+    /// while neighbouring points share index and roughness).
     fn at<'b>(
         &'b self,
+        i: usize,
         ior_outside: f32,
         scratch: &'b mut Option<RoughDielectric>,
     ) -> &'b RoughDielectric {
+        let lobe = self.lobe.at(i);
         if ior_outside == 1.0 {
-            return self.lobe;
+            return lobe;
         }
-        let eta = self.lobe.eta / ior_outside.max(1e-6);
-        let fresh = scratch.as_ref().is_none_or(|d| d.eta != eta);
+        let eta = lobe.eta / ior_outside.max(1e-6);
+        let fresh = scratch
+            .as_ref()
+            .is_none_or(|d| d.eta != eta || d.distribution != lobe.distribution);
         if fresh {
-            *scratch = Some(self.lobe.with_eta(eta));
+            *scratch = Some(lobe.with_eta(eta));
         }
-        scratch.as_ref().unwrap_or(self.lobe)
+        scratch.as_ref().unwrap_or(lobe)
     }
 }
 
-impl Bxdf for RoughDielectricBxdf<'_> {
+impl<L: Lobes<RoughDielectric>> Bxdf for RoughDielectricBxdf<L> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::TRANSMIT | LobeSampled::DIFFUSE
     }
@@ -144,7 +186,7 @@ impl Bxdf for RoughDielectricBxdf<'_> {
         let ior_out = ctx.ior_outside();
         let mut scratch = None;
         generate(ctx, samplers, out, |i, wo, u, u_lobe| {
-            self.at(ior_out[i], &mut scratch).sample(wo, u, u_lobe)
+            self.at(i, ior_out[i], &mut scratch).sample(wo, u, u_lobe)
         });
     }
     fn evaluate_samples(
@@ -157,7 +199,7 @@ impl Bxdf for RoughDielectricBxdf<'_> {
         let ior_out = ctx.ior_outside();
         let mut scratch = None;
         evaluate(ctx, wi, value, pdf, |i, wo, wi| {
-            self.at(ior_out[i], &mut scratch).eval(wo, wi)
+            self.at(i, ior_out[i], &mut scratch).eval(wo, wi)
         });
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {
@@ -167,16 +209,17 @@ impl Bxdf for RoughDielectricBxdf<'_> {
 
 /// The rough plastic closure (one-sided, as Mitsuba 3's `roughplastic`). The base
 /// reflectance is one colour (`R = Rgb`) or one per point (`R = &[Rgb]`, a pattern's
-/// column), as [`super::PlasticBxdf`]'s.
+/// column), as [`super::PlasticBxdf`]'s; the coat is the material's (`L = &RoughPlastic`)
+/// or one per point (`L = &[RoughPlastic]`, a roughness pattern).
 #[derive(Clone, Copy, Debug)]
-pub struct RoughPlasticBxdf<'a, R = Rgb> {
-    /// The coat (the material's, with its tables).
-    pub lobe: &'a RoughPlastic,
+pub struct RoughPlasticBxdf<L, R = Rgb> {
+    /// The coat (with its tables).
+    pub lobe: L,
     /// The base's (diffuse) reflectance, in [0, 1].
     pub diffuse: R,
 }
 
-impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
+impl<L: Lobes<RoughPlastic>, R: Reflectance> Bxdf for RoughPlasticBxdf<L, R> {
     fn lobes(&self) -> LobeSampled {
         LobeSampled::REFLECT | LobeSampled::DIFFUSE
     }
@@ -187,7 +230,7 @@ impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
         out: &mut BxdfSamples,
     ) {
         generate(ctx, samplers, out, |i, wo, u, u_lobe| {
-            self.lobe.sample(self.diffuse.at(i), wo, u, u_lobe)
+            self.lobe.at(i).sample(self.diffuse.at(i), wo, u, u_lobe)
         });
     }
     fn evaluate_samples(
@@ -198,7 +241,7 @@ impl<R: Reflectance> Bxdf for RoughPlasticBxdf<'_, R> {
         pdf: &mut [f32],
     ) {
         evaluate(ctx, wi, value, pdf, |i, wo, wi| {
-            self.lobe.eval(self.diffuse.at(i), wo, wi)
+            self.lobe.at(i).eval(self.diffuse.at(i), wo, wi)
         });
     }
     fn albedo(&self, _ctx: &ShadingContext<'_>, out: &mut [Rgb]) {

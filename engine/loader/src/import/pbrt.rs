@@ -15,6 +15,7 @@ mod loop_subdiv;
 mod materials;
 mod media;
 mod params;
+mod roughness;
 mod shapes;
 mod spectra;
 

@@ -22,9 +22,9 @@ pub enum ColourParam {
 }
 
 /// The pattern types, in the order messages list them.
-const PATTERNS: [&str; 12] = [
+const PATTERNS: [&str; 13] = [
     "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "add",
-    "fraction", "scale", "remap",
+    "fraction", "scale", "remap", "power",
 ];
 
 /// Nesting deeper than this is refused (no scene needs it; it bounds the recursion).
@@ -249,6 +249,12 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                 from,
                 to: pair(t, "to", [0.0, 1.0])?,
             }
+        }
+        "power" => {
+            t.deny_unknown(&["pattern", "a", "exponent"])?;
+            let a = input(t, "a", None, nodes, depth)?;
+            let exponent = t.f32_where("exponent", None, "must be > 0", |e| e > 0.0)?;
+            Node::Power { a, exponent }
         }
         other => {
             return Err(t.error(

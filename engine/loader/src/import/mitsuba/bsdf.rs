@@ -348,9 +348,13 @@ impl Converter<'_> {
                 ))
             }
         }
-        let (a, u, v) = (p.float("alpha")?, p.float("alpha_u")?, p.float("alpha_v")?);
+        let (a, u, v) = (
+            self.alpha(p, "alpha")?,
+            self.alpha(p, "alpha_u")?,
+            self.alpha(p, "alpha_v")?,
+        );
         match (a, u, v) {
-            (a, None, None) => e.set("alpha", a.unwrap_or(0.1)),
+            (a, None, None) => e.set("alpha", a.unwrap_or(toml::Value::Float(0.1))),
             (None, Some(u), Some(v)) => {
                 e.set("alpha_u", u);
                 e.set("alpha_v", v);
@@ -358,6 +362,16 @@ impl Converter<'_> {
             _ => return Err(p.error(Some("alpha"), "give alpha, or both alpha_u and alpha_v")),
         }
         Ok(())
+    }
+
+    /// A roughness as TOML: a number, or the pattern table of a `<texture>` (Mitsuba's
+    /// float textures: a grey `bitmap`, a `checkerboard`), which risotto's loader checks
+    /// is grey and within `(0, 1]`.
+    fn alpha(&self, p: &Props<'_>, name: &str) -> Result<Option<toml::Value>, SceneError> {
+        if let Ok(Some(Colour::Texture(t))) = p.colour(name, SpectrumUse::Reflectance) {
+            return Ok(Some(self.texture(&t)?));
+        }
+        Ok(p.float(name)?.map(toml::Value::Float))
     }
 
     /// A colour parameter as TOML: an RGB array or a pattern table.

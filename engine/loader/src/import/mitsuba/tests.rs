@@ -547,3 +547,24 @@ fn sensor_and_exterior_media_become_within_checks() {
         "{e}"
     );
 }
+
+#[test]
+fn roughness_textures_become_roughness_patterns() {
+    let s = convert(&scene(
+        r#"<shape type="sphere"><bsdf type="roughconductor"><texture type="checkerboard" name="alpha"><float name="color0" value="0.1"/><float name="color1" value="0.4"/></texture></bsdf></shape>
+    <shape type="sphere"><bsdf type="roughdielectric"><float name="alpha_u" value="0.3"/><texture type="bitmap" name="alpha_v"><string name="filename" value="rough.png"/></texture></bsdf></shape>
+    <shape type="sphere"><bsdf type="roughplastic"><texture type="checkerboard" name="alpha"/></bsdf></shape>"#,
+    ))
+    .unwrap()
+    .scene;
+    let t = |i: usize| &s.materials[i].1.table;
+    let checker = t(0)["alpha"].as_table().unwrap();
+    assert_eq!(checker["pattern"].as_str(), Some("checker"));
+    assert_eq!(floats(&checker["a"]), [0.1; 3]);
+    assert_eq!(floats(&checker["b"]), [0.4; 3]);
+    assert_eq!(t(1)["alpha_u"].as_float(), Some(0.3));
+    let image = t(1)["alpha_v"].as_table().unwrap();
+    assert_eq!(image["pattern"].as_str(), Some("image"));
+    assert!(image["path"].as_str().unwrap().ends_with("rough.png"));
+    assert_eq!(t(2)["alpha"]["pattern"].as_str(), Some("checker"));
+}

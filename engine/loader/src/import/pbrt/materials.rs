@@ -69,8 +69,7 @@ impl Converter<'_> {
             }
             "conductor" => {
                 t.set("type", "rough_conductor");
-                let (alpha_u, alpha_v) = self.roughness(p, "")?;
-                set_alpha(&mut t, alpha_u, alpha_v);
+                self.set_roughness(p, &mut t)?;
                 let eta = p.colour(lx, "eta", false, &|q| self.spectrum_colour(p, q))?;
                 let k = p.colour(lx, "k", false, &|q| self.spectrum_colour(p, q))?;
                 let refl = self.colour_value(p, "reflectance", false)?;
@@ -137,14 +136,14 @@ impl Converter<'_> {
                 if ty == "thindielectric" {
                     t.set("type", "thin_dielectric");
                 } else {
-                    let (au, av) = self.roughness(p, "")?;
                     // pbrt-v4 treats alpha below 1e-3 as perfectly smooth
-                    // (`TrowbridgeReitzDistribution::EffectivelySmooth`).
-                    if au.max(av) < 1e-3 {
+                    // (`TrowbridgeReitzDistribution::EffectivelySmooth`); a roughness
+                    // texture keeps the rough one.
+                    if self.effectively_smooth(p)? {
                         t.set("type", "dielectric");
                     } else {
                         t.set("type", "rough_dielectric");
-                        set_alpha(&mut t, au, av);
+                        self.set_roughness(p, &mut t)?;
                         t.set("energy_compensation", false);
                     }
                 }
@@ -260,35 +259,6 @@ impl Converter<'_> {
             origin: self.origin(at),
             transmits,
         })
-    }
-
-    /// `roughness` or `uroughness` / `vroughness` (prefixed), remapped to GGX alphas as
-    /// pbrt-v4 does when `remaproughness` is true: `alpha = sqrt(roughness)`
-    /// (`TrowbridgeReitzDistribution::RoughnessToAlpha`).
-    fn roughness(&self, p: &Params, prefix: &str) -> Result<(f64, f64), SceneError> {
-        let lx = &self.lx;
-        let nonneg =
-            |k: &str, d: f64| p.float_where(lx, &format!("{prefix}{k}"), d, ">= 0", |r| r >= 0.0);
-        let r = nonneg("roughness", 0.0)?;
-        let u = nonneg("uroughness", r)?;
-        let v = nonneg("vroughness", r)?;
-        let remap = p.bool(lx, "remaproughness", true)?;
-        let (au, av) = if remap { (u.sqrt(), v.sqrt()) } else { (u, v) };
-        for (a, k) in [(au, "uroughness"), (av, "vroughness")] {
-            if a > 1.0 {
-                let q = p
-                    .list
-                    .iter()
-                    .find(|q| q.name.ends_with(k) || q.name.ends_with("roughness"))
-                    .expect("given");
-                return Err(p.error(
-                    lx,
-                    q,
-                    format!("gives the GGX alpha {a}, above risotto's limit of 1"),
-                ));
-            }
-        }
-        Ok((au, av))
     }
 
     /// The TOML name of named material `def` as a component of a mix (written on first use,
@@ -647,17 +617,5 @@ impl Converter<'_> {
         }
         self.scene.lights.push(e);
         Ok(())
-    }
-}
-
-/// Sets `alpha` (isotropic) or `alpha_u` / `alpha_v`; alphas below 1e-4 act as 1e-4 in
-/// risotto (a mirror in all but name), as pbrt's smooth conductor.
-fn set_alpha(t: &mut Entity, u: f64, v: f64) {
-    let (u, v) = (u.max(1e-4), v.max(1e-4));
-    if u == v {
-        t.set("alpha", u);
-    } else {
-        t.set("alpha_u", u);
-        t.set("alpha_v", v);
     }
 }

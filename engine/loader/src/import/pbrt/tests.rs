@@ -577,3 +577,30 @@ fn shape_alpha_becomes_the_materials_opacity() {
         "{e}"
     );
 }
+
+#[test]
+fn roughness_textures_become_alpha_patterns() {
+    let s = convert(
+        "rough_textures",
+        &format!(
+            "{HEAD}WorldBegin\nTexture \"rough\" \"float\" \"checkerboard\" \
+             \"float tex1\" 0.04 \"float tex2\" 0.25\n\
+             Material \"conductor\" \"texture roughness\" \"rough\"\nShape \"sphere\"\n\
+             Material \"dielectric\" \"texture uroughness\" \"rough\" \"float vroughness\" 0.09 \
+             \"bool remaproughness\" false\nShape \"sphere\"\n"
+        ),
+    );
+    // remaproughness (the default): alpha = sqrt(roughness), clamped to [1e-4, 1].
+    let alpha = s.materials[0].1.table["alpha"].as_table().unwrap();
+    assert_eq!(alpha["pattern"].as_str(), Some("remap"));
+    assert_eq!(floats(&alpha["to"]), [1e-4, 1.0]);
+    let sqrt = alpha["a"].as_table().unwrap();
+    assert_eq!(sqrt["pattern"].as_str(), Some("power"));
+    assert_eq!(sqrt["exponent"].as_float(), Some(0.5));
+    assert_eq!(sqrt["a"]["pattern"].as_str(), Some("checker"));
+    // No remap: the texture as it is; a number beside it stays a number.
+    let glass = &s.materials[1].1.table;
+    assert_eq!(glass["type"].as_str(), Some("rough_dielectric"));
+    assert_eq!(glass["alpha_u"]["a"]["pattern"].as_str(), Some("checker"));
+    assert_eq!(glass["alpha_v"].as_float(), Some(0.09));
+}
