@@ -208,7 +208,8 @@ impl MaterialRegistry {
         let factory = match self.constructors.get(&m.type_name) {
             Some(ctor) => ctor(&m.params)?,
             None if m.type_name == crate::mix_params::MIX => {
-                crate::mix_params::mix(m, materials, self, depth)?
+                let build = |c: &MaterialDesc, d: usize| self.build(c, materials, d);
+                crate::mix_params::mix(m, materials, &build, depth)?
             }
             // Located at the `type` value: the registry is only known here, after parsing.
             None => {

@@ -3,7 +3,6 @@
 //! constructor): its components are other materials of the file, named by `a` and `b`, each
 //! built again through the registry for the mix (so they may also be used on their own).
 
-use crate::load::MaterialRegistry;
 use crate::scene_file::{ColourParam, MaterialDesc};
 use risotto_builtins::builtin::{MixAmount, MixMaterial};
 use risotto_components::Rgb;
@@ -19,11 +18,16 @@ pub const MIX: &str = "mix";
 /// ([`risotto_engine::plugin::MAX_COMPONENTS`]).
 const MAX_DEPTH: usize = 3;
 
-/// The factory of mix material `m` of `materials` (`depth`: how many mixes contain it).
+/// A material's factory builder: the registry's `build` (material, depth).
+pub(crate) type Build<'a> =
+    &'a dyn Fn(&MaterialDesc, usize) -> Result<Box<dyn BxdfFactory>, SceneError>;
+
+/// The factory of mix material `m` of `materials` (`depth`: how many mixes contain it),
+/// its components built by `build`.
 pub(crate) fn mix(
     m: &MaterialDesc,
     materials: &[MaterialDesc],
-    registry: &MaterialRegistry,
+    build: Build<'_>,
     depth: usize,
 ) -> Result<Box<dyn BxdfFactory>, SceneError> {
     let p = &m.params;
@@ -45,7 +49,7 @@ pub(crate) fn mix(
         if c.name == m.name {
             return Err(p.error(Some(key), "a mix cannot contain itself"));
         }
-        registry.build(c, materials, depth + 1)
+        build(c, depth + 1)
     };
     let (a, b) = (component("a")?, component("b")?);
     let amount = match p.colour_or_pattern("amount", Rgb::splat(0.5), [0.0, 1.0])? {
