@@ -16,8 +16,41 @@ pub struct Vertices<'a> {
     /// True for surface points (rays leave off the surface, to the side they go to); false
     /// for points inside a volume (rays start at the point).
     pub on_surface: bool,
+    /// Whether the points' `terminator_lift` column may be non-zero (the scene has meshes
+    /// that ask for the shadow-terminator offset, `crate::terminator`): rays leaving a
+    /// surface point to the viewer's side (reflected and shadow rays) then start from
+    /// `p + terminator_lift`. When false the column is not read.
+    pub terminator_lift: bool,
     /// The rays that arrived at the points (`points.ray_id` indexes it).
     pub incoming: &'a Rays,
+}
+
+impl Vertices<'_> {
+    /// The point rays leave point `i` (a row of `points`) from in direction `wi`, before the
+    /// surface offset: `p + terminator_lift` when [`Self::terminator_lift`] is set and the
+    /// ray goes to the viewer's side by the geometric or the shading normal (a reflected or
+    /// shadow ray; the shading stage keeps no direction the shading normal calls
+    /// transmission and the geometric one reflection), else `p` (transmitted rays leave
+    /// from the flat triangle they cross).
+    #[inline(always)]
+    pub fn leaving_point(&self, i: usize, wi: glam::Vec3) -> glam::Vec3 {
+        let pts = self.points;
+        let p = pts.p[i];
+        if self.terminator_lift && self.lifted(i, wi) {
+            p + pts.terminator_lift[i]
+        } else {
+            p
+        }
+    }
+
+    /// Whether a ray leaving point `i` in direction `wi` goes to the viewer's side by the
+    /// geometric or the shading normal (where [`Self::leaving_point`] lifts it).
+    #[inline(always)]
+    pub fn lifted(&self, i: usize, wi: glam::Vec3) -> bool {
+        let pts = self.points;
+        let (ng, nn, vn) = (pts.ng[i], pts.nn[i], pts.vn[i]);
+        wi.dot(ng) * vn.dot(ng) > 0.0 || wi.dot(nn) * vn.dot(nn) > 0.0
+    }
 }
 
 /// Path-length limits (Mitsuba's `max_depth` convention: a path of `k` segments has `k - 1`
@@ -114,12 +147,14 @@ pub fn continue_paths(
     out: &mut RayColumns<'_>,
     start: usize,
 ) -> Continuations {
+    let lift = from.terminator_lift && from.on_surface;
     let Vertices {
         points: pts,
         range,
         on_surface,
         incoming,
-    } = from;
+        ..
+    } = from.clone();
     let ray_id = &pts.ray_id[range.clone()];
     let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
@@ -228,7 +263,14 @@ pub fn continue_paths(
         o_passes[j] = in_passes[r];
         o_dimension[j] = in_dimension[r] + limits.dims_per_vertex;
         let (p, wi) = (p[k], s_wi[k]);
-        o_origin[j] = if on_surface {
+        o_origin[j] = if lift {
+            offset_origin(
+                from.leaving_point(range.start + k, wi),
+                ng[k],
+                p_offset[k],
+                wi,
+            )
+        } else if on_surface {
             offset_origin(p, ng[k], p_offset[k], wi)
         } else {
             p
@@ -322,6 +364,7 @@ mod tests {
                 points: &points,
                 range: 0..2,
                 on_surface: false,
+                terminator_lift: false,
                 incoming: &incoming,
             };
             let limits = PathLimits {

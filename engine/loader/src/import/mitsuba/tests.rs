@@ -477,3 +477,19 @@ fn clip_planes_filters_and_sensor_media_are_stated() {
     .unwrap_err();
     assert!(e.contains("cropped film"), "{e}");
 }
+
+#[test]
+fn meshes_are_imported_without_the_shadow_terminator_offset() {
+    let s = convert(&scene(
+        r#"<shape type="obj"><string name="filename" value="m.obj"/></shape>"#,
+    ))
+    .unwrap()
+    .scene;
+    let t = &s.shapes[0].table;
+    assert_eq!(t["type"].as_str(), Some("mesh"));
+    assert_eq!(
+        t["shadow_terminator_offset"].as_bool(),
+        Some(false),
+        "as Mitsuba"
+    );
+}
