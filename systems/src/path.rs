@@ -3,6 +3,7 @@
 
 use crate::bxdf_samples::BxdfSamples;
 use crate::ray::{offset_origin, InteriorBoundaries};
+use glam::Vec3;
 use risotto_components::{RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
 use std::ops::Range;
 
@@ -147,14 +148,14 @@ pub fn continue_paths(
     out: &mut RayColumns<'_>,
     start: usize,
 ) -> Continuations {
-    let lift = from.terminator_lift && from.on_surface;
     let Vertices {
         points: pts,
         range,
         on_surface,
+        terminator_lift,
         incoming,
-        ..
-    } = from.clone();
+    } = from;
+    let lift = terminator_lift && on_surface;
     let ray_id = &pts.ray_id[range.clone()];
     let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
@@ -263,20 +264,26 @@ pub fn continue_paths(
         o_passes[j] = in_passes[r];
         o_dimension[j] = in_dimension[r] + limits.dims_per_vertex;
         let (p, wi) = (p[k], s_wi[k]);
-        o_origin[j] = if lift {
-            offset_origin(
-                from.leaving_point(range.start + k, wi),
-                ng[k],
-                p_offset[k],
-                wi,
-            )
-        } else if on_surface {
+        o_origin[j] = if on_surface {
             offset_origin(p, ng[k], p_offset[k], wi)
         } else {
             p
         };
         o_direction[j] = wi;
         o_prev_p[j] = p;
+    }
+    // Pass 2b, only with the shadow-terminator offset: reflected rays of lifted points
+    // leave from the smooth surface (`crate::terminator`). Its own pass keeps pass 2 as
+    // lean as in scenes without it.
+    if lift {
+        let from = Vertices {
+            points: pts,
+            range: range.clone(),
+            on_surface,
+            terminator_lift,
+            incoming,
+        };
+        lift_origins(&from, ctx, o_direction, o_origin);
     }
     // Pass 3: volume stacks; a transmitted ray crosses the surface's interior boundary.
     if let Some(b) = boundaries {
@@ -297,6 +304,19 @@ pub fn continue_paths(
     }
     done.written = count;
     done
+}
+
+/// Pass 2b of [`continue_paths`]: the origin of each written ray `j` (from point
+/// `ctx[j]` of the group, direction `direction[j]`) recomputed from
+/// [`Vertices::leaving_point`]. Out of line, so that scenes without the offset run the same
+/// pass 2 as before it existed.
+#[inline(never)]
+fn lift_origins(from: &Vertices<'_>, ctx: &[u32], direction: &[Vec3], origin: &mut [Vec3]) {
+    let pts = from.points;
+    for ((&k, &wi), o) in ctx.iter().zip(direction).zip(origin) {
+        let i = from.range.start + k as usize;
+        *o = offset_origin(from.leaving_point(i, wi), pts.ng[i], pts.p_offset[i], wi);
+    }
 }
 
 /// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is

@@ -16,6 +16,13 @@
 //! normals disagree strongly (the discarded directions), which vanishes as the mesh is
 //! refined (`tests/mesh_attributes.rs` measures both).
 //!
+//! On a closed mesh with the shadow-terminator offset (`risotto_systems::terminator`) that
+//! darkening is the terminator of a coarse mesh: near it the light arrives at directions the
+//! shading normal calls reflection and the flat facet transmission. At a point lifted to the
+//! smooth surface such directions are kept ([`kept_when_lifted`]) and their rays leave from
+//! the smooth surface; the mesh, being closed, still stops every ray towards a light behind
+//! it, so nothing leaks.
+//!
 //! The bidirectional integrators (`crate::bidir`) apply the same checks to both subpaths
 //! and their connections, and Veach's adjoint correction (1997, sec. 5.3, eq. 5.19) to
 //! light subpaths: scattering of importance with shading normals is not symmetric, and the
