@@ -504,6 +504,26 @@ fn coarse_smooth_sphere_has_no_faceted_terminator() {
         .filter(|&&k| lifted.beauty.pixels[k] == flat_origins.beauty.pixels[k])
         .count();
     assert_eq!(same, lit.len(), "the offset changed fully lit pixels");
+    // No leak through the closed mesh: where the analytic sphere's normal (its normal AOV)
+    // faces well away from the sun, past the coarse normals' spread (a facet is 22.5
+    // degrees wide), the lifted mesh receives no light either.
+    let l = glam::Vec3::new(1.0, 0.3, 0.4).normalize();
+    let dark: Vec<usize> = (0..64 * 64)
+        .filter(|&k| {
+            let n = analytic.normal.pixels[k];
+            let n = glam::Vec3::new(n.r, n.g, n.b);
+            n.length() > 0.99 && n.dot(l) < -0.3
+        })
+        .collect();
+    assert!(dark.len() > 50, "{} dark pixels", dark.len());
+    for &k in &dark {
+        let p = lifted.beauty.pixels[k];
+        assert_eq!(
+            (p.r, p.g, p.b),
+            (0.0, 0.0, 0.0),
+            "light leaked at pixel {k}"
+        );
+    }
 }
 
 /// A flat mesh whose vertex normals all equal its face normal (a box written with normals)
