@@ -54,6 +54,7 @@ fn floor_group() -> (ShadingPoints, Rays) {
             p,
             ng: Vec3::Y,
             p_offset: 1e-6,
+            terminator_lift: Vec3::ZERO,
             nn: Vec3::Y,
             vn: to_eye,
             vlen: (EYE - p).length(),
@@ -311,6 +312,7 @@ fn shadow_ray_spawning(c: &mut Criterion) {
             points: &points,
             range: 0..N,
             on_surface: true,
+            terminator_lift: false,
             incoming: &rays,
         };
         let light = LightColumns {
@@ -365,6 +367,7 @@ fn path_continuation(c: &mut Criterion) {
             points: &points,
             range: 0..N,
             on_surface: true,
+            terminator_lift: false,
             incoming: &rays,
         };
         continue_paths(

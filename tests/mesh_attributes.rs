@@ -1,7 +1,8 @@
 //! Mesh vertex attributes in images: a tessellated sphere with vertex normals renders within
 //! noise of the analytic sphere (and the same mesh shaded flat does not), OBJ and PLY files
 //! of one mesh render identically, a coarse mesh with bent normals leaks no light from
-//! behind, and smooth normals do not darken a white furnace.
+//! behind, smooth normals do not darken a white furnace, and a coarse smooth mesh shows no
+//! faceted shadow terminator (rays leave from the smooth surface, Hanika 2021).
 
 mod common;
 
@@ -198,9 +199,8 @@ fn smooth_tessellated_sphere_matches_the_analytic_sphere_and_flat_does_not() {
     let dir = scratch_dir("mesh_attributes", "smooth_vs_analytic");
     // Facets 3.75 degrees apart: flat shading shows them in the sun; the interpolated
     // normals and the polygonal silhouette are within noise of the sphere's. (Coarser
-    // meshes, 64 x 32 and below, differ near the sun's terminator, where shadow rays from
-    // the flat facets hit their neighbours: the shadow-terminator problem of smooth normals
-    // on coarse meshes, which this renderer, like Mitsuba 3 and pbrt-v4, does not treat.)
+    // meshes differ near the sun's terminator unless rays leave from the smooth surface:
+    // `coarse_smooth_sphere_has_no_faceted_terminator`.)
     write_obj(&uv_sphere(96, 48), &dir.join("sphere.obj"));
     let material = "type = \"diffuse\"\nreflectance = 0.7";
     let render = |shape: &str| render_scene_text(&dir, &sphere_scene(shape, material, 256));
@@ -408,4 +408,159 @@ fn only_scenes_with_vertex_normals_run_the_shading_normal_checks() {
         .features
         .names()
         .contains(&"vertex_normals".to_string()));
+}
+
+/// The sun-lit diffuse sphere, no environment: every pixel is direct light only (a convex
+/// shape never sees itself), noiseless but for the pixel filter's jitter.
+fn sunlit_scene(shape: &str) -> String {
+    let text = sphere_scene(shape, "type = \"diffuse\"\nreflectance = 0.7", 16);
+    let env = "\n[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
+    assert!(text.contains(env));
+    text.replace(env, "\n")
+}
+
+/// Mean absolute difference (channels summed) of `a` from `reference` over `band`.
+fn band_error(
+    a: &risotto::engine::render::RenderOutput,
+    reference: &risotto::engine::render::RenderOutput,
+    band: &[usize],
+) -> f64 {
+    let sum = |p: risotto::components::Rgb| (p.r + p.g + p.b) as f64;
+    let total: f64 = band
+        .iter()
+        .map(|&k| (sum(a.beauty.pixels[k]) - sum(reference.beauty.pixels[k])).abs())
+        .sum();
+    total / band.len() as f64
+}
+
+/// A 224-triangle UV sphere (16 x 8) with vertex normals under a sun: near the terminator
+/// the flat facets' shadow rays hit their neighbours and the lit side ends in dark steps;
+/// leaving from the smooth surface (the default `shadow_terminator_offset`) brings the band
+/// close to the analytic sphere. Band: pixels lit at a grazing angle on the analytic
+/// sphere (below 30 % of its brightest), well inside its silhouette.
+#[test]
+fn coarse_smooth_sphere_has_no_faceted_terminator() {
+    let dir = scratch_dir("mesh_attributes", "terminator");
+    write_obj(&uv_sphere(16, 8), &dir.join("sphere.obj"));
+    let render = |shape: &str| render_scene_text(&dir, &sunlit_scene(shape));
+    let analytic = render("type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1");
+    let lifted = render("type = \"mesh\"\npath = \"sphere.obj\"");
+    let flat_origins =
+        render("type = \"mesh\"\npath = \"sphere.obj\"\nshadow_terminator_offset = false");
+    let value = |k: usize| {
+        let p = analytic.beauty.pixels[k];
+        (p.r + p.g + p.b) as f64
+    };
+    let brightest = (0..64 * 64).map(value).fold(0.0, f64::max);
+    // The sphere's silhouette is about 24 pixels from the centre (asin(1/5) against the
+    // 15 degree half field of view); 20 keeps the band off it.
+    let band: Vec<usize> = (0..64 * 64)
+        .filter(|&k| {
+            let (x, y) = ((k % 64) as f64 - 31.5, (k / 64) as f64 - 31.5);
+            x.hypot(y) < 20.0 && value(k) > 0.0 && value(k) < 0.3 * brightest
+        })
+        .collect();
+    assert!(band.len() > 50, "{} pixels in the band", band.len());
+    let with = band_error(&lifted, &analytic, &band);
+    let without = band_error(&flat_origins, &analytic, &band);
+    let mean = band.iter().map(|&k| value(k)).sum::<f64>() / band.len() as f64;
+    eprintln!(
+        "terminator band ({} px, mean {mean:.4}): error with offset {with:.4}, without {without:.4}",
+        band.len()
+    );
+    assert!(
+        without > 0.05 * mean,
+        "the flat origins should show the terminator: {without} against mean {mean}"
+    );
+    assert!(
+        with < 0.6 * without,
+        "the offset should bring the band near the sphere: {with} against {without}"
+    );
+    // The offset runs only where asked, and is counted only there.
+    assert!(lifted.stats.counters.terminator_lifts > 0);
+    assert!(lifted
+        .stats
+        .features
+        .contains(&"terminator_offset".to_string()));
+    assert_eq!(flat_origins.stats.counters.terminator_lifts, 0);
+    assert!(!flat_origins
+        .stats
+        .features
+        .contains(&"terminator_offset".to_string()));
+    // Away from the terminator nothing changes: the fully lit pixels well inside agree.
+    let lit: Vec<usize> = (0..64 * 64)
+        .filter(|&k| {
+            let (x, y) = ((k % 64) as f64 - 31.5, (k / 64) as f64 - 31.5);
+            x.hypot(y) < 20.0 && value(k) > 0.6 * brightest
+        })
+        .collect();
+    eprintln!(
+        "lit ({} px): error {:.4}",
+        lit.len(),
+        band_error(&lifted, &analytic, &lit)
+    );
+    let same = lit
+        .iter()
+        .filter(|&&k| lifted.beauty.pixels[k] == flat_origins.beauty.pixels[k])
+        .count();
+    assert_eq!(same, lit.len(), "the offset changed fully lit pixels");
+    // No leak through the closed mesh: where the analytic sphere's normal (its normal AOV)
+    // faces well away from the sun, past the coarse normals' spread (a facet is 22.5
+    // degrees wide), the lifted mesh receives no light either.
+    let l = glam::Vec3::new(1.0, 0.3, 0.4).normalize();
+    let dark: Vec<usize> = (0..64 * 64)
+        .filter(|&k| {
+            let n = analytic.normal.pixels[k];
+            let n = glam::Vec3::new(n.r, n.g, n.b);
+            n.length() > 0.99 && n.dot(l) < -0.3
+        })
+        .collect();
+    assert!(dark.len() > 50, "{} dark pixels", dark.len());
+    for &k in &dark {
+        let p = lifted.beauty.pixels[k];
+        assert_eq!(
+            (p.r, p.g, p.b),
+            (0.0, 0.0, 0.0),
+            "light leaked at pixel {k}"
+        );
+    }
+}
+
+/// A flat mesh whose vertex normals all equal its face normal (a box written with normals)
+/// renders the same with and without the offset, bit for bit, and is never lifted.
+#[test]
+fn flat_meshes_with_normals_are_not_lifted() {
+    let dir = scratch_dir("mesh_attributes", "terminator_flat");
+    // A unit box with one vertex per face corner, each with its face's normal.
+    let mut t = String::new();
+    let faces: [([f32; 3], [f32; 3], [f32; 3]); 6] = [
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+        ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+    ];
+    for (f, (n, a, b)) in faces.iter().enumerate() {
+        for (s, r) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            let p: Vec<f32> = (0..3).map(|i| 0.6 * (n[i] + s * a[i] + r * b[i])).collect();
+            writeln!(t, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+            writeln!(t, "vn {} {} {}", n[0], n[1], n[2]).unwrap();
+        }
+        let o = 4 * f + 1;
+        writeln!(t, "f {0}//{0} {1}//{1} {2}//{2}", o, o + 1, o + 2).unwrap();
+        writeln!(t, "f {0}//{0} {1}//{1} {2}//{2}", o, o + 2, o + 3).unwrap();
+    }
+    std::fs::write(dir.join("box.obj"), t).unwrap();
+    let shape = "type = \"mesh\"\npath = \"box.obj\"\ntransform = [{ rotate = { axis = [1, 1, 0], angle = 30 } }]";
+    let material = "type = \"diffuse\"\nreflectance = 0.7";
+    let on = render_scene_text(&dir, &sphere_scene(shape, material, 4));
+    let off_shape = format!("{shape}\nshadow_terminator_offset = false");
+    let off = render_scene_text(&dir, &sphere_scene(&off_shape, material, 4));
+    assert!(on.stats.features.contains(&"terminator_offset".to_string()));
+    assert_eq!(on.stats.counters.terminator_lifts, 0);
+    assert!(
+        on.beauty.pixels == off.beauty.pixels,
+        "a flat mesh renders differently with the offset"
+    );
 }

@@ -279,6 +279,11 @@ soa_table! {
         /// here move off the surface by it (`risotto_systems::ray`); one `f32` rather than
         /// the `Vec3` bound because every use is along `ng`.
         p_offset: f32,
+        /// Where rays leaving to the viewer's side of a triangle start, relative to `p`:
+        /// the displacement to the smooth surface the mesh's vertex normals imply
+        /// (`risotto_systems::terminator`, Hanika 2021), written only for meshes that ask
+        /// for the shadow-terminator offset; zero elsewhere.
+        terminator_lift: Vec3,
         /// Shading normal `Nn`, on the same side as `ng`.
         nn: Vec3,
         /// Unit tangent orthogonal to `nn` (`dPdu` made orthogonal to `nn` on meshes with
@@ -352,6 +357,7 @@ impl ShadingPointRow {
             p,
             ng: -direction,
             p_offset: 0.0,
+            terminator_lift: Vec3::ZERO,
             nn: -direction,
             tangent: (-direction).any_orthonormal_vector(),
             vn: -direction,
@@ -384,6 +390,7 @@ impl ShadingPoints {
         self.p.extend_from_slice(p);
         self.ng.extend(facing());
         self.p_offset.resize(start + m, row.p_offset);
+        self.terminator_lift.resize(start + m, row.terminator_lift);
         self.nn.extend(facing());
         self.tangent
             .extend(facing().map(Vec3::any_orthonormal_vector));

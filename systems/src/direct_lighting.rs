@@ -99,12 +99,14 @@ pub fn spawn_shadow_rays(
     out: &mut ShadowRayColumns<'_>,
     start: usize,
 ) -> usize {
+    let lift = from.terminator_lift && from.on_surface;
     let Vertices {
         points: pts,
         range,
         on_surface,
         incoming,
-    } = from;
+        ..
+    } = from.clone();
     let ray_id = &pts.ray_id[range.clone()];
     let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
@@ -167,8 +169,12 @@ pub fn spawn_shadow_rays(
         o_dimension[count] = in_dimension[r];
         // Origin offset by its error bound to the side of the surface the ray leaves to
         // (`crate::ray`).
+        // Rays to the viewer's side of a smooth mesh leave from its smooth surface
+        // (`crate::terminator`).
         let (p, ng) = (p[k], ng[k]);
-        o_origin[count] = if on_surface {
+        o_origin[count] = if lift {
+            offset_origin(from.leaving_point(range.start + k, wi), ng, p_offset[k], wi)
+        } else if on_surface {
             offset_origin(p, ng, p_offset[k], wi)
         } else {
             p
@@ -183,7 +189,10 @@ pub fn spawn_shadow_rays(
             // A shadow ray leaving through the surface it starts on enters (or leaves) that
             // shape's interior.
             let i = range.start + k;
-            if on_surface && (wi.dot(ng) >= 0.0) != (pts.vn[i].dot(ng) >= 0.0) {
+            // A lifted ray starts on the viewer's side, above the triangle, whichever side
+            // of its plane it goes to.
+            let crosses = (wi.dot(ng) >= 0.0) != (pts.vn[i].dot(ng) >= 0.0);
+            if on_surface && crosses && !(lift && from.lifted(i, wi)) {
                 b.cross(stack, pts.shape[i], pts.front_face[i]);
             }
         }

@@ -43,6 +43,7 @@ pub mod sampler;
 mod simd8;
 pub mod spectral_tracking;
 mod splitmix;
+pub mod terminator;
 pub mod tracking;
 pub mod volume_lights;
 mod warp;

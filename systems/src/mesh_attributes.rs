@@ -20,6 +20,13 @@ pub struct VertexAttributes {
     /// The vertex indices of each triangle into `normals` / `uvs`, in the order of the
     /// mesh's triangles (corner `k` of a triangle is its vertex `v_k`).
     pub corners: Vec<[u32; 3]>,
+    /// Whether rays leaving the mesh towards the viewer's side start from the smooth surface
+    /// its normals imply rather than from the flat triangle ([`crate::terminator`]): the
+    /// shadow-terminator fix. Only meshes with normals use it, and it is meant for closed
+    /// meshes only (past the border of an open one, a ray from the smooth surface can see
+    /// light from behind; the scene loader sets it only for closed meshes). Defaults to
+    /// `false` here; the scene file's `shadow_terminator_offset` defaults to `true`.
+    pub shadow_terminator_offset: bool,
 }
 
 impl VertexAttributes {
@@ -42,6 +49,8 @@ struct AttributeRange {
     normals: u32,
     /// Offset of its first uv in `uvs`, `NONE` without uvs.
     uvs: u32,
+    /// [`VertexAttributes::shadow_terminator_offset`], for a mesh with normals.
+    terminator: bool,
 }
 
 const NONE: u32 = u32::MAX;
@@ -134,6 +143,7 @@ impl MeshAttributes {
             corners: u32::try_from(self.corners.len()).expect("too many triangles"),
             normals: offset(self.normals.len(), attrs.normals.len()),
             uvs: offset(self.uvs.len(), attrs.uvs.len()),
+            terminator: attrs.shadow_terminator_offset && !attrs.normals.is_empty(),
         };
         self.ranges.push(range);
         self.normals.extend(attrs.normals);
@@ -162,6 +172,21 @@ impl MeshAttributes {
     /// Whether primitive `prim` belongs to a mesh with vertex normals.
     pub fn has_normals(&self, prim: u32) -> bool {
         self.range_of(prim).is_some_and(|r| r.normals != NONE)
+    }
+
+    /// Whether some mesh with vertex normals asks for the shadow-terminator offset.
+    pub fn any_terminator_offset(&self) -> bool {
+        self.ranges.iter().any(|r| r.terminator)
+    }
+
+    /// The stored vertex normals of triangle `prim` (corners in the triangle's vertex
+    /// order, as the file gave them: unit or zero, not turned to any side) when its mesh
+    /// has normals and asks for the shadow-terminator offset; `None` otherwise.
+    #[inline]
+    pub fn terminator_normals(&self, prim: u32) -> Option<[Vec3; 3]> {
+        let r = self.range_of(prim).filter(|r| r.terminator)?;
+        let c = self.corners[(r.corners + (prim - r.first)) as usize];
+        Some(c.map(|k| self.normals[(r.normals + k) as usize]))
     }
 
     #[inline]
@@ -273,6 +298,7 @@ mod tests {
                 Vec2::new(0.0, 1.0),
             ],
             corners: vec![[0, 1, 2], [0, 2, 3]],
+            shadow_terminator_offset: false,
         }
     }
 

@@ -3,6 +3,7 @@
 
 use crate::bxdf_samples::BxdfSamples;
 use crate::ray::{offset_origin, InteriorBoundaries};
+use glam::Vec3;
 use risotto_components::{RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
 use std::ops::Range;
 
@@ -16,8 +17,41 @@ pub struct Vertices<'a> {
     /// True for surface points (rays leave off the surface, to the side they go to); false
     /// for points inside a volume (rays start at the point).
     pub on_surface: bool,
+    /// Whether the points' `terminator_lift` column may be non-zero (the scene has meshes
+    /// that ask for the shadow-terminator offset, `crate::terminator`): rays leaving a
+    /// surface point to the viewer's side (reflected and shadow rays) then start from
+    /// `p + terminator_lift`. When false the column is not read.
+    pub terminator_lift: bool,
     /// The rays that arrived at the points (`points.ray_id` indexes it).
     pub incoming: &'a Rays,
+}
+
+impl Vertices<'_> {
+    /// The point rays leave point `i` (a row of `points`) from in direction `wi`, before the
+    /// surface offset: `p + terminator_lift` when [`Self::terminator_lift`] is set and the
+    /// ray goes to the viewer's side by the geometric or the shading normal (a reflected or
+    /// shadow ray; the shading stage keeps no direction the shading normal calls
+    /// transmission and the geometric one reflection), else `p` (transmitted rays leave
+    /// from the flat triangle they cross).
+    #[inline(always)]
+    pub fn leaving_point(&self, i: usize, wi: glam::Vec3) -> glam::Vec3 {
+        let pts = self.points;
+        let p = pts.p[i];
+        if self.terminator_lift && self.lifted(i, wi) {
+            p + pts.terminator_lift[i]
+        } else {
+            p
+        }
+    }
+
+    /// Whether a ray leaving point `i` in direction `wi` goes to the viewer's side by the
+    /// geometric or the shading normal (where [`Self::leaving_point`] lifts it).
+    #[inline(always)]
+    pub fn lifted(&self, i: usize, wi: glam::Vec3) -> bool {
+        let pts = self.points;
+        let (ng, nn, vn) = (pts.ng[i], pts.nn[i], pts.vn[i]);
+        wi.dot(ng) * vn.dot(ng) > 0.0 || wi.dot(nn) * vn.dot(nn) > 0.0
+    }
 }
 
 /// Path-length limits (Mitsuba's `max_depth` convention: a path of `k` segments has `k - 1`
@@ -118,8 +152,10 @@ pub fn continue_paths(
         points: pts,
         range,
         on_surface,
+        terminator_lift,
         incoming,
     } = from;
+    let lift = terminator_lift && on_surface;
     let ray_id = &pts.ray_id[range.clone()];
     let (m, n) = (ray_id.len(), incoming.len());
     let rows = start..start + m;
@@ -236,6 +272,19 @@ pub fn continue_paths(
         o_direction[j] = wi;
         o_prev_p[j] = p;
     }
+    // Pass 2b, only with the shadow-terminator offset: reflected rays of lifted points
+    // leave from the smooth surface (`crate::terminator`). Its own pass keeps pass 2 as
+    // lean as in scenes without it.
+    if lift {
+        let from = Vertices {
+            points: pts,
+            range: range.clone(),
+            on_surface,
+            terminator_lift,
+            incoming,
+        };
+        lift_origins(&from, ctx, o_direction, o_origin);
+    }
     // Pass 3: volume stacks; a transmitted ray crosses the surface's interior boundary.
     if let Some(b) = boundaries {
         let in_stack = &incoming.volume_stack[..n];
@@ -255,6 +304,19 @@ pub fn continue_paths(
     }
     done.written = count;
     done
+}
+
+/// Pass 2b of [`continue_paths`]: the origin of each written ray `j` (from point
+/// `ctx[j]` of the group, direction `direction[j]`) recomputed from
+/// [`Vertices::leaving_point`]. Out of line, so that scenes without the offset run the same
+/// pass 2 as before it existed.
+#[inline(never)]
+fn lift_origins(from: &Vertices<'_>, ctx: &[u32], direction: &[Vec3], origin: &mut [Vec3]) {
+    let pts = from.points;
+    for ((&k, &wi), o) in ctx.iter().zip(direction).zip(origin) {
+        let i = from.range.start + k as usize;
+        *o = offset_origin(from.leaving_point(i, wi), pts.ng[i], pts.p_offset[i], wi);
+    }
 }
 
 /// `weight.is_black() || !weight.is_finite()`, exactly, in fewer instructions: `x * 0` is
@@ -322,6 +384,7 @@ mod tests {
                 points: &points,
                 range: 0..2,
                 on_surface: false,
+                terminator_lift: false,
                 incoming: &incoming,
             };
             let limits = PathLimits {

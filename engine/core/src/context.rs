@@ -11,6 +11,7 @@ use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::lights::LightSet;
 use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
+use risotto_systems::terminator::terminator_lifts;
 
 /// Reusable buffers of [`IntegratorContext::nearest_hits`], kept by a worker across calls so
 /// the per-bounce path does not allocate.
@@ -315,6 +316,7 @@ impl IntegratorContext for RenderContext<'_> {
         pts.p.extend_from_slice(&s.zeros[..count]);
         pts.ng.extend_from_slice(&s.zeros[..count]);
         pts.p_offset.resize(end, 0.0);
+        pts.terminator_lift.extend_from_slice(&s.zeros[..count]);
         pts.vn.extend_from_slice(&s.zeros[..count]);
         pts.vlen.resize(end, 0.0);
         pts.u.resize(end, 0.0);
@@ -338,6 +340,11 @@ impl IntegratorContext for RenderContext<'_> {
         write_tangents(geometry, sorted, hits, pts, base);
         if geometry.has_attributes() {
             write_mesh_attributes(geometry, sorted, hits, pts, base);
+        }
+        if scene.features.terminator_offset {
+            // Pass 5: where rays to the viewer's side leave smooth meshes from.
+            self.stats.terminator_lifts +=
+                terminator_lifts(geometry, hits, sorted, pts, base..end) as u64;
         }
         pts.w.resize(end, 0.0);
         pts.transmission.extend_from_slice(&s.whites[..count]);

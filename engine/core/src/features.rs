@@ -29,6 +29,10 @@ pub struct Features {
     /// Some mesh has vertex normals: shading normals differ from geometric ones, and the
     /// directions where the two disagree are discarded (`path_tracer::shading_normals`).
     pub vertex_normals: bool,
+    /// Some mesh with vertex normals asks for the shadow-terminator offset: hits on it get
+    /// their `terminator_lift` and rays leaving to the viewer's side start from the smooth
+    /// surface (`risotto_systems::terminator`).
+    pub terminator_offset: bool,
     /// Emissive shapes.
     pub area_lights: bool,
     /// Distant lights.
@@ -56,6 +60,7 @@ impl Features {
             (self.surface_uv, "surface_uv"),
             (self.opacity, "opacity"),
             (self.vertex_normals, "vertex_normals"),
+            (self.terminator_offset, "terminator_offset"),
             (self.area_lights, "area_lights"),
             (self.distant_lights, "distant_lights"),
             (self.point_lights, "point_lights"),

@@ -174,6 +174,7 @@ pub fn attenuate_shadow_crossings(
             p: s.p,
             ng: s.ng,
             p_offset: s.offset(),
+            terminator_lift: glam::Vec3::ZERO,
             nn,
             tangent,
             vn: -d,

@@ -38,6 +38,56 @@ pub struct Skipped {
     pub lines: usize,
 }
 
+impl MeshData {
+    /// Whether the mesh is closed: once vertices at the same place are merged (files repeat
+    /// a vertex along texture seams and at poles, with coordinates that differ in the last
+    /// digits; positions are compared on a grid of `1e-6` of the mesh's extent), every edge
+    /// is shared by exactly two triangles that run along it in opposite directions.
+    /// Degenerate triangles (two corners merged) are skipped. An empty mesh is not closed.
+    /// What the shadow-terminator offset needs (`risotto_systems::terminator`): a ray
+    /// leaving a closed mesh's smooth surface towards a light behind it is stopped by the
+    /// mesh; past the border of an open one it is not.
+    pub fn is_closed(&self) -> bool {
+        use std::collections::HashMap;
+        let Some(&first) = self.positions.first() else {
+            return false;
+        };
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let cell = ((hi - lo).max_element() * 1e-6).max(f64::MIN_POSITIVE);
+        let mut welded: HashMap<[i64; 3], u32> = HashMap::new();
+        let ids: Vec<u32> = self
+            .positions
+            .iter()
+            .map(|&p| {
+                let q = ((p - lo) / cell).round();
+                let key = [q.x as i64, q.y as i64, q.z as i64];
+                let next = welded.len() as u32;
+                *welded.entry(key).or_insert(next)
+            })
+            .collect();
+        // Each directed edge counted: closed and consistently wound iff every one appears
+        // once and its reverse once.
+        let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut any = false;
+        for t in &self.triangles {
+            let v = t.map(|i| ids[i as usize]);
+            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+                continue;
+            }
+            any = true;
+            for k in 0..3 {
+                *edges.entry((v[k], v[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        any && edges
+            .iter()
+            .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+    }
+}
+
 /// Reads an OBJ or PLY file, chosen by its extension (`.ply`, any case, is PLY; anything
 /// else is read as OBJ). The error is a complete sentence naming the full path.
 pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
@@ -63,5 +113,40 @@ pub(crate) fn check_normals(normals: &[DVec3], what: &str) -> Result<(), String>
             normals[i].y,
             normals[i].z
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tetrahedron is closed, also with a vertex repeated a rounding error away (as at a
+    /// texture seam); without a face, or with a face wound the wrong way, it is not.
+    #[test]
+    fn closed_meshes_are_recognised() {
+        let p = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        let faces = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+        let mesh = |positions: Vec<DVec3>, triangles: Vec<[u32; 3]>| MeshData {
+            positions,
+            triangles,
+            ..Default::default()
+        };
+        assert!(mesh(p.to_vec(), faces.clone()).is_closed());
+        // Vertex 4 repeats vertex 3 within 1e-9: the seam is welded.
+        let mut seam = p.to_vec();
+        seam.push(p[3] + DVec3::splat(1e-9));
+        let mut seamed = faces.clone();
+        seamed[2] = [1, 2, 4];
+        assert!(mesh(seam, seamed).is_closed());
+        assert!(!mesh(p.to_vec(), faces[..3].to_vec()).is_closed());
+        let mut flipped = faces.clone();
+        flipped[1] = [0, 3, 1];
+        assert!(!mesh(p.to_vec(), flipped).is_closed());
+        assert!(!MeshData::default().is_closed());
     }
 }

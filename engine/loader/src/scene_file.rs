@@ -645,7 +645,13 @@ fn read_shape(
         "rectangle" => &["transform"],
         "disk" => &["radius", "inner_radius", "transform"],
         "box" => &["min", "max", "transform"],
-        "mesh" => &["path", "transform", "face_normals", "flip_normals"],
+        "mesh" => &[
+            "path",
+            "transform",
+            "face_normals",
+            "flip_normals",
+            "shadow_terminator_offset",
+        ],
         "triangles" => &[
             "positions",
             "indices",
@@ -653,6 +659,7 @@ fn read_shape(
             "uv",
             "transform",
             "face_normals",
+            "shadow_terminator_offset",
         ],
         other => {
             return Err(r.error(

@@ -287,6 +287,33 @@ impl SceneGeometry {
         })
     }
 
+    /// The world-space vertices and unit vertex normals (the stored ones mapped as normals
+    /// are, by the inverse transpose on an instance, and normalised; zero where a stored
+    /// normal is zero) of triangle `prim` when its mesh has vertex normals and asks for the
+    /// shadow-terminator offset ([`crate::terminator`]); `None` for every other primitive.
+    /// Normals keep the file's orientation: [`crate::terminator::terminator_lift`] turns
+    /// them to the side it needs.
+    #[inline]
+    pub fn terminator_triangle(&self, prim: u32) -> Option<([Vec3; 3], [Vec3; 3])> {
+        if (prim as usize) < self.triangles.len() {
+            let n = self.attributes.terminator_normals(prim)?;
+            return Some((self.triangle(prim as usize), n));
+        }
+        let (k, local) = self.instance_of(prim)?;
+        let inst = &self.instances[k];
+        let object = &self.objects[inst.object as usize];
+        if local as usize >= object.triangles.len() {
+            return None;
+        }
+        let n = object.attributes.terminator_normals(local)?;
+        let v = object
+            .triangle(local as usize)
+            .map(|p| inst.to_world.transform_point3(p));
+        let normal_map = inst.to_object.matrix3.transpose();
+        let n = n.map(|n| Vec3::from(normal_map * Vec3A::from(n)).normalize_or_zero());
+        Some((v, n))
+    }
+
     /// The tangent of a hit on primitive `prim` that is not a triangle outside instances
     /// (a sphere, or any primitive of an instance), with world normal `ng`: a sphere's
     /// direction of increasing `phi` ([`sphere_tangent`], mapped to the world on an

@@ -335,8 +335,8 @@ fn instanced_sphere_is_the_analytic_ellipsoid() {
 }
 
 /// Mesh attributes of an object reach its instances: normals as normals map (inverse
-/// transpose), uvs unchanged, tangents as the map moves `dp/du`, as the same mesh written
-/// out flat with its normals mapped gives them.
+/// transpose), uvs unchanged, tangents as the map moves `dp/du`, and the shadow-terminator
+/// triangles, as the same mesh written out flat with its normals mapped gives them.
 #[test]
 fn instanced_mesh_attributes_match_the_flat_mesh() {
     let tris = octahedron();
@@ -363,6 +363,7 @@ fn instanced_mesh_attributes_match_the_flat_mesh() {
         normals: normals_per_corner.clone(),
         uvs: uvs.clone(),
         corners: uv_corners.clone(),
+        shadow_terminator_offset: true,
     };
     let m = placements()[1];
     let mut object = SceneGeometry::build(tris.clone(), Vec::new());
@@ -388,6 +389,7 @@ fn instanced_mesh_attributes_match_the_flat_mesh() {
                 .collect(),
             uvs,
             corners: uv_corners,
+            shadow_terminator_offset: true,
         },
     );
     flat.set_attributes(fa);
@@ -419,6 +421,13 @@ fn instanced_mesh_attributes_match_the_flat_mesh() {
             ai.tangent,
             af.tangent
         );
+        // The shadow-terminator data: vertices placed, normals mapped like the flat mesh's.
+        let (vi, ni) = inst.terminator_triangle(pi[0]).expect("offset asked for");
+        let (vf, nf) = flat.terminator_triangle(pf[0]).expect("offset asked for");
+        for k in 0..3 {
+            assert!((vi[k] - vf[k]).length() < 1e-4, "v {} vs {}", vi[k], vf[k]);
+            assert!(ni[k].dot(nf[k]) > 0.9999, "n {} vs {}", ni[k], nf[k]);
+        }
         checked += 1;
     }
     assert!(checked > 100);

@@ -249,13 +249,16 @@ fn camera_vertices(
         s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
         if scene.features.vertex_normals && grp.mode == ShadingMode::Scatter {
-            discard_bxdf_samples(pts, range.clone(), &mut s.samples);
+            discard_bxdf_samples(pts, range.clone(), false, &mut s.samples);
         }
         scatter_mis(scene, s, &at, arena, counters);
         let vertices = Vertices {
             points: pts,
             range: range.clone(),
             on_surface: grp.mode == ShadingMode::Scatter,
+            // The bidirectional integrators spawn from the flat triangles (their
+            // connections have no such offset, and subpaths must meet them).
+            terminator_lift: false,
             incoming,
         };
         next_len += continue_group(

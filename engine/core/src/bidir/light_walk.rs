@@ -238,7 +238,7 @@ fn scatter_light_vertices(
         w.s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut w.s.samplers, &mut w.s.samples);
         if normals && grp.mode == ShadingMode::Scatter {
-            discard_bxdf_samples(pts, range.clone(), &mut w.s.samples);
+            discard_bxdf_samples(pts, range.clone(), false, &mut w.s.samples);
         }
         if bidirectional {
             scatter_mis(scene, &mut w.s, &at, arena, counters);
@@ -270,6 +270,7 @@ fn scatter_light_vertices(
             points: pts,
             range: range.clone(),
             on_surface: grp.mode == ShadingMode::Scatter,
+            terminator_lift: false,
             incoming,
         };
         next_len += continue_group(

@@ -109,7 +109,8 @@ pub(super) fn sample_lights(
     bxdf.evaluate_samples(ctx, light.wi, value, pdf);
     if scene.features.vertex_normals && vertices.on_surface {
         let range = vertices.range.clone();
-        discard_light_directions(vertices.points, range, light.wi, value);
+        let lifted = vertices.terminator_lift;
+        discard_light_directions(vertices.points, range, lifted, light.wi, value);
     }
     // NaN provenance: the Bxdf's evaluations and the light samples of the active points.
     let bxdf_bad = |k: usize| active[k] & !(value[k].is_finite() & pdf[k].is_finite());
@@ -258,6 +259,7 @@ impl LightingDelegate for DirectLighting<'_> {
             points,
             range,
             on_surface: false,
+            terminator_lift: false,
             incoming: rays,
         };
         let start_row = self.shadow.len();

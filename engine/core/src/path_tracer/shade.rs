@@ -186,6 +186,7 @@ pub(super) fn shade_groups<'a>(
             points: pts,
             range: range.clone(),
             on_surface: grp.mode == ShadingMode::Scatter,
+            terminator_lift: features.terminator_offset,
             incoming,
         };
         if light_sampling_possible && lobes.contains(LobeSampled::DIFFUSE) {
@@ -223,7 +224,7 @@ pub(super) fn shade_groups<'a>(
         samples.reset(m);
         bxdf.generate_samples(&ctx, samplers, samples);
         if features.vertex_normals && grp.mode == ShadingMode::Scatter {
-            discard_bxdf_samples(pts, range.clone(), samples);
+            discard_bxdf_samples(pts, range.clone(), features.terminator_offset, samples);
         }
         let system = match grp.mode {
             ShadingMode::VolumeScatter => System::Phase,

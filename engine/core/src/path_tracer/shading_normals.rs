@@ -16,6 +16,13 @@
 //! normals disagree strongly (the discarded directions), which vanishes as the mesh is
 //! refined (`tests/mesh_attributes.rs` measures both).
 //!
+//! On a closed mesh with the shadow-terminator offset (`risotto_systems::terminator`) that
+//! darkening is the terminator of a coarse mesh: near it the light arrives at directions the
+//! shading normal calls reflection and the flat facet transmission. At a point lifted to the
+//! smooth surface such directions are kept ([`kept_when_lifted`]) and their rays leave from
+//! the smooth surface; the mesh, being closed, still stops every ray towards a light behind
+//! it, so nothing leaks.
+//!
 //! The bidirectional integrators (`crate::bidir`) apply the same checks to both subpaths
 //! and their connections, and Veach's adjoint correction (1997, sec. 5.3, eq. 5.19) to
 //! light subpaths: scattering of importance with shading normals is not symmetric, and the
@@ -34,20 +41,49 @@ pub(crate) fn sides_agree(ng: glam::Vec3, nn: glam::Vec3, vn: glam::Vec3, wi: gl
     geometric == shading
 }
 
+/// Whether a direction `wi` leaving a point lifted to the smooth surface of its mesh
+/// (`risotto_systems::terminator`) is kept: where the normals agree, and also where the
+/// shading normal calls it reflection and the geometric one transmission. Such a ray leaves
+/// from the smooth surface, above the triangle, and reaches the light only if the mesh does
+/// not block it (it crosses the triangle or a neighbour otherwise): the light a smooth
+/// surface sees at grazing angles, which discarding it would darken (the shadow terminator
+/// of coarse meshes). It cannot leak light from behind a closed mesh, whose triangles stop
+/// it.
+#[inline]
+pub(crate) fn kept_when_lifted(
+    ng: glam::Vec3,
+    nn: glam::Vec3,
+    vn: glam::Vec3,
+    wi: glam::Vec3,
+) -> bool {
+    sides_agree(ng, nn, vn, wi) || wi.dot(nn) * vn.dot(nn) > 0.0
+}
+
 /// Makes the Bxdf samples of the points `range` whose direction the normals disagree on
-/// "no sample" (the path ends there, as for an absorbed sample).
+/// "no sample" (the path ends there, as for an absorbed sample). With `lifted` (the caller
+/// spawns from `terminator_lift`, the scene has meshes with the offset), points with a
+/// non-zero lift keep what [`kept_when_lifted`] keeps.
 pub(crate) fn discard_bxdf_samples(
     points: &ShadingPoints,
     range: Range<usize>,
+    lifted: bool,
     samples: &mut BxdfSamples,
 ) {
     let (ng, nn, vn) = (
         &points.ng[range.clone()],
         &points.nn[range.clone()],
-        &points.vn[range],
+        &points.vn[range.clone()],
     );
+    let lift = &points.terminator_lift[range];
+    let keep = |k: usize, wi| {
+        if lifted && lift[k] != glam::Vec3::ZERO {
+            kept_when_lifted(ng[k], nn[k], vn[k], wi)
+        } else {
+            sides_agree(ng[k], nn[k], vn[k], wi)
+        }
+    };
     for k in 0..ng.len() {
-        if samples.pdf[k] > 0.0 && !sides_agree(ng[k], nn[k], vn[k], samples.wi[k]) {
+        if samples.pdf[k] > 0.0 && !keep(k, samples.wi[k]) {
             samples.pdf[k] = 0.0;
             samples.weight[k] = Rgb::BLACK;
             samples.lobe[k] = LobeSampled::NONE;
@@ -56,20 +92,27 @@ pub(crate) fn discard_bxdf_samples(
 }
 
 /// Zeroes the Bxdf values towards the light samples `wi` of the points `range` whose
-/// direction the normals disagree on.
+/// direction the normals disagree on (`lifted` as for [`discard_bxdf_samples`]).
 pub(super) fn discard_light_directions(
     points: &ShadingPoints,
     range: Range<usize>,
+    lifted: bool,
     wi: &[glam::Vec3],
     value: &mut [Rgb],
 ) {
     let (ng, nn, vn) = (
         &points.ng[range.clone()],
         &points.nn[range.clone()],
-        &points.vn[range],
+        &points.vn[range.clone()],
     );
+    let lift = &points.terminator_lift[range];
     for k in 0..ng.len() {
-        if !sides_agree(ng[k], nn[k], vn[k], wi[k]) {
+        let keep = if lifted && lift[k] != glam::Vec3::ZERO {
+            kept_when_lifted(ng[k], nn[k], vn[k], wi[k])
+        } else {
+            sides_agree(ng[k], nn[k], vn[k], wi[k])
+        };
+        if !keep {
             value[k] = Rgb::BLACK;
         }
     }

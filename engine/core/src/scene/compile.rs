@@ -89,6 +89,7 @@ impl Scene {
         transforms.resize(shapes.len(), None);
         let mut features = Features {
             vertex_normals: attributes.any_normals() || objects.any_normals,
+            terminator_offset: attributes.any_terminator_offset() || objects.any_terminator_offset,
             ..Features::default()
         };
         let mut geometry = SceneGeometry::build_with_instances(

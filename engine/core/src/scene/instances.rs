@@ -101,6 +101,8 @@ pub(super) struct CompiledObjects {
     pub(super) bounds: Vec<(Vec3, Vec3)>,
     /// Whether some object mesh has vertex normals.
     pub(super) any_normals: bool,
+    /// Whether some object mesh with vertex normals asks for the shadow-terminator offset.
+    pub(super) any_terminator_offset: bool,
     pub(super) numbering: InstancedShapes,
 }
 
@@ -141,6 +143,7 @@ pub(super) fn compile_objects(
     let mut object_prim_shape = Vec::new();
     let mut object_shape_bounds = Vec::new();
     let mut any_normals = false;
+    let mut any_terminator_offset = false;
     for (o, def) in objects.iter().enumerate() {
         if built[o] == u32::MAX {
             continue;
@@ -188,6 +191,8 @@ pub(super) fn compile_objects(
                 ShapeGeometry::Triangles(t) => {
                     if !shape.attributes.is_empty() {
                         any_normals |= !shape.attributes.normals.is_empty();
+                        any_terminator_offset |= !shape.attributes.normals.is_empty()
+                            && shape.attributes.shadow_terminator_offset;
                         attributes.push(tris.len() as u32, shape.attributes.clone());
                     }
                     for v in t.iter().flatten() {
@@ -252,6 +257,7 @@ pub(super) fn compile_objects(
         shapes,
         bounds,
         any_normals,
+        any_terminator_offset,
         numbering: InstancedShapes {
             shape_base,
             object_prim_shape,

@@ -313,6 +313,10 @@ pub struct SystemStats {
     /// rays in heterogeneous media (the free flights' are the `null` volume events): with
     /// them, the tracking work of a render.
     pub shadow_collisions: u64,
+    /// Surface hits on meshes with the shadow-terminator offset whose rays to the viewer's
+    /// side leave from the smooth surface, above the flat triangle
+    /// (`risotto_systems::terminator`): 0, and not reported, in scenes without such meshes.
+    pub terminator_lifts: u64,
     /// Path-ray hits on surfaces with opacity whose opacity was tested (stochastic
     /// pass-through, [`InstanceHints::OPACITY`](crate::plugin::InstanceHints::OPACITY)): 0
     /// in a scene without opacity, where no opacity stage runs.
@@ -473,6 +477,7 @@ impl SystemStats {
         self.dense_segments += other.dense_segments;
         self.dense_lookups += other.dense_lookups;
         self.shadow_collisions += other.shadow_collisions;
+        self.terminator_lifts += other.terminator_lifts;
         for (a, b) in self.non_finite.iter_mut().zip(&other.non_finite) {
             *a += b;
         }

@@ -145,6 +145,9 @@ impl Serialize for RenderStats {
         if heterogeneous {
             m.serialize_entry("shadow_collisions", &c.shadow_collisions)?;
         }
+        if self.features.iter().any(|f| f == "terminator_offset") {
+            m.serialize_entry("terminator_lifts", &c.terminator_lifts)?;
+        }
         if c.dense_segments > 0 {
             m.serialize_entry("dense_segments", &c.dense_segments)?;
             m.serialize_entry("dense_lookups", &c.dense_lookups)?;

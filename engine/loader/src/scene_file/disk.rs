@@ -138,6 +138,7 @@ pub(crate) fn disk(
             .iter()
             .map(|&[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
             .collect(),
+        shadow_terminator_offset: false,
     };
     Ok((triangles, m, attributes))
 }

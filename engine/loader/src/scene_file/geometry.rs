@@ -319,7 +319,9 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneE
 /// transform, normals by its inverse transpose; a mirroring transform swaps the corners of
 /// each triangle as [`to_world`] swaps its vertices. `flip_normals = true` (Mitsuba's
 /// `flip_normals`) reverses every triangle's winding, so the front is the other side, and
-/// the file's normals with it.
+/// the file's normals with it. `shadow_terminator_offset` (default true) lets rays leave
+/// a closed mesh from the smooth surface the normals imply (`risotto_systems::terminator`;
+/// an open mesh never does, [`MeshData::is_closed`](crate::mesh_file::MeshData::is_closed)).
 pub(crate) fn mesh(
     r: &Reader<'_>,
 ) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
@@ -342,7 +344,12 @@ pub(crate) fn mesh(
                 msg,
             )
         })?;
-    mesh_from_data(r, &path, &data, face_normals, flip_normals, m)
+    let terminator = r.bool("shadow_terminator_offset", Some(true))?;
+    let (triangles, m, mut attributes) =
+        mesh_from_data(r, &path, &data, face_normals, flip_normals, m)?;
+    attributes.shadow_terminator_offset =
+        terminator && !attributes.normals.is_empty() && data.is_closed();
+    Ok((triangles, m, attributes))
 }
 
 /// `triangles`: an indexed mesh written in the scene itself (a converted pbrt
@@ -433,14 +440,18 @@ pub(crate) fn triangles(
         triangles: tris,
         skipped: Default::default(),
     };
-    mesh_from_data(
+    let terminator = r.bool("shadow_terminator_offset", Some(true))?;
+    let (triangles, m, mut attributes) = mesh_from_data(
         r,
         std::path::Path::new("triangles"),
         &data,
         face_normals,
         false,
         m,
-    )
+    )?;
+    attributes.shadow_terminator_offset =
+        terminator && !attributes.normals.is_empty() && data.is_closed();
+    Ok((triangles, m, attributes))
 }
 
 /// A mesh's triangles and attributes placed by `m`, their winding reversed with
@@ -490,6 +501,7 @@ fn mesh_from_data(
         normals,
         uvs: data.uvs.clone(),
         corners: Vec::new(),
+        shadow_terminator_offset: false,
     };
     if !attributes.is_empty() {
         attributes.corners = data

@@ -198,6 +198,8 @@ impl Converter<'_> {
                 if flip {
                     e.set("flip_normals", true);
                 }
+                // Mitsuba has no shadow-terminator offset: render as it does.
+                e.set("shadow_terminator_offset", false);
                 set_transform(&mut e, &to_world);
             }
             other => {

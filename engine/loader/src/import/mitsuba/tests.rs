@@ -568,3 +568,19 @@ fn roughness_textures_become_roughness_patterns() {
     assert!(image["path"].as_str().unwrap().ends_with("rough.png"));
     assert_eq!(t(2)["alpha"]["pattern"].as_str(), Some("checker"));
 }
+
+#[test]
+fn meshes_are_imported_without_the_shadow_terminator_offset() {
+    let s = convert(&scene(
+        r#"<shape type="obj"><string name="filename" value="m.obj"/></shape>"#,
+    ))
+    .unwrap()
+    .scene;
+    let t = &s.shapes[0].table;
+    assert_eq!(t["type"].as_str(), Some("mesh"));
+    assert_eq!(
+        t["shadow_terminator_offset"].as_bool(),
+        Some(false),
+        "as Mitsuba"
+    );
+}

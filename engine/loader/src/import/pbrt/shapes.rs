@@ -89,6 +89,8 @@ impl Converter<'_> {
                 }
                 e.set("type", "mesh");
                 e.set("path", path_for_toml(&path, self.options.toml_dir));
+                // pbrt has no shadow-terminator offset: render as it does.
+                e.set("shadow_terminator_offset", false);
             }
             "sphere" => {
                 let r = p.float_where(&self.lx, "radius", 1.0, "> 0", |r| r > 0.0)?;
@@ -408,6 +410,8 @@ impl Converter<'_> {
         e.set("indices", toml::Value::Array(flat));
         if let Some(n) = normals {
             e.set("normals", n.to_vec());
+            // pbrt has no shadow-terminator offset: render as it does.
+            e.set("shadow_terminator_offset", false);
         }
         e.set("positions", pos);
         if let Some(u) = uv {

@@ -453,6 +453,11 @@ fn loop_subdivision_surfaces_become_triangles_with_normals() {
     assert_eq!(t["type"].as_str(), Some("triangles"));
     assert_eq!(t["indices"].as_array().unwrap().len(), 3 * 64);
     assert_eq!(
+        t["shadow_terminator_offset"].as_bool(),
+        Some(false),
+        "as pbrt"
+    );
+    assert_eq!(
         t["normals"].as_array().unwrap().len(),
         t["positions"].as_array().unwrap().len()
     );
