@@ -101,6 +101,7 @@ impl BxdfFactory for MixMaterial {
             fa: &*self.a,
             fb: &*self.b,
             amount,
+            arena,
         })
     }
 
@@ -121,11 +122,13 @@ pub struct MixBxdf<'a> {
     fb: &'a dyn BxdfFactory,
     /// The amount of `b` per point, in [0, 1].
     amount: &'a [f32],
+    /// The worker's per-batch arena, for the per-point columns of each call (plain data).
+    arena: &'a Bump,
 }
 
 impl Bxdf for MixBxdf<'_> {
     fn lobes(&self) -> LobeSampled {
-        LobeSampled(self.a.lobes().0 | self.b.lobes().0)
+        self.a.lobes() | self.b.lobes()
     }
 
     fn generate_samples(
@@ -138,23 +141,27 @@ impl Bxdf for MixBxdf<'_> {
         let (ca, cb) = (ctx.component(self.fa, 1), ctx.component(self.fb, 2));
         // The choice first, then both components sample every point: each point's sampler
         // advances by the same dimensions whichever component it takes.
-        let from_b: Vec<bool> = samplers
-            .iter_mut()
-            .take(n)
-            .zip(self.amount)
-            .map(|(s, &t)| s.next_1d() < t)
-            .collect();
+        let arena = self.arena;
+        let from_b: &[bool] = arena.alloc_slice_fill_iter(
+            samplers
+                .iter_mut()
+                .take(n)
+                .zip(self.amount)
+                .map(|(s, &t)| s.next_1d() < t),
+        );
         self.a.generate_samples(&ca, samplers, out);
+        // The table of `b`'s samples owns vectors, so it is not the arena's (no destructors).
         let mut sb = BxdfSamples::default();
         sb.reset(n);
         self.b.generate_samples(&cb, samplers, &mut sb);
-        let wi: Vec<Vec3> = (0..n)
-            .map(|i| if from_b[i] { sb.wi[i] } else { out.wi[i] })
-            .collect();
-        let (mut fa, mut pa) = (vec![Rgb::BLACK; n], vec![0.0f32; n]);
-        let (mut fb, mut pb) = (vec![Rgb::BLACK; n], vec![0.0f32; n]);
-        self.a.evaluate_samples(&ca, &wi, &mut fa, &mut pa);
-        self.b.evaluate_samples(&cb, &wi, &mut fb, &mut pb);
+        let wi: &[Vec3] =
+            arena.alloc_slice_fill_iter(
+                (0..n).map(|i| if from_b[i] { sb.wi[i] } else { out.wi[i] }),
+            );
+        let (fa, pa) = columns(arena, n);
+        let (fb, pb) = columns(arena, n);
+        self.a.evaluate_samples(&ca, wi, fa, pa);
+        self.b.evaluate_samples(&cb, wi, fb, pb);
         for i in 0..n {
             let t = self.amount[i];
             let (chosen, p_choice) = if from_b[i] {
@@ -197,8 +204,8 @@ impl Bxdf for MixBxdf<'_> {
         let n = ctx.num_points();
         let (ca, cb) = (ctx.component(self.fa, 1), ctx.component(self.fb, 2));
         self.a.evaluate_samples(&ca, wi, value, pdf);
-        let (mut fb, mut pb) = (vec![Rgb::BLACK; n], vec![0.0f32; n]);
-        self.b.evaluate_samples(&cb, wi, &mut fb, &mut pb);
+        let (fb, pb) = columns(self.arena, n);
+        self.b.evaluate_samples(&cb, wi, fb, pb);
         for i in 0..n {
             let t = self.amount[i];
             value[i] = value[i] * (1.0 - t) + fb[i] * t;
@@ -210,11 +217,19 @@ impl Bxdf for MixBxdf<'_> {
         let n = ctx.num_points();
         let (ca, cb) = (ctx.component(self.fa, 1), ctx.component(self.fb, 2));
         self.a.albedo(&ca, out);
-        let mut ab = vec![Rgb::BLACK; n];
-        self.b.albedo(&cb, &mut ab);
+        let ab = self.arena.alloc_slice_fill_copy(n, Rgb::BLACK);
+        self.b.albedo(&cb, ab);
         for i in 0..n {
             let t = self.amount[i];
             out[i] = out[i] * (1.0 - t) + ab[i] * t;
         }
     }
+}
+
+/// A zeroed value column and pdf column of `n` rows in `arena`.
+fn columns(arena: &Bump, n: usize) -> (&mut [Rgb], &mut [f32]) {
+    (
+        arena.alloc_slice_fill_copy(n, Rgb::BLACK),
+        arena.alloc_slice_fill_copy(n, 0.0f32),
+    )
 }

@@ -53,19 +53,17 @@ impl CompiledScene {
                 ));
             }
         }
-        let (what, stack) = match &check.subject {
-            None => ("the camera".to_owned(), self.camera_stack.clone()),
+        let (what, innermost) = match &check.subject {
+            None => ("the camera".to_owned(), self.camera_stack.innermost()),
             Some(name) => {
                 let s = index(name)?;
                 let stack = self.stack_around(s).ok_or_else(|| {
                     format!("shape \"{name}\" is instanced or empty: it cannot be checked")
                 })?;
-                (format!("shape \"{name}\""), stack)
+                (format!("shape \"{name}\""), stack.innermost())
             }
         };
-        let innermost = stack
-            .innermost()
-            .map(|e| self.shapes[e.shape as usize].name.as_str());
+        let innermost = innermost.map(|e| self.shapes[e.shape as usize].name.as_str());
         if innermost.is_some_and(|n| check.within.iter().any(|w| w == n))
             || (innermost.is_none() && check.within.is_empty())
         {
