@@ -650,6 +650,7 @@ fn read_shape(
             "transform",
             "face_normals",
             "flip_normals",
+            "flip_tex_coords",
             "shadow_terminator_offset",
         ],
         "triangles" => &[
@@ -721,10 +722,14 @@ fn read_shape(
             kind: "quad",
             triangles: triangles_of(geometry::quad(r)?),
         },
-        "rectangle" => ShapeGeometry::Triangles {
-            kind: "quad",
-            triangles: triangles_of(geometry::rectangle(r)?),
-        },
+        "rectangle" => {
+            let (triangles, m, a) = geometry::rectangle(r)?;
+            attributes = a;
+            ShapeGeometry::Triangles {
+                kind: "quad",
+                triangles: triangles_of((triangles, m)),
+            }
+        }
         "box" => ShapeGeometry::Triangles {
             kind: "box",
             triangles: triangles_of(geometry::cuboid(r)?),

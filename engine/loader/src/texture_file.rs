@@ -56,6 +56,23 @@ pub fn read_texture_channels(path: &Path, channels: TextureChannels) -> Result<T
     Texture::new(width, height, texels).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// [`read_texture_channels`] with the rows in reverse order: the texture of an image whose
+/// `v = 0` is its top row (Mitsuba's bitmaps) read by risotto's lookup, whose `v = 0` is the
+/// bottom row.
+pub fn read_texture_channels_top_down(
+    path: &Path,
+    channels: TextureChannels,
+) -> Result<Texture, String> {
+    let t = read_texture_channels(path, channels)?;
+    let (width, height) = t.size();
+    let texels: Vec<_> = (0..height)
+        .rev()
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| t.texel(x, y))
+        .collect();
+    Texture::new(width, height, texels).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 fn check_size(path: &Path, w: u64, h: u64) -> Result<(), String> {
     if w.saturating_mul(h) > MAX_TEXTURE_PIXELS {
         return Err(format!(
@@ -216,6 +233,31 @@ mod tests {
         assert!(read_texture(&dir.join("x.jpg"))
             .unwrap_err()
             .contains(".png or an .exr"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A top-down texture (Mitsuba's bitmap convention) is the file with its rows reversed,
+    /// so that risotto's lookup (v = 0 at the bottom row) reads the file's top row at v = 0.
+    #[test]
+    fn top_down_texture_reverses_the_rows() {
+        let dir = std::env::temp_dir().join(format!("risotto-topdown-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("rows.png");
+        // 2 x 3 raw RGB, rows from the top: red-ish, green-ish, blue-ish.
+        #[rustfmt::skip]
+        let rows = [200, 0, 0, 201, 0, 0,  0, 200, 0, 0, 201, 0,  0, 0, 200, 0, 0, 201];
+        write_png(&png, 2, 3, png::ColorType::Rgb, &rows);
+        let plain = read_texture_channels(&png, TextureChannels::RawRgb).unwrap();
+        let flipped = read_texture_channels_top_down(&png, TextureChannels::RawRgb).unwrap();
+        assert_eq!(flipped.size(), (2, 3));
+        for y in 0..3 {
+            for x in 0..2 {
+                assert_eq!(flipped.texel(x, y), plain.texel(x, 2 - y));
+            }
+        }
+        // At v = 1/6 (the bottom row's centre in risotto's lookup) the flipped texture reads
+        // the file's top row.
+        assert_eq!(flipped.lookup(0.25, 1.0 / 6.0), plain.texel(0, 0));
         std::fs::remove_dir_all(&dir).ok();
     }
 

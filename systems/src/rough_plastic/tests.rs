@@ -159,3 +159,40 @@ fn below_the_surface_is_black() {
     assert_eq!(c.eval(Rgb::WHITE, Vec3::Z, below), (Rgb::BLACK, 0.0));
     assert!(c.sample(Rgb::WHITE, below, Vec2::splat(0.5), 0.5).is_none());
 }
+
+/// The diffuse lobe against Mitsuba 3's own `roughplastic` (3.9.1, `scalar_rgb`: GGX,
+/// `int_ior` bk7, `ext_ior` air, `diffuse_reflectance` (0.02, 0.2, 0.1), its component 1
+/// evaluated with `bsdf.eval` at the same directions): the coat's tables are Mitsuba's, so
+/// the values agree to the quadrature (measured within 0.1 %). With the height-correlated
+/// `G2` weighting the tables had before, alpha 1 at grazing was 94 % above Mitsuba.
+#[test]
+fn diffuse_lobe_matches_mitsubas_roughplastic() {
+    use crate::microfacet::Ggx;
+    let eta = 1.5046 / 1.000277;
+    // (alpha, cos of the viewer's direction, cos of the light's, Mitsuba's green channel).
+    let mitsuba = [
+        (0.1, 1.0, 1.0, 0.0580769),
+        (0.1, 0.5, 0.8, 0.0436153),
+        (0.1, 0.2, 0.3, 0.0108902),
+        (0.4, 1.0, 1.0, 0.0388411),
+        (0.4, 0.5, 0.8, 0.027847),
+        (0.4, 0.2, 0.3, 0.00766929),
+        (1.0, 1.0, 1.0, 0.0247171),
+        (1.0, 0.5, 0.8, 0.0133931),
+        (1.0, 0.2, 0.3, 0.00222402),
+    ];
+    for (alpha, cos_o, cos_i, want) in mitsuba {
+        let coat = RoughPlastic::new(Ggx::isotropic(alpha), eta, Rgb::BLACK, false);
+        let wo = Vec3::new((1.0f32 - cos_o * cos_o).sqrt(), 0.0, cos_o);
+        let s = (1.0f32 - cos_i * cos_i).sqrt();
+        let wi = Vec3::new(-0.3 * s, 0.953_939_2 * s, cos_i);
+        let (f, _) = coat.eval(Rgb::new(0.02, 0.2, 0.1), wo, wi);
+        let rel = (f.g - want) / want;
+        assert!(
+            rel.abs() < 3e-3,
+            "alpha {alpha}, cosines {cos_o} {cos_i}: {} vs Mitsuba {want} ({:+.2} %)",
+            f.g,
+            100.0 * rel
+        );
+    }
+}

@@ -259,8 +259,12 @@ pub(crate) fn quad(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneErr
 }
 
 /// `rectangle`: Mitsuba's rectangle, the square [-1, 1]^2 in the local xy plane with
-/// normal +z, placed by `transform`.
-pub(crate) fn rectangle(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneError> {
+/// normal +z, placed by `transform`, with Mitsuba's texture coordinates `(u, v) = ((x + 1) / 2,
+/// (y + 1) / 2)` of the local point (mitsuba3 `src/shapes/rectangle.cpp`) as attributes
+/// (corners swapped under a mirroring transform, as [`to_world`] swaps the vertices).
+pub(crate) fn rectangle(
+    r: &Reader<'_>,
+) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
     let m = read_transform(r)?;
     let tris = to_world(
         &m,
@@ -270,7 +274,23 @@ pub(crate) fn rectangle(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), Sce
             DVec3::new(0.0, 2.0, 0.0),
         ),
     );
-    Ok((tris, m))
+    // quad_local's vertices: (-1, -1), (1, -1), (1, 1), (-1, 1); triangles (0, 1, 2), (0, 2, 3).
+    let flip = m.matrix3.determinant() < 0.0;
+    let attributes = VertexAttributes {
+        normals: Vec::new(),
+        uvs: vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ],
+        corners: [[0, 1, 2], [0, 2, 3]]
+            .into_iter()
+            .map(|[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
+            .collect(),
+        shadow_terminator_offset: false,
+    };
+    Ok((tris, m, attributes))
 }
 
 /// The 12 triangles of the axis-aligned box [lo, hi], outward winding.
@@ -322,6 +342,8 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneE
 /// the file's normals with it. `shadow_terminator_offset` (default true) lets rays leave
 /// a closed mesh from the smooth surface the normals imply (`risotto_systems::terminator`;
 /// an open mesh never does, [`MeshData::is_closed`](crate::mesh_file::MeshData::is_closed)).
+/// `flip_tex_coords = true` (Mitsuba's OBJ default) reads each texture coordinate `v` as
+/// `1 - v`.
 pub(crate) fn mesh(
     r: &Reader<'_>,
 ) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
@@ -345,10 +367,17 @@ pub(crate) fn mesh(
             )
         })?;
     let terminator = r.bool("shadow_terminator_offset", Some(true))?;
+    let flip_tex_coords = r.bool("flip_tex_coords", Some(false))?;
     let (triangles, m, mut attributes) =
         mesh_from_data(r, &path, &data, face_normals, flip_normals, m)?;
     attributes.shadow_terminator_offset =
         terminator && !attributes.normals.is_empty() && data.is_closed();
+    if flip_tex_coords {
+        // Mitsuba's OBJ convention (`flip_tex_coords`, on by default there): v = 1 - v.
+        for uv in &mut attributes.uvs {
+            uv.y = 1.0 - uv.y;
+        }
+    }
     Ok((triangles, m, attributes))
 }
 

@@ -167,8 +167,10 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
             }
         }
         "image" => {
-            use crate::texture_file::{read_texture_channels, TextureChannels};
-            t.deny_unknown(&["pattern", "path", "channel", "raw"])?;
+            use crate::texture_file::{
+                read_texture_channels, read_texture_channels_top_down, TextureChannels,
+            };
+            t.deny_unknown(&["pattern", "path", "channel", "raw", "v_origin"])?;
             let path = t
                 .path("path")?
                 .ok_or_else(|| t.error(None, "an image pattern needs `path = \"file.png\"`"))?;
@@ -188,12 +190,32 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                 (TextureChannels::Rgb, true) => TextureChannels::RawRgb,
                 (c, _) => c,
             };
+            // Where `v = 0` is: the bottom row (risotto's and pbrt's convention) or the top
+            // row (Mitsuba's bitmaps).
+            let top_down = match t.string("v_origin", Some("bottom"))?.as_str() {
+                "bottom" => false,
+                "top" => true,
+                other => {
+                    return Err(t.error(
+                        Some("v_origin"),
+                        format!("must be \"bottom\" or \"top\", got \"{other}\""),
+                    ))
+                }
+            };
             // Decoded once per scene load, shared by every pattern naming the file.
             let texture = t
                 .side_files()
-                .get_or_load(&path, &format!("texture {channels:?}"), || {
-                    read_texture_channels(&path, channels)
-                })
+                .get_or_load(
+                    &path,
+                    &format!("texture {channels:?} top-down {top_down}"),
+                    || {
+                        if top_down {
+                            read_texture_channels_top_down(&path, channels)
+                        } else {
+                            read_texture_channels(&path, channels)
+                        }
+                    },
+                )
                 .map_err(|e| t.error(Some("path"), e))?;
             Node::Image(texture)
         }

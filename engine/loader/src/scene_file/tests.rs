@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use risotto_components::Rgb;
 
 use super::*;
@@ -1352,6 +1352,77 @@ to = [0, 0, 0]
     // A rectangle's normal is carried like a normal (inverse transpose): +z -> -z.
     for t in triangles(&s.shapes[1]) {
         assert!(normal(t).distance(Vec3::NEG_Z) < 1e-6);
+    }
+}
+
+/// `flip_tex_coords` reads a mesh file's `v` as `1 - v`; without it the file's values stand.
+#[test]
+fn flip_tex_coords_turns_v_upside_down() {
+    let dir = scratch_dir("flip_tex_coords");
+    std::fs::write(
+        dir.join("t.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.75\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let uvs = |flip: bool| {
+        let text = format!(
+            "[materials.m]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"mesh\"\npath = \"t.obj\"\n\
+             material = \"m\"\nflip_tex_coords = {flip}\n[camera]\nfov = 40\n\
+             from = [0, 0, 5]\nto = [0, 0, 0]\n"
+        );
+        let path = dir.join("s.toml");
+        std::fs::write(&path, text).unwrap();
+        let s = load_scene(&path).unwrap();
+        let a = &s.shapes[0].attributes;
+        a.corners[0].map(|c| a.uvs[c as usize])
+    };
+    let stored = uvs(false);
+    assert_eq!(
+        stored,
+        [
+            Vec2::new(0.1, 0.2),
+            Vec2::new(0.3, 0.4),
+            Vec2::new(0.5, 0.75)
+        ]
+    );
+    let flipped = uvs(true);
+    for (f, s) in flipped.iter().zip(&stored) {
+        assert_eq!((f.x, f.y), (s.x, 1.0 - s.y));
+    }
+}
+
+/// A rectangle's texture coordinates are Mitsuba's `((x + 1) / 2, (y + 1) / 2)` of the local
+/// point (mitsuba3 `rectangle.cpp`): checked at every world-space corner, also under a
+/// mirroring transform (which swaps the triangles' corners along with their vertices).
+#[test]
+fn rectangle_uv_is_mitsubas_local_parameterisation() {
+    for (transform, local_of) in [
+        (
+            "[{ scale = [2, 3, 1] }, { translate = [0, 0, 1] }]",
+            (|p: Vec3| Vec3::new(p.x / 2.0, p.y / 3.0, p.z - 1.0)) as fn(Vec3) -> Vec3,
+        ),
+        ("[{ scale = [-1, 1, 1] }]", |p: Vec3| {
+            Vec3::new(-p.x, p.y, p.z)
+        }),
+    ] {
+        let text = format!(
+            "[materials.m]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"rectangle\"\n\
+             material = \"m\"\ntransform = {transform}\n[camera]\nfov = 40\n\
+             from = [0, 0, 5]\nto = [0, 0, 0]\n"
+        );
+        let s = parse(&text).unwrap();
+        let shape = &s.shapes[0];
+        let tris = triangles(shape);
+        let a = &shape.attributes;
+        assert_eq!((a.corners.len(), a.uvs.len()), (2, 4), "{transform}");
+        for (t, corners) in tris.iter().zip(&a.corners) {
+            for k in 0..3 {
+                let local = local_of(t[k]);
+                let uv = a.uvs[corners[k] as usize];
+                let want = Vec2::new((local.x + 1.0) / 2.0, (local.y + 1.0) / 2.0);
+                assert!(uv.distance(want) < 1e-6, "{transform}: {uv} at {local}");
+            }
+        }
     }
 }
 

@@ -269,20 +269,12 @@ impl Converter<'_> {
             "blendbsdf" => {
                 // Mitsuba's blend, (1 - weight) first + weight second: risotto's `mix` of
                 // the two nested BSDFs, each written as a material of its own.
-                let weight = self
-                    .colour(&p, "weight", SpectrumUse::Reflectance)?
-                    .ok_or_else(|| {
-                        p.error(
-                            Some("weight"),
-                            "a blendbsdf needs its weight (a float or a texture)",
-                        )
-                    })?;
-                let weight = match weight {
-                    toml::Value::Array(a) if a.len() == 3 && a[0] == a[1] && a[1] == a[2] => {
-                        a[0].clone()
-                    }
-                    other => other,
-                };
+                let weight = self.float_or_texture(&p, "weight")?.ok_or_else(|| {
+                    p.error(
+                        Some("weight"),
+                        "a blendbsdf needs its weight (a float or a texture)",
+                    )
+                })?;
                 let inner = p.unnamed("bsdf")?;
                 let [a, b] = &inner[..] else {
                     return Err(p.error(None, "a blendbsdf blends two nested BSDFs"));
@@ -300,14 +292,8 @@ impl Converter<'_> {
             }
             "mask" => {
                 let opacity = self
-                    .colour(&p, "opacity", SpectrumUse::Reflectance)?
+                    .float_or_texture(&p, "opacity")?
                     .unwrap_or(toml::Value::Float(0.5));
-                let opacity = match opacity {
-                    toml::Value::Array(a) if a.len() == 3 && a[0] == a[1] && a[1] == a[2] => {
-                        a[0].clone()
-                    }
-                    other => other,
-                };
                 let inner = p.one_unnamed("bsdf")?.ok_or_else(|| {
                     p.error(None, "a mask needs the BSDF it masks (a nested <bsdf>)")
                 })?;
@@ -369,9 +355,24 @@ impl Converter<'_> {
     /// is grey and within `(0, 1]`.
     fn alpha(&self, p: &Props<'_>, name: &str) -> Result<Option<toml::Value>, SceneError> {
         if let Ok(Some(Colour::Texture(t))) = p.colour(name, SpectrumUse::Reflectance) {
-            return Ok(Some(self.texture(&t)?));
+            return Ok(Some(self.float_texture(&t)?));
         }
         Ok(p.float(name)?.map(toml::Value::Float))
+    }
+
+    /// A float parameter that may be a texture (a mask's opacity, a blend weight) as TOML:
+    /// a number when grey, else an RGB array or the pattern of a texture read as a float.
+    fn float_or_texture(
+        &self,
+        p: &Props<'_>,
+        name: &str,
+    ) -> Result<Option<toml::Value>, SceneError> {
+        Ok(match p.colour(name, SpectrumUse::Reflectance)? {
+            None => None,
+            Some(Colour::Rgb(c)) if c[0] == c[1] && c[1] == c[2] => Some(toml::Value::Float(c[0])),
+            Some(Colour::Rgb(c)) => Some(rgb(c)),
+            Some(Colour::Texture(t)) => Some(self.float_texture(&t)?),
+        })
     }
 
     /// A colour parameter as TOML: an RGB array or a pattern table.

@@ -198,6 +198,11 @@ impl Converter<'_> {
                 if flip {
                     e.set("flip_normals", true);
                 }
+                // Mitsuba reads an OBJ's texture coordinates upside down unless told not to
+                // (`flip_tex_coords`, default true for `obj`, false for `ply`).
+                if p.boolean("flip_tex_coords")?.unwrap_or(kind == "obj") {
+                    e.set("flip_tex_coords", true);
+                }
                 // Mitsuba has no shadow-terminator offset: render as it does.
                 e.set("shadow_terminator_offset", false);
                 set_transform(&mut e, &to_world);

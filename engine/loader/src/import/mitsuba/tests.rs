@@ -560,8 +560,10 @@ fn roughness_textures_become_roughness_patterns() {
     let t = |i: usize| &s.materials[i].1.table;
     let checker = t(0)["alpha"].as_table().unwrap();
     assert_eq!(checker["pattern"].as_str(), Some("checker"));
-    assert_eq!(floats(&checker["a"]), [0.1; 3]);
-    assert_eq!(floats(&checker["b"]), [0.4; 3]);
+    // Read as a float (Mitsuba's `eval_1`), a checkerboard's colours are the other way
+    // round from a colour checkerboard's (`float_texture`).
+    assert_eq!(floats(&checker["a"]), [0.4; 3]);
+    assert_eq!(floats(&checker["b"]), [0.1; 3]);
     assert_eq!(t(1)["alpha_u"].as_float(), Some(0.3));
     let image = t(1)["alpha_v"].as_table().unwrap();
     assert_eq!(image["pattern"].as_str(), Some("image"));
@@ -583,4 +585,22 @@ fn meshes_are_imported_without_the_shadow_terminator_offset() {
         Some(false),
         "as Mitsuba"
     );
+}
+
+/// Mitsuba reads an OBJ's texture coordinates as `(u, 1 - v)` unless `flip_tex_coords` is
+/// false, a PLY's as stored unless it is true (checked with Mitsuba 3.9.1's own loaders).
+#[test]
+fn obj_texture_coordinates_are_flipped_as_mitsuba_flips_them() {
+    let body = r#"
+<shape type="obj"><string name="filename" value="a.obj"/></shape>
+<shape type="obj"><string name="filename" value="b.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
+<shape type="ply"><string name="filename" value="c.ply"/></shape>
+<shape type="ply"><string name="filename" value="d.ply"/><boolean name="flip_tex_coords" value="true"/></shape>"#;
+    let s = convert(&scene(body)).unwrap().scene;
+    let flipped: Vec<bool> = s
+        .shapes
+        .iter()
+        .map(|shape| shape.table.get("flip_tex_coords").and_then(|v| v.as_bool()) == Some(true))
+        .collect();
+    assert_eq!(flipped, [true, false, false, true]);
 }

@@ -11,7 +11,27 @@ use super::{props, Converter};
 use crate::import::spectrum::SpectrumUse;
 
 impl Converter<'_> {
-    /// The pattern table of a `<texture>`.
+    /// The pattern table of a `<texture>` read as a float (a roughness, a mask's opacity, a
+    /// blend weight: Mitsuba's `eval_1`). Mitsuba 3.9.1's `checkerboard` answers `eval_1`
+    /// with the colours the other way round from its `eval` (`color1` where `u mod 1` and
+    /// `v mod 1` are both below or both above 1/2, measured with its Python bindings at the
+    /// four cell centres), so a checkerboard read as a float swaps `a` and `b` to render as
+    /// Mitsuba does.
+    pub(super) fn float_texture(&self, node: &Rc<Node>) -> Result<toml::Value, SceneError> {
+        let mut t = self.texture(node)?;
+        if let toml::Value::Table(table) = &mut t {
+            if table.get("pattern").and_then(|v| v.as_str()) == Some("checker") {
+                let (a, b) = (table.remove("a"), table.remove("b"));
+                if let (Some(a), Some(b)) = (a, b) {
+                    table.insert("a".into(), b);
+                    table.insert("b".into(), a);
+                }
+            }
+        }
+        Ok(t)
+    }
+
+    /// The pattern table of a `<texture>` read as a colour (Mitsuba's `eval`).
     pub(super) fn texture(&self, node: &Rc<Node>) -> Result<toml::Value, SceneError> {
         let p = props(self.cx, node)?;
         let kind = p.kind()?;
@@ -67,6 +87,9 @@ impl Converter<'_> {
                 }
                 t.insert("pattern".into(), "image".into());
                 t.insert("path".into(), self.file_path(&p.node, &file).into());
+                // Mitsuba's bitmap has v = 0 at the image's top row (measured with its
+                // Python bindings); risotto's image pattern at the bottom row by default.
+                t.insert("v_origin".into(), "top".into());
                 if raw {
                     t.insert("raw".into(), true.into());
                 }
@@ -81,8 +104,9 @@ impl Converter<'_> {
                         }
                     }
                 };
-                // Mitsuba: color0 where u mod 1 and v mod 1 are both below or both above
-                // 1/2, i.e. even parity of floor(2u) + floor(2v): risotto's `a` at scale 2.
+                // Mitsuba's `eval`: color0 where u mod 1 and v mod 1 are both below or both
+                // above 1/2, i.e. even parity of floor(2u) + floor(2v): risotto's `a` at
+                // scale 2 (its `eval_1` is the other way round: `float_texture`).
                 t.insert("pattern".into(), "checker".into());
                 t.insert("space".into(), "uv".into());
                 t.insert("scale".into(), toml::Value::Float(2.0 * uv_scale));
