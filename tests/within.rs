@@ -175,6 +175,77 @@ fn mitsuba_sensor_and_exterior_media_are_checked_against_the_geometry() {
     load(&mitsuba(3.0, false)).unwrap();
 }
 
+/// Where Mitsuba leaves a medium unset it means vacuum: the sensor without a medium, a
+/// medium's boundary without an exterior (leaving it puts the ray in vacuum), a glass or
+/// null boundary without media (Mitsuba keeps the medium across it; risotto's volume would
+/// be empty). The importer states "no medium" around each when the scene has media, so a
+/// scene where Mitsuba's and risotto's media differ is an error, not another image.
+#[test]
+fn mitsuba_unset_media_are_checked_to_be_vacuum() {
+    let load = |text: &str| compile_as(text, "scene.xml");
+    // The camera inside the fog box without a sensor medium: Mitsuba renders it in vacuum.
+    let e = load(&mitsuba(8.0, false)).unwrap_err();
+    assert!(
+        e.contains("the camera is stated to be in no medium") && e.contains("\"box\""),
+        "{e}"
+    );
+    let body = |shapes: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+    <medium type="homogeneous" id="fog"><rgb name="sigma_t" value="0.1"/></medium>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 9" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <shape type="sphere" id="outer"><float name="radius" value="3"/><bsdf type="null"/><ref id="fog" name="interior"/></shape>
+{shapes}
+</scene>"#
+        )
+    };
+    // A fog ball nested in the fog ball with no exterior: leaving it, Mitsuba's ray is in
+    // vacuum; risotto's back in the outer fog.
+    let e = load(&body(
+        r#"<shape type="sphere" id="inner"><bsdf type="null"/><ref id="fog" name="interior"/></shape>"#,
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("shape \"inner\" is stated to be in no medium")
+            && e.contains("\"outer\", which holds a medium"),
+        "{e}"
+    );
+    // Stated as Mitsuba needs it (the exterior is the fog), it loads.
+    load(&body(
+        r#"<shape type="sphere" id="inner"><bsdf type="null"/><ref id="fog" name="interior"/><ref id="fog" name="exterior"/></shape>"#,
+    ))
+    .unwrap();
+    // A clear glass ball in the fog: Mitsuba keeps the fog inside it, risotto's glass
+    // volume would be empty.
+    let e = load(&body(
+        r#"<shape type="sphere" id="glass"><bsdf type="dielectric"/></shape>"#,
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("shape \"glass\" is stated to be in no medium"),
+        "{e}"
+    );
+    // A fog ball reaching into the outer one with a part of its surface only (its first
+    // primitives outside): found by the probes spread over its surface.
+    let e = load(&body(
+        r#"<shape type="sphere" id="part"><point name="center" x="0" y="0" z="3.5"/><bsdf type="null"/><ref id="fog" name="interior"/></shape>"#,
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("shape \"part\" is stated to be in no medium"),
+        "{e}"
+    );
+    // A diffuse ball in the fog bounds no volume: nothing to check, it loads.
+    load(&body(
+        r#"<shape type="sphere" id="white"><bsdf type="diffuse"/></shape>"#,
+    ))
+    .unwrap();
+}
+
 #[test]
 fn pbrt_camera_and_outside_media_are_checked_against_the_geometry() {
     // The camera at z = 5 in fog, a fog ball of radius `r` at the origin, and a small ball

@@ -25,7 +25,7 @@ mod volume_lights;
 mod within;
 
 pub use instances::{InstanceOf, InstancedShapes, ObjectDef, ObjectShape};
-pub use within::WithinCheck;
+pub use within::{WithinCheck, NO_MEDIUM};
 
 /// Name of an entity (shape or light), used in messages and stats.
 #[derive(Clone, Debug, PartialEq, Eq)]

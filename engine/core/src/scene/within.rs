@@ -11,15 +11,28 @@
 
 use super::*;
 
-/// "The innermost volume around `subject` is the interior of one of `within`": checked by
-/// [`Scene::compile`].
+/// The scene-file value of `within` stating that no medium surrounds the camera or shape
+/// ([`WithinCheck::no_medium`]).
+pub const NO_MEDIUM: &str = "no medium";
+
+/// Points of a shape from which a "no medium" statement is checked ([`WithinCheck::no_medium`]).
+const NO_MEDIUM_PROBES: usize = 64;
+
+/// "The innermost volume around `subject` is the interior of one of `within`", or with
+/// `no_medium`, "no medium surrounds `subject`": checked by [`Scene::compile`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct WithinCheck {
     /// The camera (`None`) or the shape of this name.
     pub subject: Option<String>,
     /// Shape names; the innermost volume around the subject must be the interior of one of
-    /// them. Empty: the subject is in no volume.
+    /// them. Empty (and `no_medium` false): the subject is in no volume.
     pub within: Vec<String>,
+    /// The statement is "no medium surrounds the subject" instead (`within` is then empty):
+    /// the innermost volume around it, if any, holds no medium (its material computes no
+    /// interior, as a clear glass's), checked from points spread over a shape's surface
+    /// (overlapping volumes). What formats that switch media at each crossing of a medium
+    /// interface (Mitsuba 3) mean where they leave a medium unset.
+    pub no_medium: bool,
     /// Where the statement was written (`within` in a scene file), for errors.
     pub at: Option<crate::diagnostics::Location>,
 }
@@ -34,6 +47,31 @@ impl CompiledScene {
             .geometry
             .sample_prim(prim, risotto_components::Vec2::splat(1.0 / 3.0));
         Some(self.probe_stack_excluding(point, -normal, Some(shape)))
+    }
+
+    /// [`Self::stack_around`] from about `count` points of shape `shape`: primitives evenly
+    /// spread over its primitive list, and on each (a shape of few primitives: an analytic
+    /// sphere is one) a grid of points over the primitive's sample square.
+    pub fn stacks_around_spread(&self, shape: u32, count: usize) -> Vec<VolumeStack> {
+        let count = count.max(1);
+        let prims: Vec<u32> = (0..self.geometry.num_flat_prims() as u32)
+            .filter(|&p| self.shape_of_prim(p) == shape)
+            .collect();
+        let step = prims.len().div_ceil(count).max(1);
+        let per_prim = count.div_ceil(prims.len().max(1));
+        let side = (per_prim as f64).sqrt().ceil() as usize;
+        let mut stacks = Vec::new();
+        for &prim in prims.iter().step_by(step) {
+            for k in 0..side * side {
+                let u = risotto_components::Vec2::new(
+                    ((k % side) as f32 + 0.5) / side as f32,
+                    ((k / side) as f32 + 0.5) / side as f32,
+                );
+                let (point, normal) = self.geometry.sample_prim(prim, u);
+                stacks.push(self.probe_stack_excluding(point, -normal, Some(shape)));
+            }
+        }
+        stacks
     }
 
     /// Runs one [`WithinCheck`]; the message of a failed one.
@@ -63,6 +101,32 @@ impl CompiledScene {
                 (format!("shape \"{name}\""), stack.innermost())
             }
         };
+        if check.no_medium {
+            let holds_medium = |shape: u32| {
+                let info = &self.material_info[self.shapes[shape as usize].material as usize];
+                info.hints.contains(InstanceHints::COMPUTES_INTERIOR)
+            };
+            // A shape may reach into a volume with part of its surface only (overlapping
+            // volumes): the walk is repeated from points spread over its primitives.
+            let innermost_volumes: Vec<u32> = match &check.subject {
+                None => innermost.map(|e| e.shape).into_iter().collect(),
+                Some(name) => {
+                    let s = index(name)?;
+                    self.stacks_around_spread(s, NO_MEDIUM_PROBES)
+                        .iter()
+                        .filter_map(|st| st.innermost().map(|e| e.shape))
+                        .collect()
+                }
+            };
+            return match innermost_volumes.into_iter().find(|&v| holds_medium(v)) {
+                None => Ok(()),
+                Some(v) => Err(format!(
+                    "{what} is stated to be in no medium, but (at least part of) it lies in \
+                     the interior of \"{}\", which holds a medium",
+                    self.shapes[v as usize].name
+                )),
+            };
+        }
         let innermost = innermost.map(|e| self.shapes[e.shape as usize].name.as_str());
         if innermost.is_some_and(|n| check.within.iter().any(|w| w == n))
             || (innermost.is_none() && check.within.is_empty())

@@ -23,6 +23,7 @@ use std::rc::Rc;
 use risotto_engine::diagnostics::SceneError;
 
 use super::{ImportOptions, ImportedScene, TomlScene};
+use risotto_engine::scene::NO_MEDIUM;
 use values::{describe, Cx, Props};
 
 /// Converts a Mitsuba 3 XML scene.
@@ -46,6 +47,7 @@ pub fn import(
         sensor_medium: None,
         medium_holders: Vec::new(),
         exteriors: Vec::new(),
+        no_medium_outside: Vec::new(),
         path_integrator: None,
         clip_planes: None,
         shape_bounds: Vec::new(),
@@ -149,6 +151,9 @@ struct Converter<'a> {
     /// Each top-level shape with an exterior medium: the medium and the shape's index in
     /// `scene.shapes`.
     exteriors: Vec<(Rc<xml::Node>, usize)>,
+    /// Each top-level shape bounding a volume with no exterior stated (Mitsuba: vacuum
+    /// outside it, or the medium unchanged across it): its index in `scene.shapes`.
+    no_medium_outside: Vec<usize>,
     /// The `path` integrator, when the scene uses it (it ignores media in Mitsuba).
     path_integrator: Option<Rc<xml::Node>>,
     /// The sensor, its position and its near and far clip distances.
@@ -268,6 +273,16 @@ impl Converter<'_> {
                 return Err(unheld(m, "this exterior medium"));
             }
             self.scene.shapes[*shape].set("within", within);
+        }
+        // Where Mitsuba leaves a medium unset (the sensor's, a volume boundary's exterior),
+        // it means vacuum: checked when the scene has media at all.
+        if !self.medium_holders.is_empty() {
+            if self.sensor_medium.is_none() {
+                self.scene.camera.set("within", NO_MEDIUM);
+            }
+            for &shape in &self.no_medium_outside {
+                self.scene.shapes[shape].set("within", NO_MEDIUM);
+            }
         }
         Ok(())
     }

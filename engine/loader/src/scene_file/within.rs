@@ -4,7 +4,7 @@
 
 use super::raw::Value;
 use super::{section, Arc, Location, Reader, SceneError, SceneErrorKind, ShapeDesc, Source};
-use risotto_engine::scene::WithinCheck;
+use risotto_engine::scene::{WithinCheck, NO_MEDIUM};
 
 /// The checks of `camera.within` and of every `shapes[i].within`, in file order (the camera
 /// first).
@@ -16,10 +16,11 @@ pub(super) fn read_within(
     let mut checks = Vec::new();
     if let Some(node) = section(top, "camera")? {
         let r = Reader::new(top.src, node, "camera");
-        if let Some(names) = names(&r, shapes)? {
+        if let Some((names, no_medium)) = names(&r, shapes)? {
             checks.push(WithinCheck {
                 subject: None,
                 within: names,
+                no_medium,
                 at: located(&r, src, "camera"),
             });
         }
@@ -35,10 +36,11 @@ pub(super) fn read_within(
         };
         let entity = format!("shapes[{i}] \"{name}\"");
         let r = Reader::new(top.src, node, &entity);
-        if let Some(within) = names(&r, shapes)? {
+        if let Some((within, no_medium)) = names(&r, shapes)? {
             checks.push(WithinCheck {
                 subject: Some(name),
                 within,
+                no_medium,
                 at: located(&r, src, &entity),
             });
         }
@@ -52,8 +54,22 @@ fn located(r: &Reader<'_>, src: &Arc<Source>, entity: &str) -> Option<Location> 
         .map(|node| Location::new(src, node.span(), entity, Some("within")))
 }
 
-/// `within = ["shape", ...]`: names of shapes of the scene, no repeats.
-fn names(r: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<Option<Vec<String>>, SceneError> {
+/// `within = ["shape", ...]`: names of shapes of the scene, no repeats; or `within = "no
+/// medium"` (the names empty and the flag set).
+fn names(r: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<Option<(Vec<String>, bool)>, SceneError> {
+    if let Some(node) = r.get("within") {
+        if let Value::String(s) = &node.value {
+            if s == NO_MEDIUM {
+                return Ok(Some((Vec::new(), true)));
+            }
+            return Err(r.error(
+                SceneErrorKind::InvalidValue,
+                &node.span(),
+                Some("within"),
+                format!("must be an array of shape names or \"{NO_MEDIUM}\", got \"{s}\""),
+            ));
+        }
+    }
     let Some(items) = r.array_opt("within")? else {
         return Ok(None);
     };
@@ -80,5 +96,5 @@ fn names(r: &Reader<'_>, shapes: &[ShapeDesc]) -> Result<Option<Vec<String>>, Sc
         }
         out.push(name.clone());
     }
-    Ok(Some(out))
+    Ok(Some((out, false)))
 }

@@ -258,7 +258,33 @@ impl Converter<'_> {
             e.set("name", name.as_str());
         }
         let interior_medium = interior.as_ref().map(|(m, _)| m.clone());
+        let has_interior = interior.is_some();
         let material = self.material(bsdf, interior, node)?;
+        // Mitsuba leaves the medium unchanged across a shape without media, and switches to
+        // vacuum leaving a shape whose exterior is unset; risotto nests volumes. The two
+        // agree when no medium surrounds such a shape that bounds a volume (a medium's
+        // boundary, a glass, a null boundary): finish_media writes that check (`within =
+        // "no medium"`) when the scene has media, so a scene where they disagree is an
+        // error at load, not another image.
+        let bounds_volume = has_interior
+            || self
+                .scene
+                .materials
+                .iter()
+                .find(|(n, _)| *n == material)
+                .and_then(|(_, m)| m.table.get("type"))
+                .and_then(|t| t.as_str())
+                .is_some_and(|t| matches!(t, "dielectric" | "rough_dielectric" | "interface"));
+        let mut name = name;
+        if self.group_shapes.is_none() && bounds_volume && exterior.is_none() {
+            if name.is_none() {
+                let line = self.cx.doc.origin(node).1;
+                let n = Converter::unique(&mut self.names, &format!("{kind} at line {line}"));
+                e.set("name", n.as_str());
+                name = Some(n);
+            }
+            self.no_medium_outside.push(self.scene.shapes.len());
+        }
         e.set("material", material);
         if let Some(em) = p.one_unnamed("emitter")? {
             let ep = props(self.cx, &em)?;
