@@ -12,7 +12,7 @@ use risotto_builtins::builtin::{
 use risotto_components::Rgb;
 use risotto_systems::conductor::{metal, METALS};
 use risotto_systems::energy_compensation::AlbedoTable;
-use risotto_systems::microfacet::{Beckmann, Ggx, Microfacet};
+use risotto_systems::microfacet::{Beckmann, Ggx, Masking, Microfacet};
 use risotto_systems::pattern::{self, PatternGraph};
 use risotto_systems::rough_conductor::RoughConductor;
 use risotto_systems::rough_dielectric::RoughDielectric;
@@ -24,43 +24,65 @@ use std::sync::Arc;
 const DEFAULT_ALPHA: f32 = 0.1;
 
 /// The keys both microfacet materials share.
-const ROUGHNESS_KEYS: [&str; 5] = [
+const ROUGHNESS_KEYS: [&str; 6] = [
     "distribution",
+    "masking",
     "alpha",
     "alpha_u",
     "alpha_v",
     "energy_compensation",
 ];
 
-/// The distribution's family: `distribution = "ggx"` (the default) or `"beckmann"`.
+/// The distribution's family (`distribution = "ggx"`, the default, or `"beckmann"`) and
+/// its masking-shadowing function (`masking = "height_correlated"`, the default, or
+/// `"separable"`, Mitsuba 3's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Family {
-    /// GGX (Trowbridge-Reitz).
-    Ggx,
-    /// Beckmann.
-    Beckmann,
+pub(crate) struct Family {
+    /// Beckmann rather than GGX (Trowbridge-Reitz).
+    beckmann: bool,
+    /// `G2`'s form.
+    masking: Masking,
 }
 
 impl Family {
     /// The distribution of this family with roughnesses `alpha_u`, `alpha_v`.
     pub(crate) fn with(self, alpha_u: f32, alpha_v: f32) -> Microfacet {
-        match self {
-            Family::Ggx => Ggx::new(alpha_u, alpha_v).into(),
-            Family::Beckmann => Beckmann::new(alpha_u, alpha_v).into(),
-        }
+        let d: Microfacet = if self.beckmann {
+            Beckmann::new(alpha_u, alpha_v).into()
+        } else {
+            Ggx::new(alpha_u, alpha_v).into()
+        };
+        d.with_masking(self.masking)
     }
 }
 
-/// `distribution`: `"ggx"` (default) or `"beckmann"`.
+/// `distribution`: `"ggx"` (default) or `"beckmann"`; `masking`: `"height_correlated"`
+/// (default) or `"separable"`.
 pub(crate) fn family(p: &MaterialParams) -> Result<Family, SceneError> {
-    match p.string("distribution", Some("ggx"))?.as_str() {
-        "ggx" => Ok(Family::Ggx),
-        "beckmann" => Ok(Family::Beckmann),
-        other => Err(p.error(
-            Some("distribution"),
-            format!("unknown microfacet distribution \"{other}\" (known: ggx, beckmann)"),
-        )),
-    }
+    let beckmann = match p.string("distribution", Some("ggx"))?.as_str() {
+        "ggx" => false,
+        "beckmann" => true,
+        other => {
+            return Err(p.error(
+                Some("distribution"),
+                format!("unknown microfacet distribution \"{other}\" (known: ggx, beckmann)"),
+            ))
+        }
+    };
+    let masking = match p.string("masking", Some("height_correlated"))?.as_str() {
+        "height_correlated" => Masking::HeightCorrelated,
+        "separable" => Masking::Separable,
+        other => {
+            return Err(p.error(
+                Some("masking"),
+                format!(
+                    "unknown masking-shadowing function \"{other}\" (known: \
+                     height_correlated, separable)"
+                ),
+            ))
+        }
+    };
+    Ok(Family { beckmann, masking })
 }
 
 /// One roughness: a finite number in `(0, 1]`.
@@ -327,8 +349,9 @@ pub(crate) fn rough_dielectric(
 }
 
 /// The keys of a `rough_plastic` material besides `interior` and `two_sided`.
-pub(crate) const ROUGH_PLASTIC_KEYS: [&str; 7] = [
+pub(crate) const ROUGH_PLASTIC_KEYS: [&str; 8] = [
     "distribution",
+    "masking",
     "alpha",
     "diffuse_reflectance",
     "specular_reflectance",

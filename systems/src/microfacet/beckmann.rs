@@ -33,6 +33,9 @@ pub struct Beckmann {
     pub alpha_u: f32,
     /// Roughness along the bitangent (`+y`).
     pub alpha_v: f32,
+    /// The masking-shadowing function `Microfacet::g2` uses (height-correlated from
+    /// [`Beckmann::new`]).
+    pub masking: super::Masking,
 }
 
 impl Beckmann {
@@ -43,6 +46,7 @@ impl Beckmann {
         Beckmann {
             alpha_u: clamp(alpha_u),
             alpha_v: clamp(alpha_v),
+            masking: super::Masking::HeightCorrelated,
         }
     }
 

@@ -319,8 +319,11 @@ impl Converter<'_> {
     }
 
     /// `alpha` or `alpha_u` / `alpha_v` (default 0.1) and `distribution` (Mitsuba's default
-    /// is Beckmann; risotto's GGX, so it is written unless GGX).
+    /// is Beckmann; risotto's GGX, so it is written unless GGX); `masking = "separable"`
+    /// always (Mitsuba's microfacet lobes use `G1(wo) G1(wi)`, risotto's default is the
+    /// height-correlated form).
     fn roughness(&self, p: &Props<'_>, e: &mut Entity) -> Result<(), SceneError> {
+        e.set("masking", "separable");
         let d = p
             .string("distribution")?
             .unwrap_or_else(|| "beckmann".into());

@@ -573,6 +573,10 @@ fn roughness_textures_become_roughness_patterns() {
     assert_eq!(image["pattern"].as_str(), Some("image"));
     assert!(image["path"].as_str().unwrap().ends_with("rough.png"));
     assert_eq!(t(2)["alpha"]["pattern"].as_str(), Some("checker"));
+    // Every Mitsuba microfacet lobe uses the separable masking-shadowing function.
+    for i in 0..3 {
+        assert_eq!(t(i)["masking"].as_str(), Some("separable"));
+    }
 }
 
 #[test]
