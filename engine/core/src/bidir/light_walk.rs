@@ -119,6 +119,7 @@ pub(super) fn light_subpaths(
     }
     stats.record(System::Emit, n, start.elapsed().as_secs_f64());
     stats.add_rays(q.rays.rays.len());
+    stats.bidir_rays.light += q.rays.rays.len() as u64;
     w.s.splats.clear();
     w.s.splat_film_pos.clear();
     let stages = super::walk::stages(bd.techniques);
@@ -142,10 +143,12 @@ pub(super) fn light_subpaths(
         std::mem::swap(&mut q.rays, &mut q.next);
         q.next.rays.clear();
         stats.add_rays(q.rays.rays.len());
+        stats.bidir_rays.light += q.rays.rays.len() as u64;
         bounce += 1;
     }
     // The connections to the camera, through every volume and surface in between.
     let splats = &w.s.splats;
+    stats.bidir_rays.camera_connections += splats.len() as u64;
     if !splats.is_empty() {
         let mut contribution = std::mem::take(&mut w.s.splat_contribution);
         contribution.clear();
