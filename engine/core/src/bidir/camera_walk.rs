@@ -47,10 +47,12 @@ pub(super) fn camera_subpaths(
     stats.bidir_rays.camera += n as u64;
     w.s.mis.clear();
     let rays = &q.rays.rays;
-    w.s.mis
-        .extend(rays.origin.iter().zip(&rays.direction).map(|(&o, &d)| {
-            SubpathMis::camera_start(scene.camera.pdf_ray(o, d), f.light_paths_per_pixel)
-        }));
+    let camera = scene.camera.endpoint();
+    w.s.mis.extend(
+        rays.origin.iter().zip(&rays.direction).map(|(&o, &d)| {
+            SubpathMis::camera_start(camera.pdf_ray(o, d), f.light_paths_per_pixel)
+        }),
+    );
     w.s.connections.clear();
     let stages = super::walk::stages(bd.techniques);
     let mut first = true;

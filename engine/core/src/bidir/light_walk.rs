@@ -335,13 +335,14 @@ fn connect_to_camera(
     s.view.extend_from_slice(vn);
     s.camera_hits.clear();
     s.eval_rows.clear();
+    let camera = scene.camera.endpoint();
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;
         if incoming.depth[r] as u32 + 2 > scene.settings.max_depth {
             continue;
         }
         let u_lens = Vec2::new(s.u4[k][0], s.u4[k][1]);
-        let connection = scene.camera.connect(pts.p[i], u_lens);
+        let connection = camera.connect(pts.p[i], u_lens);
         let agrees = |c: &CameraConnection| !normals || sides_agree(pts, i, c.wi);
         if let Some(c) = connection.filter(agrees) {
             s.view[k] = c.wi;
