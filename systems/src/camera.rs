@@ -24,7 +24,7 @@
 //! `camera/importance.rs`.
 
 mod importance;
-pub use importance::CameraConnection;
+pub use importance::{CameraConnection, CameraEndpoint};
 
 use crate::pixel_filter::warp_pixel_jitter;
 pub use crate::pixel_filter::PixelFilter;

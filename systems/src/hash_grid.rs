@@ -22,6 +22,34 @@ pub struct HashGrid {
     inv_cell: f32,
     /// Query radius squared.
     radius2: f32,
+    /// `h % slots` as a multiplication ([`FastMod`]): a query hashes eight cells.
+    modulo: FastMod,
+}
+
+/// `a % d` for 32-bit `a` by a multiplication (Lemire, Kaser and Kurz 2019, "Faster remainder
+/// by direct computation"): `M = floor((2^64 - 1) / d) + 1`, then `a % d` is the high 64 bits
+/// of `(M a mod 2^64) d`, exact for every 32-bit `a` and `d`. An integer division costs tens
+/// of cycles, and a query's eight slots each took one.
+#[derive(Clone, Copy, Debug, Default)]
+struct FastMod {
+    m: u64,
+    d: u64,
+}
+
+impl FastMod {
+    fn new(d: u32) -> Self {
+        let d = u64::from(d.max(1));
+        FastMod {
+            m: (u64::MAX / d).wrapping_add(1),
+            d,
+        }
+    }
+
+    #[inline]
+    fn rem(self, a: u32) -> usize {
+        let low = self.m.wrapping_mul(u64::from(a));
+        ((u128::from(low) * u128::from(self.d)) >> 64) as usize
+    }
 }
 
 impl HashGrid {
@@ -32,12 +60,14 @@ impl HashGrid {
         self.cell = 2.0 * radius;
         self.inv_cell = 1.0 / self.cell;
         self.radius2 = radius * radius;
-        let slots = n.max(1);
+        // Slots are counted in u32 (the point indices are), so the table never outgrows it.
+        let slots = n.clamp(1, u32::MAX as usize);
+        self.modulo = FastMod::new(slots as u32);
         self.start.clear();
         self.start.resize(slots + 1, 0);
         // Count per slot, shifted by one, then prefix sums give each slot's start.
         for &p in points {
-            let s = self.slot(self.cell_of(p), slots);
+            let s = self.slot(self.cell_of(p));
             self.start[s + 1] += 1;
         }
         for s in 0..slots {
@@ -47,7 +77,7 @@ impl HashGrid {
         self.indices.resize(n, 0);
         // Fill with a cursor per slot (the starts, moved along), then restore the starts.
         for (i, &p) in points.iter().enumerate() {
-            let s = self.slot(self.cell_of(p), slots);
+            let s = self.slot(self.cell_of(p));
             self.indices[self.start[s] as usize] = i as u32;
             self.start[s] += 1;
         }
@@ -81,7 +111,7 @@ impl HashGrid {
                 if k & 2 == 0 { 0 } else { side.y },
                 if k & 4 == 0 { 0 } else { side.z },
             );
-            let s = self.slot(base + offset, slots);
+            let s = self.slot(base + offset);
             // Two cells hashing to one slot: visit it once.
             if visited[..k].contains(&s) {
                 continue;
@@ -102,12 +132,13 @@ impl HashGrid {
         (p * self.inv_cell).floor().as_ivec3()
     }
 
+    /// The table slot of cell `c`: its hash modulo the slot count.
     #[inline]
-    fn slot(&self, c: IVec3, slots: usize) -> usize {
+    fn slot(&self, c: IVec3) -> usize {
         let h = (c.x as u32).wrapping_mul(73_856_093)
             ^ (c.y as u32).wrapping_mul(19_349_663)
             ^ (c.z as u32).wrapping_mul(83_492_791);
-        h as usize % slots
+        self.modulo.rem(h)
     }
 }
 
@@ -145,6 +176,32 @@ mod tests {
                     .filter(|&i| (points[i] - p).length_squared() <= radius * radius)
                     .collect();
                 assert_eq!(got, want, "n = {n}, radius = {radius}, query {q} at {p}");
+            }
+        }
+    }
+
+    /// The multiplication remainder equals `%` for divisors and dividends at the ends of
+    /// the 32-bit range and in between.
+    #[test]
+    fn fast_remainders_are_remainders() {
+        let values = [
+            0u32,
+            1,
+            2,
+            3,
+            7,
+            1000,
+            4095,
+            4096,
+            65_537,
+            1 << 31,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
+        for &d in values.iter().filter(|&&d| d > 0) {
+            let m = FastMod::new(d);
+            for &a in &values {
+                assert_eq!(m.rem(a), (a % d) as usize, "{a} % {d}");
             }
         }
     }

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use risotto_components::Rgb;
 use risotto_systems::film::{AovFilm, Film, SplatFilm};
 use risotto_systems::independent_sampler::SamplerKind;
+use std::sync::Mutex;
 
 mod adaptive;
 mod film_memory;
@@ -410,27 +411,39 @@ fn render_passes<I: Integrator>(
         }
         None => None,
     };
+    // One worker (tables and arena) per thread of the pool, kept for the whole render:
+    // `for_each_init` would make one per job rayon splits off (up to one per tile), and each
+    // new worker allocates and first touches its tables again (a bidirectional integrator's
+    // light vertices and queues are megabytes). A thread only ever locks its own.
+    let threads = pool
+        .as_ref()
+        .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
+    let workers: Vec<Mutex<(TileWorker<I::Worker>, Bump)>> = (0..threads.max(1))
+        .map(|_| Mutex::new((TileWorker::default(), Bump::new())))
+        .collect();
     // One pass renders the sample indices `range` of every tile, continuing its film.
     let pass = |tiles: &mut Vec<Tile>, range: std::ops::Range<u32>| {
         // The sampler travels in the sample addresses (`SamplerKind::address`).
         let addresses = options.sampler.addresses(range);
+        let workers = &workers;
         let mut work = move || {
-            tiles.par_iter_mut().for_each_init(
-                || (TileWorker::<I::Worker>::default(), Bump::new()),
-                |(tables, arena), (tile, stats)| {
-                    render_tile(
-                        integrator,
-                        scene,
-                        tile,
-                        addresses.clone(),
-                        options.batch_size,
-                        tables,
-                        stats,
-                        arena,
-                        progress,
-                    )
-                },
-            )
+            tiles.par_iter_mut().for_each(|(tile, stats)| {
+                let i = rayon::current_thread_index().unwrap_or(0) % workers.len();
+                // A worker is plain scratch: one left poisoned by a panicking tile is as good.
+                let mut worker = workers[i].lock().unwrap_or_else(|e| e.into_inner());
+                let (tables, arena) = &mut *worker;
+                render_tile(
+                    integrator,
+                    scene,
+                    tile,
+                    addresses.clone(),
+                    options.batch_size,
+                    tables,
+                    stats,
+                    arena,
+                    progress,
+                )
+            })
         };
         match &pool {
             Some(pool) => pool.install(work),

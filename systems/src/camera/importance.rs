@@ -53,7 +53,7 @@
 //! the image for the pixel box): the density with which the filter-sampled camera draws a
 //! film position, relative to uniform over the image.
 
-use super::{Camera, Projection};
+use super::{Camera, Projection, RayGenerator};
 use crate::pixel_filter::film_coverage;
 use crate::warp::sample_concentric_disk;
 use glam::{Vec2, Vec3};
@@ -87,8 +87,7 @@ impl Camera {
     /// tan^2(fov / 2) h / w`) or of the film rectangle in world units (orthographic:
     /// `width^2 h / w`).
     pub fn film_area(&self) -> f32 {
-        let scale = self.ray_generator().scale;
-        4.0 * scale * scale * self.height as f32 / self.width as f32
+        self.endpoint().area
     }
 
     /// Area of the lens: `pi r^2` for a thin lens with an aperture, 1 otherwise (the pinhole
@@ -98,34 +97,6 @@ impl Camera {
             Some((radius, _)) => std::f32::consts::PI * radius * radius,
             None => 1.0,
         }
-    }
-
-    /// The film position of `v` without the image test: `v` a direction from the eye
-    /// (perspective projections; `None` unless in front) or a point (orthographic). The
-    /// inverse of `RayGenerator::screen` and the ray construction.
-    #[inline]
-    fn project(&self, v: Vec3) -> Option<Vec2> {
-        let gen = self.ray_generator();
-        let (a, b) = match self.projection {
-            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
-                let z = v.dot(self.forward);
-                if !positive(z) {
-                    return None;
-                }
-                (v.dot(self.right) / z, v.dot(self.up) / z)
-            }
-            Projection::Orthographic { .. } => {
-                let rel = v - self.from;
-                (rel.dot(self.right), rel.dot(self.up))
-            }
-        };
-        // screen: sx = 2 x / w - 1, sy = (1 - 2 y / h) h / w, and (a, b) = scale (sx, sy).
-        let (sx, sy) = (a / gen.scale, b / gen.scale);
-        let film = Vec2::new(
-            0.5 * gen.w * (sx + 1.0),
-            0.5 * gen.h * (1.0 - sy * gen.w / gen.h),
-        );
-        film.is_finite().then_some(film)
     }
 
     /// [`film_coverage`] of the camera's filter at `film`.
@@ -141,7 +112,7 @@ impl Camera {
     /// (outside the image, by more than the filter reaches for filters wider than the pixel
     /// box) or when the direction `p` points behind a perspective camera.
     pub fn raster_of(&self, p: Vec3) -> Option<Vec2> {
-        let film = self.project(p)?;
+        let film = self.endpoint().project(p)?;
         (self.coverage(film) > 0.0).then_some(film)
     }
 
@@ -149,24 +120,10 @@ impl Camera {
     /// `coverage / (A cos^3 theta)` for the perspective projections (`origin` a lens point;
     /// the film position is where the ray meets the focal plane), per unit film area
     /// `coverage / A_o` for the orthographic one (`origin` on the film; `d` must point along
-    /// `forward`). 0 outside the image or behind the camera.
+    /// `forward`). 0 outside the image or behind the camera. Many rays:
+    /// [`CameraEndpoint::pdf_ray`].
     pub fn pdf_ray(&self, origin: Vec3, d: Vec3) -> f32 {
-        let cos = d.dot(self.forward);
-        if !positive(cos) {
-            return 0.0;
-        }
-        let film = match self.projection {
-            Projection::Orthographic { .. } => self.project(origin),
-            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
-                self.project(self.focal_direction(origin, d))
-            }
-        };
-        let Some(film) = film else { return 0.0 };
-        let coverage = self.coverage(film);
-        match self.projection {
-            Projection::Orthographic { .. } => coverage / self.film_area(),
-            _ => coverage / (self.film_area() * cos * cos * cos),
-        }
+        self.endpoint().pdf_ray(origin, d)
     }
 
     /// [`Camera::pdf_ray`] of a camera ray with direction `d` from the eye (the lens centre
@@ -220,42 +177,124 @@ impl Camera {
     /// thin lens with an aperture; ignored otherwise): the film position, camera vertex,
     /// direction, distance, importance and direction density of the module's
     /// normalisation. `None` when `p` is behind the camera (or on its lens / film plane) or
+    /// projects where no pixel's filter reaches. Many points: [`CameraEndpoint::connect`].
+    pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
+        self.endpoint().connect(p, u_lens)
+    }
+
+    /// The camera with the constants of [`Camera::connect`] and [`Camera::pdf_ray`] computed
+    /// once, for many points or rays (each call would otherwise take the tangent of the half
+    /// field of view twice, a libm call, more than the rest of a connection).
+    pub fn endpoint(&self) -> CameraEndpoint {
+        let gen = self.ray_generator();
+        let area = 4.0 * gen.scale * gen.scale * gen.h / gen.w;
+        CameraEndpoint { gen, area }
+    }
+}
+
+/// A [`Camera`] as the end of light subpaths, its constants hoisted ([`Camera::endpoint`]).
+pub struct CameraEndpoint {
+    gen: RayGenerator,
+    /// [`Camera::film_area`].
+    area: f32,
+}
+
+impl CameraEndpoint {
+    /// The film position of `v` without the image test: `v` a direction from the eye
+    /// (perspective projections; `None` unless in front) or a point (orthographic). The
+    /// inverse of `RayGenerator::screen` and the ray construction.
+    #[inline]
+    fn project(&self, v: Vec3) -> Option<Vec2> {
+        let gen = &self.gen;
+        let c = &gen.camera;
+        let (a, b) = match c.projection {
+            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
+                let z = v.dot(c.forward);
+                if !positive(z) {
+                    return None;
+                }
+                (v.dot(c.right) / z, v.dot(c.up) / z)
+            }
+            Projection::Orthographic { .. } => {
+                let rel = v - c.from;
+                (rel.dot(c.right), rel.dot(c.up))
+            }
+        };
+        // screen: sx = 2 x / w - 1, sy = (1 - 2 y / h) h / w, and (a, b) = scale (sx, sy).
+        let (sx, sy) = (a / gen.scale, b / gen.scale);
+        let film = Vec2::new(
+            0.5 * gen.w * (sx + 1.0),
+            0.5 * gen.h * (1.0 - sy * gen.w / gen.h),
+        );
+        film.is_finite().then_some(film)
+    }
+
+    /// The density of the camera ray from `origin` along unit direction `d`: per solid angle
+    /// `coverage / (A cos^3 theta)` for the perspective projections (`origin` a lens point;
+    /// the film position is where the ray meets the focal plane), per unit film area
+    /// `coverage / A_o` for the orthographic one (`origin` on the film; `d` must point along
+    /// `forward`). 0 outside the image or behind the camera.
+    pub fn pdf_ray(&self, origin: Vec3, d: Vec3) -> f32 {
+        let c = &self.gen.camera;
+        let cos = d.dot(c.forward);
+        if !positive(cos) {
+            return 0.0;
+        }
+        let film = match c.projection {
+            Projection::Orthographic { .. } => self.project(origin),
+            Projection::Perspective { .. } | Projection::ThinLens { .. } => {
+                self.project(c.focal_direction(origin, d))
+            }
+        };
+        let Some(film) = film else { return 0.0 };
+        let coverage = c.coverage(film);
+        match c.projection {
+            Projection::Orthographic { .. } => coverage / self.area,
+            _ => coverage / (self.area * cos * cos * cos),
+        }
+    }
+
+    /// Connects point `p` to the camera through the lens point of lens sample `u_lens` (a
+    /// thin lens with an aperture; ignored otherwise): the film position, camera vertex,
+    /// direction, distance, importance and direction density of the module's
+    /// normalisation. `None` when `p` is behind the camera (or on its lens / film plane) or
     /// projects where no pixel's filter reaches.
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
-        if let Projection::Orthographic { .. } = self.projection {
-            let depth = (p - self.from).dot(self.forward);
+        let c = &self.gen.camera;
+        if let Projection::Orthographic { .. } = c.projection {
+            let depth = (p - c.from).dot(c.forward);
             if !positive(depth) {
                 return None;
             }
             let film = self.project(p)?;
-            let coverage = self.coverage(film);
+            let coverage = c.coverage(film);
             if !positive(coverage) {
                 return None;
             }
-            let area = self.film_area();
+            let area = self.area;
             return Some(CameraConnection {
                 film,
-                lens_point: p - self.forward * depth,
-                wi: -self.forward,
+                lens_point: p - c.forward * depth,
+                wi: -c.forward,
                 distance: depth,
                 importance: 1.0 / area,
                 pdf_dir: coverage / area,
             });
         }
-        let lens_point = self.lens_point(u_lens);
+        let lens_point = c.lens_point(u_lens);
         let to_p = p - lens_point;
         let distance = to_p.length();
         let d = to_p / distance;
-        let cos = d.dot(self.forward);
+        let cos = d.dot(c.forward);
         if !(positive(cos) && distance.is_finite()) {
             return None;
         }
-        let film = self.project(self.focal_direction(lens_point, d))?;
-        let coverage = self.coverage(film);
+        let film = self.project(c.focal_direction(lens_point, d))?;
+        let coverage = c.coverage(film);
         if !positive(coverage) {
             return None;
         }
-        let pdf_w = 1.0 / (self.film_area() * cos * cos * cos);
+        let pdf_w = 1.0 / (self.area * cos * cos * cos);
         Some(CameraConnection {
             film,
             lens_point,

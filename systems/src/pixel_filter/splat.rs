@@ -110,6 +110,13 @@ pub fn splat_weights(
 /// `width * height` (per square pixel). 1 inside the image for the pixel box, 0 where no
 /// pixel's filter reaches.
 pub fn film_coverage(filter: &PixelFilter, film: Vec2, width: u32, height: u32) -> f32 {
+    if filter.is_pixel_box() {
+        // One pixel per axis covers a position in `[0, n)` (the box is half-open), with
+        // weight 1 over an integral of 1: the sum below, without its floors and loops (the
+        // default filter, and one coverage per light vertex connected to the camera).
+        let inside = |x: f32, n: u32| (0.0..n as f32).contains(&x);
+        return (inside(film.x, width) && inside(film.y, height)) as u32 as f32;
+    }
     let axis = |x: f32, n: u32| -> f32 {
         let (lo, hi) = axis_range(x, filter.radius(), n);
         (lo..hi)
@@ -247,5 +254,36 @@ mod tests {
         splat_weights(&f, Vec2::new(-1.1, 2.5), 6, 6, &mut out);
         assert!(out.is_empty());
         assert_eq!(film_coverage(&f, Vec2::new(-1.1, 2.5), 6, 6), 0.0);
+    }
+
+    /// The pixel box's coverage (a shortcut) is the sum of its splat weights (the general
+    /// path) everywhere: inside, on and just off every border, and at non-finite positions.
+    #[test]
+    fn pixel_box_coverage_is_the_sum_of_its_weights() {
+        let (w, h) = (5u32, 3u32);
+        let mut out = SmallVec::new();
+        let xs = [
+            -1.0,
+            -1e-7,
+            -0.0,
+            0.0,
+            0.5,
+            2.5,
+            4.999_999_5,
+            5.0,
+            5.000_001,
+            7.0,
+        ];
+        let ys = [-0.0, 1e-7, 1.0, 2.999_999_8, 3.0, f32::NAN, f32::INFINITY];
+        for &x in &xs {
+            for &y in &ys {
+                let film = Vec2::new(x, y);
+                splat_weights(&PixelFilter::PIXEL_BOX, film, w, h, &mut out);
+                let sum: f32 = out.iter().map(|p| p.1).sum();
+                let c = film_coverage(&PixelFilter::PIXEL_BOX, film, w, h);
+                // (An empty sum is -0: equal to the shortcut's 0, and refused alike.)
+                assert_eq!(c, sum, "{film}");
+            }
+        }
     }
 }

@@ -44,12 +44,15 @@ pub(super) fn camera_subpaths(
         &mut q.rays.rays,
     );
     stats.add_rays(n);
+    stats.bidir_rays.camera += n as u64;
     w.s.mis.clear();
     let rays = &q.rays.rays;
-    w.s.mis
-        .extend(rays.origin.iter().zip(&rays.direction).map(|(&o, &d)| {
-            SubpathMis::camera_start(scene.camera.pdf_ray(o, d), f.light_paths_per_pixel)
-        }));
+    let camera = scene.camera.endpoint();
+    w.s.mis.extend(
+        rays.origin.iter().zip(&rays.direction).map(|(&o, &d)| {
+            SubpathMis::camera_start(camera.pdf_ray(o, d), f.light_paths_per_pixel)
+        }),
+    );
     w.s.connections.clear();
     let stages = super::walk::stages(bd.techniques);
     let mut first = true;
@@ -73,6 +76,7 @@ pub(super) fn camera_subpaths(
         std::mem::swap(&mut q.rays, &mut q.next);
         q.next.rays.clear();
         stats.add_rays(q.rays.rays.len());
+        stats.bidir_rays.camera += q.rays.rays.len() as u64;
         first = false;
     }
     let shadow = &w.s.connections;
@@ -236,7 +240,9 @@ fn camera_vertices(
         };
         if connectable {
             let start = std::time::Instant::now();
+            let queued = s.connections.len();
             connect::light_samples(scene, s, &at, &ctx, &mut *bxdf, arena, counters);
+            stats.bidir_rays.light_samples += (s.connections.len() - queued) as u64;
             connect::light_vertices(scene, s, light, &at, &ctx, &mut *bxdf, arena, counters);
             stats.record(System::Connect, m, start.elapsed().as_secs_f64());
             if s.merge_radius > 0.0 {
@@ -276,7 +282,9 @@ fn camera_vertices(
     q.next.rays.truncate(next_len);
     let (pts, incoming) = (&q.hits.groups.points, &q.hits.incoming);
     let start = std::time::Instant::now();
+    let queued = s.connections.len();
     connect::finish(scene, s, light, pts, incoming, arena, counters);
+    stats.bidir_rays.connections += (s.connections.len() - queued) as u64;
     stats.record(System::Connect, 0, start.elapsed().as_secs_f64());
     q.hits.groups.groups = groups;
 }

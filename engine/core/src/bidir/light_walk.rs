@@ -119,6 +119,7 @@ pub(super) fn light_subpaths(
     }
     stats.record(System::Emit, n, start.elapsed().as_secs_f64());
     stats.add_rays(q.rays.rays.len());
+    stats.bidir_rays.light += q.rays.rays.len() as u64;
     w.s.splats.clear();
     w.s.splat_film_pos.clear();
     let stages = super::walk::stages(bd.techniques);
@@ -142,10 +143,12 @@ pub(super) fn light_subpaths(
         std::mem::swap(&mut q.rays, &mut q.next);
         q.next.rays.clear();
         stats.add_rays(q.rays.rays.len());
+        stats.bidir_rays.light += q.rays.rays.len() as u64;
         bounce += 1;
     }
     // The connections to the camera, through every volume and surface in between.
     let splats = &w.s.splats;
+    stats.bidir_rays.camera_connections += splats.len() as u64;
     if !splats.is_empty() {
         let mut contribution = std::mem::take(&mut w.s.splat_contribution);
         contribution.clear();
@@ -332,13 +335,14 @@ fn connect_to_camera(
     s.view.extend_from_slice(vn);
     s.camera_hits.clear();
     s.eval_rows.clear();
+    let camera = scene.camera.endpoint();
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;
         if incoming.depth[r] as u32 + 2 > scene.settings.max_depth {
             continue;
         }
         let u_lens = Vec2::new(s.u4[k][0], s.u4[k][1]);
-        let connection = scene.camera.connect(pts.p[i], u_lens);
+        let connection = camera.connect(pts.p[i], u_lens);
         let agrees = |c: &CameraConnection| !normals || sides_agree(pts, i, c.wi);
         if let Some(c) = connection.filter(agrees) {
             s.view[k] = c.wi;

@@ -235,7 +235,9 @@ impl Termination {
     }
 }
 
+mod bidir_rays;
 mod non_finite;
+pub use bidir_rays::BidirRays;
 pub use non_finite::*;
 
 /// Counters of one system.
@@ -329,6 +331,8 @@ pub struct SystemStats {
     /// through many events in one call (whose inner events no strategy connects to): 0 under
     /// the path tracer and where no medium walks.
     pub walked_subpath_rays: u64,
+    /// A bidirectional integrator's rays by kind (0 under the path tracer).
+    pub bidir_rays: BidirRays,
 }
 
 /// Adds 1 to `v[i]`, growing `v`.
@@ -496,6 +500,7 @@ impl SystemStats {
         self.volume_pattern_evals += other.volume_pattern_evals;
         self.opacity_tests += other.opacity_tests;
         self.walked_subpath_rays += other.walked_subpath_rays;
+        self.bidir_rays.merge(&other.bidir_rays);
         self.opacity_passes += other.opacity_passes;
         self.opacity_shadow_crossings += other.opacity_shadow_crossings;
     }

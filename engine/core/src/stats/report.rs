@@ -166,6 +166,9 @@ impl Serialize for RenderStats {
         if c.walked_subpath_rays > 0 {
             m.serialize_entry("walked_subpath_rays", &c.walked_subpath_rays)?;
         }
+        if !c.bidir_rays.is_empty() {
+            m.serialize_entry("bidir_rays", &c.bidir_rays)?;
+        }
         m.serialize_entry("wall_seconds", &self.wall_seconds)?;
         m.serialize_entry("features", &self.features)?;
         if !self.warnings.is_empty() {
