@@ -430,8 +430,23 @@ fn render_passes<I: Integrator>(
             tiles.par_iter_mut().for_each(|(tile, stats)| {
                 let i = rayon::current_thread_index().unwrap_or(0) % workers.len();
                 // A worker is plain scratch: one left poisoned by a panicking tile is as good.
-                let mut worker = workers[i].lock().unwrap_or_else(|e| e.into_inner());
-                let (tables, arena) = &mut *worker;
+                // Held already (a plug-in's own rayon work let this thread steal another
+                // tile while its worker is in use, or the render runs inside another pool):
+                // this tile gets a fresh one rather than waiting on itself.
+                let mut held = match workers[i].try_lock() {
+                    Ok(guard) => Some(guard),
+                    Err(std::sync::TryLockError::Poisoned(e)) => Some(e.into_inner()),
+                    Err(std::sync::TryLockError::WouldBlock) => None,
+                };
+                let mut fresh = None;
+                let (tables, arena) = match held.as_deref_mut() {
+                    Some((tables, arena)) => (tables, arena),
+                    None => {
+                        let (tables, arena) =
+                            fresh.insert((TileWorker::<I::Worker>::default(), Bump::new()));
+                        (tables, arena)
+                    }
+                };
                 render_tile(
                     integrator,
                     scene,
