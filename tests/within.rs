@@ -278,3 +278,51 @@ fn pbrt_camera_and_outside_media_are_checked_against_the_geometry() {
         "{e}"
     );
 }
+
+/// pbrt-v4 switches media only where a shape's inside and outside differ and keeps the
+/// medium across any other shape, as Mitsuba does: where it leaves a medium unset (no camera
+/// medium, a medium's boundary with an empty outside, a glass without an interface in a
+/// medium) risotto's nested volumes agree only if no medium surrounds it, which the importer
+/// states and the compile checks.
+#[test]
+fn pbrt_unset_media_are_checked_to_be_vacuum() {
+    let head = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+                LookAt 0 0 9  0 0 0  0 1 0\nCamera \"perspective\"\n\
+                Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+                WorldBegin\n\
+                AttributeBegin\nMaterial \"interface\"\nMediumInterface \"fog\" \"\"\n\
+                Shape \"sphere\" \"float radius\" 3\nAttributeEnd\n";
+    let load = |rest: &str| compile_as(&format!("{head}{rest}"), "scene.pbrt");
+    // A diffuse ball in the fog: nothing to check.
+    load("Material \"diffuse\"\nShape \"sphere\" \"float radius\" 1\n").unwrap();
+    // A glass ball in the fog without an interface: pbrt keeps the fog inside it.
+    let e = load("Material \"dielectric\"\nShape \"sphere\" \"float radius\" 1\n").unwrap_err();
+    assert!(
+        e.contains("is stated to be in no medium") && e.contains("scene.pbrt:12"),
+        "{e}"
+    );
+    // Stated inside the fog on both sides, it is still no transition in pbrt: the same.
+    let e = load(
+        "AttributeBegin\nMediumInterface \"fog\" \"fog\"\nMaterial \"dielectric\"\n\
+         Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+    )
+    .unwrap_err();
+    assert!(e.contains("is stated to be in no medium"), "{e}");
+    // A fog ball nested in the fog with an empty outside: vacuum around it in pbrt.
+    let e = load(
+        "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"fog\" \"\"\n\
+         Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+    )
+    .unwrap_err();
+    assert!(e.contains("is stated to be in no medium"), "{e}");
+    // A fog ball with the fog outside too is no transition in pbrt (the fog continues
+    // across it), but risotto's interface makes a volume of it: refused as well.
+    load(
+        "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"fog\" \"fog\"\n\
+         Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+    )
+    .unwrap_err();
+    // Outside the fog, a glass ball loads.
+    load("Translate 0 0 -20\nMaterial \"dielectric\"\nShape \"sphere\" \"float radius\" 1\n")
+        .unwrap();
+}

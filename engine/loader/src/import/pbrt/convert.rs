@@ -11,6 +11,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3, DVec4};
 use risotto_engine::diagnostics::{Origin, SceneError, SceneErrorKind};
+use risotto_engine::scene::NO_MEDIUM;
 
 use super::lexer::{At, Lexer, Tok};
 use super::params::Params;
@@ -105,6 +106,9 @@ pub(super) struct Converter<'o> {
     /// Each top-level shape with an outside medium other than its inside: the medium, the
     /// shape's index in `scene.shapes` and where it was written.
     pub outsides: Vec<(String, usize, At)>,
+    /// Each top-level shape bounding a volume with no outside medium (vacuum outside it, or
+    /// the medium unchanged across it): its index in `scene.shapes`.
+    pub no_medium_outside: Vec<usize>,
     /// The object being defined: name, shapes, where.
     pub object: Option<(String, Vec<toml::Value>, At)>,
     /// The camera's medium (`MediumInterface` outside at `Camera`) and where it was set.
@@ -145,6 +149,7 @@ impl<'o> Converter<'o> {
             camera_medium: None,
             medium_holders: Vec::new(),
             outsides: Vec::new(),
+            no_medium_outside: Vec::new(),
             names: HashMap::new(),
         }
     }
@@ -591,6 +596,16 @@ impl<'o> Converter<'o> {
                 return Err(self.error(at, "Shape", format!("the shape's outside medium \"{m}\" is no shape's inside (risotto's media are the interiors of closed shapes: enclose the shape in one with `MediumInterface \"{m}\" \"\"`)")));
             }
             self.scene.shapes[*shape].set("within", within);
+        }
+        // Where pbrt leaves a medium unset (no camera medium, a volume's boundary without
+        // an outside medium), it means vacuum: checked when the scene has media at all.
+        if !self.medium_holders.is_empty() {
+            if self.camera_medium.is_none() {
+                self.scene.camera.set("within", NO_MEDIUM);
+            }
+            for &shape in &self.no_medium_outside {
+                self.scene.shapes[shape].set("within", NO_MEDIUM);
+            }
         }
         self.scene.render = render;
         self.scene.header = vec![format!(

@@ -186,8 +186,26 @@ impl Converter<'_> {
                 shapes.push(toml::Value::Table(e.table))
             }
             None => {
+                // pbrt-v4 switches media only at shapes whose inside and outside differ
+                // (leaving to the outside, "" = vacuum) and keeps the medium across any
+                // other; risotto nests volumes. They agree where no medium surrounds a
+                // shape that bounds a volume but states no outside medium (a medium's
+                // boundary, a glass, an interface): checked (`within = "no medium"`) when
+                // the scene has media (finish).
+                let bounds_volume = holds
+                    || self
+                        .scene
+                        .materials
+                        .iter()
+                        .find(|(n, _)| *n == material)
+                        .and_then(|(_, m)| m.table.get("type"))
+                        .and_then(|t| t.as_str())
+                        .is_some_and(|t| {
+                            matches!(t, "dielectric" | "rough_dielectric" | "interface")
+                        });
+                let vacuum_outside = bounds_volume && !borders;
                 // A shape holding or bordering a medium is named for `within` checks.
-                if holds || borders {
+                if holds || borders || vacuum_outside {
                     let line = self.lx.line(at);
                     let kind = entity.trim_start_matches("Shape ").trim_matches('"');
                     let name = self.unique(&format!("{kind} at line {line}"));
@@ -198,6 +216,9 @@ impl Converter<'_> {
                     if borders {
                         self.outsides
                             .push((outside, self.scene.shapes.len(), at.clone()));
+                    }
+                    if vacuum_outside {
+                        self.no_medium_outside.push(self.scene.shapes.len());
                     }
                 }
                 self.scene.shapes.push(e)
