@@ -34,7 +34,7 @@ use obvhs::{
     aabb::Aabb,
     bvh2::{node::Bvh2Node, reinsertion::ReinsertionOptimizer, Bvh2, DEFAULT_MAX_STACK_DEPTH},
     ploc::{morton::morton_encode_u32, PlocBuilder},
-    BvhBuildParams,
+    Boundable, BvhBuildParams,
 };
 
 use crate::bvh8::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
@@ -57,16 +57,18 @@ const STALL_DENSITY: usize = 2;
 /// `O(n^2)` box unions, is then a few million.
 const STALL_MIN_PRIMS: usize = STALL_BLOCK;
 
-/// The binary BVH over `aabbs` (primitive `indices[i]` has box `aabbs[i]`; at least one):
+/// The binary BVH over `prims` (primitive `i` bounded by `prims[i].aabb()`; at least one):
 /// PLOC with `params`' search distance and sort precision, then the reinsertion optimizer,
 /// with the runs on which PLOC stalls built by median splits (see the module doc); a tree
-/// still deeper than [`MAX_BVH2_DEPTH`] is replaced by a median-split one.
-pub(crate) fn build_bvh2(aabbs: &[Aabb], indices: Vec<u32>, params: &BvhBuildParams) -> Bvh2 {
-    let runs = stalled_runs(aabbs);
+/// still deeper than [`MAX_BVH2_DEPTH`] is replaced by a median-split one. The boxes are
+/// computed where they are read, never stored for all primitives at once (32 bytes a
+/// primitive less at the build's peak, issue 36).
+pub(crate) fn build_bvh2<B: Boundable>(prims: &[B], params: &BvhBuildParams) -> Bvh2 {
+    let runs = stalled_runs(prims);
     let mut bvh2 = if runs.is_empty() {
-        ploc(aabbs, indices.clone(), params)
+        ploc(prims, params)
     } else {
-        ploc_around_runs(aabbs, &indices, &runs, params)
+        ploc_around_runs(prims, &runs, params)
     };
     if bvh2_depth(&bvh2) <= MAX_BVH2_DEPTH {
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
@@ -74,17 +76,17 @@ pub(crate) fn build_bvh2(aabbs: &[Aabb], indices: Vec<u32>, params: &BvhBuildPar
     // PLOC chains equal boxes that escaped the run detection; a median split bounds the
     // depth whatever the boxes.
     if bvh2_depth(&bvh2) > MAX_BVH2_DEPTH {
-        bvh2 = median_bvh2(aabbs, &indices);
+        bvh2 = median_bvh2(prims, &(0..prims.len() as u32).collect::<Vec<_>>());
     }
     bvh2
 }
 
-/// obvhs' PLOC build of `aabbs` with `indices`.
-fn ploc(aabbs: &[Aabb], indices: Vec<u32>, params: &BvhBuildParams) -> Bvh2 {
-    PlocBuilder::with_capacity(aabbs.len()).build(
+/// obvhs' PLOC build of `prims`, primitive `i` at position `i`.
+fn ploc<B: Boundable>(prims: &[B], params: &BvhBuildParams) -> Bvh2 {
+    PlocBuilder::with_capacity(prims.len()).build(
         params.ploc_search_distance,
-        aabbs,
-        indices,
+        prims,
+        (0..prims.len() as u32).collect(),
         params.sort_precision,
         params.search_depth_threshold,
     )
@@ -94,7 +96,7 @@ fn ploc(aabbs: &[Aabb], indices: Vec<u32>, params: &BvhBuildParams) -> Bvh2 {
 /// of primitives, consecutive in PLOC's Morton order, that its first pass leaves unmerged
 /// (more than [`STALL_RUN`] in a row, or most of a block of [`STALL_BLOCK`]). Empty for
 /// fewer than [`STALL_MIN_PRIMS`] primitives.
-pub(crate) fn stalled_runs(aabbs: &[Aabb]) -> Vec<Vec<u32>> {
+pub(crate) fn stalled_runs<B: Boundable>(aabbs: &[B]) -> Vec<Vec<u32>> {
     if aabbs.len() < STALL_MIN_PRIMS {
         return Vec::new();
     }
@@ -105,21 +107,26 @@ pub(crate) fn stalled_runs(aabbs: &[Aabb]) -> Vec<Vec<u32>> {
 /// stretches of more than `run` unmerged ones in Morton order, or blocks of
 /// [`STALL_BLOCK`] mostly unmerged, joined where they overlap or touch, as lists of
 /// positions.
-fn stalls(aabbs: &[Aabb], prims: impl Iterator<Item = usize> + Clone, run: usize) -> Vec<Vec<u32>> {
+fn stalls<B: Boundable>(
+    aabbs: &[B],
+    prims: impl Iterator<Item = usize> + Clone,
+    run: usize,
+) -> Vec<Vec<u32>> {
     // Morton order of the box centres in the unit cube of all boxes' bounds, 10 bits an
     // axis, equal codes in input order: PLOC's order (21 bits an axis) up to the order
     // within cells, which on meshes holds a few neighbouring primitives at most and in a
     // run of equal boxes does not matter. Codes and positions share one `u64` key.
     let total = prims.clone().fold(Aabb::empty(), |mut t, p| {
-        t.extend(aabbs[p].min);
-        t.extend(aabbs[p].max);
+        let b = aabbs[p].aabb();
+        t.extend(b.min);
+        t.extend(b.max);
         t
     });
     let cells = Vec3A::splat(1023.0);
     let scale = cells / total.diagonal().max(Vec3A::splat(f32::MIN_POSITIVE));
     let mut order: Vec<u64> = prims
         .map(|i| {
-            let b = &aabbs[i];
+            let b = aabbs[i].aabb();
             // Float to integer casts saturate: NaN (an infinite extent) and negatives to 0.
             let c = ((b.center() - total.min) * scale).min(cells);
             let code = morton_encode_u32(c.x as u16, c.y as u16, c.z as u16);
@@ -141,7 +148,12 @@ fn stalls(aabbs: &[Aabb], prims: impl Iterator<Item = usize> + Clone, run: usize
     let block_of = |i: usize| (i / STALL_BLOCK).min(blocks - 1);
     let mut merged_in_block = vec![0usize; blocks];
     let mut stalls: Vec<(usize, usize)> = Vec::new();
-    let cost = |i: usize| aabbs[prim(i)].union(&aabbs[prim(i + 1)]).half_area();
+    let cost = |i: usize| {
+        aabbs[prim(i)]
+            .aabb()
+            .union(&aabbs[prim(i + 1)].aabb())
+            .half_area()
+    };
     // First node of the current unmerged stretch.
     let mut start = 0;
     let (mut left, mut here) = (f32::INFINITY, cost(0));
@@ -193,12 +205,7 @@ fn stalls(aabbs: &[Aabb], prims: impl Iterator<Item = usize> + Clone, run: usize
 
 /// PLOC over the primitives outside `runs` and one box per run, each run's leaf replaced by
 /// the run's median-split subtree.
-fn ploc_around_runs(
-    aabbs: &[Aabb],
-    indices: &[u32],
-    runs: &[Vec<u32>],
-    params: &BvhBuildParams,
-) -> Bvh2 {
+fn ploc_around_runs<B: Boundable>(aabbs: &[B], runs: &[Vec<u32>], params: &BvhBuildParams) -> Bvh2 {
     let mut in_run = vec![false; aabbs.len()];
     for &p in runs.iter().flatten() {
         in_run[p as usize] = true;
@@ -208,17 +215,16 @@ fn ploc_around_runs(
     let loose: Vec<u32> = (0..aabbs.len() as u32)
         .filter(|&p| !in_run[p as usize])
         .collect();
-    let mut boxes: Vec<Aabb> = loose.iter().map(|&p| aabbs[p as usize]).collect();
+    let mut boxes: Vec<Aabb> = loose.iter().map(|&p| aabbs[p as usize].aabb()).collect();
     let subtrees: Vec<Bvh2> = runs
         .iter()
         .map(|run| {
-            let run_boxes: Vec<Aabb> = run.iter().map(|&p| aabbs[p as usize]).collect();
-            let run_indices: Vec<u32> = run.iter().map(|&p| indices[p as usize]).collect();
-            median_bvh2(&run_boxes, &run_indices)
+            let run_boxes: Vec<Aabb> = run.iter().map(|&p| aabbs[p as usize].aabb()).collect();
+            median_bvh2(&run_boxes, run)
         })
         .collect();
     boxes.extend(subtrees.iter().map(|t| node_box(&t.nodes[0])));
-    let top = ploc(&boxes, (0..boxes.len() as u32).collect(), params);
+    let top = ploc(&boxes, params);
 
     // Copy the top tree from its root down, children after parents as PLOC lays them out,
     // mapping its leaves back to primitive indices or grafting a run's subtree.
@@ -238,7 +244,7 @@ fn ploc_around_runs(
         let local = top.primitive_indices[node.first_index as usize] as usize;
         if let Some(&p) = loose.get(local) {
             nodes[dst] = Bvh2Node::new(node_box(&node), 1, primitive_indices.len() as u32);
-            primitive_indices.push(indices[p as usize]);
+            primitive_indices.push(p);
             continue;
         }
         let sub = &subtrees[local - loose.len()];

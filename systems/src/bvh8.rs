@@ -12,7 +12,7 @@
 use glam::{Affine3A, Vec3, Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
-use crate::primitive::Sphere;
+use crate::primitive::{Sphere, Triangle};
 
 mod binary;
 use crate::simd8::Row8;
@@ -330,6 +330,47 @@ impl Collapse {
     }
 }
 
+impl Source<'_> {
+    /// The children of the 8-wide node made of binary subtree `n`: each a binary node and
+    /// whether it is a leaf.
+    fn kids(&self, n: u32) -> Vec<(u32, bool)> {
+        let (bins, collapse) = (self.bins, self.collapse);
+        let mut kids = Vec::with_capacity(WIDTH);
+        if bins[n as usize].is_leaf() || collapse.split[n as usize][0] == Split::Leaf {
+            // Only for the root of a tiny scene: one node with one leaf child.
+            kids.push((n, true));
+        } else {
+            let [l, r] = bins[n as usize].kids;
+            let best = collapse.node_split[n as usize] as usize;
+            collapse.slots(bins, l, best, &mut kids);
+            collapse.slots(bins, r, WIDTH - best, &mut kids);
+        }
+        kids
+    }
+
+    /// How many 8-wide nodes and triangle packets the node made of binary subtree `n` and
+    /// those below it take: the build reserves exactly that much, so the arrays never grow
+    /// by doubling (a copy of the old array alongside the new one at the build's peak).
+    fn sizes(&self, n: u32) -> (usize, usize) {
+        let (mut nodes, mut leaves) = (1, 0);
+        for (mut k, is_leaf) in self.kids(n) {
+            if is_leaf {
+                // A leaf's primitives are all triangles or one sphere or instance: its
+                // first primitive tells.
+                while !self.bins[k as usize].is_leaf() {
+                    k = self.bins[k as usize].kids[0];
+                }
+                leaves +=
+                    usize::from((self.bins[k as usize].kids[0] as usize) < self.triangles.len());
+            } else {
+                let (a, b) = self.sizes(k);
+                (nodes, leaves) = (nodes + a, leaves + b);
+            }
+        }
+        (nodes, leaves)
+    }
+}
+
 /// Inputs of the build that the recursion reads.
 struct Source<'a> {
     bins: &'a [Bin],
@@ -378,7 +419,30 @@ impl Bvh8 {
             triangles,
             spheres,
         };
+        let (nodes, packets) = src.sizes(0);
+        out.nodes.reserve_exact(nodes);
+        out.packets.reserve_exact(packets);
         out.build_node(&src, 0, 1);
+        out
+    }
+
+    /// The records of triangle primitives `0..count`, made from the packets' vertices (the
+    /// ones the build was given, stored unchanged, every triangle in exactly one lane): the
+    /// caller's vertex array is freed before they are made, so the two never coexist at
+    /// the build's end (issue 36, peak memory).
+    ///
+    /// # Panics
+    /// If the packets do not hold each of the `count` triangles once (a build bug).
+    pub(crate) fn triangle_records(&self, count: usize) -> Vec<Triangle> {
+        let mut out = vec![Triangle::new([Vec3::ZERO; 3]); count];
+        let mut filled = 0usize;
+        for p in &self.packets {
+            for l in (0..WIDTH).filter(|l| p.valid & (1 << l) != 0) {
+                out[p.prim[l] as usize] = Triangle::new(p.triangle(l));
+                filled += 1;
+            }
+        }
+        assert_eq!(filled, count, "the packets hold each triangle once");
         out
     }
 
@@ -415,17 +479,8 @@ impl Bvh8 {
     /// nodes below it; returns its index.
     fn build_node(&mut self, src: &Source, n: u32, level: usize) -> u32 {
         self.depth = self.depth.max(level);
-        let (bins, collapse) = (src.bins, src.collapse);
-        let mut kids = Vec::with_capacity(WIDTH);
-        if bins[n as usize].is_leaf() || collapse.split[n as usize][0] == Split::Leaf {
-            // Only for the root of a tiny scene: one node with one leaf child.
-            kids.push((n, true));
-        } else {
-            let [l, r] = bins[n as usize].kids;
-            let best = collapse.node_split[n as usize] as usize;
-            collapse.slots(bins, l, best, &mut kids);
-            collapse.slots(bins, r, WIDTH - best, &mut kids);
-        }
+        let bins = src.bins;
+        let kids = src.kids(n);
         let index = self.nodes.len() as u32;
         let empty_min = Row8([f32::INFINITY; WIDTH]);
         let empty_max = Row8([f32::NEG_INFINITY; WIDTH]);
@@ -583,5 +638,14 @@ mod tests {
         }
         assert_eq!(seen, [1; 16]);
         assert_eq!(bvh.spheres.len(), 1);
+        // The arrays were reserved exactly (counted before the build, the sphere's leaf
+        // not among the packets).
+        assert_eq!(bvh.nodes.capacity(), bvh.nodes.len());
+        assert_eq!(bvh.packets.capacity(), bvh.packets.len());
+        // Triangle records from the packets: each triangle's own vertices.
+        let records = bvh.triangle_records(tris.len());
+        for (r, t) in records.iter().zip(&tris) {
+            assert_eq!(r.v.map(Vec3::from), *t);
+        }
     }
 }

@@ -60,6 +60,20 @@ pub struct SceneGeometry {
     any_attributes: bool,
 }
 
+/// A primitive as the build sees it: a triangle, or a box `[min, max, max]`.
+struct PrimBox([Vec3; 3]);
+
+impl obvhs::Boundable for PrimBox {
+    /// The min/max of the three points: a triangle's exact box, or the box itself.
+    fn aabb(&self) -> Aabb {
+        let t = &self.0;
+        Aabb::new(
+            Vec3A::from(t[0].min(t[1]).min(t[2])),
+            Vec3A::from(t[0].max(t[1]).max(t[2])),
+        )
+    }
+}
+
 /// Relative padding of sphere boxes: `center +- radius` is rounded, and the box must
 /// contain the sphere exactly for traversal to be conservative.
 const BOX_PAD: f32 = 4.0 * f32::EPSILON;
@@ -127,65 +141,61 @@ impl SceneGeometry {
             );
         }
 
-        // Triangle boxes are exact (min/max of the vertices); sphere boxes are padded.
-        let mut aabbs: Vec<Aabb> = triangles
+        let mut bounds = (Vec3::ZERO, Vec3::ZERO);
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &triangles {
+            for v in t {
+                lo = lo.min(*v);
+                hi = hi.max(*v);
+            }
+        }
+        let finite = |v: Vec3| v.clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+        for s in &spheres {
+            lo = lo.min(finite(s.center - Vec3::splat(s.radius)));
+            hi = hi.max(finite(s.center + Vec3::splat(s.radius)));
+        }
+        for (blo, bhi) in &placed.boxes {
+            lo = lo.min(finite(*blo));
+            hi = hi.max(finite(*bhi));
+        }
+
+        // The build's primitives: the triangles (their boxes exact, min/max of the
+        // vertices), then the spheres' and the instances' padded boxes as `[min, max,
+        // max]`, whose min/max is the box; primitive `i` at position `i`. The triangles'
+        // vector is reused (same layout), not copied, and no box is stored: the build's
+        // peak, not its total, is what a large mesh runs out of (issue 36).
+        let tri_count = triangles.len();
+        let mut prims: Vec<PrimBox> = triangles.into_iter().map(PrimBox).collect();
+        let boxes = spheres
             .iter()
-            .map(|t| {
-                Aabb::new(
-                    Vec3A::from(t[0].min(t[1]).min(t[2])),
-                    Vec3A::from(t[0].max(t[1]).max(t[2])),
+            .map(|s| {
+                padded_box(
+                    s.center - Vec3::splat(s.radius),
+                    s.center + Vec3::splat(s.radius),
                 )
             })
-            .collect();
-        let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
+            .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)));
+        prims.extend(boxes.map(|b| PrimBox([b.min.into(), b.max.into(), b.max.into()])));
 
         // Without obvhs' spatial pre-splits: on the bench mesh and on a room with large
         // walls and long slivers they did not speed up traversal (benches/README.md) while
         // doubling build time, and their clipped boxes would need padding.
         let params = BvhBuildParams::medium_build();
-        let tri_count = triangles.len() as u32;
-        for (i, s) in spheres.iter().enumerate() {
-            aabbs.push(padded_box(
-                s.center - Vec3::splat(s.radius),
-                s.center + Vec3::splat(s.radius),
-            ));
-            indices.push(tri_count + i as u32);
-        }
-        for (k, (lo, hi)) in placed.boxes.iter().enumerate() {
-            aabbs.push(padded_box(*lo, *hi));
-            indices.push((num_prims + k) as u32);
-        }
-
-        let mut bounds = (Vec3::ZERO, Vec3::ZERO);
-        let bvh8 = if aabbs.is_empty() {
+        let mut triangles = Vec::new();
+        let bvh8 = if prims.is_empty() {
             None
         } else {
-            let mut lo = Vec3::splat(f32::INFINITY);
-            let mut hi = Vec3::splat(f32::NEG_INFINITY);
-            for t in &triangles {
-                for v in t {
-                    lo = lo.min(*v);
-                    hi = hi.max(*v);
-                }
-            }
-            let finite = |v: Vec3| v.clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
-            for s in &spheres {
-                lo = lo.min(finite(s.center - Vec3::splat(s.radius)));
-                hi = hi.max(finite(s.center + Vec3::splat(s.radius)));
-            }
-            for (blo, bhi) in &placed.boxes {
-                lo = lo.min(finite(*blo));
-                hi = hi.max(finite(*bhi));
-            }
             bounds = (lo, hi);
-
-            // obvhs' PLOC and reinsertion over our own boxes, so spheres can share the tree,
+            // obvhs' PLOC and reinsertion over the boxes, so spheres can share the tree,
             // with the runs PLOC stalls on built apart. Each intermediate is freed as soon as
-            // the next is built (the boxes here, the binary tree inside the collapse): the
-            // peak, not the total, is what a large mesh runs out of.
-            let bvh2 = build_bvh2(&aabbs, indices, &params);
-            drop(aabbs);
-            let mut bvh8 = Bvh8::from_bvh2(bvh2, &triangles, &spheres);
+            // the next is built (the binary tree inside the collapse).
+            let bvh2 = build_bvh2(&prims, &params);
+            prims.truncate(tri_count);
+            let vertices: Vec<[Vec3; 3]> = prims.into_iter().map(|p| p.0).collect();
+            let mut bvh8 = Bvh8::from_bvh2(bvh2, &vertices, &spheres);
+            drop(vertices);
+            triangles = bvh8.triangle_records(tri_count);
             if !placed.instances.is_empty() {
                 bvh8.instances = placed
                     .instances
@@ -207,7 +217,7 @@ impl SceneGeometry {
 
         let any_attributes = objects.iter().any(|o| o.any_attributes);
         Self {
-            triangles: triangles.into_iter().map(Triangle::new).collect(),
+            triangles,
             spheres,
             bvh8,
             backend: Kernel::best().backend().expect("the best kernel runs here"),

@@ -78,11 +78,7 @@ fn check_tree(bvh2: &Bvh2, aabbs: &[Aabb]) -> usize {
 }
 
 fn build(aabbs: &[Aabb]) -> Bvh2 {
-    build_bvh2(
-        aabbs,
-        (0..aabbs.len() as u32).collect(),
-        &BvhBuildParams::medium_build(),
-    )
+    build_bvh2(aabbs, &BvhBuildParams::medium_build())
 }
 
 /// `2 log2(n) + 8`: the depth a build over `n` primitives may reach.
@@ -174,7 +170,7 @@ fn meshes_take_plocs_path_unchanged() {
         let aabbs = boxes(&tris);
         assert!(stalled_runs(&aabbs).is_empty());
         let params = BvhBuildParams::medium_build();
-        let mut plain = ploc(&aabbs, (0..aabbs.len() as u32).collect(), &params);
+        let mut plain = ploc(&aabbs, &params);
         ReinsertionOptimizer::default().run(&mut plain, params.reinsertion_batch_ratio, None);
         let ours = build(&aabbs);
         assert_eq!(ours.primitive_indices, plain.primitive_indices);

@@ -6,6 +6,7 @@ use glam::Vec3;
 use obvhs::{
     aabb::Aabb,
     bvh2::{node::Bvh2Node, Bvh2},
+    Boundable,
 };
 
 /// A node of the binary BVH with every leaf holding exactly one primitive (multi-primitive
@@ -95,8 +96,12 @@ pub(crate) fn bvh2_depth(bvh2: &Bvh2) -> usize {
 /// with one primitive per leaf, built top down by median splits: along the longest axis of
 /// the centroid bounds, or by count when the centroids coincide. Depth `ceil(log2 n) + 1`
 /// whatever the boxes: the fallback when PLOC's tree is deeper than [`MAX_BVH2_DEPTH`].
-pub(crate) fn median_bvh2(aabbs: &[Aabb], indices: &[u32]) -> Bvh2 {
-    let mut prims: Vec<(Aabb, u32)> = aabbs.iter().copied().zip(indices.iter().copied()).collect();
+pub(crate) fn median_bvh2<B: Boundable>(aabbs: &[B], indices: &[u32]) -> Bvh2 {
+    let mut prims: Vec<(Aabb, u32)> = aabbs
+        .iter()
+        .map(Boundable::aabb)
+        .zip(indices.iter().copied())
+        .collect();
     let mut nodes = vec![Bvh2Node::default()];
     let mut primitive_indices = Vec::with_capacity(prims.len());
     let mut stack = vec![(0usize, prims.len(), 0usize)];

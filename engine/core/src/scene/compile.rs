@@ -43,7 +43,9 @@ impl Scene {
         let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
 
         let mut triangles = Vec::new();
-        let mut tri_shape = Vec::new();
+        // Each shape's triangle count, expanded to one shape per triangle after the build:
+        // 4 bytes a triangle fewer at the build's peak (issue 36).
+        let mut tri_shape_runs: Vec<(u32, usize)> = Vec::new();
         let mut spheres = Vec::new();
         let mut sphere_shape = Vec::new();
         let mut shapes = Vec::new();
@@ -66,8 +68,13 @@ impl Scene {
                     if let Ok(a) = world.remove_one::<VertexAttributes>(entity) {
                         attributes.push(triangles.len() as u32, a);
                     }
-                    tri_shape.extend(std::iter::repeat_n(i as u32, t.len()));
-                    triangles.extend(t);
+                    tri_shape_runs.push((i as u32, t.len()));
+                    // The first mesh's vector is moved, not copied (issue 36, peak memory).
+                    if triangles.is_empty() {
+                        triangles = t;
+                    } else {
+                        triangles.extend(t);
+                    }
                 }
             }
             shapes.push(ShapeInfo {
@@ -99,7 +106,10 @@ impl Scene {
             &objects.placements,
         );
         geometry.set_attributes(attributes);
-        let mut prim_shape = tri_shape;
+        let mut prim_shape = Vec::with_capacity(num_tris + sphere_shape.len());
+        for (shape, count) in tri_shape_runs {
+            prim_shape.extend(std::iter::repeat_n(shape, count));
+        }
         prim_shape.extend(sphere_shape);
 
         let (lo, hi) = geometry.bounds();
@@ -125,7 +135,6 @@ impl Scene {
                 }
             }
         }
-        let _ = num_tris;
         let mut light_entities: Vec<(hecs::Entity, LightComponent)> = world
             .query::<&LightComponent>()
             .iter()

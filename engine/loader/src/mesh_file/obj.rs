@@ -1,127 +1,73 @@
-//! Wavefront OBJ through tobj: positions, `vn` normals and `vt` texture coordinates, with
-//! every `(v, vt, vn)` combination a face uses made one vertex (tobj's `single_index`), so
-//! the position, normal and uv streams share one index and stay in step.
+//! Wavefront OBJ, read line by line: positions, `vn` normals and `vt` texture coordinates,
+//! with every `(v, vt, vn)` combination an object's faces use made one vertex, so the
+//! position, normal and uv streams share one index and stay in step.
 //!
-//! The file is streamed into tobj line by line, never held whole: a 2-million-triangle
-//! mesh is about 150 MB of text, as much again as its parsed form (issue 36, peak memory).
+//! Our own reader (it replaced tobj, issue 36): tobj keeps every face of the file as a list
+//! of `(v, vt, vn)` corners (an enum of 80 bytes a face, plus its index map) until the end
+//! of each object, about 160 bytes a triangle and the load's peak (a 2-million-triangle
+//! mesh: 384 MiB resident). Here a corner becomes its vertex id as its line is read, and only
+//! the ids (12 bytes a triangle) wait for the object's end. What tobj accepted is accepted
+//! and gives the same mesh, bit for bit (f32 parsing, vertex order, fan triangulation,
+//! `v x y z w`, vertex colours, relative indices, indices checked at the object's end against
+//! the entries read by then); what it rejected is rejected, now with the line and the text.
+//! One difference: `l` (polyline) statements are skipped like `p` (tobj made triangles of
+//! those with three or more corners while they were counted as skipped).
 
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use glam::{DVec3, Vec2};
 
 use super::{check_normals, MeshData};
 
-/// Reads an OBJ file (every object in it; polygons fan-triangulated by tobj; points and
-/// lines ignored; `mtllib` not read: the scene assigns the material). The error is a
-/// complete sentence naming the full path, and for a face index to a `vn` or `vt` that does
-/// not exist, the line and the index.
+/// Reads an OBJ file (every object in it; polygons fan-triangulated; points and lines
+/// skipped and counted; `mtllib` and `usemtl` not read: the scene assigns the material).
+/// The error is a complete sentence naming the full path and, for a malformed statement or
+/// a face index to an entry that does not exist, the line and its text.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
     let shown = path.display();
     let file =
         std::fs::File::open(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
-    let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file));
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let (models, _materials) = tobj::load_obj_buf(&mut lines, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| {
-        if let Some(e) = lines.error.take() {
-            return format!("cannot read OBJ file `{shown}`: {e}");
-        }
-        // Located by a second reading of the file, on this error path only.
-        let text = || std::fs::read(path).map(|b| lossy_text(&b)).ok();
-        let located = match e {
-            tobj::LoadError::FaceTexCoordOutOfBounds => {
-                text().and_then(|t| bad_face_index(&t, "vt", 1))
-            }
-            tobj::LoadError::FaceNormalOutOfBounds => {
-                text().and_then(|t| bad_face_index(&t, "vn", 2))
-            }
-            _ => None,
-        };
-        match located {
-            Some(at) => format!("cannot parse OBJ file `{shown}`: {at}"),
-            None => format!("cannot parse OBJ file `{shown}`: {e}"),
-        }
-    })?;
-    let mut mesh = MeshData {
-        skipped: lines.skipped,
-        ..MeshData::default()
-    };
+    let mut input = BufReader::with_capacity(1 << 16, file);
     let what = format!("cannot parse OBJ file `{shown}`");
-    for model in &models {
-        let m = &model.mesh;
-        let base = mesh.positions.len();
-        let n_vertices = m.positions.len() / 3;
-        let base32 = u32::try_from(base + n_vertices)
-            .map_err(|_| format!("{what}: more than 2^32 vertices"))
-            .map(|_| base as u32)?;
-        for (i, p) in m.positions.chunks_exact(3).enumerate() {
-            let v = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
-            if !v.is_finite() {
-                return Err(format!("{what}: vertex {} is not finite", base + i + 1));
-            }
-            mesh.positions.push(v);
+    let mut obj = ObjReader::default();
+    let mut bytes = Vec::new();
+    let mut number = 0usize;
+    loop {
+        bytes.clear();
+        let read = input
+            .read_until(b'\n', &mut bytes)
+            .map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
+        if read == 0 {
+            break;
         }
-        // With `single_index`, a mesh has normals (uvs) for every vertex or for none; an
-        // object where only some faces give them cannot be shaded consistently.
-        let has_normals = !m.normals.is_empty();
-        let has_uvs = !m.texcoords.is_empty();
-        for (has, len, per, kind) in [
-            (has_normals, m.normals.len(), 3, "normals (`vn`)"),
-            (has_uvs, m.texcoords.len(), 2, "texture coordinates (`vt`)"),
-        ] {
-            if has && len != per * n_vertices {
-                return Err(format!(
-                    "{what}: object `{}` gives {kind} on some faces but not on others",
-                    model.name
-                ));
-            }
-        }
-        // Attributes are per file: objects without them next to objects with them get
-        // zero normals (the renderer then uses the face normal) and uv (0, 0).
-        if has_normals || !mesh.normals.is_empty() {
-            mesh.normals.resize(base, DVec3::ZERO);
-            if has_normals {
-                mesh.normals.extend(
-                    m.normals
-                        .chunks_exact(3)
-                        .map(|n| DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]))),
-                );
-            } else {
-                mesh.normals.resize(base + n_vertices, DVec3::ZERO);
-            }
-        }
-        if has_uvs || !mesh.uvs.is_empty() {
-            mesh.uvs.resize(base, Vec2::ZERO);
-            if has_uvs {
-                mesh.uvs
-                    .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
-            } else {
-                mesh.uvs.resize(base + n_vertices, Vec2::ZERO);
-            }
-        }
-        for f in m.indices.chunks_exact(3) {
-            let mut tri = [0u32; 3];
-            for (k, &i) in f.iter().enumerate() {
-                if i as usize >= n_vertices {
-                    return Err(format!(
-                        "{what}: object `{}` refers to vertex {} but has {n_vertices}",
-                        model.name,
-                        i + 1
-                    ));
-                }
-                tri[k] = base32 + i;
-            }
-            mesh.triangles.push(tri);
-        }
+        number += 1;
+        // Files written on Windows may start with a UTF-8 byte-order mark, and comments in
+        // Latin-1 are common: the mark is dropped and bytes that are not UTF-8 become U+FFFD
+        // (harmless in a comment, still an error in a number).
+        let text = if number == 1 {
+            bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes)
+        } else {
+            &bytes[..]
+        };
+        let line = match std::str::from_utf8(text) {
+            Ok(line) => std::borrow::Cow::Borrowed(line),
+            Err(_) => String::from_utf8_lossy(text),
+        };
+        let line = line.strip_suffix('\n').unwrap_or(&line);
+        let line = line.strip_suffix('\r').unwrap_or(line);
+        obj.statement(line).map_err(|e| match e {
+            Error::Line(e) => format!("{what}: line {number}: {e} in `{}`", line.trim()),
+            Error::Index(e) => e.located(path, &what),
+        })?;
     }
+    obj.end_object().map_err(|e| e.located(path, &what))?;
+    // Errors in the vertices found at an object's end wait for the whole file to be read,
+    // as they did behind tobj: a malformed line or a bad index anywhere comes first.
+    if let Some(e) = obj.deferred {
+        return Err(format!("{what}: {e}"));
+    }
+    let mut mesh = obj.mesh;
     // Objects after the last one with normals (uvs) get theirs too.
     if !mesh.normals.is_empty() {
         mesh.normals.resize(mesh.positions.len(), DVec3::ZERO);
@@ -144,10 +90,373 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
     Ok(mesh)
 }
 
-/// The first face corner whose `vt` (`slot` 1) or `vn` (`slot` 2) index names no such
-/// entry, as "line N: face corner `a/b/c` refers to vn 7 but the file has 6": tobj reports
-/// only that some index was out of bounds. Negative indices count back from the entries
-/// read so far (the OBJ specification's relative indices).
+/// A corner's index that names no entry: the face gave none (`1//3` has no `vt`), or an
+/// index resolved to `usize::MAX` (`0`, or a relative index one before the first entry),
+/// which OBJ readers like tobj take for "none" as well.
+const MISSING: u32 = u32::MAX;
+
+/// The file's state between lines: the entries read so far (as f32, what the file's
+/// numbers are parsed to) and the current object, whose triangles hold object-local vertex
+/// ids until its end, when its vertices are checked and gathered into `mesh`.
+#[derive(Default)]
+struct ObjReader {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    texcoords: Vec<[f32; 2]>,
+    /// Components of `v x y z r g b` colours read (a colour that fails to parse stops at
+    /// the bad component): only checked, every used vertex must have one if any has.
+    colour_components: usize,
+    mesh: MeshData,
+    /// The current object's name (`o` / `g`), for messages.
+    name: Option<String>,
+    /// The current object's vertices, `(v, vt, vn)` (0-based or [`MISSING`]), in order of
+    /// first use, and its first triangle in `mesh.triangles` (ids local until its end).
+    keys: Vec<[u32; 3]>,
+    first_triangle: usize,
+    /// For each position, the id of the current object's first vertex using it (tagged by
+    /// `object`, so objects need not clear it); other vertices of a position, and indices
+    /// past the positions read, are found in `more`.
+    by_position: Vec<(u32, u32)>,
+    more: std::collections::HashMap<[u32; 3], u32, std::hash::BuildHasherDefault<KeyHasher>>,
+    /// Whether `more` holds a vertex named before its position was read.
+    forward: bool,
+    object: u32,
+    /// The current face's vertex ids.
+    corners: Vec<u32>,
+    /// The first problem with an object's vertices (not finite, attributes on only some),
+    /// reported once the file is read.
+    deferred: Option<String>,
+}
+
+/// Why a line is rejected.
+enum Error {
+    /// What is wrong with the line itself.
+    Line(String),
+    /// An index of an object ended by this line (`o`, `g`) names no entry.
+    Index(IndexError),
+}
+
+impl From<&str> for Error {
+    fn from(e: &str) -> Self {
+        Error::Line(e.to_owned())
+    }
+}
+
+impl From<String> for Error {
+    fn from(e: String) -> Self {
+        Error::Line(e)
+    }
+}
+
+/// An error found at an object's end: an index past the entries read by then.
+enum IndexError {
+    /// The entry kind (`v`, `vt`, `vn`) and the corner slot its index is in.
+    Missing(&'static str, usize),
+    /// A vertex without a colour while others have one.
+    Colour,
+}
+
+impl IndexError {
+    /// The message, with the offending corner's line found by reading the file again (only
+    /// on this error path).
+    fn located(self, path: &Path, what: &str) -> String {
+        match self {
+            IndexError::Missing(kind, slot) => {
+                let text = std::fs::read(path).map(|b| lossy_text(&b)).ok();
+                match text.and_then(|t| bad_face_index(&t, kind, slot)) {
+                    Some(at) => format!("{what}: {at}"),
+                    None => format!("{what}: a face refers to a `{kind}` that does not exist"),
+                }
+            }
+            IndexError::Colour => {
+                format!("{what}: a face uses a vertex without a colour while others have one")
+            }
+        }
+    }
+}
+
+impl ObjReader {
+    /// Reads one line (without its line break). The error names what is wrong; the caller
+    /// adds the line.
+    fn statement(&mut self, line: &str) -> Result<(), Error> {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let p = floats::<3>(&mut words).ok_or("a position needs three numbers")?;
+                self.positions.push(p);
+                self.by_position.push((0, 0));
+                self.vertex_extra(&mut words)?;
+            }
+            Some("vt") => {
+                let t = floats::<2>(&mut words).ok_or("a texture coordinate needs two numbers")?;
+                self.texcoords.push(t);
+            }
+            Some("vn") => {
+                let n = floats::<3>(&mut words).ok_or("a normal needs three numbers")?;
+                self.normals.push(n);
+            }
+            Some("f") => self.face(words)?,
+            Some("p") => self.mesh.skipped.points += 1,
+            Some("l") => self.mesh.skipped.lines += 1,
+            Some("o" | "g") => {
+                if self.mesh.triangles.len() > self.first_triangle {
+                    self.end_object().map_err(Error::Index)?;
+                }
+                // The name is the line after its first character, as tobj took it.
+                let rest = line.char_indices().nth(1).map_or("", |(i, _)| &line[i..]);
+                self.name = Some(rest.trim().to_owned()).filter(|n| !n.is_empty());
+            }
+            // The material name is what follows the first space (tobj's reading).
+            Some("usemtl")
+                if line
+                    .split_once(' ')
+                    .is_none_or(|(_, m)| m.trim().is_empty()) =>
+            {
+                return Err("`usemtl` names no material".into());
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// What may follow a position's three numbers: nothing, `w` (the position is divided
+    /// by it) or an RGB colour.
+    fn vertex_extra<'a>(
+        &mut self,
+        words: &mut impl Iterator<Item = &'a str>,
+    ) -> Result<(), String> {
+        let Some(first) = words.next() else {
+            return Ok(());
+        };
+        match (words.next(), words.next()) {
+            (None, _) => {
+                let w: f32 = first
+                    .parse()
+                    .map_err(|_| "the weight `w` is not a number")?;
+                if w == 0.0 {
+                    return Err("the weight `w` is 0".into());
+                }
+                let p = self.positions.last_mut().expect("just pushed");
+                *p = p.map(|c| c / w);
+            }
+            (Some(second), Some(third)) if words.next().is_none() => {
+                self.colour_components += [first, second, third]
+                    .iter()
+                    .take_while(|c| c.parse::<f32>().is_ok())
+                    .count();
+            }
+            _ => return Err("a position is followed by 1 or 3 numbers at most".into()),
+        }
+        Ok(())
+    }
+
+    /// A face: each corner `v`, `v/vt`, `v//vn` or `v/vt/vn` (negative indices count back
+    /// from the entries read so far) made a vertex id; fan-triangulated. Faces of one or two
+    /// corners are points and lines: skipped, as tobj skips them.
+    fn face<'a>(&mut self, corners: impl Iterator<Item = &'a str>) -> Result<(), String> {
+        let counts = [
+            self.positions.len(),
+            self.texcoords.len(),
+            self.normals.len(),
+        ];
+        let mut keys = [[MISSING; 3]; 3];
+        let mut n = 0usize;
+        self.corners.clear();
+        for corner in corners {
+            let mut key = [MISSING; 3];
+            for (slot, field) in corner.split('/').enumerate() {
+                if field.is_empty() {
+                    continue;
+                }
+                let index = field
+                    .parse::<isize>()
+                    .ok()
+                    .filter(|_| slot < 3)
+                    .ok_or_else(|| {
+                        format!("face corner `{corner}` is not v, v/vt, v//vn or v/vt/vn")
+                    })?;
+                let resolved = if index < 0 {
+                    (counts[slot] as isize).wrapping_add(index) as usize
+                } else {
+                    (index - 1) as usize
+                };
+                key[slot] = if resolved == usize::MAX {
+                    MISSING
+                } else {
+                    resolved.min(MISSING as usize - 1) as u32
+                };
+            }
+            // The first three corners wait: a face of fewer is not a surface.
+            if n < 3 {
+                keys[n] = key;
+            } else {
+                if n == 3 {
+                    for k in keys {
+                        let id = self.vertex(k);
+                        self.corners.push(id);
+                    }
+                }
+                let id = self.vertex(key);
+                self.corners.push(id);
+            }
+            n += 1;
+        }
+        match n {
+            0 => return Err("a face has no corners".into()),
+            1 | 2 => return Ok(()),
+            3 => {
+                for k in keys {
+                    let id = self.vertex(k);
+                    self.corners.push(id);
+                }
+            }
+            _ => {}
+        }
+        let c = &self.corners;
+        for k in 2..c.len() {
+            self.mesh.triangles.push([c[0], c[k - 1], c[k]]);
+        }
+        Ok(())
+    }
+
+    /// The current object's vertex id of `key`, a new one on its first use.
+    fn vertex(&mut self, key: [u32; 3]) -> u32 {
+        let next = self.keys.len() as u32;
+        let tag = self.object + 1;
+        match self.by_position.get_mut(key[0] as usize) {
+            // A position's first vertex in this object, unless an earlier face named it
+            // before its `v` line (then it is in `more`).
+            Some(slot) if slot.0 != tag => {
+                if !(self.forward && self.more.contains_key(&key)) {
+                    *slot = (tag, next);
+                    self.keys.push(key);
+                    return next;
+                }
+            }
+            Some(slot) if self.keys[slot.1 as usize] == key => return slot.1,
+            Some(_) => {}
+            None => self.forward = true,
+        }
+        *self.more.entry(key).or_insert_with(|| {
+            self.keys.push(key);
+            next
+        })
+    }
+
+    /// Ends the current object: its vertices checked against the entries read so far and
+    /// gathered into `mesh` (f64), its triangles made global.
+    fn end_object(&mut self) -> Result<(), IndexError> {
+        let mesh = &mut self.mesh;
+        let base = mesh.positions.len();
+        let n = self.keys.len();
+        let (mut uvs, mut normals) = (0usize, 0usize);
+        mesh.positions.reserve(n);
+        for &[v, vt, vn] in &self.keys {
+            let p = *self
+                .positions
+                .get(v as usize)
+                .ok_or(IndexError::Missing("v", 0))?;
+            let uv = attribute(&self.texcoords, vt, IndexError::Missing("vt", 1))?;
+            let normal = attribute(&self.normals, vn, IndexError::Missing("vn", 2))?;
+            if self.colour_components > 0 && 3 * v as usize + 2 >= self.colour_components {
+                return Err(IndexError::Colour);
+            }
+            mesh.positions.push(DVec3::from(p.map(f64::from)));
+            // Attributes are per file: objects without them next to objects with them get
+            // zero normals (the renderer then uses the face normal) and uv (0, 0).
+            if let Some(nm) = normal {
+                mesh.normals.resize(base + normals, DVec3::ZERO);
+                mesh.normals.push(DVec3::from(nm.map(f64::from)));
+                normals += 1;
+            }
+            if let Some(t) = uv {
+                mesh.uvs.resize(base + uvs, Vec2::ZERO);
+                mesh.uvs.push(Vec2::from(t));
+                uvs += 1;
+            }
+        }
+        let name = self.name.as_deref().unwrap_or("unnamed_object");
+        if let Some(i) = mesh.positions[base..].iter().position(|p| !p.is_finite()) {
+            self.deferred
+                .get_or_insert(format!("vertex {} is not finite", base + i + 1));
+        }
+        // A mesh has normals (uvs) for every vertex of an object or for none; an object where
+        // only some faces give them cannot be shaded consistently.
+        for (count, kind) in [
+            (normals, "normals (`vn`)"),
+            (uvs, "texture coordinates (`vt`)"),
+        ] {
+            if count != 0 && count != n {
+                self.deferred.get_or_insert(format!(
+                    "object `{name}` gives {kind} on some faces but not on others"
+                ));
+            }
+        }
+        if u32::try_from(mesh.positions.len()).is_err() {
+            self.deferred
+                .get_or_insert("more than 2^32 vertices".into());
+        }
+        let base32 = base as u32;
+        for t in &mut mesh.triangles[self.first_triangle..] {
+            *t = t.map(|i| base32.wrapping_add(i));
+        }
+        self.first_triangle = mesh.triangles.len();
+        self.keys.clear();
+        self.more.clear();
+        self.forward = false;
+        self.object += 1;
+        Ok(())
+    }
+}
+
+/// Entry `i` of a file's `vt` or `vn` list for a vertex: none if the face gave no index or
+/// the file has no such entries at all (tobj's reading: `vt` indices in a file without `vt`
+/// lines are ignored), `missing` if the index is past the list.
+fn attribute<T: Copy>(list: &[T], i: u32, missing: IndexError) -> Result<Option<T>, IndexError> {
+    if list.is_empty() || i == MISSING {
+        return Ok(None);
+    }
+    list.get(i as usize).copied().map(Some).ok_or(missing)
+}
+
+/// The next `N` words as f32 (`None` if fewer or one is not a number); further words are
+/// left to the caller.
+fn floats<'a, const N: usize>(words: &mut impl Iterator<Item = &'a str>) -> Option<[f32; N]> {
+    let mut out = [0.0; N];
+    for o in &mut out {
+        *o = words.next()?.parse().ok()?;
+    }
+    Some(out)
+}
+
+/// FxHash's multiply-rotate (rustc's hasher): the vertex keys are small integers, hashed
+/// millions of times where a mesh has seams; SipHash's resistance to chosen keys buys
+/// nothing for a file's indices and costs several times as much.
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl std::hash::Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u32(u32::from_le_bytes(word));
+        }
+    }
+
+    fn write_u32(&mut self, i: u32) {
+        self.0 = (self.0.rotate_left(5) ^ u64::from(i)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// The first face corner whose `v` (`slot` 0), `vt` (1) or `vn` (2) index names no such
+/// entry, as "line N: face corner `a/b/c` refers to vn 7 but the file has 6". Negative
+/// indices count back from the entries read so far (the OBJ specification's relative
+/// indices).
 fn bad_face_index(text: &str, kind: &str, slot: usize) -> Option<String> {
     let total = text
         .lines()
@@ -185,97 +494,11 @@ fn bad_face_index(text: &str, kind: &str, slot: usize) -> Option<String> {
     None
 }
 
-/// The file as tobj reads it, one line at a time: files written on Windows may start with
-/// a UTF-8 byte-order mark, and comments in Latin-1 are common, so the mark is dropped and
-/// bytes that are not UTF-8 become U+FFFD (harmless in a comment, still an error in a
-/// number; per line as for the whole file, since a newline never belongs to a multi-byte
-/// sequence). On the way, the statements tobj is told to ignore are counted.
-struct Lines<R> {
-    inner: R,
-    /// The current line (UTF-8) and how much of it tobj has consumed.
-    line: Vec<u8>,
-    at: usize,
-    first: bool,
-    /// Points (`p`) and lines (`l`): not surfaces, counted so the scene can warn that they
-    /// were skipped.
-    skipped: super::Skipped,
-    /// The read error, if any: tobj reports it only as a failed line.
-    error: Option<std::io::Error>,
-}
-
-/// `bytes` as [`Lines`] reads them: byte-order mark dropped, invalid UTF-8 replaced.
+/// `bytes` as [`load_obj`] reads them: byte-order mark dropped, invalid UTF-8 replaced.
 fn lossy_text(bytes: &[u8]) -> String {
     let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     String::from_utf8_lossy(bytes).into_owned()
 }
 
-impl<R: BufRead> Lines<R> {
-    fn new(inner: R) -> Self {
-        Lines {
-            inner,
-            line: Vec::new(),
-            at: 0,
-            first: true,
-            skipped: super::Skipped::default(),
-            error: None,
-        }
-    }
-
-    /// Reads the next line into `self.line` (empty at the end of the file).
-    fn next_line(&mut self) -> std::io::Result<()> {
-        self.line.clear();
-        self.at = 0;
-        self.inner.read_until(b'\n', &mut self.line)?;
-        if self.first {
-            self.first = false;
-            if self.line.starts_with(b"\xef\xbb\xbf") {
-                self.line.drain(..3);
-            }
-        }
-        if std::str::from_utf8(&self.line).is_err() {
-            self.line = String::from_utf8_lossy(&self.line)
-                .into_owned()
-                .into_bytes();
-        }
-        let mut words = self
-            .line
-            .split(u8::is_ascii_whitespace)
-            .filter(|w| !w.is_empty());
-        match words.next() {
-            Some(b"p") => self.skipped.points += 1,
-            Some(b"l") => self.skipped.lines += 1,
-            _ => {}
-        }
-        Ok(())
-    }
-}
-
-impl<R: BufRead> Read for Lines<R> {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        let n = {
-            let available = self.fill_buf()?;
-            let n = available.len().min(out.len());
-            out[..n].copy_from_slice(&available[..n]);
-            n
-        };
-        self.consume(n);
-        Ok(n)
-    }
-}
-
-impl<R: BufRead> BufRead for Lines<R> {
-    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
-        if self.at == self.line.len() {
-            if let Err(e) = self.next_line() {
-                let kind = e.kind();
-                self.error = Some(e);
-                return Err(std::io::Error::new(kind, "read error"));
-            }
-        }
-        Ok(&self.line[self.at..])
-    }
-
-    fn consume(&mut self, n: usize) {
-        self.at = (self.at + n).min(self.line.len());
-    }
-}
+#[cfg(test)]
+mod tests;
