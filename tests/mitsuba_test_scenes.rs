@@ -1,5 +1,5 @@
-//! Scenes of Mitsuba 3's own test data (`mitsuba-renderer/mitsuba-data`, `tests/scenes/`),
-//! read from their unchanged XML and judged by Mitsuba's own render z-test
+//! Scenes of Mitsuba 3's own test data (`mitsuba-renderer/mitsuba-data`, `tests/scenes/`):
+//! every one whose features risotto reads (18), read from their unchanged XML and judged by Mitsuba's own render z-test
 //! (`risotto::tools::z_test`: per pixel and XYZ channel against the reference's per-sample
 //! variance, Sidak-corrected, 99.75 % of the pixels must pass), at Mitsuba's test budget of
 //! 2e6 samples per image.
@@ -77,6 +77,11 @@ macro_rules! mitsuba_test_scene {
 }
 
 mitsuba_test_scene! {
+    bsdf_spheres_arealight => "bsdf_spheres/test_arealight_path",
+    bsdf_spheres_constant => "bsdf_spheres/test_constant_path",
+    bsdf_spheres_envmap => "bsdf_spheres/test_envmap_path",
+    bsdf_spheres_pointlight => "bsdf_spheres/test_pointlight_path",
+    bsdf_spheres_textured_diffuse => "bsdf_spheres/test_textured_diffuse_path",
     bsdf_spheres_roughdielectric => "bsdf_spheres/test_roughdielectric_path",
     bsdf_spheres_roughplastic_linear => "bsdf_spheres/test_roughplastic_linear_path",
     bsdf_spheres_roughplastic_nonlinear => "bsdf_spheres/test_roughplastic_nonlinear_path",

@@ -144,3 +144,32 @@ fn bad_rough_parameters_are_located_errors() {
         );
     }
 }
+
+/// `masking` on the microfacet materials: the two known forms load, anything else is an
+/// error naming the key and the value.
+#[test]
+fn masking_is_height_correlated_or_separable() {
+    let text = |ty: &str, masking: &str| {
+        format!(
+            "[materials.m]\ntype = \"{ty}\"\nmasking = \"{masking}\"\n[[shapes]]\n\
+             type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n[camera]\nfov = 40\n\
+             from = [0, 0, 5]\nto = [0, 0, 0]\n"
+        )
+    };
+    let build = |t: String| {
+        risotto::loader::load::scene_from_desc(
+            risotto::loader::scene_file::parse_scene(&t, std::path::Path::new("masking.toml"))
+                .unwrap(),
+            &risotto::loader::load::MaterialRegistry::with_builtins(),
+        )
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+    };
+    for ty in ["rough_conductor", "rough_dielectric", "rough_plastic"] {
+        for ok in ["height_correlated", "separable"] {
+            build(text(ty, ok)).unwrap();
+        }
+        let e = build(text(ty, "smith")).unwrap_err();
+        assert!(e.contains("masking") && e.contains("\"smith\""), "{e}");
+    }
+}

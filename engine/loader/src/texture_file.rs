@@ -1,5 +1,6 @@
 //! Reading image textures for the `image` pattern: PNG (8 or 16 bits, grey or RGB, with or
-//! without alpha, palettes expanded; decoded from sRGB to linear) and OpenEXR (linear RGB
+//! without alpha, palettes expanded; decoded from sRGB to linear), JPEG (8 bits, decoded
+//! from sRGB; no alpha) and OpenEXR (linear RGB
 //! through [`risotto_engine::output::read_exr_rgb`]); or, for an opacity mask, the alpha
 //! channel alone ([`TextureChannels::Alpha`]: a PNG's alpha, linear by the PNG
 //! specification, or an EXR's `A`), as grey. Sizes are checked against
@@ -9,6 +10,8 @@ use risotto_components::Rgb;
 use risotto_engine::output::read_exr_rgb_within;
 use risotto_systems::pattern::Texture;
 use std::path::Path;
+
+mod jpeg;
 
 /// The largest texture accepted, in pixels: 2^26 (8192 x 8192; 768 MiB of linear RGB).
 pub const MAX_TEXTURE_PIXELS: u64 = 1 << 26;
@@ -40,6 +43,7 @@ pub fn read_texture_channels(path: &Path, channels: TextureChannels) -> Result<T
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     let (width, height, texels) = match ext.as_deref() {
         Some("png") => read_png(path, channels)?,
+        Some("jpg" | "jpeg") => jpeg::read_jpeg(path, channels)?,
         Some("exr") if channels == TextureChannels::Alpha => read_exr_alpha(path)?,
         Some("exr") => {
             // The size is checked in the header, before the pixels are decoded.
@@ -48,7 +52,7 @@ pub fn read_texture_channels(path: &Path, channels: TextureChannels) -> Result<T
         }
         _ => {
             return Err(format!(
-                "{}: an image texture must be a .png or an .exr file",
+                "{}: an image texture must be a .png, .jpg (.jpeg) or .exr file",
                 path.display()
             ))
         }
@@ -230,9 +234,9 @@ mod tests {
         let bad = dir.join("bad.png");
         std::fs::write(&bad, b"not a png").unwrap();
         assert!(read_texture(&bad).unwrap_err().contains("bad.png"));
-        assert!(read_texture(&dir.join("x.jpg"))
+        assert!(read_texture(&dir.join("x.gif"))
             .unwrap_err()
-            .contains(".png or an .exr"));
+            .contains(".png, .jpg (.jpeg) or .exr"));
         std::fs::remove_dir_all(&dir).ok();
     }
 

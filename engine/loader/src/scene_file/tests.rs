@@ -1355,34 +1355,6 @@ to = [0, 0, 0]
     }
 }
 
-/// `masking` on the microfacet materials: the two known forms load, anything else is an
-/// error naming the key and the value.
-#[test]
-fn masking_is_height_correlated_or_separable() {
-    let text = |ty: &str, masking: &str| {
-        format!(
-            "[materials.m]\ntype = \"{ty}\"\nmasking = \"{masking}\"\n[[shapes]]\n\
-             type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n[camera]\nfov = 40\n\
-             from = [0, 0, 5]\nto = [0, 0, 0]\n"
-        )
-    };
-    let build = |t: String| {
-        crate::load::scene_from_desc(
-            parse(&t).unwrap(),
-            &crate::load::MaterialRegistry::with_builtins(),
-        )
-        .map(|_| ())
-        .map_err(|e| e.to_string())
-    };
-    for ty in ["rough_conductor", "rough_dielectric", "rough_plastic"] {
-        for ok in ["height_correlated", "separable"] {
-            build(text(ty, ok)).unwrap();
-        }
-        let e = build(text(ty, "smith")).unwrap_err();
-        assert!(e.contains("masking") && e.contains("\"smith\""), "{e}");
-    }
-}
-
 /// `flip_tex_coords` reads a mesh file's `v` as `1 - v`; without it the file's values stand.
 #[test]
 fn flip_tex_coords_turns_v_upside_down() {

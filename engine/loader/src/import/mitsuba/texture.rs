@@ -62,10 +62,11 @@ impl Converter<'_> {
                     p.error(Some("filename"), "a bitmap texture needs a filename")
                 })?;
                 let lower = file.to_ascii_lowercase();
-                if !(lower.ends_with(".png") || lower.ends_with(".exr")) {
+                let known = [".png", ".exr", ".jpg", ".jpeg"];
+                if !known.iter().any(|ext| lower.ends_with(ext)) {
                     return Err(p.error(
                         Some("filename"),
-                        format!("`{file}`: only PNG and EXR bitmaps are read"),
+                        format!("`{file}`: only PNG, JPEG and EXR bitmaps are read"),
                     ));
                 }
                 let raw = p.boolean("raw")?.unwrap_or(false);
