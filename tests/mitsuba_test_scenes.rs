@@ -1,5 +1,5 @@
 //! Scenes of Mitsuba 3's own test data (`mitsuba-renderer/mitsuba-data`, `tests/scenes/`):
-//! every one whose features risotto reads (18), read from their unchanged XML and judged by Mitsuba's own render z-test
+//! every one whose features risotto reads (19), read from their unchanged XML and judged by Mitsuba's own render z-test
 //! (`risotto::tools::z_test`: per pixel and XYZ channel against the reference's per-sample
 //! variance, Sidak-corrected, 99.75 % of the pixels must pass), at Mitsuba's test budget of
 //! 2e6 samples per image.
@@ -90,6 +90,7 @@ mitsuba_test_scene! {
     infinite_mirrors => "infinite_mirrors/scene_path",
     instancing => "instancing/test_instancing_path",
     orthographic_sensor => "orthographic_sensor/test_orthographic_path",
+    hetero_sigmat => "participating_media/test_hetero_sigmat_volpath",
     homo_null_envmap => "participating_media/test_homo_null_envmap_volpath",
     homo_roughdielectric_spot => "participating_media/test_homo_roughdielectric_spot_volpath",
     homo_spectral_sigmat => "participating_media/test_homo_spectral_sigmat_volpathmis",

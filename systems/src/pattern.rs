@@ -94,6 +94,10 @@ pub enum GridBorder {
     /// grid [padded with one voxel of 0](DensityGrid::padded_with_zeros), the box being the
     /// unpadded grid's.
     Zero,
+    /// The outermost voxels extend up to the box's faces, and the pattern is 0 outside the
+    /// box: Mitsuba 3's heterogeneous medium, which exists only inside its grid's box (its
+    /// lookups clamp there).
+    ClampInBox,
 }
 
 /// One node of a [`PatternGraph`].
@@ -496,6 +500,13 @@ fn eval_node(
                 Rgb::splat(match border {
                     GridBorder::Clamp => grid.lookup(u).min(grid.max()),
                     GridBorder::Zero => zero_border_lookup(grid, u),
+                    GridBorder::ClampInBox => {
+                        if u.cmpge(Vec3::ZERO).all() && u.cmple(Vec3::ONE).all() {
+                            grid.lookup(u).min(grid.max())
+                        } else {
+                            0.0
+                        }
+                    }
                 })
             };
             match to_box {

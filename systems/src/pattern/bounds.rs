@@ -134,6 +134,16 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
                     let (g0, g1) = grid_range(grid, a, b);
                     (if leaves { 0.0 } else { g0 }, g1)
                 }
+                GridBorder::ClampInBox => {
+                    // 0 outside the box; inside, the grid over the clamped region.
+                    let leaves = !(ulo.cmpge(Vec3::ZERO).all() && uhi.cmple(Vec3::ONE).all());
+                    let (g0, g1) = grid_range(
+                        grid,
+                        ulo.clamp(Vec3::ZERO, Vec3::ONE),
+                        uhi.clamp(Vec3::ZERO, Vec3::ONE),
+                    );
+                    (if leaves { 0.0 } else { g0 }, g1)
+                }
             };
             // Widened for the lerps' rounding, within the grid's range [0, max], to which
             // the node clamps.

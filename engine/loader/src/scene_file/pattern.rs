@@ -355,10 +355,11 @@ fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
     let (grid, border) = match t.string("border", Some("clamp"))?.as_str() {
         "clamp" => (grid, GridBorder::Clamp),
         "zero" => (Arc::new(grid.padded_with_zeros()), GridBorder::Zero),
+        "box" => (grid, GridBorder::ClampInBox),
         other => {
             return Err(t.error(
                 Some("border"),
-                format!("unknown border `{other}`; expected `clamp` or `zero`"),
+                format!("unknown border `{other}`; expected `clamp`, `zero` or `box`"),
             ))
         }
     };

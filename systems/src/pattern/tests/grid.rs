@@ -170,3 +170,44 @@ fn grid_nodes_place_the_grid_in_their_box() {
         "the first cell's support reaches the second voxel"
     );
 }
+
+/// `ClampInBox` (Mitsuba's medium, which exists only inside its grid's box): the clamped
+/// lookup inside the box, faces included, 0 outside; its bounds reach 0 only where the
+/// region leaves the box.
+#[test]
+fn a_clamp_in_box_grid_is_zero_outside_its_box_only() {
+    let node = |border| Node::Grid {
+        grid: Arc::new(DensityGrid::new([2, 1, 1], vec![0.25, 1.0]).unwrap()),
+        min: Vec3::new(10.0, 0.0, 0.0),
+        max: Vec3::new(12.0, 1.0, 1.0),
+        to_box: None,
+        border,
+    };
+    let (boxed, clamped) = (
+        graph(vec![node(GridBorder::ClampInBox)]),
+        graph(vec![node(GridBorder::Clamp)]),
+    );
+    let at = |g: &PatternGraph, x: f32, y: f32| one(g, Vec3::new(x, y, 0.5), 0.0, 0.0).r;
+    for x in [10.0, 10.3, 11.0, 11.7, 12.0] {
+        assert_eq!(
+            at(&boxed, x, 0.5),
+            at(&clamped, x, 0.5),
+            "inside at x = {x}"
+        );
+    }
+    assert_eq!(
+        at(&boxed, 10.0, 0.5),
+        0.25,
+        "the outermost voxel extends to the face"
+    );
+    for (x, y) in [(9.99, 0.5), (12.01, 0.5), (11.0, -0.01), (11.0, 1.5)] {
+        assert_eq!(at(&boxed, x, y), 0.0, "outside at ({x}, {y})");
+        assert!(at(&clamped, x, y) > 0.0);
+    }
+    let lo = |a: Vec3, b: Vec3| bounds(&boxed, a, b).0.r;
+    // (Bounds are widened by a few ulps for the lerps' rounding.)
+    let inside = lo(Vec3::new(10.0, 0.0, 0.0), Vec3::new(12.0, 1.0, 1.0));
+    assert!(inside <= 0.25 && inside > 0.2499, "{inside}");
+    assert_eq!(lo(Vec3::new(9.0, 0.0, 0.0), Vec3::new(12.0, 1.0, 1.0)), 0.0);
+    assert!(bounds(&boxed, Vec3::splat(-5.0), Vec3::splat(20.0)).1.r >= 1.0);
+}

@@ -24,12 +24,11 @@ use crate::import::spectrum::SpectrumUse;
 const SAMPLING_ONLY: &[&str] = &["sample_emitters"];
 
 impl Converter<'_> {
-    /// The `interior` table of `medium` filling the shape `shape` placed by `placement`.
+    /// The `interior` table of `medium` filling the shape placed by `placement`.
     pub(super) fn medium_table(
         &self,
         medium: &Rc<Node>,
         placement: &Placement,
-        shape: &Node,
     ) -> Result<toml::Table, SceneError> {
         let p = props(self.cx, medium)?;
         let kind = p.kind()?;
@@ -70,7 +69,7 @@ impl Converter<'_> {
                     }
                 };
                 let density = match volume("sigma_t")? {
-                    Some(v) => self.density(&v, placement, shape)?,
+                    Some(v) => self.density(&v, placement)?,
                     None => {
                         let c = self.medium_constant(&p, "sigma_t")?.unwrap_or([1.0; 3]);
                         if c[0] != c[1] || c[1] != c[2] {
@@ -140,12 +139,7 @@ impl Converter<'_> {
     }
 
     /// The `density` of a heterogeneous interior from its `sigma_t` volume.
-    fn density(
-        &self,
-        volume: &Rc<Node>,
-        placement: &Placement,
-        shape: &Node,
-    ) -> Result<toml::Value, SceneError> {
+    fn density(&self, volume: &Rc<Node>, placement: &Placement) -> Result<toml::Value, SceneError> {
         let vp = props(self.cx, volume)?;
         match vp.kind()?.as_str() {
             "constvolume" => {
@@ -170,56 +164,61 @@ impl Converter<'_> {
             }
             "gridvolume" => {
                 let (path, grid) = self.grid(&vp)?;
-                let Some((lo, hi)) = placement.bounds else {
-                    return Err(self.cx.error(
-                        shape,
-                        Some("interior"),
-                        "a grid medium is converted inside a cube or sphere only (a mesh's \
-                         bounds are not known before it is read)",
-                    ));
-                };
-                // The grid's unit cube in the shape's object space.
-                let a = placement.to_world.inverse() * grid;
-                let (g0, g1) = (
-                    a.transform_point3(DVec3::ZERO),
-                    a.transform_point3(DVec3::ONE),
-                );
                 let axis_aligned = |m: &DMat4| {
                     let c = m.to_cols_array_2d();
                     (0..3).all(|i| (0..3).all(|j| i == j || c[i][j].abs() < 1e-12))
                 };
-                let close = |x: DVec3, y: DVec3| {
-                    (x - y).abs().max_element() <= 1e-9 * (hi - lo).max_element()
-                };
-                if axis_aligned(&a) && close(g0, lo) && close(g1, hi) {
-                    return Ok(toml::Value::Table(toml::Table::from_iter([(
-                        "grid".to_owned(),
-                        toml::Value::String(path),
-                    )])));
-                }
-                // Otherwise a world-space grid pattern; the shape must lie inside its box
-                // (outside it Mitsuba's medium is empty, the pattern's clamp is not).
                 let (w0, w1) = (
                     grid.transform_point3(DVec3::ZERO),
                     grid.transform_point3(DVec3::ONE),
                 );
                 let (wlo, whi) = (w0.min(w1), w0.max(w1));
-                let inside = placement.to_world == DMat4::IDENTITY
-                    && axis_aligned(&grid)
-                    && lo.cmpge(wlo - 1e-9).all()
-                    && hi.cmple(whi + 1e-9).all();
-                if !inside {
+                if let Some((lo, hi)) = placement.bounds {
+                    // The grid's unit cube in the shape's object space.
+                    let a = placement.to_world.inverse() * grid;
+                    let (g0, g1) = (
+                        a.transform_point3(DVec3::ZERO),
+                        a.transform_point3(DVec3::ONE),
+                    );
+                    let close = |x: DVec3, y: DVec3| {
+                        (x - y).abs().max_element() <= 1e-9 * (hi - lo).max_element()
+                    };
+                    if axis_aligned(&a) && close(g0, lo) && close(g1, hi) {
+                        return Ok(toml::Value::Table(toml::Table::from_iter([(
+                            "grid".to_owned(),
+                            toml::Value::String(path),
+                        )])));
+                    }
+                    // An untransformed shape inside an axis-aligned grid box: a world-space
+                    // grid pattern (its clamp is never read outside the box).
+                    let inside = placement.to_world == DMat4::IDENTITY
+                        && axis_aligned(&grid)
+                        && lo.cmpge(wlo - 1e-9).all()
+                        && hi.cmple(whi + 1e-9).all();
+                    if inside {
+                        return Ok(grid_pattern(path, wlo, whi));
+                    }
+                }
+                // Any other shape (a mesh, whose bounds are not known before it is read, or
+                // one reaching beyond the grid): Mitsuba's medium exists only inside the
+                // grid's box, clamped there: a world-space grid pattern with `border = "box"`
+                // (0 outside the box).
+                if !axis_aligned(&grid) {
                     return Err(self.cx.error(
                         volume,
                         Some("to_world"),
                         format!(
-                            "the grid's box ({wlo} to {whi}) is neither the shape's box nor an \
-                             axis-aligned box holding the shape: Mitsuba's medium exists only \
-                             inside the grid, which risotto cannot express here"
+                            "the grid's box ({wlo} to {whi}) is turned and is not the shape's \
+                             own box: only an axis-aligned grid box is converted for a shape \
+                             it does not match"
                         ),
                     ));
                 }
-                Ok(grid_pattern(path, wlo, whi))
+                let mut t = grid_pattern(path, wlo, whi);
+                if let toml::Value::Table(table) = &mut t {
+                    table.insert("border".into(), toml::Value::String("box".into()));
+                }
+                Ok(t)
             }
             other => Err(vp.error(
                 Some("type"),

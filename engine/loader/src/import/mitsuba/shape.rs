@@ -227,7 +227,7 @@ impl Converter<'_> {
                     ));
                 }
                 self.has_media = true;
-                let table = self.medium_table(&m, &placement, node)?;
+                let table = self.medium_table(&m, &placement)?;
                 Some((m, table))
             }
             None => None,

@@ -612,3 +612,45 @@ fn obj_texture_coordinates_are_flipped_as_mitsuba_flips_them() {
         .collect();
     assert_eq!(flipped, [true, false, false, true]);
 }
+
+/// A grid medium in a mesh (whose bounds the importer does not read) or in a shape reaching
+/// beyond the grid: Mitsuba's medium exists only inside the grid's box, clamped there, so
+/// the density is a world-space grid pattern with `border = "box"`; a turned grid box that
+/// is not the shape's own is a located error.
+#[test]
+fn grid_media_in_meshes_exist_only_inside_the_grid_box() {
+    let dir = temp("grid_in_mesh");
+    // A 2 x 1 x 1 one-channel float32 .vol with the header box [0, 1]^3.
+    let mut vol = b"VOL\x03".to_vec();
+    for v in [1i32, 2, 1, 1, 1] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.5, 1.0] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(dir.join("g.vol"), vol).unwrap();
+    let medium = |transform: &str| {
+        scene(&format!(
+            r#"<medium type="heterogeneous" id="m"><volume name="sigma_t" type="gridvolume">
+    <string name="filename" value="g.vol"/><transform name="to_world">{transform}</transform></volume></medium>
+<shape type="obj"><string name="filename" value="cube.obj"/><bsdf type="null"/><ref id="m" name="interior"/>
+    <transform name="to_world"><scale value="1.5"/></transform></shape>"#
+        ))
+    };
+    let s = convert_in(
+        &dir,
+        "s.xml",
+        &medium(r#"<scale value="1.5"/><translate x="-0.5" y="-0.5" z="-0.5"/>"#),
+        &[],
+    )
+    .unwrap()
+    .scene;
+    let interior = s.materials[0].1.table["interior"].as_table().unwrap();
+    let density = interior["density"].as_table().unwrap();
+    assert_eq!(density["pattern"].as_str(), Some("grid"));
+    assert_eq!(density["border"].as_str(), Some("box"));
+    assert_eq!(floats(&density["min"]), [-0.5; 3]);
+    assert_eq!(floats(&density["max"]), [1.0; 3]);
+    let e = convert_in(&dir, "s.xml", &medium(r#"<rotate y="1" angle="30"/>"#), &[]).unwrap_err();
+    assert!(e.contains("is turned") && e.contains("s.xml:"), "{e}");
+}
