@@ -36,8 +36,9 @@
 //!   renderers agree (channel means within 0.06 % at 2048 spp, measured with the harness).
 //!   A difference of risotto's shading-normal handling, not of the importer.
 
+mod common;
+
 use risotto::engine::output::read_exr_rgb;
-use risotto::engine::render::{render, RenderOptions};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::load_scene;
 use risotto::tools::z_test::{mitsuba_test_spp, mitsuba_z_test};
@@ -55,7 +56,7 @@ fn z_test(scene: &str) {
         .unwrap()
         .compile()
         .unwrap();
-    let out = render(&compiled, &RenderOptions::default(), &|_| {}).unwrap();
+    let out = common::render_default(&compiled);
     assert_eq!(out.stats.counters.nan_dropped, 0, "{scene}: NaN samples");
     let stem = Path::new(scene).file_name().unwrap().to_str().unwrap();
     let reference = read_exr_rgb(&data.join(format!("refs/{stem}_ref_rgb.exr"))).unwrap();

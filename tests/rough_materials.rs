@@ -157,13 +157,9 @@ fn masking_is_height_correlated_or_separable() {
         )
     };
     let build = |t: String| {
-        risotto::loader::load::scene_from_desc(
-            risotto::loader::scene_file::parse_scene(&t, std::path::Path::new("masking.toml"))
-                .unwrap(),
-            &risotto::loader::load::MaterialRegistry::with_builtins(),
-        )
-        .map(|_| ())
-        .map_err(|e| e.to_string())
+        common::load_scene_text(std::path::Path::new("."), &t)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
     };
     for ty in ["rough_conductor", "rough_dielectric", "rough_plastic"] {
         for ok in ["height_correlated", "separable"] {

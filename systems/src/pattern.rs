@@ -500,13 +500,8 @@ fn eval_node(
                 Rgb::splat(match border {
                     GridBorder::Clamp => grid.lookup(u).min(grid.max()),
                     GridBorder::Zero => zero_border_lookup(grid, u),
-                    GridBorder::ClampInBox => {
-                        if u.cmpge(Vec3::ZERO).all() && u.cmple(Vec3::ONE).all() {
-                            grid.lookup(u).min(grid.max())
-                        } else {
-                            0.0
-                        }
-                    }
+                    GridBorder::ClampInBox if in_unit_box(u) => grid.lookup(u).min(grid.max()),
+                    GridBorder::ClampInBox => 0.0,
                 })
             };
             match to_box {
@@ -623,10 +618,16 @@ mod tests;
 /// on an axis of `n` inner voxels).
 #[inline]
 pub(crate) fn zero_border_lookup(grid: &DensityGrid, u: Vec3) -> f32 {
-    if !(u.cmpge(Vec3::ZERO).all() && u.cmple(Vec3::ONE).all()) {
+    if !in_unit_box(u) {
         return 0.0;
     }
     grid.lookup(padded_coordinates(grid, u)).min(grid.max())
+}
+
+/// Whether unit-box coordinates `u` lie in the box, faces included.
+#[inline]
+pub(crate) fn in_unit_box(u: Vec3) -> bool {
+    u.cmpge(Vec3::ZERO).all() && u.cmple(Vec3::ONE).all()
 }
 
 /// Unit coordinates `u` of an inner grid as coordinates of its zero-padded `grid`.

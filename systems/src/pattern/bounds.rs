@@ -124,24 +124,19 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
             let (ulo, uhi) = ((lo - *min) / extent, (hi - *min) / extent);
             let (g0, g1) = match border {
                 GridBorder::Clamp => grid_range(grid, ulo, uhi),
-                GridBorder::Zero => {
-                    // 0 outside the box; inside, the padded grid over the clamped region.
-                    let leaves = !(ulo.cmpge(Vec3::ZERO).all() && uhi.cmple(Vec3::ONE).all());
-                    let (a, b) = (
-                        super::padded_coordinates(grid, ulo.clamp(Vec3::ZERO, Vec3::ONE)),
-                        super::padded_coordinates(grid, uhi.clamp(Vec3::ZERO, Vec3::ONE)),
-                    );
-                    let (g0, g1) = grid_range(grid, a, b);
-                    (if leaves { 0.0 } else { g0 }, g1)
-                }
-                GridBorder::ClampInBox => {
-                    // 0 outside the box; inside, the grid over the clamped region.
-                    let leaves = !(ulo.cmpge(Vec3::ZERO).all() && uhi.cmple(Vec3::ONE).all());
-                    let (g0, g1) = grid_range(
-                        grid,
+                GridBorder::Zero | GridBorder::ClampInBox => {
+                    // 0 outside the box; inside, the grid over the clamped region (the padded
+                    // grid's coordinates for a zero border).
+                    let leaves = !(super::in_unit_box(ulo) && super::in_unit_box(uhi));
+                    let (mut a, mut b) = (
                         ulo.clamp(Vec3::ZERO, Vec3::ONE),
                         uhi.clamp(Vec3::ZERO, Vec3::ONE),
                     );
+                    if *border == GridBorder::Zero {
+                        a = super::padded_coordinates(grid, a);
+                        b = super::padded_coordinates(grid, b);
+                    }
+                    let (g0, g1) = grid_range(grid, a, b);
                     (if leaves { 0.0 } else { g0 }, g1)
                 }
             };

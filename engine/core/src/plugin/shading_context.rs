@@ -216,6 +216,18 @@ impl<'a> ShadingContext<'a> {
     {
         assert_eq!(nn.len(), self.range.len(), "one shading normal per point");
         ShadingContext {
+            nn: Some(nn),
+            ..self.view()
+        }
+    }
+
+    /// This context, borrowed for a shorter lifetime: the base of the derived views
+    /// ([`Self::with_shading_normals`], [`Self::component`]), which replace a field or two.
+    fn view<'b>(&self) -> ShadingContext<'b>
+    where
+        'a: 'b,
+    {
+        ShadingContext {
             points: self.points,
             range: self.range.clone(),
             mode: self.mode,
@@ -225,7 +237,7 @@ impl<'a> ShadingContext<'a> {
             cache: self.cache,
             cache_parts: self.cache_parts,
             volume_space: self.volume_space,
-            nn: Some(nn),
+            nn: self.nn,
             component: self.component,
         }
     }
@@ -247,17 +259,9 @@ impl<'a> ShadingContext<'a> {
             "component {index} of a material (1 to {MAX_COMPONENTS})"
         );
         ShadingContext {
-            points: self.points,
-            range: self.range.clone(),
-            mode: self.mode,
-            material: self.material,
-            overlapping: self.overlapping,
             factory: Some(factory),
-            cache: self.cache,
-            cache_parts: self.cache_parts,
-            volume_space: self.volume_space,
-            nn: self.nn,
             component: self.component * (MAX_COMPONENTS + 1) + index,
+            ..self.view()
         }
     }
 

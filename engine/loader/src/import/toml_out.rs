@@ -62,6 +62,21 @@ pub struct TomlScene {
 const LEADING_KEYS: &[&str] = &["type", "name", "object", "material", "pattern"];
 
 impl TomlScene {
+    /// Whether material `name` (written already) makes a closed shape a volume of its own
+    /// without a medium: a `dielectric`, `rough_dielectric` or `interface` (risotto's glass
+    /// and index-matched boundaries). Formats that switch media only at a shape's stated
+    /// medium interface keep the surrounding medium inside such a shape, which risotto's
+    /// nested volumes agree with only where no medium surrounds it (the importers'
+    /// `within = "no medium"` statements).
+    pub(crate) fn bounds_clear_volume(&self, name: &str) -> bool {
+        self.materials
+            .iter()
+            .find(|(n, _)| n == name)
+            .and_then(|(_, m)| m.table.get("type"))
+            .and_then(|t| t.as_str())
+            .is_some_and(|t| matches!(t, "dielectric" | "rough_dielectric" | "interface"))
+    }
+
     /// The TOML text and, for each entity with an origin, the byte range of its text (for
     /// [`Source::converted`](risotto_engine::diagnostics::Source::converted)).
     pub fn write(&self) -> (String, Vec<(Range<usize>, Origin)>) {

@@ -22,7 +22,7 @@
 
 use glam::{DAffine3, DVec2, DVec3, Vec2};
 
-use super::geometry::{read_transform, to_world, Triangle};
+use super::geometry::{mirrors, read_transform, to_world, wound, Triangle};
 use super::params::Reader;
 use risotto_engine::diagnostics::SceneError;
 use risotto_systems::mesh_attributes::VertexAttributes;
@@ -129,15 +129,11 @@ pub(crate) fn disk(
         .iter()
         .map(|c| [p[c[0] as usize], p[c[1] as usize], p[c[2] as usize]]);
     let triangles = to_world(&m, local);
-    let flip = m.matrix3.determinant() < 0.0;
+    let flip = mirrors(&m);
     let attributes = VertexAttributes {
         normals: Vec::new(),
         uvs: t.uvs,
-        corners: t
-            .triangles
-            .iter()
-            .map(|&[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
-            .collect(),
+        corners: t.triangles.iter().map(|&t| wound(t, flip)).collect(),
         shadow_terminator_offset: false,
     };
     Ok((triangles, m, attributes))

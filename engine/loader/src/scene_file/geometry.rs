@@ -217,18 +217,27 @@ fn quad_local(corner: DVec3, e1: DVec3, e2: DVec3) -> [[DVec3; 3]; 2] {
 /// transpose, which keeps the surface's orientation, so the winding is swapped to keep
 /// `(v1 - v0) x (v2 - v0)` along the transformed normal.
 pub(crate) fn to_world(m: &DAffine3, local: impl IntoIterator<Item = [DVec3; 3]>) -> Vec<Triangle> {
-    let flip = m.matrix3.determinant() < 0.0;
+    let flip = mirrors(m);
     local
         .into_iter()
-        .map(|[a, b, c]| {
-            let p = |v: DVec3| m.transform_point3(v).as_vec3();
-            if flip {
-                [p(a), p(c), p(b)]
-            } else {
-                [p(a), p(b), p(c)]
-            }
-        })
+        .map(|t| wound(t.map(|v| m.transform_point3(v).as_vec3()), flip))
         .collect()
+}
+
+/// Whether `m` mirrors (a negative determinant): [`to_world`] then swaps each triangle's
+/// winding.
+pub(crate) fn mirrors(m: &DAffine3) -> bool {
+    m.matrix3.determinant() < 0.0
+}
+
+/// A triangle's corners (vertices, or their attribute indices) with the second and third
+/// swapped when `flip`: the winding swap of [`to_world`], which attribute corners follow.
+pub(crate) fn wound<T>([a, b, c]: [T; 3], flip: bool) -> [T; 3] {
+    if flip {
+        [a, c, b]
+    } else {
+        [a, b, c]
+    }
 }
 
 /// Rejects a quad whose (world-space) edges span no area.
@@ -275,7 +284,7 @@ pub(crate) fn rectangle(
         ),
     );
     // quad_local's vertices: (-1, -1), (1, -1), (1, 1), (-1, 1); triangles (0, 1, 2), (0, 2, 3).
-    let flip = m.matrix3.determinant() < 0.0;
+    let flip = mirrors(&m);
     let attributes = VertexAttributes {
         normals: Vec::new(),
         uvs: vec![
@@ -284,10 +293,7 @@ pub(crate) fn rectangle(
             Vec2::new(1.0, 1.0),
             Vec2::new(0.0, 1.0),
         ],
-        corners: [[0, 1, 2], [0, 2, 3]]
-            .into_iter()
-            .map(|[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
-            .collect(),
+        corners: vec![wound([0, 1, 2], flip), wound([0, 2, 3], flip)],
         shadow_terminator_offset: false,
     };
     Ok((tris, m, attributes))
@@ -512,7 +518,7 @@ fn mesh_from_data(
         }
     });
     let triangles = to_world(&m, local);
-    let flip = (m.matrix3.determinant() < 0.0) != flip_normals;
+    let flip = mirrors(&m) != flip_normals;
     let normal_matrix = if flip_normals {
         -m.matrix3.inverse().transpose()
     } else {
@@ -533,11 +539,7 @@ fn mesh_from_data(
         shadow_terminator_offset: false,
     };
     if !attributes.is_empty() {
-        attributes.corners = data
-            .triangles
-            .iter()
-            .map(|&[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
-            .collect();
+        attributes.corners = data.triangles.iter().map(|&t| wound(t, flip)).collect();
     }
     Ok((triangles, m, attributes))
 }

@@ -266,15 +266,7 @@ impl Converter<'_> {
         // boundary, a glass, a null boundary): finish_media writes that check (`within =
         // "no medium"`) when the scene has media, so a scene where they disagree is an
         // error at load, not another image.
-        let bounds_volume = has_interior
-            || self
-                .scene
-                .materials
-                .iter()
-                .find(|(n, _)| *n == material)
-                .and_then(|(_, m)| m.table.get("type"))
-                .and_then(|t| t.as_str())
-                .is_some_and(|t| matches!(t, "dielectric" | "rough_dielectric" | "interface"));
+        let bounds_volume = has_interior || self.scene.bounds_clear_volume(&material);
         let mut name = name;
         if self.group_shapes.is_none() && bounds_volume && exterior.is_none() {
             if name.is_none() {

@@ -192,17 +192,7 @@ impl Converter<'_> {
                 // shape that bounds a volume but states no outside medium (a medium's
                 // boundary, a glass, an interface): checked (`within = "no medium"`) when
                 // the scene has media (finish).
-                let bounds_volume = holds
-                    || self
-                        .scene
-                        .materials
-                        .iter()
-                        .find(|(n, _)| *n == material)
-                        .and_then(|(_, m)| m.table.get("type"))
-                        .and_then(|t| t.as_str())
-                        .is_some_and(|t| {
-                            matches!(t, "dielectric" | "rough_dielectric" | "interface")
-                        });
+                let bounds_volume = holds || self.scene.bounds_clear_volume(&material);
                 let vacuum_outside = bounds_volume && !borders;
                 // A shape holding or bordering a medium is named for `within` checks.
                 if holds || borders || vacuum_outside {
