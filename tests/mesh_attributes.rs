@@ -285,13 +285,14 @@ fn textured_mesh_maps_uv_like_the_analytic_sphere() {
     assert!(z.iter().any(|z| z.abs() > 8.0), "{z:?}");
 }
 
-#[test]
-fn bent_normals_leak_no_light_from_behind() {
+/// The bent-normal quad of [`bent_normals_leak_no_light_from_behind`] under a sun from
+/// behind it; `render_line` is added to `[render]`. Returns the brightest pixel and the
+/// largest cosine between the sun's direction and a shading normal of the quad.
+fn bent_quad_under_a_sun_from_behind(test: &str, render_line: &str) -> (f32, f32) {
     // One quad facing +z (the camera) whose vertex normals lean 50 degrees outwards, lit
-    // only by a sun from behind it at 30 degrees below its plane: no point of the quad is
-    // lit (the light is behind every facet), though the shading normals face the light
-    // near the edge the light comes from.
-    let dir = scratch_dir("mesh_attributes", "leak");
+    // only by a sun from behind it at 30 degrees below its plane: the light is behind every
+    // facet, though the shading normals face the light near the edge the light comes from.
+    let dir = scratch_dir("mesh_attributes", test);
     let lean = 50f32.to_radians();
     let (s, c) = (lean.sin(), lean.cos());
     let obj = format!(
@@ -312,6 +313,7 @@ width = 32
 height = 32
 spp = 16
 max_depth = 4
+{render_line}
 
 [camera]
 fov = 40
@@ -341,7 +343,27 @@ irradiance = 10
         .pixels
         .iter()
         .fold(0.0f32, |m, p| m.max(p.r).max(p.g).max(p.b));
+    (max, wi.dot(nn_at_edge))
+}
+
+#[test]
+fn bent_normals_leak_no_light_from_behind() {
+    let (max, _) = bent_quad_under_a_sun_from_behind("leak", "");
     assert_eq!(max, 0.0, "light leaked through the quad");
+}
+
+#[test]
+fn shading_frame_normals_keep_the_directions_consistent_ones_discard() {
+    // Mitsuba's and pbrt-v4's treatment: the Lambertian lobe in the shading frame alone, so
+    // the edge facing the sun is lit by `E cos(wi, nn) / pi` (the sun's direct light only:
+    // the quad sees nothing else) where the consistent rule keeps it black.
+    let (max, cos_edge) =
+        bent_quad_under_a_sun_from_behind("shading-frame", r#"shading_normals = "shading_frame""#);
+    let at_edge = 10.0 * cos_edge / std::f32::consts::PI;
+    assert!(
+        max > 0.8 * at_edge && max <= 1.001 * at_edge,
+        "brightest pixel {max}, the lit edge's radiance {at_edge}"
+    );
 }
 
 #[test]

@@ -288,12 +288,19 @@ pub fn continue_paths(
     // Pass 3: volume stacks; a transmitted ray crosses the surface's interior boundary.
     if let Some(b) = boundaries {
         let in_stack = &incoming.volume_stack[..n];
-        for ((stack, &lobe), &k) in o_stack[..count].iter_mut().zip(&o_lobe[..count]).zip(ctx) {
+        let rows = o_stack[..count].iter_mut().zip(&o_lobe[..count]);
+        for (((stack, &lobe), &k), &wi) in rows.zip(ctx).zip(&o_direction[..count]) {
             let k = k as usize;
             *stack = in_stack[ray_id[k] as usize].clone();
             let i = range.start + k;
             let shape = pts.shape[i];
-            if on_surface && lobe.is_transmit() {
+            let crosses = if b.by_geometric_side {
+                let ng = pts.ng[i];
+                (wi.dot(ng) > 0.0) != (pts.vn[i].dot(ng) > 0.0)
+            } else {
+                lobe.is_transmit()
+            };
+            if on_surface && crosses {
                 if let Some(e @ (StackEvent::UnmatchedExit | StackEvent::EnteredAgain)) =
                     b.cross(stack, shape, pts.front_face[i])
                 {

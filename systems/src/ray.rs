@@ -32,13 +32,19 @@ use risotto_components::{StackEvent, VolumeEntry, VolumeStack};
 
 /// Per-shape data for crossing interior boundaries, from the compiled scene: whether rays
 /// crossing shape `s` enter or leave a volume the renderer tracks (`tracked[s]`), and that
-/// volume's stack entry (`entry[s]`).
+/// volume's stack entry (`entry[s]`), and which rays leaving a surface cross it.
 #[derive(Clone, Copy, Debug)]
 pub struct InteriorBoundaries<'a> {
     /// Whether each shape's interior is tracked on volume stacks.
     pub tracked: &'a [bool],
     /// Each shape's stack entry (meaningful where `tracked`).
     pub entry: &'a [VolumeEntry],
+    /// `false`: a ray leaving a surface crosses it when its lobe transmits (with consistent
+    /// shading normals, the same as its side). `true`: when its direction and the viewer lie
+    /// on different sides of the geometric normal, whatever the lobe (shading normals
+    /// evaluated in the shading frame alone, which keeps directions the two normals classify
+    /// differently; Mitsuba 3's `SurfaceInteraction::target_medium`).
+    pub by_geometric_side: bool,
 }
 
 impl InteriorBoundaries<'_> {

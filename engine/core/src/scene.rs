@@ -134,6 +134,45 @@ pub struct RenderSettings {
     /// [`RenderOptions::integrator`](crate::render::RenderOptions::integrator) overrides it.
     /// Defaults to the path tracer.
     pub integrator: crate::global_integrator::GlobalIntegrator,
+    /// How shading normals that differ from the geometric normal are treated
+    /// (`[render] shading_normals`); defaults to [`ShadingNormals::Consistent`].
+    pub shading_normals: ShadingNormals,
+}
+
+/// How directions are treated where a shading normal `Nn` (vertex normals) and the geometric
+/// normal `Ng` disagree on whether they are reflection or transmission.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ShadingNormals {
+    /// Directions the two normals classify differently are discarded, so light neither leaks
+    /// through a surface nor is reflected from below it (Veach 1997, sec. 5.3.2; pbrt-v3's
+    /// `BSDF::f`): `crate::path_tracer::shading_normals`. The default.
+    #[default]
+    Consistent,
+    /// The Bxdf is evaluated and sampled in the shading frame alone and every direction is
+    /// kept, as Mitsuba 3 and pbrt-v4 do; a ray crosses the surface (and changes medium)
+    /// when its direction and the viewer lie on different sides of `Ng`, whatever lobe
+    /// sampled it (Mitsuba's `SurfaceInteraction::target_medium`). Light can leak near the
+    /// silhouettes of coarse meshes; the importers of Mitsuba and pbrt files choose it so
+    /// that their scenes render as there.
+    ShadingFrame,
+}
+
+impl ShadingNormals {
+    /// Both treatments, in listing order.
+    pub const ALL: [ShadingNormals; 2] = [ShadingNormals::Consistent, ShadingNormals::ShadingFrame];
+
+    /// The name scene files use (`[render] shading_normals`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadingNormals::Consistent => "consistent",
+            ShadingNormals::ShadingFrame => "shading_frame",
+        }
+    }
+
+    /// The treatment called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|g| g.name() == name)
+    }
 }
 
 impl Default for RenderSettings {
@@ -147,6 +186,7 @@ impl Default for RenderSettings {
             seed: 0,
             max_passes: 1024,
             integrator: crate::global_integrator::GlobalIntegrator::Path,
+            shading_normals: ShadingNormals::Consistent,
         }
     }
 }
@@ -456,6 +496,14 @@ impl Scene {
 }
 
 impl CompiledScene {
+    /// Whether sampled and light directions that the shading and geometric normals classify
+    /// differently are discarded: the scene has shading normals and
+    /// [`ShadingNormals::Consistent`] treatment.
+    #[inline]
+    pub fn discards_disagreeing_directions(&self) -> bool {
+        self.features.vertex_normals && self.settings.shading_normals == ShadingNormals::Consistent
+    }
+
     /// The shape of primitive `prim` (any, instanced or not).
     #[inline(always)]
     pub fn shape_of_prim(&self, prim: u32) -> u32 {
@@ -531,6 +579,7 @@ impl CompiledScene {
         risotto_systems::ray::InteriorBoundaries {
             tracked: &self.shape_tracked,
             entry: &self.shape_entry,
+            by_geometric_side: self.settings.shading_normals == ShadingNormals::ShadingFrame,
         }
     }
 

@@ -456,6 +456,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
         rr_depth: r.rr_depth,
         seed: r.seed,
         integrator: r.integrator,
+        shading_normals: r.shading_normals,
         ..RenderSettings::default()
     };
     let c = desc.camera;

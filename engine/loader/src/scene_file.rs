@@ -119,6 +119,10 @@ pub struct RenderSettings {
     /// The global integrator (`integrator = "path" | "light" | "bdpt" | "vcm"`, default
     /// `"path"`).
     pub integrator: GlobalIntegrator,
+    /// How directions are treated where shading normals and geometric normals disagree
+    /// (`shading_normals = "consistent" | "shading_frame"`, default `"consistent"`;
+    /// [`ShadingNormals`](risotto_engine::scene::ShadingNormals)).
+    pub shading_normals: risotto_engine::scene::ShadingNormals,
 }
 
 impl RenderSettings {
@@ -143,6 +147,7 @@ impl Default for RenderSettings {
             rr_depth: d.rr_depth,
             filter: PixelFilter::PIXEL_BOX,
             integrator: d.integrator,
+            shading_normals: d.shading_normals,
         }
     }
 }
@@ -423,6 +428,7 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         "seed",
         "rr_depth",
         "integrator",
+        "shading_normals",
     ];
     r.deny_unknown(&[&keys[..], &pixel_filter::FILTER_KEYS].concat())?;
     // Each side bounded so that width * height stays far from overflow; the product is
@@ -476,23 +482,46 @@ fn read_render(top: &Reader<'_>) -> Result<RenderSettings, SceneError> {
         rr_depth: r.int_in("rr_depth", Some(d.rr_depth.into()), 1, u32_max)? as u32,
         filter: pixel_filter::read_pixel_filter(&r)?,
         integrator: read_integrator(&r)?,
+        shading_normals: read_shading_normals(&r)?,
     })
+}
+
+/// The key `key` of the `[render]` table `r`, one of the names `name` gives the values of
+/// `all` (the first is the default when the key is absent).
+fn read_choice<T: Copy>(
+    r: &Reader<'_>,
+    key: &str,
+    all: &[T],
+    name: fn(T) -> &'static str,
+) -> Result<T, SceneError> {
+    let Some(given) = r.str_opt(key)? else {
+        return Ok(all[0]);
+    };
+    all.iter()
+        .copied()
+        .find(|&v| name(v) == given)
+        .ok_or_else(|| {
+            let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
+            let node = r.get(key).unwrap_or(r.node);
+            r.invalid(key, node, &format!("must be one of {}", names.join(", ")))
+        })
+}
+
+/// The `shading_normals` key of the `[render]` table `r`.
+fn read_shading_normals(
+    r: &Reader<'_>,
+) -> Result<risotto_engine::scene::ShadingNormals, SceneError> {
+    use risotto_engine::scene::ShadingNormals;
+    let all = ShadingNormals::ALL;
+    debug_assert_eq!(all[0], ShadingNormals::default());
+    read_choice(r, "shading_normals", &all, ShadingNormals::name)
 }
 
 /// The `integrator` key of the `[render]` table `r`.
 fn read_integrator(r: &Reader<'_>) -> Result<GlobalIntegrator, SceneError> {
-    let Some(name) = r.str_opt("integrator")? else {
-        return Ok(GlobalIntegrator::default());
-    };
-    GlobalIntegrator::from_name(name).ok_or_else(|| {
-        let names: Vec<&str> = GlobalIntegrator::ALL.iter().map(|g| g.name()).collect();
-        let node = r.get("integrator").unwrap_or(r.node);
-        r.invalid(
-            "integrator",
-            node,
-            &format!("must be one of {}", names.join(", ")),
-        )
-    })
+    let all = GlobalIntegrator::ALL;
+    debug_assert_eq!(all[0], GlobalIntegrator::default());
+    read_choice(r, "integrator", &all, GlobalIntegrator::name)
 }
 
 /// Keys of a material that the scene layer consumes.

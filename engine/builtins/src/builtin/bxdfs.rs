@@ -153,11 +153,15 @@ impl<R: Reflectance> Bxdf for DielectricBxdf<R> {
         samplers: &mut [PathSampler],
         out: &mut BxdfSamples,
     ) {
-        let (ng, vn, ior_out) = (ctx.ng(), ctx.vn(), ctx.ior_outside());
+        let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
         for_sample_chunks(samplers, |i, u| {
-            // The frame follows the outward geometric normal so `eta` keeps its meaning
-            // (inside / outside) whichever side the ray arrives from.
-            let f = frame(ng[i]);
+            // The shading frame, as every other Bxdf's (and Mitsuba's and pbrt's dielectric):
+            // `nn` lies on the outward side with `ng`, so `eta` keeps its meaning (inside /
+            // outside) whichever side the ray arrives from. Where the viewer lies between the
+            // two planes this reads as arriving from inside, as in Mitsuba; directions the
+            // normals then classify differently are the path tracer's to keep or discard
+            // (`ShadingNormals`).
+            let f = frame(nn[i]);
             let eta = self.ior / ior_out[i].max(1e-6);
             if let Some(s) = bxdf::dielectric_sample(eta, self.tint.at(i), f.to_local(vn[i]), u) {
                 out.set_local(i, &f, s);
@@ -228,3 +232,72 @@ impl<R: Reflectance> Bxdf for MirrorBxdf<R> {
 
 /// The contract's closure that never scatters, under its old path here.
 pub use risotto_engine::plugin::NullBxdf;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use risotto_components::{ShadingPointRow, ShadingPoints};
+    use risotto_systems::bxdf_samples::BxdfSamples;
+
+    #[test]
+    fn the_smooth_dielectric_reflects_and_refracts_about_the_shading_normal() {
+        // A facet facing +z seen from straight above, its shading normal leaning 20 degrees
+        // towards +x: the mirror and refracted directions follow `nn`, not `ng` (Mitsuba's
+        // and pbrt's dielectric; the facet's own frame gave `wi = +z` for every reflection).
+        let nn = Vec3::new(20f32.to_radians().sin(), 0.0, 20f32.to_radians().cos());
+        let vn = Vec3::Z;
+        let mut points = ShadingPoints::default();
+        let n = 64;
+        for i in 0..n {
+            points.push(ShadingPointRow {
+                ng: Vec3::Z,
+                nn,
+                vn,
+                shape: 0,
+                ..ShadingPointRow::in_volume(Vec3::ZERO, -vn, i, 0)
+            });
+        }
+        let ctx = ShadingContext::new(&points, 0..n as usize, ShadingMode::Scatter, 0, &[]);
+        let mut samplers: Vec<PathSampler> = (0..n)
+            .map(|i| PathSampler {
+                seed: 7,
+                sample: i,
+                dimension: 0,
+            })
+            .collect();
+        let mut out = BxdfSamples::default();
+        out.reset(n as usize);
+        let ior = 1.5;
+        DielectricBxdf {
+            ior,
+            tint: Rgb::WHITE,
+        }
+        .generate_samples(&ctx, &mut samplers, &mut out);
+        let mirror = 2.0 * vn.dot(nn) * nn - vn;
+        // Snell about nn: the tangential part scales by 1/eta.
+        let cos_i = vn.dot(nn);
+        let sin2_t = (1.0 - cos_i * cos_i) / (ior * ior);
+        let refracted = -vn / ior + (cos_i / ior - (1.0 - sin2_t).sqrt()) * nn;
+        let (mut reflected, mut transmitted) = (0, 0);
+        for k in 0..n as usize {
+            assert!(out.pdf[k] > 0.0, "sample {k} absorbed");
+            let want = if out.lobe[k].is_transmit() {
+                transmitted += 1;
+                refracted
+            } else {
+                reflected += 1;
+                mirror
+            };
+            assert!(
+                out.wi[k].distance(want) < 1e-5,
+                "sample {k} ({:?}): wi {} against {want}",
+                out.lobe[k],
+                out.wi[k]
+            );
+        }
+        assert!(
+            reflected > 0 && transmitted > 0,
+            "{reflected} reflected, {transmitted} refracted"
+        );
+    }
+}

@@ -254,7 +254,7 @@ fn camera_vertices(
         }
         s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut s.samplers, &mut s.samples);
-        if scene.features.vertex_normals && grp.mode == ShadingMode::Scatter {
+        if scene.discards_disagreeing_directions() && grp.mode == ShadingMode::Scatter {
             discard_bxdf_samples(pts, range.clone(), false, &mut s.samples);
         }
         scatter_mis(scene, s, &at, arena, counters);

@@ -33,7 +33,7 @@ pub(super) fn light_samples(
     let (pts, incoming) = (at.pts, at.incoming);
     let lights = &scene.lights;
     let bounds = scene.geometry.bounds();
-    let normals = scene.features.vertex_normals;
+    let normals = scene.discards_disagreeing_directions();
     let m = at.range.len();
     s.light_hits.clear();
     s.hit_of.clear();
@@ -153,7 +153,7 @@ pub(super) fn light_vertices(
     let lp = &light.points;
     let m = at.range.len();
     let vn = &pts.vn[at.range.clone()];
-    let normals = scene.features.vertex_normals;
+    let normals = scene.discards_disagreeing_directions();
     while s.pending.len() < light.bounces() {
         s.pending.push(Vec::new());
     }

@@ -184,6 +184,7 @@ fn scatter_light_vertices(
     counters: &PatternCounters,
 ) {
     let normals = scene.features.vertex_normals;
+    let discards = scene.discards_disagreeing_directions();
     let q = &mut w.light_q;
     let groups = std::mem::take(&mut q.hits.groups.groups);
     let total: usize = groups.iter().map(|g| g.range.len()).sum();
@@ -240,7 +241,7 @@ fn scatter_light_vertices(
         // Sample the next direction; the reverse pdf of each non-Dirac sample.
         w.s.samples.reset(m);
         bxdf.generate_samples(&ctx, &mut w.s.samplers, &mut w.s.samples);
-        if normals && grp.mode == ShadingMode::Scatter {
+        if discards && grp.mode == ShadingMode::Scatter {
             discard_bxdf_samples(pts, range.clone(), false, &mut w.s.samples);
         }
         if bidirectional {
@@ -330,7 +331,7 @@ fn connect_to_camera(
     let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
     let vn = &pts.vn[at.range.clone()];
-    let normals = scene.features.vertex_normals;
+    let normals = scene.discards_disagreeing_directions();
     s.view.clear();
     s.view.extend_from_slice(vn);
     s.camera_hits.clear();

@@ -29,7 +29,7 @@ pub(super) fn light_vertices(
     let (pts, incoming) = (at.pts, at.incoming);
     let lp = &light.points;
     let (grid, merges) = (&s.grid, &mut s.merges);
-    let normals = scene.features.vertex_normals;
+    let normals = scene.discards_disagreeing_directions();
     merges.clear();
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;

@@ -107,7 +107,7 @@ pub(super) fn sample_lights(
         scratch(&mut buffers.eval_pdf, m, 0.0),
     );
     bxdf.evaluate_samples(ctx, light.wi, value, pdf);
-    if scene.features.vertex_normals && vertices.on_surface {
+    if scene.discards_disagreeing_directions() && vertices.on_surface {
         let range = vertices.range.clone();
         let lifted = vertices.terminator_lift;
         discard_light_directions(vertices.points, range, lifted, light.wi, value);

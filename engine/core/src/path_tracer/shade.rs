@@ -223,7 +223,7 @@ pub(super) fn shade_groups<'a>(
         // Bxdf sampling for the next bounce.
         samples.reset(m);
         bxdf.generate_samples(&ctx, samplers, samples);
-        if features.vertex_normals && grp.mode == ShadingMode::Scatter {
+        if scene.discards_disagreeing_directions() && grp.mode == ShadingMode::Scatter {
             discard_bxdf_samples(pts, range.clone(), features.terminator_offset, samples);
         }
         let system = match grp.mode {

@@ -14,6 +14,7 @@ mod environment;
 mod integrator;
 mod objects;
 mod pixel_filter;
+mod shading_normals;
 mod triangles;
 
 /// The file name used for inline scenes (it must show up in every message).
@@ -269,6 +270,7 @@ fn defaults_when_render_section_is_absent() {
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
             integrator: risotto_engine::integrator::GlobalIntegrator::Path,
+            shading_normals: risotto_engine::scene::ShadingNormals::Consistent,
         }
     );
     assert_eq!(s.camera.up, Vec3::Y);
@@ -1628,6 +1630,7 @@ fn mitsuba_suite_cornell_matches_the_readme() {
             rr_depth: 5,
             filter: PixelFilter::PIXEL_BOX,
             integrator: risotto_engine::integrator::GlobalIntegrator::Path,
+            shading_normals: risotto_engine::scene::ShadingNormals::Consistent,
         }
     );
     assert_eq!(

@@ -5,6 +5,7 @@ use std::rc::Rc;
 
 use glam::DVec3;
 use risotto_engine::diagnostics::SceneError;
+use risotto_engine::scene::ShadingNormals;
 
 use super::values::describe;
 use super::xml::Node;
@@ -90,6 +91,9 @@ impl Converter<'_> {
         }
         render.set("max_depth", max_depth);
         render.set("rr_depth", rr_depth.max(1));
+        // Mitsuba evaluates its BSDFs in the shading frame alone and keeps every sampled
+        // direction (risotto's default discards those the two normals disagree on).
+        render.set("shading_normals", ShadingNormals::ShadingFrame.name());
         self.scene.render = render;
         Ok(())
     }

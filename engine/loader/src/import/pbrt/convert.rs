@@ -11,7 +11,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3, DVec4};
 use risotto_engine::diagnostics::{Origin, SceneError, SceneErrorKind};
-use risotto_engine::scene::NO_MEDIUM;
+use risotto_engine::scene::{ShadingNormals, NO_MEDIUM};
 
 use super::lexer::{At, Lexer, Tok};
 use super::params::Params;
@@ -183,6 +183,9 @@ impl<'o> Converter<'o> {
             .with("height", 720)
             .with("spp", 16)
             .with("max_depth", 6)
+            // pbrt-v4 evaluates its BSDFs in the shading frame alone and keeps every sampled
+            // direction (risotto's default discards those the two normals disagree on).
+            .with("shading_normals", ShadingNormals::ShadingFrame.name())
             .with("filter", "gaussian")
             .with("filter_radius", 1.5)
             .with("filter_stddev", 0.5);
