@@ -27,7 +27,10 @@ fn graphs() -> Vec<(&'static str, PatternGraph)> {
         ("constant", g(vec![Node::Constant(Rgb::splat(0.5))])),
         ("noise_1_octave", g(vec![noise(1)])),
         ("fbm_5_octaves", g(vec![noise(5)])),
-        ("image_bilinear", g(vec![Node::Image(Arc::new(texture))])),
+        (
+            "image_bilinear",
+            g(vec![Node::Image(Arc::new(texture), Default::default())]),
+        ),
         (
             "grid_trilinear",
             g(vec![Node::Grid {

@@ -94,4 +94,5 @@ mitsuba_test_scene! {
     homo_spectral_sigmat => "participating_media/test_homo_spectral_sigmat_volpathmis",
     surf_area_light => "participating_media/test_surf_area_light_volpath",
     spot_direct => "spot_light/test_spot_direct",
+    texture_interp_direct => "texture_interp/test_texture_interp_direct",
 }

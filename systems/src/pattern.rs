@@ -38,7 +38,7 @@ mod noise;
 mod texture;
 
 pub use noise::{perlin, Fbm, MAX_OCTAVES, PERLIN_BOUND, PERLIN_SLOPE};
-pub use texture::Texture;
+pub use texture::{ImageLookup, Texture, TextureFilter, Wrap};
 
 use crate::grid::DensityGrid;
 use glam::Vec3;
@@ -138,8 +138,9 @@ pub enum Node {
         /// Colour at `to` and after.
         b: Rgb,
     },
-    /// A texture by `(u, v)` ([`Texture::lookup`]), shared with every graph naming its file.
-    Image(Arc<Texture>),
+    /// A texture by `(u, v)` ([`Texture::lookup_with`]), shared with every graph naming its
+    /// file, read as the [`ImageLookup`] says.
+    Image(Arc<Texture>, ImageLookup),
     /// A density grid placed in the box `[min, max]` of `P` (its unit cube mapped onto the
     /// box; outside, the grid's clamp convention extends the faces), grey. With `to_box`, the
     /// box is in a space of its own: `P` is first mapped by `to_box` (world to box space; the
@@ -340,7 +341,7 @@ impl PatternGraph {
         self.nodes.iter().any(|n| {
             matches!(
                 n,
-                Node::Image(_)
+                Node::Image(..)
                     | Node::Checker {
                         space: Space::Uv,
                         ..
@@ -364,7 +365,7 @@ impl PatternGraph {
             Node::Constant(c) => grey(c),
             Node::Checker { a, b, .. } | Node::Gradient { a, b, .. } => grey(a) && grey(b),
             Node::Scale { factor, .. } => grey(factor),
-            Node::Image(t) => t.is_grey(),
+            Node::Image(t, _) => t.is_grey(),
             Node::Noise(_)
             | Node::Grid { .. }
             | Node::Mix { .. }
@@ -480,9 +481,15 @@ fn eval_node(
                 out[i] = gradient_at(c, *from, *to, *a, *b);
             }
         }
-        Node::Image(texture) => {
-            for i in 0..m {
-                out[i] = texture.lookup(u[i], v[i]);
+        Node::Image(texture, how) => {
+            if *how == ImageLookup::default() {
+                for i in 0..m {
+                    out[i] = texture.lookup(u[i], v[i]);
+                }
+            } else {
+                for i in 0..m {
+                    out[i] = texture.lookup_with(u[i], v[i], how);
+                }
             }
         }
         Node::Grid {

@@ -90,7 +90,7 @@ fn node_bounds(node: &Node, done: &[Interval], lo: Vec3, hi: Vec3) -> Interval {
                 gradient_at(c1, *from, *to, *a, *b),
             )
         }
-        Node::Image(texture) => texture.range(),
+        Node::Image(texture, _) => texture.range(),
         Node::Grid {
             grid,
             min,

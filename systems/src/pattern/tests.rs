@@ -2,6 +2,7 @@ use super::*;
 use crate::sampler::SplitMix64;
 
 mod grid;
+mod image_lookup;
 use grid::{rotated_grid, zero_border_grid};
 
 fn graph(nodes: Vec<Node>) -> PatternGraph {
@@ -62,7 +63,10 @@ fn test_graphs() -> Vec<(&'static str, PatternGraph)> {
         ("checker_uv", graph(vec![checker(Space::Uv)])),
         ("gradient_y", graph(vec![gradient(Axis::Y)])),
         ("gradient_v", graph(vec![gradient(Axis::V)])),
-        ("image", graph(vec![Node::Image(texture())])),
+        (
+            "image",
+            graph(vec![Node::Image(texture(), Default::default())]),
+        ),
         ("grid", graph(vec![grid.clone()])),
         ("rotated grid", graph(vec![rotated_grid()])),
         ("zero-border grid", graph(vec![zero_border_grid()])),
@@ -85,7 +89,7 @@ fn test_graphs() -> Vec<(&'static str, PatternGraph)> {
             "mix(checker, image, noise)",
             graph(vec![
                 checker(Space::P),
-                Node::Image(texture()),
+                Node::Image(texture(), Default::default()),
                 Node::Noise(fbm(2.0, 3)),
                 Node::Mix { a: 0, b: 1, t: 2 },
             ]),
@@ -369,7 +373,7 @@ fn fbm_with_one_octave_is_the_noise_and_sums_octaves_otherwise() {
 #[test]
 fn image_texel_centres_read_back_the_texels() {
     let t = texture();
-    let g = graph(vec![Node::Image(t.clone())]);
+    let g = graph(vec![Node::Image(t.clone(), Default::default())]);
     for y in 0..2 {
         for x in 0..4 {
             let (u, v) = ((x as f32 + 0.5) / 4.0, 1.0 - (y as f32 + 0.5) / 2.0);
@@ -453,7 +457,7 @@ fn graphs_refuse_forward_references_and_bad_parameters() {
     assert!(Texture::new(1, 1, vec![Rgb::splat(f32::NAN)]).is_err());
     let g = graph(vec![
         c,
-        Node::Image(texture()),
+        Node::Image(texture(), Default::default()),
         Node::Multiply { a: 0, b: 1 },
     ]);
     assert!(g.reads_uv());

@@ -8,7 +8,8 @@ use glam::Vec3;
 use risotto_components::Rgb;
 use risotto_systems::grid::DensityGrid;
 use risotto_systems::pattern::{
-    self, Axis, Fbm, GridBorder, Node, NodeId, PatternGraph, Space, MAX_OCTAVES,
+    self, Axis, Fbm, GridBorder, ImageLookup, Node, NodeId, PatternGraph, Space, TextureFilter,
+    Wrap, MAX_OCTAVES,
 };
 use std::sync::Arc;
 
@@ -26,6 +27,45 @@ const PATTERNS: [&str; 13] = [
     "constant", "noise", "checker", "gradient", "image", "grid", "mix", "multiply", "add",
     "fraction", "scale", "remap", "power",
 ];
+
+/// The `uv_transform`, `wrap` and `filter` keys of an `image` table `t`.
+fn image_lookup(t: &MaterialParams) -> Result<ImageLookup, SceneError> {
+    let choice = |key: &str, names: &[&str]| -> Result<usize, SceneError> {
+        let name = t.string(key, Some(names[0]))?;
+        names.iter().position(|n| *n == name).ok_or_else(|| {
+            t.error(
+                Some(key),
+                format!("must be one of {}, got \"{name}\"", names.join(", ")),
+            )
+        })
+    };
+    let wrap =
+        [Wrap::Repeat, Wrap::Mirror, Wrap::Clamp][choice("wrap", &["repeat", "mirror", "clamp"])?];
+    let filter = [TextureFilter::Bilinear, TextureFilter::Nearest]
+        [choice("filter", &["bilinear", "nearest"])?];
+    // `uv_transform = { u = [a, b, c], v = [d, e, f] }`: u' = a u + b v + c, v' = d u + e v + f.
+    let uv_transform = match t.table("uv_transform")? {
+        None => None,
+        Some(m) => {
+            m.deny_unknown(&["u", "v"])?;
+            let (u, v) = (m.vec3("u", Some(Vec3::X))?, m.vec3("v", Some(Vec3::Y))?);
+            let affine = glam::Affine2::from_cols(
+                glam::Vec2::new(u.x, v.x),
+                glam::Vec2::new(u.y, v.y),
+                glam::Vec2::new(u.z, v.z),
+            );
+            if !affine.is_finite() {
+                return Err(m.error(Some("u"), "the transform's entries must be finite"));
+            }
+            Some(affine)
+        }
+    };
+    Ok(ImageLookup {
+        uv_transform,
+        wrap,
+        filter,
+    })
+}
 
 /// Nesting deeper than this is refused (no scene needs it; it bounds the recursion).
 const MAX_DEPTH: usize = 32;
@@ -170,7 +210,16 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
             use crate::texture_file::{
                 read_texture_channels, read_texture_channels_top_down, TextureChannels,
             };
-            t.deny_unknown(&["pattern", "path", "channel", "raw", "v_origin"])?;
+            t.deny_unknown(&[
+                "pattern",
+                "path",
+                "channel",
+                "raw",
+                "v_origin",
+                "uv_transform",
+                "wrap",
+                "filter",
+            ])?;
             let path = t
                 .path("path")?
                 .ok_or_else(|| t.error(None, "an image pattern needs `path = \"file.png\"`"))?;
@@ -217,7 +266,7 @@ fn node(t: &MaterialParams, nodes: &mut Vec<Node>, depth: usize) -> Result<NodeI
                     },
                 )
                 .map_err(|e| t.error(Some("path"), e))?;
-            Node::Image(texture)
+            Node::Image(texture, image_lookup(t)?)
         }
         "grid" => grid(t)?,
         "mix" => {

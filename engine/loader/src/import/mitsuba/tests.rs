@@ -654,3 +654,28 @@ fn grid_media_in_meshes_exist_only_inside_the_grid_box() {
     let e = convert_in(&dir, "s.xml", &medium(r#"<rotate y="1" angle="30"/>"#), &[]).unwrap_err();
     assert!(e.contains("is turned") && e.contains("s.xml:"), "{e}");
 }
+
+#[test]
+fn bitmap_to_uv_wrap_and_filter_become_the_image_lookup() {
+    // Mitsuba composes `scale` then `translate`: u' = 2 u - 0.5 (its texture_interp scene).
+    let s = convert(&scene(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><transform name="to_uv"><scale value="2"/><translate value="-.5,-.5, 0"/></transform><string name="filename" value="c.png"/><string name="wrap_mode" value="mirror"/><string name="filter_type" value="nearest"/></texture></bsdf></shape>"#,
+    ))
+    .unwrap()
+    .scene;
+    let image = s.materials[0].1.table["reflectance"].as_table().unwrap();
+    assert_eq!(image["wrap"].as_str(), Some("mirror"));
+    assert_eq!(image["filter"].as_str(), Some("nearest"));
+    let uv = image["uv_transform"].as_table().unwrap();
+    assert_eq!(floats(&uv["u"]), [2.0, 0.0, -0.5]);
+    assert_eq!(floats(&uv["v"]), [0.0, 2.0, -0.5]);
+    // A checkerboard takes a uniform scale only; an unknown wrap mode is an error.
+    for bad in [
+        r#"<texture type="checkerboard" name="reflectance"><transform name="to_uv"><translate x="0.5"/></transform></texture>"#,
+        r#"<texture type="bitmap" name="reflectance"><string name="filename" value="c.png"/><string name="wrap_mode" value="zero"/></texture>"#,
+    ] {
+        let text = format!(r#"<shape type="sphere"><bsdf type="diffuse">{bad}</bsdf></shape>"#);
+        let e = convert(&scene(&text)).unwrap_err();
+        assert!(e.contains("to_uv") || e.contains("wrap_mode"), "{e}");
+    }
+}

@@ -36,25 +36,29 @@ impl Converter<'_> {
         let p = props(self.cx, node)?;
         let kind = p.kind()?;
         let mut t = toml::Table::new();
-        // to_uv: only a uniform scale of (u, v) (a checker's frequency) is converted.
-        let uv_scale = match p.transform("to_uv")? {
-            None => 1.0,
-            Some(tr) => {
-                let m = tr.matrix;
-                let s = m.x_axis.x;
-                let uniform = (m.y_axis.y - s).abs() < 1e-12
-                    && m.x_axis.y == 0.0
-                    && m.y_axis.x == 0.0
-                    && m.w_axis.x == 0.0
-                    && m.w_axis.y == 0.0;
-                if !uniform || s <= 0.0 || kind != "checkerboard" {
+        // to_uv: Mitsuba keeps the 2D affine part of the 4x4 (`Transform4f::extract`):
+        // u' = m00 u + m01 v + m03, v' = m10 u + m11 v + m13. A bitmap takes any of it; a
+        // checkerboard only a uniform scale (the checker pattern's frequency).
+        let to_uv = p.transform("to_uv")?.map(|tr| {
+            let m = tr.matrix;
+            (
+                [m.x_axis.x, m.y_axis.x, m.w_axis.x],
+                [m.x_axis.y, m.y_axis.y, m.w_axis.y],
+            )
+        });
+        let uv_scale = match to_uv {
+            Some((u, v)) if kind == "checkerboard" => {
+                let s = u[0];
+                let uniform = v[1] == s && u[1] == 0.0 && v[0] == 0.0 && u[2] == 0.0 && v[2] == 0.0;
+                if !uniform || s <= 0.0 {
                     return Err(p.error(
                         Some("to_uv"),
-                        "to_uv is converted only as a uniform positive scale of a checkerboard",
+                        "a checkerboard's to_uv is converted only as a uniform positive scale",
                     ));
                 }
                 s
             }
+            _ => 1.0,
         };
         match kind.as_str() {
             "bitmap" => {
@@ -73,17 +77,17 @@ impl Converter<'_> {
                 let filter = p
                     .string("filter_type")?
                     .unwrap_or_else(|| "bilinear".into());
-                if filter != "bilinear" {
+                if !["bilinear", "nearest"].contains(&filter.as_str()) {
                     return Err(p.error(
                         Some("filter_type"),
-                        format!("filter_type \"{filter}\" is not converted (bilinear only)"),
+                        format!("filter_type \"{filter}\" is not supported (bilinear, nearest)"),
                     ));
                 }
                 let wrap = p.string("wrap_mode")?.unwrap_or_else(|| "repeat".into());
-                if wrap != "repeat" {
+                if !["repeat", "mirror", "clamp"].contains(&wrap.as_str()) {
                     return Err(p.error(
                         Some("wrap_mode"),
-                        format!("wrap_mode \"{wrap}\" is not converted (repeat only)"),
+                        format!("wrap_mode \"{wrap}\" is not supported (repeat, mirror, clamp)"),
                     ));
                 }
                 t.insert("pattern".into(), "image".into());
@@ -93,6 +97,19 @@ impl Converter<'_> {
                 t.insert("v_origin".into(), "top".into());
                 if raw {
                     t.insert("raw".into(), true.into());
+                }
+                if filter != "bilinear" {
+                    t.insert("filter".into(), filter.into());
+                }
+                if wrap != "repeat" {
+                    t.insert("wrap".into(), wrap.into());
+                }
+                if let Some((u, v)) = to_uv {
+                    let row = |r: [f64; 3]| toml::Value::Array(r.map(toml::Value::Float).to_vec());
+                    let mut m = toml::Table::new();
+                    m.insert("u".into(), row(u));
+                    m.insert("v".into(), row(v));
+                    t.insert("uv_transform".into(), toml::Value::Table(m));
                 }
             }
             "checkerboard" => {

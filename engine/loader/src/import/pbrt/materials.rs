@@ -404,7 +404,9 @@ impl Converter<'_> {
             ("udelta", 0.0),
             ("vdelta", 0.0),
         ] {
-            if ty != "checkerboard" || k.ends_with("delta") {
+            if !matches!(ty, "checkerboard" | "imagemap")
+                || (ty == "checkerboard" && k.ends_with("delta"))
+            {
                 if let Some(q) = p.ignore(k) {
                     if p.float(lx, k, d)? != d {
                         return Err(p.error(
@@ -432,14 +434,33 @@ impl Converter<'_> {
                 // pbrt-v4 flips t (`st[1] = 1 - st[1]`), so v = 0 is the image's bottom
                 // row, as in risotto; it repeats, as risotto's image does.
                 if let Some((w, q)) = p.string(lx, "wrap")? {
-                    if w != "repeat" {
-                        return Err(p.error(lx, q, "only \"repeat\" wrapping is supported"));
+                    if !matches!(w, "repeat" | "clamp") {
+                        return Err(p.error(lx, q, "only \"repeat\" and \"clamp\" wrapping are supported"));
+                    }
+                    if w == "clamp" {
+                        t.insert("wrap".into(), "clamp".into());
                     }
                 }
                 if let Some((f, q)) = p.string(lx, "filter")? {
-                    if f != "bilinear" {
-                        return Err(p.error(lx, q, "only \"bilinear\" filtering is supported"));
+                    match f {
+                        "bilinear" => {}
+                        "point" => {
+                            t.insert("filter".into(), "nearest".into());
+                        }
+                        _ => {
+                            return Err(p.error(lx, q, "only \"bilinear\" and \"point\" filtering are supported (no MIP maps)"))
+                        }
                     }
+                }
+                // pbrt-v4's UVMapping: (su u + du, sv v + dv), before the lookup's t flip.
+                let (su, sv) = (p.float(lx, "uscale", 1.0)?, p.float(lx, "vscale", 1.0)?);
+                let (du, dv) = (p.float(lx, "udelta", 0.0)?, p.float(lx, "vdelta", 0.0)?);
+                if (su, sv, du, dv) != (1.0, 1.0, 0.0, 0.0) {
+                    let row = |r: [f64; 3]| toml::Value::Array(r.map(toml::Value::Float).to_vec());
+                    let mut m = toml::Table::new();
+                    m.insert("u".into(), row([su, 0.0, du]));
+                    m.insert("v".into(), row([0.0, sv, dv]));
+                    t.insert("uv_transform".into(), toml::Value::Table(m));
                 }
                 if let Some((enc, q)) = p.string(lx, "encoding")? {
                     let png = file.to_ascii_lowercase().ends_with(".png");

@@ -610,3 +610,36 @@ fn roughness_textures_become_alpha_patterns() {
     assert_eq!(glass["alpha_u"]["a"]["pattern"].as_str(), Some("checker"));
     assert_eq!(glass["alpha_v"].as_float(), Some(0.09));
 }
+
+#[test]
+fn imagemap_scales_offsets_wrap_and_point_filter_become_the_image_lookup() {
+    let s = convert(
+        "imagemap",
+        &format!(
+            "{HEAD}WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \
+             \"float uscale\" 2 \"float vscale\" 3 \"float udelta\" 0.25 \"float vdelta\" -0.5 \
+             \"string wrap\" \"clamp\" \"string filter\" \"point\"\n\
+             Material \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n"
+        ),
+    );
+    let (_, m) = &s.materials[0];
+    let image = m.table["reflectance"].as_table().unwrap();
+    assert_eq!(image["pattern"].as_str(), Some("image"));
+    assert_eq!(image["wrap"].as_str(), Some("clamp"));
+    assert_eq!(image["filter"].as_str(), Some("nearest"));
+    let uv = image["uv_transform"].as_table().unwrap();
+    assert_eq!(floats(&uv["u"]), [2.0, 0.0, 0.25]);
+    assert_eq!(floats(&uv["v"]), [0.0, 3.0, -0.5]);
+    // pbrt's "black" wrap and MIP-mapped filters are located errors.
+    for (key, value) in [("wrap", "black"), ("filter", "ewa")] {
+        let e = error(
+            "imagemap-errors",
+            &format!(
+                "{HEAD}WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\" \
+                 \"string {key}\" \"{value}\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\n\
+                 Shape \"sphere\"\n"
+            ),
+        );
+        assert!(e.contains(key) && e.contains("scene.pbrt:6:"), "{e}");
+    }
+}
