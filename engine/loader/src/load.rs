@@ -108,10 +108,8 @@ impl MaterialRegistry {
             builtin(p, surface, &keys)
         });
         r.register("thin_dielectric", |p| {
-            Ok(Box::new(BuiltinMaterial {
-                surface: surface_params::thin_dielectric(p)?,
-                interior: Interior::None,
-            }))
+            let keys = ["ior", "null_transmission"];
+            builtin(p, surface_params::thin_dielectric(p)?, &keys)
         });
         r.register("dielectric", |p| {
             surface_params::reject_two_sided(p, "dielectric")?;

@@ -71,20 +71,15 @@ pub const PLASTIC_KEYS: [&str; 5] = [
     "nonlinear",
 ];
 
-/// `type = "thin_dielectric"`: a thin pane, `ior` (default 1.5). It bounds no volume, so an
-/// `interior` is an error.
+/// `type = "thin_dielectric"`: a thin pane, `ior` (default 1.5). With an `interior`, the
+/// closed shape it covers bounds a volume whose index is the vacuum's (Mitsuba's
+/// thindielectric around a medium): the pane reflects and passes light as anywhere else, and
+/// a ray it passes enters or leaves the volume.
 pub fn thin_dielectric(p: &MaterialParams) -> Result<Surface, SceneError> {
     reject_two_sided(p, "thin_dielectric")?;
-    if p.has("interior") {
-        return Err(p.error(
-            Some("interior"),
-            "a thin dielectric is a pane with no inside: it bounds no volume, so it takes \
-             no interior (use `dielectric` for a solid piece of glass)",
-        ));
-    }
-    p.deny_unknown(&["ior"])?;
     Ok(Surface::ThinDielectric {
         ior: ior(p, "ior", 1.5)?,
+        null_transmission: p.bool("null_transmission", Some(false))?,
     })
 }
 

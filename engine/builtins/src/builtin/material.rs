@@ -124,6 +124,8 @@ pub enum Surface {
     ThinDielectric {
         /// The pane's index of refraction.
         ior: f32,
+        /// Transmission is a null event, not a bounce ([`ThinDielectricBxdf::null_transmission`]).
+        null_transmission: bool,
     },
     /// pbrt-v4's `coateddiffuse` / `coatedconductor`: a dielectric coat over a base with a
     /// slab between ([`risotto_systems::layered`]). Two-sided.
@@ -205,8 +207,9 @@ impl Surface {
                     | InstanceHints::TRANSMISSION_SHADOWS
                     | InstanceHints::TRANSMITS
             }
-            // A pane passes rays without their entering anything: not `TRANSMITS` (which
-            // would track the shape on the volume stack as a closed boundary).
+            // A pane alone passes rays without their entering anything: not `TRANSMITS`
+            // (which would track the shape on the volume stack as a closed boundary; with an
+            // interior it is one, `instance_hints`).
             Surface::ThinDielectric { .. } => InstanceHints::NONE,
             Surface::TwoSided(inner) => inner.hints(),
         }
@@ -254,7 +257,13 @@ impl Surface {
                 lobe,
                 diffuse: pattern_column(ctx, "diffuse_reflectance", diffuse, arena),
             }),
-            Surface::ThinDielectric { ior } => arena.alloc(ThinDielectricBxdf { ior }),
+            Surface::ThinDielectric {
+                ior,
+                null_transmission,
+            } => arena.alloc(ThinDielectricBxdf {
+                ior,
+                null_transmission,
+            }),
             Surface::Coated(ref c) => match c.reflectance {
                 CoatedReflectance::Color(reflectance) => arena.alloc(CoatedBxdf {
                     layered: &c.layered,
@@ -300,7 +309,7 @@ impl Surface {
                 | Surface::RoughPlasticPattern { diffuse, .. },
                 "diffuse_reflectance",
             ) => Some(ParamValue::Pattern(diffuse)),
-            (Surface::ThinDielectric { ior }, "ior") => Some(ParamValue::Float(*ior)),
+            (Surface::ThinDielectric { ior, .. }, "ior") => Some(ParamValue::Float(*ior)),
             (Surface::RoughDielectric(lobe), "ior") => Some(ParamValue::Float(lobe.eta)),
             (Surface::RoughDielectric(lobe), "tint") => Some(ParamValue::Color(lobe.tint)),
             (Surface::RoughConductor(lobe), "specular_reflectance") => {
@@ -335,7 +344,14 @@ pub struct BuiltinMaterial {
 
 impl BxdfFactory for BuiltinMaterial {
     fn instance_hints(&self) -> InstanceHints {
-        let surface = self.surface.hints();
+        let surface = match (&self.surface, &self.interior) {
+            // A pane around an interior (Mitsuba's thindielectric bounding a medium): the
+            // rays it passes cross into the volume, a boundary like any transmitting one.
+            (Surface::ThinDielectric { .. }, interior) if !matches!(interior, Interior::None) => {
+                InstanceHints::TRANSMITS
+            }
+            (surface, _) => surface.hints(),
+        };
         surface | self.interior.hints()
     }
 

@@ -1,10 +1,12 @@
 //! The thin dielectric closure: a pane of glass with both faces in one surface
 //! (`risotto_systems::bxdf::thin_dielectric` has the model).
 //!
-//! The pane bounds no volume: its material computes no interior and does not hint
+//! A pane alone bounds no volume: its material computes no interior and does not hint
 //! `TRANSMITS`, so the renderer does not track it on the volume stack, and a ray that passes
 //! stays in the volumes it was in (the sample's `TRANSMIT` bit says which side it left by;
-//! its `eta` is 1). Shadow rays are blocked, as by the smooth dielectric and as Mitsuba 3's
+//! its `eta` is 1). With an interior (Mitsuba's thindielectric around a medium) the closed
+//! shape is a boundary like a dielectric's, of index 1: a ray the pane passes enters or
+//! leaves the volume, and the pane's own index applies at both faces. Shadow rays are blocked, as by the smooth dielectric and as Mitsuba 3's
 //! path tracer does (its emitter samples test occlusion): light through a pane arrives by
 //! the straight transmission lobe only.
 
@@ -21,6 +23,11 @@ use risotto_systems::sampler::PathSampler;
 pub struct ThinDielectricBxdf {
     /// Index of refraction of the pane's material.
     pub ior: f32,
+    /// Transmission is a null event (its sample carries [`LobeSampled::PASS`]): the path
+    /// goes on straight through without counting a bounce towards `max_depth`, as Mitsuba
+    /// 3's volumetric path tracers treat their `thindielectric` (its transmission component
+    /// is flagged `Null`). Off, the transmission is a specular bounce like the reflection.
+    pub null_transmission: bool,
 }
 
 impl Bxdf for ThinDielectricBxdf {
@@ -38,8 +45,12 @@ impl Bxdf for ThinDielectricBxdf {
             // The pane is symmetric: either side of the shading normal.
             let f = frame(nn[i]);
             let eta = self.ior / ior_out[i].max(1e-6);
+            let null_transmission = self.null_transmission;
             if let Some(s) = bxdf::thin_dielectric_sample(eta, f.to_local(vn[i]), u) {
                 out.set_local(i, &f, s);
+                if null_transmission && s.lobe.is_transmit() {
+                    out.lobe[i] = LobeSampled(s.lobe.0 | LobeSampled::PASS.0);
+                }
             }
         });
     }

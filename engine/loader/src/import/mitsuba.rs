@@ -49,6 +49,7 @@ pub fn import(
         exteriors: Vec::new(),
         no_medium_outside: Vec::new(),
         path_integrator: None,
+        volumetric: false,
         clip_planes: None,
         shape_bounds: Vec::new(),
         groups: Vec::new(),
@@ -59,6 +60,7 @@ pub fn import(
         path.display()
     ));
     let root = cx.doc.root.clone();
+    conv.volumetric = conv.volumetric_integrator(&root)?;
     let mut integrators = Vec::new();
     let mut sensors = Vec::new();
     for child in &root.children {
@@ -156,6 +158,9 @@ struct Converter<'a> {
     no_medium_outside: Vec<usize>,
     /// The `path` integrator, when the scene uses it (it ignores media in Mitsuba).
     path_integrator: Option<Rc<xml::Node>>,
+    /// The integrator is `volpath` or `volpathmis` (through `moment` / `aov` wrappers),
+    /// which treat a `thindielectric`'s transmission as a null event.
+    volumetric: bool,
     /// The sensor, its position and its near and far clip distances.
     clip_planes: Option<(Rc<xml::Node>, glam::DVec3, f64, f64)>,
     /// Each shape and its world bounds when known without reading files.

@@ -39,15 +39,7 @@ impl Converter<'_> {
                 .with("type", "diffuse")
                 .with("reflectance", 0.5),
         };
-        if let Some((medium, interior)) = &interior {
-            if table.table.get("type").and_then(|t| t.as_str()) == Some("thin_dielectric") {
-                return Err(self.cx.error(
-                    shape,
-                    Some("interior"),
-                    "a thindielectric bounds no volume: it cannot have an interior medium",
-                ));
-            }
-            let _ = medium;
+        if let Some((_, interior)) = &interior {
             table.set("interior", toml::Value::Table(interior.clone()));
         }
         for m in &self.materials {
@@ -111,6 +103,11 @@ impl Converter<'_> {
                     },
                 );
                 e.set("ior", ior);
+                // Mitsuba's thindielectric flags its transmission `Null`: its volumetric
+                // path tracers do not count it as a bounce (`path` does).
+                if kind == "thindielectric" && self.volumetric {
+                    e.set("null_transmission", true);
+                }
                 let r = self.constant(&p, "specular_reflectance")?;
                 let t = self.constant(&p, "specular_transmittance")?;
                 match (r, t) {

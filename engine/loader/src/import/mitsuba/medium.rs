@@ -69,7 +69,11 @@ impl Converter<'_> {
                     }
                 };
                 let density = match volume("sigma_t")? {
-                    Some(v) => self.density(&v, placement)?,
+                    Some(v) => {
+                        let (density, factor) = self.density(&v, placement)?;
+                        t.insert("scale".into(), grey_or_rgb(factor.map(|f| f * scale)));
+                        density
+                    }
                     None => {
                         let c = self.medium_constant(&p, "sigma_t")?.unwrap_or([1.0; 3]);
                         if c[0] != c[1] || c[1] != c[2] {
@@ -138,10 +142,24 @@ impl Converter<'_> {
         }
     }
 
-    /// The `density` of a heterogeneous interior from its `sigma_t` volume.
-    fn density(&self, volume: &Rc<Node>, placement: &Placement) -> Result<toml::Value, SceneError> {
+    /// The `density` of a heterogeneous interior from its `sigma_t` volume, and the colour
+    /// that multiplies the medium's `scale` (a chromatic `constvolume`; white otherwise).
+    ///
+    /// Mitsuba's heterogeneous medium exists only inside its `sigma_t` volume's box (the
+    /// unit cube placed by the volume's `to_world`, or a `.vol` file's own box; measured with
+    /// its bindings: `intersect_aabb` of a `constvolume` without `to_world` is `[0, 1]^3`),
+    /// and clamps its lookups there. Where that box is the shape's own (or holds the whole
+    /// untransformed shape) the grid, or the constant, is written as is; otherwise a
+    /// world-space grid pattern with `border = "box"`, 0 outside the box.
+    fn density(
+        &self,
+        volume: &Rc<Node>,
+        placement: &Placement,
+    ) -> Result<(toml::Value, [f64; 3]), SceneError> {
         let vp = props(self.cx, volume)?;
-        match vp.kind()?.as_str() {
+        // What the volume holds: a file's grid, or one constant (as a one-voxel grid), its
+        // value split into a grey density and a colour factor.
+        let (source, box_matrix, factor) = match vp.kind()?.as_str() {
             "constvolume" => {
                 let c = match vp.colour("value", SpectrumUse::Reflectance)? {
                     Some(Colour::Rgb(c)) => c,
@@ -150,81 +168,97 @@ impl Converter<'_> {
                         return Err(vp.error(Some("value"), "a constvolume's value is a constant"))
                     }
                 };
+                let m = vp
+                    .transform("to_world")?
+                    .map_or(DMat4::IDENTITY, |t| t.matrix);
                 vp.finish(&[])?;
-                if c[0] != c[1] || c[1] != c[2] {
-                    return Err(vp.error(
-                        Some("value"),
-                        "a chromatic constvolume: use a homogeneous medium",
-                    ));
-                }
-                Ok(toml::Value::Table(toml::Table::from_iter([(
-                    "constant".to_owned(),
-                    toml::Value::Float(c[0]),
-                )])))
+                (VolumeSource::Constant, m, c)
             }
             "gridvolume" => {
                 let (path, grid) = self.grid(&vp)?;
-                let axis_aligned = |m: &DMat4| {
-                    let c = m.to_cols_array_2d();
-                    (0..3).all(|i| (0..3).all(|j| i == j || c[i][j].abs() < 1e-12))
-                };
-                let (w0, w1) = (
-                    grid.transform_point3(DVec3::ZERO),
-                    grid.transform_point3(DVec3::ONE),
-                );
-                let (wlo, whi) = (w0.min(w1), w0.max(w1));
-                if let Some((lo, hi)) = placement.bounds {
-                    // The grid's unit cube in the shape's object space.
-                    let a = placement.to_world.inverse() * grid;
-                    let (g0, g1) = (
-                        a.transform_point3(DVec3::ZERO),
-                        a.transform_point3(DVec3::ONE),
-                    );
-                    let close = |x: DVec3, y: DVec3| {
-                        (x - y).abs().max_element() <= 1e-9 * (hi - lo).max_element()
-                    };
-                    if axis_aligned(&a) && close(g0, lo) && close(g1, hi) {
-                        return Ok(toml::Value::Table(toml::Table::from_iter([(
-                            "grid".to_owned(),
-                            toml::Value::String(path),
-                        )])));
-                    }
-                    // An untransformed shape inside an axis-aligned grid box: a world-space
-                    // grid pattern (its clamp is never read outside the box).
-                    let inside = placement.to_world == DMat4::IDENTITY
-                        && axis_aligned(&grid)
-                        && lo.cmpge(wlo - 1e-9).all()
-                        && hi.cmple(whi + 1e-9).all();
-                    if inside {
-                        return Ok(grid_pattern(path, wlo, whi));
-                    }
-                }
-                // Any other shape (a mesh, whose bounds are not known before it is read, or
-                // one reaching beyond the grid): Mitsuba's medium exists only inside the
-                // grid's box, clamped there: a world-space grid pattern with `border = "box"`
-                // (0 outside the box).
-                if !axis_aligned(&grid) {
-                    return Err(self.cx.error(
-                        volume,
-                        Some("to_world"),
-                        format!(
-                            "the grid's box ({wlo} to {whi}) is turned and is not the shape's \
-                             own box: only an axis-aligned grid box is converted for a shape \
-                             it does not match"
-                        ),
-                    ));
-                }
-                let mut t = grid_pattern(path, wlo, whi);
-                if let toml::Value::Table(table) = &mut t {
-                    table.insert("border".into(), toml::Value::String("box".into()));
-                }
-                Ok(t)
+                (VolumeSource::Grid(path), grid, [1.0; 3])
             }
-            other => Err(vp.error(
-                Some("type"),
-                format!("volume type \"{other}\" is not supported (gridvolume, constvolume)"),
-            )),
+            other => {
+                return Err(vp.error(
+                    Some("type"),
+                    format!("volume type \"{other}\" is not supported (gridvolume, constvolume)"),
+                ))
+            }
+        };
+        let whole = |src: &VolumeSource| match src {
+            VolumeSource::Grid(path) => {
+                toml::Table::from_iter([("grid".to_owned(), toml::Value::String(path.clone()))])
+            }
+            VolumeSource::Constant => {
+                toml::Table::from_iter([("constant".to_owned(), toml::Value::Float(1.0))])
+            }
+        };
+        let axis_aligned = |m: &DMat4| {
+            let c = m.to_cols_array_2d();
+            (0..3).all(|i| (0..3).all(|j| i == j || c[i][j].abs() < 1e-12))
+        };
+        let (w0, w1) = (
+            box_matrix.transform_point3(DVec3::ZERO),
+            box_matrix.transform_point3(DVec3::ONE),
+        );
+        let (wlo, whi) = (w0.min(w1), w0.max(w1));
+        if let Some((lo, hi)) = placement.bounds {
+            // The volume's unit cube in the shape's object space.
+            let a = placement.to_world.inverse() * box_matrix;
+            let (g0, g1) = (
+                a.transform_point3(DVec3::ZERO),
+                a.transform_point3(DVec3::ONE),
+            );
+            let close =
+                |x: DVec3, y: DVec3| (x - y).abs().max_element() <= 1e-9 * (hi - lo).max_element();
+            if axis_aligned(&a) && close(g0, lo) && close(g1, hi) {
+                return Ok((toml::Value::Table(whole(&source)), factor));
+            }
+            // An untransformed shape inside an axis-aligned box: a world-space grid pattern
+            // (its clamp is never read outside the box), or the constant.
+            let inside = placement.to_world == DMat4::IDENTITY
+                && axis_aligned(&box_matrix)
+                && lo.cmpge(wlo - 1e-9).all()
+                && hi.cmple(whi + 1e-9).all();
+            if inside {
+                return Ok(match source {
+                    VolumeSource::Grid(path) => (grid_pattern(path, wlo, whi), factor),
+                    VolumeSource::Constant => (toml::Value::Table(whole(&source)), factor),
+                });
+            }
         }
+        // Any other shape (a mesh, whose bounds are not known before it is read, or one
+        // reaching beyond the box): a world-space grid pattern with `border = "box"`.
+        if !axis_aligned(&box_matrix) {
+            return Err(self.cx.error(
+                volume,
+                Some("to_world"),
+                format!(
+                    "the volume's box ({wlo} to {whi}) is turned and is not the shape's own \
+                     box: only an axis-aligned box is converted for a shape it does not match"
+                ),
+            ));
+        }
+        let mut t = match source {
+            VolumeSource::Grid(path) => grid_pattern(path, wlo, whi),
+            VolumeSource::Constant => toml::Value::Table(toml::Table::from_iter([
+                ("pattern".to_owned(), toml::Value::String("grid".into())),
+                (
+                    "values".to_owned(),
+                    toml::Value::Array(vec![toml::Value::Float(1.0)]),
+                ),
+                (
+                    "dims".to_owned(),
+                    toml::Value::Array(vec![toml::Value::Integer(1); 3]),
+                ),
+                ("min".to_owned(), super::sensor::vec3(wlo)),
+                ("max".to_owned(), super::sensor::vec3(whi)),
+            ])),
+        };
+        if let toml::Value::Table(table) = &mut t {
+            table.insert("border".into(), toml::Value::String("box".into()));
+        }
+        Ok((t, factor))
     }
 
     /// A volume read at scattering points (an albedo) as a world-space pattern.
@@ -290,6 +324,14 @@ impl Converter<'_> {
         vp.finish(&["raw", "accel", "use_grid_bbox"])?;
         Ok((self.file_path(&vp.node, &file), m))
     }
+}
+
+/// What a heterogeneous medium's `sigma_t` volume holds.
+enum VolumeSource {
+    /// A grid file, as written in the TOML.
+    Grid(String),
+    /// A constant (its value goes to the medium's `scale`).
+    Constant,
 }
 
 /// A `grid` pattern of `path` over the world box `lo`..`hi`.

@@ -98,6 +98,31 @@ impl Converter<'_> {
         Ok(())
     }
 
+    /// Whether the scene's first `<integrator>` (through `moment` / `aov` wrappers) is
+    /// `volpath` or `volpathmis`; read before the shapes, whose thin dielectrics depend on it
+    /// (the integrator itself is converted, and checked, by [`Self::integrator`]).
+    pub(super) fn volumetric_integrator(&self, root: &Rc<Node>) -> Result<bool, SceneError> {
+        let Some(mut node) = root
+            .children
+            .iter()
+            .find(|c| c.tag == "integrator")
+            .cloned()
+        else {
+            return Ok(false);
+        };
+        loop {
+            let kind = props(self.cx, &node)?.kind()?;
+            if kind == "moment" || kind == "aov" {
+                match node.children.iter().find(|c| c.tag == "integrator") {
+                    Some(inner) => node = inner.clone(),
+                    None => return Ok(false),
+                }
+                continue;
+            }
+            return Ok(matches!(kind.as_str(), "volpath" | "volpathmis"));
+        }
+    }
+
     /// `<sensor>`: `perspective`, `thinlens`, `orthographic`, with `<film>` and `<sampler>`.
     pub(super) fn sensor(&mut self, node: &Rc<Node>) -> Result<(), SceneError> {
         let p = props(self.cx, node)?;

@@ -656,6 +656,40 @@ fn grid_media_in_meshes_exist_only_inside_the_grid_box() {
 }
 
 #[test]
+fn constvolume_media_exist_only_inside_the_volume_box() {
+    // Mitsuba's constvolume spans [0, 1]^3 without a to_world (its `intersect_aabb`,
+    // measured): in a cube [-1, 1]^3 the medium fills one octant. Its colour goes to the
+    // medium's scale.
+    let medium = |transform: &str, shape: &str| {
+        scene(&format!(
+            r#"<medium type="heterogeneous" id="m"><float name="scale" value="5"/><volume name="sigma_t" type="constvolume">
+    <rgb name="value" value="0.5, 0.4, 0.3"/>{transform}</volume></medium>
+<shape type="{shape}"><bsdf type="null"/><ref id="m" name="interior"/></shape>"#
+        ))
+    };
+    let interior = |text: &str| {
+        let s = convert(text).unwrap().scene;
+        s.materials[0].1.table["interior"]
+            .as_table()
+            .unwrap()
+            .clone()
+    };
+    let octant = interior(&medium("", "cube"));
+    assert_eq!(floats(&octant["scale"]), [2.5, 2.0, 1.5]);
+    let density = octant["density"].as_table().unwrap();
+    assert_eq!(density["pattern"].as_str(), Some("grid"));
+    assert_eq!(density["border"].as_str(), Some("box"));
+    assert_eq!(floats(&density["min"]), [0.0; 3]);
+    assert_eq!(floats(&density["max"]), [1.0; 3]);
+    // Placed on the cube's own box, it is a constant.
+    let whole = interior(&medium(
+        r#"<transform name="to_world"><scale value="2"/><translate value="-1, -1, -1"/></transform>"#,
+        "cube",
+    ));
+    assert_eq!(whole["density"]["constant"].as_float(), Some(1.0));
+}
+
+#[test]
 fn bitmap_to_uv_wrap_and_filter_become_the_image_lookup() {
     // Mitsuba composes `scale` then `translate`: u' = 2 u - 0.5 (its texture_interp scene).
     let s = convert(&scene(
@@ -677,5 +711,32 @@ fn bitmap_to_uv_wrap_and_filter_become_the_image_lookup() {
         let text = format!(r#"<shape type="sphere"><bsdf type="diffuse">{bad}</bsdf></shape>"#);
         let e = convert(&scene(&text)).unwrap_err();
         assert!(e.contains("to_uv") || e.contains("wrap_mode"), "{e}");
+    }
+}
+
+#[test]
+fn thin_dielectrics_pass_as_null_events_under_the_volumetric_integrators() {
+    // Mitsuba flags a thindielectric's transmission `Null`: volpath and volpathmis (also
+    // inside a moment wrapper) do not count it as a bounce, path does.
+    let pane = r#"<shape type="rectangle"><bsdf type="thindielectric"/></shape>"#;
+    for (integrator, null) in [
+        ("", false),
+        (r#"<integrator type="path"/>"#, false),
+        (r#"<integrator type="volpath"/>"#, true),
+        (
+            r#"<integrator type="moment"><integrator type="volpathmis"/></integrator>"#,
+            true,
+        ),
+    ] {
+        let s = convert(&scene(&format!("{integrator}{pane}")))
+            .unwrap()
+            .scene;
+        let t = &s.materials[0].1.table;
+        assert_eq!(t["type"].as_str(), Some("thin_dielectric"));
+        assert_eq!(
+            t.get("null_transmission").and_then(|v| v.as_bool()),
+            null.then_some(true),
+            "{integrator}"
+        );
     }
 }
