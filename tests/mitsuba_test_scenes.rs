@@ -1,5 +1,5 @@
 //! Scenes of Mitsuba 3's own test data (`mitsuba-renderer/mitsuba-data`, `tests/scenes/`):
-//! 23 of the 25 whose features risotto reads, read from their unchanged XML and judged by Mitsuba's own render z-test
+//! 24 of the 26 whose features risotto reads, read from their unchanged XML and judged by Mitsuba's own render z-test
 //! (`risotto::tools::z_test`: per pixel and XYZ channel against the reference's per-sample
 //! variance, Sidak-corrected, 99.75 % of the pixels must pass), at Mitsuba's test budget of
 //! 2e6 samples per image.
@@ -53,9 +53,10 @@
 //!
 //! Scenes of the directory left out, each a located error of the importer: `bumpmap`,
 //! `normalmap` (3), `principled` (3), `mesh_attribute` (3), `projector` (2), the particle
-//! tracer (`ptracer`), a sphere with a non-uniform `to_world` (`various_shapes`), and two
-//! heterogeneous media with a 3-channel grid read as a pattern (an albedo grid, a chromatic
-//! density grid in a mesh).
+//! tracer (`ptracer`), a sphere with a non-uniform `to_world` (`various_shapes`), and a
+//! chromatic (3-channel) density grid in a mesh (`hetero_spectral_sigmat_volpathmis`: the
+//! medium's density pattern is grey; a 3-channel albedo grid is read, as the sum of its
+//! channels' grid patterns, `hetero_sigmat_albedo`).
 
 mod common;
 
@@ -113,6 +114,7 @@ mitsuba_test_scene! {
     instancing => "instancing/test_instancing_path",
     orthographic_sensor => "orthographic_sensor/test_orthographic_path",
     hetero_sigmat => "participating_media/test_hetero_sigmat_volpath",
+    hetero_sigmat_albedo => "participating_media/test_hetero_sigmat_albedo_volpath",
     homo_dielectric_envmap => "participating_media/test_homo_dielectric_envmap_volpath",
     homo_emitter_inside_medium => "participating_media/test_homo_emitter_inside_medium_volpath",
     hetero_spectral_sigmat_no_scattering => "participating_media/test_hetero_spectral_sigmat_no_scattering_volpath",

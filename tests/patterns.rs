@@ -366,3 +366,70 @@ fn a_tint_pattern_with_cheap_shadows_is_a_located_error() {
         "{err}"
     );
 }
+
+/// A Mitsuba `.vol` of `dims` voxels and `channels` interleaved values per voxel over the
+/// box [0, 1]^3.
+fn write_vol(path: &Path, dims: [i32; 3], channels: i32, values: &[f32]) {
+    let mut b = b"VOL\x03".to_vec();
+    for v in [1i32, dims[0], dims[1], dims[2], channels] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].iter().chain(values) {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn a_grid_pattern_reads_one_channel_of_a_three_channel_file() {
+    use risotto::systems::pattern::{eval, Node};
+    let dir = scratch_dir("patterns", "grid_channel");
+    // One voxel, (r, g, b) = (0.2, 0.5, 0.9).
+    write_vol(&dir.join("rgb.vol"), [1, 1, 1], 3, &[0.2, 0.5, 0.9]);
+    write_vol(&dir.join("grey.vol"), [1, 1, 1], 1, &[0.4]);
+    for (channel, want) in [("r", 0.2f32), ("g", 0.5), ("b", 0.9)] {
+        let reflectance = format!(
+            r#"{{ pattern = "grid", path = "rgb.vol", channel = "{channel}", min = [0, 0, 0], max = [1, 1, 1] }}"#
+        );
+        let scene = load_text(&dir, &flat_scene(&reflectance, 1)).unwrap();
+        let Some(ParamValue::Pattern(graph)) = scene.materials[0].factory.param("reflectance")
+        else {
+            panic!("reflectance is not a pattern");
+        };
+        assert!(matches!(graph.nodes()[0], Node::Grid { .. }));
+        let mut out = [risotto::components::Rgb::BLACK];
+        eval(graph, &[glam::Vec3::splat(0.5)], &[0.0], &[0.0], &mut out);
+        assert_eq!(
+            out[0],
+            risotto::components::Rgb::splat(want),
+            "channel {channel}"
+        );
+    }
+    // Without `channel` a 3-channel file is refused; with it, a 1-channel file and inline
+    // values are; an unknown channel is named.
+    for (reflectance, piece) in [
+        (r#"{ pattern = "grid", path = "rgb.vol" }"#, "3 channels"),
+        (
+            r#"{ pattern = "grid", path = "grey.vol", channel = "r" }"#,
+            "1 channel",
+        ),
+        (
+            r#"{ pattern = "grid", values = [1], dims = [1, 1, 1], channel = "r" }"#,
+            "`channel`",
+        ),
+        (
+            r#"{ pattern = "grid", path = "rgb.vol", channel = "alpha" }"#,
+            "\"alpha\"",
+        ),
+    ] {
+        let e = match load_text(&dir, &flat_scene(reflectance, 1)) {
+            Ok(_) => panic!("{reflectance}: loaded"),
+            Err(e) => e,
+        };
+        assert!(
+            e.contains(piece) && e.contains("scene.toml:15:"),
+            "{reflectance}: {e}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -370,7 +370,14 @@ fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
         "max",
         "transform",
         "border",
+        "channel",
     ])?;
+    if t.has("channel") && !t.has("path") {
+        return Err(t.error(
+            Some("channel"),
+            "belongs to a 3-channel grid file (`path`), not to `values`",
+        ));
+    }
     let grid = match (t.has("path"), t.has("values")) {
         (true, false) => grid_file(t)?,
         (false, true) => inline_grid(t)?,
@@ -424,7 +431,7 @@ fn grid(t: &MaterialParams) -> Result<Node, SceneError> {
 /// A grid pattern's file (`path`, with `header` and `name`), shared with every graph and
 /// medium naming it.
 fn grid_file(t: &MaterialParams) -> Result<Arc<DensityGrid>, SceneError> {
-    use crate::grid_file::{is_vdb, read_grid_named};
+    use crate::grid_file::{is_vdb, read_grid_channels, read_grid_named, GridChannels};
     let path = t
         .path("path")?
         .ok_or_else(|| t.error(Some("path"), "expected a file name"))?;
@@ -437,11 +444,46 @@ fn grid_file(t: &MaterialParams) -> Result<Arc<DensityGrid>, SceneError> {
         // A raw grid's header beside it is read too.
         t.note_file(&path.with_extension("json"));
     }
+    // `channel = "r" | "g" | "b"`: one channel of a 3-channel file (a pattern is grey).
+    let channel = match t
+        .has("channel")
+        .then(|| t.string("channel", None))
+        .transpose()?
+    {
+        None => None,
+        Some(c) => Some(
+            ["r", "g", "b"]
+                .iter()
+                .position(|n| *n == c)
+                .ok_or_else(|| {
+                    t.error(
+                        Some("channel"),
+                        format!("must be \"r\", \"g\" or \"b\", got \"{c}\""),
+                    )
+                })?,
+        ),
+    };
+    let Some(k) = channel else {
+        return t
+            .side_files()
+            .get_or_load(
+                &path,
+                &format!("grid header={header:?} name={name:?}"),
+                || read_grid_named(&path, header.as_deref(), name.as_deref()),
+            )
+            .map_err(|e| t.error(Some("path"), e.to_string()));
+    };
     t.side_files()
         .get_or_load(
             &path,
-            &format!("grid header={header:?} name={name:?}"),
-            || read_grid_named(&path, header.as_deref(), name.as_deref()),
+            &format!("grid header={header:?} name={name:?} channel={k}"),
+            || match read_grid_channels(&path, header.as_deref(), name.as_deref())? {
+                GridChannels::Three(c) => Ok(c.channel(k).clone()),
+                GridChannels::One(_) => Err(crate::grid_file::GridFileError::Format {
+                    path: path.clone(),
+                    message: "1 channel: `channel` picks one of a 3-channel file's".into(),
+                }),
+            },
         )
         .map_err(|e| t.error(Some("path"), e.to_string()))
 }

@@ -277,12 +277,46 @@ impl Converter<'_> {
                 Ok(grey_or_rgb(c))
             }
             "gridvolume" => {
+                let file = vp.string("filename")?.unwrap_or_default();
+                let resolved = self.cx.doc.resolve(&vp.node, &file);
                 let (path, grid) = self.grid(&vp)?;
                 let (w0, w1) = (
                     grid.transform_point3(DVec3::ZERO),
                     grid.transform_point3(DVec3::ONE),
                 );
-                Ok(grid_pattern(path, w0.min(w1), w0.max(w1)))
+                let (lo, hi) = (w0.min(w1), w0.max(w1));
+                if vol_channels(&resolved).map_err(|m| vp.error(Some("filename"), m))? != 3 {
+                    return Ok(grid_pattern(path, lo, hi));
+                }
+                // A colour per voxel: the sum of each channel's grey grid times its primary.
+                let channel = |name: &str, primary: [f64; 3]| {
+                    let mut g = grid_pattern(path.clone(), lo, hi);
+                    if let toml::Value::Table(t) = &mut g {
+                        t.insert("channel".into(), toml::Value::String(name.into()));
+                    }
+                    toml::Value::Table(toml::Table::from_iter([
+                        ("pattern".to_owned(), toml::Value::String("multiply".into())),
+                        ("a".to_owned(), g),
+                        ("b".to_owned(), rgb(primary)),
+                    ]))
+                };
+                let add = |a: toml::Value, b: toml::Value| {
+                    toml::Value::Table(toml::Table::from_iter([
+                        ("pattern".to_owned(), toml::Value::String("add".into())),
+                        ("a".to_owned(), a),
+                        ("b".to_owned(), b),
+                    ]))
+                };
+                let sum = add(
+                    add(channel("r", [1.0, 0.0, 0.0]), channel("g", [0.0, 1.0, 0.0])),
+                    channel("b", [0.0, 0.0, 1.0]),
+                );
+                // Clamped to [0, 1] (`remap`'s default): the sum's interval bounds carry
+                // rounding slack past the file's largest value, which an albedo must not.
+                Ok(toml::Value::Table(toml::Table::from_iter([
+                    ("pattern".to_owned(), toml::Value::String("remap".into())),
+                    ("a".to_owned(), sum),
+                ])))
             }
             other => Err(vp.error(
                 Some("type"),
@@ -344,9 +378,9 @@ fn grid_pattern(path: String, lo: DVec3, hi: DVec3) -> toml::Value {
     ]))
 }
 
-/// The bounding box stored in a Mitsuba `.vol` file's header (bytes 24 to 48: six
-/// little-endian float32, min then max).
-fn vol_bounds(path: &std::path::Path) -> Result<(DVec3, DVec3), String> {
+/// The 48-byte header of a Mitsuba `.vol` file (magic, version, encoding, resolution,
+/// channels, bounding box).
+fn vol_header(path: &std::path::Path) -> Result<[u8; 48], String> {
     let mut head = [0u8; 48];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut head))
@@ -354,6 +388,20 @@ fn vol_bounds(path: &std::path::Path) -> Result<(DVec3, DVec3), String> {
     if &head[..3] != b"VOL" {
         return Err(format!("`{}` is not a Mitsuba .vol file", path.display()));
     }
+    Ok(head)
+}
+
+/// The channel count stored in a Mitsuba `.vol` file's header (bytes 20 to 24, a
+/// little-endian int32).
+fn vol_channels(path: &std::path::Path) -> Result<i32, String> {
+    let head = vol_header(path)?;
+    Ok(i32::from_le_bytes([head[20], head[21], head[22], head[23]]))
+}
+
+/// The bounding box stored in a Mitsuba `.vol` file's header (bytes 24 to 48: six
+/// little-endian float32, min then max).
+fn vol_bounds(path: &std::path::Path) -> Result<(DVec3, DVec3), String> {
+    let head = vol_header(path)?;
     let f = |i: usize| f32::from_le_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]) as f64;
     let lo = DVec3::new(f(24), f(28), f(32));
     let hi = DVec3::new(f(36), f(40), f(44));

@@ -740,3 +740,36 @@ fn thin_dielectrics_pass_as_null_events_under_the_volumetric_integrators() {
         );
     }
 }
+
+#[test]
+fn three_channel_albedo_grids_become_a_sum_of_channel_patterns() {
+    let dir = temp("rgb_albedo");
+    // One voxel, three channels, box [0, 1]^3.
+    let mut vol = b"VOL\x03".to_vec();
+    for v in [1i32, 1, 1, 1, 3] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.2, 0.5, 0.9] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(dir.join("a.vol"), vol).unwrap();
+    let text = scene(
+        r#"<medium type="heterogeneous" id="m"><volume name="albedo" type="gridvolume"><string name="filename" value="a.vol"/></volume></medium>
+<shape type="cube"><bsdf type="null"/><ref id="m" name="interior"/></shape>"#,
+    );
+    let s = convert_in(&dir, "s.xml", &text, &[]).unwrap().scene;
+    let albedo = &s.materials[0].1.table["interior"]["albedo"];
+    assert_eq!(albedo["pattern"].as_str(), Some("remap"));
+    // add(add(r * [1,0,0], g * [0,1,0]), b * [0,0,1]).
+    let sum = &albedo["a"];
+    let terms = [&sum["a"]["a"], &sum["a"]["b"], &sum["b"]];
+    for (term, (channel, primary)) in terms.into_iter().zip([
+        ("r", [1.0, 0.0, 0.0]),
+        ("g", [0.0, 1.0, 0.0]),
+        ("b", [0.0, 0.0, 1.0]),
+    ]) {
+        assert_eq!(term["pattern"].as_str(), Some("multiply"));
+        assert_eq!(term["a"]["channel"].as_str(), Some(channel));
+        assert_eq!(floats(&term["b"]), primary);
+    }
+}
