@@ -199,21 +199,30 @@ const _: () = assert!(std::mem::size_of::<Split>() == 1 && WIDTH == 8);
 /// its parent, with surface areas (plus a volume term, see [`Collapse::new`]) as visit
 /// probabilities. A leaf holds up to eight triangles (one packet test) or one sphere.
 struct Collapse {
-    /// Visit-probability weight of the root box.
-    root_weight: f32,
-    /// Emptied by [`Self::release_costs`] once the tree to collapse is chosen: with two
-    /// binary nodes per primitive it is the largest array of the collapse, and the 8-wide
-    /// tree built next needs only `split` and `node_split` (issue 36, peak memory).
-    cost: Vec<[f32; WIDTH]>,
+    /// SAH cost of the 8-wide tree: the root node and everything below it.
+    root_cost: f32,
     split: Vec<[Split; WIDTH]>,
     /// For an inner node that becomes an 8-wide node: the slots (1 to 7) of its left child,
     /// the rest going to the right one, at the least cost.
     node_split: Vec<u8>,
 }
 
+/// What the collapse's dynamic programme keeps of a finished subtree until its parent reads
+/// it: the least costs over 1 to 8 slots and its triangle count (`u32::MAX` if a sphere is
+/// among its primitives).
+struct Subtree {
+    cost: [f32; WIDTH],
+    tris: u32,
+}
+
 impl Collapse {
     /// The collapse of `bins` (root first) with costs computed on boxes scaled by `s`
     /// ([`cost_scale`]).
+    ///
+    /// The subtrees are costed in post-order with their costs on a stack, popped by the
+    /// parent: only the root-to-node path's siblings are alive at once (at most twice the
+    /// depth), not a cost row per binary node (32 bytes, two nodes a primitive: 128 MB on
+    /// a 2M-triangle mesh, issue 36). The arithmetic is the same, node by node.
     fn new(bins: &[Bin], s: f32, is_sphere: impl Fn(u32) -> bool) -> Self {
         let root = scaled(&bins[0].aabb(), s);
         let volume = |b: &Aabb| {
@@ -234,84 +243,78 @@ impl Collapse {
                 a
             }
         };
-        // Post-order with an explicit stack.
-        let mut order = Vec::with_capacity(bins.len());
-        let mut stack = vec![0u32];
-        while let Some(n) = stack.pop() {
-            order.push(n);
-            let b = &bins[n as usize];
-            if !b.is_leaf() {
-                stack.extend(b.kids);
-            }
-        }
         let mut c = Collapse {
-            root_weight: weight(&bins[0].aabb()),
-            cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
+            root_cost: 0.0,
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
             node_split: vec![0; bins.len()],
         };
-        // Triangles under each node, or `u32::MAX` if a sphere is among its primitives.
-        let mut tris = vec![0u32; bins.len()];
-        for &n in order.iter().rev() {
-            let n = n as usize;
-            let b = &bins[n];
+        // Post-order with an explicit stack: `(node, children done)`; a node's children
+        // are pushed right then left, so the left one's subtree is finished (and lies
+        // below the right one's on `done`) when the node comes back.
+        let mut todo = vec![(0u32, false)];
+        let mut done: Vec<Subtree> = Vec::new();
+        while let Some((n, kids_done)) = todo.pop() {
+            let b = &bins[n as usize];
             let area = weight(&b.aabb());
             if b.is_leaf() {
                 let sphere = is_sphere(b.kids[0]);
-                tris[n] = if sphere { u32::MAX } else { 1 };
-                c.cost[n] = [area * if sphere { SPHERE_COST } else { 1.0 }; WIDTH];
+                done.push(Subtree {
+                    cost: [area * if sphere { SPHERE_COST } else { 1.0 }; WIDTH],
+                    tris: if sphere { u32::MAX } else { 1 },
+                });
                 continue;
             }
-            let [l, r] = b.kids.map(|k| k as usize);
-            tris[n] = tris[l].saturating_add(tris[r]);
+            if !kids_done {
+                todo.extend([(n, true), (b.kids[1], false), (b.kids[0], false)]);
+                continue;
+            }
+            let r = done.pop().expect("the right subtree is costed");
+            let l = done.pop().expect("the left subtree is costed");
+            let n = n as usize;
+            let tris = l.tris.saturating_add(r.tris);
+            let mut cost = [f32::INFINITY; WIDTH];
+            let split = &mut c.split[n];
             // Spread over i >= 2 slots: the best split of the slots between the children,
             // or fewer slots.
             for i in 2..=WIDTH {
-                let (mut best, mut how) = (c.cost[n][i - 2], c.split[n][i - 2]);
+                let (mut best, mut how) = (cost[i - 2], split[i - 2]);
                 for k in 1..i {
-                    let v = c.cost[l][k - 1] + c.cost[r][i - k - 1];
+                    let v = l.cost[k - 1] + r.cost[i - k - 1];
                     if v < best {
                         (best, how) = (v, Split::Distribute(LeftSlots::new(k)));
                     }
                 }
-                c.cost[n][i - 1] = best;
-                c.split[n][i - 1] = how;
+                cost[i - 1] = best;
+                split[i - 1] = how;
             }
             // As an 8-wide node, at least one slot to each child (the first of equal costs).
-            let spread = |k: usize| c.cost[l][k - 1] + c.cost[r][WIDTH - 1 - k];
+            let spread = |k: usize| l.cost[k - 1] + r.cost[WIDTH - 1 - k];
             c.node_split[n] = (1..WIDTH)
                 .min_by(|&a, &b| spread(a).total_cmp(&spread(b)))
                 .expect("non-empty range") as u8;
             // One slot: a leaf, or a node with all slots below it.
-            let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
-            let fits = tris[n] as usize <= WIDTH;
+            let node_cost = area * NODE_COST + cost[WIDTH - 1];
+            let fits = tris as usize <= WIDTH;
             let leaf_cost = if fits { area } else { f32::INFINITY };
             // `fits` as well: a leaf must never be chosen for a subtree it cannot hold, even
             // if a cost is infinite or NaN.
-            (c.cost[n][0], c.split[n][0]) = if fits && leaf_cost <= node_cost {
+            (cost[0], split[0]) = if fits && leaf_cost <= node_cost {
                 (leaf_cost, Split::Leaf)
             } else {
                 (node_cost, Split::Node)
             };
             // "At most i slots" also allows one slot.
             for i in 2..=WIDTH {
-                if c.cost[n][0] < c.cost[n][i - 1] {
-                    c.cost[n][i - 1] = c.cost[n][0];
-                    c.split[n][i - 1] = c.split[n][0];
+                if cost[0] < cost[i - 1] {
+                    cost[i - 1] = cost[0];
+                    split[i - 1] = split[0];
                 }
             }
+            done.push(Subtree { cost, tris });
         }
+        let root = done.pop().expect("the root is costed");
+        c.root_cost = weight(&bins[0].aabb()) * NODE_COST + root.cost[WIDTH - 1];
         c
-    }
-
-    /// Frees the costs (the split decisions stay).
-    fn release_costs(&mut self) {
-        self.cost = Vec::new();
-    }
-
-    /// SAH cost of the 8-wide tree: the root node and everything below it.
-    fn root_cost(&self) -> f32 {
-        self.root_weight * NODE_COST + self.cost[0][WIDTH - 1]
     }
 
     /// The binary nodes that fill the slots of subtree `n` given `i` slots: each is either
@@ -371,6 +374,13 @@ impl Source<'_> {
     }
 }
 
+/// The triangle leaves as the recursion makes them, before their packets are filled: leaf
+/// `i`'s primitives are `prims[ends[i - 1]..ends[i]]` (from 0 for the first).
+struct PacketLeaves {
+    prims: Vec<u32>,
+    ends: Vec<u32>,
+}
+
 /// Inputs of the build that the recursion reads.
 struct Source<'a> {
     bins: &'a [Bin],
@@ -399,11 +409,10 @@ impl Bvh8 {
         let mut collapse = Collapse::new(&bins, s, is_sphere);
         if let Some(sweep) = sweep {
             let sweep_collapse = Collapse::new(&sweep, s, is_sphere);
-            if sweep_collapse.root_cost() < collapse.root_cost() {
+            if sweep_collapse.root_cost < collapse.root_cost {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
-        collapse.release_costs();
         let mut out = Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
@@ -421,8 +430,26 @@ impl Bvh8 {
         };
         let (nodes, packets) = src.sizes(0);
         out.nodes.reserve_exact(nodes);
-        out.packets.reserve_exact(packets);
-        out.build_node(&src, 0, 1);
+        let mut leaves = PacketLeaves {
+            prims: Vec::with_capacity(triangles.len()),
+            ends: Vec::with_capacity(packets),
+        };
+        out.build_node(&src, 0, 1, &mut leaves);
+        // The packets are made once the binary tree and its split table are gone: the two
+        // never coexist with them (issue 36, peak memory).
+        drop(bins);
+        drop(collapse);
+        out.packets.reserve_exact(leaves.ends.len());
+        let mut start = 0;
+        for &end in &leaves.ends {
+            let mut tris = [(0u32, [Vec3::ZERO; 3]); WIDTH];
+            let prims = &leaves.prims[start as usize..end as usize];
+            for (t, &p) in tris.iter_mut().zip(prims) {
+                *t = (p, triangles[p as usize]);
+            }
+            out.packets.push(TriPacket8::new(&tris[..prims.len()]));
+            start = end;
+        }
         out
     }
 
@@ -477,7 +504,7 @@ impl Bvh8 {
 
     /// Appends the 8-wide node whose children are the slots of binary subtree `n`, and the
     /// nodes below it; returns its index.
-    fn build_node(&mut self, src: &Source, n: u32, level: usize) -> u32 {
+    fn build_node(&mut self, src: &Source, n: u32, level: usize, leaves: &mut PacketLeaves) -> u32 {
         self.depth = self.depth.max(level);
         let bins = src.bins;
         let kids = src.kids(n);
@@ -502,10 +529,10 @@ impl Bvh8 {
             }
             let (child, tri_only) = if is_leaf {
                 self.nodes[index as usize].leaf_mask |= 1 << c;
-                let child = self.build_leaf(src, k);
+                let child = self.build_leaf(src, k, leaves);
                 (child, child & SPHERE == 0)
             } else {
-                let child = self.build_node(src, k, level + 1);
+                let child = self.build_node(src, k, level + 1, leaves);
                 let below = &self.nodes[child as usize];
                 (child, below.tri_only == below.valid)
             };
@@ -518,7 +545,7 @@ impl Bvh8 {
 
     /// Appends the leaf of binary subtree `n` (a sphere, or up to eight triangles) and
     /// returns its child entry.
-    fn build_leaf(&mut self, src: &Source, n: u32) -> u32 {
+    fn build_leaf(&mut self, src: &Source, n: u32, leaves: &mut PacketLeaves) -> u32 {
         let mut prims = Vec::with_capacity(WIDTH);
         let mut stack = vec![n];
         while let Some(k) = stack.pop() {
@@ -548,13 +575,14 @@ impl Bvh8 {
             });
             LEAF | SPHERE | index
         } else {
-            let tris: Vec<(u32, [Vec3; 3])> = prims
-                .iter()
-                .map(|&p| (p, src.triangles[p as usize]))
-                .collect();
-            let index = self.packets.len() as u32;
+            assert!(
+                prims.len() <= WIDTH,
+                "a packet holds at most {WIDTH} triangles"
+            );
+            let index = leaves.ends.len() as u32;
             assert!(index <= INDEX_MASK, "too many leaves");
-            self.packets.push(TriPacket8::new(&tris));
+            leaves.prims.extend(&prims);
+            leaves.ends.push(leaves.prims.len() as u32);
             LEAF | index
         }
     }
