@@ -9,6 +9,8 @@
 //! coordinate with one triangle per lane so that the watertight test runs on all of them at
 //! once, or a single sphere.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec3, Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
@@ -94,6 +96,7 @@ impl TriPacket8 {
     }
 
     /// Vertices of lane `l`.
+    #[inline(always)]
     pub(crate) fn triangle(&self, l: usize) -> [Vec3; 3] {
         let v = |i: usize| Vec3::new(self.v[i][0].0[l], self.v[i][1].0[l], self.v[i][2].0[l]);
         [v(0), v(1), v(2)]
@@ -128,8 +131,9 @@ pub(crate) struct Bvh8 {
     pub(crate) spheres: Vec<SphereLeaf>,
     /// Instance leaves (empty without instances).
     pub(crate) instances: Vec<InstanceLeaf>,
-    /// The objects' BVHs, in object space (empty without instances).
-    pub(crate) objects: Vec<Bvh8>,
+    /// The objects' BVHs, in object space (empty without instances), shared with the
+    /// objects' geometries, whose triangles are read from their packets.
+    pub(crate) objects: Vec<Arc<Bvh8>>,
     /// Per axis, the largest magnitude of any box coordinate: bounds the rounding error of
     /// the slab distances (see [`crate::intersect`]).
     pub(crate) max_abs: Vec3A,
@@ -453,24 +457,33 @@ impl Bvh8 {
         out
     }
 
-    /// The records of triangle primitives `0..count`, made from the packets' vertices (the
-    /// ones the build was given, stored unchanged, every triangle in exactly one lane): the
-    /// caller's vertex array is freed before they are made, so the two never coexist at
-    /// the build's end (issue 36, peak memory).
+    /// Where each of triangle primitives `0..count` lies: `packet * WIDTH + lane` (the
+    /// packets hold the vertices the build was given, unchanged, every triangle in exactly
+    /// one lane): 4 bytes a triangle instead of a record of its own (issue 36).
     ///
     /// # Panics
     /// If the packets do not hold each of the `count` triangles once (a build bug).
-    pub(crate) fn triangle_records(&self, count: usize) -> Vec<Triangle> {
-        let mut out = vec![Triangle::new([Vec3::ZERO; 3]); count];
+    pub(crate) fn triangle_slots(&self, count: usize) -> Vec<u32> {
+        const UNSET: u32 = u32::MAX;
+        let mut out = vec![UNSET; count];
         let mut filled = 0usize;
-        for p in &self.packets {
+        for (i, p) in self.packets.iter().enumerate() {
             for l in (0..WIDTH).filter(|l| p.valid & (1 << l) != 0) {
-                out[p.prim[l] as usize] = Triangle::new(p.triangle(l));
+                let slot = &mut out[p.prim[l] as usize];
+                assert_eq!(*slot, UNSET, "the packets hold each triangle once");
+                // `i <= INDEX_MASK < 2^29`, so the slot fits 32 bits.
+                *slot = (i * WIDTH + l) as u32;
                 filled += 1;
             }
         }
         assert_eq!(filled, count, "the packets hold each triangle once");
         out
+    }
+
+    /// The triangle in `slot` (as [`Self::triangle_slots`] numbers them).
+    #[inline(always)]
+    pub(crate) fn slot_triangle(packets: &[TriPacket8], slot: u32) -> Triangle {
+        Triangle::new(packets[slot as usize / WIDTH].triangle(slot as usize % WIDTH))
     }
 
     /// Entries a traversal stack can hold at most: a node pushes at most its [`WIDTH`] hit
@@ -486,19 +499,20 @@ impl Bvh8 {
     pub(crate) fn object_stack_capacity(&self) -> usize {
         self.objects
             .iter()
-            .map(Self::stack_capacity)
+            .map(|o| o.stack_capacity())
             .max()
             .unwrap_or(0)
     }
 
-    /// Bytes held by the nodes, leaves and instances, the objects' BVHs included.
+    /// Bytes held by the nodes, leaves and instances (the objects' BVHs are their
+    /// geometries' to count).
     pub(crate) fn bytes(&self) -> usize {
         use std::mem::size_of;
         self.nodes.capacity() * size_of::<Node8>()
             + self.packets.capacity() * size_of::<TriPacket8>()
             + self.spheres.capacity() * size_of::<SphereLeaf>()
             + self.instances.capacity() * size_of::<InstanceLeaf>()
-            + self.objects.iter().map(Self::bytes).sum::<usize>()
+            + self.objects.capacity() * size_of::<Arc<Self>>()
             + size_of::<Self>()
     }
 
@@ -670,9 +684,10 @@ mod tests {
         // not among the packets).
         assert_eq!(bvh.nodes.capacity(), bvh.nodes.len());
         assert_eq!(bvh.packets.capacity(), bvh.packets.len());
-        // Triangle records from the packets: each triangle's own vertices.
-        let records = bvh.triangle_records(tris.len());
-        for (r, t) in records.iter().zip(&tris) {
+        // Triangles from the packets by their slots: each triangle's own vertices.
+        let slots = bvh.triangle_slots(tris.len());
+        for (&slot, t) in slots.iter().zip(&tris) {
+            let r = Bvh8::slot_triangle(&bvh.packets, slot);
             assert_eq!(r.v.map(Vec3::from), *t);
         }
     }
