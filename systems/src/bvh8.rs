@@ -14,6 +14,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3, Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
+use crate::build_prims::BuildPrims;
 use crate::primitive::{Sphere, Triangle};
 
 mod binary;
@@ -367,8 +368,9 @@ impl Source<'_> {
                 while !self.bins[k as usize].is_leaf() {
                     k = self.bins[k as usize].kids[0];
                 }
-                leaves +=
-                    usize::from((self.bins[k as usize].kids[0] as usize) < self.triangles.len());
+                leaves += usize::from(
+                    (self.bins[k as usize].kids[0] as usize) < self.prims.num_triangles(),
+                );
             } else {
                 let (a, b) = self.sizes(k);
                 (nodes, leaves) = (nodes + a, leaves + b);
@@ -389,7 +391,7 @@ struct PacketLeaves {
 struct Source<'a> {
     bins: &'a [Bin],
     collapse: &'a Collapse,
-    triangles: &'a [[Vec3; 3]],
+    prims: &'a BuildPrims,
     spheres: &'a [Sphere],
 }
 
@@ -400,8 +402,8 @@ impl Bvh8 {
     /// binary subtrees to child slots and leaves ([`Collapse`]).
     /// The binary tree is taken, and dropped as soon as it is copied into one-primitive
     /// leaves: at most one of the two is alive at a time (issue 36, peak memory).
-    pub(crate) fn from_bvh2(bvh2: Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
-        let tri_count = triangles.len() as u32;
+    pub(crate) fn from_bvh2(bvh2: Bvh2, prims: &BuildPrims, spheres: &[Sphere]) -> Self {
+        let tri_count = prims.num_triangles() as u32;
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
@@ -429,13 +431,13 @@ impl Bvh8 {
         let src = Source {
             bins: &bins,
             collapse: &collapse,
-            triangles,
+            prims,
             spheres,
         };
         let (nodes, packets) = src.sizes(0);
         out.nodes.reserve_exact(nodes);
         let mut leaves = PacketLeaves {
-            prims: Vec::with_capacity(triangles.len()),
+            prims: Vec::with_capacity(prims.num_triangles()),
             ends: Vec::with_capacity(packets),
         };
         out.build_node(&src, 0, 1, &mut leaves);
@@ -447,11 +449,11 @@ impl Bvh8 {
         let mut start = 0;
         for &end in &leaves.ends {
             let mut tris = [(0u32, [Vec3::ZERO; 3]); WIDTH];
-            let prims = &leaves.prims[start as usize..end as usize];
-            for (t, &p) in tris.iter_mut().zip(prims) {
-                *t = (p, triangles[p as usize]);
+            let leaf = &leaves.prims[start as usize..end as usize];
+            for (t, &p) in tris.iter_mut().zip(leaf) {
+                *t = (p, prims.triangle(p as usize));
             }
-            out.packets.push(TriPacket8::new(&tris[..prims.len()]));
+            out.packets.push(TriPacket8::new(&tris[..leaf.len()]));
             start = end;
         }
         out
@@ -572,7 +574,7 @@ impl Bvh8 {
                 stack.push(b.kids[0]);
             }
         }
-        let tri_count = src.triangles.len() as u32;
+        let tri_count = src.prims.num_triangles() as u32;
         let instance_first = tri_count as usize + src.spheres.len();
         if prims[0] as usize >= instance_first {
             assert_eq!(prims.len(), 1, "instance leaves hold one instance");
@@ -652,7 +654,8 @@ mod tests {
             primitive_indices: all.clone(),
             ..Default::default()
         };
-        let bvh = Bvh8::from_bvh2(bvh2, &tris, &spheres);
+        let prims = BuildPrims::new(tris.clone(), Vec::new());
+        let bvh = Bvh8::from_bvh2(bvh2, &prims, &spheres);
         let mut seen = [0u32; 16];
         for node in &bvh.nodes {
             for c in 0..WIDTH {

@@ -15,6 +15,7 @@ use std::sync::Arc;
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec3A};
 use obvhs::{aabb::Aabb, BvhBuildParams};
 
+use crate::build_prims::{BuildPrims, PrimBoxes};
 use crate::bvh2_build::build_bvh2;
 use crate::bvh8::{Bvh8, InstanceLeaf, TriPacket8};
 use crate::mesh_attributes::MeshAttributes;
@@ -89,20 +90,6 @@ impl Triangles<'_> {
     #[inline(always)]
     fn get(&self, prim: usize) -> Triangle {
         Bvh8::slot_triangle(self.packets, self.slots[prim])
-    }
-}
-
-/// A primitive as the build sees it: a triangle, or a box `[min, max, max]`.
-struct PrimBox([Vec3; 3]);
-
-impl obvhs::Boundable for PrimBox {
-    /// The min/max of the three points: a triangle's exact box, or the box itself.
-    fn aabb(&self) -> Aabb {
-        let t = &self.0;
-        Aabb::new(
-            Vec3A::from(t[0].min(t[1]).min(t[2])),
-            Vec3A::from(t[0].max(t[1]).max(t[2])),
-        )
     }
 }
 
@@ -193,13 +180,11 @@ impl SceneGeometry {
         }
 
         // The build's primitives: the triangles (their boxes exact, min/max of the
-        // vertices), then the spheres' and the instances' padded boxes as `[min, max,
-        // max]`, whose min/max is the box; primitive `i` at position `i`. The triangles'
-        // vector is reused (same layout), not copied, and no box is stored: the build's
+        // vertices) with their vertices welded, then the spheres' and the instances' padded
+        // boxes; primitive `i` at position `i`. No box is stored for a triangle: the build's
         // peak, not its total, is what a large mesh runs out of (issue 36).
         let tri_count = triangles.len();
-        let mut prims: Vec<PrimBox> = triangles.into_iter().map(PrimBox).collect();
-        let boxes = spheres
+        let boxes: Vec<(Vec3, Vec3)> = spheres
             .iter()
             .map(|s| {
                 padded_box(
@@ -207,15 +192,17 @@ impl SceneGeometry {
                     s.center + Vec3::splat(s.radius),
                 )
             })
-            .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)));
-        prims.extend(boxes.map(|b| PrimBox([b.min.into(), b.max.into(), b.max.into()])));
+            .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)))
+            .map(|b| (b.min.into(), b.max.into()))
+            .collect();
+        let prims = BuildPrims::new(triangles, boxes);
 
         // Without obvhs' spatial pre-splits: on the bench mesh and on a room with large
         // walls and long slivers they did not speed up traversal (benches/README.md) while
         // doubling build time, and their clipped boxes would need padding.
         let params = BvhBuildParams::medium_build();
         let mut tri_slots = Vec::new();
-        let bvh8 = if prims.is_empty() {
+        let bvh8 = if prims.count() == 0 {
             None
         } else {
             bounds = (lo, hi);
@@ -223,10 +210,8 @@ impl SceneGeometry {
             // with the runs PLOC stalls on built apart. Each intermediate is freed as soon as
             // the next is built (the binary tree inside the collapse).
             let bvh2 = build_bvh2(&prims, &params);
-            prims.truncate(tri_count);
-            let vertices: Vec<[Vec3; 3]> = prims.into_iter().map(|p| p.0).collect();
-            let mut bvh8 = Bvh8::from_bvh2(bvh2, &vertices, &spheres);
-            drop(vertices);
+            let mut bvh8 = Bvh8::from_bvh2(bvh2, &prims, &spheres);
+            drop(prims);
             tri_slots = bvh8.triangle_slots(tri_count);
             if !placed.instances.is_empty() {
                 bvh8.instances = placed
