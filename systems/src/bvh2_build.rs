@@ -33,9 +33,11 @@ use glam::Vec3A;
 use obvhs::{
     aabb::Aabb,
     bvh2::{node::Bvh2Node, reinsertion::ReinsertionOptimizer, Bvh2, DEFAULT_MAX_STACK_DEPTH},
-    ploc::{morton::morton_encode_u32, PlocBuilder},
-    Boundable, BvhBuildParams,
+    ploc::{morton::morton_encode_u32, PlocBuilder, PlocSearchDistance},
+    BvhBuildParams,
 };
+
+use crate::build_prims::PrimBoxes;
 
 use crate::bvh8::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
 
@@ -57,13 +59,13 @@ const STALL_DENSITY: usize = 2;
 /// `O(n^2)` box unions, is then a few million.
 const STALL_MIN_PRIMS: usize = STALL_BLOCK;
 
-/// The binary BVH over `prims` (primitive `i` bounded by `prims[i].aabb()`; at least one):
+/// The binary BVH over `prims` (primitive `i` bounded by `prims.aabb(i)`; at least one):
 /// PLOC with `params`' search distance and sort precision, then the reinsertion optimizer,
 /// with the runs on which PLOC stalls built by median splits (see the module doc); a tree
 /// still deeper than [`MAX_BVH2_DEPTH`] is replaced by a median-split one. The boxes are
 /// computed where they are read, never stored for all primitives at once (32 bytes a
 /// primitive less at the build's peak, issue 36).
-pub(crate) fn build_bvh2<B: Boundable>(prims: &[B], params: &BvhBuildParams) -> Bvh2 {
+pub(crate) fn build_bvh2<P: PrimBoxes + ?Sized>(prims: &P, params: &BvhBuildParams) -> Bvh2 {
     let runs = stalled_runs(prims);
     let mut bvh2 = if runs.is_empty() {
         ploc(prims, params)
@@ -76,39 +78,66 @@ pub(crate) fn build_bvh2<B: Boundable>(prims: &[B], params: &BvhBuildParams) -> 
     // PLOC chains equal boxes that escaped the run detection; a median split bounds the
     // depth whatever the boxes.
     if bvh2_depth(&bvh2) > MAX_BVH2_DEPTH {
-        bvh2 = median_bvh2(prims, &(0..prims.len() as u32).collect::<Vec<_>>());
+        bvh2 = median_bvh2(prims, &(0..prims.count() as u32).collect::<Vec<_>>());
     }
     bvh2
 }
 
-/// obvhs' PLOC build of `prims`, primitive `i` at position `i`.
-fn ploc<B: Boundable>(prims: &[B], params: &BvhBuildParams) -> Bvh2 {
-    PlocBuilder::with_capacity(prims.len()).build(
-        params.ploc_search_distance,
-        prims,
-        (0..prims.len() as u32).collect(),
-        params.sort_precision,
-        params.search_depth_threshold,
-    )
+/// obvhs' PLOC build of `prims`, primitive `i` at position `i`: its `PlocBuilder::build`
+/// step for step, but with the leaves made here from [`PrimBoxes`] (obvhs wants a slice of
+/// boxable items, and the welded triangles are not one: issue 36).
+fn ploc<P: PrimBoxes + ?Sized>(prims: &P, params: &BvhBuildParams) -> Bvh2 {
+    let n = prims.count();
+    let mut bvh = Bvh2::zeroed(n);
+    bvh.reset_for_reuse(n, Some((0..n as u32).collect()));
+    if n == 0 {
+        return bvh;
+    }
+    let mut builder = PlocBuilder::new();
+    let mut total = Aabb::empty();
+    builder.current_nodes = (0..n)
+        .map(|i| {
+            let b = prims.aabb(i);
+            total.extend(b.min);
+            total.extend(b.max);
+            Bvh2Node::new(b, 1, i as u32)
+        })
+        .collect();
+    let (precision, depth) = (params.sort_precision, params.search_depth_threshold);
+    // obvhs' `build_with_bvh`: the search distance is a const parameter.
+    macro_rules! merge {
+        ($distance:literal) => {
+            builder.build_ploc_from_leaves::<$distance, false>(&mut bvh, total, precision, depth)
+        };
+    }
+    match params.ploc_search_distance {
+        PlocSearchDistance::Minimum => merge!(1),
+        PlocSearchDistance::VeryLow => merge!(2),
+        PlocSearchDistance::Low => merge!(6),
+        PlocSearchDistance::Medium => merge!(14),
+        PlocSearchDistance::High => merge!(24),
+        PlocSearchDistance::VeryHigh => merge!(32),
+    }
+    bvh
 }
 
 /// The primitives (positions in `aabbs`) of each run on which PLOC would stall: stretches
 /// of primitives, consecutive in PLOC's Morton order, that its first pass leaves unmerged
 /// (more than [`STALL_RUN`] in a row, or most of a block of [`STALL_BLOCK`]). Empty for
 /// fewer than [`STALL_MIN_PRIMS`] primitives.
-pub(crate) fn stalled_runs<B: Boundable>(aabbs: &[B]) -> Vec<Vec<u32>> {
-    if aabbs.len() < STALL_MIN_PRIMS {
+pub(crate) fn stalled_runs<P: PrimBoxes + ?Sized>(aabbs: &P) -> Vec<Vec<u32>> {
+    if aabbs.count() < STALL_MIN_PRIMS {
         return Vec::new();
     }
-    stalls(aabbs, 0..aabbs.len(), STALL_RUN)
+    stalls(aabbs, 0..aabbs.count(), STALL_RUN)
 }
 
 /// The stalls of PLOC's first pass over the primitives `prims` (positions in `aabbs`):
 /// stretches of more than `run` unmerged ones in Morton order, or blocks of
 /// [`STALL_BLOCK`] mostly unmerged, joined where they overlap or touch, as lists of
 /// positions.
-fn stalls<B: Boundable>(
-    aabbs: &[B],
+fn stalls<P: PrimBoxes + ?Sized>(
+    aabbs: &P,
     prims: impl Iterator<Item = usize> + Clone,
     run: usize,
 ) -> Vec<Vec<u32>> {
@@ -117,7 +146,7 @@ fn stalls<B: Boundable>(
     // within cells, which on meshes holds a few neighbouring primitives at most and in a
     // run of equal boxes does not matter. Codes and positions share one `u64` key.
     let total = prims.clone().fold(Aabb::empty(), |mut t, p| {
-        let b = aabbs[p].aabb();
+        let b = aabbs.aabb(p);
         t.extend(b.min);
         t.extend(b.max);
         t
@@ -126,7 +155,7 @@ fn stalls<B: Boundable>(
     let scale = cells / total.diagonal().max(Vec3A::splat(f32::MIN_POSITIVE));
     let mut order: Vec<u64> = prims
         .map(|i| {
-            let b = aabbs[i].aabb();
+            let b = aabbs.aabb(i);
             // Float to integer casts saturate: NaN (an infinite extent) and negatives to 0.
             let c = ((b.center() - total.min) * scale).min(cells);
             let code = morton_encode_u32(c.x as u16, c.y as u16, c.z as u16);
@@ -149,9 +178,9 @@ fn stalls<B: Boundable>(
     let mut merged_in_block = vec![0usize; blocks];
     let mut stalls: Vec<(usize, usize)> = Vec::new();
     let cost = |i: usize| {
-        aabbs[prim(i)]
-            .aabb()
-            .union(&aabbs[prim(i + 1)].aabb())
+        aabbs
+            .aabb(prim(i))
+            .union(&aabbs.aabb(prim(i + 1)))
             .half_area()
     };
     // First node of the current unmerged stretch.
@@ -205,31 +234,35 @@ fn stalls<B: Boundable>(
 
 /// PLOC over the primitives outside `runs` and one box per run, each run's leaf replaced by
 /// the run's median-split subtree.
-fn ploc_around_runs<B: Boundable>(aabbs: &[B], runs: &[Vec<u32>], params: &BvhBuildParams) -> Bvh2 {
-    let mut in_run = vec![false; aabbs.len()];
+fn ploc_around_runs<P: PrimBoxes + ?Sized>(
+    aabbs: &P,
+    runs: &[Vec<u32>],
+    params: &BvhBuildParams,
+) -> Bvh2 {
+    let mut in_run = vec![false; aabbs.count()];
     for &p in runs.iter().flatten() {
         in_run[p as usize] = true;
     }
     // PLOC's primitives: the positions outside runs, then one per run (its local index
     // `loose.len() + r`).
-    let loose: Vec<u32> = (0..aabbs.len() as u32)
+    let loose: Vec<u32> = (0..aabbs.count() as u32)
         .filter(|&p| !in_run[p as usize])
         .collect();
-    let mut boxes: Vec<Aabb> = loose.iter().map(|&p| aabbs[p as usize].aabb()).collect();
+    let mut boxes: Vec<Aabb> = loose.iter().map(|&p| aabbs.aabb(p as usize)).collect();
     let subtrees: Vec<Bvh2> = runs
         .iter()
         .map(|run| {
-            let run_boxes: Vec<Aabb> = run.iter().map(|&p| aabbs[p as usize].aabb()).collect();
-            median_bvh2(&run_boxes, run)
+            let run_boxes: Vec<Aabb> = run.iter().map(|&p| aabbs.aabb(p as usize)).collect();
+            median_bvh2(run_boxes.as_slice(), run)
         })
         .collect();
     boxes.extend(subtrees.iter().map(|t| node_box(&t.nodes[0])));
-    let top = ploc(&boxes, params);
+    let top = ploc(boxes.as_slice(), params);
 
     // Copy the top tree from its root down, children after parents as PLOC lays them out,
     // mapping its leaves back to primitive indices or grafting a run's subtree.
     let mut nodes = vec![Bvh2Node::default()];
-    let mut primitive_indices = Vec::with_capacity(aabbs.len());
+    let mut primitive_indices = Vec::with_capacity(aabbs.count());
     let mut stack = vec![(0usize, 0usize)];
     while let Some((src, dst)) = stack.pop() {
         let node = top.nodes[src];

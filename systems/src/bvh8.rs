@@ -9,9 +9,12 @@
 //! coordinate with one triangle per lane so that the watertight test runs on all of them at
 //! once, or a single sphere.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec3, Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2};
 
+use crate::build_prims::BuildPrims;
 use crate::primitive::{Sphere, Triangle};
 
 mod binary;
@@ -94,6 +97,7 @@ impl TriPacket8 {
     }
 
     /// Vertices of lane `l`.
+    #[inline(always)]
     pub(crate) fn triangle(&self, l: usize) -> [Vec3; 3] {
         let v = |i: usize| Vec3::new(self.v[i][0].0[l], self.v[i][1].0[l], self.v[i][2].0[l]);
         [v(0), v(1), v(2)]
@@ -128,8 +132,9 @@ pub(crate) struct Bvh8 {
     pub(crate) spheres: Vec<SphereLeaf>,
     /// Instance leaves (empty without instances).
     pub(crate) instances: Vec<InstanceLeaf>,
-    /// The objects' BVHs, in object space (empty without instances).
-    pub(crate) objects: Vec<Bvh8>,
+    /// The objects' BVHs, in object space (empty without instances), shared with the
+    /// objects' geometries, whose triangles are read from their packets.
+    pub(crate) objects: Vec<Arc<Bvh8>>,
     /// Per axis, the largest magnitude of any box coordinate: bounds the rounding error of
     /// the slab distances (see [`crate::intersect`]).
     pub(crate) max_abs: Vec3A,
@@ -199,21 +204,30 @@ const _: () = assert!(std::mem::size_of::<Split>() == 1 && WIDTH == 8);
 /// its parent, with surface areas (plus a volume term, see [`Collapse::new`]) as visit
 /// probabilities. A leaf holds up to eight triangles (one packet test) or one sphere.
 struct Collapse {
-    /// Visit-probability weight of the root box.
-    root_weight: f32,
-    /// Emptied by [`Self::release_costs`] once the tree to collapse is chosen: with two
-    /// binary nodes per primitive it is the largest array of the collapse, and the 8-wide
-    /// tree built next needs only `split` and `node_split` (issue 36, peak memory).
-    cost: Vec<[f32; WIDTH]>,
+    /// SAH cost of the 8-wide tree: the root node and everything below it.
+    root_cost: f32,
     split: Vec<[Split; WIDTH]>,
     /// For an inner node that becomes an 8-wide node: the slots (1 to 7) of its left child,
     /// the rest going to the right one, at the least cost.
     node_split: Vec<u8>,
 }
 
+/// What the collapse's dynamic programme keeps of a finished subtree until its parent reads
+/// it: the least costs over 1 to 8 slots and its triangle count (`u32::MAX` if a sphere is
+/// among its primitives).
+struct Subtree {
+    cost: [f32; WIDTH],
+    tris: u32,
+}
+
 impl Collapse {
     /// The collapse of `bins` (root first) with costs computed on boxes scaled by `s`
     /// ([`cost_scale`]).
+    ///
+    /// The subtrees are costed in post-order with their costs on a stack, popped by the
+    /// parent: only the root-to-node path's siblings are alive at once (at most twice the
+    /// depth), not a cost row per binary node (32 bytes, two nodes a primitive: 128 MB on
+    /// a 2M-triangle mesh, issue 36). The arithmetic is the same, node by node.
     fn new(bins: &[Bin], s: f32, is_sphere: impl Fn(u32) -> bool) -> Self {
         let root = scaled(&bins[0].aabb(), s);
         let volume = |b: &Aabb| {
@@ -234,84 +248,78 @@ impl Collapse {
                 a
             }
         };
-        // Post-order with an explicit stack.
-        let mut order = Vec::with_capacity(bins.len());
-        let mut stack = vec![0u32];
-        while let Some(n) = stack.pop() {
-            order.push(n);
-            let b = &bins[n as usize];
-            if !b.is_leaf() {
-                stack.extend(b.kids);
-            }
-        }
         let mut c = Collapse {
-            root_weight: weight(&bins[0].aabb()),
-            cost: vec![[f32::INFINITY; WIDTH]; bins.len()],
+            root_cost: 0.0,
             split: vec![[Split::Leaf; WIDTH]; bins.len()],
             node_split: vec![0; bins.len()],
         };
-        // Triangles under each node, or `u32::MAX` if a sphere is among its primitives.
-        let mut tris = vec![0u32; bins.len()];
-        for &n in order.iter().rev() {
-            let n = n as usize;
-            let b = &bins[n];
+        // Post-order with an explicit stack: `(node, children done)`; a node's children
+        // are pushed right then left, so the left one's subtree is finished (and lies
+        // below the right one's on `done`) when the node comes back.
+        let mut todo = vec![(0u32, false)];
+        let mut done: Vec<Subtree> = Vec::new();
+        while let Some((n, kids_done)) = todo.pop() {
+            let b = &bins[n as usize];
             let area = weight(&b.aabb());
             if b.is_leaf() {
                 let sphere = is_sphere(b.kids[0]);
-                tris[n] = if sphere { u32::MAX } else { 1 };
-                c.cost[n] = [area * if sphere { SPHERE_COST } else { 1.0 }; WIDTH];
+                done.push(Subtree {
+                    cost: [area * if sphere { SPHERE_COST } else { 1.0 }; WIDTH],
+                    tris: if sphere { u32::MAX } else { 1 },
+                });
                 continue;
             }
-            let [l, r] = b.kids.map(|k| k as usize);
-            tris[n] = tris[l].saturating_add(tris[r]);
+            if !kids_done {
+                todo.extend([(n, true), (b.kids[1], false), (b.kids[0], false)]);
+                continue;
+            }
+            let r = done.pop().expect("the right subtree is costed");
+            let l = done.pop().expect("the left subtree is costed");
+            let n = n as usize;
+            let tris = l.tris.saturating_add(r.tris);
+            let mut cost = [f32::INFINITY; WIDTH];
+            let split = &mut c.split[n];
             // Spread over i >= 2 slots: the best split of the slots between the children,
             // or fewer slots.
             for i in 2..=WIDTH {
-                let (mut best, mut how) = (c.cost[n][i - 2], c.split[n][i - 2]);
+                let (mut best, mut how) = (cost[i - 2], split[i - 2]);
                 for k in 1..i {
-                    let v = c.cost[l][k - 1] + c.cost[r][i - k - 1];
+                    let v = l.cost[k - 1] + r.cost[i - k - 1];
                     if v < best {
                         (best, how) = (v, Split::Distribute(LeftSlots::new(k)));
                     }
                 }
-                c.cost[n][i - 1] = best;
-                c.split[n][i - 1] = how;
+                cost[i - 1] = best;
+                split[i - 1] = how;
             }
             // As an 8-wide node, at least one slot to each child (the first of equal costs).
-            let spread = |k: usize| c.cost[l][k - 1] + c.cost[r][WIDTH - 1 - k];
+            let spread = |k: usize| l.cost[k - 1] + r.cost[WIDTH - 1 - k];
             c.node_split[n] = (1..WIDTH)
                 .min_by(|&a, &b| spread(a).total_cmp(&spread(b)))
                 .expect("non-empty range") as u8;
             // One slot: a leaf, or a node with all slots below it.
-            let node_cost = area * NODE_COST + c.cost[n][WIDTH - 1];
-            let fits = tris[n] as usize <= WIDTH;
+            let node_cost = area * NODE_COST + cost[WIDTH - 1];
+            let fits = tris as usize <= WIDTH;
             let leaf_cost = if fits { area } else { f32::INFINITY };
             // `fits` as well: a leaf must never be chosen for a subtree it cannot hold, even
             // if a cost is infinite or NaN.
-            (c.cost[n][0], c.split[n][0]) = if fits && leaf_cost <= node_cost {
+            (cost[0], split[0]) = if fits && leaf_cost <= node_cost {
                 (leaf_cost, Split::Leaf)
             } else {
                 (node_cost, Split::Node)
             };
             // "At most i slots" also allows one slot.
             for i in 2..=WIDTH {
-                if c.cost[n][0] < c.cost[n][i - 1] {
-                    c.cost[n][i - 1] = c.cost[n][0];
-                    c.split[n][i - 1] = c.split[n][0];
+                if cost[0] < cost[i - 1] {
+                    cost[i - 1] = cost[0];
+                    split[i - 1] = split[0];
                 }
             }
+            done.push(Subtree { cost, tris });
         }
+        let root = done.pop().expect("the root is costed");
+        c.root_cost = weight(&bins[0].aabb()) * NODE_COST + root.cost[WIDTH - 1];
         c
-    }
-
-    /// Frees the costs (the split decisions stay).
-    fn release_costs(&mut self) {
-        self.cost = Vec::new();
-    }
-
-    /// SAH cost of the 8-wide tree: the root node and everything below it.
-    fn root_cost(&self) -> f32 {
-        self.root_weight * NODE_COST + self.cost[0][WIDTH - 1]
     }
 
     /// The binary nodes that fill the slots of subtree `n` given `i` slots: each is either
@@ -360,8 +368,9 @@ impl Source<'_> {
                 while !self.bins[k as usize].is_leaf() {
                     k = self.bins[k as usize].kids[0];
                 }
-                leaves +=
-                    usize::from((self.bins[k as usize].kids[0] as usize) < self.triangles.len());
+                leaves += usize::from(
+                    (self.bins[k as usize].kids[0] as usize) < self.prims.num_triangles(),
+                );
             } else {
                 let (a, b) = self.sizes(k);
                 (nodes, leaves) = (nodes + a, leaves + b);
@@ -371,11 +380,18 @@ impl Source<'_> {
     }
 }
 
+/// The triangle leaves as the recursion makes them, before their packets are filled: leaf
+/// `i`'s primitives are `prims[ends[i - 1]..ends[i]]` (from 0 for the first).
+struct PacketLeaves {
+    prims: Vec<u32>,
+    ends: Vec<u32>,
+}
+
 /// Inputs of the build that the recursion reads.
 struct Source<'a> {
     bins: &'a [Bin],
     collapse: &'a Collapse,
-    triangles: &'a [[Vec3; 3]],
+    prims: &'a BuildPrims,
     spheres: &'a [Sphere],
 }
 
@@ -386,8 +402,8 @@ impl Bvh8 {
     /// binary subtrees to child slots and leaves ([`Collapse`]).
     /// The binary tree is taken, and dropped as soon as it is copied into one-primitive
     /// leaves: at most one of the two is alive at a time (issue 36, peak memory).
-    pub(crate) fn from_bvh2(bvh2: Bvh2, triangles: &[[Vec3; 3]], spheres: &[Sphere]) -> Self {
-        let tri_count = triangles.len() as u32;
+    pub(crate) fn from_bvh2(bvh2: Bvh2, prims: &BuildPrims, spheres: &[Sphere]) -> Self {
+        let tri_count = prims.num_triangles() as u32;
         let is_sphere = |p: u32| p >= tri_count;
         // obvhs' tree, and for small scenes the full-sweep SAH tree: whichever collapses
         // to the lower SAH cost.
@@ -399,11 +415,10 @@ impl Bvh8 {
         let mut collapse = Collapse::new(&bins, s, is_sphere);
         if let Some(sweep) = sweep {
             let sweep_collapse = Collapse::new(&sweep, s, is_sphere);
-            if sweep_collapse.root_cost() < collapse.root_cost() {
+            if sweep_collapse.root_cost < collapse.root_cost {
                 (bins, collapse) = (sweep, sweep_collapse);
             }
         }
-        collapse.release_costs();
         let mut out = Bvh8 {
             nodes: Vec::new(),
             packets: Vec::new(),
@@ -416,34 +431,61 @@ impl Bvh8 {
         let src = Source {
             bins: &bins,
             collapse: &collapse,
-            triangles,
+            prims,
             spheres,
         };
         let (nodes, packets) = src.sizes(0);
         out.nodes.reserve_exact(nodes);
-        out.packets.reserve_exact(packets);
-        out.build_node(&src, 0, 1);
+        let mut leaves = PacketLeaves {
+            prims: Vec::with_capacity(prims.num_triangles()),
+            ends: Vec::with_capacity(packets),
+        };
+        out.build_node(&src, 0, 1, &mut leaves);
+        // The packets are made once the binary tree and its split table are gone: the two
+        // never coexist with them (issue 36, peak memory).
+        drop(bins);
+        drop(collapse);
+        out.packets.reserve_exact(leaves.ends.len());
+        let mut start = 0;
+        for &end in &leaves.ends {
+            let mut tris = [(0u32, [Vec3::ZERO; 3]); WIDTH];
+            let leaf = &leaves.prims[start as usize..end as usize];
+            for (t, &p) in tris.iter_mut().zip(leaf) {
+                *t = (p, prims.triangle(p as usize));
+            }
+            out.packets.push(TriPacket8::new(&tris[..leaf.len()]));
+            start = end;
+        }
         out
     }
 
-    /// The records of triangle primitives `0..count`, made from the packets' vertices (the
-    /// ones the build was given, stored unchanged, every triangle in exactly one lane): the
-    /// caller's vertex array is freed before they are made, so the two never coexist at
-    /// the build's end (issue 36, peak memory).
+    /// Where each of triangle primitives `0..count` lies: `packet * WIDTH + lane` (the
+    /// packets hold the vertices the build was given, unchanged, every triangle in exactly
+    /// one lane): 4 bytes a triangle instead of a record of its own (issue 36).
     ///
     /// # Panics
     /// If the packets do not hold each of the `count` triangles once (a build bug).
-    pub(crate) fn triangle_records(&self, count: usize) -> Vec<Triangle> {
-        let mut out = vec![Triangle::new([Vec3::ZERO; 3]); count];
+    pub(crate) fn triangle_slots(&self, count: usize) -> Vec<u32> {
+        const UNSET: u32 = u32::MAX;
+        let mut out = vec![UNSET; count];
         let mut filled = 0usize;
-        for p in &self.packets {
+        for (i, p) in self.packets.iter().enumerate() {
             for l in (0..WIDTH).filter(|l| p.valid & (1 << l) != 0) {
-                out[p.prim[l] as usize] = Triangle::new(p.triangle(l));
+                let slot = &mut out[p.prim[l] as usize];
+                assert_eq!(*slot, UNSET, "the packets hold each triangle once");
+                // `i <= INDEX_MASK < 2^29`, so the slot fits 32 bits.
+                *slot = (i * WIDTH + l) as u32;
                 filled += 1;
             }
         }
         assert_eq!(filled, count, "the packets hold each triangle once");
         out
+    }
+
+    /// The triangle in `slot` (as [`Self::triangle_slots`] numbers them).
+    #[inline(always)]
+    pub(crate) fn slot_triangle(packets: &[TriPacket8], slot: u32) -> Triangle {
+        Triangle::new(packets[slot as usize / WIDTH].triangle(slot as usize % WIDTH))
     }
 
     /// Entries a traversal stack can hold at most: a node pushes at most its [`WIDTH`] hit
@@ -459,25 +501,26 @@ impl Bvh8 {
     pub(crate) fn object_stack_capacity(&self) -> usize {
         self.objects
             .iter()
-            .map(Self::stack_capacity)
+            .map(|o| o.stack_capacity())
             .max()
             .unwrap_or(0)
     }
 
-    /// Bytes held by the nodes, leaves and instances, the objects' BVHs included.
+    /// Bytes held by the nodes, leaves and instances (the objects' BVHs are their
+    /// geometries' to count).
     pub(crate) fn bytes(&self) -> usize {
         use std::mem::size_of;
         self.nodes.capacity() * size_of::<Node8>()
             + self.packets.capacity() * size_of::<TriPacket8>()
             + self.spheres.capacity() * size_of::<SphereLeaf>()
             + self.instances.capacity() * size_of::<InstanceLeaf>()
-            + self.objects.iter().map(Self::bytes).sum::<usize>()
+            + self.objects.capacity() * size_of::<Arc<Self>>()
             + size_of::<Self>()
     }
 
     /// Appends the 8-wide node whose children are the slots of binary subtree `n`, and the
     /// nodes below it; returns its index.
-    fn build_node(&mut self, src: &Source, n: u32, level: usize) -> u32 {
+    fn build_node(&mut self, src: &Source, n: u32, level: usize, leaves: &mut PacketLeaves) -> u32 {
         self.depth = self.depth.max(level);
         let bins = src.bins;
         let kids = src.kids(n);
@@ -502,10 +545,10 @@ impl Bvh8 {
             }
             let (child, tri_only) = if is_leaf {
                 self.nodes[index as usize].leaf_mask |= 1 << c;
-                let child = self.build_leaf(src, k);
+                let child = self.build_leaf(src, k, leaves);
                 (child, child & SPHERE == 0)
             } else {
-                let child = self.build_node(src, k, level + 1);
+                let child = self.build_node(src, k, level + 1, leaves);
                 let below = &self.nodes[child as usize];
                 (child, below.tri_only == below.valid)
             };
@@ -518,7 +561,7 @@ impl Bvh8 {
 
     /// Appends the leaf of binary subtree `n` (a sphere, or up to eight triangles) and
     /// returns its child entry.
-    fn build_leaf(&mut self, src: &Source, n: u32) -> u32 {
+    fn build_leaf(&mut self, src: &Source, n: u32, leaves: &mut PacketLeaves) -> u32 {
         let mut prims = Vec::with_capacity(WIDTH);
         let mut stack = vec![n];
         while let Some(k) = stack.pop() {
@@ -531,7 +574,7 @@ impl Bvh8 {
                 stack.push(b.kids[0]);
             }
         }
-        let tri_count = src.triangles.len() as u32;
+        let tri_count = src.prims.num_triangles() as u32;
         let instance_first = tri_count as usize + src.spheres.len();
         if prims[0] as usize >= instance_first {
             assert_eq!(prims.len(), 1, "instance leaves hold one instance");
@@ -548,13 +591,14 @@ impl Bvh8 {
             });
             LEAF | SPHERE | index
         } else {
-            let tris: Vec<(u32, [Vec3; 3])> = prims
-                .iter()
-                .map(|&p| (p, src.triangles[p as usize]))
-                .collect();
-            let index = self.packets.len() as u32;
+            assert!(
+                prims.len() <= WIDTH,
+                "a packet holds at most {WIDTH} triangles"
+            );
+            let index = leaves.ends.len() as u32;
             assert!(index <= INDEX_MASK, "too many leaves");
-            self.packets.push(TriPacket8::new(&tris));
+            leaves.prims.extend(&prims);
+            leaves.ends.push(leaves.prims.len() as u32);
             LEAF | index
         }
     }
@@ -610,7 +654,8 @@ mod tests {
             primitive_indices: all.clone(),
             ..Default::default()
         };
-        let bvh = Bvh8::from_bvh2(bvh2, &tris, &spheres);
+        let prims = BuildPrims::new(tris.clone(), Vec::new());
+        let bvh = Bvh8::from_bvh2(bvh2, &prims, &spheres);
         let mut seen = [0u32; 16];
         for node in &bvh.nodes {
             for c in 0..WIDTH {
@@ -642,9 +687,10 @@ mod tests {
         // not among the packets).
         assert_eq!(bvh.nodes.capacity(), bvh.nodes.len());
         assert_eq!(bvh.packets.capacity(), bvh.packets.len());
-        // Triangle records from the packets: each triangle's own vertices.
-        let records = bvh.triangle_records(tris.len());
-        for (r, t) in records.iter().zip(&tris) {
+        // Triangles from the packets by their slots: each triangle's own vertices.
+        let slots = bvh.triangle_slots(tris.len());
+        for (&slot, t) in slots.iter().zip(&tris) {
+            let r = Bvh8::slot_triangle(&bvh.packets, slot);
             assert_eq!(r.v.map(Vec3::from), *t);
         }
     }

@@ -10,12 +10,14 @@
 //! never leaks out of this module and [`crate::intersect`].
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3, Vec3A};
 use obvhs::{aabb::Aabb, BvhBuildParams};
 
+use crate::build_prims::{BuildPrims, PrimBoxes};
 use crate::bvh2_build::build_bvh2;
-use crate::bvh8::{Bvh8, InstanceLeaf};
+use crate::bvh8::{Bvh8, InstanceLeaf, TriPacket8};
 use crate::mesh_attributes::MeshAttributes;
 use crate::primitive::{sphere_hit_dir, sphere_uv, Triangle};
 use crate::simd8::{Backend, Kernel};
@@ -24,7 +26,7 @@ use crate::simd8::{Backend, Kernel};
 // are their public paths.
 pub(crate) use crate::primitive::{gamma, UNDERFLOW};
 pub use crate::primitive::{
-    sphere_point_error, surface_offset, triangle_point_error, Sphere, SurfaceSample, Triangles,
+    sphere_point_error, surface_offset, triangle_point_error, Sphere, SurfaceSample,
 };
 
 mod instances;
@@ -39,12 +41,15 @@ pub use instances::Instance;
 /// is dropped once collapsed (only the 8-wide one is kept: issue 36, memory per triangle).
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
-    triangles: Vec<Triangle>,
+    /// Where triangle primitive `i` lies in `bvh8`'s packets (`packet * 8 + lane`): the
+    /// triangles are stored once, in the leaves the traversal tests (issue 36).
+    tri_slots: Vec<u32>,
     spheres: Vec<Sphere>,
     /// The binary BVH collapsed to an uncompressed 8-wide BVH with triangle-packet
     /// leaves (what the intersection systems traverse; see [`crate::intersect`]); `None`
-    /// for an empty scene (obvhs cannot build an empty tree).
-    bvh8: Option<Bvh8>,
+    /// for an empty scene (obvhs cannot build an empty tree). Shared with the top-level
+    /// BVH of the scenes that place this geometry as an object.
+    bvh8: Option<Arc<Bvh8>>,
     /// The intersection kernel, checked to run on this CPU.
     backend: Backend,
     bounds: (Vec3, Vec3),
@@ -60,17 +65,31 @@ pub struct SceneGeometry {
     any_attributes: bool,
 }
 
-/// A primitive as the build sees it: a triangle, or a box `[min, max, max]`.
-struct PrimBox([Vec3; 3]);
+/// The triangles of a [`SceneGeometry`], for batch loops over hits: taken once before the
+/// loop, so the loop keeps the arrays in registers instead of reloading them through the
+/// geometry. A triangle's vertices are read from its BVH leaf packet, its normal and area
+/// computed from them ([`Triangle::new`], the same operations whenever they are made).
+#[derive(Clone, Copy, Debug)]
+pub struct Triangles<'a> {
+    slots: &'a [u32],
+    packets: &'a [TriPacket8],
+}
 
-impl obvhs::Boundable for PrimBox {
-    /// The min/max of the three points: a triangle's exact box, or the box itself.
-    fn aabb(&self) -> Aabb {
-        let t = &self.0;
-        Aabb::new(
-            Vec3A::from(t[0].min(t[1]).min(t[2])),
-            Vec3A::from(t[0].max(t[1]).max(t[2])),
-        )
+impl Triangles<'_> {
+    /// [`SceneGeometry::surface_at`] when `prim` is a triangle outside instances, `None` for
+    /// a sphere or a primitive of an instance. A few instructions and the common case:
+    /// batch loops inline it and call `surface_at` for spheres, writing the result of each
+    /// branch directly (not merging two results through memory).
+    #[inline(always)]
+    pub fn surface_at(&self, prim: u32, b1: f32, b2: f32) -> Option<SurfaceSample> {
+        let slot = *self.slots.get(prim as usize)?;
+        Some(Bvh8::slot_triangle(self.packets, slot).surface_at(b1, b2))
+    }
+
+    /// Triangle primitive `prim` (below the number of triangles).
+    #[inline(always)]
+    fn get(&self, prim: usize) -> Triangle {
+        Bvh8::slot_triangle(self.packets, self.slots[prim])
     }
 }
 
@@ -119,7 +138,7 @@ impl SceneGeometry {
     pub fn build_with_instances(
         triangles: Vec<[Vec3; 3]>,
         spheres: Vec<Sphere>,
-        mut objects: Vec<SceneGeometry>,
+        objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
     ) -> Self {
         let num_prims = triangles.len() + spheres.len();
@@ -161,13 +180,11 @@ impl SceneGeometry {
         }
 
         // The build's primitives: the triangles (their boxes exact, min/max of the
-        // vertices), then the spheres' and the instances' padded boxes as `[min, max,
-        // max]`, whose min/max is the box; primitive `i` at position `i`. The triangles'
-        // vector is reused (same layout), not copied, and no box is stored: the build's
+        // vertices) with their vertices welded, then the spheres' and the instances' padded
+        // boxes; primitive `i` at position `i`. No box is stored for a triangle: the build's
         // peak, not its total, is what a large mesh runs out of (issue 36).
         let tri_count = triangles.len();
-        let mut prims: Vec<PrimBox> = triangles.into_iter().map(PrimBox).collect();
-        let boxes = spheres
+        let boxes: Vec<(Vec3, Vec3)> = spheres
             .iter()
             .map(|s| {
                 padded_box(
@@ -175,15 +192,17 @@ impl SceneGeometry {
                     s.center + Vec3::splat(s.radius),
                 )
             })
-            .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)));
-        prims.extend(boxes.map(|b| PrimBox([b.min.into(), b.max.into(), b.max.into()])));
+            .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)))
+            .map(|b| (b.min.into(), b.max.into()))
+            .collect();
+        let prims = BuildPrims::new(triangles, boxes);
 
         // Without obvhs' spatial pre-splits: on the bench mesh and on a room with large
         // walls and long slivers they did not speed up traversal (benches/README.md) while
         // doubling build time, and their clipped boxes would need padding.
         let params = BvhBuildParams::medium_build();
-        let mut triangles = Vec::new();
-        let bvh8 = if prims.is_empty() {
+        let mut tri_slots = Vec::new();
+        let bvh8 = if prims.count() == 0 {
             None
         } else {
             bounds = (lo, hi);
@@ -191,11 +210,9 @@ impl SceneGeometry {
             // with the runs PLOC stalls on built apart. Each intermediate is freed as soon as
             // the next is built (the binary tree inside the collapse).
             let bvh2 = build_bvh2(&prims, &params);
-            prims.truncate(tri_count);
-            let vertices: Vec<[Vec3; 3]> = prims.into_iter().map(|p| p.0).collect();
-            let mut bvh8 = Bvh8::from_bvh2(bvh2, &vertices, &spheres);
-            drop(vertices);
-            triangles = bvh8.triangle_records(tri_count);
+            let mut bvh8 = Bvh8::from_bvh2(bvh2, &prims, &spheres);
+            drop(prims);
+            tri_slots = bvh8.triangle_slots(tri_count);
             if !placed.instances.is_empty() {
                 bvh8.instances = placed
                     .instances
@@ -206,18 +223,18 @@ impl SceneGeometry {
                         prim_base: i.prim_base,
                     })
                     .collect();
-                // The objects' BVHs move to where the traversal reads them.
+                // The objects' BVHs, shared where the traversal reads them.
                 bvh8.objects = objects
-                    .iter_mut()
-                    .map(|o| o.bvh8.take().expect("objects are not empty"))
+                    .iter()
+                    .map(|o| Arc::clone(o.bvh8.as_ref().expect("objects are not empty")))
                     .collect();
             }
-            Some(bvh8)
+            Some(Arc::new(bvh8))
         };
 
         let any_attributes = objects.iter().any(|o| o.any_attributes);
         Self {
-            triangles,
+            tri_slots,
             spheres,
             bvh8,
             backend: Kernel::best().backend().expect("the best kernel runs here"),
@@ -239,7 +256,7 @@ impl SceneGeometry {
     /// When a range of `attributes` reaches past the triangles.
     pub fn set_attributes(&mut self, attributes: MeshAttributes) {
         assert!(
-            attributes.max_prim_end() <= self.triangles.len(),
+            attributes.max_prim_end() <= self.tri_slots.len(),
             "vertex attributes of primitives that are not triangles"
         );
         self.attributes = attributes;
@@ -257,7 +274,7 @@ impl SceneGeometry {
 
     /// Number of triangles (they are primitives `0..num_triangles()`).
     pub fn num_triangles(&self) -> usize {
-        self.triangles.len()
+        self.tri_slots.len()
     }
 
     /// Number of spheres (primitives `num_triangles()..num_prims()`).
@@ -267,7 +284,7 @@ impl SceneGeometry {
 
     /// Number of primitives outside instances (the triangles and the spheres).
     pub fn num_flat_prims(&self) -> usize {
-        self.triangles.len() + self.spheres.len()
+        self.tri_slots.len() + self.spheres.len()
     }
 
     /// Number of primitives, every instance's included.
@@ -284,7 +301,7 @@ impl SceneGeometry {
 
     /// Vertices of triangle `i` (a primitive index below `num_triangles()`).
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
-        self.triangles[i].v.map(Vec3::from)
+        self.triangles().get(i).v.map(Vec3::from)
     }
 
     /// Sphere number `i` (primitive `num_triangles() + i`).
@@ -294,7 +311,7 @@ impl SceneGeometry {
 
     /// The 8-wide BVH (`None` for an empty scene) and the kernel that traverses it.
     pub(crate) fn bvh8(&self) -> Option<(&Bvh8, Backend)> {
-        self.bvh8.as_ref().map(|b| (b, self.backend))
+        self.bvh8.as_deref().map(|b| (b, self.backend))
     }
 
     /// The intersection kernel in use ([`Kernel::best`] unless set).
@@ -346,12 +363,12 @@ impl SceneGeometry {
     /// so the answer can differ from the f32 `ng` only for rays within rounding of tangent.
     #[inline]
     pub fn hit_is_front(&self, prim: u32, origin: Vec3, direction: Vec3, t: f32, b1: f32) -> bool {
-        if (prim as usize) < self.triangles.len() {
-            direction.dot(self.triangles[prim as usize].ng()) < 0.0
+        if (prim as usize) < self.tri_slots.len() {
+            direction.dot(self.triangles().get(prim as usize).ng()) < 0.0
         } else if prim as usize >= self.num_flat_prims() {
             self.instance_hit_is_front(prim, origin, direction, t, b1)
         } else {
-            let s = self.spheres[prim as usize - self.triangles.len()];
+            let s = self.spheres[prim as usize - self.tri_slots.len()];
             let t64 = t as f64 + if b1.is_finite() { b1 as f64 } else { 0.0 };
             let d = direction.as_dvec3();
             let h = (origin.as_dvec3() - s.center.as_dvec3()) + d * t64;
@@ -375,12 +392,12 @@ impl SceneGeometry {
         b1: f32,
         b2: f32,
     ) -> Vec2 {
-        if (prim as usize) < self.triangles.len() {
+        if (prim as usize) < self.tri_slots.len() {
             Vec2::new(b1, b2)
         } else if prim as usize >= self.num_flat_prims() {
             self.instance_surface_uv(prim, origin, direction, t, b1, b2)
         } else {
-            let s = self.spheres[prim as usize - self.triangles.len()];
+            let s = self.spheres[prim as usize - self.tri_slots.len()];
             sphere_uv(sphere_hit_dir(s, origin, direction, t, b1))
         }
     }
@@ -388,7 +405,10 @@ impl SceneGeometry {
     /// The triangles, for batch loops over hits ([`Triangles::surface_at`]).
     #[inline(always)]
     pub fn triangles(&self) -> Triangles<'_> {
-        Triangles(&self.triangles)
+        Triangles {
+            slots: &self.tri_slots,
+            packets: self.bvh8.as_ref().map_or(&[], |b| &b.packets),
+        }
     }
 
     /// The sphere case of [`Self::surface_at`], and that of primitives of instances.
@@ -405,7 +425,7 @@ impl SceneGeometry {
         if prim >= self.num_flat_prims() {
             return self.instance_surface_at(prim as u32, origin, direction, t, b1, b2);
         }
-        let s = self.spheres[prim - self.triangles.len()];
+        let s = self.spheres[prim - self.tri_slots.len()];
         let n = sphere_hit_dir(s, origin, direction, t, b1);
         // The point in double precision, rounded once: its distance to the sphere is then
         // under an ulp of its own largest coordinate, which the spawn offset (relative to
@@ -425,10 +445,10 @@ impl SceneGeometry {
     /// lights).
     pub fn prim_area(&self, prim: u32) -> f32 {
         let prim = prim as usize;
-        if prim < self.triangles.len() {
-            self.triangles[prim].ng_area.w
+        if prim < self.tri_slots.len() {
+            self.triangles().get(prim).area()
         } else {
-            let r = self.spheres[prim - self.triangles.len()].radius;
+            let r = self.spheres[prim - self.tri_slots.len()].radius;
             4.0 * PI * r * r
         }
     }
@@ -453,8 +473,8 @@ impl SceneGeometry {
     #[inline]
     pub fn sample_surface(&self, prim: u32, u: Vec2) -> SurfaceSample {
         let prim = prim as usize;
-        if prim < self.triangles.len() {
-            let tri = &self.triangles[prim];
+        if prim < self.tri_slots.len() {
+            let tri = self.triangles().get(prim);
             // Heitz 2019, "A Low-Distortion Map Between Triangle and Square": folds the
             // square onto the triangle so that the map is area preserving (uniform).
             let (b0, b1) = if u.x < u.y {
@@ -474,7 +494,7 @@ impl SceneGeometry {
             }
         } else {
             use std::f64::consts::PI as PI64;
-            let s = self.spheres[prim - self.triangles.len()];
+            let s = self.spheres[prim - self.tri_slots.len()];
             // Archimedes: z = cos(theta) is uniform on [-1, 1] for area-uniform points.
             let z = 1.0 - 2.0 * u.x as f64;
             let r = (1.0 - z * z).max(0.0).sqrt();

@@ -4,6 +4,7 @@
 
 pub mod adaptive;
 pub mod bssrdf;
+mod build_prims;
 mod bvh2_build;
 mod bvh8;
 pub mod bxdf;

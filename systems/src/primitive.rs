@@ -1,11 +1,11 @@
 //! The primitives of a compiled scene, apart from the aggregate over them ([`SceneGeometry`]
-//! and its BVH): the analytic sphere, the triangle record, a surface point and the error
+//! and its BVH): the analytic sphere, the triangle with its normal and area, a surface point and the error
 //! bounds of its position. The BVH (`crate::bvh8`), the geometry and the intersection
 //! systems all build on these; [`crate::geometry`] re-exports the public ones.
 //!
 //! [`SceneGeometry`]: crate::geometry::SceneGeometry
 
-use glam::{DVec3, Vec2, Vec3, Vec3A, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec3A};
 
 /// An analytic sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,35 +106,44 @@ pub fn sphere_point_error(center: Vec3, radius: f32, p: Vec3) -> Vec3 {
         + Vec3::splat(UNDERFLOW)
 }
 
-/// A triangle with its unit geometric normal and area precomputed: every hit and every light
-/// sample needs them, and recomputing costs a cross product and a square root each time. One
-/// record, so a hit or a sample reads one array (one bounds check, one base pointer). In
-/// 16-byte lanes (64 bytes, one cache line): interpolating a point is three SIMD multiplies
-/// and two adds, lane by lane the same float operations as on `Vec3`s.
+/// A triangle with its unit geometric normal and area, made where a hit or a light sample
+/// needs them from the vertices its BVH leaf packet holds ([`crate::geometry::Triangles`]):
+/// not stored, since a 64-byte record per triangle repeated the packets' vertices (issue 36,
+/// memory per triangle). In 16-byte lanes: interpolating a point is three SIMD multiplies and
+/// two adds, lane by lane the same float operations as on `Vec3`s.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Triangle {
     pub(crate) v: [Vec3A; 3],
-    /// `normalize((v1 - v0) x (v2 - v0))` (zero for a degenerate triangle) and, in `w`, the
-    /// area.
-    pub(crate) ng_area: Vec4,
+    /// `normalize((v1 - v0) x (v2 - v0))`, zero for a degenerate triangle.
+    ng: Vec3,
 }
 
 impl Triangle {
+    /// The triangle of `v` with its normal: inlined where hits are shaded (a call per hit
+    /// cost more than the arithmetic), the overflowing case apart.
+    #[inline(always)]
     pub(crate) fn new(v: [Vec3; 3]) -> Self {
         let c = (v[1] - v[0]).cross(v[2] - v[0]);
-        let ng_area = if c.is_finite() && c.length().is_finite() {
-            c.normalize_or_zero().extend(0.5 * c.length())
+        // `|c|^2` is finite exactly when `c` and `|c|` are.
+        let ng = if c.length_squared().is_finite() {
+            c.normalize_or_zero()
         } else {
-            // Edges beyond about 1e19 overflow f32's cross product: the same in f64 (the
-            // area saturates at f32::MAX).
-            let [a, b, c] = v.map(Vec3::as_dvec3);
-            let c = (b - a).cross(c - a);
-            let area = (0.5 * c.length()).min(f32::MAX as f64) as f32;
-            c.normalize_or_zero().as_vec3().extend(area)
+            wide_cross(v).normalize_or_zero().as_vec3()
         };
         Triangle {
             v: v.map(Vec3A::from),
-            ng_area,
+            ng,
+        }
+    }
+
+    /// The area, `|(v1 - v0) x (v2 - v0)| / 2` (saturating at `f32::MAX`).
+    pub(crate) fn area(&self) -> f32 {
+        let v = self.v.map(Vec3::from);
+        let c = (v[1] - v[0]).cross(v[2] - v[0]);
+        if c.length_squared().is_finite() {
+            0.5 * c.length()
+        } else {
+            (0.5 * wide_cross(v).length()).min(f32::MAX as f64) as f32
         }
     }
 
@@ -148,14 +157,14 @@ impl Triangle {
 
     #[inline(always)]
     pub(crate) fn ng(&self) -> Vec3 {
-        self.ng_area.truncate()
+        self.ng
     }
 
     /// [`SceneGeometry::surface_at`] on this triangle.
     ///
     /// [`SceneGeometry::surface_at`]: crate::geometry::SceneGeometry::surface_at
     #[inline(always)]
-    fn surface_at(&self, b1: f32, b2: f32) -> SurfaceSample {
+    pub(crate) fn surface_at(&self, b1: f32, b2: f32) -> SurfaceSample {
         let b0 = 1.0 - b1 - b2;
         SurfaceSample {
             p: self.point(b1, b2),
@@ -166,25 +175,12 @@ impl Triangle {
     }
 }
 
-/// The triangles of a [`SceneGeometry`], for batch loops over hits: taken once before the loop,
-/// so the loop keeps the array in registers instead of reloading it through the geometry.
-///
-/// [`SceneGeometry`]: crate::geometry::SceneGeometry
-#[derive(Clone, Copy, Debug)]
-pub struct Triangles<'a>(pub(crate) &'a [Triangle]);
-
-impl Triangles<'_> {
-    /// [`SceneGeometry::surface_at`] when `prim` is a triangle outside instances, `None` for
-    /// a sphere or a primitive of an instance. A few
-    /// instructions and the common case: batch loops inline it and call `surface_at` for
-    /// spheres, writing the result of each branch directly (not merging two results through
-    /// memory).
-    ///
-    /// [`SceneGeometry::surface_at`]: crate::geometry::SceneGeometry::surface_at
-    #[inline(always)]
-    pub fn surface_at(&self, prim: u32, b1: f32, b2: f32) -> Option<SurfaceSample> {
-        Some(self.0.get(prim as usize)?.surface_at(b1, b2))
-    }
+/// `(v1 - v0) x (v2 - v0)` in f64: edges beyond about 1e19 overflow f32's cross product.
+#[cold]
+#[inline(never)]
+fn wide_cross(v: [Vec3; 3]) -> DVec3 {
+    let [a, b, c] = v.map(Vec3::as_dvec3);
+    (b - a).cross(c - a)
 }
 
 /// Surface parameters `(phi / 2pi, theta / pi)` of the direction `h` (centre to point).

@@ -6,8 +6,9 @@ use glam::Vec3;
 use obvhs::{
     aabb::Aabb,
     bvh2::{node::Bvh2Node, Bvh2},
-    Boundable,
 };
+
+use crate::build_prims::PrimBoxes;
 
 /// A node of the binary BVH with every leaf holding exactly one primitive (multi-primitive
 /// leaves of obvhs' tree are split, their box repeated).
@@ -96,10 +97,9 @@ pub(crate) fn bvh2_depth(bvh2: &Bvh2) -> usize {
 /// with one primitive per leaf, built top down by median splits: along the longest axis of
 /// the centroid bounds, or by count when the centroids coincide. Depth `ceil(log2 n) + 1`
 /// whatever the boxes: the fallback when PLOC's tree is deeper than [`MAX_BVH2_DEPTH`].
-pub(crate) fn median_bvh2<B: Boundable>(aabbs: &[B], indices: &[u32]) -> Bvh2 {
-    let mut prims: Vec<(Aabb, u32)> = aabbs
-        .iter()
-        .map(Boundable::aabb)
+pub(crate) fn median_bvh2<P: PrimBoxes + ?Sized>(aabbs: &P, indices: &[u32]) -> Bvh2 {
+    let mut prims: Vec<(Aabb, u32)> = (0..aabbs.count())
+        .map(|i| aabbs.aabb(i))
         .zip(indices.iter().copied())
         .collect();
     let mut nodes = vec![Bvh2Node::default()];

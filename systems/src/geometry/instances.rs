@@ -267,7 +267,7 @@ impl SceneGeometry {
     /// object's.
     #[inline]
     pub fn mesh_shading(&self, prim: u32, b1: f32, b2: f32, ng: Vec3) -> Option<MeshShading> {
-        if (prim as usize) < self.triangles.len() {
+        if (prim as usize) < self.tri_slots.len() {
             return self
                 .attributes
                 .shading(prim, b1, b2, self.triangle(prim as usize), ng);
@@ -275,7 +275,7 @@ impl SceneGeometry {
         let (k, local) = self.instance_of(prim)?;
         let inst = &self.instances[k];
         let object = &self.objects[inst.object as usize];
-        if local as usize >= object.triangles.len() {
+        if local as usize >= object.tri_slots.len() {
             return None;
         }
         let v = object
@@ -295,14 +295,14 @@ impl SceneGeometry {
     /// them to the side it needs.
     #[inline]
     pub fn terminator_triangle(&self, prim: u32) -> Option<([Vec3; 3], [Vec3; 3])> {
-        if (prim as usize) < self.triangles.len() {
+        if (prim as usize) < self.tri_slots.len() {
             let n = self.attributes.terminator_normals(prim)?;
             return Some((self.triangle(prim as usize), n));
         }
         let (k, local) = self.instance_of(prim)?;
         let inst = &self.instances[k];
         let object = &self.objects[inst.object as usize];
-        if local as usize >= object.triangles.len() {
+        if local as usize >= object.tri_slots.len() {
             return None;
         }
         let n = object.attributes.terminator_normals(local)?;
@@ -325,7 +325,7 @@ impl SceneGeometry {
         };
         let inst = &self.instances[k];
         let object = &self.objects[inst.object as usize];
-        if (local as usize) < object.triangles.len() {
+        if (local as usize) < object.tri_slots.len() {
             return arbitrary_tangent(ng);
         }
         // The object-space normal: normals map back by the transpose of `to_world`.
@@ -337,10 +337,10 @@ impl SceneGeometry {
     #[inline]
     pub fn is_sphere(&self, prim: u32) -> bool {
         match self.instance_of(prim) {
-            None => prim as usize >= self.triangles.len(),
+            None => prim as usize >= self.tri_slots.len(),
             Some((k, local)) => {
                 let object = &self.objects[self.instances[k].object as usize];
-                local as usize >= object.triangles.len()
+                local as usize >= object.tri_slots.len()
             }
         }
     }
@@ -349,11 +349,7 @@ impl SceneGeometry {
     /// rest of [`Self::memory_bytes`] is the flat geometry, the top-level BVH and the
     /// instances.
     pub fn object_bytes(&self) -> usize {
-        let bvhs = self
-            .bvh8
-            .as_ref()
-            .map_or(0, |b| b.objects.iter().map(|o| o.bytes()).sum::<usize>());
-        self.objects.iter().map(Self::memory_bytes).sum::<usize>() + bvhs
+        self.objects.iter().map(Self::memory_bytes).sum::<usize>()
     }
 
     /// Bytes this geometry holds: triangles, spheres, the BVH, mesh attributes, and the
@@ -361,7 +357,7 @@ impl SceneGeometry {
     pub fn memory_bytes(&self) -> usize {
         use std::mem::size_of;
         size_of::<Self>()
-            + self.triangles.capacity() * size_of::<super::Triangle>()
+            + self.tri_slots.capacity() * size_of::<u32>()
             + self.spheres.capacity() * size_of::<super::Sphere>()
             + self.bvh8.as_ref().map_or(0, |b| b.bytes())
             + self.attributes.bytes()

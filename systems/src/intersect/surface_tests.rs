@@ -6,10 +6,11 @@ use crate::primitive::sphere_hit_dir;
 use crate::sampler::SplitMix64;
 use glam::{DVec3, Vec2, Vec3};
 
-/// The triangle records against the vertices they were built from, in double precision:
+/// The triangles as the geometry gives them (read from the BVH's packets, normal and area
+/// computed there) against the vertices they were built from, in double precision:
 /// interpolated points, normals, areas; spheres are not triangles.
 #[test]
-fn triangle_records_match_their_vertices() {
+fn triangles_match_their_vertices() {
     let mut rng = SplitMix64(3);
     let mut v = || Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 20.0 - Vec3::splat(10.0);
     let tris: Vec<[Vec3; 3]> = (0..50).map(|_| [v(), v(), v()]).collect();

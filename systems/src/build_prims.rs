@@ -1,0 +1,209 @@
+//! The BVH build's primitives: what the build reads of them ([`PrimBoxes`], a box by
+//! primitive index) and the set the geometry hands it ([`BuildPrims`]): the triangles with
+//! their vertices welded (shared by bit-equal position), then the boxes of the spheres and
+//! instances.
+//!
+//! A mesh reaches the build as one `[Vec3; 3]` per triangle (36 bytes); welded, its vertices
+//! take 12 bytes a corner index and 12 a distinct position, about 18 bytes a triangle on a
+//! closed mesh (half as many vertices as triangles). The build's peak, obvhs' PLOC working
+//! set, comes on top of whatever is alive at that point (issue 36). A triangle read back
+//! ([`BuildPrims::triangle`]) has exactly the vertices it was given: welding only merges
+//! bit-equal positions.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::{Vec3, Vec3A};
+use obvhs::{aabb::Aabb, Boundable};
+
+/// Primitive boxes by index, as the binary BVH builds read them (`0..count()`).
+pub(crate) trait PrimBoxes {
+    /// Number of primitives.
+    fn count(&self) -> usize;
+    /// The box of primitive `i`.
+    fn aabb(&self, i: usize) -> Aabb;
+}
+
+impl<B: Boundable> PrimBoxes for [B] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    #[inline]
+    fn aabb(&self, i: usize) -> Aabb {
+        self[i].aabb()
+    }
+}
+
+impl<B: Boundable> PrimBoxes for Vec<B> {
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    #[inline]
+    fn aabb(&self, i: usize) -> Aabb {
+        self[i].aabb()
+    }
+}
+
+/// How the triangles' vertices are held.
+#[derive(Debug)]
+enum Vertices {
+    /// Three corner indices a triangle into distinct positions.
+    Shared {
+        positions: Vec<Vec3>,
+        corners: Vec<[u32; 3]>,
+    },
+    /// As given: kept when welding would not save memory (a soup whose vertices are
+    /// hardly shared: more than two distinct positions a triangle).
+    Soup(Vec<[Vec3; 3]>),
+}
+
+/// The build's primitives: triangles `0..num_triangles()`, then boxes `(min, max)` (the
+/// spheres' and instances' padded boxes).
+#[derive(Debug)]
+pub(crate) struct BuildPrims {
+    vertices: Vertices,
+    num_triangles: usize,
+    boxes: Vec<(Vec3, Vec3)>,
+}
+
+/// FxHash's step (rustc's hasher): a rotate, a xor and a multiply a word; the keys are
+/// float bit patterns, and std's SipHash took most of the weld's time.
+#[derive(Default)]
+struct BitsHasher(u64);
+
+impl Hasher for BitsHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl BuildPrims {
+    /// The triangles welded by bit-equal positions (or kept as given when that saves
+    /// nothing), then `boxes`.
+    pub(crate) fn new(triangles: Vec<[Vec3; 3]>, boxes: Vec<(Vec3, Vec3)>) -> Self {
+        let n = triangles.len();
+        let mut index: HashMap<(u64, u32), u32, BuildHasherDefault<BitsHasher>> =
+            HashMap::default();
+        let mut positions = Vec::new();
+        let mut corners = Vec::with_capacity(n);
+        let bits = |v: Vec3| {
+            let [x, y, z] = v.to_array().map(f32::to_bits);
+            ((u64::from(x) << 32) | u64::from(y), z)
+        };
+        let mut welded = true;
+        for t in &triangles {
+            let mut c = [0u32; 3];
+            for (k, v) in t.iter().enumerate() {
+                c[k] = *index.entry(bits(*v)).or_insert_with(|| {
+                    positions.push(*v);
+                    (positions.len() - 1) as u32
+                });
+            }
+            corners.push(c);
+            // Two distinct positions a triangle: the welded form (12 + 24 bytes) no smaller.
+            if positions.len() > 2 * n || positions.len() >= u32::MAX as usize {
+                welded = false;
+                break;
+            }
+        }
+        drop(index);
+        let vertices = if welded {
+            drop(triangles);
+            positions.shrink_to_fit();
+            Vertices::Shared { positions, corners }
+        } else {
+            Vertices::Soup(triangles)
+        };
+        BuildPrims {
+            vertices,
+            num_triangles: n,
+            boxes,
+        }
+    }
+
+    /// Number of triangles (primitives `0..num_triangles()`).
+    pub(crate) fn num_triangles(&self) -> usize {
+        self.num_triangles
+    }
+
+    /// The vertices of triangle `i`, exactly as given.
+    #[inline]
+    pub(crate) fn triangle(&self, i: usize) -> [Vec3; 3] {
+        match &self.vertices {
+            Vertices::Shared { positions, corners } => corners[i].map(|c| positions[c as usize]),
+            Vertices::Soup(t) => t[i],
+        }
+    }
+}
+
+impl PrimBoxes for BuildPrims {
+    fn count(&self) -> usize {
+        self.num_triangles + self.boxes.len()
+    }
+
+    /// A triangle's exact box (min/max of its vertices), or the box given.
+    #[inline]
+    fn aabb(&self, i: usize) -> Aabb {
+        let (lo, hi) = if i < self.num_triangles {
+            let t = self.triangle(i);
+            (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+        } else {
+            self.boxes[i - self.num_triangles]
+        };
+        Aabb::new(Vec3A::from(lo), Vec3A::from(hi))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Welding keeps every vertex bit for bit (signed zeros apart), shares bit-equal ones,
+    /// and a soup of unshared triangles is kept as given.
+    #[test]
+    fn welding_keeps_every_vertex() {
+        let a = Vec3::new(0.0, 0.0, 0.0);
+        let b = Vec3::new(-0.0, 0.0, 0.0);
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let d = Vec3::new(1.0, 2.0, 3.0 + f32::EPSILON * 4.0);
+        let tris = vec![[a, c, d], [b, c, d], [a, d, c], [c, a, b]];
+        let p = BuildPrims::new(tris.clone(), vec![(Vec3::splat(-1.0), Vec3::ONE)]);
+        assert!(
+            matches!(p.vertices, Vertices::Shared { ref positions, .. } if positions.len() == 4)
+        );
+        for (i, t) in tris.iter().enumerate() {
+            let got = p.triangle(i).map(|v| v.to_array().map(f32::to_bits));
+            assert_eq!(got, t.map(|v| v.to_array().map(f32::to_bits)));
+        }
+        assert_eq!(p.count(), 5);
+        let last = p.aabb(4);
+        assert_eq!(
+            (Vec3::from(last.min), Vec3::from(last.max)),
+            (Vec3::splat(-1.0), Vec3::ONE)
+        );
+        let first = p.aabb(0);
+        assert_eq!((Vec3::from(first.min), Vec3::from(first.max)), (a, d));
+
+        let soup: Vec<[Vec3; 3]> = (0..10)
+            .map(|i| [0.0, 1.0, 2.0].map(|k| Vec3::splat(3.0 * i as f32 + k)))
+            .collect();
+        let p = BuildPrims::new(soup.clone(), Vec::new());
+        assert!(matches!(p.vertices, Vertices::Soup(_)));
+        assert_eq!((0..10).map(|i| p.triangle(i)).collect::<Vec<_>>(), soup);
+    }
+}
