@@ -29,9 +29,9 @@ use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use glam::Vec3;
-use risotto_components::{Rays, NO_HIT};
-use risotto_systems::camera::push_camera_rays;
-use risotto_systems::intersect::intersect_closest;
+use risotto_components::NO_HIT;
+use risotto_systems::camera::push_camera_ray_geometry;
+use risotto_systems::intersect::{intersect_closest, FREE_ORIGIN};
 use risotto_systems::lights::Light;
 use risotto_systems::sampler::MAX_SPP;
 
@@ -86,7 +86,8 @@ fn few_triangle_emitters(scene: &CompiledScene) -> bool {
 #[derive(Debug, Default)]
 pub struct VisibleEmitterScratch {
     emitters: Vec<[Vec3; 3]>,
-    rays: Rays,
+    camera_origin: Vec<Vec3>,
+    camera_direction: Vec<Vec3>,
     sample: Vec<u32>,
     candidate: Vec<u32>,
     origin: Vec<Vec3>,
@@ -120,24 +121,27 @@ pub(super) fn add_extra_samples(
         s.sample.clear();
         s.sample
             .extend(batch.paths.sample[..n].iter().map(|&i| i + j * spp));
-        s.rays.clear();
+        s.camera_origin.clear();
+        s.camera_direction.clear();
         stats.time(System::Camera, n, || {
-            push_camera_rays(
+            push_camera_ray_geometry(
                 &scene.camera,
                 &batch.paths.pixel,
                 &s.sample,
                 &batch.seeds,
-                &scene.camera_stack,
-                &mut s.rays,
+                &mut s.camera_origin,
+                &mut s.camera_direction,
             )
         });
         // The rays that may hit an emitter, and their columns for the scene's closest hit.
-        let (rays, emitters) = (&s.rays, &s.emitters);
+        // A camera ray's other columns are constants (`push_camera_rays`): `tmin`
+        // `FREE_ORIGIN`, `tmax` infinity, throughput 1.
+        let (origin, direction) = (&s.camera_origin, &s.camera_direction);
+        let (tmin, tmax) = (FREE_ORIGIN, f32::INFINITY);
+        let emitters = &s.emitters;
         s.candidate.clear();
         s.candidate.extend((0..n as u32).filter(|&k| {
-            let k = k as usize;
-            let (o, d) = (rays.origin[k], rays.direction[k]);
-            let (tmin, tmax) = (rays.tmin[k], rays.tmax[k]);
+            let (o, d) = (origin[k as usize], direction[k as usize]);
             may_hit_box(bounds, o, d, tmin, tmax)
                 && emitters.iter().any(|tri| may_hit(tri, o, d, tmin, tmax))
         }));
@@ -147,14 +151,13 @@ pub(super) fn add_extra_samples(
         }
         let c = &s.candidate;
         s.origin.clear();
-        s.origin.extend(c.iter().map(|&k| rays.origin[k as usize]));
+        s.origin.extend(c.iter().map(|&k| origin[k as usize]));
         s.direction.clear();
-        s.direction
-            .extend(c.iter().map(|&k| rays.direction[k as usize]));
+        s.direction.extend(c.iter().map(|&k| direction[k as usize]));
         s.tmin.clear();
-        s.tmin.extend(c.iter().map(|&k| rays.tmin[k as usize]));
+        s.tmin.resize(m, tmin);
         s.tmax.clear();
-        s.tmax.extend(c.iter().map(|&k| rays.tmax[k as usize]));
+        s.tmax.resize(m, tmax);
         s.t.resize(m, 0.0);
         s.b1.resize(m, 0.0);
         s.b2.resize(m, 0.0);
@@ -183,7 +186,7 @@ pub(super) fn add_extra_samples(
             // One-sided emitters, as `PathTracer::surface_emission`.
             if d.dot(surf.ng) < 0.0 {
                 let k = k as usize;
-                batch.paths.radiance[k] += s.rays.throughput[k] * le * weight;
+                batch.paths.radiance[k] += le * weight;
             }
         }
     }
