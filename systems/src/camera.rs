@@ -298,10 +298,47 @@ pub fn push_camera_rays(
     stack: &VolumeStack,
     rays: &mut Rays,
 ) {
+    let (base, end) = (rays.len(), rays.len() + pixel.len());
+    push_camera_ray_geometry(
+        camera,
+        pixel,
+        sample,
+        seed,
+        &mut rays.origin,
+        &mut rays.direction,
+    );
+    rays.prev_p.extend_from_slice(&rays.origin[base..end]);
+    // The camera is no computed surface point: hits close to it are decided exactly.
+    rays.tmin.resize(end, crate::intersect::FREE_ORIGIN);
+    rays.tmax.resize(end, f32::INFINITY);
+    rays.path.extend(0..pixel.len() as u32);
+    rays.throughput.resize(end, Rgb::WHITE);
+    rays.lobe.resize(end, LobeSampled::NONE);
+    rays.depth.resize(end, 0);
+    rays.passes.resize(end, 0);
+    rays.pdf.resize(end, 0.0);
+    rays.eta_scale.resize(end, 1.0);
+    rays.dimension.resize(end, FIRST_PATH_DIMENSION);
+    rays.shading_ctx_index.resize(end, u32::MAX);
+    rays.volume_stack.resize(end, stack.clone());
+    debug_assert!(rays.is_consistent(), "a ray column was not filled");
+}
+
+/// The origins and directions of [`push_camera_rays`] alone, appended to `origin` and
+/// `direction` (for callers that need no other column of a camera ray, whose other values
+/// are its constants: `tmin` [`FREE_ORIGIN`](crate::intersect::FREE_ORIGIN), `tmax`
+/// infinity, throughput 1).
+pub fn push_camera_ray_geometry(
+    camera: &Camera,
+    pixel: &[u32],
+    sample: &[u32],
+    seed: &[u32],
+    origin: &mut Vec<Vec3>,
+    direction: &mut Vec<Vec3>,
+) {
     let gen = camera.ray_generator();
     let n = pixel.len();
-    let base = rays.len();
-    let end = base + n;
+    let end = origin.len() + n;
     // The jitter of every sample first, eight per call of the column sampler.
     let mut jitter = vec![Vec2::ZERO; n];
     first_2d_column(&seed[..n], &sample[..n], &mut jitter);
@@ -328,42 +365,27 @@ pub fn push_camera_rays(
     if let Some((radius, focus)) = camera.projection.lens() {
         // Lens samples (dimensions 2 and 3) one ray at a time: a lens is rare and its rays
         // cost little beside their paths.
-        rays.origin.reserve(n);
-        rays.direction.reserve(n);
+        origin.reserve(n);
+        direction.reserve(n);
         for ((film, &seed), &sample) in films.zip(&seed[..n]).zip(&sample[..n]) {
             let u = sample_2d(seed, sample, LENS_DIMENSION);
             let (o, d) = gen.thin_lens(film, u, radius, focus);
-            rays.origin.push(o);
-            rays.direction.push(d);
+            origin.push(o);
+            direction.push(d);
         }
     } else {
         match camera.projection {
             Projection::Perspective { .. } | Projection::ThinLens { .. } => {
-                rays.origin.resize(end, camera.from);
+                origin.resize(end, camera.from);
                 let films: Vec<Vec2> = films.collect();
-                extend_perspective(Backend::best(), &gen, &films, &mut rays.direction);
+                extend_perspective(Backend::best(), &gen, &films, direction);
             }
             Projection::Orthographic { .. } => {
-                rays.origin.extend(films.map(|film| gen.orthographic(film)));
-                rays.direction.resize(end, camera.forward);
+                origin.extend(films.map(|film| gen.orthographic(film)));
+                direction.resize(end, camera.forward);
             }
         }
     }
-    rays.prev_p.extend_from_slice(&rays.origin[base..end]);
-    // The camera is no computed surface point: hits close to it are decided exactly.
-    rays.tmin.resize(end, crate::intersect::FREE_ORIGIN);
-    rays.tmax.resize(end, f32::INFINITY);
-    rays.path.extend(0..n as u32);
-    rays.throughput.resize(end, Rgb::WHITE);
-    rays.lobe.resize(end, LobeSampled::NONE);
-    rays.depth.resize(end, 0);
-    rays.passes.resize(end, 0);
-    rays.pdf.resize(end, 0.0);
-    rays.eta_scale.resize(end, 1.0);
-    rays.dimension.resize(end, FIRST_PATH_DIMENSION);
-    rays.shading_ctx_index.resize(end, u32::MAX);
-    rays.volume_stack.resize(end, stack.clone());
-    debug_assert!(rays.is_consistent(), "a ray column was not filled");
 }
 
 /// Appends `gen.perspective(film)` for every film position to `out`, eight rays at a time

@@ -88,9 +88,13 @@ impl PathTracer {
         let p = pts.p[i];
         let ng = pts.ng[i];
         let prev = incoming.prev_p[r];
-        let w = self.emitter_mis(incoming, r, || {
+        let mut w = self.emitter_mis(incoming, r, || {
             light_pdf_at(scene, shape, prev, p, ng, incoming, r)
         });
+        if incoming.depth[r] == 0 {
+            // The camera ray's share of the directly visible emission (`visible_emitters`).
+            w *= super::visible_emitters::share(scene);
+        }
         let path = incoming.path[r] as usize;
         let c = incoming.throughput[r] * transmission * le * w;
         paths.radiance[path] += c;

@@ -37,6 +37,7 @@ pub(crate) use shading_normals::{discard_bxdf_samples, sides_agree};
 mod surface_caches;
 mod trace;
 mod transmission;
+pub mod visible_emitters;
 
 use crate::integrator::{Integrator, LightingTechnique, PathBatch};
 pub use crate::path_record::{
@@ -85,6 +86,9 @@ impl Integrator for PathTracer {
         // the queues between the stages; the stages do not know it.
         let mut rec = batch.trace.take().map(Recorder::new);
         generate::camera_rays(scene, batch, &mut q.rays, stats);
+        if visible_emitters::applies(scene) {
+            visible_emitters::add_extra_samples(scene, batch, &mut q.visible_emitters, stats);
+        }
         q.emissive_material.clear();
         q.emissive_material.resize(scene.materials.len(), false);
         for shape in scene.shapes.iter().filter(|s| s.emission.is_some()) {

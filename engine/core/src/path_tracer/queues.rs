@@ -170,6 +170,8 @@ pub struct Queues {
     /// Whether some emissive shape has the material (per material index): the shade stage
     /// looks for emitters only in the groups of those materials.
     pub emissive_material: Vec<bool>,
+    /// The extra camera rays of the directly visible emission (`visible_emitters`).
+    pub visible_emitters: super::visible_emitters::VisibleEmitterScratch,
 }
 
 /// The first `n` elements of a per-group scratch buffer, grown with `fill` when shorter.

@@ -1,0 +1,86 @@
+//! Emitters seen directly from the camera take `K + 1` pixel points per path sample
+//! (`risotto::engine::path_tracer::visible_emitters`): the shares add up to the emission,
+//! the extra points fall elsewhere in the pixel, and the estimate of an edge stays unbiased.
+
+mod common;
+use common::*;
+use glam::Vec3;
+use risotto::builtins::builtin::Surface;
+use risotto::engine::path_tracer::visible_emitters::EXTRA_CAMERA_SAMPLES;
+use risotto::engine::render::RenderOutput;
+use risotto::engine::scene::Scene;
+use risotto_components::Rgb;
+
+const LE: f32 = 4.0;
+
+/// `width` x 256 pixels of an orthographic view 2 units wide looking down -z at an emitter
+/// facing the camera over `x < edge` and one facing away over `x > edge`, nothing behind;
+/// one segment per path, so the image is the directly visible emission alone.
+fn render_edge(width: u32, edge: f32, spp: u32) -> RenderOutput {
+    let h = 256;
+    let view = ortho_camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 2.0, width, h);
+    let mut scene = Scene::new(view, settings(width, h, spp, 1));
+    let black = scene.add_material(
+        "black",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: Rgb::BLACK,
+        }),
+    );
+    // The view is 2 units wide and 128 tall (square pixels).
+    let tall = Vec3::Y * 200.0;
+    // Front face along e1 x e2 = x x y = +z, towards the camera.
+    let front = quad(Vec3::new(-2.0, -100.0, 0.0), Vec3::X * (edge + 2.0), tall);
+    scene.add_shape("front", front, black, Some(Rgb::splat(LE)));
+    // e1 x e2 = y x x = -z: its back faces the camera.
+    let back = quad(Vec3::new(edge, -100.0, 0.0), tall, Vec3::X * (2.0 - edge));
+    scene.add_shape("back", back, black, Some(Rgb::splat(LE)));
+    render_default(&scene.compile().unwrap())
+}
+
+#[test]
+fn an_emitter_filling_the_pixel_gives_its_emission_exactly() {
+    const { assert!(EXTRA_CAMERA_SAMPLES > 0, "the extra camera samples are off") };
+    let out = render_edge(4, 0.15, 1);
+    for y in 0..256 {
+        for (x, want) in [(0, LE), (1, LE), (3, 0.0)] {
+            let v = out.beauty.get(x, y);
+            assert!(
+                (v.r - want).abs() <= 1e-5 * LE,
+                "pixel ({x}, {y}) = {v:?}, want {want}: the camera rays' shares do not add up"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_edge_pixel_counts_every_camera_point_of_the_sample() {
+    // Column 2 spans x in [0, 0.5): the edge at 0.15 covers 0.3 of it.
+    let out = render_edge(4, 0.15, 1);
+    let k = (EXTRA_CAMERA_SAMPLES + 1) as f32;
+    let values: Vec<f32> = (0..256).map(|y| out.beauty.get(2, y).r / LE).collect();
+    for (y, v) in values.iter().enumerate() {
+        // One path sample: a multiple of 1 / (K + 1) of the emission.
+        assert!(
+            ((v * k).round() - v * k).abs() < 1e-4,
+            "row {y}: {v} is not a count of {k} camera points"
+        );
+    }
+    // With the path's own point alone every value would be 0 or 1.
+    assert!(
+        values.iter().any(|&v| v > 0.01 && v < 0.99),
+        "no edge pixel between 0 and the emission: the extra points are not used"
+    );
+    // Each pixel's estimate is unbiased: their mean is the covered fraction. Per pixel the
+    // (0, 2)-net's four x strata leave a variance of at most 0.25^2 / 4, so the standard
+    // error of the mean of 256 is below 0.008.
+    let mean = values.iter().sum::<f32>() / values.len() as f32;
+    assert!((mean - 0.3).abs() < 0.03, "mean coverage {mean}, want 0.3");
+}
+
+#[test]
+fn more_samples_keep_the_edge_unbiased() {
+    let out = render_edge(4, 0.15, 16);
+    let mean = (0..256).map(|y| out.beauty.get(2, y).r / LE).sum::<f32>() / 256.0;
+    assert!((mean - 0.3).abs() < 0.01, "mean coverage {mean}, want 0.3");
+}
