@@ -68,7 +68,7 @@ pub struct SceneGeometry {
 /// The triangles of a [`SceneGeometry`], for batch loops over hits: taken once before the
 /// loop, so the loop keeps the arrays in registers instead of reloading them through the
 /// geometry. A triangle's vertices are read from its BVH leaf packet, its normal and area
-/// computed from them ([`Triangle::new`], the same operations whenever they are made).
+/// computed from them (`Triangle::new`, the same operations whenever they are made).
 #[derive(Clone, Copy, Debug)]
 pub struct Triangles<'a> {
     slots: &'a [u32],
