@@ -237,11 +237,18 @@ fn listed(scene: &Path) -> Vec<String> {
 fn techniques_lists_only_what_applies() {
     let dir = scratch_dir("converge", "listing");
     let scene = cornell(&dir, 16);
-    // Cornell has no volumes: the integrator, lighting and sampler, nothing else, and
-    // converge's adaptive sampling (the path tracer renders it).
+    // Cornell has no volumes: the integrator, lighting, sampler and visible emitters
+    // (its light is two triangles), nothing else, and converge's adaptive sampling (the
+    // path tracer renders it).
     assert_eq!(
         listed(&scene),
-        ["integrator", "lighting", "sampler", "adaptive"]
+        [
+            "integrator",
+            "lighting",
+            "sampler",
+            "visible_emitters",
+            "adaptive"
+        ]
     );
     let out = risotto(&["techniques", scene.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -256,6 +263,8 @@ fn techniques_lists_only_what_applies() {
         "integrator=vcm",
         "adaptive=off",
         "adaptive=on",
+        "visible_emitters=supersampled",
+        "visible_emitters=paths",
     ] {
         assert!(text.contains(v), "listing lacks {v}: {text}");
     }

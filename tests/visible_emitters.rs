@@ -9,6 +9,7 @@ use risotto::builtins::builtin::Surface;
 use risotto::engine::path_tracer::visible_emitters::EXTRA_CAMERA_SAMPLES;
 use risotto::engine::render::RenderOutput;
 use risotto::engine::scene::Scene;
+use risotto::engine::stats::System;
 use risotto_components::Rgb;
 
 const LE: f32 = 4.0;
@@ -83,4 +84,43 @@ fn more_samples_keep_the_edge_unbiased() {
     let out = render_edge(4, 0.15, 16);
     let mean = (0..256).map(|y| out.beauty.get(2, y).r / LE).sum::<f32>() / 256.0;
     assert!((mean - 0.3).abs() < 0.01, "mean coverage {mean}, want 0.3");
+}
+
+#[test]
+fn the_paths_technique_leaves_the_emission_to_the_paths_own_camera_rays() {
+    use risotto::engine::path_tracer::visible_emitters::VisibleEmitters;
+    use risotto::engine::render::{render, RenderOptions};
+    let h = 256;
+    let view = ortho_camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 2.0, 4, h);
+    let mut scene = Scene::new(view, settings(4, h, 1, 1));
+    let black = scene.add_material(
+        "black",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: Rgb::BLACK,
+        }),
+    );
+    let tall = Vec3::Y * 200.0;
+    let front = quad(Vec3::new(-2.0, -100.0, 0.0), Vec3::X * 2.15, tall);
+    scene.add_shape("front", front, black, Some(Rgb::splat(LE)));
+    let compiled = scene.compile().unwrap();
+    let options = RenderOptions {
+        visible_emitters: VisibleEmitters::Paths,
+        ..RenderOptions::default()
+    };
+    let out = render(&compiled, &options, &|_| {}).unwrap();
+    // One camera point per pixel sample: the edge column is the emission or nothing.
+    for y in 0..h as usize {
+        let v = out.beauty.get(2, y).r;
+        assert!(v == 0.0 || (v - LE).abs() <= 1e-5 * LE, "row {y}: {v}");
+    }
+    // The stats show it: one camera ray per path, against K + 1 when supersampled.
+    let camera = |o: &RenderOutput| o.stats.counters.system(System::Camera).items;
+    let pixels = u64::from(4 * h);
+    assert_eq!(camera(&out), pixels);
+    let supersampled = render(&compiled, &RenderOptions::default(), &|_| {}).unwrap();
+    assert_eq!(
+        camera(&supersampled),
+        pixels * u64::from(EXTRA_CAMERA_SAMPLES + 1)
+    );
 }

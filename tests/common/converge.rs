@@ -8,7 +8,7 @@ use std::process::Output;
 /// The uniform curves of `converge --techniques all` on [`cornell`], in order: the
 /// defaults, the light tracer, bdpt and vcm, lighting nee and bxdf, the independent
 /// sampler (`all` adds `adaptive=on` after them where the spp list lets pixels stop early).
-pub const CORNELL_ALL: [&str; 7] = [
+pub const CORNELL_ALL: [&str; 8] = [
     "lighting=mis+sampler=sobol",
     "integrator=light",
     "integrator=bdpt",
@@ -16,6 +16,7 @@ pub const CORNELL_ALL: [&str; 7] = [
     "lighting=nee",
     "lighting=bxdf",
     "sampler=independent",
+    "visible_emitters=paths",
 ];
 
 /// The cornell box of the Mitsuba suite at `size` x `size` pixels.

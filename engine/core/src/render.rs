@@ -91,6 +91,9 @@ pub struct RenderOptions {
     /// The global integrator (the `integrator` technique). Defaults to `None`: the one the
     /// scene asks for ([`RenderSettings::integrator`](crate::scene::RenderSettings::integrator)).
     pub integrator: Option<GlobalIntegrator>,
+    /// Whether the path tracer samples the directly visible emission with extra camera
+    /// points (the `visible_emitters` technique). Defaults to supersampled.
+    pub visible_emitters: crate::path_tracer::visible_emitters::VisibleEmitters,
 }
 
 /// Adaptive sampling's request ([`RenderOptions::noise_target`]).
@@ -138,6 +141,7 @@ impl Default for RenderOptions {
             interrupt: None,
             noise_target: None,
             integrator: None,
+            visible_emitters: Default::default(),
         }
     }
 }
@@ -283,6 +287,7 @@ fn render_dispatch(
     let tracer = PathTracer {
         technique: options.technique,
         techniques: options.plugin_techniques,
+        visible_emitters: options.visible_emitters,
     };
     let strategy = match options.integrator.unwrap_or(scene.settings.integrator) {
         GlobalIntegrator::Path => {

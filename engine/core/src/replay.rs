@@ -126,6 +126,7 @@ pub fn replay(
     let tracer = PathTracer {
         technique: options.technique,
         techniques: options.plugin_techniques,
+        visible_emitters: options.visible_emitters,
     };
     // The one path, with the pixel seed and sample address the render gives it.
     let pixel = y * w + x;

@@ -17,6 +17,7 @@
 //! [`IntegratorContext::technique`]: crate::plugin::IntegratorContext::technique
 
 use crate::integrator::{GlobalIntegrator, LightingTechnique};
+use crate::path_tracer::visible_emitters::VisibleEmitters;
 pub use crate::plugin::technique::{
     always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue, MAX_PLUGIN_CHOICES,
 };
@@ -109,15 +110,42 @@ pub static INTEGRATOR: Technique = Technique {
     applies_to: "scenes with lights (emitters, distant, point, spot, environment, emissive media)",
 };
 
+/// `visible_emitters`: how the emission seen directly from the camera is sampled.
+pub static VISIBLE_EMITTERS: Technique = Technique {
+    name: "visible_emitters",
+    summary: "how the emission seen directly from the camera is sampled (the path tracer)",
+    values: &[
+        TechniqueValue {
+            name: "supersampled",
+            summary: "4 pixel points per path sample (the pixel's next Sobol points), each a quarter: emitter edges resolved 4x finer",
+            converges: always,
+        },
+        TechniqueValue {
+            name: "paths",
+            summary: "the paths' own camera rays alone",
+            converges: always,
+        },
+    ],
+    default: "supersampled",
+    applies_to: "scenes with emissive triangles and no volumes, transmissive or partly opaque surfaces (at most 32 emissive triangles, camera in no volume)",
+};
+
+/// Whether the extra camera points of `visible_emitters` can apply to a scene with these
+/// features (`path_tracer::visible_emitters::applies` checks the rest).
+fn visible_emitters_apply(f: &Features) -> bool {
+    f.area_lights && !(f.volumes || f.transmissive || f.opacity || f.emissive_media)
+}
+
 /// Whether a technique of the global integrator applies to a scene with these features.
 pub type Applies = fn(&Features) -> bool;
 
 /// The global integrator's own techniques, in listing order, each with the scenes it
 /// applies to.
-pub static CORE: [(&Technique, Applies); 3] = [
+pub static CORE: [(&Technique, Applies); 4] = [
     (&INTEGRATOR, has_lights),
     (&LIGHTING, has_lights),
     (&SAMPLER, |_| true),
+    (&VISIBLE_EMITTERS, visible_emitters_apply),
 ];
 
 /// The techniques known in one scene: the global integrator's ([`CORE`]) and those its
@@ -205,6 +233,8 @@ pub struct Techniques {
     pub lighting: LightingTechnique,
     /// `sampler`.
     pub sampler: SamplerKind,
+    /// `visible_emitters`.
+    pub visible_emitters: VisibleEmitters,
     /// Every plug-in technique (unlisted: its default).
     pub plugins: PluginTechniques,
 }
@@ -227,6 +257,10 @@ impl Techniques {
             "sampler" => match self.sampler {
                 SamplerKind::Sobol => "sobol",
                 SamplerKind::Independent => "independent",
+            },
+            "visible_emitters" => match self.visible_emitters {
+                VisibleEmitters::Supersampled => "supersampled",
+                VisibleEmitters::Paths => "paths",
             },
             _ => self.plugins.get(t.name).unwrap_or(t.default),
         })
@@ -254,6 +288,12 @@ impl Techniques {
                 self.sampler = match v.name {
                     "independent" => SamplerKind::Independent,
                     _ => SamplerKind::Sobol,
+                }
+            }
+            "visible_emitters" => {
+                self.visible_emitters = match v.name {
+                    "paths" => VisibleEmitters::Paths,
+                    _ => VisibleEmitters::Supersampled,
                 }
             }
             // A default is no choice: the same selection compares equal however written.
@@ -332,14 +372,15 @@ impl Techniques {
     }
 
     /// A short label: the non-default assignments (`lighting=nee`, `integrator=bdpt`), or
-    /// the path tracer's defaults joined by `+` when all are defaults
-    /// (`lighting=mis+sampler=sobol`).
+    /// the path tracer's lighting and sampler defaults joined by `+` when all are defaults
+    /// (`lighting=mis+sampler=sobol`; the label every sweep's default row has had).
     pub fn label(&self) -> String {
         let pairs = self.non_default();
         let pairs = if pairs.is_empty() {
-            // The default integrator's own techniques: the path tracer is implied.
+            // The path tracer is implied, and so are the defaults of the techniques that
+            // apply to few scenes (`visible_emitters`).
             CORE.iter()
-                .filter(|(t, _)| t.name != INTEGRATOR.name)
+                .filter(|(t, _)| t.name != INTEGRATOR.name && t.name != VISIBLE_EMITTERS.name)
                 .map(|(t, _)| (t.name, t.default))
                 .collect()
         } else {
@@ -358,6 +399,7 @@ impl Techniques {
             integrator: self.integrator.or(base.integrator),
             technique: self.lighting,
             sampler: self.sampler,
+            visible_emitters: self.visible_emitters,
             plugin_techniques: self.plugins,
             ..base
         }

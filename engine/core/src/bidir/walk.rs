@@ -16,11 +16,13 @@ use risotto_systems::ray::{shadow_ray, spawn_origin};
 
 /// The path tracer's stages configured as a bidirectional integrator uses them: no
 /// lighting delegate for volume integrators (`BxdfOnly` offers none), the render's plug-in
-/// technique choices.
+/// technique choices; the camera subpaths gather the directly visible emission themselves
+/// (no extra camera points).
 pub(super) fn stages(techniques: PluginTechniques) -> PathTracer {
     PathTracer {
         technique: LightingTechnique::BxdfOnly,
         techniques,
+        visible_emitters: crate::path_tracer::visible_emitters::VisibleEmitters::Paths,
     }
 }
 

@@ -69,6 +69,8 @@ pub struct PathTracer {
     pub technique: LightingTechnique,
     /// Technique choices handed to volume integrators.
     pub techniques: crate::plugin::PluginTechniques,
+    /// The `visible_emitters` technique.
+    pub visible_emitters: visible_emitters::VisibleEmitters,
 }
 
 impl Integrator for PathTracer {
@@ -86,7 +88,7 @@ impl Integrator for PathTracer {
         // the queues between the stages; the stages do not know it.
         let mut rec = batch.trace.take().map(Recorder::new);
         generate::camera_rays(scene, batch, &mut q.rays, stats);
-        if visible_emitters::applies(scene) {
+        if visible_emitters::applies(scene, self.visible_emitters) {
             visible_emitters::add_extra_samples(scene, batch, &mut q.visible_emitters, stats);
         }
         q.emissive_material.clear();

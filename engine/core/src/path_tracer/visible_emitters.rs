@@ -35,6 +35,17 @@ use risotto_systems::intersect::{intersect_closest, FREE_ORIGIN};
 use risotto_systems::lights::Light;
 use risotto_systems::sampler::MAX_SPP;
 
+/// The `visible_emitters` technique: whether the directly visible emission takes the extra
+/// camera points (where the scene allows: see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum VisibleEmitters {
+    /// `K + 1` camera points per path sample for the directly visible emission.
+    #[default]
+    Supersampled,
+    /// The paths' own camera rays alone.
+    Paths,
+}
+
 /// Extra camera rays per path sample for the directly visible emission (`K`).
 pub const EXTRA_CAMERA_SAMPLES: u32 = 3;
 
@@ -44,19 +55,21 @@ pub const MAX_EMITTER_TRIANGLES: usize = 32;
 
 /// The share of the directly visible emission each camera ray carries: `1 / (K + 1)` where
 /// the extra rays are traced ([`applies`]), else 1.
-pub(super) fn share(scene: &CompiledScene) -> f32 {
-    if applies(scene) {
+pub(super) fn share(scene: &CompiledScene, choice: VisibleEmitters) -> f32 {
+    if applies(scene, choice) {
         1.0 / (EXTRA_CAMERA_SAMPLES + 1) as f32
     } else {
         1.0
     }
 }
 
-/// Whether the scene's camera rays find their directly visible emission at their first hit
-/// and there is some to find (see the module documentation).
-pub(super) fn applies(scene: &CompiledScene) -> bool {
+/// Whether the technique asks for the extra points (`choice`), and the scene's camera rays
+/// find their directly visible emission at their first hit and there is some to find (see
+/// the module documentation).
+pub(super) fn applies(scene: &CompiledScene, choice: VisibleEmitters) -> bool {
     let f = &scene.features;
-    EXTRA_CAMERA_SAMPLES > 0
+    choice == VisibleEmitters::Supersampled
+        && EXTRA_CAMERA_SAMPLES > 0
         && f.area_lights
         && !(f.volumes || f.transmissive || f.opacity || f.emissive_media)
         && scene.camera_stack.is_empty()
@@ -109,7 +122,7 @@ pub(super) fn add_extra_samples(
 ) {
     let n = batch.paths.len();
     let spp = scene.settings.spp;
-    let weight = share(scene);
+    let weight = 1.0 / (EXTRA_CAMERA_SAMPLES + 1) as f32;
     s.emitters.clear();
     s.emitters
         .extend(scene.lights.lights().iter().filter_map(|l| match l {
