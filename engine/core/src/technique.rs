@@ -524,7 +524,13 @@ mod tests {
         let dark = TechniqueRegistry::new(Features::default(), []);
         assert_eq!(
             names(&lit),
-            ["integrator", "lighting", "sampler", "quality"]
+            [
+                "integrator",
+                "lighting",
+                "sampler",
+                "visible_emitters",
+                "quality"
+            ]
         );
         assert_eq!(names(&dark), ["sampler"]);
         let nee = Techniques::parse(&lit, "lighting=nee").unwrap();
