@@ -4,8 +4,8 @@ memory (issue 36)"): the scene of benches/displaced_sphere.toml built with mi.lo
 (the OBJ read and the acceleration structure built), then one 1-spp render at 256x256.
 
 Usage (from the Mitsuba harness, which provides the `mitsuba` module):
-  /work/shared/refs/mitsuba/run.sh $PWD/benches/mitsuba_mesh_load.py target/displaced_sphere.obj
-  /work/shared/refs/mitsuba/run.sh $PWD/benches/mitsuba_mesh_load.py --empty
+  ../shared/refs/mitsuba/run.sh $PWD/benches/mitsuba_mesh_load.py target/displaced_sphere.obj
+  ../shared/refs/mitsuba/run.sh $PWD/benches/mitsuba_mesh_load.py --empty
 
 Prints one JSON line: load_seconds (mi.load_dict), render_seconds (mi.render, forced),
 peak_resident_bytes (ru_maxrss of this process, the whole run). `--empty` loads the same
@@ -18,7 +18,11 @@ import resource
 import sys
 import time
 
-sys.path.insert(0, "/work/shared/refs/mitsuba")
+# The harness is the repository's sibling ../shared/refs/mitsuba, or $MI_HARNESS.
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(
+    0, os.environ.get("MI_HARNESS", os.path.join(HERE, "../../shared/refs/mitsuba"))
+)
 import mienv  # noqa: E402
 
 
