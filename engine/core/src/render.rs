@@ -287,7 +287,10 @@ fn render_dispatch(
     let tracer = PathTracer {
         technique: options.technique,
         techniques: options.plugin_techniques,
-        visible_emitters: options.visible_emitters,
+        visible_emitters: crate::path_tracer::visible_emitters::for_scene(
+            scene,
+            options.visible_emitters,
+        ),
     };
     let strategy = match options.integrator.unwrap_or(scene.settings.integrator) {
         GlobalIntegrator::Path => {

@@ -126,7 +126,10 @@ pub fn replay(
     let tracer = PathTracer {
         technique: options.technique,
         techniques: options.plugin_techniques,
-        visible_emitters: options.visible_emitters,
+        visible_emitters: crate::path_tracer::visible_emitters::for_scene(
+            scene,
+            options.visible_emitters,
+        ),
     };
     // The one path, with the pixel seed and sample address the render gives it.
     let pixel = y * w + x;

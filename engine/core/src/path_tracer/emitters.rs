@@ -94,7 +94,7 @@ impl PathTracer {
         // A camera ray's first hit (no lobe yet: not a ray that passed a null pane at depth
         // 0): its share of the directly visible emission (`visible_emitters`).
         if incoming.depth[r] == 0 && incoming.lobe[r] == risotto_components::LobeSampled::NONE {
-            w *= super::visible_emitters::share(scene, self.visible_emitters);
+            w *= super::visible_emitters::share(self.visible_emitters);
         }
         let path = incoming.path[r] as usize;
         let c = incoming.throughput[r] * transmission * le * w;

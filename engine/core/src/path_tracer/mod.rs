@@ -69,7 +69,8 @@ pub struct PathTracer {
     pub technique: LightingTechnique,
     /// Technique choices handed to volume integrators.
     pub techniques: crate::plugin::PluginTechniques,
-    /// The `visible_emitters` technique.
+    /// The `visible_emitters` technique as it applies to the scene rendered
+    /// ([`visible_emitters::for_scene`]).
     pub visible_emitters: visible_emitters::VisibleEmitters,
 }
 
@@ -88,7 +89,7 @@ impl Integrator for PathTracer {
         // the queues between the stages; the stages do not know it.
         let mut rec = batch.trace.take().map(Recorder::new);
         generate::camera_rays(scene, batch, &mut q.rays, stats);
-        if visible_emitters::applies(scene, self.visible_emitters) {
+        if self.visible_emitters == visible_emitters::VisibleEmitters::Supersampled {
             visible_emitters::add_extra_samples(scene, batch, &mut q.visible_emitters, stats);
         }
         q.emissive_material.clear();

@@ -53,20 +53,29 @@ pub const EXTRA_CAMERA_SAMPLES: u32 = 3;
 /// keep the paths' own estimate.
 pub const MAX_EMITTER_TRIANGLES: usize = 32;
 
-/// The share of the directly visible emission each camera ray carries: `1 / (K + 1)` where
-/// the extra rays are traced ([`applies`]), else 1.
-pub(super) fn share(scene: &CompiledScene, choice: VisibleEmitters) -> f32 {
+/// The choice `choice` as it applies to `scene`: supersampled only where the scene allows
+/// it (`applies`). Resolved once per render, so that the per-hit `share` reads no scene.
+pub fn for_scene(scene: &CompiledScene, choice: VisibleEmitters) -> VisibleEmitters {
     if applies(scene, choice) {
-        1.0 / (EXTRA_CAMERA_SAMPLES + 1) as f32
+        VisibleEmitters::Supersampled
     } else {
-        1.0
+        VisibleEmitters::Paths
+    }
+}
+
+/// The share of the directly visible emission each camera ray carries under the resolved
+/// choice ([`for_scene`]): `1 / (K + 1)` where the extra rays are traced, else 1.
+pub(super) fn share(resolved: VisibleEmitters) -> f32 {
+    match resolved {
+        VisibleEmitters::Supersampled => 1.0 / (EXTRA_CAMERA_SAMPLES + 1) as f32,
+        VisibleEmitters::Paths => 1.0,
     }
 }
 
 /// Whether the technique asks for the extra points (`choice`), and the scene's camera rays
 /// find their directly visible emission at their first hit and there is some to find (see
 /// the module documentation).
-pub(super) fn applies(scene: &CompiledScene, choice: VisibleEmitters) -> bool {
+fn applies(scene: &CompiledScene, choice: VisibleEmitters) -> bool {
     let f = &scene.features;
     choice == VisibleEmitters::Supersampled
         && EXTRA_CAMERA_SAMPLES > 0
@@ -122,7 +131,7 @@ pub(super) fn add_extra_samples(
 ) {
     let n = batch.paths.len();
     let spp = scene.settings.spp;
-    let weight = 1.0 / (EXTRA_CAMERA_SAMPLES + 1) as f32;
+    let weight = share(VisibleEmitters::Supersampled);
     s.emitters.clear();
     s.emitters
         .extend(scene.lights.lights().iter().filter_map(|l| match l {
