@@ -159,6 +159,65 @@ fn a_null_transmission_is_no_bounce() {
 }
 
 #[test]
+fn light_samples_pass_a_null_pane_attenuated_by_its_t_prime() {
+    // A point light 2 above a diffuse floor (reflectance 0.5), a pane between them at
+    // height 1 turned by `angle` about +y, and an orthographic camera under the pane seeing
+    // a 0.002-wide patch of the floor: only the light sample lights it (a point light is
+    // never hit), so each pixel is exactly `0.5 / pi * I / 4 * T'(angle)` for a pane whose
+    // transmission is a null event (Mitsuba's `eval_null_transmission`, `1 - R'` at the
+    // light ray's angle to the pane) and black for a pane that blocks shadow rays.
+    let rest = |null: bool, angle: f64| {
+        format!(
+            r#"
+[materials.glass]
+type = "thin_dielectric"
+ior = 1.5
+null_transmission = {null}
+
+[materials.floor]
+type = "diffuse"
+reflectance = 0.5
+
+[[shapes]]
+name = "floor"
+type = "rectangle"
+material = "floor"
+
+[[shapes]]
+name = "pane"
+type = "rectangle"
+material = "glass"
+transform = [{{ rotate = {{ axis = [0, 1, 0], angle = {angle} }} }}, {{ translate = [0, 0, 1] }}]
+
+[[lights]]
+type = "point"
+position = [0, 0, 2]
+intensity = 3
+"#
+        )
+    };
+    let camera =
+        |rest: &str| scene([0.0, 0.0, 0.5], 2, rest).replace("width = 0.5", "width = 0.002");
+    for angle in [0.0f64, 60.0, 80.0] {
+        let r = fresnel(angle.to_radians(), 1.5);
+        let t_prime = 1.0 - 2.0 * r / (1.0 + r);
+        let expected = 0.5 / std::f64::consts::PI * 3.0 / 4.0 * t_prime;
+        let got = render_mean(&camera(&rest(true, angle)), 4)[0];
+        assert!(
+            (got - expected).abs() < 1e-4 * expected,
+            "angle {angle}: {got} against {expected} (T' = {t_prime})"
+        );
+        // The angle matters: T' at 80 degrees is far from its value at normal incidence.
+        if angle == 80.0 {
+            let r0 = fresnel(0.0, 1.5);
+            assert!((t_prime - (1.0 - 2.0 * r0 / (1.0 + r0))).abs() > 0.1);
+        }
+        let blocked = render_mean(&camera(&rest(false, angle)), 4);
+        assert_eq!(blocked, [0.0; 3]);
+    }
+}
+
+#[test]
 fn panes_around_an_absorbing_interior_pass_it_into_the_volume() {
     // A unit cube of thin panes around a Beer interior (Mitsuba's thindielectric bounding a
     // medium), seen along -z at normal incidence in front of a light: a path crosses the

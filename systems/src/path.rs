@@ -4,7 +4,7 @@
 use crate::bxdf_samples::BxdfSamples;
 use crate::ray::{offset_origin, InteriorBoundaries};
 use glam::Vec3;
-use risotto_components::{LobeSampled, RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
+use risotto_components::{RayColumns, Rays, Rgb, ShadingPoints, StackEvent};
 use std::ops::Range;
 
 /// A group of scattering vertices: shading points and the rays that arrived there.
@@ -205,16 +205,11 @@ pub fn continue_paths(
     let mut count = 0;
     for k in 0..m {
         let r = ray_id[k] as usize;
-        // A null event (a sample with the pass bit: Mitsuba's null transmission of a thin
-        // pane) is not a vertex of the path: it adds no segment and leaves the depth as it
-        // is.
-        let bounce = u16::from(!s_lobe[k].contains(LobeSampled::PASS));
         // The next segment must fit in max_depth, and its vertex count in the depth column
         // (`depth + 1 >= MAX_PATH_VERTICES`, i.e. `depth + 2 > MAX_PATH_VERTICES`): one
         // test against the smaller bound, then which one it was.
-        let segments = in_depth[r] as u32 + 1 + u32::from(bounce);
-        if segments > segment_cap {
-            if segments > limits.max_depth {
+        if in_depth[r] as u32 + 2 > segment_cap {
+            if in_depth[r] as u32 + 2 > limits.max_depth {
                 done.max_depth += 1;
             } else {
                 done.depth_limit += 1;
@@ -231,7 +226,7 @@ pub fn continue_paths(
         let lobe = s_lobe[k];
         let eta = s_eta[k];
         let eta_scale = in_eta_scale[r] * if lobe.is_transmit() { eta * eta } else { 1.0 };
-        let depth = in_depth[r] + bounce;
+        let depth = in_depth[r] + 1;
         if depth as u32 > limits.rr_depth {
             let q = survival_probability(throughput.max_channel() * eta_scale);
             if q < 1.0 {

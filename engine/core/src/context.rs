@@ -632,7 +632,7 @@ fn write_ray_columns(
 }
 
 /// IOR of the innermost volume of `stack` that is not `shape`'s own interior (1 in vacuum).
-fn ior_outside(scene: &CompiledScene, stack: &VolumeStack, shape: u32) -> f32 {
+pub(crate) fn ior_outside(scene: &CompiledScene, stack: &VolumeStack, shape: u32) -> f32 {
     let mut best: Option<risotto_components::VolumeEntry> = None;
     for e in stack.entries() {
         if e.shape != shape && best.is_none_or(|b| e.priority >= b.priority) {

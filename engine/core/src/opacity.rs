@@ -23,6 +23,7 @@
 //! collects it whether it then passes or scatters, and a light sample on it is not
 //! attenuated by its own opacity.
 
+pub use crate::plugin::{opacity_of, opacity_parameter};
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use crate::shade_groups::ShadingMode;
@@ -37,13 +38,6 @@ use std::ops::Range;
 /// draw different dimensions.
 pub const OPACITY_SEED_SALT: u32 = 0x2c1b_3c6d;
 
-/// The scalar opacity of a parameter value: the mean of its channels (a grey pattern, such
-/// as an image's alpha channel, gives its value), clamped to [0, 1] against rounding.
-#[inline]
-pub fn opacity_of(value: Rgb) -> f32 {
-    value.average().clamp(0.0, 1.0)
-}
-
 /// Whether a ray with uniform sample `u` in [0, 1) passes a surface of opacity `a`: with
 /// probability `1 - a` (never when `a = 1`, always when `a = 0`).
 #[inline]
@@ -53,7 +47,9 @@ pub fn passes(u: f32, a: f32) -> bool {
 
 /// The opacity of rows `range` of `points` (all of `material`), through a shading context
 /// with the material's factory and a parameter cache in `arena` counting into `counters`,
-/// written to `out` (one per row). A material without an `opacity` parameter is opaque.
+/// written to `out` (one per row): what the factory's
+/// [`BxdfFactory::opacity`](crate::plugin::BxdfFactory::opacity) answers (by default its
+/// `opacity` parameter; a material without one is opaque).
 pub fn eval_opacity(
     scene: &CompiledScene,
     points: &ShadingPoints,
@@ -70,9 +66,11 @@ pub fn eval_opacity(
     let ctx = ShadingContext::new(points, range, ShadingMode::Scatter, material, &[])
         .with_factory(factory)
         .with_cache(&cache);
-    match ctx.eval_param("opacity") {
-        Some(column) => out.extend(column.iter().map(|&c| opacity_of(c))),
-        None => out.resize(n, 1.0),
+    out.resize(n, 1.0);
+    factory.opacity(&ctx, out);
+    for a in out.iter_mut() {
+        // A user's factory may answer anything: a probability is clamped (NaN is opaque).
+        *a = if a.is_nan() { 1.0 } else { a.clamp(0.0, 1.0) };
     }
 }
 
@@ -97,6 +95,9 @@ pub struct ShadowCrossing {
     pub material: u32,
     /// The surface's shape.
     pub shape: u32,
+    /// Index of refraction outside the surface, from the shadow ray's volume stack (as the
+    /// trace stage gives path rays' points: a pane's reflectance depends on it).
+    pub ior_outside: f32,
 }
 
 /// The buffers of [`attenuate_shadow_crossings`], kept by the walk's scratch so that a walk
@@ -187,7 +188,7 @@ pub fn attenuate_shadow_crossings(
             material: c.material,
             shape: c.shape,
             front_face: d.dot(s.ng) < 0.0,
-            ior_outside: 1.0,
+            ior_outside: c.ior_outside,
         });
     }
     let mut start = 0;

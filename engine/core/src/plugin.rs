@@ -111,8 +111,10 @@ impl InstanceHints {
     /// seen towards light samples twice. The built-in emissive media set both hints.
     pub const INTERIOR_EMITS_ALONG_PATHS: InstanceHints = InstanceHints(2048);
     /// The surface is partly present (the seed's opacity shaders): the factory answers
-    /// [`BxdfFactory::param`]`("opacity")` with the surface's opacity `a` in [0, 1] (a
-    /// constant or a pattern; a colour's channels are averaged). Path rays pass the surface
+    /// [`BxdfFactory::opacity`] with the surface's opacity `a` in [0, 1] at each hit (by
+    /// default its [`BxdfFactory::param`]`("opacity")`, a constant or a pattern whose
+    /// channels are averaged; a factory may compute it from the hit's direction too, as a
+    /// thin pane's Fresnel reflectance does). Path rays pass the surface
     /// unchanged with probability `1 - a` and scatter with probability `a`; shadow rays
     /// are attenuated by `1 - a` at each crossing, in addition to the volumes'
     /// `transmission`. The scene gets the `opacity` feature, without which no opacity stage
@@ -332,6 +334,28 @@ pub trait VolumeIntegrator {
     }
 }
 
+/// The scalar opacity of a parameter value: the mean of its channels (a grey pattern, such
+/// as an image's alpha channel, gives its value), clamped to [0, 1] against rounding.
+#[inline]
+pub fn opacity_of(value: Rgb) -> f32 {
+    value.average().clamp(0.0, 1.0)
+}
+
+/// The `opacity` parameter of `ctx`'s material at each of its points, through the
+/// context's cache (a colour's channels averaged, [`opacity_of`]), written to `out`; 1 (opaque)
+/// without one. What [`BxdfFactory::opacity`] answers by
+/// default, for a factory that overrides it for some surfaces only.
+pub fn opacity_parameter(ctx: &ShadingContext<'_>, out: &mut [f32]) {
+    match ctx.eval_param("opacity") {
+        Some(column) => {
+            for (a, &c) in out.iter_mut().zip(column) {
+                *a = opacity_of(c);
+            }
+        }
+        None => out.fill(1.0),
+    }
+}
+
 /// Creates closures for one material (RIS `RixBxdfFactory`).
 pub trait BxdfFactory: Send + Sync {
     /// What the renderer may know without building closures.
@@ -360,6 +384,23 @@ pub trait BxdfFactory: Send + Sync {
     /// [`InstanceHints::TRANSMISSION_SHADOWS`] is set. Defaults to opaque.
     fn shadow_transmittance(&self) -> Rgb {
         Rgb::BLACK
+    }
+
+    /// The surface's opacity `a` in [0, 1] at every point of `ctx` (with
+    /// [`InstanceHints::OPACITY`]), written to `out` (one per point): the probability that a
+    /// ray meeting the surface there finds it present. Path rays pass with probability
+    /// `1 - a`, shadow rays are attenuated by `(1 - a) + a T` for the
+    /// [`shadow_transmittance`](Self::shadow_transmittance) `T` (`crate::opacity`). The
+    /// context's points are hits as the trace stage writes them, with `vn` the reverse of
+    /// the ray's direction (a shadow ray's, towards its light, at a shadow ray's crossing),
+    /// so `a` may depend on the direction; it must not depend on which way a ray crosses
+    /// (`vn` or `-vn`), since a shadow ray and a path ray cross the same surface in opposite
+    /// directions for the same light path.
+    ///
+    /// Defaults to [`param`](Self::param)`("opacity")` evaluated through the context's
+    /// cache (a colour's channels averaged, clamped to [0, 1]); opaque without one.
+    fn opacity(&self, ctx: &ShadingContext<'_>, out: &mut [f32]) {
+        opacity_parameter(ctx, out)
     }
 
     /// The value of material parameter `name` (RIS: a parameter's connection), what

@@ -278,6 +278,7 @@ pub fn trace_shadow_rays_with(
                     b2: b2[k],
                     material,
                     shape,
+                    ior_outside: crate::context::ior_outside(scene, &stacks[iu], shape),
                 });
             } else if !false_boundary {
                 if !info.hints.contains(InstanceHints::TRANSMISSION_SHADOWS) {

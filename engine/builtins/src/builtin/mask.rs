@@ -62,6 +62,26 @@ impl BxdfFactory for OpacityMask {
         self.inner.shadow_transmittance()
     }
 
+    /// The mask's own opacity times the wrapped material's, when that has one too (a
+    /// pane whose transmission is a null event): the surface is present where both are.
+    fn opacity(&self, ctx: &ShadingContext<'_>, out: &mut [f32]) {
+        if self.inner.instance_hints().contains(InstanceHints::OPACITY) {
+            self.inner.opacity(ctx, out);
+        } else {
+            out.fill(1.0);
+        }
+        match &self.opacity {
+            Opacity::Constant(a) => out.iter_mut().for_each(|o| *o *= a),
+            Opacity::Pattern(_) => {
+                if let Some(column) = ctx.eval_param("opacity") {
+                    for (o, &c) in out.iter_mut().zip(column) {
+                        *o *= risotto_engine::opacity::opacity_of(c);
+                    }
+                }
+            }
+        }
+    }
+
     fn param(&self, name: &str) -> Option<ParamValue<'_>> {
         match (name, &self.opacity) {
             ("opacity", Opacity::Constant(a)) => Some(ParamValue::Float(*a)),

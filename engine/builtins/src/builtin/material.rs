@@ -119,12 +119,13 @@ pub enum Surface {
     /// Rough plastic whose roughness is a pattern ([`super::rough_patterns`]); its base
     /// reflectance a colour or a pattern.
     RoughPlasticVarying(Box<VaryingPlastic>),
-    /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no interior, no
-    /// refraction offset, shadow rays blocked.
+    /// A thin pane of glass ([`risotto_systems::bxdf::thin_dielectric`]): no refraction
+    /// offset; shadow rays blocked unless its transmission is a null event.
     ThinDielectric {
         /// The pane's index of refraction.
         ior: f32,
-        /// Transmission is a null event, not a bounce ([`ThinDielectricBxdf::null_transmission`]).
+        /// Transmission is a null event, not a bounce ([`ThinDielectricBxdf::null_transmission`]):
+        /// the pane is a surface with opacity `R'` (its reflectance) and a mirror Bxdf.
         null_transmission: bool,
     },
     /// pbrt-v4's `coateddiffuse` / `coatedconductor`: a dielectric coat over a base with a
@@ -209,8 +210,14 @@ impl Surface {
             }
             // A pane alone passes rays without their entering anything: not `TRANSMITS`
             // (which would track the shape on the volume stack as a closed boundary; with an
-            // interior it is one, `instance_hints`).
-            Surface::ThinDielectric { .. } => InstanceHints::NONE,
+            // interior it is one, `instance_hints`). A null transmission is a pass of the
+            // opacity machinery (`BuiltinMaterial::opacity`).
+            Surface::ThinDielectric {
+                null_transmission, ..
+            } => match null_transmission {
+                true => InstanceHints::OPACITY,
+                false => InstanceHints::NONE,
+            },
             Surface::TwoSided(inner) => inner.hints(),
         }
     }
@@ -347,8 +354,10 @@ impl BxdfFactory for BuiltinMaterial {
         let surface = match (&self.surface, &self.interior) {
             // A pane around an interior (Mitsuba's thindielectric bounding a medium): the
             // rays it passes cross into the volume, a boundary like any transmitting one.
-            (Surface::ThinDielectric { .. }, interior) if !matches!(interior, Interior::None) => {
-                InstanceHints::TRANSMITS
+            (surface @ Surface::ThinDielectric { .. }, interior)
+                if !matches!(interior, Interior::None) =>
+            {
+                InstanceHints::TRANSMITS | surface.hints()
             }
             (surface, _) => surface.hints(),
         };
@@ -393,7 +402,10 @@ impl BxdfFactory for BuiltinMaterial {
         _mode: ShadingMode,
         arena: &'a Bump,
     ) -> Option<&'a mut (dyn VolumeIntegrator + 'a)> {
-        let blocks = self.surface != Surface::Interface && self.shadow_transmittance().is_black();
+        // A surface with opacity lets shadow rays through where it is absent.
+        let blocks = self.surface != Surface::Interface
+            && self.shadow_transmittance().is_black()
+            && !self.surface.hints().contains(InstanceHints::OPACITY);
         self.interior.begin(ctx, arena, blocks)
     }
 
@@ -406,6 +418,28 @@ impl BxdfFactory for BuiltinMaterial {
                 ..
             } => tint,
             _ => Rgb::BLACK,
+        }
+    }
+
+    /// A pane whose transmission is a null event (Mitsuba 3's `thindielectric` under its
+    /// volumetric path tracers) is present with probability `R'(cos)`, its reflectance with
+    /// the internal bounces summed, at the hit's angle to the shading normal: a path ray
+    /// passes it straight with probability `T' = 1 - R'` without a bounce, and a shadow ray
+    /// through it is attenuated by `T'`, Mitsuba's `eval_null_transmission`. Symmetric in
+    /// the direction, as the contract asks. Other surfaces: their `opacity` parameter.
+    fn opacity(&self, ctx: &ShadingContext<'_>, out: &mut [f32]) {
+        match self.surface {
+            Surface::ThinDielectric {
+                ior,
+                null_transmission: true,
+            } => {
+                let (nn, vn, ior_out) = (ctx.nn(), ctx.vn(), ctx.ior_outside());
+                for (i, a) in out.iter_mut().enumerate() {
+                    let eta = ior / ior_out[i].max(1e-6);
+                    *a = risotto_systems::bxdf::thin_dielectric_reflectance(nn[i].dot(vn[i]), eta);
+                }
+            }
+            _ => risotto_engine::opacity::opacity_parameter(ctx, out),
         }
     }
 
