@@ -1,5 +1,5 @@
 //! Scenes of Mitsuba 3's own test data (`mitsuba-renderer/mitsuba-data`, `tests/scenes/`):
-//! the 26 whose features risotto reads, read from their unchanged XML and judged by Mitsuba's own render z-test
+//! the 27 whose features risotto reads, read from their unchanged XML and judged by Mitsuba's own render z-test
 //! (`risotto::tools::z_test`: per pixel and XYZ channel against the reference's per-sample
 //! variance, Sidak-corrected, 99.75 % of the pixels must pass), at Mitsuba's test budget of
 //! 2e6 samples per image.
@@ -51,10 +51,10 @@
 //!
 //! Scenes of the directory left out, each a located error of the importer: `bumpmap`,
 //! `normalmap` (3), `principled` (3), `mesh_attribute` (3), `projector` (2), the particle
-//! tracer (`ptracer`), a sphere with a non-uniform `to_world` (`various_shapes`), and a
-//! chromatic (3-channel) density grid in a mesh (`hetero_spectral_sigmat_volpathmis`: the
-//! medium's density pattern is grey; a 3-channel albedo grid is read, as the sum of its
-//! channels' grid patterns, `hetero_sigmat_albedo`).
+//! tracer (`ptracer`) and a sphere with a non-uniform `to_world` (`various_shapes`). A
+//! chromatic (3-channel) density grid in a mesh (`hetero_spectral_sigmat_volpathmis`) is
+//! read as the sum of its channels' box-bordered grid patterns (a density per channel), as
+//! a 3-channel albedo grid is (`hetero_sigmat_albedo`).
 
 mod common;
 
@@ -121,6 +121,7 @@ mitsuba_test_scene! {
     homo_null_envmap => "participating_media/test_homo_null_envmap_volpath",
     homo_roughdielectric_spot => "participating_media/test_homo_roughdielectric_spot_volpath",
     homo_spectral_sigmat => "participating_media/test_homo_spectral_sigmat_volpathmis",
+    hetero_spectral_sigmat => "participating_media/test_hetero_spectral_sigmat_volpathmis",
     surf_area_light => "participating_media/test_surf_area_light_volpath",
     spot_direct => "spot_light/test_spot_direct",
     texture_interp_direct => "texture_interp/test_texture_interp_direct",

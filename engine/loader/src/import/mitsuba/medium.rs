@@ -175,8 +175,12 @@ impl Converter<'_> {
                 (VolumeSource::Constant, m, c)
             }
             "gridvolume" => {
+                let file = vp.string("filename")?.unwrap_or_default();
+                let resolved = self.cx.doc.resolve(&vp.node, &file);
+                let channels =
+                    vol_channels(&resolved).map_err(|m| vp.error(Some("filename"), m))?;
                 let (path, grid) = self.grid(&vp)?;
-                (VolumeSource::Grid(path), grid, [1.0; 3])
+                (VolumeSource::Grid(path, channels), grid, [1.0; 3])
             }
             other => {
                 return Err(vp.error(
@@ -186,7 +190,7 @@ impl Converter<'_> {
             }
         };
         let whole = |src: &VolumeSource| match src {
-            VolumeSource::Grid(path) => {
+            VolumeSource::Grid(path, _) => {
                 toml::Table::from_iter([("grid".to_owned(), toml::Value::String(path.clone()))])
             }
             VolumeSource::Constant => {
@@ -222,7 +226,10 @@ impl Converter<'_> {
                 && hi.cmple(whi + 1e-9).all();
             if inside {
                 return Ok(match source {
-                    VolumeSource::Grid(path) => (grid_pattern(path, wlo, whi), factor),
+                    VolumeSource::Grid(path, 3) => {
+                        (colour_grid_pattern(&path, wlo, whi, false), factor)
+                    }
+                    VolumeSource::Grid(path, _) => (grid_pattern(path, wlo, whi), factor),
                     VolumeSource::Constant => (toml::Value::Table(whole(&source)), factor),
                 });
             }
@@ -240,7 +247,12 @@ impl Converter<'_> {
             ));
         }
         let mut t = match source {
-            VolumeSource::Grid(path) => grid_pattern(path, wlo, whi),
+            // A density per channel (a colour graph, `sigma_t,c = scale_c density_c`), each
+            // channel's grid bordered by the box.
+            VolumeSource::Grid(path, 3) => {
+                return Ok((colour_grid_pattern(&path, wlo, whi, true), factor))
+            }
+            VolumeSource::Grid(path, _) => grid_pattern(path, wlo, whi),
             VolumeSource::Constant => toml::Value::Table(toml::Table::from_iter([
                 ("pattern".to_owned(), toml::Value::String("grid".into())),
                 (
@@ -288,34 +300,11 @@ impl Converter<'_> {
                 if vol_channels(&resolved).map_err(|m| vp.error(Some("filename"), m))? != 3 {
                     return Ok(grid_pattern(path, lo, hi));
                 }
-                // A colour per voxel: the sum of each channel's grey grid times its primary.
-                let channel = |name: &str, primary: [f64; 3]| {
-                    let mut g = grid_pattern(path.clone(), lo, hi);
-                    if let toml::Value::Table(t) = &mut g {
-                        t.insert("channel".into(), toml::Value::String(name.into()));
-                    }
-                    toml::Value::Table(toml::Table::from_iter([
-                        ("pattern".to_owned(), toml::Value::String("multiply".into())),
-                        ("a".to_owned(), g),
-                        ("b".to_owned(), rgb(primary)),
-                    ]))
-                };
-                let add = |a: toml::Value, b: toml::Value| {
-                    toml::Value::Table(toml::Table::from_iter([
-                        ("pattern".to_owned(), toml::Value::String("add".into())),
-                        ("a".to_owned(), a),
-                        ("b".to_owned(), b),
-                    ]))
-                };
-                let sum = add(
-                    add(channel("r", [1.0, 0.0, 0.0]), channel("g", [0.0, 1.0, 0.0])),
-                    channel("b", [0.0, 0.0, 1.0]),
-                );
                 // Clamped to [0, 1] (`remap`'s default): the sum's interval bounds carry
                 // rounding slack past the file's largest value, which an albedo must not.
                 Ok(toml::Value::Table(toml::Table::from_iter([
                     ("pattern".to_owned(), toml::Value::String("remap".into())),
-                    ("a".to_owned(), sum),
+                    ("a".to_owned(), colour_grid_pattern(&path, lo, hi, false)),
                 ])))
             }
             other => Err(vp.error(
@@ -362,8 +351,8 @@ impl Converter<'_> {
 
 /// What a heterogeneous medium's `sigma_t` volume holds.
 enum VolumeSource {
-    /// A grid file, as written in the TOML.
-    Grid(String),
+    /// A grid file, as written in the TOML, and its number of channels.
+    Grid(String, i32),
     /// A constant (its value goes to the medium's `scale`).
     Constant,
 }
@@ -421,4 +410,35 @@ fn grey_or_rgb(c: [f64; 3]) -> toml::Value {
     } else {
         rgb(c)
     }
+}
+
+/// A 3-channel grid file over the world box `lo`..`hi` as a colour pattern: the sum of each
+/// channel's grey `grid` pattern (`channel = "r" | "g" | "b"`) times its primary, each
+/// bordered by the box (0 outside it) when `border`.
+fn colour_grid_pattern(path: &str, lo: DVec3, hi: DVec3, border: bool) -> toml::Value {
+    let channel = |name: &str, primary: [f64; 3]| {
+        let mut g = grid_pattern(path.to_owned(), lo, hi);
+        if let toml::Value::Table(t) = &mut g {
+            t.insert("channel".into(), toml::Value::String(name.into()));
+            if border {
+                t.insert("border".into(), toml::Value::String("box".into()));
+            }
+        }
+        toml::Value::Table(toml::Table::from_iter([
+            ("pattern".to_owned(), toml::Value::String("multiply".into())),
+            ("a".to_owned(), g),
+            ("b".to_owned(), rgb(primary)),
+        ]))
+    };
+    let add = |a: toml::Value, b: toml::Value| {
+        toml::Value::Table(toml::Table::from_iter([
+            ("pattern".to_owned(), toml::Value::String("add".into())),
+            ("a".to_owned(), a),
+            ("b".to_owned(), b),
+        ]))
+    };
+    add(
+        add(channel("r", [1.0, 0.0, 0.0]), channel("g", [0.0, 1.0, 0.0])),
+        channel("b", [0.0, 0.0, 1.0]),
+    )
 }

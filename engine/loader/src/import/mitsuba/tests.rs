@@ -773,3 +773,40 @@ fn three_channel_albedo_grids_become_a_sum_of_channel_patterns() {
         assert_eq!(floats(&term["b"]), primary);
     }
 }
+
+#[test]
+fn three_channel_density_grids_in_meshes_become_bordered_channel_patterns() {
+    // A 3-channel sigma_t grid whose box is not the mesh's own: a density per channel
+    // (a colour graph, not clamped as an albedo is), each channel's grid bordered by the box.
+    let dir = temp("rgb_density");
+    let mut vol = b"VOL\x03".to_vec();
+    for v in [1i32, 1, 1, 1, 3] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.2, 5.0, 9.0] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(dir.join("s.vol"), vol).unwrap();
+    let text = scene(
+        r#"<medium type="heterogeneous" id="m"><volume name="sigma_t" type="gridvolume">
+    <string name="filename" value="s.vol"/><transform name="to_world"><scale value="1.5"/><translate x="-0.5" y="-0.5" z="-0.5"/></transform></volume></medium>
+<shape type="obj"><string name="filename" value="cube.obj"/><bsdf type="null"/><ref id="m" name="interior"/></shape>"#,
+    );
+    let s = convert_in(&dir, "s.xml", &text, &[]).unwrap().scene;
+    let density = &s.materials[0].1.table["interior"]["density"];
+    assert_eq!(density["pattern"].as_str(), Some("add"));
+    let terms = [&density["a"]["a"], &density["a"]["b"], &density["b"]];
+    for (term, (channel, primary)) in terms.into_iter().zip([
+        ("r", [1.0, 0.0, 0.0]),
+        ("g", [0.0, 1.0, 0.0]),
+        ("b", [0.0, 0.0, 1.0]),
+    ]) {
+        assert_eq!(term["pattern"].as_str(), Some("multiply"));
+        let grid = &term["a"];
+        assert_eq!(grid["channel"].as_str(), Some(channel));
+        assert_eq!(grid["border"].as_str(), Some("box"));
+        assert_eq!(floats(&grid["min"]), [-0.5; 3]);
+        assert_eq!(floats(&grid["max"]), [1.0; 3]);
+        assert_eq!(floats(&term["b"]), primary);
+    }
+}
