@@ -617,18 +617,24 @@ fn obj_texture_coordinates_are_flipped_as_mitsuba_flips_them() {
 /// beyond the grid: Mitsuba's medium exists only inside the grid's box, clamped there, so
 /// the density is a world-space grid pattern with `border = "box"`; a turned grid box that
 /// is not the shape's own is a located error.
+/// Writes a float32 Mitsuba `.vol` of `dims` voxels and `channels` channels over the box
+/// `[0, 1]^3` (its header: "VOL", version 3, encoding 1, dims, channels, box).
+fn write_vol(path: &std::path::Path, dims: [i32; 3], channels: i32, values: &[f32]) {
+    let mut vol = b"VOL\x03".to_vec();
+    for v in [1, dims[0], dims[1], dims[2], channels] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].iter().chain(values) {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, vol).unwrap();
+}
+
 #[test]
 fn grid_media_in_meshes_exist_only_inside_the_grid_box() {
     let dir = temp("grid_in_mesh");
     // A 2 x 1 x 1 one-channel float32 .vol with the header box [0, 1]^3.
-    let mut vol = b"VOL\x03".to_vec();
-    for v in [1i32, 2, 1, 1, 1] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.5, 1.0] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    std::fs::write(dir.join("g.vol"), vol).unwrap();
+    write_vol(&dir.join("g.vol"), [2, 1, 1], 1, &[0.5, 1.0]);
     let medium = |transform: &str| {
         scene(&format!(
             r#"<medium type="heterogeneous" id="m"><volume name="sigma_t" type="gridvolume">
@@ -745,14 +751,7 @@ fn thin_dielectrics_pass_as_null_events_under_the_volumetric_integrators() {
 fn three_channel_albedo_grids_become_a_sum_of_channel_patterns() {
     let dir = temp("rgb_albedo");
     // One voxel, three channels, box [0, 1]^3.
-    let mut vol = b"VOL\x03".to_vec();
-    for v in [1i32, 1, 1, 1, 3] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.2, 0.5, 0.9] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    std::fs::write(dir.join("a.vol"), vol).unwrap();
+    write_vol(&dir.join("a.vol"), [1, 1, 1], 3, &[0.2, 0.5, 0.9]);
     let text = scene(
         r#"<medium type="heterogeneous" id="m"><volume name="albedo" type="gridvolume"><string name="filename" value="a.vol"/></volume></medium>
 <shape type="cube"><bsdf type="null"/><ref id="m" name="interior"/></shape>"#,
@@ -779,14 +778,7 @@ fn three_channel_density_grids_in_meshes_become_bordered_channel_patterns() {
     // A 3-channel sigma_t grid whose box is not the mesh's own: a density per channel
     // (a colour graph, not clamped as an albedo is), each channel's grid bordered by the box.
     let dir = temp("rgb_density");
-    let mut vol = b"VOL\x03".to_vec();
-    for v in [1i32, 1, 1, 1, 3] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.2, 5.0, 9.0] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    std::fs::write(dir.join("s.vol"), vol).unwrap();
+    write_vol(&dir.join("s.vol"), [1, 1, 1], 3, &[0.2, 5.0, 9.0]);
     let text = scene(
         r#"<medium type="heterogeneous" id="m"><volume name="sigma_t" type="gridvolume">
     <string name="filename" value="s.vol"/><transform name="to_world"><scale value="1.5"/><translate x="-0.5" y="-0.5" z="-0.5"/></transform></volume></medium>
