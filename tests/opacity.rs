@@ -1,7 +1,8 @@
 //! Opacity on any material (issue 32; the seed's opacity shaders "in addition to
 //! `GetTransmission`"): path rays pass a surface of opacity `a` with probability `1 - a`,
 //! shadow rays are attenuated by `1 - a`, the two estimate the same transport, a fully
-//! transparent stack cannot loop forever, and scenes without opacity run no opacity stage.
+//! transparent stack cannot loop forever, scenes without opacity run no opacity stage, and a
+//! plug-in's opacity may depend on the direction (`BxdfFactory::opacity`).
 
 mod common;
 use common::*;
@@ -277,4 +278,94 @@ fn bad_opacity_is_a_located_error() {
         "opacity",
         &["channel", "\"alpha\"", "\"a\""],
     );
+}
+
+/// A plug-in's direction-dependent opacity (`BxdfFactory::opacity`, which a user's factory
+/// overrides as the built-in null pane does): a black veil present with probability
+/// `1 - |cos|` of the hit's angle to its normal, so it lets through `|cos|` of the light
+/// crossing it, by path rays and by shadow rays alike.
+struct Veil;
+
+impl risotto::engine::plugin::BxdfFactory for Veil {
+    fn instance_hints(&self) -> risotto::engine::plugin::InstanceHints {
+        risotto::engine::plugin::InstanceHints::OPACITY
+    }
+    fn begin_scatter<'a>(
+        &'a self,
+        _ctx: &'a risotto::engine::plugin::ShadingContext<'a>,
+        _mode: risotto::engine::plugin::ShadingMode,
+        arena: &'a bumpalo::Bump,
+    ) -> &'a mut (dyn risotto::engine::plugin::Bxdf + 'a) {
+        arena.alloc(risotto::engine::plugin::NullBxdf)
+    }
+    fn opacity(&self, ctx: &risotto::engine::plugin::ShadingContext<'_>, out: &mut [f32]) {
+        for (a, (n, v)) in out.iter_mut().zip(ctx.nn().iter().zip(ctx.vn())) {
+            *a = 1.0 - n.dot(*v).abs();
+        }
+    }
+}
+
+/// Renders `text` with the built-in materials and the plug-in type `veil`.
+fn render_with_veil(dir: &std::path::Path, text: &str) -> risotto::engine::render::RenderOutput {
+    use risotto::loader::load::{scene_from_desc, MaterialRegistry};
+    let mut registry = MaterialRegistry::with_builtins();
+    registry.register("veil", |_| Ok(Box::new(Veil)));
+    let desc = risotto::loader::scene_file::parse_scene(text, &dir.join("scene.toml")).unwrap();
+    let scene = scene_from_desc(desc, &registry).unwrap().compile().unwrap();
+    render_default(&scene)
+}
+
+#[test]
+fn a_plug_in_opacity_may_depend_on_the_direction() {
+    let dir = scratch_dir("opacity", "veil");
+    // The veil turned by `angle` about z between the camera (or the sun) and what it
+    // looks at (or lights).
+    let veil = |angle: f32| {
+        format!(
+            "[materials.veil]\ntype = \"veil\"\n\n\
+             [[shapes]]\nname = \"veil\"\ntype = \"quad\"\nmaterial = \"veil\"\n\
+             corner = [-50, 0, -50]\nedge1 = [0, 0, 100]\nedge2 = [100, 0, 0]\n\
+             transform = [{{ rotate = {{ axis = [0, 0, 1], angle = {angle} }} }}, \
+             {{ translate = [0, 1.5, 0] }}]\n\n"
+        )
+    };
+    // Path rays: a unit emitter seen through the veil at 60 degrees by parallel camera rays
+    // passes cos 60 = 0.5 of each camera sample (0 or 1: standard error
+    // sqrt(0.25 / 16384) = 0.004).
+    let mut emitter = header(16, 64, "[0, 3, 0]", "[0, 0, 0]")
+        .replace("fov = 40", "projection = \"orthographic\"\nwidth = 1");
+    emitter += "[materials.black]\ntype = \"diffuse\"\nreflectance = 0\n\n\
+                [[shapes]]\nname = \"lamp\"\ntype = \"quad\"\nmaterial = \"black\"\n\
+                corner = [-50, 0, -50]\nedge1 = [0, 0, 100]\nedge2 = [100, 0, 0]\nemission = 1\n\n";
+    let out = render_with_veil(&dir, &(emitter + &veil(60.0)));
+    assert_finite("veil", &out);
+    let (mean, _) = image_mean(&out);
+    assert!((mean.g - 0.5).abs() < 0.02, "mean {mean:?}, expected 0.5");
+    // Shadow rays: the sun straight down through the veil at `angle` onto a grey floor seen
+    // from below the veil is `cos(angle)` of the open floor's light, exactly (deterministic
+    // attenuation, the same camera samples).
+    let floor = |veiled: Option<f32>| {
+        let mut s = header(8, 4, "[0, 1, 0]", "[0, 0, 0]");
+        s += "[materials.grey]\ntype = \"diffuse\"\nreflectance = 0.5\n\n\
+              [[shapes]]\nname = \"floor\"\ntype = \"quad\"\nmaterial = \"grey\"\n\
+              corner = [-50, 0, -50]\nedge1 = [0, 0, 100]\nedge2 = [100, 0, 0]\n\n\
+              [[lights]]\ntype = \"distant\"\ndirection = [0, -1, 0]\nirradiance = 3\n\n";
+        if let Some(angle) = veiled {
+            s += &veil(angle);
+        }
+        render_with_veil(&dir, &s)
+    };
+    let open = floor(None);
+    for angle in [30.0f32, 75.0] {
+        let veiled = floor(Some(angle));
+        let expected = angle.to_radians().cos();
+        for (v, o) in veiled.beauty.pixels.iter().zip(&open.beauty.pixels) {
+            assert!(o.g > 0.0, "lit floor");
+            assert!(
+                (v.g / o.g - expected).abs() < 1e-4,
+                "angle {angle}: {} of the open floor, expected {expected}",
+                v.g / o.g
+            );
+        }
+    }
 }
