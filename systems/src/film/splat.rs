@@ -30,10 +30,15 @@ pub struct SplatFilm {
     height: u32,
     /// `round(sum * SCALE)`, three channels per pixel, row-major pixels.
     sums: Vec<AtomicI64>,
+    /// The sums of the contributions' squares, in the same fixed point: the variance of the
+    /// light-traced image ([`Self::sum_of_squares`]).
+    squares: Vec<AtomicI64>,
     /// Contributions dropped because a channel was not finite.
     non_finite: AtomicU64,
     /// Channel additions that hit the range and saturated.
     saturated: AtomicU64,
+    /// Square additions that saturated (only the variance is then too low).
+    saturated_squares: AtomicU64,
 }
 
 impl SplatFilm {
@@ -41,7 +46,7 @@ impl SplatFilm {
     pub const SCALE: f64 = 4_294_967_296.0;
 
     /// An empty film of `width x height` pixels; `None` for more than
-    /// [`MAX_PIXELS`](super::MAX_PIXELS) pixels (24 bytes each).
+    /// [`MAX_PIXELS`](super::MAX_PIXELS) pixels (48 bytes each: sums and sums of squares).
     pub fn new(width: u32, height: u32) -> Option<SplatFilm> {
         let pixels = u64::from(width) * u64::from(height);
         if pixels > super::MAX_PIXELS {
@@ -51,8 +56,10 @@ impl SplatFilm {
             width,
             height,
             sums: (0..3 * pixels).map(|_| AtomicI64::new(0)).collect(),
+            squares: (0..3 * pixels).map(|_| AtomicI64::new(0)).collect(),
             non_finite: AtomicU64::new(0),
             saturated: AtomicU64::new(0),
+            saturated_squares: AtomicU64::new(0),
         })
     }
 
@@ -77,42 +84,16 @@ impl SplatFilm {
         }
         let base = 3 * pixel as usize;
         let channels = &self.sums[base..base + 3];
-        for (sum, v) in channels.iter().zip([value.r, value.g, value.b]) {
-            self.add_fixed(sum, v);
-        }
-    }
-
-    /// Adds the finite `v` to one channel's sum, saturating.
-    #[inline(always)]
-    fn add_fixed(&self, sum: &AtomicI64, v: f32) {
-        // `v 2^32` is exact (a power-of-two scale of an f32: 24 significant bits), so adding
-        // 1/2 towards its sign is exact below 2^52 and leaves the integers above it alone,
-        // and truncation then rounds half away from zero as `f64::round` does, without
-        // its libm call. `as` saturates at the i64 range: a value beyond it saturates the
-        // sum by itself.
-        let scaled = f64::from(v) * Self::SCALE;
-        let q = (scaled + 0.5f64.copysign(scaled)) as i64;
-        if q == 0 {
-            return;
-        }
-        let too_large = scaled.abs() >= I64_RANGE;
-        // A compare-and-swap loop rather than `fetch_add`: a wrapped sum could not be
-        // repaired afterwards without a race.
-        let mut old = sum.load(Ordering::Relaxed);
-        loop {
-            let (new, wrapped) = match old.checked_add(q) {
-                Some(new) => (new, false),
-                None => (old.saturating_add(q), true),
-            };
-            match sum.compare_exchange_weak(old, new, Ordering::Relaxed, Ordering::Relaxed) {
-                Ok(_) => {
-                    if too_large || wrapped {
-                        self.saturated.fetch_add(1, Ordering::Relaxed);
-                    }
-                    return;
-                }
-                Err(current) => old = current,
-            }
+        let squares = &self.squares[base..base + 3];
+        for ((sum, square), v) in channels
+            .iter()
+            .zip(squares)
+            .zip([value.r, value.g, value.b])
+        {
+            add_fixed(sum, v, &self.saturated);
+            // f32 squares overflow only past 1.8e19 radiance: saturated as any sum that
+            // passes the range, and counted apart.
+            add_fixed(square, (v * v).min(f32::MAX), &self.saturated_squares);
         }
     }
 
@@ -153,6 +134,15 @@ impl SplatFilm {
         [0, 1, 2].map(|c| self.sums[base + c].load(Ordering::Relaxed) as f64 / Self::SCALE)
     }
 
+    /// The sum of the squares of the contributions added to pixel `pixel` (r, g, b; a
+    /// filtered splat's weighted share counts as one contribution), to within `2^-33` per
+    /// addition: squares below `2^-33` are lost, which leaves out of the variance only
+    /// contributions under about `1e-5`.
+    pub fn sum_of_squares(&self, pixel: u32) -> [f64; 3] {
+        let base = 3 * pixel as usize;
+        [0, 1, 2].map(|c| self.squares[base + c].load(Ordering::Relaxed) as f64 / Self::SCALE)
+    }
+
     /// Pixel `pixel`'s value after `light_paths` light subpaths were traced and splatted
     /// with [`crate::camera::CameraConnection::importance`]: the sum times `width * height
     /// / light_paths` (the normalisation of `camera/importance.rs`), the pixel's
@@ -182,14 +172,55 @@ impl SplatFilm {
         self.saturated.load(Ordering::Relaxed)
     }
 
-    /// Zeroes every sum and both counters (between iterations; not concurrently with
+    /// Additions to the sums of squares that saturated at the range.
+    pub fn square_saturations(&self) -> u64 {
+        self.saturated_squares.load(Ordering::Relaxed)
+    }
+
+    /// Zeroes every sum and the counters (between iterations; not concurrently with
     /// additions).
     pub fn clear(&self) {
-        for s in &self.sums {
+        for s in self.sums.iter().chain(&self.squares) {
             s.store(0, Ordering::Relaxed);
         }
         self.non_finite.store(0, Ordering::Relaxed);
         self.saturated.store(0, Ordering::Relaxed);
+        self.saturated_squares.store(0, Ordering::Relaxed);
+    }
+}
+
+/// Adds the finite `v` to one channel's sum, saturating, and counts a saturation in
+/// `saturated`.
+#[inline(always)]
+fn add_fixed(sum: &AtomicI64, v: f32, saturated: &AtomicU64) {
+    // `v 2^32` is exact (a power-of-two scale of an f32: 24 significant bits), so adding
+    // 1/2 towards its sign is exact below 2^52 and leaves the integers above it alone,
+    // and truncation then rounds half away from zero as `f64::round` does, without
+    // its libm call. `as` saturates at the i64 range: a value beyond it saturates the
+    // sum by itself.
+    let scaled = f64::from(v) * SplatFilm::SCALE;
+    let q = (scaled + 0.5f64.copysign(scaled)) as i64;
+    if q == 0 {
+        return;
+    }
+    let too_large = scaled.abs() >= I64_RANGE;
+    // A compare-and-swap loop rather than `fetch_add`: a wrapped sum could not be
+    // repaired afterwards without a race.
+    let mut old = sum.load(Ordering::Relaxed);
+    loop {
+        let (new, wrapped) = match old.checked_add(q) {
+            Some(new) => (new, false),
+            None => (old.saturating_add(q), true),
+        };
+        match sum.compare_exchange_weak(old, new, Ordering::Relaxed, Ordering::Relaxed) {
+            Ok(_) => {
+                if too_large || wrapped {
+                    saturated.fetch_add(1, Ordering::Relaxed);
+                }
+                return;
+            }
+            Err(current) => old = current,
+        }
     }
 }
 
