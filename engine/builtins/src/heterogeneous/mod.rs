@@ -374,7 +374,10 @@ impl HeterogeneousMedium {
         let max: Vec<f32> = (0..n)
             .map(|i| {
                 (0..3)
-                    .map(|c| channels.channel(c).data()[i])
+                    .map(|c| {
+                        let [x, y, z] = risotto_systems::grid::voxel_of(dims, i);
+                        channels.channel(c).voxel(x, y, z)
+                    })
                     .fold(0.0, f32::max)
             })
             .collect();

@@ -6,9 +6,12 @@
 //! the integer index coordinate `(i, j, k)`, its trilinear sampler (`BoxSampler`)
 //! interpolates between those lattice points, and inactive voxels read as the background
 //! (0 for the fog volumes renderers take as density). The reader turns the active voxels and
-//! active tiles (8^3 and 128^3 blocks of one value) into a dense grid over their index
-//! bounding box `[lo, hi]`, padded by one background voxel on every side. With the dense
-//! grid's cell-centred convention ([`risotto_systems::grid`]: clamp to the outermost voxels,
+//! active tiles (8^3 and 128^3 blocks of one value) into a grid over their index bounding
+//! box `[lo, hi]`, padded by one background voxel on every side: held block-sparse (the
+//! VDB's leaf nodes as bricks, tiles and empty space one value each, nothing densified)
+//! when at most [`SPARSE_FRACTION`] of the box's bricks hold active voxels, dense
+//! otherwise; lookups return the same bits either way. With the grid's cell-centred
+//! convention ([`risotto_systems::grid`]: clamp to the outermost voxels,
 //! here the zero border) its field at index coordinate `x` is exactly OpenVDB's trilinear
 //! field, background outside. The dense grid spans the index box `[lo - 1.5, hi + 1.5]`,
 //! which is what fills the shape's bounds (as for every grid file): size the box to the
@@ -19,7 +22,8 @@
 //! grids are refused: `vdb-rs` 0.6 reads every tree's background and tile values as four
 //! bytes and so reads a vec3 tree as empty, checked on `tests/data/small.vdb`), with
 //! finite, non-negative active values and a dense size of at most
-//! [`crate::grid_file::MAX_VOXELS`]. The background value is taken as 0 (the crate does not
+//! [`crate::grid_file::MAX_VOXELS`] (sparse: that many stored voxels and a brick table of
+//! 1/16 of it, a box of up to 2048^3). The background value is taken as 0 (the crate does not
 //! expose it); root-level tiles are not read. The file version must be 218 or later (OpenVDB
 //! 3 on). Before the crate sees the file, `structure` (the submodule) checks every size and count it
 //! declares against its length (the crate would allocate what a corrupt header asks for,
@@ -28,7 +32,7 @@
 //! as a format error naming the file.
 
 use crate::grid_file::{format, GridFileError, MAX_VOXELS};
-use risotto_systems::grid::DensityGrid;
+use risotto_systems::grid::{BrickBuilder, DensityGrid};
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -142,17 +146,36 @@ pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFile
             Ok::<_, String>(Ok(()))
         })?
     };
-    dense(path, &chosen, walk)
+    to_grid(path, &chosen, walk)
 }
 
-/// The padded dense grid of the active values `walk` visits (module docs), visited twice.
-fn dense(
+/// A VDB is held block-sparse when at most this fraction of its box's `8^3` bricks hold
+/// active voxels (tiles and empty space are one value per brick either way). Below it a
+/// sparse grid takes at most about half the dense grid's memory (4 bytes of table per brick
+/// beside the stored ones); above it the saving is small and the dense grid's lookups skip
+/// the table. Measured in `benches/README.md`, "Media memory (issue 36)".
+pub const SPARSE_FRACTION: f64 = 0.5;
+
+/// The largest brick table of a sparse grid (entries, 4 bytes each; a box of 2048^3 voxels).
+const MAX_BRICK_TABLE: usize = MAX_VOXELS / 16;
+
+/// The padded grid of the active values `walk` visits (module docs), visited twice: held
+/// block-sparse ([`risotto_systems::grid::Bricks`], bricks on the VDB's own leaf lattice, so
+/// each leaf node is one brick) when at most [`SPARSE_FRACTION`] of the box's bricks hold
+/// active voxels, dense otherwise.
+fn to_grid(
     path: &Path,
     name: &str,
     walk: impl Fn(&mut dyn FnMut(Active) -> Result<(), GridFileError>) -> Result<(), GridFileError>,
 ) -> Result<DensityGrid, GridFileError> {
     let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
     let mut any = false;
+    // The leaf bricks (index >> 3) holding active voxels, counted as changes of leaf between
+    // consecutive voxels: the tree visits a leaf's voxels together, so this is the leaf
+    // count without a set of keys (12 MB for a dense 512^3 VDB); a walk in another order
+    // only counts more and chooses dense.
+    let mut leaves = 0usize;
+    let mut last = None;
     walk(&mut |a: Active| {
         any = true;
         if !a.value.is_finite() || a.value < 0.0 {
@@ -176,6 +199,13 @@ fn dense(
             lo[k] = lo[k].min(a.origin[k]);
             hi[k] = hi[k].max(a.origin[k] + a.size - 1);
         }
+        if a.size == 1 {
+            let key = a.origin.map(|c| c >> 3);
+            if last != Some(key) {
+                leaves += 1;
+                last = Some(key);
+            }
+        }
         Ok(())
     })?;
     if !any {
@@ -184,25 +214,56 @@ fn dense(
             format!("grid \"{name}\" has no active voxels"),
         ));
     }
-    // One background voxel on each side.
+    // One background voxel on each side: grid voxel p is index p + lo - 1, so storage
+    // q = p + shift is on the VDB's leaf lattice when shift = (lo - 1) mod 8.
     let dims = [0, 1, 2].map(|k| (hi[k] - lo[k] + 3) as u64);
+    let shift = lo.map(|l| (l - 1).rem_euclid(8) as usize);
+    let too_big = |what: String| {
+        format(
+            path,
+            format!(
+                "grid \"{name}\": active index bounds ({}, {}, {})..({}, {}, {}) make {what}",
+                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+            ),
+        )
+    };
+    let table = if dims.iter().all(|&d| d <= usize::MAX as u64 / 2) {
+        BrickBuilder::table_len(dims.map(|d| d as usize), shift)
+    } else {
+        usize::MAX
+    };
+    let sparse = (leaves as f64) <= SPARSE_FRACTION * table as f64;
+    let place = |a: &Active| [0, 1, 2].map(|k| (a.origin[k] - lo[k] + 1) as usize);
+    if sparse {
+        if table > MAX_BRICK_TABLE || leaves > MAX_VOXELS / 512 {
+            return Err(too_big(format!(
+                "a sparse grid of {} bricks ({} stored), more than {MAX_BRICK_TABLE} ({})",
+                table,
+                leaves,
+                MAX_VOXELS / 512
+            )));
+        }
+        let mut bricks = BrickBuilder::new(dims.map(|d| d as usize), shift);
+        walk(&mut |a: Active| {
+            bricks.fill(place(&a), [a.size as usize; 3], a.value);
+            Ok(())
+        })?;
+        return DensityGrid::from_bricks(bricks.finish())
+            .map_err(|e| format(path, format!("grid \"{name}\": {e}")));
+    }
     let count = dims
         .iter()
         .try_fold(1u64, |a, &d| a.checked_mul(d))
         .filter(|&n| n <= MAX_VOXELS as u64)
         .ok_or_else(|| {
-            format(
-                path,
-                format!(
-                    "grid \"{name}\": active index bounds ({}, {}, {})..({}, {}, {}) make a dense grid of {dims:?} voxels, more than {MAX_VOXELS}",
-                    lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
-                ),
-            )
+            too_big(format!(
+                "a dense grid of {dims:?} voxels, more than {MAX_VOXELS}"
+            ))
         })?;
     let dims = dims.map(|d| d as usize);
     let mut data = vec![0.0f32; count as usize];
     walk(&mut |a: Active| {
-        let base = [0, 1, 2].map(|k| (a.origin[k] - lo[k] + 1) as usize);
+        let base = place(&a);
         let s = a.size as usize;
         for z in base[2]..base[2] + s {
             for y in base[1]..base[1] + s {
@@ -237,6 +298,8 @@ mod tests {
         // tests/data/make_vdb.py: value 1 + i + 10 j + 100 k at index (i - 2, j + 3, k + 7).
         let g = read_vdb(&data("small.vdb"), None).unwrap();
         assert_eq!(g.dims(), [7, 6, 5]);
+        // Its voxels touch 4 leaves of a 4-brick box: held dense (SPARSE_FRACTION).
+        assert!(g.bricks().is_none());
         let lo = Vec3::new(-2.0, 3.0, 7.0);
         for (i, j, k) in [(0, 0, 0), (4, 3, 2), (2, 1, 1), (1, 2, 0)] {
             let x = lo + Vec3::new(i as f32, j as f32, k as f32);
@@ -327,6 +390,11 @@ mod tests {
     fn tiles_fill_their_blocks() {
         let g = read_vdb(&data("tile.vdb"), None).unwrap();
         assert_eq!(g.dims(), [10, 10, 10]);
+        // No leaf holds voxels: held sparse, the tile one uniform brick (the bricks sit on
+        // the VDB's leaf lattice), nothing stored.
+        let bricks = g.bricks().expect("a tile-only VDB is held sparse");
+        assert_eq!(bricks.stored_bricks(), 0);
+        assert_eq!(bricks.brick_counts(), [3, 3, 3]);
         let lo = Vec3::ZERO;
         for x in [Vec3::ZERO, Vec3::splat(7.0), Vec3::new(3.0, 5.5, 0.5)] {
             assert_eq!(g.lookup(unit(x, lo, g.dims())), 0.25, "{x}");
@@ -334,7 +402,7 @@ mod tests {
         assert_eq!(g.lookup(unit(Vec3::splat(8.0), lo, g.dims())), 0.0);
     }
 
-    /// A walk over a list of active values (for [`dense`]).
+    /// A walk over a list of active values (for [`to_grid`]).
     fn listed(
         active: &[Active],
     ) -> impl Fn(&mut dyn FnMut(Active) -> Result<(), GridFileError>) -> Result<(), GridFileError> + '_
@@ -394,7 +462,7 @@ mod tests {
             size: 1,
             value: -1.0,
         }];
-        let e = dense(&small, "density", listed(&negative))
+        let e = to_grid(&small, "density", listed(&negative))
             .unwrap_err()
             .to_string();
         assert!(e.contains("(1, 2, 3)") && e.contains("negative"), "{e}");
@@ -410,7 +478,7 @@ mod tests {
                 value: 1.0,
             },
         ];
-        let e = dense(&small, "density", listed(&huge))
+        let e = to_grid(&small, "density", listed(&huge))
             .unwrap_err()
             .to_string();
         assert!(e.contains("more than"), "{e}");
