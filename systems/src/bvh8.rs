@@ -18,6 +18,7 @@ use crate::build_prims::BuildPrims;
 use crate::primitive::{Sphere, Triangle};
 
 mod binary;
+mod binned;
 use crate::simd8::Row8;
 use binary::*;
 pub(crate) use binary::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
@@ -55,6 +56,24 @@ pub(crate) struct Node8 {
     /// test's exact cull of boxes behind the ray origin applies to it (see
     /// `intersect_node8` in [`crate::intersect`]).
     pub(crate) tri_only: u32,
+}
+
+impl Node8 {
+    /// A node of `count` valid slots (1 to [`WIDTH`]), every box still empty (inverted: no
+    /// ray hits it), no child set.
+    pub(crate) fn with_slots(count: usize) -> Self {
+        let empty_min = Row8([f32::INFINITY; WIDTH]);
+        let empty_max = Row8([f32::NEG_INFINITY; WIDTH]);
+        Node8 {
+            bounds: [
+                empty_min, empty_max, empty_min, empty_max, empty_min, empty_max,
+            ],
+            child: [0; WIDTH],
+            leaf_mask: 0,
+            valid: (1 << count) - 1,
+            tri_only: 0,
+        }
+    }
 }
 
 /// Up to eight triangles of one leaf, coordinate by coordinate: `v[i][a]` holds coordinate
@@ -525,17 +544,7 @@ impl Bvh8 {
         let bins = src.bins;
         let kids = src.kids(n);
         let index = self.nodes.len() as u32;
-        let empty_min = Row8([f32::INFINITY; WIDTH]);
-        let empty_max = Row8([f32::NEG_INFINITY; WIDTH]);
-        self.nodes.push(Node8 {
-            bounds: [
-                empty_min, empty_max, empty_min, empty_max, empty_min, empty_max,
-            ],
-            child: [0; WIDTH],
-            leaf_mask: 0,
-            valid: (1 << kids.len()) - 1,
-            tri_only: 0,
-        });
+        self.nodes.push(Node8::with_slots(kids.len()));
         for (c, &(k, is_leaf)) in kids.iter().enumerate() {
             let aabb = bins[k as usize].aabb();
             let node = &mut self.nodes[index as usize];

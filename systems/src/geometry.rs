@@ -35,10 +35,11 @@ pub use instances::Instance;
 
 /// All primitives of a compiled scene and the BVH over them.
 ///
-/// One binary BVH (obvhs' PLOC builder and reinsertion optimizer) over the triangles and the
-/// spheres' bounding boxes, so a ray visits every primitive kind in a single traversal. The
-/// intersection systems traverse it collapsed to uncompressed 8-wide nodes; the binary tree
-/// is dropped once collapsed (only the 8-wide one is kept: issue 36, memory per triangle).
+/// One BVH over the triangles and the spheres' bounding boxes, so a ray visits every
+/// primitive kind in a single traversal: uncompressed 8-wide nodes, built for large scenes
+/// top down by binned SAH ([`Bvh8::binned`], no binary tree: issue 36, memory per
+/// triangle), for smaller ones by obvhs' PLOC builder and reinsertion optimizer collapsed
+/// to 8-wide nodes, the binary tree dropped once collapsed ([`BvhBuilder`]).
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
     /// Where triangle primitive `i` lies in `bvh8`'s packets (`packet * 8 + lane`): the
@@ -110,6 +111,36 @@ fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
     )
 }
 
+/// How the 8-wide BVH is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BvhBuilder {
+    /// obvhs' PLOC and reinsertion, collapsed SAH-optimally to 8-wide nodes
+    /// ([`Bvh8::from_bvh2`]).
+    Ploc,
+    /// Top-down binned SAH writing the 8-wide nodes directly ([`Bvh8::binned`]).
+    Binned,
+}
+
+/// Scenes of at least this many primitives are built by [`BvhBuilder::Binned`]. On the
+/// displaced-sphere meshes of `benches/README.md` its tree renders in fewer instructions
+/// than the collapsed PLOC tree (4 spp, callgrind, `render_tile`: 20k triangles -4.1 %, 50k -5.3 %,
+/// 200k -2.8 %, 2M -3.1 %), on small scenes of large triangles in more (a 320-triangle
+/// icosphere in a room, `scenes/mesh.toml`: +8.8 %; the Cornell box +10 % of the whole process), where the
+/// collapse's exact SAH over every assignment of subtrees to slots and its volume term
+/// pay; and below the peak it matters little what the build holds.
+const BINNED_MIN: usize = 16 * 1024;
+
+impl BvhBuilder {
+    /// The builder for a scene of `count` primitives.
+    fn for_prims(count: usize) -> Self {
+        if count >= BINNED_MIN {
+            Self::Binned
+        } else {
+            Self::Ploc
+        }
+    }
+}
+
 impl SceneGeometry {
     /// Builds the geometry and its BVH. Triangles may be degenerate (they are never hit).
     ///
@@ -140,6 +171,29 @@ impl SceneGeometry {
         spheres: Vec<Sphere>,
         objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
+    ) -> Self {
+        Self::build_using(triangles, spheres, objects, instances, None)
+    }
+
+    /// [`Self::build`] with the BVH made by `builder` whatever the scene's size (the tests
+    /// of each builder).
+    #[cfg(test)]
+    pub(crate) fn build_with_builder(
+        triangles: Vec<[Vec3; 3]>,
+        spheres: Vec<Sphere>,
+        builder: BvhBuilder,
+    ) -> Self {
+        Self::build_using(triangles, spheres, Vec::new(), &[], Some(builder))
+    }
+
+    /// [`Self::build_with_instances`] by `builder`, or the one [`BvhBuilder::for_prims`]
+    /// picks.
+    fn build_using(
+        triangles: Vec<[Vec3; 3]>,
+        spheres: Vec<Sphere>,
+        objects: Vec<SceneGeometry>,
+        instances: &[(u32, Affine3A)],
+        builder: Option<BvhBuilder>,
     ) -> Self {
         let num_prims = triangles.len() + spheres.len();
         assert!(
@@ -209,8 +263,14 @@ impl SceneGeometry {
             // obvhs' PLOC and reinsertion over the boxes, so spheres can share the tree,
             // with the runs PLOC stalls on built apart. Each intermediate is freed as soon as
             // the next is built (the binary tree inside the collapse).
-            let bvh2 = build_bvh2(&prims, &params);
-            let mut bvh8 = Bvh8::from_bvh2(bvh2, &prims, &spheres);
+            let builder = builder.unwrap_or(BvhBuilder::for_prims(prims.count()));
+            let mut bvh8 = match builder {
+                BvhBuilder::Binned => Bvh8::binned(&prims, &spheres),
+                BvhBuilder::Ploc => {
+                    let bvh2 = build_bvh2(&prims, &params);
+                    Bvh8::from_bvh2(bvh2, &prims, &spheres)
+                }
+            };
             drop(prims);
             tri_slots = bvh8.triangle_slots(tri_count);
             if !placed.instances.is_empty() {

@@ -1,7 +1,7 @@
 //! Tests of `intersect.rs`.
 
 use super::*;
-use crate::geometry::Sphere;
+use crate::geometry::{BvhBuilder, Sphere};
 
 use crate::sampler::SplitMix64 as Rng;
 
@@ -201,6 +201,13 @@ fn node8_test_is_conservative_and_tight() {
 /// every node is reachable from the root exactly once.
 #[test]
 fn bvh8_collapse_is_a_complete_bounding_tree() {
+    for builder in [BvhBuilder::Ploc, BvhBuilder::Binned] {
+        complete_bounding_tree(builder);
+    }
+}
+
+/// [`bvh8_collapse_is_a_complete_bounding_tree`] of one builder.
+fn complete_bounding_tree(builder: BvhBuilder) {
     let mut rng = Rng(5);
     for n in [1usize, 2, 3, 5, 8, 9, 17, 2000] {
         let tris: Vec<[Vec3; 3]> = (0..n)
@@ -215,7 +222,7 @@ fn bvh8_collapse_is_a_complete_bounding_tree() {
                 radius: 0.1 + rng.f32(),
             })
             .collect();
-        let geom = SceneGeometry::build(tris.clone(), spheres.clone());
+        let geom = SceneGeometry::build_with_builder(tris.clone(), spheres.clone(), builder);
         let (bvh, _) = geom.bvh8().unwrap();
         let mut seen = vec![0u32; n + spheres.len()];
         let mut reached = vec![0u32; bvh.nodes.len()];
@@ -284,7 +291,10 @@ fn bvh8_collapse_is_a_complete_bounding_tree() {
                 }
             }
         }
-        assert!(seen.iter().all(|&s| s == 1), "n = {n}: {seen:?}");
+        assert!(
+            seen.iter().all(|&s| s == 1),
+            "{builder:?} n = {n}: {seen:?}"
+        );
         assert!(reached.iter().all(|&r| r == 1), "n = {n}: {reached:?}");
         assert!(leaves.0.iter().chain(&leaves.1).all(|&r| r == 1));
         assert_eq!(
@@ -300,6 +310,13 @@ fn bvh8_collapse_is_a_complete_bounding_tree() {
 /// ([`Bvh8::stack_capacity`]) and the hits must equal brute force.
 #[test]
 fn deep_tree_traversal_matches_brute_force() {
+    for builder in [BvhBuilder::Ploc, BvhBuilder::Binned] {
+        deep_tree_traversal(builder);
+    }
+}
+
+/// [`deep_tree_traversal_matches_brute_force`] of one builder.
+fn deep_tree_traversal(builder: BvhBuilder) {
     let mut rng = Rng(11);
     let mut tris = Vec::new();
     for k in 0..400 {
@@ -313,11 +330,11 @@ fn deep_tree_traversal_matches_brute_force() {
             ]);
         }
     }
-    let geom = SceneGeometry::build(tris.clone(), Vec::new());
+    let geom = SceneGeometry::build_with_builder(tris.clone(), Vec::new(), builder);
     let (bvh, _) = geom.bvh8().unwrap();
     assert!(bvh.depth >= 6, "tree only {} levels deep", bvh.depth);
     for backend in backends() {
-        let mut g = SceneGeometry::build(tris.clone(), Vec::new());
+        let mut g = SceneGeometry::build_with_builder(tris.clone(), Vec::new(), builder);
         g.set_kernel(backend.kernel());
         for _ in 0..500 {
             // From outside, through a point near the centre of the chain.

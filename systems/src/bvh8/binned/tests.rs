@@ -1,0 +1,151 @@
+//! Tests of the binned 8-wide build (`binned.rs`). Its structure (every primitive in one
+//! leaf, every child box around its subtree, the depth, the leaf flags) is checked with the
+//! other builder's in `intersect/tests.rs` (`bvh8_collapse_is_a_complete_bounding_tree`).
+
+use glam::Vec3;
+
+use super::PARALLEL_MIN;
+use crate::bvh8::{Bvh8, WIDTH};
+use crate::geometry::{BvhBuilder, SceneGeometry};
+use crate::intersect::{intersect_closest, WatertightRay};
+use crate::sampler::SplitMix64 as Rng;
+
+fn vec(rng: &mut Rng, lo: f32, hi: f32) -> Vec3 {
+    Vec3::new(rng.f32(), rng.f32(), rng.f32()) * (hi - lo) + Vec3::splat(lo)
+}
+
+/// `n` random small triangles in a cube.
+fn soup(rng: &mut Rng, n: usize) -> Vec<[Vec3; 3]> {
+    (0..n)
+        .map(|_| {
+            let c = vec(rng, -10.0, 10.0);
+            [c, c + vec(rng, -0.4, 0.4), c + vec(rng, -0.4, 0.4)]
+        })
+        .collect()
+}
+
+fn binned(tris: &[[Vec3; 3]]) -> SceneGeometry {
+    SceneGeometry::build_with_builder(tris.to_vec(), Vec::new(), BvhBuilder::Binned)
+}
+
+/// The closest hit of random rays through the tree equals a loop over every triangle with
+/// the same watertight test: the distance bit for bit, and the triangle where it is the
+/// only one at that distance.
+#[test]
+fn closest_hits_equal_brute_force() {
+    let mut rng = Rng(36);
+    let tris = soup(&mut rng, 3000);
+    let geom = binned(&tris);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = vec(&mut rng, -12.0, 12.0);
+        let d = (vec(&mut rng, -8.0, 8.0) - o).normalize();
+        let ray = WatertightRay::new(o, d);
+        let mut brute = (f32::INFINITY, u32::MAX, 0);
+        for (i, t) in tris.iter().enumerate() {
+            let Some(h) =
+                ray.intersect_triangle(t[0].into(), t[1].into(), t[2].into(), 0.0, f32::INFINITY)
+            else {
+                continue;
+            };
+            if h.t < brute.0 {
+                brute = (h.t, i as u32, 1);
+            } else if h.t == brute.0 {
+                brute.2 += 1;
+            }
+        }
+        let (mut t, mut prim, mut b1, mut b2) = ([0.0], [0], [0.0], [0.0]);
+        intersect_closest(
+            &geom,
+            &[o],
+            &[d],
+            &[0.0],
+            &[f32::INFINITY],
+            &mut t,
+            &mut prim,
+            &mut b1,
+            &mut b2,
+        );
+        assert_eq!(t[0], brute.0, "o {o} d {d}");
+        if brute.0.is_finite() {
+            hits += 1;
+            if brute.2 == 1 {
+                assert_eq!(prim[0], brute.1, "o {o} d {d}");
+            }
+        }
+    }
+    assert!(hits > 300, "only {hits} rays hit");
+}
+
+/// The tree of a scene large enough to be built on several tasks is the same, node for
+/// node and packet for packet, whatever the number of threads.
+#[test]
+fn the_tree_does_not_depend_on_the_thread_count() {
+    let mut rng = Rng(7);
+    let tris = soup(&mut rng, 3 * PARALLEL_MIN);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| binned(&tris))
+    };
+    let one = build(1);
+    let (a, _) = one.bvh8().expect("a tree");
+    for threads in [2, 3, 4] {
+        let many = build(threads);
+        let (b, _) = many.bvh8().expect("a tree");
+        assert_eq!(a.nodes.len(), b.nodes.len(), "{threads} threads");
+        for (x, y) in a.nodes.iter().zip(&b.nodes) {
+            let bits = |n: &crate::bvh8::Node8| n.bounds.map(|r| r.0.map(f32::to_bits));
+            assert_eq!(bits(x), bits(y), "{threads} threads");
+            assert_eq!(
+                (x.child, x.leaf_mask, x.valid, x.tri_only),
+                (y.child, y.leaf_mask, y.valid, y.tri_only),
+                "{threads} threads"
+            );
+        }
+        assert_eq!(a.packets, b.packets, "{threads} threads");
+        assert_eq!(a.depth, b.depth, "{threads} threads");
+    }
+}
+
+/// Packets are full where the SAH allows: on a mesh-like soup most leaves hold eight
+/// triangles (a child of at most eight is never split), well above the 4.7 a leaf of the
+/// collapsed one-primitive tree.
+#[test]
+fn leaves_fill_their_packets() {
+    let mut rng = Rng(3);
+    let tris = soup(&mut rng, 20_000);
+    let geom = binned(&tris);
+    let (bvh, _) = geom.bvh8().expect("a tree");
+    let fill = tris.len() as f64 / bvh.packets.len() as f64;
+    assert!(
+        fill > 6.5 && fill <= WIDTH as f64,
+        "{fill:.2} triangles a packet"
+    );
+}
+
+/// Coincident triangles (binning cannot separate them) are split by count: every one is
+/// kept, in one leaf, and the tree stays shallow.
+#[test]
+fn coincident_triangles_are_split_by_count() {
+    let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let mut tris = vec![t; 10_000];
+    tris.push([
+        Vec3::splat(5.0),
+        Vec3::splat(5.0) + Vec3::X,
+        Vec3::splat(6.0),
+    ]);
+    let geom = binned(&tris);
+    let (bvh, _) = geom.bvh8().expect("a tree");
+    // Panics unless every triangle is in exactly one packet lane.
+    let slots = bvh.triangle_slots(tris.len());
+    for (&slot, t) in slots.iter().zip(&tris) {
+        assert_eq!(
+            Bvh8::slot_triangle(&bvh.packets, slot).v.map(Vec3::from),
+            *t
+        );
+    }
+    assert!(bvh.depth <= 8, "depth {}", bvh.depth);
+}
