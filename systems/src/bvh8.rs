@@ -22,6 +22,8 @@ mod binned;
 use crate::simd8::Row8;
 use binary::*;
 pub(crate) use binary::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
+#[cfg(test)]
+pub(crate) use binned::PARALLEL_MIN;
 
 /// Number of children of a node and of triangles in a leaf packet.
 pub(crate) const WIDTH: usize = 8;

@@ -727,6 +727,8 @@ mod all_hits;
 pub use all_hits::{intersect_all, NextHit, RayHits, MAX_HITS};
 
 #[cfg(test)]
+mod binned_tests;
+#[cfg(test)]
 mod instance_tests;
 #[cfg(test)]
 mod surface_tests;

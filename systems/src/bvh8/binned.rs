@@ -548,6 +548,3 @@ impl Bvh8 {
         }
     }
 }
-
-#[cfg(test)]
-mod tests;

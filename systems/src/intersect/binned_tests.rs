@@ -1,11 +1,12 @@
-//! Tests of the binned 8-wide build (`binned.rs`). Its structure (every primitive in one
+//! Tests of the binned 8-wide build (`bvh8/binned.rs`), here beside the traversal they
+//! check it with (in `bvh8/` they would make the modules depend on each other in a circle).
+//! Its structure (every primitive in one
 //! leaf, every child box around its subtree, the depth, the leaf flags) is checked with the
 //! other builder's in `intersect/tests.rs` (`bvh8_collapse_is_a_complete_bounding_tree`).
 
 use glam::Vec3;
 
-use super::PARALLEL_MIN;
-use crate::bvh8::{Bvh8, WIDTH};
+use crate::bvh8::{Bvh8, PARALLEL_MIN, WIDTH};
 use crate::geometry::{BvhBuilder, SceneGeometry};
 use crate::intersect::{intersect_closest, WatertightRay};
 use crate::sampler::SplitMix64 as Rng;
