@@ -37,9 +37,9 @@ pub use instances::Instance;
 ///
 /// One BVH over the triangles and the spheres' bounding boxes, so a ray visits every
 /// primitive kind in a single traversal: uncompressed 8-wide nodes, built for large scenes
-/// top down by binned SAH ([`Bvh8::binned`], no binary tree: issue 36, memory per
+/// top down by binned SAH (`Bvh8::binned`, no binary tree: issue 36, memory per
 /// triangle), for smaller ones by obvhs' PLOC builder and reinsertion optimizer collapsed
-/// to 8-wide nodes, the binary tree dropped once collapsed ([`BvhBuilder`]).
+/// to 8-wide nodes, the binary tree dropped once collapsed (`BvhBuilder` chooses).
 #[derive(Clone, Debug)]
 pub struct SceneGeometry {
     /// Where triangle primitive `i` lies in `bvh8`'s packets (`packet * 8 + lane`): the
