@@ -8,7 +8,8 @@ use glam::Vec3;
 
 use crate::bvh8::{Bvh8, PARALLEL_MIN, WIDTH};
 use crate::geometry::{BvhBuilder, SceneGeometry};
-use crate::intersect::{intersect_closest, WatertightRay};
+use crate::intersect::tests::closest_one;
+use crate::intersect::WatertightRay;
 use crate::sampler::SplitMix64 as Rng;
 
 fn vec(rng: &mut Rng, lo: f32, hi: f32) -> Vec3 {
@@ -55,23 +56,12 @@ fn closest_hits_equal_brute_force() {
                 brute.2 += 1;
             }
         }
-        let (mut t, mut prim, mut b1, mut b2) = ([0.0], [0], [0.0], [0.0]);
-        intersect_closest(
-            &geom,
-            &[o],
-            &[d],
-            &[0.0],
-            &[f32::INFINITY],
-            &mut t,
-            &mut prim,
-            &mut b1,
-            &mut b2,
-        );
-        assert_eq!(t[0], brute.0, "o {o} d {d}");
+        let (t, prim, ..) = closest_one(&geom, o, d);
+        assert_eq!(t, brute.0, "o {o} d {d}");
         if brute.0.is_finite() {
             hits += 1;
             if brute.2 == 1 {
-                assert_eq!(prim[0], brute.1, "o {o} d {d}");
+                assert_eq!(prim, brute.1, "o {o} d {d}");
             }
         }
     }

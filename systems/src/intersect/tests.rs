@@ -51,6 +51,24 @@ impl RngExt for Rng {
 }
 
 /// Every kernel this CPU runs.
+/// The closest hit of the one ray `o + t d` (`t` in `[0, inf)`) in `geom`: `(t, prim, b1, b2)`
+/// as [`intersect_closest`] writes them.
+pub(super) fn closest_one(geom: &SceneGeometry, o: Vec3, d: Vec3) -> (f32, u32, f32, f32) {
+    let (mut t, mut prim, mut b1, mut b2) = ([0.0], [0], [0.0], [0.0]);
+    intersect_closest(
+        geom,
+        &[o],
+        &[d],
+        &[0.0],
+        &[f32::INFINITY],
+        &mut t,
+        &mut prim,
+        &mut b1,
+        &mut b2,
+    );
+    (t[0], prim[0], b1[0], b2[0])
+}
+
 fn backends() -> Vec<Backend> {
     let all = [Kernel::Portable, Kernel::Avx2];
     let b: Vec<Backend> = all.iter().filter_map(|k| k.backend()).collect();
@@ -355,19 +373,8 @@ fn deep_tree_traversal(builder: BvhBuilder) {
                         .map(|h| h.t)
                 })
                 .fold(f32::INFINITY, f32::min);
-            let (mut t, mut prim, mut b1, mut b2) = ([0.0], [0], [0.0], [0.0]);
-            intersect_closest(
-                &g,
-                &[o],
-                &[d],
-                &[0.0],
-                &[f32::INFINITY],
-                &mut t,
-                &mut prim,
-                &mut b1,
-                &mut b2,
-            );
-            assert_eq!(t[0], brute, "{backend:?}: o {o} d {d}");
+            let (t, ..) = closest_one(&g, o, d);
+            assert_eq!(t, brute, "{backend:?}: o {o} d {d}");
             let mut occluded = [false];
             intersect_occluded(&g, &[o], &[d], &[0.0], &[f32::INFINITY], &mut occluded);
             assert_eq!(
