@@ -433,15 +433,55 @@ fn bdpt_renders_the_same_bits_on_one_and_two_threads() {
         let scene = suite_scene(name, 32, 4, 0, None);
         let one = run(&scene, GlobalIntegrator::Bdpt, Some(1));
         let two = run(&scene, GlobalIntegrator::Bdpt, Some(2));
-        let bits = |o: &RenderOutput| -> Vec<[u32; 3]> {
-            o.beauty
-                .pixels
-                .iter()
-                .map(|p| p.to_array().map(f32::to_bits))
-                .collect()
-        };
-        assert!(bits(&one) == bits(&two), "{name}: 1 and 2 threads differ");
+        assert!(
+            beauty_bits(&one) == beauty_bits(&two),
+            "{name}: 1 and 2 threads differ"
+        );
     }
+}
+
+/// The beauty's bits.
+fn beauty_bits(o: &RenderOutput) -> Vec<[u32; 3]> {
+    o.beauty
+        .pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+/// `vcm` merges at every camera vertex the light vertices of its whole iteration (one light
+/// subpath per camera sample of the iteration, traced by a light pass before any camera
+/// subpath), not only those of its own batch: so how the iteration is cut into batches,
+/// tiles and threads changes no bit. (With merging per batch, the batch size set how many
+/// light subpaths a merge saw, `N_L` of its kernel and weights, and so the image.) And
+/// merging does something: the image differs from `bdpt`'s.
+#[test]
+fn vcm_merges_the_light_vertices_of_the_whole_iteration() {
+    let scene = suite_scene("cornell", 32, 4, 0, None);
+    let render_cut = |integrator, batch_size, tile_size, threads| {
+        let options = RenderOptions {
+            integrator: Some(integrator),
+            threads: Some(threads),
+            batch_size,
+            tile_size,
+            ..RenderOptions::default()
+        };
+        render(&scene, &options, &|_| {}).unwrap()
+    };
+    let whole = render_cut(GlobalIntegrator::Vcm, 4096, 32, 1);
+    assert_no_nan("vcm", &whole);
+    for (batch_size, tile_size, threads) in [(16, 32, 1), (64, 8, 2), (4096, 16, 2)] {
+        let cut = render_cut(GlobalIntegrator::Vcm, batch_size, tile_size, threads);
+        assert!(
+            beauty_bits(&cut) == beauty_bits(&whole),
+            "batches of {batch_size}, tiles of {tile_size}, {threads} threads"
+        );
+    }
+    let bdpt = render_cut(GlobalIntegrator::Bdpt, 4096, 32, 1);
+    assert!(
+        beauty_bits(&bdpt) != beauty_bits(&whole),
+        "vcm merged nothing"
+    );
 }
 
 /// `subsurface_like`'s dielectric sphere of dense medium: the bidirectional integrators

@@ -70,6 +70,41 @@ pub trait Integrator: Sync {
     fn splats(&self) -> Option<(&SplatFilm, f64)> {
         None
     }
+
+    /// Whether this integrator renders in **iterations**: each one sample index of a group
+    /// of tiles, rendered as a light pass over its batches ([`Integrator::light_pass`]) and
+    /// then their camera pass ([`Integrator::run_batch`]), so that what the light pass leaves
+    /// (vertex merging's light vertices) is shared by every camera path of the iteration.
+    /// `Some(n)`: an iteration takes at most `n` camera samples (its memory bound; at least
+    /// one tile's), so the tiles are cut into groups of that many pixels. `None` (the
+    /// default): every batch is rendered on its own, and the other iteration methods are
+    /// never called.
+    fn iteration_paths(&self) -> Option<usize> {
+        None
+    }
+
+    /// An iteration of the sample index `sample` of `camera_samples` pixels (those its group
+    /// of tiles renders) begins; its light pass follows.
+    fn begin_iteration(&self, sample: u32, camera_samples: usize) {
+        let _ = (sample, camera_samples);
+    }
+
+    /// The light pass of one batch of the iteration: the same batch (pixels, sample indices,
+    /// seeds) is handed to [`Integrator::run_batch`] after [`Integrator::end_light_pass`].
+    /// Its paths' radiance is not read. Defaults to nothing.
+    fn light_pass(
+        &self,
+        scene: &CompiledScene,
+        batch: &PathBatch,
+        worker: &mut Self::Worker,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        let _ = (scene, batch, worker, stats, arena);
+    }
+
+    /// Every batch of the iteration has had its light pass; their camera passes follow.
+    fn end_light_pass(&self) {}
 }
 
 /// Film plus AOV accumulators for one tile.
@@ -101,6 +136,12 @@ impl TileFilm {
             active: Vec::new(),
             converged_passes: Vec::new(),
         }
+    }
+
+    /// How many of the tile's pixels take samples.
+    pub fn active_pixels(&self) -> usize {
+        let n = (self.film.width * self.film.height) as usize;
+        (0..n).filter(|&local| self.is_active(local)).count()
     }
 
     /// Whether the pixel `local` (row-major in the tile) takes samples.
@@ -140,12 +181,56 @@ pub fn render_tile<I: Integrator>(
     arena: &mut Bump,
     progress: &dyn Fn(u64),
 ) {
+    for_each_batch(scene, tile, samples, batch_size, worker, |tile, w| {
+        let TileWorker {
+            integrator: state,
+            batch,
+            film_pixel,
+        } = w;
+        integrator.run_batch(scene, batch, state, stats, arena);
+        splat_batch(tile, film_pixel, &batch.paths, stats);
+        let n = batch.paths.len();
+        stats.add_samples(n);
+        arena.reset();
+        progress(n as u64);
+    })
+}
+
+/// The light pass of an iteration over `tile` ([`Integrator::light_pass`]): the batches
+/// [`render_tile`] makes of the same arguments, handed to the integrator's light pass. The
+/// film is not touched.
+#[allow(clippy::too_many_arguments, reason = "the scheduler's inputs, named")]
+pub fn light_pass_tile<I: Integrator>(
+    integrator: &I,
+    scene: &CompiledScene,
+    tile: &mut TileFilm,
+    samples: std::ops::Range<u32>,
+    batch_size: usize,
+    worker: &mut TileWorker<I::Worker>,
+    stats: &mut SystemStats,
+    arena: &mut Bump,
+) {
+    for_each_batch(scene, tile, samples, batch_size, worker, |_, w| {
+        integrator.light_pass(scene, &w.batch, &mut w.integrator, stats, arena);
+        arena.reset();
+    })
+}
+
+/// Cuts the samples `samples` of `tile`'s pixels that take samples into batches of about
+/// `batch_size` paths (one path per pixel and sample, pixel-major) and hands each, filled
+/// into `worker`, to `run`.
+fn for_each_batch<W>(
+    scene: &CompiledScene,
+    tile: &mut TileFilm,
+    samples: std::ops::Range<u32>,
+    batch_size: usize,
+    worker: &mut TileWorker<W>,
+    mut run: impl FnMut(&mut TileFilm, &mut TileWorker<W>),
+) {
     let w = tile.film.width;
     let h = tile.film.height;
     // The pixels that take samples (all but those adaptive sampling has stopped).
-    let pixels = (0..(w * h) as usize)
-        .filter(|&local| tile.is_active(local))
-        .count();
+    let pixels = tile.active_pixels();
     if pixels == 0 {
         return;
     }
@@ -156,9 +241,7 @@ pub fn render_tile<I: Integrator>(
     while s0 < samples.end {
         let s1 = s0.saturating_add(per_batch).min(samples.end);
         let TileWorker {
-            integrator: state,
-            batch,
-            film_pixel,
+            batch, film_pixel, ..
         } = &mut *worker;
         // One path per pixel and sample, pixel-major; radiance, albedo and normal start
         // black (the defaults), depth at infinity (no hit yet).
@@ -210,12 +293,7 @@ pub fn render_tile<I: Integrator>(
                     s
                 }
             }));
-        integrator.run_batch(scene, batch, state, stats, arena);
-        splat_batch(tile, film_pixel, &batch.paths, stats);
-        let n = batch.paths.len();
-        stats.add_samples(n);
-        arena.reset();
-        progress(n as u64);
+        run(tile, worker);
         s0 = s1;
     }
 }

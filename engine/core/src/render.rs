@@ -9,7 +9,8 @@
 
 use crate::bidir::{Bidirectional, Strategy};
 use crate::integrator::{
-    render_tile, GlobalIntegrator, Integrator, LightingTechnique, TileFilm, TileWorker,
+    light_pass_tile, render_tile, GlobalIntegrator, Integrator, LightingTechnique, TileFilm,
+    TileWorker,
 };
 use crate::output::Image;
 use crate::path_tracer::PathTracer;
@@ -429,8 +430,9 @@ fn render_passes<I: Integrator>(
     let workers: Vec<Mutex<(TileWorker<I::Worker>, Bump)>> = (0..threads.max(1))
         .map(|_| Mutex::new((TileWorker::default(), Bump::new())))
         .collect();
-    // One pass renders the sample indices `range` of every tile, continuing its film.
-    let pass = |tiles: &mut Vec<Tile>, range: std::ops::Range<u32>| {
+    // Renders the sample indices `range` of `tiles` in parallel, continuing their films, or
+    // (`light`) runs the integrator's light pass of an iteration over them.
+    let run_tiles = |tiles: &mut [Tile], range: std::ops::Range<u32>, light: bool| {
         // The sampler travels in the sample addresses (`SamplerKind::address`).
         let addresses = options.sampler.addresses(range);
         let workers = &workers;
@@ -455,22 +457,44 @@ fn render_passes<I: Integrator>(
                         (tables, arena)
                     }
                 };
-                render_tile(
-                    integrator,
-                    scene,
-                    tile,
-                    addresses.clone(),
-                    options.batch_size,
-                    tables,
-                    stats,
-                    arena,
-                    progress,
-                )
+                let (samples, batch_size) = (addresses.clone(), options.batch_size);
+                if light {
+                    light_pass_tile(
+                        integrator, scene, tile, samples, batch_size, tables, stats, arena,
+                    );
+                } else {
+                    render_tile(
+                        integrator, scene, tile, samples, batch_size, tables, stats, arena,
+                        progress,
+                    );
+                }
             })
         };
         match &pool {
             Some(pool) => pool.install(work),
             None => work(),
+        }
+    };
+    // A render in iterations: one sample index of a group of tiles each, the groups as
+    // large as the integrator's bound allows (at least one tile).
+    let tiles_per_group = integrator.iteration_paths().map(|max| {
+        let tile_pixels = tiles.iter().map(|(t, _)| t.active_pixels()).max();
+        (max / tile_pixels.unwrap_or(1).max(1)).max(1)
+    });
+    // One pass renders the sample indices `range` of every tile, continuing its film: in
+    // iterations (a light pass, then the camera pass) when the integrator works in them.
+    let pass = |tiles: &mut Vec<Tile>, range: std::ops::Range<u32>| match tiles_per_group {
+        None => run_tiles(tiles, range, false),
+        Some(group_size) => {
+            for sample in range {
+                for group in tiles.chunks_mut(group_size) {
+                    let camera_samples = group.iter().map(|(t, _)| t.active_pixels()).sum();
+                    integrator.begin_iteration(sample, camera_samples);
+                    run_tiles(group, sample..sample + 1, true);
+                    integrator.end_light_pass();
+                    run_tiles(group, sample..sample + 1, false);
+                }
+            }
         }
     };
     let mut done = samples.start;

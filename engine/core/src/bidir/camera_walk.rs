@@ -4,6 +4,7 @@
 //! sample's own light subpath, each weighted by [`super::mis`] against all the others.
 
 use super::evaluate::cos_at;
+use super::merge::MergeVertices;
 use super::mis::{emitter_hit_weight, SubpathMis};
 use super::walk::trace_bounce;
 use super::{connect, merge, BidirWorker, Bidirectional, Scratch, Strategy};
@@ -22,11 +23,13 @@ use risotto_systems::sampler::{next_4d_column, PathSampler};
 
 /// Traces the camera subpaths of `batch`, adding to each path's radiance what its strategies
 /// estimate (shadow rays of its light samples and connections traced at the end).
+#[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub(super) fn camera_subpaths(
     bd: &Bidirectional,
     scene: &CompiledScene,
     batch: &mut PathBatch,
     w: &mut BidirWorker,
+    merge: Option<&MergeVertices>,
     stats: &mut SystemStats,
     arena: &Bump,
     counters: &PatternCounters,
@@ -71,7 +74,7 @@ pub(super) fn camera_subpaths(
             &mut w.s.mis,
         );
         environment(bd, scene, batch, w);
-        camera_vertices(bd, scene, batch, w, first, stats, arena, counters);
+        camera_vertices(bd, scene, batch, w, merge, first, stats, arena, counters);
         let q = &mut w.camera_q;
         std::mem::swap(&mut q.rays, &mut q.next);
         q.next.rays.clear();
@@ -143,6 +146,7 @@ fn camera_vertices(
     scene: &CompiledScene,
     batch: &mut PathBatch,
     w: &mut BidirWorker,
+    merge: Option<&MergeVertices>,
     first: bool,
     stats: &mut SystemStats,
     arena: &Bump,
@@ -245,10 +249,10 @@ fn camera_vertices(
             stats.bidir_rays.light_samples += (s.connections.len() - queued) as u64;
             connect::light_vertices(scene, s, light, &at, &ctx, &mut *bxdf, arena, counters);
             stats.record(System::Connect, m, start.elapsed().as_secs_f64());
-            if s.merge_radius > 0.0 {
+            if let Some(merge) = merge.filter(|_| s.merge_radius > 0.0) {
                 let start = std::time::Instant::now();
                 let radiance = &mut batch.paths.radiance;
-                merge::light_vertices(scene, s, light, &at, radiance, arena, counters);
+                merge::light_vertices(scene, s, merge, &at, radiance, arena, counters);
                 stats.record(System::Merge, m, start.elapsed().as_secs_f64());
             }
         }

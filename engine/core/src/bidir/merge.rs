@@ -1,16 +1,79 @@
-//! Vertex merging at camera vertices (`integrator = vcm`).
+//! Vertex merging at camera vertices (`integrator = vcm`), against the light vertices of
+//! every light subpath of the iteration.
 
 use super::camera_walk::GroupVertices;
 use super::evaluate::{cos_at, sides_agree};
-use super::mis::merge_weight;
+use super::mis::{merge_weight, SubpathMis};
 use super::vertices::LightVertices;
 use super::Scratch;
 use crate::plugin::PatternCounters;
 use crate::scene::CompiledScene;
 use bumpalo::Bump;
+use glam::Vec3;
 use risotto_components::Rgb;
+use risotto_systems::hash_grid::HashGrid;
 
-/// Vertex merging at the group's vertices: every light vertex of the batch within the merge
+/// The light vertices an iteration's camera vertices merge: every stored vertex of the
+/// light subpaths of all its batches, in one table (what merging reads of them, 49 bytes a
+/// vertex, beside the hash grid's 4-8), hashed for radius queries.
+#[derive(Default)]
+pub struct MergeVertices {
+    /// Positions.
+    pub p: Vec<Vec3>,
+    /// The direction back along the light subpath (the stored shading point's `vn`).
+    pub toward_light: Vec<Vec3>,
+    /// Whether the vertex is a point in a medium (else on a surface).
+    pub in_medium: Vec<bool>,
+    /// Segments from the light to the vertex.
+    pub segments: Vec<u32>,
+    /// Light subpath throughput arriving at the vertex.
+    pub throughput: Vec<Rgb>,
+    /// The light subpath's MIS sums at the vertex.
+    pub mis: Vec<SubpathMis>,
+    /// `p` hashed for queries of the iteration's radius.
+    grid: HashGrid,
+}
+
+impl MergeVertices {
+    /// Empties the table (keeping its storage).
+    pub fn clear(&mut self) {
+        self.p.clear();
+        self.toward_light.clear();
+        self.in_medium.clear();
+        self.segments.clear();
+        self.throughput.clear();
+        self.mis.clear();
+    }
+
+    /// Appends every vertex of `light`.
+    pub fn extend_from(&mut self, light: &LightVertices) {
+        let pts = &light.points;
+        self.p.extend_from_slice(&pts.p);
+        self.toward_light.extend_from_slice(&pts.vn);
+        self.in_medium
+            .extend(pts.shape.iter().map(|&s| s == u32::MAX));
+        self.segments.extend_from_slice(&light.segments);
+        self.throughput.extend_from_slice(&light.throughput);
+        self.mis.extend_from_slice(&light.mis);
+    }
+
+    /// Hashes the vertices for queries of radius `radius`.
+    pub fn build(&mut self, radius: f32) {
+        self.grid.build(&self.p, radius);
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.p.len()
+    }
+
+    /// True when there is no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.p.is_empty()
+    }
+}
+
+/// Vertex merging at the group's vertices: every light vertex of the iteration within the merge
 /// radius (of the same kind: surface points with surface points, points in media with
 /// points in media) is taken as light arriving at the camera vertex, a density estimate
 /// with the kernel `1 / (pi r^2 N_L)` on surfaces and `1 / (4/3 pi r^3 N_L)` in media
@@ -19,7 +82,7 @@ use risotto_components::Rgb;
 pub(super) fn light_vertices(
     scene: &CompiledScene,
     s: &mut Scratch,
-    light: &LightVertices,
+    light: &MergeVertices,
     at: &GroupVertices<'_>,
     radiance: &mut [Rgb],
     arena: &Bump,
@@ -27,18 +90,17 @@ pub(super) fn light_vertices(
 ) {
     let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
-    let lp = &light.points;
-    let (grid, merges) = (&s.grid, &mut s.merges);
+    let (grid, merges) = (&light.grid, &mut s.merges);
     let normals = scene.discards_disagreeing_directions();
     merges.clear();
     for (k, i) in at.range.clone().enumerate() {
         let r = pts.ray_id[i] as usize;
         let in_medium = pts.shape[i] == u32::MAX;
         let camera_segments = incoming.depth[r] as u32 + 1;
-        grid.query(&lp.p, pts.p[i], |v| {
+        grid.query(&light.p, pts.p[i], |v| {
             let fits = camera_segments + light.segments[v] <= scene.settings.max_depth;
-            let agree = !normals || sides_agree(pts, i, lp.vn[v]);
-            if fits && agree && (lp.shape[v] == u32::MAX) == in_medium {
+            let agree = !normals || sides_agree(pts, i, light.toward_light[v]);
+            if fits && agree && light.in_medium[v] == in_medium {
                 merges.push((k as u32, v as u32));
             }
         });
@@ -57,7 +119,7 @@ pub(super) fn light_vertices(
             .map(|&(k, _)| pts.vn[at.range.start + k as usize]),
     );
     s.wi.clear();
-    s.wi.extend(merges.iter().map(|&(_, v)| lp.vn[v as usize]));
+    s.wi.extend(merges.iter().map(|&(_, v)| light.toward_light[v as usize]));
     s.pair_eval
         .run(scene, at.material, at.mode, &s.view, &s.wi, arena, counters);
     std::mem::swap(&mut s.value, &mut s.pair_eval.value);
@@ -66,13 +128,13 @@ pub(super) fn light_vertices(
         .run(scene, at.material, at.mode, &s.wi, &s.view, arena, counters);
     let pi = std::f32::consts::PI;
     let r = s.merge_radius;
-    let light_paths = f.light_paths_in_batch;
+    let light_paths = f.merged_light_paths;
     for (e, &(k, v)) in s.merges.iter().enumerate() {
         let (i, v) = (at.range.start + k as usize, v as usize);
         let ray = pts.ray_id[i] as usize;
         let path = incoming.path[ray] as usize;
         let in_medium = pts.shape[i] == u32::MAX;
-        let cos = cos_at(pts, i, lp.vn[v]);
+        let cos = cos_at(pts, i, light.toward_light[v]);
         if cos <= 0.0 {
             continue;
         }

@@ -59,9 +59,9 @@ pub struct MisFactors {
     /// Light subpaths per iteration over the image's pixel count (light tracing's count
     /// against the camera's one sample per pixel).
     pub light_paths_per_pixel: f32,
-    /// Light subpaths whose vertices a camera vertex merges (`N_L` of the kernels; 0
-    /// without merging).
-    pub light_paths_in_batch: f32,
+    /// Light subpaths whose vertices a camera vertex merges: the iteration's (`N_L` of the
+    /// kernels; 0 without merging).
+    pub merged_light_paths: f32,
     /// Merging at surface vertices.
     pub surface: VertexFactors,
     /// Merging at points in media.
@@ -73,7 +73,7 @@ impl MisFactors {
     pub fn connections_only(light_paths_per_pixel: f32) -> Self {
         MisFactors {
             light_paths_per_pixel,
-            light_paths_in_batch: 0.0,
+            merged_light_paths: 0.0,
             surface: VertexFactors::default(),
             volume: VertexFactors::default(),
         }
@@ -86,7 +86,7 @@ impl MisFactors {
         let pi = std::f32::consts::PI;
         MisFactors {
             light_paths_per_pixel,
-            light_paths_in_batch: light_paths,
+            merged_light_paths: light_paths,
             surface: VertexFactors::of_eta(pi * radius * radius * light_paths),
             volume: VertexFactors::of_eta(4.0 / 3.0 * pi * radius.powi(3) * light_paths),
         }

@@ -19,6 +19,17 @@
 //! |---|---|---|---|
 //! | `light` | first segment only (emitters seen directly) | splatted at every vertex | none needed |
 //! | `bdpt` | every strategy | splatted, and connected to | MIS over connections and light tracing |
+//! | `vcm` | every strategy, and merging | splatted, connected to, and merged | MIS over all of them |
+//!
+//! `vcm` renders in iterations ([`Integrator::iteration_paths`]): one sample index of a group
+//! of tiles (every pixel, up to [`ITERATION_LIGHT_PATHS`]). The iteration's light pass
+//! ([`Integrator::light_pass`]) traces each batch's light subpaths and keeps them; between the
+//! passes their vertices are gathered into one table in batch order and hashed
+//! ([`merge::MergeVertices`]); the camera pass ([`Integrator::run_batch`]) takes each
+//! batch's own light subpaths back for its connections, and every camera vertex merges the
+//! vertices of them all (SmallVCM's loop: all light subpaths of an iteration, then all
+//! camera subpaths). One sample index an iteration: samples of one pixel never share light
+//! vertices, so their merges are independent, as the weights assume.
 //!
 //! What media and materials do here:
 //! - Emissive media are not lights to a bidirectional integrator: camera subpaths gather what
@@ -36,7 +47,7 @@ mod camera_walk;
 mod connect;
 pub mod evaluate;
 mod light_walk;
-mod merge;
+pub mod merge;
 pub mod mis;
 pub mod vertices;
 mod walk;
@@ -48,6 +59,7 @@ use crate::scene::CompiledScene;
 use crate::stats::{System, SystemStats};
 use bumpalo::Bump;
 use glam::Vec2;
+use merge::MergeVertices;
 use mis::{MisFactors, SubpathMis};
 use risotto_components::{Rgb, ShadowRays, StackEvent, VolumeStack};
 use risotto_systems::bxdf_samples::BxdfSamples;
@@ -55,7 +67,9 @@ use risotto_systems::camera::CameraConnection;
 use risotto_systems::film::SplatFilm;
 use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 use risotto_systems::sampler::PathSampler;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, PoisonError, RwLock};
 pub use vertices::LightVertices;
 
 /// Seed salt of light subpaths' sampler sequences (decorrelated from their camera sample's).
@@ -63,6 +77,13 @@ const LIGHT_SEED_SALT: u32 = 0x9e37_79b9;
 
 /// The first sampler dimension of a light subpath's vertices: the emission draws 0-4.
 const WALK_FIRST_DIMENSION: u32 = 8;
+
+/// At most how many light subpaths one iteration of `vcm` traces and merges (its memory
+/// bound, [`Integrator::iteration_paths`]; at least one sample index of one tile). Every
+/// stored vertex of them is held from the iteration's light pass to its camera pass, at most
+/// 250 bytes each (the vertex, [`LightVertices`], and its copy for merging,
+/// [`MergeVertices`]), at most `max_depth - 1` of them a subpath: 115 MB at `max_depth = 8`.
+pub const ITERATION_LIGHT_PATHS: usize = 1 << 16;
 
 /// The first iteration's merge radius as a fraction of the scene's bounding-sphere radius
 /// (SmallVCM's default).
@@ -81,8 +102,8 @@ pub enum Strategy {
     /// Bidirectional path tracing: every connection strategy and light tracing, MIS-weighted.
     Bdpt,
     /// Vertex connection and merging: bidirectional path tracing and, at every camera
-    /// vertex, the light vertices of the batch's light subpaths within a shrinking radius
-    /// (Georgiev et al. 2012).
+    /// vertex, the light vertices of the iteration's light subpaths within a shrinking
+    /// radius (Georgiev et al. 2012).
     Vcm,
 }
 
@@ -113,6 +134,36 @@ pub struct Bidirectional {
     light_paths_per_pixel: f32,
     /// The first iteration's merge radius ([`MERGE_RADIUS_FACTOR`]).
     merge_radius: f32,
+    /// The iteration in progress (`vcm`): its constants and the light vertices its camera
+    /// vertices merge; written between its passes, read by its camera pass.
+    iteration: RwLock<Iteration>,
+    /// The light subpaths the iteration's light pass traced, by batch ([`batch_key`]),
+    /// waiting for their camera pass.
+    traced: Mutex<HashMap<(u32, u32), LightVertices>>,
+    /// Tables camera passes are done with, for the next light passes.
+    spare: Mutex<Vec<LightVertices>>,
+}
+
+/// One iteration of `vcm`: a light subpath per camera sample of its batches, traced first,
+/// then every camera subpath, merging at its vertices the light vertices of them all.
+#[derive(Default)]
+struct Iteration {
+    /// Its MIS constants.
+    factors: MisFactors,
+    /// Its merge radius.
+    radius: f32,
+    /// Every light vertex of its light subpaths.
+    vertices: MergeVertices,
+}
+
+/// Which batch a batch is, the same in an iteration's two passes: its first path's pixel
+/// and sample address (a tile's batches are its pixels over disjoint sample ranges).
+fn batch_key(batch: &PathBatch) -> (u32, u32) {
+    let p = &batch.paths;
+    (
+        p.pixel.first().copied().unwrap_or(u32::MAX),
+        p.sample.first().copied().unwrap_or(u32::MAX),
+    )
 }
 
 impl Bidirectional {
@@ -142,6 +193,9 @@ impl Bidirectional {
             light_paths: AtomicU64::new(0),
             light_paths_per_pixel: window_pixels as f32 / (w as f32 * h as f32),
             merge_radius: MERGE_RADIUS_FACTOR * scene.radius,
+            iteration: RwLock::default(),
+            traced: Mutex::default(),
+            spare: Mutex::default(),
         })
     }
 
@@ -159,14 +213,14 @@ impl Bidirectional {
         Ok(())
     }
 
-    /// The MIS constants of a batch of `paths` camera samples whose first sample index is
-    /// `first_sample`, and its merge radius (0 without merging).
+    /// The MIS constants of an iteration of `paths` camera samples whose first sample index
+    /// is `first_sample`, and its merge radius (0 without merging).
     fn factors(&self, paths: usize, first_sample: u32) -> (MisFactors, f32) {
         match self.strategy {
             Strategy::Vcm => {
-                // The batch is an iteration of progressive merging (Hachisuka and Jensen
-                // 2009; Georgiev et al. 2012, sec. 5): the radius shrinks as
-                // `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`, so the merged estimate's bias
+                // Progressive merging (Hachisuka and Jensen 2009; Georgiev et al. 2012,
+                // sec. 5): the radius shrinks as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`
+                // with the iteration's first sample index `i`, so the merged estimate's bias
                 // vanishes as its variance does.
                 let i = first_sample as f32;
                 let r = self.merge_radius / (i + 1.0).powf(0.5 * (1.0 - RADIUS_ALPHA));
@@ -178,6 +232,17 @@ impl Bidirectional {
                 0.0,
             ),
         }
+    }
+
+    /// The iteration in progress (read-locked), its constants set into `s`.
+    fn iteration_into(&self, s: &mut Scratch) -> std::sync::RwLockReadGuard<'_, Iteration> {
+        let it = self
+            .iteration
+            .read()
+            .unwrap_or_else(PoisonError::into_inner);
+        s.factors = it.factors;
+        s.merge_radius = it.radius;
+        it
     }
 
     /// The volumes subpaths of light `light` start in.
@@ -238,8 +303,9 @@ pub(crate) struct Scratch {
     factors: MisFactors,
     /// The batch's merge radius (0 without merging).
     merge_radius: f32,
-    /// The batch's light vertices hashed for merging.
-    grid: risotto_systems::hash_grid::HashGrid,
+    /// A batch's own light vertices for merging, when it has no iteration (a batch run
+    /// without the renderer's light pass).
+    own_merge: MergeVertices,
     /// Per camera vertex of a group: the light vertices to merge.
     merges: Vec<(u32, u32)>,
     /// MIS sums of every subpath of the walk in progress.
@@ -296,30 +362,119 @@ impl Integrator for Bidirectional {
         arena: &Bump,
     ) {
         let counters: &PatternCounters = arena.alloc(PatternCounters::default());
-        let first_sample = batch
-            .paths
-            .sample
-            .iter()
-            .map(|s| s & !INDEPENDENT_BIT)
-            .min();
-        let (factors, radius) = self.factors(batch.paths.len(), first_sample.unwrap_or(0));
-        worker.s.factors = factors;
-        worker.s.merge_radius = radius;
-        light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
-        if radius > 0.0 {
-            let (grid, points) = (&mut worker.s.grid, &worker.light.points.p);
-            stats.time(System::Merge, points.len(), || grid.build(points, radius));
+        let traced = match self.strategy {
+            Strategy::Vcm => lock(&self.traced).remove(&batch_key(batch)),
+            _ => None,
+        };
+        match traced {
+            // The camera pass of an iteration: this batch's light subpaths were traced by
+            // its light pass, and every camera vertex merges the iteration's light vertices.
+            Some(mut light) => {
+                std::mem::swap(&mut worker.light, &mut light);
+                lock(&self.spare).push(light);
+                let it = self.iteration_into(&mut worker.s);
+                let merge = Some(&it.vertices);
+                camera_walk::camera_subpaths(
+                    self, scene, batch, worker, merge, stats, arena, counters,
+                );
+            }
+            // A batch of its own: its light subpaths, then its camera subpaths (merging,
+            // for `vcm` run without the renderer's iterations, the batch's own).
+            None => {
+                let first_sample = batch
+                    .paths
+                    .sample
+                    .iter()
+                    .map(|s| s & !INDEPENDENT_BIT)
+                    .min();
+                let (factors, radius) = self.factors(batch.paths.len(), first_sample.unwrap_or(0));
+                worker.s.factors = factors;
+                worker.s.merge_radius = radius;
+                light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
+                self.light_paths
+                    .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
+                let mut own = std::mem::take(&mut worker.s.own_merge);
+                if radius > 0.0 {
+                    own.clear();
+                    own.extend_from(&worker.light);
+                    stats.time(System::Merge, own.len(), || own.build(radius));
+                }
+                let merge = (radius > 0.0).then_some(&own);
+                camera_walk::camera_subpaths(
+                    self, scene, batch, worker, merge, stats, arena, counters,
+                );
+                worker.s.own_merge = own;
+            }
         }
-        self.light_paths
-            .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
-        camera_walk::camera_subpaths(self, scene, batch, worker, stats, arena, counters);
-        stats.pattern_cache_hits += counters.hits.get();
-        stats.pattern_cache_shared += counters.shared.get();
-        stats.pattern_evals += counters.evals.get();
-        stats.volume_pattern_evals += counters.volume_evals.get();
+        add_pattern_counters(stats, counters);
     }
 
     fn splats(&self) -> Option<(&SplatFilm, f64)> {
         Some(Bidirectional::splats(self))
     }
+
+    /// `vcm` merges across the batches of an iteration; the others need no iterations.
+    fn iteration_paths(&self) -> Option<usize> {
+        (self.strategy == Strategy::Vcm).then_some(ITERATION_LIGHT_PATHS)
+    }
+
+    fn begin_iteration(&self, sample: u32, camera_samples: usize) {
+        let mut it = self
+            .iteration
+            .write()
+            .unwrap_or_else(PoisonError::into_inner);
+        (it.factors, it.radius) = self.factors(camera_samples, sample);
+        it.vertices.clear();
+    }
+
+    fn light_pass(
+        &self,
+        scene: &CompiledScene,
+        batch: &PathBatch,
+        worker: &mut BidirWorker,
+        stats: &mut SystemStats,
+        arena: &Bump,
+    ) {
+        let counters: &PatternCounters = arena.alloc(PatternCounters::default());
+        drop(self.iteration_into(&mut worker.s));
+        let mut light = lock(&self.spare).pop().unwrap_or_default();
+        std::mem::swap(&mut worker.light, &mut light);
+        light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
+        std::mem::swap(&mut worker.light, &mut light);
+        self.light_paths
+            .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
+        lock(&self.traced).insert(batch_key(batch), light);
+        add_pattern_counters(stats, counters);
+    }
+
+    /// Gathers the iteration's light vertices for merging, in batch order (so the image
+    /// does not depend on which thread traced which batch), and hashes them.
+    fn end_light_pass(&self) {
+        let traced = lock(&self.traced);
+        let mut keys: Vec<_> = traced.keys().copied().collect();
+        keys.sort_unstable();
+        let mut it = self
+            .iteration
+            .write()
+            .unwrap_or_else(PoisonError::into_inner);
+        let it = &mut *it;
+        it.vertices.clear();
+        for k in keys {
+            it.vertices.extend_from(&traced[&k]);
+        }
+        it.vertices.build(it.radius.max(f32::MIN_POSITIVE));
+    }
+}
+
+/// Adds a batch's pattern counters to the stats.
+fn add_pattern_counters(stats: &mut SystemStats, counters: &PatternCounters) {
+    stats.pattern_cache_hits += counters.hits.get();
+    stats.pattern_cache_shared += counters.shared.get();
+    stats.pattern_evals += counters.evals.get();
+    stats.volume_pattern_evals += counters.volume_evals.get();
+}
+
+/// `m` locked; one a panicking thread poisoned is as good (plain tables).
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
 }

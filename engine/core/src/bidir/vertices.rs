@@ -5,7 +5,9 @@
 //! bounce and `by_bounce[b][path]` finds path `path`'s vertex of bounce `b` (or
 //! [`NO_VERTEX`]). Memory: one row (the shading point, about 120 bytes, plus 40 bytes of
 //! path state and the volume stack) per stored vertex, at most `max_depth - 1` per light
-//! subpath, so at most `batch size x (max_depth - 1)` rows per batch.
+//! subpath, so at most `batch size x (max_depth - 1)` rows per batch. `vcm` keeps the tables
+//! of every batch of an iteration until its camera pass (at most
+//! [`ITERATION_LIGHT_PATHS`](super::ITERATION_LIGHT_PATHS) light subpaths).
 
 use super::mis::SubpathMis;
 use risotto_components::{Rgb, ShadingPoints, VolumeStack};
