@@ -166,7 +166,33 @@ fn bidirectional(c: &mut Criterion) {
         b.iter(|| {
             let mut found = 0usize;
             for &p in &points {
-                grid.query(&points, black_box(p), |_| found += 1);
+                grid.query(black_box(p), |_| found += 1);
+            }
+            black_box(found)
+        })
+    });
+    // An iteration's worth of light vertices (vcm at 256 x 256: about 200,000), several
+    // megabytes, so that queries miss the cache as in a render: 4096 queries at other
+    // points, about one point within the radius each.
+    let many: Vec<Vec3> = (0..1u32 << 18)
+        .map(|i| {
+            // splitmix64 of (point, axis): uniform in [0, 1).
+            let h = |k: u64| {
+                let mut z = (u64::from(i) * 3 + k).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+                ((z ^ (z >> 31)) >> 40) as f32 / (1u32 << 24) as f32
+            };
+            Vec3::new(h(0), h(1), h(2))
+        })
+        .collect();
+    let mut big = HashGrid::default();
+    big.build(&many, 0.01);
+    g.bench_function("hash_grid_query_4096_in_262144", |b| {
+        b.iter(|| {
+            let mut found = 0usize;
+            for &p in &points {
+                big.query(black_box(p), |_| found += 1);
             }
             black_box(found)
         })

@@ -15,7 +15,7 @@ use risotto_systems::hash_grid::HashGrid;
 
 /// The light vertices an iteration's camera vertices merge: every stored vertex of the
 /// light subpaths of all its batches, in one table (what merging reads of them, 49 bytes a
-/// vertex, beside the hash grid's 4-8), hashed for radius queries.
+/// vertex, and the hash grid's 20-24), hashed for radius queries.
 #[derive(Default)]
 pub struct MergeVertices {
     /// Positions.
@@ -97,7 +97,7 @@ pub(super) fn light_vertices(
         let r = pts.ray_id[i] as usize;
         let in_medium = pts.shape[i] == u32::MAX;
         let camera_segments = incoming.depth[r] as u32 + 1;
-        grid.query(&light.p, pts.p[i], |v| {
+        grid.query(pts.p[i], |v| {
             let fits = camera_segments + light.segments[v] <= scene.settings.max_depth;
             let agree = !normals || sides_agree(pts, i, light.toward_light[v]);
             if fits && agree && light.in_medium[v] == in_medium {
