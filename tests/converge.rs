@@ -103,6 +103,51 @@ fn sweep_writes_csv_json_png_and_svg_that_agree() {
     }
 }
 
+/// `--metric relmse` compares the techniques by the relMSE: the efficiency column is
+/// `1 / (relMSE x seconds)`, the table and the JSON say which metric, and both errors are in
+/// the CSV still. A wrong name is an error naming it.
+#[test]
+fn the_relmse_metric_is_what_the_sweep_compares_by() {
+    let dir = scratch_dir("converge", "relmse");
+    let scene = cornell(&dir, 16);
+    let out_dir = dir.join("out");
+    let args = [
+        "--spp",
+        "1,2",
+        "--reference-spp",
+        "16",
+        "--techniques",
+        "lighting=mis",
+        "--metric",
+        "relmse",
+    ];
+    let out = converge(&scene, &out_dir, &args);
+    assert_ok("converge", &out);
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("1/(relMSE*s)"), "{table}");
+    assert!(table.contains("equal error: relMSE"), "{table}");
+    let (_, rows) = csv_rows(&out_dir);
+    assert_eq!(rows.len(), 2);
+    for row in &rows {
+        let (r, m, t) = (num(row, "relmse"), num(row, "mse"), num(row, "seconds"));
+        assert!(r > 0.0 && m > 0.0 && (r / m - 1.0).abs() > 0.01, "{row:?}");
+        let eff = num(row, "efficiency");
+        assert!((eff * r * t - 1.0).abs() < 1e-9, "{row:?}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("converge.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["metric"], "relmse");
+    let bad = converge(
+        &scene,
+        &dir.join("bad"),
+        &["--spp", "1", "--metric", "rmse"],
+    );
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("\"rmse\" is not mse or relmse"), "{err}");
+}
+
 #[test]
 fn mse_falls_with_spp_and_sobol_beats_the_independent_sampler() {
     // MIS at 1 and 16 spp: Monte Carlo divides the MSE by about 16 (Sobol by more), so

@@ -217,6 +217,7 @@ fn converge_sweeps_a_declared_technique_and_keeps_it_out_of_the_reference() {
             techniques: None,
         },
         render: RenderOptions::default(),
+        metric: Default::default(),
     };
     assert_eq!(options.variants.len(), 2);
     let progress = Progress {

@@ -17,6 +17,12 @@
 //! `1 / (MSE x seconds)` at its largest spp (for an unbiased Monte Carlo estimator it is
 //! about constant along the curve, the usual figure of merit).
 //!
+//! The sweep's **error metric** ([`ErrorMetric`], `--metric`) is what the efficiency, the
+//! fits, the equal-time and equal-error comparison and the plot use: the MSE by default, or
+//! the relMSE, which weighs every pixel's error by its brightness, so that a few very bright
+//! pixels whose error no technique changes (a small lamp seen in glass) do not hide what
+//! the rest of the image does. Both are recorded for every point either way.
+//!
 //! # The reference's own noise
 //! A reference rendered by the tool (`--reference-spp N`) is the mean `r = (a + b) / 2` of two
 //! independent renders of `N / 2` spp each (seeds unused by the sweep). For a test image `t`
@@ -95,6 +101,36 @@ pub enum Reference {
     },
 }
 
+/// The error a sweep compares its techniques by (module docs, "Metrics").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ErrorMetric {
+    /// `mean (t - r)^2`.
+    #[default]
+    Mse,
+    /// `mean (t - r)^2 / (r^2 + 0.01)`.
+    RelMse,
+}
+
+impl ErrorMetric {
+    /// How tables and plots name it.
+    pub fn label(self) -> &'static str {
+        match self {
+            ErrorMetric::Mse => "MSE",
+            ErrorMetric::RelMse => "relMSE",
+        }
+    }
+
+    /// The metric called `name` (`mse` or `relmse`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "mse" => Some(ErrorMetric::Mse),
+            "relmse" => Some(ErrorMetric::RelMse),
+            _ => None,
+        }
+    }
+}
+
 /// What to sweep.
 #[derive(Clone, Debug)]
 pub struct ConvergeOptions {
@@ -110,6 +146,8 @@ pub struct ConvergeOptions {
     pub reference: Reference,
     /// Threads, batch and tile size of every render (the techniques are set per variant).
     pub render: RenderOptions,
+    /// The error the curves are compared by.
+    pub metric: ErrorMetric,
 }
 
 /// Progress callbacks of [`run`].
@@ -180,7 +218,13 @@ pub struct Point {
     pub relmse_max: f64,
     /// Mean bias of the image mean per channel, `mean(test) - mean(reference)`.
     pub bias: [f64; 3],
-    /// `1 / (mse x seconds)` (NaN, `null` in JSON, when `mse <= 0`).
+    /// The sweep's metric ([`Sweep::metric`]): `mse` or `relmse`.
+    pub error: f64,
+    /// Its smallest value over the repeats.
+    pub error_min: f64,
+    /// Its largest value over the repeats.
+    pub error_max: f64,
+    /// `1 / (error x seconds)` (NaN, `null` in JSON, when `error <= 0`).
     pub efficiency: f64,
     /// The relative error an adaptive point's pixels stop at; `None` (absent in JSON) for
     /// a uniform point.
@@ -246,6 +290,8 @@ pub struct Sweep {
     pub height: usize,
     /// The reference.
     pub reference: ReferenceInfo,
+    /// The error the curves are compared by.
+    pub metric: ErrorMetric,
     /// One curve per variant.
     pub curves: Vec<Curve>,
 }
@@ -561,7 +607,7 @@ pub fn run(
     for (variant, points) in options.variants.iter().zip(&raw) {
         let mut pts = Vec::new();
         for p in points {
-            pts.push(point(p, &reference, &info)?);
+            pts.push(point(p, &reference, &info, options.metric)?);
         }
         curves.push(curve(&registry, variant, pts));
     }
@@ -569,6 +615,7 @@ pub fn run(
         width: w,
         height: h,
         reference: info,
+        metric: options.metric,
         curves,
     })
 }

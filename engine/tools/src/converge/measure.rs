@@ -41,6 +41,7 @@ pub(super) fn point(
     raw: &RawPoint,
     reference: &Image,
     info: &ReferenceInfo,
+    metric: ErrorMetric,
 ) -> Result<Point, ConvergeError> {
     let renders = &raw.renders;
     let mut mse = Vec::new();
@@ -62,6 +63,10 @@ pub(super) fn point(
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (m, t) = (mean(&mse), min(&seconds));
+    let error = match metric {
+        ErrorMetric::Mse => &mse,
+        ErrorMetric::RelMse => &relmse,
+    };
     let spp_mean: Vec<f64> = renders.iter().map(|s| s.spp_mean).collect();
     Ok(Point {
         spp: raw.spp,
@@ -77,16 +82,19 @@ pub(super) fn point(
         relmse_min: min(&relmse),
         relmse_max: max(&relmse),
         bias,
-        efficiency: efficiency(m, t),
+        error: mean(error),
+        error_min: min(error),
+        error_max: max(error),
+        efficiency: efficiency(mean(error), t),
         noise_target: raw.noise_target,
         spp_mean: raw.noise_target.map(|_| mean(&spp_mean)),
     })
 }
 
-/// `1 / (mse x seconds)`, NaN unless both are positive.
-fn efficiency(mse: f64, seconds: f64) -> f64 {
-    if mse > 0.0 && seconds > 0.0 {
-        1.0 / (mse * seconds)
+/// `1 / (error x seconds)`, NaN unless both are positive.
+fn efficiency(error: f64, seconds: f64) -> f64 {
+    if error > 0.0 && seconds > 0.0 {
+        1.0 / (error * seconds)
     } else {
         f64::NAN
     }
@@ -112,9 +120,12 @@ pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 
 /// A curve from its points.
 pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec<Point>) -> Curve {
-    let valid = || points.iter().filter(|p| p.mse > 0.0 && p.seconds > 0.0);
-    let mse_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.mse.ln())).collect();
-    let rmse_spp: Vec<(f64, f64)> = valid().map(|p| (p.samples().ln(), p.rmse.ln())).collect();
+    let valid = || points.iter().filter(|p| p.error > 0.0 && p.seconds > 0.0);
+    let error_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.error.ln())).collect();
+    // The root of the error (RMSE, or relative RMSE) against spp.
+    let root_spp: Vec<(f64, f64)> = valid()
+        .map(|p| (p.samples().ln(), 0.5 * p.error.ln()))
+        .collect();
     let last = points.last();
     let techniques = &variant.techniques;
     let adaptive = match variant.adaptive {
@@ -132,13 +143,13 @@ pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec
             .chain([(ADAPTIVE.name.to_string(), adaptive.to_string())])
             .collect(),
         efficiency: last.map_or(f64::NAN, |p| p.efficiency),
-        mse_time_slope: fit_line(&mse_time).map_or(f64::NAN, |(_, b)| b),
-        rmse_spp_slope: fit_line(&rmse_spp).map_or(f64::NAN, |(_, b)| b),
+        mse_time_slope: fit_line(&error_time).map_or(f64::NAN, |(_, b)| b),
+        rmse_spp_slope: fit_line(&root_spp).map_or(f64::NAN, |(_, b)| b),
         points,
     }
 }
 
-/// The line `ln MSE = a + b ln seconds` of a curve. Render times of small images are
+/// The line `ln error = a + b ln seconds` of a curve (the sweep's metric; "MSE" below). Render times of small images are
 /// dominated by timer and scheduling noise, so a uniform curve's error is not fitted
 /// against them: `b` is the least-squares slope of ln MSE against ln spp (-1 when that is
 /// not negative, as for Monte Carlo), and time is taken proportional to spp at the curve's
@@ -156,14 +167,14 @@ pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
     let valid: Vec<&Point> = c
         .points
         .iter()
-        .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
+        .filter(|p| p.error > 0.0 && p.seconds > 0.0)
         .collect();
     let adaptive = valid.iter().any(|p| p.noise_target.is_some());
     let x = |p: &Point| match adaptive {
         true => p.seconds,
         false => p.spp as f64,
     };
-    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), p.mse.ln())).collect();
+    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), p.error.ln())).collect();
     let (a, b) = match fit_line(&pts) {
         Some((a, b)) if b < 0.0 => (a, b),
         _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,

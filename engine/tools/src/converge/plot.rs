@@ -7,7 +7,7 @@
 //! registered with plotters' `ab_glyph` text backend, so plots render the same on a machine
 //! without any font installed (plotters' default `ttf` backend asks the system's fontconfig).
 
-use crate::converge::Sweep;
+use crate::converge::{ErrorMetric, Sweep};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -39,8 +39,8 @@ fn register_font() -> Result<(), String> {
     .clone()
 }
 
-/// One curve's drawable points: `(seconds, rmse, rmse of the best repeat, of the worst)`,
-/// leaving out points whose corrected MSE is not positive.
+/// One curve's drawable points: `(seconds, root of the error, of the best repeat's, of the worst's)`,
+/// leaving out points whose corrected error is not positive.
 fn drawable(sweep: &Sweep) -> Vec<Vec<(f64, f64, f64, f64)>> {
     sweep
         .curves
@@ -48,10 +48,15 @@ fn drawable(sweep: &Sweep) -> Vec<Vec<(f64, f64, f64, f64)>> {
         .map(|c| {
             c.points
                 .iter()
-                .filter(|p| p.mse > 0.0 && p.seconds > 0.0)
+                .filter(|p| p.error > 0.0 && p.seconds > 0.0)
                 .map(|p| {
-                    let lo = p.mse_min.max(p.mse * 1e-3).sqrt();
-                    (p.seconds, p.rmse, lo, p.mse_max.max(p.mse).sqrt())
+                    let lo = p.error_min.max(p.error * 1e-3).sqrt();
+                    (
+                        p.seconds,
+                        p.error.sqrt(),
+                        lo,
+                        p.error_max.max(p.error).sqrt(),
+                    )
                 })
                 .collect()
         })
@@ -90,7 +95,10 @@ where
     chart
         .configure_mesh()
         .x_desc("render time (s)")
-        .y_desc("RMSE vs reference")
+        .y_desc(match sweep.metric {
+            ErrorMetric::Mse => "RMSE vs reference",
+            ErrorMetric::RelMse => "relative RMSE vs reference",
+        })
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
         .x_label_formatter(&|x| seconds_label(*x))
@@ -105,8 +113,10 @@ where
             .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), style))
             .map_err(e)?
             .label(format!(
-                "{}   1/(MSE\u{b7}s) = {:.3e}",
-                c.label, c.efficiency
+                "{}   1/({}\u{b7}s) = {:.3e}",
+                c.label,
+                sweep.metric.label(),
+                c.efficiency
             ))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
         chart

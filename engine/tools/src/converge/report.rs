@@ -10,9 +10,9 @@ pub struct Comparison {
     pub label: String,
     /// Its efficiency.
     pub efficiency: f64,
-    /// Its MSE at the common time over the best one's.
-    pub equal_time_mse_ratio: f64,
-    /// Its time to reach the common MSE over the best one's.
+    /// Its error (the sweep's metric) at the common time over the best one's.
+    pub equal_time_error_ratio: f64,
+    /// Its time to reach the common error over the best one's.
     pub equal_error_time_ratio: f64,
 }
 
@@ -21,8 +21,8 @@ pub struct Comparison {
 pub struct ComparisonTable {
     /// The time every curve reaches (the smallest of their largest times).
     pub equal_time_seconds: f64,
-    /// The MSE every curve reaches (the largest of their smallest MSEs).
-    pub equal_error_mse: f64,
+    /// The error every curve reaches (the largest of their smallest errors).
+    pub equal_error: f64,
     /// One row per curve.
     pub rows: Vec<Comparison>,
 }
@@ -45,7 +45,7 @@ impl Sweep {
             .filter_map(|c| {
                 c.points
                     .iter()
-                    .map(|p| p.mse)
+                    .map(|p| p.error)
                     .filter(|&m| m > 0.0)
                     .reduce(f64::min)
             })
@@ -64,7 +64,7 @@ impl Sweep {
         let (best_mse, best_time) = (best(&mses), best(&times));
         ComparisonTable {
             equal_time_seconds: t,
-            equal_error_mse: e,
+            equal_error: e,
             rows: self
                 .curves
                 .iter()
@@ -72,7 +72,7 @@ impl Sweep {
                 .map(|(c, (m, s))| Comparison {
                     label: c.label.clone(),
                     efficiency: c.efficiency,
-                    equal_time_mse_ratio: m / best_mse,
+                    equal_time_error_ratio: m / best_mse,
                     equal_error_time_ratio: s / best_time,
                 })
                 .collect(),
@@ -113,10 +113,11 @@ impl Sweep {
                 (None, None) => "?".into(),
             }
         );
+        let m = self.metric.label();
         let _ = writeln!(
             s,
-            "equal time: {:.3} s; equal error: MSE {:.3e}",
-            cmp.equal_time_seconds, cmp.equal_error_mse
+            "equal time: {:.3} s; equal error: {m} {:.3e}",
+            cmp.equal_time_seconds, cmp.equal_error
         );
         let _ = writeln!(
             s,
@@ -124,10 +125,10 @@ impl Sweep {
             "technique",
             "max spp",
             "seconds",
-            "1/(MSE*s)",
+            format!("1/({m}*s)"),
             "RMSE~spp^b",
-            "equal-time MSE",
-            "equal-MSE time"
+            format!("equal-time {m}"),
+            format!("equal-{m} time")
         );
         for (c, row) in self.curves.iter().zip(&cmp.rows) {
             let last = c.points.last();
@@ -139,7 +140,7 @@ impl Sweep {
                 last.map_or(f64::NAN, |p| p.seconds),
                 c.efficiency,
                 c.rmse_spp_slope,
-                row.equal_time_mse_ratio,
+                row.equal_time_error_ratio,
                 row.equal_error_time_ratio
             );
         }
@@ -189,6 +190,7 @@ impl Sweep {
             "width": self.width,
             "height": self.height,
             "reference": self.reference,
+            "metric": self.metric,
             "curves": self.curves,
             "comparison": self.comparison(),
         })

@@ -51,13 +51,19 @@ fn a_point_against_itself_has_zero_error_and_bias() {
             spp_min: 4,
         }],
     };
-    let p = point(&raw, &img, &info).unwrap();
+    let p = point(&raw, &img, &info, ErrorMetric::Mse).unwrap();
     assert_eq!((p.mse, p.relmse, p.bias), (0.0, 0.0, [0.0; 3]));
     assert!(p.efficiency.is_nan());
     assert_eq!((p.noise_target, p.spp_mean), (None, None));
     let other = noisy(4, 0.1);
-    let q = point(&raw, &other, &info).unwrap();
+    let q = point(&raw, &other, &info, ErrorMetric::Mse).unwrap();
     assert!(q.mse > 0.0 && q.relmse > 0.0 && q.efficiency > 0.0);
+    assert_eq!((q.error, q.efficiency), (q.mse, 1.0 / (q.mse * 0.5)));
+    // The relMSE metric: the same measures, compared by the relMSE (which differs).
+    let r = point(&raw, &other, &info, ErrorMetric::RelMse).unwrap();
+    assert_eq!((r.mse, r.relmse), (q.mse, q.relmse));
+    assert_ne!(r.relmse, r.mse);
+    assert_eq!((r.error, r.efficiency), (r.relmse, 1.0 / (r.relmse * 0.5)));
 }
 
 #[test]
@@ -83,6 +89,9 @@ fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
                 relmse_min: k / t,
                 relmse_max: k / t,
                 bias: [0.0; 3],
+                error: k / t,
+                error_min: k / t,
+                error_max: k / t,
                 efficiency: 1.0 / k,
                 noise_target: None,
                 spp_mean: None,
@@ -104,11 +113,12 @@ fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
             noise_mse: 0.0,
             noise_relmse: 0.0,
         },
+        metric: ErrorMetric::Mse,
         curves: vec![mk("a", 1.0), mk("b", 4.0)],
     };
     let c = sweep.comparison();
-    assert!((c.rows[0].equal_time_mse_ratio - 1.0).abs() < 1e-9);
-    assert!((c.rows[1].equal_time_mse_ratio - 4.0).abs() < 1e-9);
+    assert!((c.rows[0].equal_time_error_ratio - 1.0).abs() < 1e-9);
+    assert!((c.rows[1].equal_time_error_ratio - 4.0).abs() < 1e-9);
     assert!((c.rows[1].equal_error_time_ratio - 4.0).abs() < 1e-9);
     assert_eq!(sweep.most_efficient().unwrap().label, "a");
     let (a, b) = fit_line(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]).unwrap();
@@ -149,6 +159,9 @@ fn made(spp: u32, seconds: f64, mse: f64, target: Option<(f64, f64)>) -> Point {
         relmse_min: mse,
         relmse_max: mse,
         bias: [0.0; 3],
+        error: mse,
+        error_min: mse,
+        error_max: mse,
         efficiency: 1.0 / (mse * seconds),
         noise_target: target.map(|(t, _)| t),
         spp_mean: target.map(|(_, m)| m),
@@ -169,7 +182,7 @@ fn an_adaptive_point_records_its_target_and_mean_spp_in_csv_and_json() {
         noise_target: Some(0.1),
         renders: vec![sample(40.0), sample(50.0)],
     };
-    let p = point(&raw, &img, &exact()).unwrap();
+    let p = point(&raw, &img, &exact(), ErrorMetric::Mse).unwrap();
     // The mean over the repeats of each render's mean spp; the cap stays the spp.
     assert_eq!(
         (p.spp, p.noise_target, p.spp_mean),
@@ -186,6 +199,7 @@ fn an_adaptive_point_records_its_target_and_mean_spp_in_csv_and_json() {
         width: 64,
         height: 64,
         reference: exact(),
+        metric: ErrorMetric::Mse,
         curves: vec![
             curve(
                 &TechniqueRegistry::new(Default::default(), []),
@@ -250,6 +264,7 @@ fn the_comparison_fits_an_adaptive_curve_against_its_seconds() {
         width: 1,
         height: 1,
         reference: exact(),
+        metric: ErrorMetric::Mse,
         curves: vec![
             curve(&registry, &Techniques::default().into(), uniform),
             curve(&registry, &on, adaptive),
@@ -257,8 +272,14 @@ fn the_comparison_fits_an_adaptive_curve_against_its_seconds() {
     };
     let c = sweep.comparison();
     assert!((c.equal_time_seconds - 4.0).abs() < 1e-12);
-    assert!((c.rows[0].equal_time_mse_ratio - 2.0).abs() < 1e-9, "{c:?}");
-    assert!((c.rows[1].equal_time_mse_ratio - 1.0).abs() < 1e-9, "{c:?}");
+    assert!(
+        (c.rows[0].equal_time_error_ratio - 2.0).abs() < 1e-9,
+        "{c:?}"
+    );
+    assert!(
+        (c.rows[1].equal_time_error_ratio - 1.0).abs() < 1e-9,
+        "{c:?}"
+    );
     let r = c.rows[0].equal_error_time_ratio;
     assert!((r - 2f64.sqrt()).abs() < 1e-9, "{c:?}");
 }
@@ -286,6 +307,7 @@ fn the_image_memory_guard_counts_the_adaptive_points() {
             techniques: None,
         },
         render: RenderOptions::default(),
+        metric: ErrorMetric::Mse,
     };
     assert!(check_kept_images(&options(11), 4096, 4096).is_ok());
     let e = check_kept_images(&options(12), 4096, 4096).unwrap_err();
