@@ -104,7 +104,10 @@ pub trait Integrator: Sync {
     }
 
     /// Every batch of the iteration has had its light pass; their camera passes follow.
-    fn end_light_pass(&self) {}
+    /// What it does between them is recorded in `stats` (one tile's of the group).
+    fn end_light_pass(&self, stats: &mut SystemStats) {
+        let _ = stats;
+    }
 }
 
 /// Film plus AOV accumulators for one tile.

@@ -491,7 +491,9 @@ fn render_passes<I: Integrator>(
                     let camera_samples = group.iter().map(|(t, _)| t.active_pixels()).sum();
                     integrator.begin_iteration(sample, camera_samples);
                     run_tiles(group, sample..sample + 1, true);
-                    integrator.end_light_pass();
+                    if let Some((_, stats)) = group.first_mut() {
+                        integrator.end_light_pass(stats);
+                    }
                     run_tiles(group, sample..sample + 1, false);
                 }
             }

@@ -449,7 +449,8 @@ impl Integrator for Bidirectional {
 
     /// Gathers the iteration's light vertices for merging, in batch order (so the image
     /// does not depend on which thread traced which batch), and hashes them.
-    fn end_light_pass(&self) {
+    fn end_light_pass(&self, stats: &mut SystemStats) {
+        let start = std::time::Instant::now();
         let traced = lock(&self.traced);
         let mut keys: Vec<_> = traced.keys().copied().collect();
         keys.sort_unstable();
@@ -463,6 +464,8 @@ impl Integrator for Bidirectional {
             it.vertices.extend_from(&traced[&k]);
         }
         it.vertices.build(it.radius.max(f32::MIN_POSITIVE));
+        let seconds = start.elapsed().as_secs_f64();
+        stats.record(System::Merge, it.vertices.len(), seconds);
     }
 }
 

@@ -105,10 +105,14 @@ impl Sweep {
             match (&self.reference.path, self.reference.spp) {
                 (Some(p), _) => p.clone(),
                 (None, Some(n)) => format!(
-                    "rendered, {} at {n} spp ({:.2} s), noise MSE {:.3e} subtracted",
+                    "rendered, {} at {n} spp ({:.2} s), noise {} {:.3e} subtracted",
                     self.reference.techniques.as_deref().unwrap_or("?"),
                     self.reference.seconds.unwrap_or(f64::NAN),
-                    self.reference.noise_mse
+                    self.metric.label(),
+                    match self.metric {
+                        ErrorMetric::Mse => self.reference.noise_mse,
+                        ErrorMetric::RelMse => self.reference.noise_relmse,
+                    }
                 ),
                 (None, None) => "?".into(),
             }
