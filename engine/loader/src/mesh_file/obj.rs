@@ -13,6 +13,7 @@
 //! One difference: `l` (polyline) statements are skipped like `p` (tobj made triangles of
 //! those with three or more corners while they were counted as skipped).
 
+use rayon::prelude::*;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 
@@ -25,41 +26,79 @@ use super::{check_normals, MeshData};
 /// The error is a complete sentence naming the full path and, for a malformed statement or
 /// a face index to an entry that does not exist, the line and its text.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
+    load_obj_in_blocks(path, BLOCK_BYTES)
+}
+
+/// [`load_obj`] reading about `block_bytes` of whole lines at a time (the result does not
+/// depend on it; the tests read every file in blocks of one line too).
+fn load_obj_in_blocks(path: &Path, block_bytes: usize) -> Result<MeshData, String> {
     let shown = path.display();
     let file =
         std::fs::File::open(path).map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
     let mut input = BufReader::with_capacity(1 << 16, file);
     let what = format!("cannot parse OBJ file `{shown}`");
     let mut obj = ObjReader::default();
-    let mut bytes = Vec::new();
+    // Whole lines, about `BLOCK_BYTES` at a time: their positions, normals and texture
+    // coordinates are parsed in parallel, then every line is applied in order.
+    let (mut block, mut ends) = (Vec::new(), Vec::new());
     let mut number = 0usize;
     loop {
-        bytes.clear();
-        let read = input
-            .read_until(b'\n', &mut bytes)
-            .map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
-        if read == 0 {
+        block.clear();
+        ends.clear();
+        while block.len() < block_bytes {
+            let read = input
+                .read_until(b'\n', &mut block)
+                .map_err(|e| format!("cannot read OBJ file `{shown}`: {e}"))?;
+            if read == 0 {
+                break;
+            }
+            ends.push(block.len());
+        }
+        if ends.is_empty() {
             break;
         }
-        number += 1;
-        // Files written on Windows may start with a UTF-8 byte-order mark, and comments in
-        // Latin-1 are common: the mark is dropped and bytes that are not UTF-8 become U+FFFD
-        // (harmless in a comment, still an error in a number).
-        let text = if number == 1 {
-            bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes)
-        } else {
-            &bytes[..]
-        };
-        let line = match std::str::from_utf8(text) {
-            Ok(line) => std::borrow::Cow::Borrowed(line),
-            Err(_) => String::from_utf8_lossy(text),
-        };
-        let line = line.strip_suffix('\n').unwrap_or(&line);
-        let line = line.strip_suffix('\r').unwrap_or(line);
-        obj.statement(line).map_err(|e| match e {
-            Error::Line(e) => format!("{what}: line {number}: {e} in `{}`", line.trim()),
-            Error::Index(e) => e.located(path, &what),
-        })?;
+        let line_bytes = |k: usize| &block[if k == 0 { 0 } else { ends[k - 1] }..ends[k]];
+        let first = number + 1;
+        let parsed: Vec<Parsed> = (0..ends.len())
+            .into_par_iter()
+            .map(|k| match first + k {
+                1 => Parsed::Other,
+                _ => parse_entry(line_bytes(k)),
+            })
+            .collect();
+        for (k, entry) in parsed.into_iter().enumerate() {
+            number += 1;
+            match entry {
+                Parsed::Position(p) => obj.position(p),
+                Parsed::Normal(n) => obj.normals.push(n),
+                Parsed::Texcoord(t) => obj.texcoords.push(t),
+                Parsed::Triangle(raw) => obj.triangle(raw),
+                Parsed::Other => {
+                    let bytes = line_bytes(k);
+                    // Files written on Windows may start with a UTF-8 byte-order mark, and
+                    // comments in Latin-1 are common: the mark is dropped and bytes that are
+                    // not UTF-8 become U+FFFD (harmless in a comment, still an error in a
+                    // number).
+                    let text = if number == 1 {
+                        bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
+                    } else {
+                        bytes
+                    };
+                    let line = match std::str::from_utf8(text) {
+                        Ok(line) => std::borrow::Cow::Borrowed(line),
+                        Err(_) => String::from_utf8_lossy(text),
+                    };
+                    let line = line.strip_suffix('\n').unwrap_or(&line);
+                    let line = line.strip_suffix('\r').unwrap_or(line);
+                    obj.statement(line).map_err(|e| match e {
+                        Error::Line(e) => {
+                            format!("{what}: line {number}: {e} in `{}`", line.trim())
+                        }
+                        Error::Index(e) => e.located(path, &what),
+                    })?;
+                }
+            }
+        }
     }
     obj.end_object().map_err(|e| e.located(path, &what))?;
     // Errors in the vertices found at an object's end wait for the whole file to be read,
@@ -88,6 +127,76 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
         return Err(format!("OBJ file `{shown}` contains no faces"));
     }
     Ok(mesh)
+}
+
+/// About how many bytes of whole lines are read, and their entries parsed in parallel, at a
+/// time (the file is never held whole: issue 36).
+const BLOCK_BYTES: usize = 1 << 22;
+
+/// A line as the parallel pass reads it: a plain position (`v x y z`, nothing after), normal,
+/// texture coordinate or triangle, parsed as [`ObjReader::statement`] parses them (a
+/// triangle's indices resolved later, in order, against the entries read by then); anything
+/// else (other faces, objects, a position with a weight or a colour, the first line, text
+/// that is not UTF-8, a malformed entry) is left to `statement`, in order.
+enum Parsed {
+    Position([f32; 3]),
+    Normal([f32; 3]),
+    Texcoord([f32; 2]),
+    /// `f` with three corners, each `(v, vt, vn)` as written (0: absent).
+    Triangle([[isize; 3]; 3]),
+    Other,
+}
+
+/// The [`Parsed`] form of one line (with its line break).
+fn parse_entry(bytes: &[u8]) -> Parsed {
+    let Ok(line) = std::str::from_utf8(bytes) else {
+        return Parsed::Other;
+    };
+    let line = line.strip_suffix('\n').unwrap_or(line);
+    let line = line.strip_suffix('\r').unwrap_or(line);
+    let mut words = line.split_whitespace();
+    let parsed = match words.next() {
+        Some("v") => floats::<3>(&mut words)
+            .filter(|_| words.next().is_none())
+            .map(Parsed::Position),
+        Some("vn") => floats::<3>(&mut words).map(Parsed::Normal),
+        Some("vt") => floats::<2>(&mut words).map(Parsed::Texcoord),
+        Some("f") => triangle_corners(&mut words).map(Parsed::Triangle),
+        _ => None,
+    };
+    parsed.unwrap_or(Parsed::Other)
+}
+
+/// The three corners of a triangle's `f` line as written (0 for an absent index, which
+/// [`resolve`] takes for none, as it takes a written 0); `None` unless there are exactly
+/// three, each `v`, `v/vt`, `v//vn` or `v/vt/vn` of integers (as [`ObjReader::face`] reads
+/// them: empty fields skipped, a fourth non-empty one an error).
+fn triangle_corners<'a>(words: &mut impl Iterator<Item = &'a str>) -> Option<[[isize; 3]; 3]> {
+    let mut raw = [[0isize; 3]; 3];
+    for corner in &mut raw {
+        for (slot, field) in words.next()?.split('/').enumerate() {
+            if field.is_empty() {
+                continue;
+            }
+            *corner.get_mut(slot)? = field.parse().ok()?;
+        }
+    }
+    words.next().is_none().then_some(raw)
+}
+
+/// The 0-based entry of a face index (1-based; negative counts back from the `count`
+/// entries read so far; 0, as an absent one, resolves to [`MISSING`]).
+fn resolve(index: isize, count: usize) -> u32 {
+    let resolved = if index < 0 {
+        (count as isize).wrapping_add(index) as usize
+    } else {
+        (index as usize).wrapping_sub(1)
+    };
+    if resolved == usize::MAX {
+        MISSING
+    } else {
+        resolved.min(MISSING as usize - 1) as u32
+    }
 }
 
 /// A corner's index that names no entry: the face gave none (`1//3` has no `vt`), or an
@@ -176,6 +285,12 @@ impl IndexError {
 }
 
 impl ObjReader {
+    /// A position read (`v`).
+    fn position(&mut self, p: [f32; 3]) {
+        self.positions.push(p);
+        self.by_position.push((0, 0));
+    }
+
     /// Reads one line (without its line break). The error names what is wrong; the caller
     /// adds the line.
     fn statement(&mut self, line: &str) -> Result<(), Error> {
@@ -183,8 +298,7 @@ impl ObjReader {
         match words.next() {
             Some("v") => {
                 let p = floats::<3>(&mut words).ok_or("a position needs three numbers")?;
-                self.positions.push(p);
-                self.by_position.push((0, 0));
+                self.position(p);
                 self.vertex_extra(&mut words)?;
             }
             Some("vt") => {
@@ -275,16 +389,7 @@ impl ObjReader {
                     .ok_or_else(|| {
                         format!("face corner `{corner}` is not v, v/vt, v//vn or v/vt/vn")
                     })?;
-                let resolved = if index < 0 {
-                    (counts[slot] as isize).wrapping_add(index) as usize
-                } else {
-                    (index - 1) as usize
-                };
-                key[slot] = if resolved == usize::MAX {
-                    MISSING
-                } else {
-                    resolved.min(MISSING as usize - 1) as u32
-                };
+                key[slot] = resolve(index, counts[slot]);
             }
             // The first three corners wait: a face of fewer is not a surface.
             if n < 3 {
@@ -317,6 +422,19 @@ impl ObjReader {
             self.mesh.triangles.push([c[0], c[k - 1], c[k]]);
         }
         Ok(())
+    }
+
+    /// A triangle `f a b c` whose corners the parallel pass read ([`Parsed::Triangle`]):
+    /// as [`Self::face`] makes it.
+    fn triangle(&mut self, raw: [[isize; 3]; 3]) {
+        let counts = [
+            self.positions.len(),
+            self.texcoords.len(),
+            self.normals.len(),
+        ];
+        let keys = raw.map(|c| [0, 1, 2].map(|slot| resolve(c[slot], counts[slot])));
+        let ids = keys.map(|k| self.vertex(k));
+        self.mesh.triangles.push(ids);
     }
 
     /// The current object's vertex id of `key`, a new one on its first use.

@@ -4,16 +4,26 @@
 
 use glam::{DVec3, Vec2};
 
-use super::load_obj;
+use super::{load_obj, load_obj_in_blocks};
 use crate::mesh_file::MeshData;
 
-/// `text` written to a scratch file and read.
+/// `text` written to a scratch file and read; also read a line at a time and in blocks of
+/// 16 bytes (the lines parsed in parallel per block, then applied in order), which must
+/// give the same mesh or the same error.
 fn read(name: &str, text: &str) -> Result<MeshData, String> {
     let dir = std::env::temp_dir().join(format!("risotto-obj-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.obj"));
     std::fs::write(&path, text).unwrap();
-    load_obj(&path)
+    let whole = load_obj(&path);
+    for block_bytes in [1, 16] {
+        assert_eq!(
+            load_obj_in_blocks(&path, block_bytes),
+            whole,
+            "{name} in blocks of {block_bytes} bytes"
+        );
+    }
+    whole
 }
 
 /// A corner names a position before its `v` line (checked at the object's end, as tobj
@@ -150,5 +160,26 @@ fn errors_name_the_line_and_the_value() {
         let e = read(name, &text).expect_err(name);
         assert!(e.contains(&format!("{name}.obj")), "{name}: {e}");
         assert!(e.contains(want), "{name}: {e}");
+    }
+}
+
+/// A byte-order mark, CRLF line ends and a Latin-1 comment (not UTF-8): the same mesh read
+/// whole or a line at a time (the first line and lines that are not UTF-8 are left to the
+/// in-order pass, the others parsed in parallel).
+#[test]
+fn byte_order_mark_crlf_and_latin1_comments_read_alike_in_any_block() {
+    let dir = std::env::temp_dir().join(format!("risotto-obj-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bom_crlf.obj");
+    let mut bytes = b"\xef\xbb\xbfv 0 0 0\r\n# caf\xe9\r\nv 1 0 0\r\nv 0 1 0\r\n".to_vec();
+    bytes.extend_from_slice(b"vn 0 0 1\r\nvt 0.5 0.25\r\nf 1/1/1 2/1/1 3/1/1\r\n");
+    std::fs::write(&path, &bytes).unwrap();
+    let whole = load_obj(&path).unwrap();
+    assert_eq!(whole.positions.len(), 3);
+    assert_eq!(whole.positions[1], DVec3::new(1.0, 0.0, 0.0));
+    assert_eq!(whole.uvs, [Vec2::new(0.5, 0.25); 3]);
+    assert_eq!(whole.normals, [DVec3::Z; 3]);
+    for block_bytes in [1, 7, 1 << 20] {
+        assert_eq!(load_obj_in_blocks(&path, block_bytes).unwrap(), whole);
     }
 }
