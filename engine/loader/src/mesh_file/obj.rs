@@ -1,4 +1,6 @@
-//! Wavefront OBJ, read line by line: positions, `vn` normals and `vt` texture coordinates,
+//! Wavefront OBJ, read in blocks of whole lines (their entries and triangles parsed in
+//! parallel, then every line applied in order): positions, `vn` normals and `vt` texture
+//! coordinates,
 //! with every `(v, vt, vn)` combination an object's faces use made one vertex, so the
 //! position, normal and uv streams share one index and stay in step.
 //!
