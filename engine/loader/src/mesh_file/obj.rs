@@ -1,8 +1,7 @@
 //! Wavefront OBJ, read in blocks of whole lines (their entries and triangles parsed in
 //! parallel, then every line applied in order): positions, `vn` normals and `vt` texture
-//! coordinates,
-//! with every `(v, vt, vn)` combination an object's faces use made one vertex, so the
-//! position, normal and uv streams share one index and stay in step.
+//! coordinates, with every `(v, vt, vn)` combination an object's faces use made one vertex,
+//! so the position, normal and uv streams share one index and stay in step.
 //!
 //! Our own reader (it replaced tobj, issue 36): tobj keeps every face of the file as a list
 //! of `(v, vt, vn)` corners (an enum of 80 bytes a face, plus its index map) until the end
