@@ -789,3 +789,180 @@ fn closed_forms_are_what_the_limits_say() {
     let p = expected_point_light();
     assert!(p > 0.0 && p < ALBEDO as f64 / (4.0 * std::f64::consts::PI) / 0.25);
 }
+
+/// A user's integrator that renders in iterations (`Integrator::iteration_paths`), as the
+/// built-in `vcm` does: it logs every call, and a batch's radiance is the number of light
+/// passes its iteration ran before it.
+struct IterationProbe {
+    max_paths: usize,
+    log: std::sync::Mutex<Vec<Call>>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Call {
+    Begin {
+        sample: u32,
+        camera_samples: usize,
+    },
+    Light {
+        pixel: u32,
+        sample: u32,
+        paths: usize,
+    },
+    End,
+    Camera {
+        pixel: u32,
+        sample: u32,
+        paths: usize,
+    },
+}
+
+impl IterationProbe {
+    fn push(&self, c: Call) {
+        self.log.lock().unwrap().push(c);
+    }
+}
+
+impl Integrator for IterationProbe {
+    type Worker = ();
+
+    fn run_batch(
+        &self,
+        _: &CompiledScene,
+        batch: &mut PathBatch,
+        _: &mut (),
+        _: &mut SystemStats,
+        _: &Bump,
+    ) {
+        let p = &batch.paths;
+        self.push(Call::Camera {
+            pixel: p.pixel[0],
+            sample: p.sample[0],
+            paths: p.len(),
+        });
+        let log = self.log.lock().unwrap();
+        let begin = log
+            .iter()
+            .rposition(|c| matches!(c, Call::Begin { .. }))
+            .unwrap();
+        let lights = log[begin..]
+            .iter()
+            .filter(|c| matches!(c, Call::Light { .. }))
+            .count();
+        batch.paths.radiance.fill(Rgb::splat(lights as f32));
+    }
+
+    fn iteration_paths(&self) -> Option<usize> {
+        Some(self.max_paths)
+    }
+
+    fn begin_iteration(&self, sample: u32, camera_samples: usize) {
+        self.push(Call::Begin {
+            sample,
+            camera_samples,
+        });
+    }
+
+    fn light_pass(
+        &self,
+        _: &CompiledScene,
+        batch: &PathBatch,
+        _: &mut (),
+        _: &mut SystemStats,
+        _: &Bump,
+    ) {
+        let p = &batch.paths;
+        self.push(Call::Light {
+            pixel: p.pixel[0],
+            sample: p.sample[0],
+            paths: p.len(),
+        });
+    }
+
+    fn end_light_pass(&self, _: &mut SystemStats) {
+        self.push(Call::End);
+    }
+}
+
+/// The iteration contract, from a plug-in's side: a user's integrator gets one iteration per
+/// sample index and group of tiles (at most its `iteration_paths` pixels a group, at least
+/// one tile), every batch of the iteration first in its light pass and then, after
+/// `end_light_pass`, in its camera pass, the same batches in both, each pixel and sample
+/// once; and the image is what its camera passes made.
+#[test]
+fn a_user_integrator_renders_in_iterations() {
+    let (w, h, spp) = (32u32, 24u32, 3u32);
+    let scene = Scene::new(
+        perspective(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 40.0, w, h),
+        settings(w, h, spp, 4),
+    )
+    .compile()
+    .unwrap();
+    // 16 x 16 tiles, row by row: 256, 256, 128 and 128 pixels; at most 600 a group takes
+    // two tiles (600 / 256), so groups of 512 and 256 pixels. A tile's batch is its pixels
+    // at one sample index (a batch never cuts a pixel's run of samples).
+    let probe = IterationProbe {
+        max_paths: 600,
+        log: Default::default(),
+    };
+    let options = RenderOptions {
+        threads: Some(2),
+        tile_size: 16,
+        batch_size: 64,
+        ..RenderOptions::default()
+    };
+    let out = render_with(&probe, &scene, &options, &|_| {}).unwrap();
+    let log = probe.log.into_inner().unwrap();
+    let mut seen = std::collections::HashSet::new();
+    let mut iterations = 0;
+    for it in log.split(|c| matches!(c, Call::Begin { .. })).skip(1) {
+        iterations += 1;
+        let end = it.iter().position(|c| *c == Call::End).expect("an end");
+        let key = |c: &Call| match *c {
+            Call::Light {
+                pixel,
+                sample,
+                paths,
+            }
+            | Call::Camera {
+                pixel,
+                sample,
+                paths,
+            } => (pixel, sample, paths),
+            _ => panic!("{c:?} inside an iteration's pass"),
+        };
+        let mut light: Vec<_> = it[..end].iter().map(key).collect();
+        let mut camera: Vec<_> = it[end + 1..].iter().map(key).collect();
+        assert!(!light.is_empty(), "an iteration without batches");
+        light.sort_unstable();
+        camera.sort_unstable();
+        assert_eq!(light, camera, "the two passes' batches differ");
+        let paths: usize = camera.iter().map(|b| b.2).sum();
+        assert!(paths <= 600, "an iteration of {paths} pixels");
+        for b in camera {
+            assert!(seen.insert((b.0, b.1)), "batch {b:?} rendered twice");
+        }
+    }
+    let begins: Vec<(u32, usize)> = log
+        .iter()
+        .filter_map(|c| match *c {
+            Call::Begin {
+                sample,
+                camera_samples,
+            } => Some((sample, camera_samples)),
+            _ => None,
+        })
+        .collect();
+    // Two groups of two tiles for each of 3 sample indices, in sample order; every pixel
+    // and sample rendered.
+    assert_eq!(iterations, 6);
+    let sizes: Vec<usize> = begins.iter().map(|b| b.1).collect();
+    assert_eq!(sizes, [512, 256].repeat(3));
+    assert!(begins.windows(2).all(|b| b[0].0 <= b[1].0));
+    assert_eq!(seen.len(), 4 * 3);
+    // Every camera batch came after both light passes of its iteration.
+    assert!(
+        out.beauty.pixels.iter().all(|p| p.to_array() == [2.0; 3]),
+        "a camera pass ran before its iteration's light passes were done"
+    );
+}
