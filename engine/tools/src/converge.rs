@@ -218,13 +218,8 @@ pub struct Point {
     pub relmse_max: f64,
     /// Mean bias of the image mean per channel, `mean(test) - mean(reference)`.
     pub bias: [f64; 3],
-    /// The sweep's metric ([`Sweep::metric`]): `mse` or `relmse`.
-    pub error: f64,
-    /// Its smallest value over the repeats.
-    pub error_min: f64,
-    /// Its largest value over the repeats.
-    pub error_max: f64,
-    /// `1 / (error x seconds)` (NaN, `null` in JSON, when `error <= 0`).
+    /// `1 / (error x seconds)` with the sweep's metric ([`Sweep::metric`]) (NaN, `null` in
+    /// JSON, when the error is not positive).
     pub efficiency: f64,
     /// The relative error an adaptive point's pixels stop at; `None` (absent in JSON) for
     /// a uniform point.
@@ -237,6 +232,14 @@ pub struct Point {
 }
 
 impl Point {
+    /// The point's error by `metric`: its mean, smallest and largest over the repeats.
+    pub fn error(&self, metric: ErrorMetric) -> (f64, f64, f64) {
+        match metric {
+            ErrorMetric::Mse => (self.mse, self.mse_min, self.mse_max),
+            ErrorMetric::RelMse => (self.relmse, self.relmse_min, self.relmse_max),
+        }
+    }
+
     /// The samples per pixel the point took: its mean for an adaptive point, else its spp.
     pub fn samples(&self) -> f64 {
         self.spp_mean.unwrap_or(self.spp as f64)
@@ -609,7 +612,7 @@ pub fn run(
         for p in points {
             pts.push(point(p, &reference, &info, options.metric)?);
         }
-        curves.push(curve(&registry, variant, pts));
+        curves.push(curve(&registry, variant, pts, options.metric));
     }
     Ok(Sweep {
         width: w,

@@ -2,6 +2,7 @@
 //! intersector reports: they live here because they need both.
 
 use crate::geometry::*;
+use crate::intersect::tests::closest_one;
 use crate::primitive::sphere_hit_dir;
 use crate::sampler::SplitMix64;
 use glam::{DVec3, Vec2, Vec3};
@@ -63,42 +64,17 @@ fn hit_is_front_agrees_with_the_surface_normal() {
         (Vec3::new(0.2, 0.1, 5.0), Vec3::new(0.6, 0.0, 0.8)), // sphere from inside
     ];
     for (o, d) in cases {
-        let n = 1;
-        let (mut t, mut prim) = (vec![0.0; n], vec![0; n]);
-        let (mut b1, mut b2) = (vec![0.0; n], vec![0.0; n]);
-        crate::intersect::intersect_closest(
-            &geom,
-            &[o],
-            &[d],
-            &[0.0],
-            &[f32::INFINITY],
-            &mut t,
-            &mut prim,
-            &mut b1,
-            &mut b2,
-        );
-        let s = geom.surface_at(prim[0], o, d, t[0], b1[0], b2[0]);
+        let (t, prim, b1, b2) = closest_one(&geom, o, d);
+        let s = geom.surface_at(prim, o, d, t, b1, b2);
         assert_eq!(
-            geom.hit_is_front(prim[0], o, d, t[0], b1[0]),
+            geom.hit_is_front(prim, o, d, t, b1),
             d.dot(s.ng) < 0.0,
             "ray from {o:?} along {d:?}"
         );
     }
     let front = |o: Vec3, d: Vec3| {
-        let (mut t, mut prim) = (vec![0.0], vec![0]);
-        let (mut b1, mut b2) = (vec![0.0], vec![0.0]);
-        crate::intersect::intersect_closest(
-            &geom,
-            &[o],
-            &[d],
-            &[0.0],
-            &[f32::INFINITY],
-            &mut t,
-            &mut prim,
-            &mut b1,
-            &mut b2,
-        );
-        geom.hit_is_front(prim[0], o, d, t[0], b1[0])
+        let (t, prim, b1, _) = closest_one(&geom, o, d);
+        geom.hit_is_front(prim, o, d, t, b1)
     };
     assert!(front(Vec3::new(0.0, 0.0, 2.0), -Vec3::Z));
     assert!(!front(Vec3::new(0.0, 0.0, -2.0), Vec3::Z));

@@ -50,7 +50,6 @@ impl RngExt for Rng {
     }
 }
 
-/// Every kernel this CPU runs.
 /// The closest hit of the one ray `o + t d` (`t` in `[0, inf)`) in `geom`: `(t, prim, b1, b2)`
 /// as [`intersect_closest`] writes them.
 pub(super) fn closest_one(geom: &SceneGeometry, o: Vec3, d: Vec3) -> (f32, u32, f32, f32) {
@@ -69,6 +68,7 @@ pub(super) fn closest_one(geom: &SceneGeometry, o: Vec3, d: Vec3) -> (f32, u32, 
     (t[0], prim[0], b1[0], b2[0])
 }
 
+/// Every kernel this CPU runs.
 fn backends() -> Vec<Backend> {
     let all = [Kernel::Portable, Kernel::Avx2];
     let b: Vec<Backend> = all.iter().filter_map(|k| k.backend()).collect();

@@ -63,10 +63,6 @@ pub(super) fn point(
     let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (m, t) = (mean(&mse), min(&seconds));
-    let error = match metric {
-        ErrorMetric::Mse => &mse,
-        ErrorMetric::RelMse => &relmse,
-    };
     let spp_mean: Vec<f64> = renders.iter().map(|s| s.spp_mean).collect();
     Ok(Point {
         spp: raw.spp,
@@ -82,10 +78,13 @@ pub(super) fn point(
         relmse_min: min(&relmse),
         relmse_max: max(&relmse),
         bias,
-        error: mean(error),
-        error_min: min(error),
-        error_max: max(error),
-        efficiency: efficiency(mean(error), t),
+        efficiency: efficiency(
+            match metric {
+                ErrorMetric::Mse => m,
+                ErrorMetric::RelMse => mean(&relmse),
+            },
+            t,
+        ),
         noise_target: raw.noise_target,
         spp_mean: raw.noise_target.map(|_| mean(&spp_mean)),
     })
@@ -119,12 +118,18 @@ pub fn fit_line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
 }
 
 /// A curve from its points.
-pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec<Point>) -> Curve {
-    let valid = || points.iter().filter(|p| p.error > 0.0 && p.seconds > 0.0);
-    let error_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), p.error.ln())).collect();
+pub(super) fn curve(
+    registry: &TechniqueRegistry,
+    variant: &Variant,
+    points: Vec<Point>,
+    metric: ErrorMetric,
+) -> Curve {
+    let error = |p: &Point| p.error(metric).0;
+    let valid = || points.iter().filter(|p| error(p) > 0.0 && p.seconds > 0.0);
+    let error_time: Vec<(f64, f64)> = valid().map(|p| (p.seconds.ln(), error(p).ln())).collect();
     // The root of the error (RMSE, or relative RMSE) against spp.
     let root_spp: Vec<(f64, f64)> = valid()
-        .map(|p| (p.samples().ln(), 0.5 * p.error.ln()))
+        .map(|p| (p.samples().ln(), 0.5 * error(p).ln()))
         .collect();
     let last = points.last();
     let techniques = &variant.techniques;
@@ -163,18 +168,19 @@ pub(super) fn curve(registry: &TechniqueRegistry, variant: &Variant, points: Vec
 /// while the uniform renders took 0.9 to 1.0 ms per spp, so a fit against the mean spp
 /// with one cost per sample would misplace its early points in time by up to 2x. Its renders take at least `2 min_spp` samples per pixel, so they are not
 /// the millisecond renders whose times are noise.
-pub(super) fn error_time_model(c: &Curve) -> Option<(f64, f64)> {
+pub(super) fn error_time_model(c: &Curve, metric: ErrorMetric) -> Option<(f64, f64)> {
+    let error = |p: &Point| p.error(metric).0;
     let valid: Vec<&Point> = c
         .points
         .iter()
-        .filter(|p| p.error > 0.0 && p.seconds > 0.0)
+        .filter(|p| error(p) > 0.0 && p.seconds > 0.0)
         .collect();
     let adaptive = valid.iter().any(|p| p.noise_target.is_some());
     let x = |p: &Point| match adaptive {
         true => p.seconds,
         false => p.spp as f64,
     };
-    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), p.error.ln())).collect();
+    let pts: Vec<(f64, f64)> = valid.iter().map(|p| (x(p).ln(), error(p).ln())).collect();
     let (a, b) = match fit_line(&pts) {
         Some((a, b)) if b < 0.0 => (a, b),
         _ => pts.last().map(|&(x, y)| (y + x, -1.0))?,

@@ -48,16 +48,9 @@ fn drawable(sweep: &Sweep) -> Vec<Vec<(f64, f64, f64, f64)>> {
         .map(|c| {
             c.points
                 .iter()
-                .filter(|p| p.error > 0.0 && p.seconds > 0.0)
-                .map(|p| {
-                    let lo = p.error_min.max(p.error * 1e-3).sqrt();
-                    (
-                        p.seconds,
-                        p.error.sqrt(),
-                        lo,
-                        p.error_max.max(p.error).sqrt(),
-                    )
-                })
+                .map(|p| (p.seconds, p.error(sweep.metric)))
+                .filter(|&(t, (e, _, _))| e > 0.0 && t > 0.0)
+                .map(|(t, (e, lo, hi))| (t, e.sqrt(), lo.max(e * 1e-3).sqrt(), hi.max(e).sqrt()))
                 .collect()
         })
         .collect()

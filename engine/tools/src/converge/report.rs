@@ -33,7 +33,11 @@ impl Sweep {
     /// proportional to spp, an adaptive curve's against its seconds; see `error_time_model`)
     /// at the largest time all curves reach and at the smallest MSE all reach.
     pub fn comparison(&self) -> ComparisonTable {
-        let models: Vec<Option<(f64, f64)>> = self.curves.iter().map(error_time_model).collect();
+        let models: Vec<Option<(f64, f64)>> = self
+            .curves
+            .iter()
+            .map(|c| error_time_model(c, self.metric))
+            .collect();
         let t = self
             .curves
             .iter()
@@ -45,7 +49,7 @@ impl Sweep {
             .filter_map(|c| {
                 c.points
                     .iter()
-                    .map(|p| p.error)
+                    .map(|p| p.error(self.metric).0)
                     .filter(|&m| m > 0.0)
                     .reduce(f64::min)
             })

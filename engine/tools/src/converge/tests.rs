@@ -58,12 +58,18 @@ fn a_point_against_itself_has_zero_error_and_bias() {
     let other = noisy(4, 0.1);
     let q = point(&raw, &other, &info, ErrorMetric::Mse).unwrap();
     assert!(q.mse > 0.0 && q.relmse > 0.0 && q.efficiency > 0.0);
-    assert_eq!((q.error, q.efficiency), (q.mse, 1.0 / (q.mse * 0.5)));
+    assert_eq!(
+        (q.error(ErrorMetric::Mse).0, q.efficiency),
+        (q.mse, 1.0 / (q.mse * 0.5))
+    );
     // The relMSE metric: the same measures, compared by the relMSE (which differs).
     let r = point(&raw, &other, &info, ErrorMetric::RelMse).unwrap();
     assert_eq!((r.mse, r.relmse), (q.mse, q.relmse));
     assert_ne!(r.relmse, r.mse);
-    assert_eq!((r.error, r.efficiency), (r.relmse, 1.0 / (r.relmse * 0.5)));
+    assert_eq!(
+        (r.error(ErrorMetric::RelMse).0, r.efficiency),
+        (r.relmse, 1.0 / (r.relmse * 0.5))
+    );
 }
 
 #[test]
@@ -89,9 +95,6 @@ fn comparison_reads_the_fitted_lines_at_common_time_and_error() {
                 relmse_min: k / t,
                 relmse_max: k / t,
                 bias: [0.0; 3],
-                error: k / t,
-                error_min: k / t,
-                error_max: k / t,
                 efficiency: 1.0 / k,
                 noise_target: None,
                 spp_mean: None,
@@ -159,9 +162,6 @@ fn made(spp: u32, seconds: f64, mse: f64, target: Option<(f64, f64)>) -> Point {
         relmse_min: mse,
         relmse_max: mse,
         bias: [0.0; 3],
-        error: mse,
-        error_min: mse,
-        error_max: mse,
         efficiency: 1.0 / (mse * seconds),
         noise_target: target.map(|(t, _)| t),
         spp_mean: target.map(|(_, m)| m),
@@ -205,11 +205,13 @@ fn an_adaptive_point_records_its_target_and_mean_spp_in_csv_and_json() {
                 &TechniqueRegistry::new(Default::default(), []),
                 &Variant::from(Techniques::default()),
                 vec![uniform],
+                ErrorMetric::Mse,
             ),
             curve(
                 &TechniqueRegistry::new(Default::default(), []),
                 &adaptive,
                 vec![p],
+                ErrorMetric::Mse,
             ),
         ],
     };
@@ -266,8 +268,13 @@ fn the_comparison_fits_an_adaptive_curve_against_its_seconds() {
         reference: exact(),
         metric: ErrorMetric::Mse,
         curves: vec![
-            curve(&registry, &Techniques::default().into(), uniform),
-            curve(&registry, &on, adaptive),
+            curve(
+                &registry,
+                &Techniques::default().into(),
+                uniform,
+                ErrorMetric::Mse,
+            ),
+            curve(&registry, &on, adaptive, ErrorMetric::Mse),
         ],
     };
     let c = sweep.comparison();
