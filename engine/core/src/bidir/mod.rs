@@ -65,7 +65,6 @@ use risotto_components::{Rgb, ShadowRays, StackEvent, VolumeStack};
 use risotto_systems::bxdf_samples::BxdfSamples;
 use risotto_systems::camera::CameraConnection;
 use risotto_systems::film::SplatFilm;
-use risotto_systems::independent_sampler::INDEPENDENT_BIT;
 use risotto_systems::sampler::PathSampler;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -213,25 +212,17 @@ impl Bidirectional {
         Ok(())
     }
 
-    /// The MIS constants of an iteration of `paths` camera samples whose first sample index
-    /// is `first_sample`, and its merge radius (0 without merging).
-    fn factors(&self, paths: usize, first_sample: u32) -> (MisFactors, f32) {
-        match self.strategy {
-            Strategy::Vcm => {
-                // Progressive merging (Hachisuka and Jensen 2009; Georgiev et al. 2012,
-                // sec. 5): the radius shrinks as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`
-                // with the iteration's first sample index `i`, so the merged estimate's bias
-                // vanishes as its variance does.
-                let i = first_sample as f32;
-                let r = self.merge_radius / (i + 1.0).powf(0.5 * (1.0 - RADIUS_ALPHA));
-                let f = MisFactors::vcm(r, paths as f32, self.light_paths_per_pixel);
-                (f, r)
-            }
-            _ => (
-                MisFactors::connections_only(self.light_paths_per_pixel),
-                0.0,
-            ),
-        }
+    /// The MIS constants of a `vcm` iteration of `paths` camera samples at sample index
+    /// `sample`, and its merge radius. Progressive merging (Hachisuka and Jensen 2009;
+    /// Georgiev et al. 2012, sec. 5): the radius shrinks as `r_i = r_0 / (i + 1)^((1 -
+    /// alpha) / 2)`, so the merged estimate's bias vanishes as its variance does.
+    fn iteration_factors(&self, paths: usize, sample: u32) -> (MisFactors, f32) {
+        let i = sample as f32;
+        let r = self.merge_radius / (i + 1.0).powf(0.5 * (1.0 - RADIUS_ALPHA));
+        (
+            MisFactors::vcm(r, paths as f32, self.light_paths_per_pixel),
+            r,
+        )
     }
 
     /// The iteration in progress (read-locked), its constants set into `s`.
@@ -303,9 +294,6 @@ pub(crate) struct Scratch {
     factors: MisFactors,
     /// The batch's merge radius (0 without merging).
     merge_radius: f32,
-    /// A batch's own light vertices for merging, when it has no iteration (a batch run
-    /// without the renderer's light pass).
-    own_merge: MergeVertices,
     /// Per camera vertex of a group: the light vertices to merge.
     merges: Vec<(u32, u32)>,
     /// MIS sums of every subpath of the walk in progress.
@@ -378,32 +366,19 @@ impl Integrator for Bidirectional {
                     self, scene, batch, worker, merge, stats, arena, counters,
                 );
             }
-            // A batch of its own: its light subpaths, then its camera subpaths (merging,
-            // for `vcm` run without the renderer's iterations, the batch's own).
+            // A batch of its own (`light`, `bdpt`; `vcm` only when run outside the renderer's
+            // iterations, then without merging, as `bdpt`: one batch's light vertices merged
+            // at several samples of a pixel would be correlated): its light subpaths, then its
+            // camera subpaths.
             None => {
-                let first_sample = batch
-                    .paths
-                    .sample
-                    .iter()
-                    .map(|s| s & !INDEPENDENT_BIT)
-                    .min();
-                let (factors, radius) = self.factors(batch.paths.len(), first_sample.unwrap_or(0));
-                worker.s.factors = factors;
-                worker.s.merge_radius = radius;
+                worker.s.factors = MisFactors::connections_only(self.light_paths_per_pixel);
+                worker.s.merge_radius = 0.0;
                 light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);
                 self.light_paths
                     .fetch_add(batch.paths.len() as u64, Ordering::Relaxed);
-                let mut own = std::mem::take(&mut worker.s.own_merge);
-                if radius > 0.0 {
-                    own.clear();
-                    own.extend_from(&worker.light);
-                    stats.time(System::Merge, own.len(), || own.build(radius));
-                }
-                let merge = (radius > 0.0).then_some(&own);
                 camera_walk::camera_subpaths(
-                    self, scene, batch, worker, merge, stats, arena, counters,
+                    self, scene, batch, worker, None, stats, arena, counters,
                 );
-                worker.s.own_merge = own;
             }
         }
         add_pattern_counters(stats, counters);
@@ -423,7 +398,7 @@ impl Integrator for Bidirectional {
             .iteration
             .write()
             .unwrap_or_else(PoisonError::into_inner);
-        (it.factors, it.radius) = self.factors(camera_samples, sample);
+        (it.factors, it.radius) = self.iteration_factors(camera_samples, sample);
         it.vertices.clear();
     }
 
