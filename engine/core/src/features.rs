@@ -18,6 +18,10 @@ pub struct Features {
     pub emissive_media: bool,
     /// Some emissive medium is light-sampled (`crate::plugin::volume_light`).
     pub emissive_volume_lights: bool,
+    /// Some emissive interior offers no volume light (behind a dielectric, in a turned
+    /// shape or one no emitter covers, `crate::plugin::volume_light`): only the rays that
+    /// cross it gather its emission, and no light subpath starts in it.
+    pub emissive_media_without_lights: bool,
     /// Some surface passes shadow rays (transmission system must walk through surfaces).
     pub transmission_shadows: bool,
     /// Some material reads surface `u`, `v` (sphere hits compute theirs,
@@ -56,6 +60,10 @@ impl Features {
             (self.subsurface, "subsurface"),
             (self.emissive_media, "emissive_media"),
             (self.emissive_volume_lights, "emissive_volume_lights"),
+            (
+                self.emissive_media_without_lights,
+                "emissive_media_without_lights",
+            ),
             (self.transmission_shadows, "transmission_shadows"),
             (self.surface_uv, "surface_uv"),
             (self.opacity, "opacity"),

@@ -59,7 +59,7 @@ pub use shading_context::{
 };
 use std::any::Any;
 pub use technique::{always, never, PluginTechniques, Technique, TechniqueError, TechniqueValue};
-pub use volume_light::{EmitterSupport, VolumeEmitter, VolumeLightMis};
+pub use volume_light::{EmissionStrategies, EmitterSupport, VolumeEmitter, VolumeLightMis};
 
 /// What a factory tells the renderer without being asked to build anything (RIS
 /// `GetInstanceHints`). The scene's feature set, and so the scheduler's stage list, is derived

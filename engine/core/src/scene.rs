@@ -315,6 +315,9 @@ pub struct CompiledScene {
     /// a constant environment is left to Bxdf sampling
     /// ([`LightSet::with_environment_sampling`]).
     pub mis_lights: LightSet,
+    /// With emissive media: [`Self::lights`] and the volume lights
+    /// ([`Self::bidirectional_lights`]).
+    pub lights_with_volumes: Option<LightSet>,
     /// Camera.
     pub camera: Camera,
     /// Settings.
@@ -527,6 +530,17 @@ impl CompiledScene {
     fn add_volume_lights(&mut self) {
         self.volume_light = vec![u32::MAX; self.shapes.len()];
         let emitters = volume_lights::collect(self);
+        let emissive_interiors = self
+            .shapes
+            .iter()
+            .filter(|s| {
+                let factory = &self.materials[s.material as usize].factory;
+                factory
+                    .instance_hints()
+                    .contains(crate::plugin::InstanceHints::INTERIOR_EMITS)
+            })
+            .count();
+        self.features.emissive_media_without_lights = emissive_interiors > emitters.len();
         if emitters.is_empty() {
             return;
         }
@@ -537,6 +551,11 @@ impl CompiledScene {
             self.volume_light[*shape as usize] = lights.len() as u32;
             lights.push(light);
         }
+        // Every light sampled, and the volume lights after them: a bidirectional
+        // integrator's set (light subpaths start in emissive media too).
+        let mut all = self.lights.lights().to_vec();
+        all.extend_from_slice(&lights[all.len()..]);
+        self.lights_with_volumes = Some(LightSet::new(all, &self.geometry, self.radius));
         self.mis_lights =
             LightSet::with_environment_sampling(lights, &self.geometry, self.radius, false);
         self.features.emissive_volume_lights = true;
@@ -553,15 +572,34 @@ impl CompiledScene {
         if !mis {
             return None;
         }
+        self.volume_light_in(&self.mis_lights, shape)
+    }
+
+    /// The MIS data of the volume light of `shape`'s interior in the light set `set` (one
+    /// of [`Self::mis_lights`] and [`Self::bidirectional_lights`], which list the volume
+    /// lights at the same indices), with the path tracer's weights
+    /// ([`crate::plugin::VolumeLightMis::strategies`] `None`).
+    pub fn volume_light_in<'a>(
+        &self,
+        set: &'a LightSet,
+        shape: u32,
+    ) -> Option<crate::plugin::VolumeLightMis<'a>> {
         let index = *self.volume_light.get(shape as usize)?;
-        let set = &self.mis_lights;
         match set.lights().get(index as usize)? {
             Light::Volume { emitter } => Some(crate::plugin::VolumeLightMis {
                 emitter,
                 selection: set.selection_pmf(index),
+                strategies: None,
             }),
             _ => None,
         }
+    }
+
+    /// The lights a bidirectional integrator samples, for its light subpaths and its
+    /// next-event estimation: every light of [`Self::lights`], then the volume lights of
+    /// [`Self::mis_lights`] at the same indices as there.
+    pub fn bidirectional_lights(&self) -> &LightSet {
+        self.lights_with_volumes.as_ref().unwrap_or(&self.lights)
     }
 
     /// The volume entry for crossing into `shape`'s interior, if its material has one.

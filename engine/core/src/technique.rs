@@ -93,7 +93,7 @@ pub static INTEGRATOR: Technique = Technique {
         TechniqueValue {
             name: "light",
             summary: "light tracing: paths from the lights, splatted where they meet the camera (not through glass: a Dirac surface between a vertex and the camera blocks it)",
-            converges: |f| !f.emissive_media && !f.transmissive,
+            converges: |f| !f.emissive_media_without_lights && !f.transmissive,
         },
         TechniqueValue {
             name: "bdpt",

@@ -111,12 +111,13 @@ fn environment(
     w: &mut BidirWorker,
 ) {
     let incoming = &w.camera_q.hits.incoming;
-    let env = scene.lights.environment_light();
+    let lights = scene.bidirectional_lights();
+    let env = lights.environment_light();
     for &(r, tr) in &w.s.escaped {
         let r = r as usize;
         let path = incoming.path[r] as usize;
         let d = incoming.direction[r];
-        let le = scene.lights.environment_radiance(d);
+        let le = lights.environment_radiance(d);
         let depth = incoming.depth[r];
         if depth == 0 && batch.paths.depth[path].is_infinite() {
             batch.paths.albedo[path] = le;
@@ -128,9 +129,9 @@ fn environment(
             (0, _, _) => 1.0,
             (_, Strategy::Light, _) | (_, _, None) => continue,
             (_, _, Some(env)) => {
-                let direct = scene.lights.environment_pdf(d);
+                let direct = lights.environment_pdf(d);
                 let bounds = scene.geometry.bounds();
-                let (pp, pd) = scene.lights.emission_pdf(env, Vec3::ZERO, -d, -d, bounds);
+                let (pp, pd) = lights.emission_pdf(env, Vec3::ZERO, -d, -d, bounds);
                 emitter_hit_weight(&w.s.mis[path], direct, pp * pd, false)
             }
         };
@@ -199,13 +200,13 @@ fn camera_vertices(
             } else {
                 let prim = hit_prim(scene, incoming, r);
                 let Some(light) = (prim != NO_HIT)
-                    .then(|| scene.lights.area_light(prim))
+                    .then(|| scene.bidirectional_lights().area_light(prim))
                     .flatten()
                 else {
                     continue;
                 };
                 let (pp, pd) = scene
-                    .lights
+                    .bidirectional_lights()
                     .emission_pdf(light, pts.p[i], pts.ng[i], pts.vn[i], bounds);
                 emitter_hit_weight(&s.mis[path], pp, pp * pd, false)
             };

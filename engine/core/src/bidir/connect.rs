@@ -31,7 +31,7 @@ pub(super) fn light_samples(
 ) {
     let f = s.factors;
     let (pts, incoming) = (at.pts, at.incoming);
-    let lights = &scene.lights;
+    let lights = scene.bidirectional_lights();
     let bounds = scene.geometry.bounds();
     let normals = scene.discards_disagreeing_directions();
     let m = at.range.len();
@@ -63,6 +63,9 @@ pub(super) fn light_samples(
                 let n = area_light_normal(scene, *prim, q);
                 (n, n.dot(-ls.wi).abs())
             }
+            // A point of a medium: its majorant, the camera side's density of reaching it
+            // per unit solid angle and distance^-2 (`volume_emission.rs`).
+            Light::Volume { emitter } => (Vec3::ZERO, emitter.mis_majorant(q)),
             _ => (Vec3::ZERO, 1.0),
         };
         let (pp, pd) = lights.emission_pdf(light, q, n_light, -ls.wi, bounds);

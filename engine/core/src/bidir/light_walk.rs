@@ -26,6 +26,7 @@ use bumpalo::Bump;
 use glam::Vec2;
 use risotto_components::{LobeSampled, RayRow, Rgb};
 use risotto_systems::camera::CameraConnection;
+use risotto_systems::lights::Light;
 use risotto_systems::path::Vertices;
 use risotto_systems::ray::offset_origin;
 use risotto_systems::sampler::{sample_1d, sample_2d};
@@ -56,7 +57,9 @@ pub(super) fn light_subpaths(
     w.s.mis.resize(n, SubpathMis::default());
     w.s.at_infinity.clear();
     w.s.at_infinity.resize(n, false);
-    let lights = &scene.lights;
+    w.s.in_volume_light.clear();
+    w.s.in_volume_light.resize(n, false);
+    let lights = scene.bidirectional_lights();
     let bounds = scene.geometry.bounds();
     let q = &mut w.light_q;
     q.rays.rays.clear();
@@ -91,8 +94,17 @@ pub(super) fn light_subpaths(
             _ => e.pdf_position,
         };
         let delta = e.delta_position || e.delta_direction;
-        w.s.mis[i] = SubpathMis::light_start(direct_pdf, emission_pdf, e.cos_at_light, delta);
+        // A point of an emissive medium: the camera side reaches it per unit volume at its
+        // majorant's rate, which takes the cosine's place in the weights
+        // (`volume_emission.rs`).
+        let volume = match &lights.lights()[e.light as usize] {
+            Light::Volume { emitter } => Some(emitter.mis_majorant(e.p)),
+            _ => None,
+        };
+        let cos_at_light = volume.unwrap_or(e.cos_at_light);
+        w.s.mis[i] = SubpathMis::light_start(direct_pdf, emission_pdf, cos_at_light, delta);
         w.s.at_infinity[i] = e.at_infinity;
+        w.s.in_volume_light[i] = volume.is_some();
         let offset = e.n.abs().dot(e.p_error);
         let origin = if e.n == glam::Vec3::ZERO {
             e.p
@@ -114,7 +126,11 @@ pub(super) fn light_subpaths(
             dimension: WALK_FIRST_DIMENSION,
             shading_ctx_index: u32::MAX,
             prev_p: e.p,
-            volume_stack: bd.light_stack(e.light).clone(),
+            // A medium's point: the volumes around it (other lights: around the light).
+            volume_stack: match volume {
+                Some(_) => scene.probe_stack(e.p, e.direction),
+                None => bd.light_stack(e.light).clone(),
+            },
         });
     }
     stats.record(System::Emit, n, start.elapsed().as_secs_f64());
@@ -195,6 +211,8 @@ fn scatter_light_vertices(
     next_out.tmin.fill(0.0);
     next_out.tmax.fill(f32::INFINITY);
     let by_bounce_len = n_paths;
+    // Light tracing alone connects only to the camera: nothing to store, no weights.
+    let bidirectional = bd.strategy != Strategy::Light;
     for grp in &groups {
         let range = grp.range.clone();
         let pts = &q.hits.groups.points;
@@ -207,6 +225,11 @@ fn scatter_light_vertices(
             let path = incoming.path[r] as usize;
             let distance = (pts.p[i] - incoming.prev_p[r]).length();
             let first_from_infinity = incoming.depth[r] == 0 && w.s.at_infinity[path];
+            // A subpath from an emissive medium whose first segment walked: the camera
+            // subpaths gather that emission alone (`volume_emission.rs`).
+            if bounce == 0 && w.s.in_volume_light[path] && incoming.depth[r] > 0 && bidirectional {
+                incoming.throughput[r] = Rgb::BLACK;
+            }
             let cos_in = cos_at(pts, i, pts.vn[i]);
             w.s.mis[path].arrive(distance, cos_in, first_from_infinity);
         }
@@ -228,8 +251,6 @@ fn scatter_light_vertices(
             material: grp.material,
             mode: grp.mode,
         };
-        // Light tracing alone connects only to the camera: nothing to store, no weights.
-        let bidirectional = bd.strategy != Strategy::Light;
         if connectable {
             let start = std::time::Instant::now();
             if bidirectional {

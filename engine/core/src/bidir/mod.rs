@@ -32,9 +32,14 @@
 //! vertices, so their merges are independent, as the weights assume.
 //!
 //! What media and materials do here:
-//! - Emissive media are not lights to a bidirectional integrator: camera subpaths gather what
-//!   they emit along their rays (the emission media report), no light subpath starts in
-//!   them, so `light` shows a medium's glow only where the camera sees it directly.
+//! - Emissive media that offer a volume light ([`crate::plugin::volume_light`]) are lights
+//!   like the others ([`CompiledScene::bidirectional_lights`]): light subpaths start inside
+//!   them, camera vertices light-sample them and connect to those subpaths, and what the
+//!   camera subpaths' rays gather in them is weighed against every other strategy through
+//!   the contract's [`EmissionStrategies`](crate::plugin::EmissionStrategies)
+//!   (`volume_emission.rs`). Media that offer none (behind a dielectric, in a turned shape)
+//!   are gathered by the camera subpaths alone: `light` shows their glow only where the
+//!   camera sees them directly (the `emissive_media_without_lights` feature).
 //! - Volume integrators that walk many events per call (`scattering = "walk"`, dense media
 //!   inside glass) hand back only the walk's exit: their inner events are not vertices to
 //!   connect to, and the weights treat the walk as a chain of Dirac vertices (`walk.rs`,
@@ -50,6 +55,7 @@ mod light_walk;
 pub mod merge;
 pub mod mis;
 pub mod vertices;
+mod volume_emission;
 mod walk;
 
 use crate::integrator::{Integrator, PathBatch};
@@ -177,7 +183,7 @@ impl Bidirectional {
     ) -> Result<Self, String> {
         let (w, h) = (scene.camera.width, scene.camera.height);
         let light_stacks = scene
-            .lights
+            .bidirectional_lights()
             .lights()
             .iter()
             .map(|l| light_stack(scene, l))
@@ -255,7 +261,8 @@ impl Bidirectional {
 }
 
 /// The volumes a light's subpaths start in: probed from a point of the light (its centre
-/// for lights with a position; outside everything for lights at infinity).
+/// for lights with a position; outside everything for lights at infinity). Subpaths from a
+/// volume light probe their own start points (`light_walk.rs`).
 fn light_stack(scene: &CompiledScene, light: &risotto_systems::lights::Light) -> VolumeStack {
     use risotto_systems::lights::Light;
     match light {
@@ -300,6 +307,8 @@ pub(crate) struct Scratch {
     mis: Vec<SubpathMis>,
     /// Light subpaths from lights at infinity.
     at_infinity: Vec<bool>,
+    /// Light subpaths from emissive media.
+    in_volume_light: Vec<bool>,
     /// Rays that left the scene this bounce, with their last transmission.
     escaped: Vec<(u32, Rgb)>,
     /// Each path's ray depth as it was sent to the trace stage (walks add to it).

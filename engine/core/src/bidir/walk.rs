@@ -3,10 +3,11 @@
 //! delegate, so media return their scattering points), and the shadow rays of connections.
 
 use super::mis::SubpathMis;
+use super::volume_emission::CameraEmission;
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::path_tracer::queues::Queues;
-use crate::path_tracer::{pass_through_boundaries, trace_nearest_hits, PathTracer};
-use crate::plugin::{PatternCounters, PluginTechniques};
+use crate::path_tracer::{pass_through_boundaries, trace_nearest_hits, PathTracer, TraceRole};
+use crate::plugin::{EmissionStrategies, PatternCounters, PluginTechniques};
 use crate::scene::CompiledScene;
 use crate::stats::SystemStats;
 use bumpalo::Bump;
@@ -53,8 +54,20 @@ pub(super) fn trace_bounce(
     for (&path, &depth) in q.rays.rays.path.iter().zip(&q.rays.rays.depth) {
         sent_depth[path as usize] = depth;
     }
+    // Camera rays weigh the emission of media that are lights (`volume_emission.rs`); light
+    // subpaths gather none.
+    let emission = CameraEmission { mis, sent_depth };
+    let role = TraceRole {
+        light_path,
+        emission: (!light_path && scene.lights_with_volumes.is_some()).then(|| {
+            (
+                scene.bidirectional_lights(),
+                &emission as &dyn EmissionStrategies,
+            )
+        }),
+    };
     while !q.rays.rays.is_empty() {
-        trace_nearest_hits(stages, scene, batch, q, stats, arena, counters, light_path);
+        trace_nearest_hits(stages, scene, batch, q, stats, arena, counters, role);
         let e = &mut q.escaped;
         escaped.extend(e.ray.iter().copied().zip(e.transmission.iter().copied()));
         e.ray.clear();

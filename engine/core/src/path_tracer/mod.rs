@@ -36,6 +36,7 @@ mod shading_normals;
 pub(crate) use shading_normals::{discard_bxdf_samples, sides_agree};
 mod surface_caches;
 mod trace;
+pub(crate) use trace::TraceRole;
 mod transmission;
 pub mod visible_emitters;
 
@@ -110,8 +111,9 @@ impl Integrator for PathTracer {
                 r.begin_bounce(batch, stats);
             }
             while !q.rays.rays.is_empty() {
+                let role = TraceRole::default();
                 trace::nearest_hits(
-                    self, scene, batch, q, stats, arena, counters, &surfaces, false,
+                    self, scene, batch, q, stats, arena, counters, &surfaces, role,
                 );
                 // Later rounds trace rays past boundaries, which left no shaded point.
                 surfaces.clear();
@@ -174,8 +176,9 @@ impl Integrator for PathTracer {
 
 /// The trace stage for other global integrators (`crate::bidir`): traces `q.rays` into
 /// `q.hits` and `q.escaped` with `tracer`'s techniques (a `BxdfOnly` tracer offers volume
-/// integrators no lighting delegate), no surface caches shared; `light_path` tells volume
-/// integrators that the rays come from the lights.
+/// integrators no lighting delegate), no surface caches shared; `role` tells volume
+/// integrators whether the rays come from the lights and how the integrator weighs the
+/// emission of media it samples as lights.
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub(crate) fn trace_nearest_hits(
     tracer: &PathTracer,
@@ -185,11 +188,11 @@ pub(crate) fn trace_nearest_hits(
     stats: &mut SystemStats,
     arena: &Bump,
     counters: &PatternCounters,
-    light_path: bool,
+    role: TraceRole<'_>,
 ) {
     let surfaces = SurfaceCaches::default();
     trace::nearest_hits(
-        tracer, scene, batch, q, stats, arena, counters, &surfaces, light_path,
+        tracer, scene, batch, q, stats, arena, counters, &surfaces, role,
     );
 }
 

@@ -17,8 +17,20 @@ use crate::scene::CompiledScene;
 use crate::stats::{count_non_finite, Stage, System, SystemStats, Termination};
 use bumpalo::Bump;
 use risotto_components::{LobeSampled, Rays, VolumeEntry, VolumeStack};
+use risotto_systems::lights::LightSet;
 use risotto_systems::partition::partition_by_key;
 use risotto_systems::sampler::PathSampler;
+
+/// Whose rays a trace stage traces, as the volume integrators it calls are told.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct TraceRole<'a> {
+    /// The rays start at the lights ([`VolumeServices::light_path`]).
+    pub light_path: bool,
+    /// A global integrator's own weights for the emission of light-sampled media, and the
+    /// light set whose selection probabilities they use
+    /// ([`VolumeLightMis::strategies`]); `None`: the path tracer's.
+    pub emission: Option<(&'a LightSet, &'a dyn EmissionStrategies)>,
+}
 
 /// Traces every ray of `q.rays` (leaving it empty), appending the rays to `q.hits.incoming`,
 /// their points to `q.hits.groups` and the escaped ones to `q.escaped`.
@@ -36,13 +48,13 @@ pub(super) fn nearest_hits<'a>(
     arena: &'a Bump,
     counters: &'a PatternCounters,
     surfaces: &SurfaceCaches<'a>,
-    light_path: bool,
+    role: TraceRole<'_>,
 ) {
     let (rays, hits, t) = (&mut q.rays.rays, &mut q.hits, &mut q.trace);
     if scene.features.volumes {
         partitioned(
             tracer,
-            light_path,
+            role,
             scene,
             batch,
             rays,
@@ -137,7 +149,7 @@ fn add_emitted(
 )]
 fn partitioned<'a>(
     tracer: &PathTracer,
-    light_path: bool,
+    role: TraceRole<'_>,
     scene: &CompiledScene,
     batch: &mut PathBatch,
     rays: &mut Rays,
@@ -260,11 +272,21 @@ fn partitioned<'a>(
                         lighting,
                         factory,
                         arena,
-                        volume_light: scene.volume_light_mis(
-                            entry.shape,
-                            tracer.technique == LightingTechnique::Mis,
-                        ),
-                        light_path,
+                        volume_light: match role.emission {
+                            Some((set, strategies)) => {
+                                scene
+                                    .volume_light_in(set, entry.shape)
+                                    .map(|l| VolumeLightMis {
+                                        strategies: Some(strategies),
+                                        ..l
+                                    })
+                            }
+                            None => scene.volume_light_mis(
+                                entry.shape,
+                                tracer.technique == LightingTechnique::Mis,
+                            ),
+                        },
+                        light_path: role.light_path,
                     },
                     &mut t.answers,
                 );

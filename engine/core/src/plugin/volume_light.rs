@@ -26,6 +26,12 @@
 //! built-in media report emission along path rays,
 //! [`InstanceHints::INTERIOR_EMITS_ALONG_PATHS`](super::InstanceHints::INTERIOR_EMITS_ALONG_PATHS)).
 //!
+//! A global integrator with more strategies than light sampling at the ray's last vertex
+//! (the bidirectional ones, whose light subpaths also start in the medium) gives its own
+//! weights through [`VolumeLightMis::strategies`] ([`EmissionStrategies`]); a volume
+//! integrator calls the same [`VolumeLightMis::unidirectional_weight`] and
+//! [`VolumeLightMis::weighs`] either way.
+//!
 //! Light sampling alone (`lighting = nee`, and the lighting delegate) does not sample volume
 //! lights: the collision estimator keeps weight 1 there. Next-event estimation alone is no
 //! usable estimator of a volume's emission: from a vertex inside the emitter its variance is
@@ -48,12 +54,45 @@ pub use risotto_systems::volume_lights::{EmitterSupport, VolumeEmitter};
 
 /// What a volume integrator needs to weight its collision estimator against light sampling
 /// of its own emitter ([`VolumeServices::volume_light`](crate::plugin::VolumeServices)).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy)]
 pub struct VolumeLightMis<'a> {
     /// The emitter (the medium's cells and tracking bounds).
     pub emitter: &'a VolumeEmitter,
-    /// Its selection probability in the light set the path tracer samples at vertices.
+    /// Its selection probability in the light set the global integrator samples.
     pub selection: f32,
+    /// The global integrator's own weights, when strategies other than light sampling at
+    /// the ray's last vertex also make the paths the collision estimator ends (a
+    /// bidirectional integrator's: light subpaths that start in the medium, connections to
+    /// them); `None`: the path tracer's pair of light sampling and the collision estimator
+    /// (the [module docs](self)). Either way a volume integrator calls the same two methods.
+    pub strategies: Option<&'a dyn EmissionStrategies>,
+}
+
+impl std::fmt::Debug for VolumeLightMis<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VolumeLightMis")
+            .field("emitter", self.emitter)
+            .field("selection", &self.selection)
+            .field("strategies", &self.strategies.is_some())
+            .finish()
+    }
+}
+
+/// A global integrator's weights for the emission a medium's collision estimator gathers
+/// along its rays, when more strategies than light sampling at the ray's last vertex make
+/// those paths ([`VolumeLightMis::strategies`]). Whatever the strategies, the weights of
+/// one path must sum to one over them (Veach 1997, sec. 9.2), so only the global
+/// integrator, which knows all of them, can give this one's.
+pub trait EmissionStrategies: Sync {
+    /// The weight of what the collision estimator gathers at world point `x` on ray `r` of
+    /// `rays` (tentative collisions at the rate `light.emitter.mis_majorant(x)`, the density
+    /// `pdf(r) majorant(x) / |x - prev_p(r)|^2` in volume measure, as in the
+    /// [module docs](self)).
+    fn weight(&self, light: &VolumeLightMis<'_>, rays: &Rays, r: usize, x: Vec3) -> f32;
+
+    /// Whether ray `r`'s emission is weighed at all (the weight is 1 where it is not, and a
+    /// volume integrator may gather it exactly).
+    fn weighs(&self, rays: &Rays, r: usize) -> bool;
 }
 
 impl VolumeLightMis<'_> {
@@ -61,6 +100,9 @@ impl VolumeLightMis<'_> {
     /// of `rays` (see the [module docs](self)).
     #[inline]
     pub fn unidirectional_weight(&self, rays: &Rays, r: usize, x: Vec3) -> f32 {
+        if let Some(s) = self.strategies {
+            return s.weight(self, rays, r, x);
+        }
         if !self.weighs(rays, r) {
             return 1.0;
         }
@@ -70,12 +112,15 @@ impl VolumeLightMis<'_> {
         power_heuristic(p_u, p_v)
     }
 
-    /// Whether ray `r`'s emission is weighed against light samples at all: not for camera
-    /// rays, rays with a Dirac lobe or no pdf; [`Self::unidirectional_weight`] is 1 on those.
-    /// (Under `nee` and `bxdf`, which sample no volume light, an integrator gets no
-    /// `VolumeLightMis` at all.)
+    /// Whether ray `r`'s emission is weighed against other strategies at all; under the
+    /// path tracer not for camera rays, rays with a Dirac lobe or no pdf
+    /// ([`Self::unidirectional_weight`] is 1 on those). (Under `nee` and `bxdf`, which sample
+    /// no volume light, an integrator gets no `VolumeLightMis` at all.)
     #[inline]
     pub fn weighs(&self, rays: &Rays, r: usize) -> bool {
+        if let Some(s) = self.strategies {
+            return s.weighs(rays, r);
+        }
         let pdf = rays.pdf[r];
         let plain = rays.depth[r] == 0 || rays.lobe[r].is_specular() || pdf.is_nan() || pdf <= 0.0;
         !plain

@@ -255,6 +255,7 @@ impl Scene {
             material_info,
             lights,
             mis_lights,
+            lights_with_volumes: None,
             camera,
             settings,
             features,
