@@ -7,7 +7,7 @@ use super::evaluate::cos_at;
 use super::merge::MergeVertices;
 use super::mis::{emitter_hit_weight, SubpathMis};
 use super::walk::trace_bounce;
-use super::{connect, merge, BidirWorker, Bidirectional, Scratch, Strategy};
+use super::{connect, merge, strategy_weight, BidirWorker, Bidirectional, Scratch, Strategy};
 use crate::integrator::PathBatch;
 use crate::path_tracer::{continue_group, discard_bxdf_samples, hit_prim};
 use crate::plugin::{Bxdf, ParamCache, PatternCounters, ShadingContext};
@@ -72,6 +72,7 @@ pub(super) fn camera_subpaths(
             false,
             &mut w.s.sent_depth,
             &mut w.s.mis,
+            w.s.alone,
         );
         environment(bd, scene, batch, w);
         camera_vertices(bd, scene, batch, w, merge, first, stats, arena, counters);
@@ -135,6 +136,7 @@ fn environment(
                 emitter_hit_weight(&w.s.mis[path], direct, pp * pd, false)
             }
         };
+        let weight = strategy_weight(w.s.alone, 0, depth as u32 + 2, weight);
         batch.paths.radiance[path] += incoming.throughput[r] * tr * le * weight;
     }
 }
@@ -210,6 +212,7 @@ fn camera_vertices(
                     .emission_pdf(light, pts.p[i], pts.ng[i], pts.vn[i], bounds);
                 emitter_hit_weight(&s.mis[path], pp, pp * pd, false)
             };
+            let weight = strategy_weight(s.alone, 0, depth as u32 + 2, weight);
             batch.paths.radiance[path] += incoming.throughput[r] * le * weight;
         }
         let factory = scene.materials[grp.material as usize].factory.as_ref();

@@ -8,7 +8,7 @@ use super::evaluate::{adjoint_cosines, cos_at, evaluate_runs, sides_agree};
 use super::mis::{connection_weight, light_sample_weight, pdf_w_to_a, ConnectionPdfs, SubpathMis};
 use super::vertices::{LightVertices, NO_VERTEX};
 use super::walk::{arrival_margin, push_connection, stack_toward};
-use super::Scratch;
+use super::{strategy_weight, Scratch};
 use crate::plugin::{Bxdf, PatternCounters, ShadingContext};
 use crate::scene::CompiledScene;
 use bumpalo::Bump;
@@ -117,6 +117,7 @@ pub(super) fn light_samples(
             ls.delta,
             f.at(pts.shape[i] == u32::MAX),
         );
+        let weight = strategy_weight(s.alone, 1, incoming.depth[r] as u32 + 2, weight);
         let c = incoming.throughput[r] * s.value[k] * ls.radiance * (weight / ls.pdf);
         if c.is_black() || !c.is_finite() {
             continue;
@@ -322,6 +323,8 @@ pub(super) fn finish(
                 f.at(lp.shape[v] == u32::MAX),
             );
             let weight = connection_weight(&c.camera_mis, &light.mis[v], &pdfs, vc, vl);
+            let (s_light, t_camera) = (light.segments[v] + 1, incoming.depth[r] as u32 + 2);
+            let weight = strategy_weight(s.alone, s_light, t_camera, weight);
             let contribution = incoming.throughput[r]
                 * c.camera_value
                 * f_light

@@ -15,7 +15,10 @@ use super::evaluate::{adjoint_cosines, cos_at, sides_agree};
 use super::mis::{camera_connection_weight, SubpathMis};
 use super::vertices::LightVertices;
 use super::walk::{push_connection, stack_toward, trace_bounce};
-use super::{BidirWorker, Bidirectional, Scratch, Strategy, LIGHT_SEED_SALT, WALK_FIRST_DIMENSION};
+use super::{
+    strategy_weight, BidirWorker, Bidirectional, Scratch, Strategy, LIGHT_SEED_SALT,
+    WALK_FIRST_DIMENSION,
+};
 use crate::integrator::PathBatch;
 use crate::path_tracer::{continue_group, discard_bxdf_samples};
 use crate::plugin::{ParamCache, PatternCounters, ShadingContext};
@@ -153,6 +156,7 @@ pub(super) fn light_subpaths(
             true,
             &mut w.s.sent_depth,
             &mut w.s.mis,
+            w.s.alone,
         );
         scatter_light_vertices(bd, scene, w, bounce, stats, arena, counters);
         let q = &mut w.light_q;
@@ -400,6 +404,7 @@ fn connect_to_camera(
                 f.light_paths_per_pixel,
             ),
         };
+        let weight = strategy_weight(s.alone, incoming.depth[r] as u32 + 2, 1, weight);
         let contribution = incoming.throughput[r] * fc * (c.importance * weight);
         if contribution.is_black() || !contribution.is_finite() {
             continue;

@@ -150,6 +150,8 @@ pub(super) fn light_vertices(
             s.pair_eval.pdf[e],
             f.at(in_medium),
         );
+        // No connection strategy: dropped when one is alone.
+        let weight = if s.alone.is_some() { 0.0 } else { weight };
         // `f` without the cosine: the light vertices' flux already is per unit projected
         // area of their own surface.
         let c =

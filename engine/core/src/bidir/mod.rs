@@ -123,10 +123,41 @@ impl Strategy {
     }
 }
 
+/// One connection strategy alone, unweighted: a check of the strategies one by one (the
+/// issue's "each strategy alone, MIS off"). Strategy `(s, t)` joins `s` light vertices (the
+/// point on the light counted) and `t` camera vertices (the camera's counted) into a path of
+/// `s + t - 1` segments (Veach 1997, sec. 10.2): `s = 0` is a camera subpath that hits the
+/// emitter (or gathers a medium's emission), `s = 1` next-event estimation, `t = 1` light
+/// tracing, the others connections. Each is an unbiased estimator on its own of the paths
+/// it can make, so on a scene where every strategy can make every path (diffuse surfaces, an
+/// area light, a pinhole camera), the image of one `(s, t)` alone is the image of the paths
+/// of `s + t - 1` segments (pbrt-v4's `visualizestrategies`, without MIS). Merges are
+/// dropped. Emission a volume integrator gathers without asking for its weight (after a
+/// walk's events) is kept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StrategyAlone {
+    /// `s`: vertices on the light subpath, the light's point counted.
+    pub light_vertices: u32,
+    /// `t`: vertices on the camera subpath, the camera's counted.
+    pub camera_vertices: u32,
+}
+
+/// The weight of a contribution of strategy `(s, t)` whose MIS weight is `mis`: `mis` when
+/// no strategy is alone; 1 for the strategy alone, 0 for the others.
+#[inline]
+pub(crate) fn strategy_weight(alone: Option<StrategyAlone>, s: u32, t: u32, mis: f32) -> f32 {
+    match alone {
+        None => mis,
+        Some(a) => (a.light_vertices == s && a.camera_vertices == t) as u32 as f32,
+    }
+}
+
 /// A bidirectional global integrator.
 pub struct Bidirectional {
     /// The strategies combined.
     pub strategy: Strategy,
+    /// One strategy alone, unweighted ([`StrategyAlone`]); `None`: all of them, weighted.
+    pub alone: Option<StrategyAlone>,
     /// Technique choices handed to volume integrators.
     pub techniques: PluginTechniques,
     /// The volumes each light's subpaths start in.
@@ -192,6 +223,7 @@ impl Bidirectional {
             .ok_or_else(|| format!("a {w} x {h} splat film cannot be allocated"))?;
         Ok(Bidirectional {
             strategy,
+            alone: None,
             techniques,
             light_stacks,
             splats,
@@ -301,6 +333,8 @@ pub(crate) struct Scratch {
     factors: MisFactors,
     /// The batch's merge radius (0 without merging).
     merge_radius: f32,
+    /// The strategy alone, if any ([`Bidirectional::alone`]).
+    alone: Option<StrategyAlone>,
     /// Per camera vertex of a group: the light vertices to merge.
     merges: Vec<(u32, u32)>,
     /// MIS sums of every subpath of the walk in progress.
@@ -359,6 +393,7 @@ impl Integrator for Bidirectional {
         arena: &Bump,
     ) {
         let counters: &PatternCounters = arena.alloc(PatternCounters::default());
+        worker.s.alone = self.alone;
         let traced = match self.strategy {
             Strategy::Vcm => lock(&self.traced).remove(&batch_key(batch)),
             _ => None,
@@ -421,6 +456,7 @@ impl Integrator for Bidirectional {
     ) {
         let counters: &PatternCounters = arena.alloc(PatternCounters::default());
         drop(self.iteration_into(&mut worker.s));
+        worker.s.alone = self.alone;
         let mut light = lock(&self.spare).pop().unwrap_or_default();
         std::mem::swap(&mut worker.light, &mut light);
         light_walk::light_subpaths(self, scene, batch, worker, stats, arena, counters);

@@ -34,6 +34,7 @@
 //! subpath's alone.
 
 use super::mis::{emitter_hit_weight, SubpathMis};
+use super::{strategy_weight, StrategyAlone};
 use crate::plugin::{EmissionStrategies, VolumeLightMis};
 use glam::Vec3;
 use risotto_components::Rays;
@@ -44,10 +45,16 @@ pub(super) struct CameraEmission<'a> {
     pub mis: &'a [SubpathMis],
     /// Per path: the ray's depth as it was sent (a deeper ray walked).
     pub sent_depth: &'a [u16],
+    /// The strategy alone, if any (then every ray is weighed, by it alone).
+    pub alone: Option<StrategyAlone>,
 }
 
 impl EmissionStrategies for CameraEmission<'_> {
     fn weight(&self, light: &VolumeLightMis<'_>, rays: &Rays, r: usize, x: Vec3) -> f32 {
+        if self.alone.is_some() {
+            // The camera subpath's vertices and the emission's point: `(0, depth + 2)`.
+            return strategy_weight(self.alone, 0, rays.depth[r] as u32 + 2, 1.0);
+        }
         if !self.weighs(rays, r) {
             return 1.0;
         }
@@ -72,6 +79,9 @@ impl EmissionStrategies for CameraEmission<'_> {
     /// Camera rays (what the camera sees directly, which no other strategy makes) and rays
     /// that walked before reaching the medium keep weight 1.
     fn weighs(&self, rays: &Rays, r: usize) -> bool {
+        if self.alone.is_some() {
+            return true;
+        }
         let depth = rays.depth[r];
         depth != 0 && depth <= self.sent_depth[rays.path[r] as usize]
     }

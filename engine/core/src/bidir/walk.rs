@@ -4,6 +4,7 @@
 
 use super::mis::SubpathMis;
 use super::volume_emission::CameraEmission;
+use super::StrategyAlone;
 use crate::integrator::{LightingTechnique, PathBatch};
 use crate::path_tracer::queues::Queues;
 use crate::path_tracer::{pass_through_boundaries, trace_nearest_hits, PathTracer, TraceRole};
@@ -31,7 +32,8 @@ pub(super) fn stages(techniques: PluginTechniques) -> PathTracer {
 /// index-matched boundaries, false boundaries and surfaces their opacity lets them pass.
 /// The rays that left the scene go to `escaped` (rows of `q.hits.incoming`, with the
 /// transmission of their last segment). `light_path`: the rays are a light subpath's (the
-/// seed's `isLightPath`, [`VolumeServices::light_path`](crate::plugin::VolumeServices)).
+/// seed's `isLightPath`, [`VolumeServices::light_path`](crate::plugin::VolumeServices)); `alone`:
+/// the strategy alone, if any ([`StrategyAlone`]).
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
 pub(super) fn trace_bounce(
     stages: &PathTracer,
@@ -45,6 +47,7 @@ pub(super) fn trace_bounce(
     light_path: bool,
     sent_depth: &mut Vec<u16>,
     mis: &mut [SubpathMis],
+    alone: Option<StrategyAlone>,
 ) {
     q.hits.recycle_into(&mut q.next);
     escaped.clear();
@@ -56,7 +59,11 @@ pub(super) fn trace_bounce(
     }
     // Camera rays weigh the emission of media that are lights (`volume_emission.rs`); light
     // subpaths gather none.
-    let emission = CameraEmission { mis, sent_depth };
+    let emission = CameraEmission {
+        mis,
+        sent_depth,
+        alone,
+    };
     let role = TraceRole {
         light_path,
         emission: (!light_path && scene.lights_with_volumes.is_some()).then(|| {
