@@ -15,7 +15,7 @@ use common::scratch_dir;
 use common::*;
 use risotto::engine::features::Features;
 use risotto::engine::integrator::{GlobalIntegrator, LightingTechnique};
-use risotto::engine::render::{render, RenderOptions, RenderOutput};
+use risotto::engine::render::{render, render_with, RenderOptions, RenderOutput};
 use risotto::engine::scene::CompiledScene;
 use risotto::engine::stats::VolumeEvent;
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
@@ -587,4 +587,45 @@ fn light_tracing_converges(features: &Features) -> bool {
         .find(|v| v.name == "light")
         .unwrap();
     (light.converges)(features)
+}
+
+/// Each strategy alone (`Bidirectional::alone`) makes the paths through an emissive medium
+/// that the path tracer does: on the floor beside the absorbing box, the paths of two
+/// segments (camera, floor, a point of the medium) by the camera subpath gathering the
+/// emission along its second ray `(0, 3)`, by next-event estimation of the volume light
+/// `(1, 2)` and by light tracing from a point of the medium `(2, 1)`, each unweighted,
+/// against the path tracer's `max_depth = 2` image minus its `max_depth = 1` image.
+#[test]
+fn each_strategy_alone_lights_the_floor_from_the_medium() {
+    use risotto::engine::bidir::{Bidirectional, Strategy, StrategyAlone};
+    let d = scratch_dir("vlights", "bidir-alone");
+    let interior = r#"{ type = "homogeneous", sigma_t = 1.5, albedo = 0, emission = 2, scattering = "bounce" }"#;
+    let scene_at = |max_depth, seed: u32| {
+        let text = overview_scene(interior, 1024, max_depth)
+            .replace("spp = 1024", &format!("spp = 1024\nseed = {seed}"));
+        compile(&d, &text)
+    };
+    let two = image_mean(&render_with_technique(
+        &scene_at(2, 1),
+        LightingTechnique::Mis,
+    ));
+    let one = image_mean(&render_with_technique(
+        &scene_at(1, 2),
+        LightingTechnique::Mis,
+    ));
+    let want = (
+        two.0 - one.0,
+        (two.1 * two.1 + one.1 * one.1).map(f32::sqrt),
+    );
+    let scene = scene_at(2, 3);
+    for (s, t) in [(0, 3), (1, 2), (2, 1)] {
+        let mut bd = Bidirectional::new(&scene, Strategy::Bdpt, Default::default(), 64).unwrap();
+        bd.alone = Some(StrategyAlone {
+            light_vertices: s,
+            camera_vertices: t,
+        });
+        let out = render_with(&bd, &scene, &RenderOptions::default(), &|_| {}).unwrap();
+        assert_eq!(out.stats.counters.nan_dropped, 0);
+        assert_agree(&format!("({s}, {t})"), image_mean(&out), want);
+    }
 }
