@@ -1,9 +1,13 @@
 //! Writes the load and memory benchmark's mesh (issue 36): a displaced unit sphere as an OBJ
 //! file with `v` positions, `vn` vertex normals and `f v//vn` faces, as a scanned or
-//! sculpted mesh from a user would come.
+//! sculpted mesh from a user would come; or, for an `OUT` ending in `.ply`, the same mesh
+//! as a binary little-endian PLY (float `x y z nx ny nz`, `list uchar int vertex_indices`),
+//! the positions and normals rounded to the OBJ's six decimals so both files hold the same
+//! mesh.
 //!
 //! ```text
 //! cargo run --release --example displaced_sphere -- TRIANGLES OUT.obj
+//! cargo run --release --example displaced_sphere -- TRIANGLES OUT.ply
 //! ```
 //!
 //! A latitude-longitude grid of `rings` rings of `2 rings` vertices each plus the two poles
@@ -21,7 +25,7 @@ use glam::DVec3;
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [count, out] = args.as_slice() else {
-        return Err("usage: displaced_sphere TRIANGLES OUT.obj".into());
+        return Err("usage: displaced_sphere TRIANGLES OUT.obj|OUT.ply".into());
     };
     let triangles: u64 = count
         .parse()
@@ -47,13 +51,50 @@ fn main() -> Result<(), String> {
         }
         w.flush()
     };
-    write(&mut w).map_err(|e| format!("cannot write `{out}`: {e}"))?;
+    let ply = out.to_ascii_lowercase().ends_with(".ply");
+    let written = if ply {
+        write_ply(&mut w, &positions, &normals, &faces)
+    } else {
+        write(&mut w)
+    };
+    written.map_err(|e| format!("cannot write `{out}`: {e}"))?;
     println!(
         "{out}: {} vertices, {} triangles",
         positions.len(),
         faces.len()
     );
     Ok(())
+}
+
+/// The mesh as a binary little-endian PLY, each coordinate rounded as the OBJ prints it.
+fn write_ply(
+    w: &mut impl Write,
+    positions: &[DVec3],
+    normals: &[DVec3],
+    faces: &[[usize; 3]],
+) -> std::io::Result<()> {
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\n\
+         property float y\nproperty float z\nproperty float nx\nproperty float ny\n\
+         property float nz\nelement face {}\nproperty list uchar int vertex_indices\n\
+         end_header\n",
+        positions.len(),
+        faces.len()
+    )?;
+    let six = |x: f64| -> f32 { format!("{x:.6}").parse().unwrap_or(0.0) };
+    for (p, n) in positions.iter().zip(normals) {
+        for c in [p.x, p.y, p.z, n.x, n.y, n.z] {
+            w.write_all(&six(c).to_le_bytes())?;
+        }
+    }
+    for f in faces {
+        w.write_all(&[3])?;
+        for &i in f {
+            w.write_all(&(i as i32).to_le_bytes())?;
+        }
+    }
+    w.flush()
 }
 
 /// The displaced grid: vertex 0 the north pole, then `rings` rings of `2 rings` vertices
