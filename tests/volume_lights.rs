@@ -425,7 +425,7 @@ fn an_emissive_medium_behind_a_dielectric_is_no_light() {
 /// 1e-3 (about one comb point per crossing, from the rate's floor) and 1e3 (thousands of
 /// mean free paths across; the sum stops where the transmittance falls below 1e-12), with
 /// `j = 2 sigma_t` so that the box glows with about `2 (1 - T)`. No sample is dropped as
-/// NaN, and MIS agrees with unidirectional estimation.
+/// NaN, and MIS, `bdpt` and `vcm` agree with unidirectional estimation.
 #[test]
 fn homogeneous_emitters_stay_finite_and_unbiased_at_extreme_densities() {
     let d = scratch_dir("vlights", "homogeneous-extreme");
@@ -446,6 +446,16 @@ fn homogeneous_emitters_stay_finite_and_unbiased_at_extreme_densities() {
             image_mean(&mis_out),
             image_mean(&uni_out),
         );
+        // The bidirectional integrators, whose light subpaths start in the medium and whose
+        // weights take its majorant for a cosine: finite at both extremes, and unbiased.
+        for integrator in [GlobalIntegrator::Bdpt, GlobalIntegrator::Vcm] {
+            let out = render_with_integrator(&scene, integrator);
+            assert_agree(
+                &format!("sigma_t {sigma}: {integrator:?} vs bxdf"),
+                image_mean(&out),
+                image_mean(&uni_out),
+            );
+        }
     }
 }
 
