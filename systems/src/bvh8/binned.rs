@@ -528,15 +528,23 @@ impl Bvh8 {
             out.leaves.len() <= INDEX_MASK as usize && out.spheres.len() <= INDEX_MASK as usize,
             "too many leaves"
         );
-        let mut packets = Vec::with_capacity(out.leaves.len());
-        for &(start, count) in &out.leaves {
-            let mut tris = [(0u32, [Vec3::ZERO; 3]); WIDTH];
-            let leaf = &order[start as usize..(start + count) as usize];
-            for (t, &p) in tris.iter_mut().zip(leaf) {
-                *t = (p, prims.triangle(p as usize));
-            }
-            packets.push(TriPacket8::new(&tris[..leaf.len()]));
-        }
+        // Filled on rayon tasks, in leaf order (the same packets whatever the threads): on
+        // a large mesh most of this is the first touch of the packets' pages, which the
+        // main thread alone took after the subtrees were built (0.15 s of a 2M-triangle
+        // mesh's build).
+        use rayon::prelude::*;
+        let packets: Vec<TriPacket8> = out
+            .leaves
+            .par_iter()
+            .map(|&(start, count)| {
+                let mut tris = [(0u32, [Vec3::ZERO; 3]); WIDTH];
+                let leaf = &order[start as usize..(start + count) as usize];
+                for (t, &p) in tris.iter_mut().zip(leaf) {
+                    *t = (p, prims.triangle(p as usize));
+                }
+                TriPacket8::new(&tris[..leaf.len()])
+            })
+            .collect();
         Bvh8 {
             nodes: out.nodes,
             packets,
