@@ -66,7 +66,7 @@ pub(super) fn trace_bounce(
     };
     let role = TraceRole {
         light_path,
-        emission: (!light_path && scene.lights_with_volumes.is_some()).then(|| {
+        emission: (!light_path && scene.features.emissive_volume_lights).then(|| {
             (
                 scene.bidirectional_lights(),
                 &emission as &dyn EmissionStrategies,
