@@ -165,8 +165,8 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
         // `all` asks for adaptive=on only where it can show something; asked for by name
         // with too small a cap it is an error (converge::run).
         let cap = spps.iter().copied().max().unwrap_or(1);
-        if variants.iter().any(|v| v.adaptive) && !adaptive.can_stop_below(cap) {
-            variants.retain(|v| !v.adaptive);
+        if variants.iter().any(|v| v.adaptive.is_some()) && !adaptive.can_stop_below(cap) {
+            variants.retain(|v| v.adaptive.is_none());
             eprintln!(
                 "note: adaptive=on left out: with --spp up to {cap} no pixel can stop before \
                  the cap (a pixel stops at 2 x --min-spp {} samples at the earliest)",
@@ -191,7 +191,9 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
                 );
             }
             let techniques = match &args.reference_technique {
-                Some(spec) if Variant::parse(&compiled, spec).is_ok_and(|v| v.adaptive) => {
+                Some(spec)
+                    if Variant::parse(&compiled, spec).is_ok_and(|v| v.adaptive.is_some()) =>
+                {
                     anyhow::bail!(
                         "--reference-technique {spec}: a reference is rendered uniformly \
                          (adaptive sampling's stopping rule is biased)"

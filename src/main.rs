@@ -271,6 +271,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             Some(NoiseTarget {
                 relative_error: x,
                 min_spp: args.min_spp,
+                rule: args.stopping_rule.into(),
             })
         }
         Some(x) => {

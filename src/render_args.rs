@@ -97,8 +97,8 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) partial: bool,
     /// Adaptive sampling: each pixel stops once its estimated relative error (standard
-    /// error over value, 3x3 window) is at most X, e.g. 0.02; the scene's spp (or --spp)
-    /// is then the most a pixel takes. See README, "Accuracy and its cost".
+    /// error over value, as --stopping-rule estimates it) is at most X, e.g. 0.02; the
+    /// scene's spp (or --spp) is then the most a pixel takes. See README, "Accuracy and its cost".
     #[arg(
         long,
         value_name = "X",
@@ -113,6 +113,18 @@ pub(crate) struct RenderArgs {
         requires = "noise_target"
     )]
     pub(crate) min_spp: u32,
+    /// With --noise-target: which samples decide that a pixel stops. `window`: its own and
+    /// its eight neighbours' (spends the samples best; biased where light arrives by rare
+    /// paths). `unbiased`: a pilot of --min-spp samples a pixel, discarded, and the pixels
+    /// before it, never its own samples (an unbiased mean, for --min-spp more samples a
+    /// pixel). See README, "Renders that stop at a requested accuracy".
+    #[arg(
+        long,
+        value_enum,
+        default_value_t = StoppingRuleArg::Window,
+        requires = "noise_target"
+    )]
+    pub(crate) stopping_rule: StoppingRuleArg,
     /// Show the image while it renders in the tev viewer listening at HOST:PORT (default
     /// 127.0.0.1:14158, tev's own), updated about every second (pbrt-v4's
     /// --display-server). A viewer that is not there costs a warning, not the render.
@@ -144,6 +156,22 @@ pub(crate) struct RenderArgs {
         ]
     )]
     pub(crate) replay: Option<String>,
+}
+
+/// `risotto render --stopping-rule`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum StoppingRuleArg {
+    Window,
+    Unbiased,
+}
+
+impl From<StoppingRuleArg> for risotto::engine::render::StoppingRule {
+    fn from(rule: StoppingRuleArg) -> Self {
+        match rule {
+            StoppingRuleArg::Window => Self::Window,
+            StoppingRuleArg::Unbiased => Self::Unbiased,
+        }
+    }
 }
 
 /// `risotto render --progress`.

@@ -25,7 +25,7 @@ mod common;
 
 use risotto::engine::integrator::GlobalIntegrator;
 use risotto::engine::output::{read_exr_rgb, Image};
-use risotto::engine::render::{render, NoiseTarget, RenderOptions, RenderOutput};
+use risotto::engine::render::{render, NoiseTarget, RenderOptions, RenderOutput, StoppingRule};
 use risotto::engine::scene::CompiledScene;
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::load_scene;
@@ -528,6 +528,7 @@ fn bdpt_with_a_noise_target_is_an_error() {
             noise_target: Some(NoiseTarget {
                 relative_error: 0.05,
                 min_spp: 2,
+                rule: StoppingRule::Window,
             }),
             ..RenderOptions::default()
         };

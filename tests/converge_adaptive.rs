@@ -140,6 +140,48 @@ fn an_adaptive_curve_lowers_its_target_and_takes_more_samples_and_time() {
     );
 }
 
+/// `adaptive=unbiased` sweeps the unbiased stopping rule beside `adaptive=on`: its own
+/// curve, labelled and recorded as such, its pilot not in its mean spp.
+#[test]
+fn the_unbiased_rule_is_a_curve_of_its_own() {
+    let dir = scratch_dir("converge-adaptive", "unbiased");
+    let out_dir = dir.join("out");
+    let out = converge(
+        &smoke_ball(),
+        &out_dir,
+        &[
+            "--techniques",
+            "adaptive=on,adaptive=unbiased",
+            "--spp",
+            "256",
+            "--noise-targets",
+            "0.2",
+            "--min-spp",
+            "4",
+            "--repeats",
+            "1",
+            "--reference-spp",
+            "16",
+            "--reference-technique",
+            "lighting=mis",
+            "--threads",
+            "2",
+        ],
+    );
+    assert_ok("converge adaptive=unbiased", &out);
+    let (_, rows) = csv_rows(&out_dir);
+    let labels: Vec<&str> = rows.iter().map(|r| r["technique"].as_str()).collect();
+    assert_eq!(labels, ["adaptive=on", "adaptive=unbiased"]);
+    for r in &rows {
+        let m = num(r, "spp_mean");
+        assert!((8.0..256.0).contains(&m), "{r:?}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("converge.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["curves"][1]["techniques"]["adaptive"], "unbiased");
+}
+
 #[test]
 fn all_adds_adaptive_on_once_where_the_path_tracer_renders() {
     let dir = scratch_dir("converge-adaptive", "all");

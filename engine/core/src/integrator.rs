@@ -126,6 +126,8 @@ pub struct TileFilm {
     /// Adaptive sampling's guard: how many consecutive pass ends found each pixel at its
     /// target (it stops at two). Empty when not adaptive.
     pub converged_passes: Vec<u8>,
+    /// XORed into the scene's seed for this tile's pixel seeds: 0 for an image's tiles.
+    pub seed_salt: u64,
 }
 
 impl TileFilm {
@@ -138,6 +140,7 @@ impl TileFilm {
             y0,
             active: Vec::new(),
             converged_passes: Vec::new(),
+            seed_salt: 0,
         }
     }
 
@@ -283,7 +286,7 @@ fn for_each_batch<W>(
             .zip(&batch.paths.pixel)
             .all(|(&local, &pixel)| local == tile.local(pixel, scene.camera.width)));
         // Paths come in runs of one pixel's samples: mix each pixel's seed once per run.
-        let seed = scene.settings.seed;
+        let seed = scene.settings.seed ^ tile.seed_salt;
         let mut last: Option<(u32, u32)> = None;
         batch.seeds.clear();
         batch

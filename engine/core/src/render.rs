@@ -100,19 +100,46 @@ pub struct RenderOptions {
 /// Adaptive sampling's request ([`RenderOptions::noise_target`]).
 ///
 /// Every pixel first takes `min_spp` samples; then, after each pass, the pixels whose
-/// relative error (estimated from the film's variance over a 3 x 3 window, relative to 1 %
-/// of the image's mean for dark pixels: [`risotto_systems::adaptive`]) is at or below
+/// relative error (estimated from film variances as the [`StoppingRule`] says, relative to
+/// 1 % of the image's mean for dark pixels: [`risotto_systems::adaptive`]) is at or below
 /// `relative_error` stop for good, and the others take as many samples again as they have
 /// (doubling passes, shorter when the render is interruptible or checkpointed). A pixel's
 /// samples are the first indices of its sequence, so the `sampleCount` layer says how many
 /// it took; the output's [`RenderOutput::samples`] is the range the most-sampled pixels
-/// took.
+/// took. Which samples decide that a pixel stops is the [`StoppingRule`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseTarget {
     /// The relative error (standard error over value) at which a pixel stops, > 0.
     pub relative_error: f32,
     /// Samples every pixel takes before any stops, >= 1 (the driver's default: 16).
     pub min_spp: u32,
+    /// Which samples decide that a pixel stops.
+    pub rule: StoppingRule,
+}
+
+/// Which samples an adaptive render's stopping decisions read ([`NoiseTarget::rule`]).
+///
+/// A rule that reads the samples a pixel keeps biases its mean where light arrives by rare
+/// paths: a pixel that has not yet drawn one shows a low mean and a low variance together,
+/// and stops low (Kirk and Arvo 1991). `Window` has this bias and spends the samples best;
+/// `Unbiased` does not read a pixel's samples at all. README, "Renders that stop at a
+/// requested accuracy", has both measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StoppingRule {
+    /// The worst estimate of the pixel and its eight neighbours
+    /// ([`risotto_systems::adaptive::windowed_relative_error`]): a pixel that drew a rare
+    /// bright sample samples on until the sample is averaged down.
+    #[default]
+    Window,
+    /// The worst of two estimates that never read the pixel's own samples: a pilot of
+    /// `min_spp` independently scrambled samples of every pixel, rendered first and
+    /// discarded (its 3 x 3 window's per-sample error at the pixel's count), and the
+    /// image's pixels before it in raster order
+    /// ([`risotto_systems::adaptive::preceding_relative_error`]). A pixel's sample count is
+    /// then independent of its samples, and its mean unbiased. Costs the pilot (`min_spp`
+    /// more samples a pixel) and, where a pixel draws a rare bright sample the estimates
+    /// did not foresee, keeps it at the pixel's count.
+    Unbiased,
 }
 
 /// The largest tile edge of an adaptive render ([`RenderOptions::noise_target`]).
@@ -430,9 +457,13 @@ fn render_passes<I: Integrator>(
     let workers: Vec<Mutex<(TileWorker<I::Worker>, Bump)>> = (0..threads.max(1))
         .map(|_| Mutex::new((TileWorker::default(), Bump::new())))
         .collect();
-    // Renders the sample indices `range` of `tiles` in parallel, continuing their films, or
-    // (`light`) runs the integrator's light pass of an iteration over them.
-    let run_tiles = |tiles: &mut [Tile], range: std::ops::Range<u32>, light: bool| {
+    // Renders the sample indices `range` of `tiles` in parallel, continuing their films and
+    // reporting the samples to `progress`, or (`light`) runs the integrator's light pass of
+    // an iteration over them.
+    let run_tiles = |tiles: &mut [Tile],
+                     range: std::ops::Range<u32>,
+                     light: bool,
+                     progress: &(dyn Fn(u64) + Sync)| {
         // The sampler travels in the sample addresses (`SamplerKind::address`).
         let addresses = options.sampler.addresses(range);
         let workers = &workers;
@@ -484,17 +515,17 @@ fn render_passes<I: Integrator>(
     // One pass renders the sample indices `range` of every tile, continuing its film: in
     // iterations (a light pass, then the camera pass) when the integrator works in them.
     let pass = |tiles: &mut Vec<Tile>, range: std::ops::Range<u32>| match tiles_per_group {
-        None => run_tiles(tiles, range, false),
+        None => run_tiles(tiles, range, false, progress),
         Some(group_size) => {
             for sample in range {
                 for group in tiles.chunks_mut(group_size) {
                     let camera_samples = group.iter().map(|(t, _)| t.active_pixels()).sum();
                     integrator.begin_iteration(sample, camera_samples);
-                    run_tiles(group, sample..sample + 1, true);
+                    run_tiles(group, sample..sample + 1, true, progress);
                     if let Some((_, stats)) = group.first_mut() {
                         integrator.end_light_pass(stats);
                     }
-                    run_tiles(group, sample..sample + 1, false);
+                    run_tiles(group, sample..sample + 1, false, progress);
                 }
             }
         }
@@ -517,6 +548,13 @@ fn render_passes<I: Integrator>(
             .start
             .saturating_add(target.min_spp.max(1))
             .min(samples.end);
+        // The unbiased rule's pilot (`adaptive`): the first `min_spp` sample indices of every
+        // pixel, independently scrambled, counted in the work but not in the progress.
+        let mut pilots = Vec::new();
+        if target.rule == StoppingRule::Unbiased {
+            pilots = adaptive::pilot_tiles(&tiles);
+            run_tiles(&mut pilots, done..next, false, &|_| {});
+        }
         loop {
             let t = std::time::Instant::now();
             pass(&mut tiles, done..next);
@@ -525,7 +563,7 @@ fn render_passes<I: Integrator>(
             if interrupted() || done >= samples.end {
                 break;
             }
-            if stop_converged_pixels(&mut tiles, window, target) == 0 {
+            if stop_converged_pixels(&mut tiles, &pilots, window, target) == 0 {
                 break;
             }
             let mut chunk = done - samples.start;
@@ -552,6 +590,10 @@ fn render_passes<I: Integrator>(
             }
             next = done.saturating_add(chunk.max(1)).min(samples.end);
         }
+        // The pilot's work is the render's (its rays and time), not its image.
+        for ((_, stats), (_, pilot_stats)) in tiles.iter_mut().zip(&pilots) {
+            stats.merge(pilot_stats);
+        }
         let mut out = gather(
             scene,
             window,
@@ -560,7 +602,7 @@ fn render_passes<I: Integrator>(
             start,
             integrator.splats(),
         );
-        out.stats.adaptive = Some(adaptive_summary(&out, target));
+        out.stats.adaptive = Some(adaptive_summary(&out, target, &pilots));
         return Ok(out);
     }
     match every {

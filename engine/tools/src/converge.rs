@@ -374,7 +374,7 @@ pub fn total_samples(options: &ConvergeOptions, pixels: u64) -> Option<u64> {
     let SppPlan::List(spps) = &options.plan else {
         return None;
     };
-    if options.variants.iter().any(|v| v.adaptive) {
+    if options.variants.iter().any(|v| v.adaptive.is_some()) {
         return None;
     }
     let sweep: u64 = spps.iter().map(|&s| s as u64).sum::<u64>()
@@ -410,7 +410,11 @@ const BUDGET_LEVELS: usize = MAX_SPP.ilog2() as usize + 1;
 /// (an spp count of a uniform variant, a noise target of an adaptive one; a budget's
 /// curves have up to [`BUDGET_LEVELS`] points) and repeat.
 fn check_kept_images(options: &ConvergeOptions, w: usize, h: usize) -> Result<(), ConvergeError> {
-    let adaptive = options.variants.iter().filter(|v| v.adaptive).count() as u64;
+    let adaptive = options
+        .variants
+        .iter()
+        .filter(|v| v.adaptive.is_some())
+        .count() as u64;
     let uniform = options.variants.len() as u64 - adaptive;
     let (counts, targets, up_to) = match &options.plan {
         SppPlan::List(spps) => (
@@ -478,7 +482,7 @@ pub fn run(
     {
         techniques.check_applicable(&registry)?;
     }
-    let any_adaptive = options.variants.iter().any(|v| v.adaptive);
+    let any_adaptive = options.variants.iter().any(|v| v.adaptive.is_some());
     if any_adaptive {
         options.adaptive.check()?;
     }
@@ -530,13 +534,13 @@ pub fn run(
             sweep.render(scene, &mut raw, |_| true, cap)?;
         }
         SppPlan::Budget(_) => {
-            sweep.render(scene, &mut raw, |v| !v.adaptive, MAX_SPP)?;
+            sweep.render(scene, &mut raw, |v| v.adaptive.is_none(), MAX_SPP)?;
             let reached = largest_spp(&raw, &options.variants, false);
             let cap = reached
                 .unwrap_or(MAX_SPP)
                 .max(options.adaptive.min_spp.saturating_mul(4))
                 .min(MAX_SPP);
-            sweep.render(scene, &mut raw, |v| v.adaptive, cap)?;
+            sweep.render(scene, &mut raw, |v| v.adaptive.is_some(), cap)?;
         }
     }
     let largest = largest_spp(&raw, &options.variants, true).unwrap_or(1);

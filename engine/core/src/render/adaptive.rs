@@ -1,15 +1,50 @@
 //! Adaptive sampling's decisions between passes ([`RenderOptions::noise_target`]): each
 //! pixel's estimated relative error from the tiles' films, which pixels stop, and the
 //! summary the stats report.
+//!
+//! Under [`StoppingRule::Unbiased`] the decisions read a pilot (tiles of `min_spp` samples
+//! of every pixel from an independent scramble, [`PILOT_SEED_SALT`], rendered before the
+//! image and never part of it) and the image's pixels before each pixel in raster order,
+//! never the pixel's own samples; the floor of dark pixels is the pilot's too. So a
+//! pixel's sample count is a function of samples independent of its own, and its mean is
+//! unbiased (the pass lengths of an interruptible render follow the wall time, which a
+//! pixel's samples move by microseconds: not a dependence worth the name).
 
-use super::{NoiseTarget, RenderOutput, Tile, Window, NOISE_FLOOR_FRACTION};
+use super::{NoiseTarget, RenderOutput, StoppingRule, Tile, Window, NOISE_FLOOR_FRACTION};
+use crate::integrator::TileFilm;
+use crate::stats::SystemStats;
 use risotto_systems::adaptive::AdaptiveSummary;
 
-/// The means and variances of the means of the window's pixels, gathered from `tiles`.
-fn window_estimates(tiles: &[Tile], window: Window) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+/// XORed into the scene's seed for the pilot's pixel seeds
+/// ([`crate::integrator::TileFilm::seed_salt`]): an independent Owen scramble of the same
+/// sequence (independent streams under the independent sampler).
+pub(super) const PILOT_SEED_SALT: u64 = 0x5851_f42d_4c95_7f2d;
+
+/// The pilot's tiles of an unbiased adaptive render, one beside each of `tiles`, empty.
+pub(super) fn pilot_tiles(tiles: &[Tile]) -> Vec<Tile> {
+    tiles
+        .iter()
+        .map(|(t, _)| {
+            let mut pilot = TileFilm::new(t.x0, t.y0, t.film.width, t.film.height);
+            pilot.seed_salt = PILOT_SEED_SALT;
+            (pilot, SystemStats::default())
+        })
+        .collect()
+}
+
+/// The means, variances of the means and sample counts of the window's pixels, gathered
+/// from `tiles`.
+struct Estimates {
+    value: Vec<[f32; 3]>,
+    variance: Vec<[f32; 3]>,
+    count: Vec<u32>,
+}
+
+fn window_estimates(tiles: &[Tile], window: Window) -> Estimates {
     let (w, h) = (window.width() as usize, window.height() as usize);
     let mut value = vec![[0.0f32; 3]; w * h];
     let mut variance = vec![[0.0f32; 3]; w * h];
+    let mut count = vec![0u32; w * h];
     for (tile, _) in tiles {
         let film = &tile.film;
         for ty in 0..film.height {
@@ -19,10 +54,15 @@ fn window_estimates(tiles: &[Tile], window: Window) -> (Vec<[f32; 3]>, Vec<[f32;
                 let y = (tile.y0 - window.y0 + ty) as usize;
                 value[y * w + x] = film.mean(src).to_array();
                 variance[y * w + x] = film.variance_of_mean(src).to_array();
+                count[y * w + x] = film.count[src];
             }
         }
     }
-    (value, variance)
+    Estimates {
+        value,
+        variance,
+        count,
+    }
 }
 
 /// The estimated relative error of each pixel of the window ([`NoiseTarget`]).
@@ -34,16 +74,52 @@ fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> V
     error
 }
 
-/// Stops, for good, the pixels whose estimated error has been at or below the target at two
+/// The error [`StoppingRule::Unbiased`] estimates for each pixel of the window: the worst
+/// of the pilot's (its 3 x 3 window's per-sample relative error over the square root of the
+/// pixel's count in `image`) and that of the image's preceding pixels, both against the
+/// pilot's floor.
+fn unbiased_errors(image: &Estimates, pilot: &Estimates, window: Window) -> Vec<f32> {
+    use risotto_systems::adaptive::{error_floor, preceding_relative_error};
+    let (w, h) = (window.width() as usize, window.height() as usize);
+    let floor = error_floor(&pilot.value, NOISE_FLOOR_FRACTION);
+    // The pilot's per-sample variances: every pilot pixel has its `min_spp` samples.
+    let per_sample: Vec<[f32; 3]> = (pilot.variance.iter().zip(&pilot.count))
+        .map(|(v, &n)| v.map(|v| v * n as f32))
+        .collect();
+    let mut per_sample_error = vec![0.0; w * h];
+    risotto_systems::adaptive::windowed_relative_error(
+        w,
+        h,
+        &pilot.value,
+        &per_sample,
+        floor,
+        &mut per_sample_error,
+    );
+    let mut error = vec![0.0; w * h];
+    preceding_relative_error(w, h, &image.value, &image.variance, floor, &mut error);
+    for ((e, pilot_error), &n) in error.iter_mut().zip(&per_sample_error).zip(&image.count) {
+        *e = e.max(pilot_error / (n.max(1) as f32).sqrt());
+    }
+    error
+}
+
+/// Stops, for good, the pixels whose estimated error (by `target.rule`; `pilots` beside
+/// `tiles` under [`StoppingRule::Unbiased`]) has been at or below the target at two
 /// consecutive pass ends (the guard against stopping on an unluckily low estimate: the
 /// second look has twice the samples); returns how many still take samples.
 pub(super) fn stop_converged_pixels(
     tiles: &mut [Tile],
+    pilots: &[Tile],
     window: Window,
     target: NoiseTarget,
 ) -> usize {
-    let (value, variance) = window_estimates(tiles, window);
-    let error = window_errors(&value, &variance, window);
+    let image = window_estimates(tiles, window);
+    let error = match target.rule {
+        StoppingRule::Window => window_errors(&image.value, &image.variance, window),
+        StoppingRule::Unbiased => {
+            unbiased_errors(&image, &window_estimates(pilots, window), window)
+        }
+    };
     let w = window.width() as usize;
     let mut active = 0;
     for (tile, _) in tiles.iter_mut() {
@@ -74,9 +150,61 @@ pub(super) fn stop_converged_pixels(
 }
 
 /// The stats of an adaptive render: its sample counts and final error estimates.
-pub(super) fn adaptive_summary(out: &RenderOutput, target: NoiseTarget) -> AdaptiveSummary {
+pub(super) fn adaptive_summary(
+    out: &RenderOutput,
+    target: NoiseTarget,
+    pilots: &[Tile],
+) -> AdaptiveSummary {
     let value: Vec<[f32; 3]> = out.beauty.pixels.iter().map(|p| p.to_array()).collect();
     let variance: Vec<[f32; 3]> = out.variance.pixels.iter().map(|p| p.to_array()).collect();
     let error = window_errors(&value, &variance, out.window);
-    AdaptiveSummary::new(target.relative_error, &out.film.count, &error)
+    AdaptiveSummary {
+        pilot_spp: pilots.first().map_or(0, |(t, _)| t.film.count[0]),
+        ..AdaptiveSummary::new(target.relative_error, &out.film.count, &error)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 x 3 window's estimates: every pixel `value` 1 with variance of the mean `var`
+    /// and `count` samples.
+    fn uniform(var: f32, count: u32) -> Estimates {
+        Estimates {
+            value: vec![[1.0; 3]; 12],
+            variance: vec![[var; 3]; 12],
+            count: vec![count; 12],
+        }
+    }
+
+    #[test]
+    fn the_unbiased_rule_never_reads_a_pixels_own_samples() {
+        let window = Window::full(4, 3);
+        let pilot = uniform(0.0004, 16);
+        let image = uniform(0.0001, 64);
+        let error = unbiased_errors(&image, &pilot, window);
+        // The pilot's per-sample relative error is sqrt(0.0004 x 16) = 0.08, at 64 samples
+        // 0.01; the image's preceding pixels say sqrt(0.0001) = 0.01 too.
+        assert!(error.iter().all(|e| (e - 0.01).abs() < 1e-6), "{error:?}");
+        // Whatever a pixel's own samples say (its mean, its variance), its error stays.
+        let i = 5;
+        let mut own = uniform(0.0001, 64);
+        own.value[i] = [0.01; 3];
+        own.variance[i] = [9.0; 3];
+        assert_eq!(unbiased_errors(&own, &pilot, window)[i], error[i]);
+        // A noisier pixel before it, or a noisier pilot around it, raises it.
+        let mut before = uniform(0.0001, 64);
+        before.variance[i - 1] = [0.0025; 3];
+        assert!((unbiased_errors(&before, &pilot, window)[i] - 0.05).abs() < 1e-6);
+        let mut noisy_pilot = uniform(0.0004, 16);
+        noisy_pilot.variance[i + 1] = [0.0016; 3];
+        assert!((unbiased_errors(&image, &noisy_pilot, window)[i] - 0.02).abs() < 1e-6);
+        // The pilot's error falls with the pixel's own count: it is the image's error at
+        // that count.
+        let mut more = uniform(0.0001, 64);
+        more.count[i] = 256;
+        more.variance = vec![[0.0; 3]; 12];
+        assert!((unbiased_errors(&more, &pilot, window)[i] - 0.005).abs() < 1e-6);
+    }
 }

@@ -121,6 +121,7 @@ impl Serialize for RenderStats {
                     // JSON has no infinity, so such a quantile is written as null.
                     "error_median": finite_or_null(a.error_median),
                     "error_p95": finite_or_null(a.error_p95),
+                    "pilot_spp": a.pilot_spp,
                 }),
             )?;
         }
@@ -245,6 +246,14 @@ impl fmt::Display for RenderStats {
                 a.error_median,
                 a.error_p95
             )?;
+            if a.pilot_spp > 0 {
+                writeln!(
+                    f,
+                    "adaptive: unbiased stopping rule, a pilot of {} spp decided (rendered, \
+                     not in the image)",
+                    a.pilot_spp
+                )?;
+            }
         }
         let ended: u64 = c.terminated.iter().sum();
         write!(f, "terminated:")?;

@@ -11,7 +11,7 @@ pub(super) fn largest_spp(
 ) -> Option<u32> {
     raw.iter()
         .zip(variants)
-        .filter(|(_, v)| adaptive || !v.adaptive)
+        .filter(|(_, v)| adaptive || v.adaptive.is_none())
         .flat_map(|(c, _)| c.iter().map(|p| p.spp))
         .max()
 }
@@ -55,6 +55,7 @@ impl Levels<'_, '_> {
                 let target = noise_target.map(|relative_error| NoiseTarget {
                     relative_error: relative_error as f32,
                     min_spp: options.adaptive.min_spp,
+                    rule: variant.adaptive.unwrap_or_default(),
                 });
                 let mut renders = Vec::new();
                 for r in 0..options.repeats {
@@ -83,7 +84,7 @@ impl Levels<'_, '_> {
                         active[v] = false;
                     }
                 }
-                if variant.adaptive && renders.iter().all(|s| s.spp_min >= spp) {
+                if variant.adaptive.is_some() && renders.iter().all(|s| s.spp_min >= spp) {
                     active[v] = false;
                 }
                 raw[v].push(RawPoint {
@@ -99,7 +100,7 @@ impl Levels<'_, '_> {
     /// The spp and noise target of `variant`'s point number `level`; `None` past its last.
     fn level(&self, variant: &Variant, level: usize, cap: u32) -> Option<(u32, Option<f64>)> {
         let targets = &self.options.adaptive.noise_targets;
-        match (&self.options.plan, variant.adaptive) {
+        match (&self.options.plan, variant.adaptive.is_some()) {
             (SppPlan::List(spps), false) => spps.get(level).map(|&s| (s, None)),
             (SppPlan::List(_), true) => targets.get(level).map(|&x| (cap, Some(x))),
             (SppPlan::Budget(_), _) if level >= BUDGET_LEVELS => None,

@@ -133,10 +133,9 @@ pub(super) fn curve(
         .collect();
     let last = points.last();
     let techniques = &variant.techniques;
-    let adaptive = match variant.adaptive {
-        true => "on",
-        false => ADAPTIVE.default,
-    };
+    let adaptive = variant
+        .adaptive
+        .map_or(ADAPTIVE.default, super::variant::adaptive_value);
     Curve {
         label: variant.label(),
         techniques: registry

@@ -23,7 +23,7 @@ pub(super) fn most_efficient_converging(
     let mut best: Option<(f64, &Techniques)> = None;
     for (variant, points) in variants.iter().zip(raw) {
         let techniques = &variant.techniques;
-        if variant.adaptive || !techniques.converges(&registry) {
+        if variant.adaptive.is_some() || !techniques.converges(&registry) {
             continue;
         }
         let Some(RawPoint { spp, renders, .. }) = points.last() else {

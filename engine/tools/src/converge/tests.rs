@@ -2,6 +2,7 @@
 
 use super::*;
 use risotto_components::Rgb;
+use risotto_engine::render::StoppingRule;
 
 fn noisy(seed: u64, sigma: f32) -> Image {
     let mut rng = risotto_systems::sampler::SplitMix64(seed);
@@ -191,7 +192,7 @@ fn an_adaptive_point_records_its_target_and_mean_spp_in_csv_and_json() {
     assert_eq!(p.samples(), 45.0);
     let adaptive = Variant {
         techniques: Techniques::default(),
-        adaptive: true,
+        adaptive: Some(StoppingRule::Window),
     };
     assert_eq!(adaptive.label(), "adaptive=on");
     let uniform = made(4, 0.1, 0.01, None);
@@ -260,7 +261,7 @@ fn the_comparison_fits_an_adaptive_curve_against_its_seconds() {
     let registry = TechniqueRegistry::new(Default::default(), []);
     let on = Variant {
         techniques: Techniques::default(),
-        adaptive: true,
+        adaptive: Some(StoppingRule::Window),
     };
     let sweep = Sweep {
         width: 1,
@@ -300,7 +301,7 @@ fn the_image_memory_guard_counts_the_adaptive_points() {
             Techniques::default().into(),
             Variant {
                 techniques: Techniques::default(),
-                adaptive: true,
+                adaptive: Some(StoppingRule::Window),
             },
         ],
         plan: SppPlan::List((0..10).map(|i| 1 << i).collect()),

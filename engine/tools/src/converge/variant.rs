@@ -1,8 +1,9 @@
 //! The sweep's variants, one curve each: a choice of techniques ([`Techniques`]) and how the
-//! samples are spread over the pixels, `adaptive = off | on` ([`ADAPTIVE`]).
+//! samples are spread over the pixels, `adaptive = off | on | unbiased` ([`ADAPTIVE`]).
 //!
-//! `adaptive=on` is not an estimator technique of the engine (`render` asks for it with
-//! `--noise-target X`, a number, not a `--technique` value) but a dimension of the sweep,
+//! `adaptive=on` (and `unbiased`, the other stopping rule) is not an estimator technique of
+//! the engine (`render` asks for it with `--noise-target X`, a number, not a `--technique`
+//! value) but a dimension of the sweep,
 //! written in `--techniques` specs like one (`adaptive=on`, `lighting=nee+adaptive=on`) and
 //! listed by `risotto techniques` beside them, so its curve is compared with the uniform ones
 //! on the same plot and table. Its points are renders at decreasing noise targets rather
@@ -10,13 +11,15 @@
 
 use super::ConvergeError;
 use risotto_engine::integrator::GlobalIntegrator;
+use risotto_engine::render::StoppingRule;
 use risotto_engine::scene::CompiledScene;
 use risotto_engine::technique::{
     always, never, Technique, TechniqueRegistry, TechniqueValue, Techniques,
 };
 
-/// `adaptive`: uniform sampling or adaptive sampling to a noise target, as `converge`
-/// sweeps it and `risotto techniques` lists it. It applies where the scene's integrator is
+/// `adaptive`: uniform sampling, or adaptive sampling to a noise target with the window
+/// (`on`) or the unbiased stopping rule ([`StoppingRule`]), as `converge` sweeps it and
+/// `risotto techniques` lists it. It applies where the scene's integrator is
 /// the path tracer: the bidirectional integrators refuse a noise target (their light paths
 /// splat onto every pixel, stopped or not).
 pub static ADAPTIVE: Technique = Technique {
@@ -30,8 +33,13 @@ pub static ADAPTIVE: Technique = Technique {
         },
         TechniqueValue {
             name: "on",
-            summary: "adaptive: a pixel stops at the noise target (biased: Kirk and Arvo 1991); converge only, points at noise targets",
+            summary: "adaptive: a pixel stops at the noise target, its 3x3 window deciding (biased where light arrives by rare paths: Kirk and Arvo 1991); converge only, points at noise targets",
             converges: never,
+        },
+        TechniqueValue {
+            name: "unbiased",
+            summary: "adaptive, decided by a discarded pilot and the preceding pixels, never a pixel's own samples (render --stopping-rule unbiased): unbiased; converge only, points at noise targets",
+            converges: always,
         },
     ],
     default: "off",
@@ -102,31 +110,36 @@ impl AdaptivePlan {
 pub struct Variant {
     /// The techniques.
     pub techniques: Techniques,
-    /// `adaptive=on`: points at noise targets ([`AdaptivePlan`]); off, at spp counts.
-    pub adaptive: bool,
+    /// `adaptive=on` or `unbiased`: points at noise targets ([`AdaptivePlan`]) with this
+    /// stopping rule; `None` (`off`), at spp counts.
+    pub adaptive: Option<StoppingRule>,
 }
 
 impl From<Techniques> for Variant {
     fn from(techniques: Techniques) -> Variant {
         Variant {
             techniques,
-            adaptive: false,
+            adaptive: None,
         }
     }
 }
 
 impl Variant {
-    /// The defaults with the `+`-separated assignments of `spec` applied, `adaptive=on|off`
-    /// among them (`lighting=nee+adaptive=on`), checked against `scene`
+    /// The defaults with the `+`-separated assignments of `spec` applied,
+    /// `adaptive=off|on|unbiased` among them (`lighting=nee+adaptive=on`), checked against `scene`
     /// ([`Variant::check`]).
     pub fn parse(scene: &CompiledScene, spec: &str) -> Result<Variant, ConvergeError> {
         let registry = TechniqueRegistry::for_scene(scene);
         let mut techniques = Vec::new();
-        let mut adaptive = false;
+        let mut adaptive = None;
         for a in spec.split('+') {
             match a.split_once('=') {
                 Some((name, value)) if name.trim() == ADAPTIVE.name => {
-                    adaptive = ADAPTIVE.value(value.trim())?.name == "on";
+                    adaptive = match ADAPTIVE.value(value.trim())?.name {
+                        "on" => Some(StoppingRule::Window),
+                        "unbiased" => Some(StoppingRule::Unbiased),
+                        _ => None,
+                    };
                 }
                 _ => techniques.push(a),
             }
@@ -155,7 +168,7 @@ impl Variant {
         if adaptive_applies(scene) {
             out.push(Variant {
                 techniques: Techniques::default(),
-                adaptive: true,
+                adaptive: Some(StoppingRule::Window),
             });
         }
         out
@@ -168,7 +181,7 @@ impl Variant {
         self.techniques
             .check_applicable(&TechniqueRegistry::for_scene(scene))?;
         let integrator = self.integrator(scene);
-        if self.adaptive && integrator != GlobalIntegrator::Path {
+        if self.adaptive.is_some() && integrator != GlobalIntegrator::Path {
             return Err(ConvergeError::Options(format!(
                 "{}: adaptive sampling (a noise target) needs the path tracer, and this \
                  variant renders with integrator={} (it splats light paths onto every \
@@ -191,16 +204,28 @@ impl Variant {
     /// variant its non-default techniques followed by `adaptive=on` (`adaptive=on` alone on
     /// the defaults).
     pub fn label(&self) -> String {
-        if !self.adaptive {
+        let Some(rule) = self.adaptive else {
             return self.techniques.label();
-        }
+        };
         self.techniques
             .non_default()
             .iter()
             .map(|(n, v)| format!("{n}={v}"))
-            .chain(std::iter::once(format!("{}=on", ADAPTIVE.name)))
+            .chain(std::iter::once(format!(
+                "{}={}",
+                ADAPTIVE.name,
+                adaptive_value(rule)
+            )))
             .collect::<Vec<_>>()
             .join("+")
+    }
+}
+
+/// The `adaptive` value that asks for `rule`.
+pub fn adaptive_value(rule: StoppingRule) -> &'static str {
+    match rule {
+        StoppingRule::Window => "on",
+        StoppingRule::Unbiased => "unbiased",
     }
 }
 
