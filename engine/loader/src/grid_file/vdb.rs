@@ -58,6 +58,12 @@ fn guarded<T, E: std::fmt::Display>(
     }
 }
 
+/// A visitor of active values; it stops a walk with its first error.
+type Visit<'a> = &'a mut dyn FnMut(Active) -> Result<(), GridFileError>;
+
+/// A walk over a grid's active values, calling the visitor on each.
+type Walk<'a> = &'a dyn Fn(Visit<'_>) -> Result<(), GridFileError>;
+
 /// One active value of the tree: a voxel (`size` 1) or a tile of `size^3` voxels.
 #[derive(Clone, Copy)]
 struct Active {
@@ -131,22 +137,115 @@ pub fn read_vdb(path: &Path, name: Option<&str>) -> Result<DensityGrid, GridFile
     })?;
     // The tree is walked twice (bounds, then values) rather than listing its active values:
     // a list costs 40 bytes a voxel beside the tree and the dense grid (5.4 GB for a dense
-    // 512^3 VDB).
-    let walk = |visit: &mut dyn FnMut(Active) -> Result<(), GridFileError>| {
-        guarded(path, &format!("grid \"{chosen}\""), || {
-            for (c, value, level) in grid.iter() {
-                if let Err(e) = visit(Active {
-                    origin: [c.x as i64, c.y as i64, c.z as i64],
-                    size: level.scale() as i64,
-                    value,
-                }) {
-                    return Ok(Err(e));
-                }
-            }
-            Ok::<_, String>(Ok(()))
-        })?
-    };
-    to_grid(path, &chosen, walk)
+    // 512^3 VDB). The second walk takes the tree apart as it goes ([`consume_tree`]).
+    let what = format!("grid \"{chosen}\"");
+    let walk =
+        |visit: Visit<'_>| guarded(path, &what, || Ok::<_, String>(visit_all(&grid, visit)))?;
+    let extent = active_extent(path, &chosen, &walk)?;
+    let fill =
+        |visit: Visit<'_>| guarded(path, &what, || Ok::<_, String>(consume_tree(grid, visit)))?;
+    fill_grid(path, &chosen, extent, fill)
+}
+
+/// Visits the active values of `grid` (`vdb_rs::Grid::iter`), stopping at `visit`'s first
+/// error.
+fn visit_all(grid: &vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFileError> {
+    for (c, value, level) in grid.iter() {
+        visit(Active {
+            origin: [c.x as i64, c.y as i64, c.z as i64],
+            size: level.scale() as i64,
+            value,
+        })?;
+    }
+    Ok(())
+}
+
+/// Visits the active values of `grid` as [`visit_all`] does (in another order: each root
+/// node's tiles, then its children in z, y, x order), taking the tree apart on the way: each child of a
+/// root node (an internal node of 128^3 voxels with its leaves, 8 MB of a dense tree) is
+/// dropped once visited and its pages handed back to the system ([`release_freed_pages`]).
+/// The grid being filled then grows while the tree shrinks, instead of the two being whole
+/// together at the load's peak (issue 36: a dense 512^3 VDB peaked at twice its grid).
+///
+/// Each part is walked by `vdb_rs`'s own iterator, on a root node holding only that part,
+/// so what is visited, tiles and values alike, is what `Grid::iter` visits.
+fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFileError> {
+    let vdb_rs::Grid {
+        tree,
+        mut transform,
+        mut descriptor,
+    } = grid;
+    for mut root in tree.root_nodes {
+        let mut no_children = root.child_mask.clone();
+        no_children.fill(false);
+        let mut no_tiles = root.value_mask.clone();
+        no_tiles.fill(false);
+        // The children in the dense grid's memory order (z, then y, then x): consecutive
+        // parts then fill whole slabs of its pages, which become resident as the parts'
+        // leaves are freed (in the tree's own order, z fastest, the first few parts touch
+        // every page of the grid).
+        let mut children: Vec<u32> = root.child_mask.iter_ones().map(|i| i as u32).collect();
+        children.sort_by_key(|idx| {
+            root.nodes
+                .get(idx)
+                .map(|n| (n.origin.z, n.origin.y, n.origin.x))
+        });
+        let mut parts = vec![vdb_rs::Node5 {
+            child_mask: no_children.clone(),
+            value_mask: std::mem::take(&mut root.value_mask),
+            nodes: Default::default(),
+            data: std::mem::take(&mut root.data),
+            origin: root.origin,
+        }];
+        for idx in children {
+            let mut child_mask = no_children.clone();
+            child_mask.set(idx as usize, true);
+            // A missing child is the iterator's to report (it panics, `guarded` says so).
+            let nodes = root
+                .nodes
+                .remove(&idx)
+                .map(|n| (idx, n))
+                .into_iter()
+                .collect();
+            parts.push(vdb_rs::Node5 {
+                child_mask,
+                value_mask: no_tiles.clone(),
+                nodes,
+                data: Vec::new(),
+                origin: root.origin,
+            });
+        }
+        drop(root);
+        // Front to back, each part dropped as soon as it is visited.
+        for part in parts {
+            let one = vdb_rs::Grid {
+                tree: vdb_rs::Tree {
+                    root_nodes: vec![part],
+                },
+                transform,
+                descriptor,
+            };
+            visit_all(&one, visit)?;
+            (transform, descriptor) = (one.transform, one.descriptor);
+            release_freed_pages();
+        }
+    }
+    Ok(())
+}
+
+/// Hands the pages of freed heap memory back to the system (glibc's `malloc_trim`, which
+/// since glibc 2.8 releases whole free pages anywhere in the heap, not only at its top). A
+/// tree's leaves are 2 KB allocations, below glibc's mmap threshold: freed, they stay
+/// resident in the heap until trimmed, and the grid being filled does not reuse them (its
+/// own allocation is one mapping). Elsewhere nothing is done: the peak is then the tree and
+/// the grid together, as before.
+#[allow(unsafe_code, reason = "malloc_trim is a C function")]
+fn release_freed_pages() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim takes no pointers and only releases memory malloc holds free.
+    unsafe {
+        libc::malloc_trim(0);
+    }
 }
 
 /// A VDB is held block-sparse when at most this fraction of its box's `8^3` bricks hold
@@ -159,15 +258,28 @@ pub const SPARSE_FRACTION: f64 = 0.5;
 /// The largest brick table of a sparse grid (entries, 4 bytes each; a box of 2048^3 voxels).
 const MAX_BRICK_TABLE: usize = MAX_VOXELS / 16;
 
-/// The padded grid of the active values `walk` visits (module docs), visited twice: held
-/// block-sparse ([`risotto_systems::grid::Bricks`], bricks on the VDB's own leaf lattice, so
-/// each leaf node is one brick) when at most [`SPARSE_FRACTION`] of the box's bricks hold
-/// active voxels, dense otherwise.
+/// The padded grid of the active values `walk` visits (module docs), visited twice, the
+/// second time by `fill` ([`active_extent`], then [`fill_grid`]).
+#[cfg(test)]
 fn to_grid(
     path: &Path,
     name: &str,
-    walk: impl Fn(&mut dyn FnMut(Active) -> Result<(), GridFileError>) -> Result<(), GridFileError>,
+    walk: Walk<'_>,
+    fill: impl FnOnce(Visit<'_>) -> Result<(), GridFileError>,
 ) -> Result<DensityGrid, GridFileError> {
+    fill_grid(path, name, active_extent(path, name, walk)?, fill)
+}
+
+/// The index bounds of a grid's active values, and how many leaves hold them.
+struct Extent {
+    lo: [i64; 3],
+    hi: [i64; 3],
+    leaves: usize,
+}
+
+/// The [`Extent`] of the active values `walk` visits, after checking each value (finite,
+/// not negative) and that there is one.
+fn active_extent(path: &Path, name: &str, walk: Walk<'_>) -> Result<Extent, GridFileError> {
     let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
     let mut any = false;
     // The leaf bricks (index >> 3) holding active voxels, counted as changes of leaf between
@@ -214,6 +326,20 @@ fn to_grid(
             format!("grid \"{name}\" has no active voxels"),
         ));
     }
+    Ok(Extent { lo, hi, leaves })
+}
+
+/// The padded grid of the active values `fill` visits, within `extent` (module docs): held
+/// block-sparse ([`risotto_systems::grid::Bricks`], bricks on the VDB's own leaf lattice, so
+/// each leaf node is one brick) when at most [`SPARSE_FRACTION`] of the box's bricks hold
+/// active voxels, dense otherwise.
+fn fill_grid(
+    path: &Path,
+    name: &str,
+    extent: Extent,
+    fill: impl FnOnce(&mut dyn FnMut(Active) -> Result<(), GridFileError>) -> Result<(), GridFileError>,
+) -> Result<DensityGrid, GridFileError> {
+    let Extent { lo, hi, leaves } = extent;
     // One background voxel on each side: grid voxel p is index p + lo - 1, so storage
     // q = p + shift is on the VDB's leaf lattice when shift = (lo - 1) mod 8.
     let dims = [0, 1, 2].map(|k| (hi[k] - lo[k] + 3) as u64);
@@ -244,7 +370,7 @@ fn to_grid(
             )));
         }
         let mut bricks = BrickBuilder::new(dims.map(|d| d as usize), shift);
-        walk(&mut |a: Active| {
+        fill(&mut |a: Active| {
             bricks.fill(place(&a), [a.size as usize; 3], a.value);
             Ok(())
         })?;
@@ -262,7 +388,7 @@ fn to_grid(
         })?;
     let dims = dims.map(|d| d as usize);
     let mut data = vec![0.0f32; count as usize];
-    walk(&mut |a: Active| {
+    fill(&mut |a: Active| {
         let base = place(&a);
         let s = a.size as usize;
         for z in base[2]..base[2] + s {
@@ -402,11 +528,56 @@ mod tests {
         assert_eq!(g.lookup(unit(Vec3::splat(8.0), lo, g.dims())), 0.0);
     }
 
+    /// The tree taken apart visits what `Grid::iter` visits: the same voxels and tiles,
+    /// values and sizes (small.vdb: leaves; tile.vdb: a tile and no leaf; each also with a
+    /// 128^3 tile added to its root node where it has no child).
+    #[test]
+    fn the_consumed_tree_visits_what_the_iterator_does() {
+        for (name, root_tile) in [
+            ("small.vdb", false),
+            ("tile.vdb", false),
+            ("small.vdb", true),
+            ("tile.vdb", true),
+        ] {
+            let read = || {
+                let file = File::open(data(name)).unwrap();
+                let mut reader = vdb_rs::VdbReader::new(BufReader::new(file)).unwrap();
+                let mut grid = reader.read_grid::<f32>("density").unwrap();
+                if root_tile {
+                    let root = &mut grid.tree.root_nodes[0];
+                    let free = (0..root.child_mask.len()).find(|&i| !root.child_mask[i]);
+                    let k = free.unwrap();
+                    root.value_mask.set(k, true);
+                    root.data[k] = 0.5;
+                }
+                grid
+            };
+            let collect = |walk: &mut dyn FnMut(Visit<'_>) -> Result<(), GridFileError>| {
+                let mut seen = Vec::new();
+                walk(&mut |a: Active| {
+                    seen.push((a.origin, a.size, a.value.to_bits()));
+                    Ok(())
+                })
+                .unwrap();
+                seen.sort();
+                seen
+            };
+            let grid = read();
+            let iterated = collect(&mut |v| visit_all(&grid, v));
+            let mut consumed = Some(read());
+            let taken = collect(&mut |v| consume_tree(consumed.take().unwrap(), v));
+            assert!(!iterated.is_empty(), "{name}");
+            assert_eq!(
+                iterated.iter().any(|a| a.1 == 128),
+                root_tile,
+                "{name}: {iterated:?}"
+            );
+            assert_eq!(taken, iterated, "{name}");
+        }
+    }
+
     /// A walk over a list of active values (for [`to_grid`]).
-    fn listed(
-        active: &[Active],
-    ) -> impl Fn(&mut dyn FnMut(Active) -> Result<(), GridFileError>) -> Result<(), GridFileError> + '_
-    {
+    fn listed(active: &[Active]) -> impl Fn(Visit<'_>) -> Result<(), GridFileError> + '_ {
         move |visit| {
             for a in active {
                 visit(*a)?;
@@ -462,7 +633,7 @@ mod tests {
             size: 1,
             value: -1.0,
         }];
-        let e = to_grid(&small, "density", listed(&negative))
+        let e = to_grid(&small, "density", &listed(&negative), listed(&negative))
             .unwrap_err()
             .to_string();
         assert!(e.contains("(1, 2, 3)") && e.contains("negative"), "{e}");
@@ -478,7 +649,7 @@ mod tests {
                 value: 1.0,
             },
         ];
-        let e = to_grid(&small, "density", listed(&huge))
+        let e = to_grid(&small, "density", &listed(&huge), listed(&huge))
             .unwrap_err()
             .to_string();
         assert!(e.contains("more than"), "{e}");
