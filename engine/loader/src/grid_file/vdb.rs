@@ -163,7 +163,8 @@ fn visit_all(grid: &vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFileE
 /// Visits the active values of `grid` as [`visit_all`] does (in another order: each root
 /// node's tiles, then its children in z, y, x order), taking the tree apart on the way: each child of a
 /// root node (an internal node of 128^3 voxels with its leaves, 8 MB of a dense tree) is
-/// dropped once visited and its pages handed back to the system ([`release_freed_pages`]).
+/// dropped once visited and its pages handed back to the system ([`release_freed_pages`],
+/// every 4 MB of leaves).
 /// The grid being filled then grows while the tree shrinks, instead of the two being whole
 /// together at the load's peak (issue 36: a dense 512^3 VDB peaked at twice its grid).
 ///
@@ -175,6 +176,10 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
         mut transform,
         mut descriptor,
     } = grid;
+    // A leaf's values (8^3 floats); what a trim can hand back.
+    const LEAF_BYTES: usize = 512 * 4;
+    const TRIM_BYTES: usize = 4 << 20;
+    let mut freed = 0;
     for mut root in tree.root_nodes {
         let mut no_children = root.child_mask.clone();
         no_children.fill(false);
@@ -216,8 +221,15 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
             });
         }
         drop(root);
-        // Front to back, each part dropped as soon as it is visited.
+        // Front to back, each part dropped as soon as it is visited; the freed pages handed
+        // back every TRIM_BYTES of leaves (a trim walks malloc's free lists: once a part
+        // would be thousands of walks on a large sparse tree).
         for part in parts {
+            freed += part
+                .nodes
+                .values()
+                .map(|n| n.nodes.len() * LEAF_BYTES)
+                .sum::<usize>();
             let one = vdb_rs::Grid {
                 tree: vdb_rs::Tree {
                     root_nodes: vec![part],
@@ -227,9 +239,13 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
             };
             visit_all(&one, visit)?;
             (transform, descriptor) = (one.transform, one.descriptor);
-            release_freed_pages();
+            if freed >= TRIM_BYTES {
+                release_freed_pages();
+                freed = 0;
+            }
         }
     }
+    release_freed_pages();
     Ok(())
 }
 
