@@ -29,6 +29,7 @@ mod splats;
 use adaptive::{adaptive_summary, stop_converged_pixels};
 pub use film_memory::{
     check_film_memory, film_bytes, physical_memory, proc_bytes, FILM_BYTES_PER_PIXEL,
+    PILOT_BYTES_PER_PIXEL,
 };
 use splats::add_splats;
 mod window;
@@ -391,8 +392,16 @@ pub fn checked_extent(
     if window.x1 > w || window.y1 > h {
         return Err(crop_err(format!("outside the {w}x{h} image")));
     }
-    check_film_memory(window.pixels() as u64, physical_memory())
-        .map_err(|reason| RenderError::FilmMemory { window, reason })?;
+    let pilot = match options.noise_target {
+        Some(t) if t.rule == StoppingRule::Unbiased => PILOT_BYTES_PER_PIXEL,
+        _ => 0,
+    };
+    check_film_memory(
+        window.pixels() as u64,
+        FILM_BYTES_PER_PIXEL + pilot,
+        physical_memory(),
+    )
+    .map_err(|reason| RenderError::FilmMemory { window, reason })?;
     let spp = scene.settings.spp;
     let samples = options
         .samples

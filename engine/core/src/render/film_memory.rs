@@ -20,12 +20,28 @@ pub fn film_bytes(pixels: u64) -> u64 {
     pixels.saturating_mul(FILM_BYTES_PER_PIXEL)
 }
 
-/// `Err(message)` when a film of `pixels` pixels needs more than `physical` bytes of memory.
-pub fn check_film_memory(pixels: u64, physical: Option<u64>) -> Result<(), String> {
-    let need = film_bytes(pixels);
+/// What an adaptive render's pilot ([`StoppingRule::Unbiased`](super::StoppingRule)) adds a
+/// pixel: its tile films' sums, held for the whole render (a [`Film`]'s radiance sums,
+/// squared sums and count, and an [`AovFilm`]'s albedo, normal and depth sums).
+///
+/// [`Film`]: risotto_systems::film::Film
+/// [`AovFilm`]: risotto_systems::film::AovFilm
+pub const PILOT_BYTES_PER_PIXEL: u64 =
+    (2 * size_of::<[f64; 3]>() + size_of::<u32>() + 2 * size_of::<[f64; 3]>() + size_of::<f64>())
+        as u64;
+
+/// `Err(message)` when a film of `pixels` pixels, `bytes_per_pixel` each (the renderer's:
+/// [`FILM_BYTES_PER_PIXEL`], plus [`PILOT_BYTES_PER_PIXEL`] with the unbiased stopping
+/// rule), needs more than `physical` bytes of memory.
+pub fn check_film_memory(
+    pixels: u64,
+    bytes_per_pixel: u64,
+    physical: Option<u64>,
+) -> Result<(), String> {
+    let need = pixels.saturating_mul(bytes_per_pixel);
     match physical {
         Some(have) if need > have => Err(format!(
-            "a film of {pixels} pixels needs about {:.1} GB ({FILM_BYTES_PER_PIXEL} bytes a \
+            "a film of {pixels} pixels needs about {:.1} GB ({bytes_per_pixel} bytes a \
              pixel), more than this machine's {:.1} GB of memory; render it in parts \
              (`--crop`, then `risotto merge`)",
             need as f64 / 1e9,
@@ -70,12 +86,18 @@ mod tests {
         // 8192^2 pixels need about 15 GB: refused on an 8 GB machine, accepted on 32 GB and
         // where the memory is unknown.
         let pixels = 8192 * 8192;
-        let err = check_film_memory(pixels, Some(8 << 30)).unwrap_err();
+        let film = FILM_BYTES_PER_PIXEL;
+        let err = check_film_memory(pixels, film, Some(8 << 30)).unwrap_err();
         assert!(err.contains("67108864 pixels"), "{err}");
         assert!(err.contains("15.0 GB"), "{err}");
         assert!(err.contains("8.6 GB"), "{err}");
-        assert!(check_film_memory(pixels, Some(32 << 30)).is_ok());
-        assert!(check_film_memory(pixels, None).is_ok());
-        assert!(check_film_memory(u64::MAX, Some(1)).is_err());
+        assert!(check_film_memory(pixels, film, Some(32 << 30)).is_ok());
+        assert!(check_film_memory(pixels, film, None).is_ok());
+        assert!(check_film_memory(u64::MAX, film, Some(1)).is_err());
+        // The unbiased rule's pilot: 108 bytes more a pixel, 22.3 GB, over a 20 GB machine.
+        assert_eq!(PILOT_BYTES_PER_PIXEL, 108);
+        assert!(check_film_memory(pixels, film, Some(20 << 30)).is_ok());
+        let err = check_film_memory(pixels, film + PILOT_BYTES_PER_PIXEL, Some(20 << 30));
+        assert!(err.unwrap_err().contains("332 bytes a pixel"));
     }
 }
