@@ -161,12 +161,12 @@ fn visit_all(grid: &vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFileE
 }
 
 /// Visits the active values of `grid` as [`visit_all`] does (in another order: each root
-/// node's tiles, then its children in z, y, x order), taking the tree apart on the way: each child of a
-/// root node (an internal node of 128^3 voxels with its leaves, 8 MB of a dense tree) is
-/// dropped once visited and its pages handed back to the system ([`release_freed_pages`],
-/// every 4 MB of leaves).
-/// The grid being filled then grows while the tree shrinks, instead of the two being whole
-/// together at the load's peak (issue 36: a dense 512^3 VDB peaked at twice its grid).
+/// node's tiles, then its children in z, y, x order), taking the tree apart on the way:
+/// each child of a root node (an internal node of 128^3 voxels with its leaves, 8 MB of a
+/// dense tree) is dropped once visited and its pages handed back to the system
+/// ([`release_freed_pages`], every 4 MB of leaves). The grid being filled then grows while
+/// the tree shrinks, instead of the two being whole together at the load's peak (issue 36:
+/// a dense 512^3 VDB peaked at twice its grid).
 ///
 /// Each part is walked by `vdb_rs`'s own iterator, on a root node holding only that part,
 /// so what is visited, tiles and values alike, is what `Grid::iter` visits.
@@ -238,7 +238,14 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
                 descriptor,
             };
             visit_all(&one, visit)?;
-            (transform, descriptor) = (one.transform, one.descriptor);
+            let vdb_rs::Grid {
+                tree,
+                transform: t,
+                descriptor: d,
+            } = one;
+            (transform, descriptor) = (t, d);
+            // Freed before the trim, not at the end of the iteration.
+            drop(tree);
             if freed >= TRIM_BYTES {
                 release_freed_pages();
                 freed = 0;
