@@ -23,7 +23,7 @@ use crate::simd8::Row8;
 use binary::*;
 pub(crate) use binary::{bvh2_depth, median_bvh2, node_box, MAX_BVH2_DEPTH};
 #[cfg(test)]
-pub(crate) use binned::PARALLEL_MIN;
+pub(crate) use binned::{PARALLEL_BINNING_MIN, PARALLEL_MIN};
 
 /// Number of children of a node and of triangles in a leaf packet.
 pub(crate) const WIDTH: usize = 8;

@@ -320,6 +320,41 @@ fn split(refs: &mut Refs, set: &Set, ctx: &Ctx, sah: bool) -> (Set, Set) {
     (l, r)
 }
 
+/// Sets of at least this many primitives count their bins on rayon tasks.
+pub(crate) const PARALLEL_BINNING_MIN: usize = 128 * 1024;
+
+/// Primitives a task bins (of a set of at least [`PARALLEL_BINNING_MIN`]).
+const BINNING_CHUNK: usize = 32 * 1024;
+
+/// Bins of every axis.
+type AxisBins = [[Bin; BINS]; 3];
+
+/// The bins of `boxes` (primitives `prims`; below `tri_count` a triangle) under `binning`.
+fn bin_prims(boxes: &[PrimBox], prims: &[u32], binning: &Binning, tri_count: u32) -> AxisBins {
+    let mut bins = [[EMPTY_BIN; BINS]; 3];
+    for (r, &prim) in boxes.iter().zip(prims) {
+        let (lo, hi) = (Vec3A::from(r.min), Vec3A::from(r.max));
+        let tri = u32::from(prim < tri_count);
+        for (axis, b) in binning.bins(r.centroid()).into_iter().enumerate() {
+            let bin = &mut bins[axis][b];
+            bin.bounds.extend(lo, hi);
+            bin.tris += tri;
+            bin.others += 1 - tri;
+        }
+    }
+    bins
+}
+
+/// The bins of two disjoint sets of primitives merged.
+fn merge_bins(mut a: AxisBins, b: AxisBins) -> AxisBins {
+    for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+        a.bounds = a.bounds.union(&b.bounds);
+        a.tris += b.tris;
+        a.others += b.others;
+    }
+    a
+}
+
 /// The binned SAH split of `part`: `(axis, first bin of the right side)` of least cost,
 /// the first of equal costs in axis and bin order; `None` when every axis has all
 /// centroids in one bin.
@@ -330,17 +365,21 @@ fn best_binned_split(
     ctx: &Ctx,
 ) -> Option<(usize, usize)> {
     let n = binning.bins;
-    let mut bins = [[EMPTY_BIN; BINS]; 3];
-    for (r, &prim) in boxes.iter().zip(prims) {
-        let (lo, hi) = (Vec3A::from(r.min), Vec3A::from(r.max));
-        let tri = u32::from(prim < ctx.tri_count);
-        for (axis, b) in binning.bins(r.centroid()).into_iter().enumerate() {
-            let bin = &mut bins[axis][b];
-            bin.bounds.extend(lo, hi);
-            bin.tris += tri;
-            bin.others += 1 - tri;
-        }
-    }
+    let tri_count = ctx.tri_count;
+    // The bins of a large set are counted on rayon tasks, a chunk each, and merged: unions
+    // and sums, exact in any order, so the split is the same whatever the threads. The
+    // root's splits otherwise ran on one thread (issue 36: a tenth of a 2M-triangle
+    // mesh's build on two cores).
+    let bins = if boxes.len() >= PARALLEL_BINNING_MIN {
+        use rayon::prelude::*;
+        boxes
+            .par_chunks(BINNING_CHUNK)
+            .zip(prims.par_chunks(BINNING_CHUNK))
+            .map(|(b, p)| bin_prims(b, p, binning, tri_count))
+            .reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
+    } else {
+        bin_prims(boxes, prims, binning, tri_count)
+    };
     let mut best: Option<(f32, usize, usize)> = None;
     for (axis, bins) in bins.iter().enumerate() {
         // Right sides from the last bin down: `right_cost[i]` prices bins `i..n`.
@@ -554,5 +593,61 @@ impl Bvh8 {
             max_abs: root.min.abs().max(root.max.abs()),
             depth: out.depth,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::SplitMix64 as Rng;
+
+    /// Bins counted a chunk at a time and merged, in either order, are the bins of the
+    /// whole set, bit for bit: the parallel binning's split is the serial one.
+    #[test]
+    fn merged_bins_are_the_bins_of_the_whole() {
+        let mut rng = Rng(3);
+        let n = 3 * BINNING_CHUNK / 2 + 17;
+        let mut f = || rng.f32() * 10.0 - 5.0;
+        let boxes: Vec<PrimBox> = (0..n)
+            .map(|_| {
+                let c = Vec3::new(f(), f(), f());
+                let h = Vec3::new(f(), f(), f()).abs() * 0.01;
+                PrimBox {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let prims: Vec<u32> = (0..n as u32).collect();
+        let tri_count = n as u32 / 3;
+        let set = Set::of(&boxes, &prims, tri_count);
+        let binning = Binning::new(&set, 1.0);
+        let whole = bin_prims(&boxes, &prims, &binning, tri_count);
+        let parts: Vec<AxisBins> = boxes
+            .chunks(BINNING_CHUNK)
+            .zip(prims.chunks(BINNING_CHUNK))
+            .map(|(b, p)| bin_prims(b, p, &binning, tri_count))
+            .collect();
+        let forward = parts
+            .iter()
+            .copied()
+            .fold([[EMPTY_BIN; BINS]; 3], merge_bins);
+        let backward = parts
+            .iter()
+            .rev()
+            .copied()
+            .fold([[EMPTY_BIN; BINS]; 3], merge_bins);
+        let bits = |b: &AxisBins| {
+            b.iter()
+                .flatten()
+                .map(|b| {
+                    let (lo, hi) = (b.bounds.min.to_array(), b.bounds.max.to_array());
+                    (lo.map(f32::to_bits), hi.map(f32::to_bits), b.tris, b.others)
+                })
+                .collect::<Vec<_>>()
+        };
+        assert!(whole.iter().flatten().all(|b| b.tris + b.others < n as u32));
+        assert_eq!(bits(&whole), bits(&forward));
+        assert_eq!(bits(&whole), bits(&backward));
     }
 }

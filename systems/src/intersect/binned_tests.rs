@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use crate::bvh8::{Bvh8, PARALLEL_MIN, WIDTH};
+use crate::bvh8::{Bvh8, PARALLEL_BINNING_MIN, PARALLEL_MIN, WIDTH};
 use crate::geometry::{BvhBuilder, SceneGeometry};
 use crate::intersect::tests::closest_one;
 use crate::intersect::WatertightRay;
@@ -68,12 +68,13 @@ fn closest_hits_equal_brute_force() {
     assert!(hits > 300, "only {hits} rays hit");
 }
 
-/// The tree of a scene large enough to be built on several tasks is the same, node for
-/// node and packet for packet, whatever the number of threads.
+/// The tree of a scene large enough to be built on several tasks, and to bin its root's
+/// splits on several, is the same, node for node and packet for packet, whatever the
+/// number of threads.
 #[test]
 fn the_tree_does_not_depend_on_the_thread_count() {
     let mut rng = Rng(7);
-    let tris = soup(&mut rng, 3 * PARALLEL_MIN);
+    let tris = soup(&mut rng, PARALLEL_BINNING_MIN + 3 * PARALLEL_MIN);
     let build = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
