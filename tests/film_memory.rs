@@ -2,9 +2,14 @@
 //! machine's memory with ([`FILM_BYTES_PER_PIXEL`]) is the one a render takes. Two renders of
 //! a trivial scene (one sphere, sky, 1 spp) at 512^2 and 1024^2 pixels report their peak
 //! resident memory (`--stats`, Linux `VmHWM`); the difference over the 786,432 extra pixels
-//! is the film's cost per pixel, everything else (code, scene, threads) being the same.
+//! is the film's cost per pixel, everything else (code, scene, threads) being the same. The
+//! same with adaptive sampling measures what its estimates add
+//! ([`ADAPTIVE_BYTES_PER_PIXEL`]), and with the unbiased rule what its pilot adds
+//! ([`PILOT_BYTES_PER_PIXEL`]).
 
-use risotto::engine::render::FILM_BYTES_PER_PIXEL;
+use risotto::engine::render::{
+    ADAPTIVE_BYTES_PER_PIXEL, FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
+};
 use std::path::Path;
 
 mod common;
@@ -32,15 +37,16 @@ radiance = [1, 1, 1]
 "#;
 
 /// Peak resident bytes of a render of the scene at `size`^2 (with the PNG preview, as a user
-/// runs it), or `None` where the platform does not report it.
-fn peak_resident(dir: &Path, size: u32) -> Option<u64> {
+/// runs it) with the render options `extra`, or `None` where the platform does not report
+/// it.
+fn peak_resident(dir: &Path, size: u32, extra: &[&str]) -> Option<u64> {
     let scene = dir.join(format!("s{size}.toml"));
     std::fs::write(&scene, SCENE.replace("SIZE", &size.to_string())).unwrap();
     let (out, stats) = (
         dir.join(format!("s{size}.exr")),
         dir.join(format!("s{size}.json")),
     );
-    let args = [
+    let mut args = vec![
         "render",
         scene.to_str().unwrap(),
         "-o",
@@ -51,27 +57,96 @@ fn peak_resident(dir: &Path, size: u32) -> Option<u64> {
         "-t",
         "1",
     ];
+    args.extend_from_slice(extra);
     ok("render", risotto(&args));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     json["run"]["peak_resident_bytes"].as_u64()
 }
 
-#[test]
-fn a_renders_film_costs_the_documented_bytes_per_pixel() {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("film-memory");
+/// Peak resident bytes a pixel of renders at 512^2 and 1024^2 with the options `extra`,
+/// differenced, in `dir` (`None` where the platform reports no peak).
+fn bytes_per_pixel(dir: &str, extra: &[&str]) -> Option<f64> {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(dir);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let (Some(small), Some(large)) = (peak_resident(&dir, 512), peak_resident(&dir, 1024)) else {
+    let small = peak_resident(&dir, 512, extra)?;
+    let large = peak_resident(&dir, 1024, extra)?;
+    Some(large.saturating_sub(small) as f64 / (1024.0 * 1024.0 - 512.0 * 512.0))
+}
+
+#[test]
+fn a_renders_film_costs_the_documented_bytes_per_pixel() {
+    let Some(per_pixel) = bytes_per_pixel("film-memory", &[]) else {
         eprintln!("no peak memory on this platform: nothing to measure");
         return;
     };
-    let per_pixel = large.saturating_sub(small) as f64 / (1024.0 * 1024.0 - 512.0 * 512.0);
     eprintln!("film: {per_pixel:.0} bytes a pixel (documented {FILM_BYTES_PER_PIXEL})");
     let documented = FILM_BYTES_PER_PIXEL as f64;
     assert!(
         (0.8 * documented..=1.2 * documented).contains(&per_pixel),
         "a render's film takes {per_pixel:.0} bytes a pixel; FILM_BYTES_PER_PIXEL says \
          {FILM_BYTES_PER_PIXEL}: update it (and docs/scene-format.md) or the film"
+    );
+}
+
+/// Adaptive sampling's options with stopping rule `rule` (a loose target: the memory, not
+/// the image, is measured).
+fn adaptive(rule: &str) -> [&str; 6] {
+    [
+        "--noise-target",
+        "0.5",
+        "--min-spp",
+        "4",
+        "--stopping-rule",
+        rule,
+    ]
+}
+
+/// Asserts that `measured` bytes a pixel are within a quarter of `documented` (`what` names
+/// the constant).
+fn assert_documented(measured: f64, documented: u64, what: &str) {
+    eprintln!("{what}: {measured:.0} bytes a pixel (documented {documented})");
+    let documented = documented as f64;
+    assert!(
+        (0.75 * documented..=1.25 * documented).contains(&measured),
+        "{what} is {documented} bytes a pixel, measured {measured:.0}: update it or the code"
+    );
+}
+
+/// An adaptive render's estimates and flags, beyond the film, are what
+/// `ADAPTIVE_BYTES_PER_PIXEL` says.
+#[test]
+fn adaptive_sampling_costs_the_documented_bytes_per_pixel() {
+    let (Some(plain), Some(window)) = (
+        bytes_per_pixel("adaptive-memory-plain", &[]),
+        bytes_per_pixel("adaptive-memory-window", &adaptive("window")),
+    ) else {
+        eprintln!("no peak memory on this platform: nothing to measure");
+        return;
+    };
+    assert_documented(
+        window - plain,
+        ADAPTIVE_BYTES_PER_PIXEL,
+        "ADAPTIVE_BYTES_PER_PIXEL",
+    );
+}
+
+/// The unbiased stopping rule's pilot keeps its tiles' beauty sums for the whole render and
+/// no AOVs: it adds `PILOT_BYTES_PER_PIXEL` to the window rule's render (with AOV sums it
+/// added 126, which fails this).
+#[test]
+fn the_unbiased_rules_pilot_costs_the_documented_bytes_per_pixel() {
+    let (Some(window), Some(unbiased)) = (
+        bytes_per_pixel("pilot-memory-window", &adaptive("window")),
+        bytes_per_pixel("pilot-memory-unbiased", &adaptive("unbiased")),
+    ) else {
+        eprintln!("no peak memory on this platform: nothing to measure");
+        return;
+    };
+    assert_documented(
+        unbiased - window,
+        PILOT_BYTES_PER_PIXEL,
+        "PILOT_BYTES_PER_PIXEL",
     );
 }

@@ -131,6 +131,25 @@ impl AovFilm {
         }
     }
 
+    /// A film of `width x height` pixels that holds no sums, for a render whose AOVs nobody
+    /// reads (an adaptive render's pilot): [`Self::holds_sums`] is false, the splat skips it
+    /// and adding it to another film adds nothing.
+    pub fn without_sums(width: u32, height: u32) -> Self {
+        AovFilm {
+            width,
+            height,
+            albedo: Vec::new(),
+            normal: Vec::new(),
+            depth: Vec::new(),
+        }
+    }
+
+    /// Whether the film holds its pixels' sums (not one made by [`Self::without_sums`]; a
+    /// film of no pixels holds none).
+    pub fn holds_sums(&self) -> bool {
+        !self.depth.is_empty()
+    }
+
     /// Mean albedo of pixel `i` over `count` samples (black for none).
     pub fn albedo_mean(&self, i: usize, count: u32) -> Rgb {
         let [r, g, b] = self.albedo[i].map(|s| mean(s, count));
@@ -151,6 +170,9 @@ impl AovFilm {
     /// Adds the sums of `tile` (a rectangle at `(x0, y0)` of this one), as
     /// [`Film::add_tile`] does.
     pub fn add_tile(&mut self, tile: &AovFilm, x0: u32, y0: u32) {
+        if !tile.holds_sums() || !self.holds_sums() {
+            return;
+        }
         for ty in 0..tile.height {
             for tx in 0..tile.width {
                 let src = (ty * tile.width + tx) as usize;
@@ -324,5 +346,21 @@ mod tests {
         // No samples: zero, not NaN.
         assert_eq!(whole.depth_mean(0, 0), 0.0);
         assert_eq!(whole.albedo_mean(5, 0), Rgb::BLACK);
+    }
+
+    /// A film without sums holds nothing and adds nothing; a film with sums holds them.
+    #[test]
+    fn a_film_without_sums_holds_and_adds_nothing() {
+        let none = AovFilm::without_sums(1, 2);
+        assert!(!none.holds_sums() && none.albedo.is_empty() && none.depth.is_empty());
+        assert!(AovFilm::new(1, 2).holds_sums());
+        let mut whole = AovFilm::new(3, 2);
+        whole.depth[5] = 2.0;
+        whole.add_tile(&none, 2, 0);
+        assert_eq!(whole, {
+            let mut w = AovFilm::new(3, 2);
+            w.depth[5] = 2.0;
+            w
+        });
     }
 }

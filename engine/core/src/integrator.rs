@@ -144,6 +144,20 @@ impl TileFilm {
         }
     }
 
+    /// An empty tile whose AOVs are not kept ([`AovFilm::without_sums`]): the beauty alone,
+    /// 52 of a tile's 108 bytes a pixel (an adaptive render's pilot).
+    pub fn without_aovs(x0: u32, y0: u32, w: u32, h: u32) -> Self {
+        TileFilm {
+            film: Film::new(w, h),
+            aovs: AovFilm::without_sums(w, h),
+            x0,
+            y0,
+            active: Vec::new(),
+            converged_passes: Vec::new(),
+            seed_salt: 0,
+        }
+    }
+
     /// How many of the tile's pixels take samples.
     pub fn active_pixels(&self) -> usize {
         let n = (self.film.width * self.film.height) as usize;
@@ -316,6 +330,9 @@ fn splat_batch(tile: &mut TileFilm, film_pixel: &[u32], paths: &Paths, stats: &m
     // path order (the same bits as adding to the film per path, without a store and reload
     // between additions).
     let sums = &mut tile.aovs;
+    if !sums.holds_sums() {
+        return;
+    }
     let (mut p, mut run) = (usize::MAX, ([0.0f64; 3], [0.0f64; 3], 0.0f64));
     for (&q, ((&albedo, &normal), &d)) in film_pixel.iter().zip(aovs) {
         let q = q as usize;

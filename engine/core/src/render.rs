@@ -28,8 +28,8 @@ mod gather;
 mod splats;
 use adaptive::{adaptive_summary, stop_converged_pixels};
 pub use film_memory::{
-    check_film_memory, film_bytes, physical_memory, proc_bytes, FILM_BYTES_PER_PIXEL,
-    PILOT_BYTES_PER_PIXEL,
+    check_film_memory, film_bytes, physical_memory, proc_bytes, ADAPTIVE_BYTES_PER_PIXEL,
+    FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
 };
 pub use gather::aov_means;
 use gather::gather;
@@ -394,13 +394,16 @@ pub fn checked_extent(
     if window.x1 > w || window.y1 > h {
         return Err(crop_err(format!("outside the {w}x{h} image")));
     }
-    let pilot = match options.noise_target {
-        Some(t) if t.rule == StoppingRule::Unbiased => PILOT_BYTES_PER_PIXEL,
-        _ => 0,
+    let adaptive = match options.noise_target {
+        None => 0,
+        Some(t) if t.rule == StoppingRule::Unbiased => {
+            ADAPTIVE_BYTES_PER_PIXEL + PILOT_BYTES_PER_PIXEL
+        }
+        Some(_) => ADAPTIVE_BYTES_PER_PIXEL,
     };
     check_film_memory(
         window.pixels() as u64,
-        FILM_BYTES_PER_PIXEL + pilot,
+        FILM_BYTES_PER_PIXEL + adaptive,
         physical_memory(),
     )
     .map_err(|reason| RenderError::FilmMemory { window, reason })?;

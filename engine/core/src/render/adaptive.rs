@@ -25,7 +25,7 @@ pub(super) fn pilot_tiles(tiles: &[Tile]) -> Vec<Tile> {
     tiles
         .iter()
         .map(|(t, _)| {
-            let mut pilot = TileFilm::new(t.x0, t.y0, t.film.width, t.film.height);
+            let mut pilot = TileFilm::without_aovs(t.x0, t.y0, t.film.width, t.film.height);
             pilot.seed_salt = PILOT_SEED_SALT;
             (pilot, SystemStats::default())
         })

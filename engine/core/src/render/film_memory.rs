@@ -20,19 +20,27 @@ pub fn film_bytes(pixels: u64) -> u64 {
     pixels.saturating_mul(FILM_BYTES_PER_PIXEL)
 }
 
-/// What an adaptive render's pilot ([`StoppingRule::Unbiased`](super::StoppingRule)) adds a
-/// pixel: its tile films' sums, held for the whole render (a [`Film`]'s radiance sums,
-/// squared sums and count, and an [`AovFilm`]'s albedo, normal and depth sums).
+/// What adaptive sampling ([`NoiseTarget`](super::NoiseTarget), either rule) adds to a
+/// render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (101 bytes on Linux,
+/// 2026-12-07): the estimates made at each pass end (means, variances, counts and errors,
+/// 32 bytes), the tiles' flags of which pixels still sample, and the summary's copies of
+/// the means and variances beside the gathered output.
+pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 100;
+
+/// What the unbiased stopping rule ([`StoppingRule::Unbiased`](super::StoppingRule)) adds
+/// on top of [`ADAPTIVE_BYTES_PER_PIXEL`], measured the same way (68 bytes): its pilot's
+/// tile films, held for the whole render (a [`Film`]'s radiance sums, squared sums and
+/// count, 52 bytes: the pilot keeps no AOVs, [`TileFilm::without_aovs`]), and the pilot's
+/// estimates at each pass end.
 ///
 /// [`Film`]: risotto_systems::film::Film
-/// [`AovFilm`]: risotto_systems::film::AovFilm
-pub const PILOT_BYTES_PER_PIXEL: u64 =
-    (2 * size_of::<[f64; 3]>() + size_of::<u32>() + 2 * size_of::<[f64; 3]>() + size_of::<f64>())
-        as u64;
+/// [`TileFilm::without_aovs`]: crate::integrator::TileFilm::without_aovs
+pub const PILOT_BYTES_PER_PIXEL: u64 = 68;
 
 /// `Err(message)` when a film of `pixels` pixels, `bytes_per_pixel` each (the renderer's:
-/// [`FILM_BYTES_PER_PIXEL`], plus [`PILOT_BYTES_PER_PIXEL`] with the unbiased stopping
-/// rule), needs more than `physical` bytes of memory.
+/// [`FILM_BYTES_PER_PIXEL`], plus [`ADAPTIVE_BYTES_PER_PIXEL`] when adaptive and
+/// [`PILOT_BYTES_PER_PIXEL`] with the unbiased stopping rule), needs more than `physical`
+/// bytes of memory.
 pub fn check_film_memory(
     pixels: u64,
     bytes_per_pixel: u64,
@@ -94,10 +102,10 @@ mod tests {
         assert!(check_film_memory(pixels, film, Some(32 << 30)).is_ok());
         assert!(check_film_memory(pixels, film, None).is_ok());
         assert!(check_film_memory(u64::MAX, film, Some(1)).is_err());
-        // The unbiased rule's pilot: 108 bytes more a pixel, 22.3 GB, over a 20 GB machine.
-        assert_eq!(PILOT_BYTES_PER_PIXEL, 108);
-        assert!(check_film_memory(pixels, film, Some(20 << 30)).is_ok());
-        let err = check_film_memory(pixels, film + PILOT_BYTES_PER_PIXEL, Some(20 << 30));
-        assert!(err.unwrap_err().contains("332 bytes a pixel"));
+        // Adaptive with the unbiased rule: 392 bytes a pixel, 26.3 GB, over a 24 GB machine.
+        let adaptive = film + ADAPTIVE_BYTES_PER_PIXEL + PILOT_BYTES_PER_PIXEL;
+        assert!(check_film_memory(pixels, film, Some(24 << 30)).is_ok());
+        let err = check_film_memory(pixels, adaptive, Some(24 << 30));
+        assert!(err.unwrap_err().contains("392 bytes a pixel"));
     }
 }
