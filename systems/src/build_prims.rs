@@ -1,20 +1,19 @@
 //! The BVH build's primitives: what the build reads of them ([`PrimBoxes`], a box by
-//! primitive index) and the set the geometry hands it ([`BuildPrims`]): the triangles with
-//! their vertices welded (shared by bit-equal position), then the boxes of the spheres and
-//! instances.
+//! primitive index) and the set the geometry hands it ([`BuildPrims`]): the triangles over
+//! shared vertices, then the boxes of the spheres and instances.
 //!
-//! A mesh reaches the build as one `[Vec3; 3]` per triangle (36 bytes); welded, its vertices
-//! take 12 bytes a corner index and 12 a distinct position, about 18 bytes a triangle on a
-//! closed mesh (half as many vertices as triangles). The build's peak, obvhs' PLOC working
-//! set, comes on top of whatever is alive at that point (issue 36). A triangle read back
-//! ([`BuildPrims::triangle`]) has exactly the vertices it was given: welding only merges
-//! bit-equal positions.
-
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+//! A mesh reaches the build indexed ([`TriangleMesh`]: 12 bytes a corner index and 12 a
+//! position, about 18 bytes a triangle on a closed mesh, half as many vertices as
+//! triangles), as its file held it; triangles given one `[Vec3; 3]` each (36 bytes) are
+//! welded by bit-equal position into that form, or kept as given where that saves nothing.
+//! The build's peak comes on top of whatever is alive at that point (issue 36). A triangle
+//! read back ([`BuildPrims::triangle`]) has exactly the vertices it was given: welding only
+//! merges bit-equal positions.
 
 use glam::{Vec3, Vec3A};
 use obvhs::{aabb::Aabb, Boundable};
+
+use crate::triangle_mesh::TriangleMesh;
 
 /// Primitive boxes by index, as the binary BVH builds read them (`0..count()`).
 pub(crate) trait PrimBoxes {
@@ -68,70 +67,35 @@ pub(crate) struct BuildPrims {
     boxes: Vec<(Vec3, Vec3)>,
 }
 
-/// FxHash's step (rustc's hasher): a rotate, a xor and a multiply a word; the keys are
-/// float bit patterns, and std's SipHash took most of the weld's time.
-#[derive(Default)]
-struct BitsHasher(u64);
-
-impl Hasher for BitsHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    #[inline]
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
 impl BuildPrims {
     /// The triangles welded by bit-equal positions (or kept as given when that saves
     /// nothing), then `boxes`.
     pub(crate) fn new(triangles: Vec<[Vec3; 3]>, boxes: Vec<(Vec3, Vec3)>) -> Self {
         let n = triangles.len();
-        let mut index: HashMap<(u64, u32), u32, BuildHasherDefault<BitsHasher>> =
-            HashMap::default();
-        let mut positions = Vec::new();
-        let mut corners = Vec::with_capacity(n);
-        let bits = |v: Vec3| {
-            let [x, y, z] = v.to_array().map(f32::to_bits);
-            ((u64::from(x) << 32) | u64::from(y), z)
-        };
-        let mut welded = true;
-        for t in &triangles {
-            let mut c = [0u32; 3];
-            for (k, v) in t.iter().enumerate() {
-                c[k] = *index.entry(bits(*v)).or_insert_with(|| {
-                    positions.push(*v);
-                    (positions.len() - 1) as u32
-                });
+        // Two distinct positions a triangle: the welded form (12 + 24 bytes) no smaller.
+        match TriangleMesh::weld(&triangles, 2 * n) {
+            Some(mesh) => {
+                drop(triangles);
+                Self::from_mesh(mesh, boxes)
             }
-            corners.push(c);
-            // Two distinct positions a triangle: the welded form (12 + 24 bytes) no smaller.
-            if positions.len() > 2 * n || positions.len() >= u32::MAX as usize {
-                welded = false;
-                break;
-            }
+            None => BuildPrims {
+                vertices: Vertices::Soup(triangles),
+                num_triangles: n,
+                boxes,
+            },
         }
-        drop(index);
-        let vertices = if welded {
-            drop(triangles);
-            positions.shrink_to_fit();
-            Vertices::Shared { positions, corners }
-        } else {
-            Vertices::Soup(triangles)
-        };
+    }
+
+    /// The triangles of `mesh` over its vertices as given (no weld: a mesh file's vertices
+    /// are shared already), then `boxes`.
+    pub(crate) fn from_mesh(mesh: TriangleMesh, boxes: Vec<(Vec3, Vec3)>) -> Self {
+        let num_triangles = mesh.triangles.len();
         BuildPrims {
-            vertices,
-            num_triangles: n,
+            vertices: Vertices::Shared {
+                positions: mesh.positions,
+                corners: mesh.triangles,
+            },
+            num_triangles,
             boxes,
         }
     }

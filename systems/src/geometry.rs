@@ -30,6 +30,7 @@ pub use crate::primitive::{
 };
 
 mod instances;
+pub use crate::triangle_mesh::{TriangleMesh, TriangleSet};
 pub(crate) use instances::ray_to_object;
 pub use instances::Instance;
 
@@ -128,7 +129,7 @@ pub(crate) enum BvhBuilder {
 /// icosphere in a room, `scenes/mesh.toml`: +8.8 %; the Cornell box +10 % of the whole process), where the
 /// collapse's exact SAH over every assignment of subtrees to slots and its volume term
 /// pay; and below the peak it matters little what the build holds.
-const BINNED_MIN: usize = 16 * 1024;
+pub(crate) const BINNED_MIN: usize = 16 * 1024;
 
 impl BvhBuilder {
     /// The builder for a scene of `count` primitives.
@@ -172,6 +173,27 @@ impl SceneGeometry {
         objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
     ) -> Self {
+        let triangles = TriangleSet::Soup(triangles);
+        Self::build_using(triangles, spheres, objects, instances, None)
+    }
+
+    /// [`Self::build_with_instances`] with the triangles as a [`TriangleSet`]: a soup, or a
+    /// [`TriangleMesh`] whose triangle `i` is `mesh.triangle(i)`, which gives the same
+    /// primitive numbering, tree and hits as the soup of its triangles without the soup or
+    /// the weld.
+    ///
+    /// # Panics
+    /// As [`Self::build_with_instances`]; also if an index of a mesh is not one of its
+    /// vertices.
+    pub fn build_set_with_instances(
+        triangles: TriangleSet,
+        spheres: Vec<Sphere>,
+        objects: Vec<SceneGeometry>,
+        instances: &[(u32, Affine3A)],
+    ) -> Self {
+        if let TriangleSet::Mesh(mesh) = &triangles {
+            assert!(mesh.indices_in_range(), "a triangle index is not a vertex");
+        }
         Self::build_using(triangles, spheres, objects, instances, None)
     }
 
@@ -183,13 +205,14 @@ impl SceneGeometry {
         spheres: Vec<Sphere>,
         builder: BvhBuilder,
     ) -> Self {
+        let triangles = TriangleSet::Soup(triangles);
         Self::build_using(triangles, spheres, Vec::new(), &[], Some(builder))
     }
 
     /// [`Self::build_with_instances`] by `builder`, or the one [`BvhBuilder::for_prims`]
     /// picks.
     fn build_using(
-        triangles: Vec<[Vec3; 3]>,
+        triangles: TriangleSet,
         spheres: Vec<Sphere>,
         objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
@@ -201,12 +224,12 @@ impl SceneGeometry {
             "too many primitives: {num_prims}"
         );
         let placed = instances::place(&objects, instances, num_prims as u32);
-        for tri in &triangles {
+        triangles.for_each(|tri| {
             assert!(
                 tri.iter().all(|v| v.is_finite()),
                 "non-finite vertex in {tri:?}"
             );
-        }
+        });
         for s in &spheres {
             assert!(
                 s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0,
@@ -217,12 +240,12 @@ impl SceneGeometry {
         let mut bounds = (Vec3::ZERO, Vec3::ZERO);
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for t in &triangles {
+        triangles.for_each(|t| {
             for v in t {
-                lo = lo.min(*v);
-                hi = hi.max(*v);
+                lo = lo.min(v);
+                hi = hi.max(v);
             }
-        }
+        });
         let finite = |v: Vec3| v.clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
         for s in &spheres {
             lo = lo.min(finite(s.center - Vec3::splat(s.radius)));
@@ -249,7 +272,10 @@ impl SceneGeometry {
             .chain(placed.boxes.iter().map(|&(lo, hi)| padded_box(lo, hi)))
             .map(|b| (b.min.into(), b.max.into()))
             .collect();
-        let prims = BuildPrims::new(triangles, boxes);
+        let prims = match triangles {
+            TriangleSet::Soup(soup) => BuildPrims::new(soup, boxes),
+            TriangleSet::Mesh(mesh) => BuildPrims::from_mesh(mesh, boxes),
+        };
 
         // Without obvhs' spatial pre-splits: on the bench mesh and on a room with large
         // walls and long slivers they did not speed up traversal (benches/README.md) while

@@ -46,6 +46,7 @@ pub mod spectral_tracking;
 mod splitmix;
 pub mod terminator;
 pub mod tracking;
+mod triangle_mesh;
 pub mod volume_lights;
 mod warp;
 

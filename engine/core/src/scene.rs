@@ -12,6 +12,7 @@ use glam::{Affine3A, Vec3};
 use risotto_components::{Rgb, VolumeStack};
 use risotto_systems::camera::Camera;
 use risotto_systems::environment_map::EnvironmentMap;
+pub use risotto_systems::geometry::TriangleMesh;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::lights::{Light, LightSet, SpotFalloff, SpotTexture};
 /// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] shape (an
@@ -39,6 +40,30 @@ pub enum ShapeGeometry {
     /// Triangles (for quads, boxes and meshes), wound so `(v1-v0)x(v2-v0)` is the outward
     /// (front) normal.
     Triangles(Vec<[Vec3; 3]>),
+    /// Triangles over shared vertices, wound as [`Self::Triangles`]: what a mesh file holds.
+    /// The same surface as the [`Self::Triangles`] of its triangles, stored once and built
+    /// without a weld (issue 36).
+    Mesh(TriangleMesh),
+}
+
+impl ShapeGeometry {
+    /// Number of triangles (0 for a sphere).
+    pub fn num_triangles(&self) -> usize {
+        match self {
+            ShapeGeometry::Sphere(_) => 0,
+            ShapeGeometry::Triangles(t) => t.len(),
+            ShapeGeometry::Mesh(m) => m.len(),
+        }
+    }
+
+    /// The vertices of each triangle, in order (none for a sphere).
+    pub fn triangles(&self) -> Box<dyn Iterator<Item = [Vec3; 3]> + '_> {
+        match self {
+            ShapeGeometry::Sphere(_) => Box::new(std::iter::empty()),
+            ShapeGeometry::Triangles(t) => Box::new(t.iter().copied()),
+            ShapeGeometry::Mesh(m) => Box::new((0..m.len()).map(|i| m.triangle(i))),
+        }
+    }
 }
 
 /// The object-to-world transform of a shape entity: its geometry (always stored in world
@@ -470,8 +495,8 @@ impl Scene {
             .get::<&ShapeGeometry>(shape)
             .expect("a shape of this scene")
         {
-            ShapeGeometry::Triangles(t) => t.len(),
             ShapeGeometry::Sphere(_) => panic!("vertex attributes on a sphere"),
+            g => g.num_triangles(),
         };
         assert_eq!(
             attributes.corners.len(),

@@ -493,6 +493,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                 ShapeGeometry::Sphere(Sphere { center, radius })
             }
             DescGeometry::Triangles { triangles, .. } => ShapeGeometry::Triangles(triangles),
+            DescGeometry::Mesh(mesh) => ShapeGeometry::Mesh(mesh),
         };
         let e = scene.add_shape_with_transform(
             &s.name,
@@ -519,6 +520,7 @@ pub fn scene_from_desc(desc: SceneDesc, registry: &MaterialRegistry) -> Result<S
                     DescGeometry::Triangles { triangles, .. } => {
                         ShapeGeometry::Triangles(triangles)
                     }
+                    DescGeometry::Mesh(mesh) => ShapeGeometry::Mesh(mesh),
                 },
                 material: s.material as u32,
                 attributes: s.attributes,

@@ -40,6 +40,7 @@ use glam::{Affine3A, Vec3};
 use render::read_render;
 pub use render::RenderSettings;
 use risotto_components::Rgb;
+use risotto_engine::scene::TriangleMesh;
 pub use risotto_systems::mesh_attributes::VertexAttributes;
 pub use risotto_systems::pixel_filter::PixelFilter;
 
@@ -194,6 +195,21 @@ pub enum ShapeGeometry {
         /// The triangles.
         triangles: Vec<[Vec3; 3]>,
     },
+    /// A `mesh` (file) or `triangles` shape: triangles over shared vertices in world space,
+    /// as the file indexes them, wound as [`Self::Triangles`] (issue 36: no triangle is
+    /// copied out of the mesh).
+    Mesh(TriangleMesh),
+}
+
+impl ShapeGeometry {
+    /// The world-space vertices of each triangle, in order (none for a sphere).
+    pub fn world_triangles(&self) -> Vec<[Vec3; 3]> {
+        match self {
+            ShapeGeometry::Sphere { .. } => Vec::new(),
+            ShapeGeometry::Triangles { triangles, .. } => triangles.clone(),
+            ShapeGeometry::Mesh(m) => (0..m.len()).map(|i| m.triangle(i)).collect(),
+        }
+    }
 }
 
 /// Reads and parses a scene file.
@@ -606,36 +622,42 @@ fn read_shape(
             }
         }
         "triangles" => {
-            let (triangles, m, a) = geometry::triangles(r)?;
+            let (mesh, m, a) = geometry::triangles(r)?;
             attributes = a;
-            ShapeGeometry::Triangles {
-                kind: "mesh",
-                triangles: triangles_of((triangles, m)),
-            }
+            transform = m;
+            ShapeGeometry::Mesh(mesh)
         }
         _ => {
-            let (triangles, m, a) = geometry::mesh(r)?;
+            let (mesh, m, a) = geometry::mesh(r)?;
             attributes = a;
-            ShapeGeometry::Triangles {
-                kind: "mesh",
-                triangles: triangles_of((triangles, m)),
-            }
+            transform = m;
+            ShapeGeometry::Mesh(mesh)
         }
     };
     let transform = Affine3A::from_mat3_translation(
         transform.matrix3.as_mat3(),
         transform.translation.as_vec3(),
     );
-    if let ShapeGeometry::Triangles { triangles, .. } = &geometry {
-        if !triangles.iter().flatten().all(|v| v.is_finite()) {
-            let at = r.get("transform").unwrap_or(node);
-            return Err(r.error(
-                SceneErrorKind::InvalidValue,
-                &at.span(),
-                None,
-                "vertex coordinates overflow f32 (values too large)",
-            ));
+    let finite = match &geometry {
+        ShapeGeometry::Sphere { .. } => true,
+        ShapeGeometry::Triangles { triangles, .. } => {
+            triangles.iter().flatten().all(|v| v.is_finite())
         }
+        // The vertices the triangles use (a file may list others).
+        ShapeGeometry::Mesh(m) => m
+            .triangles
+            .iter()
+            .flatten()
+            .all(|&k| m.positions[k as usize].is_finite()),
+    };
+    if !finite {
+        let at = r.get("transform").unwrap_or(node);
+        return Err(r.error(
+            SceneErrorKind::InvalidValue,
+            &at.span(),
+            None,
+            "vertex coordinates overflow f32 (values too large)",
+        ));
     }
     Ok(ShapeDesc {
         name,

@@ -2,6 +2,7 @@
 //! need every entity at once (coincident shapes, the camera's volume stack).
 
 use super::*;
+use risotto_systems::geometry::TriangleSet;
 use risotto_systems::mesh_attributes::MeshAttributes;
 
 impl Scene {
@@ -42,7 +43,7 @@ impl Scene {
         let mut warnings = read_warnings;
         let hidden = hidden_coincident_shapes(&shape_entities, &materials, &mut warnings)?;
 
-        let mut triangles = Vec::new();
+        let mut triangles = TriangleSet::default();
         // Each shape's triangle count, expanded to one shape per triangle after the build:
         // 4 bytes a triangle fewer at the build's peak (issue 36).
         let mut tri_shape_runs: Vec<(u32, usize)> = Vec::new();
@@ -64,16 +65,16 @@ impl Scene {
                     spheres.push(s);
                     sphere_shape.push(i as u32);
                 }
-                ShapeGeometry::Triangles(t) => {
+                ShapeGeometry::Triangles(_) | ShapeGeometry::Mesh(_) => {
                     if let Ok(a) = world.remove_one::<VertexAttributes>(entity) {
                         attributes.push(triangles.len() as u32, a);
                     }
-                    tri_shape_runs.push((i as u32, t.len()));
-                    // The first mesh's vector is moved, not copied (issue 36, peak memory).
-                    if triangles.is_empty() {
-                        triangles = t;
-                    } else {
-                        triangles.extend(t);
+                    tri_shape_runs.push((i as u32, geom.num_triangles()));
+                    // The first shape's vectors are moved, not copied (issue 36, peak memory).
+                    match geom {
+                        ShapeGeometry::Mesh(m) => triangles.push_mesh(m),
+                        ShapeGeometry::Triangles(t) => triangles.push_soup(t),
+                        ShapeGeometry::Sphere(_) => unreachable!("matched above"),
                     }
                 }
             }
@@ -99,7 +100,7 @@ impl Scene {
             terminator_offset: attributes.any_terminator_offset() || objects.any_terminator_offset,
             ..Features::default()
         };
-        let mut geometry = SceneGeometry::build_with_instances(
+        let mut geometry = SceneGeometry::build_set_with_instances(
             triangles,
             spheres,
             objects.geometries,
@@ -441,18 +442,19 @@ fn hidden_coincident_shapes(
             s.center.to_array().map(f32::to_bits).hash(h);
             s.radius.to_bits().hash(h);
         }
-        ShapeGeometry::Triangles(t) => {
+        // A mesh and the soup of its triangles are the same surface.
+        triangles => {
             1u8.hash(h);
-            t.len().hash(h);
-            for v in t.iter().flatten() {
+            triangles.num_triangles().hash(h);
+            for v in triangles.triangles().flatten() {
                 v.to_array().map(f32::to_bits).hash(h);
             }
         }
     };
     let same = |a: &ShapeGeometry, b: &ShapeGeometry| match (a, b) {
         (ShapeGeometry::Sphere(a), ShapeGeometry::Sphere(b)) => a == b,
-        (ShapeGeometry::Triangles(a), ShapeGeometry::Triangles(b)) => a == b,
-        _ => false,
+        (ShapeGeometry::Sphere(_), _) | (_, ShapeGeometry::Sphere(_)) => false,
+        (a, b) => a.num_triangles() == b.num_triangles() && a.triangles().eq(b.triangles()),
     };
     let mut groups: HashMap<u64, Vec<usize>> = HashMap::new();
     for (i, s) in shapes.iter().enumerate().filter(|(_, s)| candidate(s)) {

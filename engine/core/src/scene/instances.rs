@@ -7,6 +7,7 @@
 //! of the primitive ([`InstancedShapes`]).
 
 use super::*;
+use risotto_systems::geometry::TriangleSet;
 use risotto_systems::mesh_attributes::MeshAttributes;
 
 /// A shape of an object: its geometry in the object's space.
@@ -153,7 +154,7 @@ pub(super) fn compile_objects(
         if def.shapes.is_empty() {
             return Err(invalid(entity, "has no shapes".into()));
         }
-        let (mut tris, mut tri_shape) = (Vec::new(), Vec::new());
+        let (mut tris, mut tri_shape) = (TriangleSet::default(), Vec::new());
         let (mut spheres, mut sphere_shape) = (Vec::new(), Vec::new());
         let mut attributes = MeshAttributes::default();
         let mut shape_bounds = Vec::with_capacity(def.shapes.len());
@@ -188,18 +189,22 @@ pub(super) fn compile_objects(
                         sp.center + Vec3::splat(sp.radius),
                     );
                 }
-                ShapeGeometry::Triangles(t) => {
+                triangles => {
                     if !shape.attributes.is_empty() {
                         any_normals |= !shape.attributes.normals.is_empty();
                         any_terminator_offset |= !shape.attributes.normals.is_empty()
                             && shape.attributes.shadow_terminator_offset;
                         attributes.push(tris.len() as u32, shape.attributes.clone());
                     }
-                    for v in t.iter().flatten() {
-                        (lo, hi) = (lo.min(*v), hi.max(*v));
+                    for v in triangles.triangles().flatten() {
+                        (lo, hi) = (lo.min(v), hi.max(v));
                     }
-                    tri_shape.extend(std::iter::repeat_n(s as u32, t.len()));
-                    tris.extend_from_slice(t);
+                    tri_shape.extend(std::iter::repeat_n(s as u32, triangles.num_triangles()));
+                    match triangles {
+                        ShapeGeometry::Mesh(m) => tris.push_mesh(m.clone()),
+                        ShapeGeometry::Triangles(t) => tris.push_soup(t.clone()),
+                        ShapeGeometry::Sphere(_) => unreachable!("matched above"),
+                    }
                 }
             }
             shape_bounds.push((lo, hi));
@@ -211,7 +216,7 @@ pub(super) fn compile_objects(
             ));
         }
         tri_shape.extend(sphere_shape);
-        let mut g = SceneGeometry::build(tris, spheres);
+        let mut g = SceneGeometry::build_set_with_instances(tris, spheres, Vec::new(), &[]);
         g.set_attributes(attributes);
         geometries.push(g);
         object_prim_shape.push(tri_shape);

@@ -8,6 +8,7 @@ use super::params::Reader;
 use super::raw::{Node, Value};
 use crate::mesh_file::load_mesh;
 use risotto_engine::diagnostics::{SceneError, SceneErrorKind};
+use risotto_engine::scene::TriangleMesh;
 use risotto_systems::mesh_attributes::VertexAttributes;
 
 /// A triangle `[v0, v1, v2]`; its geometric normal is along `(v1 - v0) x (v2 - v0)`.
@@ -352,7 +353,7 @@ pub(crate) fn cuboid(r: &Reader<'_>) -> Result<(Vec<Triangle>, DAffine3), SceneE
 /// `1 - v`.
 pub(crate) fn mesh(
     r: &Reader<'_>,
-) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
+) -> Result<(TriangleMesh, DAffine3, VertexAttributes), SceneError> {
     let (path, node) = r
         .path_opt("path")?
         .ok_or_else(|| r.missing("path", "an OBJ or PLY file path relative to the scene file"))?;
@@ -394,7 +395,7 @@ pub(crate) fn mesh(
 /// treatment as `mesh` (transform, `face_normals`).
 pub(crate) fn triangles(
     r: &Reader<'_>,
-) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
+) -> Result<(TriangleMesh, DAffine3, VertexAttributes), SceneError> {
     let numbers = |key: &str, per: usize| -> Result<Option<(Vec<f64>, &Node)>, SceneError> {
         let Some(node) = r.get(key) else {
             return Ok(None);
@@ -490,7 +491,9 @@ pub(crate) fn triangles(
 }
 
 /// A mesh's triangles and attributes placed by `m`, their winding reversed with
-/// `flip_normals` (see [`mesh`]).
+/// `flip_normals` (see [`mesh`]): its vertices mapped to the world one by one and its
+/// triangles kept as indices (issue 36: no triangle is copied out of the mesh), each
+/// vertex the point [`to_world`] would make of it and each triangle wound as there.
 fn mesh_from_data(
     r: &Reader<'_>,
     path: &std::path::Path,
@@ -498,7 +501,7 @@ fn mesh_from_data(
     face_normals: bool,
     flip_normals: bool,
     m: DAffine3,
-) -> Result<(Vec<Triangle>, DAffine3, VertexAttributes), SceneError> {
+) -> Result<(TriangleMesh, DAffine3, VertexAttributes), SceneError> {
     let skipped = data.skipped;
     if skipped.points + skipped.lines > 0 {
         r.src.warnings.add(format!(
@@ -508,17 +511,16 @@ fn mesh_from_data(
             skipped.lines
         ));
     }
-    let p = &data.positions;
-    let local = data.triangles.iter().map(|t| {
-        let (a, b, c) = (p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
-        if flip_normals {
-            [a, c, b]
-        } else {
-            [a, b, c]
-        }
-    });
-    let triangles = to_world(&m, local);
+    // `flip_normals` reverses the winding, and a mirroring `m` reverses it again.
     let flip = mirrors(&m) != flip_normals;
+    let triangles = TriangleMesh {
+        positions: data
+            .positions
+            .iter()
+            .map(|&p| m.transform_point3(p).as_vec3())
+            .collect(),
+        triangles: data.triangles.iter().map(|&t| wound(t, flip)).collect(),
+    };
     let normal_matrix = if flip_normals {
         -m.matrix3.inverse().transpose()
     } else {

@@ -130,10 +130,11 @@ fn normal(t: &[Vec3; 3]) -> Vec3 {
     (t[1] - t[0]).cross(t[2] - t[0]).normalize()
 }
 
-fn triangles(shape: &ShapeDesc) -> &[[Vec3; 3]] {
+/// The world-space triangles of a shape (of a mesh, its triangles over its vertices).
+fn triangles(shape: &ShapeDesc) -> Vec<[Vec3; 3]> {
     match &shape.geometry {
-        ShapeGeometry::Triangles { triangles, .. } => triangles,
         ShapeGeometry::Sphere { .. } => panic!("{} is a sphere", shape.name),
+        g => g.world_triangles(),
     }
 }
 
@@ -222,13 +223,13 @@ fn base_scene_loads_with_resolved_values() {
     assert_eq!(s.shapes[0].emission, None);
     // The floor quad: normal = normalize(edge1 x edge2) = z x x = +y.
     for t in triangles(&s.shapes[1]) {
-        assert!(normal(t).distance(Vec3::Y) < 1e-6);
+        assert!(normal(&t).distance(Vec3::Y) < 1e-6);
     }
     // The crate: cube [-1,1]^3 scaled 0.5, turned, centred at (2, 0.5, 0).
     let crate_tris = triangles(&s.shapes[2]);
     assert_eq!(crate_tris.len(), 12);
-    assert_outward(crate_tris, "crate");
-    for v in distinct_vertices(crate_tris) {
+    assert_outward(&crate_tris, "crate");
+    for v in distinct_vertices(&crate_tris) {
         let local = v - Vec3::new(2.0, 0.5, 0.0);
         assert!((local.y.abs() - 0.5).abs() < 1e-6);
         // Rotation about y preserves the horizontal distance sqrt(0.5^2 + 0.5^2).
@@ -680,13 +681,8 @@ fn bad_mesh_attributes_and_ply_files_are_reported() {
     let normal_z = |extra: &str| {
         let text = format!("[materials.m]\ntype = \"diffuse\"\n\n[[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\npath = \"ok.obj\"\n{extra}\n\n[camera]\nfov = 40\nfrom = [0, 0, 5]\nto = [0, 0, 0]\n");
         let desc = parse_scene(&text, &scene_path).unwrap();
-        match &desc.shapes[0].geometry {
-            ShapeGeometry::Triangles { triangles, .. } => {
-                let [a, b, c] = triangles[0];
-                (b - a).cross(c - a).z
-            }
-            other => panic!("{other:?}"),
-        }
+        let [a, b, c] = desc.shapes[0].geometry.world_triangles()[0];
+        (b - a).cross(c - a).z
     };
     let (plain, flipped) = (normal_z(""), normal_z("flip_normals = true"));
     assert!(plain != 0.0 && flipped == -plain, "{plain} {flipped}");
@@ -1310,9 +1306,9 @@ to = [0, 0, 0]
         Vec3::new(-3.2595, 7.1547, 0.4311),
         Vec3::new(-0.4311, 7.1547, 3.2595),
     ];
-    assert!(same_point_set(&distinct_vertices(tris), &corners, 1e-4));
+    assert!(same_point_set(&distinct_vertices(&tris), &corners, 1e-4));
     for t in tris {
-        assert!(normal(t).distance(Vec3::new(0.4082, -0.8165, -0.4082)) < 1e-4);
+        assert!(normal(&t).distance(Vec3::new(0.4082, -0.8165, -0.4082)) < 1e-4);
     }
 }
 
@@ -1339,7 +1335,7 @@ to = [0, 0, 0]
 "#;
     let s = parse(text).unwrap();
     let tris = triangles(&s.shapes[0]);
-    assert_outward(tris, "mirrored box");
+    assert_outward(&tris, "mirrored box");
     let expected: Vec<Vec3> = (0..8)
         .map(|i| {
             let c = Vec3::new(
@@ -1350,10 +1346,10 @@ to = [0, 0, 0]
             Vec3::new(5.0 - c.x, c.y, c.z)
         })
         .collect();
-    assert!(same_point_set(&distinct_vertices(tris), &expected, 1e-6));
+    assert!(same_point_set(&distinct_vertices(&tris), &expected, 1e-6));
     // A rectangle's normal is carried like a normal (inverse transpose): +z -> -z.
     for t in triangles(&s.shapes[1]) {
-        assert!(normal(t).distance(Vec3::NEG_Z) < 1e-6);
+        assert!(normal(&t).distance(Vec3::NEG_Z) < 1e-6);
     }
 }
 
@@ -1507,6 +1503,7 @@ fn every_shipped_scene_loads_and_is_well_formed() {
                     assert_outward(triangles, &format!("{what} {}", shape.name));
                 }
                 ShapeGeometry::Triangles { triangles, .. } => assert!(!triangles.is_empty()),
+                ShapeGeometry::Mesh(m) => assert!(!m.is_empty() && m.indices_in_range()),
                 ShapeGeometry::Sphere { radius, .. } => assert!(*radius > 0.0),
             }
         }
@@ -1597,7 +1594,7 @@ const SHORT_ROWS: [[f64; 4]; 3] = [
 
 /// The footprint (x, z) corners and y range of a box against the README's list.
 fn assert_box(s: &SceneDesc, name: &str, footprint: [(f32, f32); 4], y: (f32, f32)) {
-    let verts = distinct_vertices(triangles(shape(s, name)));
+    let verts = distinct_vertices(&triangles(shape(s, name)));
     assert_eq!(verts.len(), 8, "{name}");
     for (lo_hi, yv) in [("bottom", y.0), ("top", y.1)] {
         let layer: Vec<Vec3> = verts
@@ -1669,10 +1666,10 @@ fn mitsuba_suite_cornell_matches_the_readme() {
     for (name, rows) in [("tall_box", TALL_ROWS), ("short_box", SHORT_ROWS)] {
         let tris = triangles(shape(&s, name));
         assert!(
-            same_point_set(&distinct_vertices(tris), &readme_box(rows), 1e-5),
+            same_point_set(&distinct_vertices(&tris), &readme_box(rows), 1e-5),
             "{name}"
         );
-        assert_outward(tris, name);
+        assert_outward(&tris, name);
     }
     // Walls: 2 x 2, inward normals as listed in the README.
     let walls = [
@@ -1687,11 +1684,11 @@ fn mitsuba_suite_cornell_matches_the_readme() {
         assert_eq!(s.materials[sh.material].name, material);
         assert_eq!(sh.emission, None);
         let tris = triangles(sh);
-        for t in tris {
-            assert!(normal(t).distance(n) < 1e-6, "{name}");
+        for &t in &tris {
+            assert!(normal(&t).distance(n) < 1e-6, "{name}");
         }
         // The wall lies in the plane -n . p = 1 (the cube face opposite its normal).
-        let verts = distinct_vertices(tris);
+        let verts = distinct_vertices(&tris);
         assert_eq!(verts.len(), 4);
         for v in &verts {
             assert!((v.dot(n) + 1.0).abs() < 1e-6, "{name} {v}");
@@ -1717,12 +1714,12 @@ fn mitsuba_suite_cornell_matches_the_readme() {
         .map(|&(x, z)| Vec3::new(x, 0.99, z))
         .collect();
     assert!(same_point_set(
-        &distinct_vertices(triangles(light)),
+        &distinct_vertices(&triangles(light)),
         &corners,
         1e-6
     ));
     for t in triangles(light) {
-        assert!(normal(t).distance(Vec3::NEG_Y) < 1e-6);
+        assert!(normal(&t).distance(Vec3::NEG_Y) < 1e-6);
     }
     // Materials as in the XML.
     let refl = |n: &str| {
@@ -1755,7 +1752,7 @@ fn cornell_box_has_the_suite_geometry() {
         let (sa, sb) = (shape(&classic, a), shape(&suite, b));
         let (ta, tb) = (triangles(sa), triangles(sb));
         assert!(
-            same_point_set(&distinct_vertices(ta), &distinct_vertices(tb), 1e-5),
+            same_point_set(&distinct_vertices(&ta), &distinct_vertices(&tb), 1e-5),
             "{a} vs {b}"
         );
         // Same orientation: compare the (uniform) normal of the first triangles.
@@ -1775,14 +1772,14 @@ fn mesh_scene_icosphere_is_a_closed_outward_sphere() {
     let tris = triangles(ico);
     assert_eq!(tris.len(), 320);
     let center = Vec3::new(-0.9, 0.7, 0.0);
-    let verts = distinct_vertices(tris);
+    let verts = distinct_vertices(&tris);
     assert_eq!(verts.len(), 162);
     for v in &verts {
         assert!((v.distance(center) - 0.7).abs() < 1e-5, "{v}");
     }
-    for t in tris {
+    for &t in &tris {
         let c = (t[0] + t[1] + t[2]) / 3.0;
-        assert!(normal(t).dot(c - center) > 0.0);
+        assert!(normal(&t).dot(c - center) > 0.0);
     }
     // Closed: every edge is shared by exactly two triangles, in opposite directions.
     let key = |v: Vec3| verts.iter().position(|u| u.distance(v) < 1e-5).unwrap();
@@ -1846,7 +1843,7 @@ fn documented_complete_example_parses() {
     );
     // The lamp: side 4 centred at (-3, 6, 3) facing the origin.
     let lamp = triangles(shape(&s, "lamp"));
-    let centre = distinct_vertices(lamp).iter().copied().sum::<Vec3>() / 4.0;
+    let centre = distinct_vertices(&lamp).iter().copied().sum::<Vec3>() / 4.0;
     assert!(centre.distance(Vec3::new(-3.0, 6.0, 3.0)) < 1e-5);
     assert!(normal(&lamp[0]).dot(-centre.normalize()) > 0.9999);
 }
