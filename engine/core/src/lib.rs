@@ -16,6 +16,7 @@ pub mod features;
 pub mod global_integrator;
 pub mod integrator;
 mod interior;
+pub mod memory;
 pub mod opacity;
 pub mod output;
 pub mod path_record;

@@ -106,6 +106,10 @@ impl Scene {
             objects.geometries,
             &objects.placements,
         );
+        // The build's inputs (a mesh's vertices and indices, the primitives' boxes) are freed;
+        // the tables compiled next would otherwise sit on top of their retained pages, and the
+        // peak be theirs and the tree's together (2M-triangle mesh: 243 -> 234 MB, issue 36).
+        crate::memory::release_freed_pages();
         geometry.set_attributes(attributes);
         let mut prim_shape = Vec::with_capacity(num_tris + sphere_shape.len());
         for (shape, count) in tri_shape_runs {

@@ -256,19 +256,13 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
     Ok(())
 }
 
-/// Hands the pages of freed heap memory back to the system (glibc's `malloc_trim`, which
-/// since glibc 2.8 releases whole free pages anywhere in the heap, not only at its top). A
-/// tree's leaves are 2 KB allocations, below glibc's mmap threshold: freed, they stay
-/// resident in the heap until trimmed, and the grid being filled does not reuse them (its
-/// own allocation is one mapping). Elsewhere nothing is done: the peak is then the tree and
-/// the grid together, as before.
-#[allow(unsafe_code, reason = "malloc_trim is a C function")]
+/// Hands the pages of the freed parts back to the system
+/// ([`risotto_engine::memory::release_freed_pages`]). A tree's leaves are 2 KB allocations,
+/// below glibc's mmap threshold: freed, they stay resident in the heap until trimmed, and
+/// the grid being filled does not reuse them (its own allocation is one mapping). Elsewhere
+/// than glibc nothing is done: the peak is then the tree and the grid together, as before.
 fn release_freed_pages() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: malloc_trim takes no pointers and only releases memory malloc holds free.
-    unsafe {
-        libc::malloc_trim(0);
-    }
+    risotto_engine::memory::release_freed_pages();
 }
 
 /// A VDB is held block-sparse when at most this fraction of its box's `8^3` bricks hold
