@@ -15,8 +15,9 @@ use risotto_systems::environment_map::EnvironmentMap;
 pub use risotto_systems::geometry::TriangleMesh;
 use risotto_systems::geometry::{SceneGeometry, Sphere};
 use risotto_systems::lights::{Light, LightSet, SpotFalloff, SpotTexture};
-/// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] shape (an
-/// optional component of its entity; [`Scene::set_vertex_attributes`]).
+/// Per-vertex normals and texture coordinates of a [`ShapeGeometry::Triangles`] or
+/// [`ShapeGeometry::Mesh`] shape (an optional component of its entity;
+/// [`Scene::set_vertex_attributes`]).
 pub use risotto_systems::mesh_attributes::VertexAttributes;
 use std::sync::Arc;
 
@@ -37,8 +38,8 @@ pub struct Name(pub String);
 pub enum ShapeGeometry {
     /// An analytic sphere.
     Sphere(Sphere),
-    /// Triangles (for quads, boxes and meshes), wound so `(v1-v0)x(v2-v0)` is the outward
-    /// (front) normal.
+    /// Triangles, one `[Vec3; 3]` each (quads, boxes, disks; any triangles built in code),
+    /// wound so `(v1-v0)x(v2-v0)` is the outward (front) normal.
     Triangles(Vec<[Vec3; 3]>),
     /// Triangles over shared vertices, wound as [`Self::Triangles`]: what a mesh file holds.
     /// The same surface as the [`Self::Triangles`] of its triangles, stored once and built

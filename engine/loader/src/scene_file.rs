@@ -170,7 +170,7 @@ pub struct ShapeDesc {
     /// one. A volume's `u, v, w` and grids are measured in object space.
     pub transform: Affine3A,
     /// A `mesh`'s vertex normals and texture coordinates in world space (one corner triple
-    /// per triangle of [`ShapeGeometry::Triangles`]), a `disk`'s polar texture coordinates;
+    /// per triangle of [`ShapeGeometry::Mesh`]), a `disk`'s polar texture coordinates;
     /// empty for other shapes and for meshes whose file has neither (or normals only, with
     /// `face_normals = true`).
     pub attributes: VertexAttributes,
