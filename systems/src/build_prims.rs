@@ -100,6 +100,14 @@ impl BuildPrims {
         }
     }
 
+    /// The triangles' vertex indices, the positions freed (empty for a soup kept as given).
+    pub(crate) fn into_corners(self) -> Vec<[u32; 3]> {
+        match self.vertices {
+            Vertices::Shared { corners, .. } => corners,
+            Vertices::Soup(_) => Vec::new(),
+        }
+    }
+
     /// Number of triangles (primitives `0..num_triangles()`).
     pub(crate) fn num_triangles(&self) -> usize {
         self.num_triangles

@@ -174,7 +174,7 @@ impl SceneGeometry {
         instances: &[(u32, Affine3A)],
     ) -> Self {
         let triangles = TriangleSet::Soup(triangles);
-        Self::build_using(triangles, spheres, objects, instances, None)
+        Self::build_using(triangles, spheres, objects, instances, None).0
     }
 
     /// [`Self::build_with_instances`] with the triangles as a [`TriangleSet`]: a soup, or a
@@ -191,6 +191,23 @@ impl SceneGeometry {
         objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
     ) -> Self {
+        Self::build_set_keeping_indices(triangles, spheres, objects, instances).0
+    }
+
+    /// [`Self::build_set_with_instances`], also handing back the triangles' vertex indices
+    /// as the build held them (a mesh's own, in triangle order; a soup's welded ones; empty
+    /// where the build kept a soup as given or built nothing), which the build would
+    /// otherwise free: a mesh's vertex attributes index their normals by the same corners,
+    /// and need not hold a second copy while the tree is built (issue 36).
+    ///
+    /// # Panics
+    /// As [`Self::build_set_with_instances`].
+    pub fn build_set_keeping_indices(
+        triangles: TriangleSet,
+        spheres: Vec<Sphere>,
+        objects: Vec<SceneGeometry>,
+        instances: &[(u32, Affine3A)],
+    ) -> (Self, Vec<[u32; 3]>) {
         if let TriangleSet::Mesh(mesh) = &triangles {
             assert!(mesh.indices_in_range(), "a triangle index is not a vertex");
         }
@@ -206,7 +223,7 @@ impl SceneGeometry {
         builder: BvhBuilder,
     ) -> Self {
         let triangles = TriangleSet::Soup(triangles);
-        Self::build_using(triangles, spheres, Vec::new(), &[], Some(builder))
+        Self::build_using(triangles, spheres, Vec::new(), &[], Some(builder)).0
     }
 
     /// [`Self::build_with_instances`] by `builder`, or the one [`BvhBuilder::for_prims`]
@@ -217,7 +234,7 @@ impl SceneGeometry {
         objects: Vec<SceneGeometry>,
         instances: &[(u32, Affine3A)],
         builder: Option<BvhBuilder>,
-    ) -> Self {
+    ) -> (Self, Vec<[u32; 3]>) {
         let num_prims = triangles.len() + spheres.len();
         assert!(
             num_prims < u32::MAX as usize,
@@ -282,6 +299,7 @@ impl SceneGeometry {
         // doubling build time, and their clipped boxes would need padding.
         let params = BvhBuildParams::medium_build();
         let mut tri_slots = Vec::new();
+        let mut indices = Vec::new();
         let bvh8 = if prims.count() == 0 {
             None
         } else {
@@ -297,7 +315,7 @@ impl SceneGeometry {
                     Bvh8::from_bvh2(bvh2, &prims, &spheres)
                 }
             };
-            drop(prims);
+            indices = prims.into_corners();
             tri_slots = bvh8.triangle_slots(tri_count);
             if !placed.instances.is_empty() {
                 bvh8.instances = placed
@@ -319,7 +337,7 @@ impl SceneGeometry {
         };
 
         let any_attributes = objects.iter().any(|o| o.any_attributes);
-        Self {
+        let geometry = Self {
             tri_slots,
             spheres,
             bvh8,
@@ -333,7 +351,8 @@ impl SceneGeometry {
             },
             instances: placed.instances,
             any_attributes,
-        }
+        };
+        (geometry, indices)
     }
 
     /// Sets the meshes' vertex attributes (their ranges must be triangle primitives).

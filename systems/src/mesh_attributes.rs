@@ -29,6 +29,15 @@ pub struct VertexAttributes {
     pub shadow_terminator_offset: bool,
 }
 
+/// `to` followed by `from`: `from` itself when `to` is empty.
+fn append<T>(to: &mut Vec<T>, from: Vec<T>) {
+    if to.is_empty() {
+        *to = from;
+    } else {
+        to.extend(from);
+    }
+}
+
 impl VertexAttributes {
     /// Whether the mesh has neither normals nor texture coordinates (nothing to store).
     pub fn is_empty(&self) -> bool {
@@ -146,9 +155,11 @@ impl MeshAttributes {
             terminator: attrs.shadow_terminator_offset && !attrs.normals.is_empty(),
         };
         self.ranges.push(range);
-        self.normals.extend(attrs.normals);
-        self.uvs.extend(attrs.uvs);
-        self.corners.extend(attrs.corners);
+        // The first mesh's arrays are moved, not copied: a large mesh's corners would
+        // otherwise be held twice for a moment (issue 36, peak memory).
+        append(&mut self.normals, attrs.normals);
+        append(&mut self.uvs, attrs.uvs);
+        append(&mut self.corners, attrs.corners);
     }
 
     /// One past the last primitive with attributes (0 when empty).

@@ -173,13 +173,20 @@ impl TriangleSet {
         }
     }
 
-    /// Appends the triangles of `mesh` (the first mesh is moved, not copied).
-    pub fn push_mesh(&mut self, mesh: TriangleMesh) {
+    /// Appends the triangles of `mesh` (the first mesh is moved, not copied); returns the
+    /// number the set gives its first vertex (the set's indices of its triangles are its
+    /// own plus that).
+    pub fn push_mesh(&mut self, mesh: TriangleMesh) -> u32 {
         if let TriangleSet::Soup(soup) = self {
             *self = TriangleSet::Mesh(TriangleMesh::from_soup(soup));
         }
-        if let TriangleSet::Mesh(m) = self {
-            m.append(mesh);
+        match self {
+            TriangleSet::Mesh(m) => {
+                let base = m.positions.len() as u32;
+                m.append(mesh);
+                base
+            }
+            TriangleSet::Soup(_) => unreachable!("made a mesh above"),
         }
     }
 

@@ -5,10 +5,32 @@ use super::*;
 use risotto_systems::geometry::TriangleSet;
 use risotto_systems::mesh_attributes::MeshAttributes;
 
+/// A triangle shape's vertex attributes, pushed after the build in primitive order.
+struct ShapeAttributes {
+    /// The shape's first primitive.
+    first: u32,
+    attributes: VertexAttributes,
+    /// Set when the attributes' corners are the mesh's own triangles' indices: the mesh
+    /// lends them to the build rather than holding two copies while the tree is built, and
+    /// gets them back after it (issue 36: 24 MB of the 2M-triangle mesh's peak).
+    lent: Option<LentCorners>,
+}
+
+/// Where a mesh's lent corners are in the build's indices.
+struct LentCorners {
+    /// The mesh's triangles.
+    count: usize,
+    /// The set's number of the mesh's first vertex.
+    base: u32,
+}
+
 impl Scene {
     /// Flattens the world into a [`CompiledScene`].
     pub fn compile(self) -> Result<CompiledScene, CompileError> {
         self.settings.check(&self.camera)?;
+        // What loading freed (a mesh file's parse tables and its f64 data) is handed back
+        // before the build allocates its boxes and tree (issue 36, peak memory).
+        crate::memory::release_freed_pages();
         let Scene {
             files,
             warnings: read_warnings,
@@ -51,6 +73,8 @@ impl Scene {
         let mut sphere_shape = Vec::new();
         let mut shapes = Vec::new();
         let mut attributes = MeshAttributes::default();
+        // Each triangle shape's vertex attributes, pushed after the build in primitive order.
+        let mut shape_attributes: Vec<ShapeAttributes> = Vec::new();
         for (i, (entity, name, geom, mat, emission)) in shape_entities.into_iter().enumerate() {
             if mat as usize >= materials.len() {
                 return Err(CompileError::MissingMaterial {
@@ -66,14 +90,37 @@ impl Scene {
                     sphere_shape.push(i as u32);
                 }
                 ShapeGeometry::Triangles(_) | ShapeGeometry::Mesh(_) => {
-                    if let Ok(a) = world.remove_one::<VertexAttributes>(entity) {
-                        attributes.push(triangles.len() as u32, a);
-                    }
-                    tri_shape_runs.push((i as u32, geom.num_triangles()));
+                    let first = triangles.len() as u32;
+                    let count = geom.num_triangles();
+                    let attrs = world.remove_one::<VertexAttributes>(entity).ok();
+                    tri_shape_runs.push((i as u32, count));
                     // The first shape's vectors are moved, not copied (issue 36, peak memory).
                     match geom {
-                        ShapeGeometry::Mesh(m) => triangles.push_mesh(m),
-                        ShapeGeometry::Triangles(t) => triangles.push_soup(t),
+                        ShapeGeometry::Mesh(m) => {
+                            let mut attrs = attrs;
+                            let lends = attrs.as_ref().is_some_and(|a| a.corners == m.triangles);
+                            if let (Some(a), true) = (&mut attrs, lends) {
+                                a.corners = Vec::new();
+                            }
+                            let base = triangles.push_mesh(m);
+                            if let Some(attributes) = attrs {
+                                shape_attributes.push(ShapeAttributes {
+                                    first,
+                                    attributes,
+                                    lent: lends.then_some(LentCorners { count, base }),
+                                });
+                            }
+                        }
+                        ShapeGeometry::Triangles(t) => {
+                            triangles.push_soup(t);
+                            if let Some(attributes) = attrs {
+                                shape_attributes.push(ShapeAttributes {
+                                    first,
+                                    attributes,
+                                    lent: None,
+                                });
+                            }
+                        }
                         ShapeGeometry::Sphere(_) => unreachable!("matched above"),
                     }
                 }
@@ -95,21 +142,41 @@ impl Scene {
         )?;
         shapes.extend(objects.shapes);
         transforms.resize(shapes.len(), None);
-        let mut features = Features {
-            vertex_normals: attributes.any_normals() || objects.any_normals,
-            terminator_offset: attributes.any_terminator_offset() || objects.any_terminator_offset,
-            ..Features::default()
-        };
-        let mut geometry = SceneGeometry::build_set_with_instances(
+        let (mut geometry, mut indices) = SceneGeometry::build_set_keeping_indices(
             triangles,
             spheres,
             objects.geometries,
             &objects.placements,
         );
+        // The meshes that lent their corners to the build get them back (their own vertex
+        // numbers: the set numbered a mesh's vertices from `base`).
+        for ShapeAttributes {
+            first,
+            attributes: mut a,
+            lent,
+        } in shape_attributes
+        {
+            if let Some(LentCorners { count, base }) = lent {
+                let start = first as usize;
+                a.corners = if start == 0 && base == 0 && count == indices.len() {
+                    std::mem::take(&mut indices)
+                } else {
+                    let own = &indices[start..start + count];
+                    own.iter().map(|t| t.map(|k| k - base)).collect()
+                };
+            }
+            attributes.push(first, a);
+        }
+        drop(indices);
         // The build's inputs (a mesh's vertices and indices, the primitives' boxes) are freed;
         // the tables compiled next would otherwise sit on top of their retained pages, and the
         // peak be theirs and the tree's together (2M-triangle mesh: 243 -> 234 MB, issue 36).
         crate::memory::release_freed_pages();
+        let mut features = Features {
+            vertex_normals: attributes.any_normals() || objects.any_normals,
+            terminator_offset: attributes.any_terminator_offset() || objects.any_terminator_offset,
+            ..Features::default()
+        };
         geometry.set_attributes(attributes);
         let mut prim_shape = Vec::with_capacity(num_tris + sphere_shape.len());
         for (shape, count) in tri_shape_runs {

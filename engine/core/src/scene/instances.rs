@@ -201,7 +201,9 @@ pub(super) fn compile_objects(
                     }
                     tri_shape.extend(std::iter::repeat_n(s as u32, triangles.num_triangles()));
                     match triangles {
-                        ShapeGeometry::Mesh(m) => tris.push_mesh(m.clone()),
+                        ShapeGeometry::Mesh(m) => {
+                            tris.push_mesh(m.clone());
+                        }
                         ShapeGeometry::Triangles(t) => tris.push_soup(t.clone()),
                         ShapeGeometry::Sphere(_) => unreachable!("matched above"),
                     }
