@@ -7,7 +7,6 @@
 //! [`SceneGeometry::build_set_with_instances`]: crate::geometry::SceneGeometry::build_set_with_instances
 
 use std::collections::HashMap;
-
 use std::hash::Hasher;
 
 use glam::Vec3;
@@ -68,7 +67,11 @@ impl TriangleMesh {
     }
 
     /// The triangles of `soup` over their distinct positions: vertices bit for bit equal are
-    /// shared (signed zeros apart), every triangle keeps exactly the vertices it was given.
+    /// shared (so `0.0` and `-0.0` are not), and every triangle keeps exactly the vertices
+    /// it was given.
+    ///
+    /// # Panics
+    /// With `u32::MAX` or more distinct positions (their indices are `u32`).
     pub fn from_soup(soup: &[[Vec3; 3]]) -> Self {
         Self::weld(soup, usize::MAX).expect("no limit on the positions")
     }
