@@ -33,18 +33,20 @@ fn glass_box(as_mesh: bool) -> ShapeGeometry {
     }
 }
 
+/// A `w x h` view from `from` (field of view `fov`) of a floor under a sun and a sky,
+/// rendered at `spp` and `max_depth`.
+fn lit_floor(w: u32, h: u32, from: Vec3, fov: f32, spp: u32, max_depth: u32) -> Scene {
+    let cam = perspective(from, Vec3::new(0.0, 0.5, 0.0), fov, w, h);
+    let mut scene = Scene::new(cam, settings(w, h, spp, max_depth));
+    add_floor(&mut scene, Vec3::ZERO, Rgb::splat(0.5));
+    add_sun(&mut scene, 0.6, Rgb::new(3.0, 2.9, 2.7));
+    environment(&mut scene, Rgb::new(0.2, 0.25, 0.35));
+    scene
+}
+
 /// A floor, a sun and a sky, and the glass boxes `boxes` (true: a mesh) in one material.
 fn scene(boxes: &[bool]) -> Scene {
-    let (w, h) = (24, 16);
-    let cam = perspective(
-        Vec3::new(0.5, 2.5, 5.0),
-        Vec3::new(0.0, 0.5, 0.0),
-        35.0,
-        w,
-        h,
-    );
-    let mut scene = Scene::new(cam, settings(w, h, 16, 12));
-    add_floor(&mut scene, Vec3::ZERO, Rgb::splat(0.5));
+    let mut scene = lit_floor(24, 16, Vec3::new(0.5, 2.5, 5.0), 35.0, 16, 12);
     let glass = Surface::Dielectric {
         ior: 1.5,
         tint: Rgb::splat(1.0),
@@ -57,8 +59,6 @@ fn scene(boxes: &[bool]) -> Scene {
     for (i, &as_mesh) in boxes.iter().enumerate() {
         scene.add_shape(&format!("box{i}"), glass_box(as_mesh), m, None);
     }
-    add_sun(&mut scene, 0.6, Rgb::new(3.0, 2.9, 2.7));
-    environment(&mut scene, Rgb::new(0.2, 0.25, 0.35));
     scene
 }
 
@@ -106,16 +106,7 @@ fn a_mesh_and_its_soup_are_coincident() {
 #[test]
 fn meshes_with_vertex_normals_render_as_their_soups() {
     let render = |as_mesh: bool| {
-        let (w, h) = (32, 24);
-        let cam = perspective(
-            Vec3::new(0.5, 2.5, 6.0),
-            Vec3::new(0.0, 0.5, 0.0),
-            40.0,
-            w,
-            h,
-        );
-        let mut scene = Scene::new(cam, settings(w, h, 8, 6));
-        add_floor(&mut scene, Vec3::ZERO, Rgb::splat(0.5));
+        let mut scene = lit_floor(32, 24, Vec3::new(0.5, 2.5, 6.0), 40.0, 8, 6);
         let m = add_diffuse(&mut scene, "white", 0.7);
         for (k, x) in [-1.2f32, 1.1].into_iter().enumerate() {
             let (lo, hi) = (Vec3::new(x - 0.5, 0.0, -0.5), Vec3::new(x + 0.5, 1.0, 0.5));
@@ -141,8 +132,6 @@ fn meshes_with_vertex_normals_render_as_their_soups() {
             let e = scene.add_shape(&format!("box{k}"), geometry, m, None);
             scene.set_vertex_attributes(e, attributes);
         }
-        add_sun(&mut scene, 0.6, Rgb::new(3.0, 2.9, 2.7));
-        environment(&mut scene, Rgb::new(0.2, 0.25, 0.35));
         render_default(&scene.compile().unwrap())
     };
     let (mesh, soup) = (render(true), render(false));

@@ -13,7 +13,7 @@
 use glam::{Vec3, Vec3A};
 use obvhs::{aabb::Aabb, Boundable};
 
-use crate::triangle_mesh::TriangleMesh;
+use crate::triangle_mesh::{TriangleMesh, TriangleSet};
 
 /// Primitive boxes by index, as the binary BVH builds read them (`0..count()`).
 pub(crate) trait PrimBoxes {
@@ -45,25 +45,13 @@ impl<B: Boundable> PrimBoxes for Vec<B> {
     }
 }
 
-/// How the triangles' vertices are held.
-#[derive(Debug)]
-enum Vertices {
-    /// Three corner indices a triangle into distinct positions.
-    Shared {
-        positions: Vec<Vec3>,
-        corners: Vec<[u32; 3]>,
-    },
-    /// As given: kept when welding would not save memory (a soup whose vertices are
-    /// hardly shared: more than two distinct positions a triangle).
-    Soup(Vec<[Vec3; 3]>),
-}
-
 /// The build's primitives: triangles `0..num_triangles()`, then boxes `(min, max)` (the
 /// spheres' and instances' padded boxes).
 #[derive(Debug)]
 pub(crate) struct BuildPrims {
-    vertices: Vertices,
-    num_triangles: usize,
+    /// A mesh; a soup only where welding it would not save memory (its vertices hardly
+    /// shared: more than two distinct positions a triangle).
+    triangles: TriangleSet,
     boxes: Vec<(Vec3, Vec3)>,
 }
 
@@ -71,71 +59,57 @@ impl BuildPrims {
     /// The triangles welded by bit-equal positions (or kept as given when that saves
     /// nothing), then `boxes`.
     pub(crate) fn new(triangles: Vec<[Vec3; 3]>, boxes: Vec<(Vec3, Vec3)>) -> Self {
-        let n = triangles.len();
         // Two distinct positions a triangle: the welded form (12 + 24 bytes) no smaller.
-        match TriangleMesh::weld(&triangles, 2 * n) {
-            Some(mesh) => {
-                drop(triangles);
-                Self::from_mesh(mesh, boxes)
-            }
-            None => BuildPrims {
-                vertices: Vertices::Soup(triangles),
-                num_triangles: n,
-                boxes,
-            },
-        }
+        let triangles = match TriangleMesh::weld(&triangles, 2 * triangles.len()) {
+            Some(mesh) => TriangleSet::Mesh(mesh),
+            None => TriangleSet::Soup(triangles),
+        };
+        BuildPrims { triangles, boxes }
     }
 
     /// The triangles of `mesh` over its vertices as given (no weld: a mesh file's vertices
     /// are shared already), then `boxes`.
     pub(crate) fn from_mesh(mesh: TriangleMesh, boxes: Vec<(Vec3, Vec3)>) -> Self {
-        let num_triangles = mesh.triangles.len();
         BuildPrims {
-            vertices: Vertices::Shared {
-                positions: mesh.positions,
-                corners: mesh.triangles,
-            },
-            num_triangles,
+            triangles: TriangleSet::Mesh(mesh),
             boxes,
         }
     }
 
     /// The triangles' vertex indices, the positions freed (empty for a soup kept as given).
     pub(crate) fn into_corners(self) -> Vec<[u32; 3]> {
-        match self.vertices {
-            Vertices::Shared { corners, .. } => corners,
-            Vertices::Soup(_) => Vec::new(),
+        match self.triangles {
+            TriangleSet::Mesh(mesh) => mesh.triangles,
+            TriangleSet::Soup(_) => Vec::new(),
         }
     }
 
     /// Number of triangles (primitives `0..num_triangles()`).
     pub(crate) fn num_triangles(&self) -> usize {
-        self.num_triangles
+        self.triangles.len()
     }
 
     /// The vertices of triangle `i`, exactly as given.
     #[inline]
     pub(crate) fn triangle(&self, i: usize) -> [Vec3; 3] {
-        match &self.vertices {
-            Vertices::Shared { positions, corners } => corners[i].map(|c| positions[c as usize]),
-            Vertices::Soup(t) => t[i],
-        }
+        self.triangles.triangle(i)
     }
 }
 
 impl PrimBoxes for BuildPrims {
     fn count(&self) -> usize {
-        self.num_triangles + self.boxes.len()
+        self.num_triangles() + self.boxes.len()
     }
 
     /// A triangle's exact box (min/max of its vertices), or the box given.
     #[inline]
     fn aabb(&self, i: usize) -> Aabb {
-        let (lo, hi) = if i < self.num_triangles {
+        let tris = self.num_triangles();
+        let (lo, hi) = if i < tris {
             let t = self.triangle(i);
             (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
         } else {
-            self.boxes[i - self.num_triangles]
+            self.boxes[i - tris]
         };
         Aabb::new(Vec3A::from(lo), Vec3A::from(hi))
     }
@@ -155,9 +129,7 @@ mod tests {
         let d = Vec3::new(1.0, 2.0, 3.0 + f32::EPSILON * 4.0);
         let tris = vec![[a, c, d], [b, c, d], [a, d, c], [c, a, b]];
         let p = BuildPrims::new(tris.clone(), vec![(Vec3::splat(-1.0), Vec3::ONE)]);
-        assert!(
-            matches!(p.vertices, Vertices::Shared { ref positions, .. } if positions.len() == 4)
-        );
+        assert!(matches!(p.triangles, TriangleSet::Mesh(ref m) if m.positions.len() == 4));
         for (i, t) in tris.iter().enumerate() {
             let got = p.triangle(i).map(|v| v.to_array().map(f32::to_bits));
             assert_eq!(got, t.map(|v| v.to_array().map(f32::to_bits)));
@@ -175,7 +147,7 @@ mod tests {
             .map(|i| [0.0, 1.0, 2.0].map(|k| Vec3::splat(3.0 * i as f32 + k)))
             .collect();
         let p = BuildPrims::new(soup.clone(), Vec::new());
-        assert!(matches!(p.vertices, Vertices::Soup(_)));
+        assert!(matches!(p.triangles, TriangleSet::Soup(_)));
         assert_eq!((0..10).map(|i| p.triangle(i)).collect::<Vec<_>>(), soup);
     }
 }

@@ -193,12 +193,21 @@ impl TriangleSet {
         }
     }
 
+    /// The vertices of triangle `i`.
+    ///
+    /// # Panics
+    /// If `i` is not a triangle (or, of a mesh, one of its indices is not a vertex).
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        match self {
+            TriangleSet::Soup(t) => t[i],
+            TriangleSet::Mesh(m) => m.triangle(i),
+        }
+    }
+
     /// Calls `f` with each triangle's vertices, in order.
     pub fn for_each(&self, mut f: impl FnMut([Vec3; 3])) {
-        match self {
-            TriangleSet::Soup(t) => t.iter().for_each(|&t| f(t)),
-            TriangleSet::Mesh(m) => (0..m.len()).for_each(|i| f(m.triangle(i))),
-        }
+        (0..self.len()).for_each(|i| f(self.triangle(i)));
     }
 }
 

@@ -133,23 +133,20 @@ pub struct TileFilm {
 impl TileFilm {
     /// An empty tile.
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
-        TileFilm {
-            film: Film::new(w, h),
-            aovs: AovFilm::new(w, h),
-            x0,
-            y0,
-            active: Vec::new(),
-            converged_passes: Vec::new(),
-            seed_salt: 0,
-        }
+        Self::with_aovs(x0, y0, Film::new(w, h), AovFilm::new(w, h))
     }
 
     /// An empty tile whose AOVs are not kept ([`AovFilm::without_sums`]): the beauty alone,
     /// 52 of a tile's 108 bytes a pixel (an adaptive render's pilot).
     pub fn without_aovs(x0: u32, y0: u32, w: u32, h: u32) -> Self {
+        Self::with_aovs(x0, y0, Film::new(w, h), AovFilm::without_sums(w, h))
+    }
+
+    /// A tile at `(x0, y0)` of `film` and `aovs`, every pixel sampling.
+    fn with_aovs(x0: u32, y0: u32, film: Film, aovs: AovFilm) -> Self {
         TileFilm {
-            film: Film::new(w, h),
-            aovs: AovFilm::without_sums(w, h),
+            film,
+            aovs,
             x0,
             y0,
             active: Vec::new(),

@@ -32,6 +32,7 @@
 //! as a format error naming the file.
 
 use crate::grid_file::{format, GridFileError, MAX_VOXELS};
+use risotto_engine::memory::release_freed_pages;
 use risotto_systems::grid::{BrickBuilder, DensityGrid};
 use std::fs::File;
 use std::io::BufReader;
@@ -164,7 +165,9 @@ fn visit_all(grid: &vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFileE
 /// node's tiles, then its children in z, y, x order), taking the tree apart on the way:
 /// each child of a root node (an internal node of 128^3 voxels with its leaves, 8 MB of a
 /// dense tree) is dropped once visited and its pages handed back to the system
-/// ([`release_freed_pages`], every 4 MB of leaves). The grid being filled then grows while
+/// ([`release_freed_pages`], every 4 MB of leaves: a tree's leaves are 2 KB allocations,
+/// below glibc's mmap threshold, which stay resident until trimmed and which the grid being
+/// filled, one mapping, does not reuse). The grid being filled then grows while
 /// the tree shrinks, instead of the two being whole together at the load's peak (issue 36:
 /// a dense 512^3 VDB peaked at twice its grid).
 ///
@@ -254,15 +257,6 @@ fn consume_tree(grid: vdb_rs::Grid<f32>, visit: Visit<'_>) -> Result<(), GridFil
     }
     release_freed_pages();
     Ok(())
-}
-
-/// Hands the pages of the freed parts back to the system
-/// ([`risotto_engine::memory::release_freed_pages`]). A tree's leaves are 2 KB allocations,
-/// below glibc's mmap threshold: freed, they stay resident in the heap until trimmed, and
-/// the grid being filled does not reuse them (its own allocation is one mapping). Elsewhere
-/// than glibc nothing is done: the peak is then the tree and the grid together, as before.
-fn release_freed_pages() {
-    risotto_engine::memory::release_freed_pages();
 }
 
 /// A VDB is held block-sparse when at most this fraction of its box's `8^3` bricks hold
