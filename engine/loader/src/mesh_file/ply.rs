@@ -7,7 +7,8 @@
 //! is read one at a time into a small typed record (`VertexRecord`, `FaceRecord`;
 //! others are read and dropped) and appended to the mesh at once. Neither the file's bytes
 //! nor a table of parsed elements (`ply-rs-bw`'s default element is a map of named
-//! properties, several hundred bytes a vertex) is ever held whole.
+//! properties, several hundred bytes a vertex) is ever held whole. Binary bodies are decoded
+//! by the `binary` module from the header's layout, ascii ones by `ply-rs-bw`.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Seek};
@@ -21,6 +22,9 @@ use ply_rs_bw::ply::{
 };
 
 use super::{check_normals, MeshData};
+
+mod binary;
+use binary::{BinaryDecoder, ByteOrder, Element, ElementLayout};
 
 /// The texture-coordinate property names, in the order they are looked for.
 const UV_NAMES: [(&str, &str); 3] = [("u", "v"), ("s", "t"), ("texture_u", "texture_v")];
@@ -87,6 +91,11 @@ pub fn load_ply(path: &Path) -> Result<MeshData, String> {
         reader,
         encoding: header.encoding,
         line: String::new(),
+        binary: match header.encoding {
+            Encoding::Ascii => None,
+            Encoding::BinaryLittleEndian => Some(BinaryDecoder::new(ByteOrder::Little)),
+            Encoding::BinaryBigEndian => Some(BinaryDecoder::new(ByteOrder::Big)),
+        },
     };
     for (name, def) in &header.elements {
         let what = what.as_str();
@@ -94,68 +103,61 @@ pub fn load_ply(path: &Path) -> Result<MeshData, String> {
         let cannot = |i: usize| {
             move |e: String| format!("{what}: cannot read `{name}` element {i} (of {count}): {e}")
         };
+        let layout = ElementLayout::of(def, (name == "face").then_some(index_name));
+        let cannot = |i: usize, e: String| cannot(i)(e);
         match name.as_str() {
-            "vertex" => {
-                let parser = Parser::<VertexRecord>::new();
-                for i in 0..def.count {
-                    let v = elements.next(&parser, def).map_err(cannot(i))?;
-                    let p = DVec3::new(v.x, v.y, v.z);
-                    if !p.is_finite() {
-                        return Err(format!("{what}: vertex {i} is not finite ({p})"));
-                    }
-                    mesh.positions.push(p);
-                    if has_normals {
-                        mesh.normals.push(DVec3::new(v.nx, v.ny, v.nz));
-                    }
-                    if let Some(k) = uv_pair {
-                        let t = Vec2::new(v.uv[2 * k] as f32, v.uv[2 * k + 1] as f32);
-                        if !t.is_finite() {
-                            return Err(format!(
-                                "{what}: vertex {i} has a texture coordinate that is not finite ({t})"
-                            ));
-                        }
-                        mesh.uvs.push(t);
-                    }
+            "vertex" => elements.for_each(def, &layout, cannot, |i, v| {
+                let [x, y, z, nx, ny, nz] = [0, 1, 2, 3, 4, 5].map(|k| v.values[k]);
+                let p = DVec3::new(x, y, z);
+                if !p.is_finite() {
+                    return Err(format!("{what}: vertex {i} is not finite ({p})"));
                 }
-            }
-            "face" => {
-                let parser = Parser::<FaceRecord>::new();
-                let mut indices = Vec::new();
-                for f in 0..def.count {
-                    let face = elements.next(&parser, def).map_err(cannot(f))?;
-                    if !face.indices_into(index_name, &mut indices) {
+                mesh.positions.push(p);
+                if has_normals {
+                    mesh.normals.push(DVec3::new(nx, ny, nz));
+                }
+                if let Some(k) = uv_pair {
+                    let uv = &v.values[6 + 2 * k..];
+                    let t = Vec2::new(uv[0] as f32, uv[1] as f32);
+                    if !t.is_finite() {
                         return Err(format!(
-                            "{what}: face {f}: `{index_name}` is not an integer list"
+                            "{what}: vertex {i} has a texture coordinate that is not finite ({t})"
                         ));
                     }
-                    if indices.len() < 3 {
-                        return Err(format!(
-                            "{what}: face {f} has {} vertices (a face needs at least 3)",
-                            indices.len()
-                        ));
-                    }
-                    let n = n_vertices as i64;
-                    if let Some(&bad) = indices.iter().find(|&&i| i < 0 || i >= n) {
-                        return Err(format!(
-                            "{what}: face {f} refers to vertex {bad} but the file has {n} (indices start at 0)"
-                        ));
-                    }
-                    // Fan triangulation: (0, k, k + 1), as tobj does for OBJ polygons.
-                    for k in 1..indices.len() - 1 {
-                        mesh.triangles.push([
-                            indices[0] as u32,
-                            indices[k] as u32,
-                            indices[k + 1] as u32,
-                        ]);
-                    }
+                    mesh.uvs.push(t);
                 }
-            }
-            _ => {
-                let parser = Parser::<IgnoredRecord>::new();
-                for i in 0..def.count {
-                    elements.next(&parser, def).map_err(cannot(i))?;
+                Ok(())
+            })?,
+            "face" => elements.for_each(def, &layout, cannot, |f, face| {
+                let indices = &face.indices;
+                if !face.integer_list {
+                    return Err(format!(
+                        "{what}: face {f}: `{index_name}` is not an integer list"
+                    ));
                 }
-            }
+                if indices.len() < 3 {
+                    return Err(format!(
+                        "{what}: face {f} has {} vertices (a face needs at least 3)",
+                        indices.len()
+                    ));
+                }
+                let n = n_vertices as i64;
+                if let Some(&bad) = indices.iter().find(|&&i| i < 0 || i >= n) {
+                    return Err(format!(
+                        "{what}: face {f} refers to vertex {bad} but the file has {n} (indices start at 0)"
+                    ));
+                }
+                // Fan triangulation: (0, k, k + 1), as tobj does for OBJ polygons.
+                for k in 1..indices.len() - 1 {
+                    mesh.triangles.push([
+                        indices[0] as u32,
+                        indices[k] as u32,
+                        indices[k + 1] as u32,
+                    ]);
+                }
+                Ok(())
+            })?,
+            _ => elements.for_each(def, &layout, cannot, |_, _| Ok(()))?,
         }
     }
     check_normals(&mesh.normals, &what)?;
@@ -171,10 +173,52 @@ struct ElementReader<R: BufRead> {
     encoding: Encoding,
     /// An ascii element's line.
     line: String,
+    /// The decoder of a binary body (`None` for ascii).
+    binary: Option<BinaryDecoder>,
 }
 
 impl<R: BufRead> ElementReader<R> {
-    /// The next element, as `def` declares it.
+    /// Reads the `def.count` elements of `def` (laid out as `layout`), handing each to `f`
+    /// with its number: decoded by [`BinaryDecoder`] from a binary body, parsed by
+    /// `ply-rs-bw` from an ascii one. A read error is `cannot(number, reason)`.
+    fn for_each(
+        &mut self,
+        def: &ElementDef,
+        layout: &ElementLayout,
+        cannot: impl Fn(usize, String) -> String,
+        mut f: impl FnMut(usize, &Element) -> Result<(), String>,
+    ) -> Result<(), String> {
+        if let Some(binary) = &mut self.binary {
+            let reader = self.reader.get_mut();
+            return binary.for_each(reader, layout, def.count, cannot, f);
+        }
+        let mut element = Element::new();
+        let index_name = INDEX_NAMES
+            .into_iter()
+            .find(|n| def.properties.contains_key(*n));
+        for i in 0..def.count {
+            match def.name.as_str() {
+                "vertex" => {
+                    let v = self.next(&Parser::<VertexRecord>::new(), def);
+                    element.values = v.map_err(|e| cannot(i, e))?.values;
+                }
+                "face" => {
+                    let face = self.next(&Parser::<FaceRecord>::new(), def);
+                    let face = face.map_err(|e| cannot(i, e))?;
+                    let name = index_name.unwrap_or_default();
+                    element.integer_list = face.indices_into(name, &mut element.indices);
+                }
+                _ => {
+                    let ignored = self.next(&Parser::<IgnoredRecord>::new(), def);
+                    ignored.map_err(|e| cannot(i, e))?;
+                }
+            }
+            f(i, &element)?;
+        }
+        Ok(())
+    }
+
+    /// The next element of an ascii body, as `def` declares it.
     fn next<E: PropertyAccess>(
         &mut self,
         parser: &Parser<E>,
@@ -200,47 +244,31 @@ impl<R: BufRead> ElementReader<R> {
 /// The properties of a `vertex` element the mesh uses; any scalar type, as `f64` (NaN where
 /// a property is absent: the callers check finiteness).
 struct VertexRecord {
-    x: f64,
-    y: f64,
-    z: f64,
-    nx: f64,
-    ny: f64,
-    nz: f64,
-    /// The texture coordinates under each of [`UV_NAMES`]' names, pair by pair.
-    uv: [f64; 6],
+    /// `x, y, z, nx, ny, nz`, then the texture coordinates under each of [`UV_NAMES`]'
+    /// names, pair by pair ([`vertex_slot`]).
+    values: [f64; 12],
+}
+
+/// The [`VertexRecord::values`] entry of vertex property `name`.
+fn vertex_slot(name: &str) -> Option<usize> {
+    let uv = UV_NAMES.iter().flat_map(|(u, v)| [*u, *v]);
+    ["x", "y", "z", "nx", "ny", "nz"]
+        .into_iter()
+        .chain(uv)
+        .position(|n| n == name)
 }
 
 impl PropertyAccess for VertexRecord {
     fn new() -> Self {
         VertexRecord {
-            x: f64::NAN,
-            y: f64::NAN,
-            z: f64::NAN,
-            nx: f64::NAN,
-            ny: f64::NAN,
-            nz: f64::NAN,
-            uv: [f64::NAN; 6],
+            values: [f64::NAN; 12],
         }
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        let value = scalar(&property);
-        let slot = match name {
-            "x" => &mut self.x,
-            "y" => &mut self.y,
-            "z" => &mut self.z,
-            "nx" => &mut self.nx,
-            "ny" => &mut self.ny,
-            "nz" => &mut self.nz,
-            _ => {
-                let names = UV_NAMES.iter().flat_map(|(u, v)| [*u, *v]);
-                match names.zip(self.uv.iter_mut()).find(|(n, _)| *n == name) {
-                    Some((_, slot)) => slot,
-                    None => return PropertyAccessResult::Ignored,
-                }
-            }
-        };
-        *slot = value;
+        if let Some(k) = vertex_slot(name) {
+            self.values[k] = scalar(&property);
+        }
         PropertyAccessResult::Ignored
     }
 }
@@ -396,7 +424,8 @@ fn scalar(p: &Property) -> f64 {
 mod tests {
     use super::*;
 
-    fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    /// Writes `bytes` to file `name` in a temporary directory of this process.
+    pub(super) fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
         let dir = std::env::temp_dir().join(format!("risotto-ply-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(name);
