@@ -420,6 +420,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     // An adaptive render ends early by design; only a signal interrupts it, and what it has
     // is written as a whole image (its pixels' sample counts differ: not a partial render).
     let mut denoised = None;
+    let output_start = std::time::Instant::now();
     let interrupted = match noise_target {
         Some(_) => interrupt::requested(),
         None => result.samples.end < range.end,
@@ -448,6 +449,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
             denoised.as_ref().unwrap_or(&result.beauty),
             args.exposure,
         )?;
+    }
+    // The files' time, without the denoiser's (its own `denoise_seconds`).
+    let denoise_seconds = result.stats.run.as_ref().and_then(|r| r.denoise_seconds);
+    if let Some(run) = &mut result.stats.run {
+        let seconds = output_start.elapsed().as_secs_f64() - denoise_seconds.unwrap_or(0.0);
+        run.output_seconds = Some(seconds.max(0.0));
     }
     if let Some(path) = &args.stats {
         result

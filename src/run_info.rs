@@ -27,6 +27,7 @@ pub(crate) fn run_info(
         build_seconds,
         render_seconds: result.stats.wall_seconds,
         denoise_seconds: None,
+        output_seconds: None,
         peak_resident_bytes: peak_resident_bytes(),
     }
 }

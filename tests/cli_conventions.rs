@@ -232,7 +232,12 @@ fn stats_say_which_build_image_threads_and_where_the_time_went() {
         (Some(4), Some(1))
     );
     assert_eq!(run["samples"], serde_json::json!([1, 3]));
-    for key in ["load_seconds", "build_seconds", "render_seconds"] {
+    for key in [
+        "load_seconds",
+        "build_seconds",
+        "render_seconds",
+        "output_seconds",
+    ] {
         let t = run[key].as_f64().unwrap_or(-1.0);
         assert!((0.0..60.0).contains(&t), "{key}: {t}");
     }

@@ -562,6 +562,11 @@ pub struct RunInfo {
     /// Denoising the image (`render --denoise`), in seconds; absent without it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub denoise_seconds: Option<f64>,
+    /// Writing the image files (the EXR, and the PNG preview unless `--no-preview`), in
+    /// seconds; absent until they are written (and in the stats of a render that wrote
+    /// none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_seconds: Option<f64>,
     /// Peak resident memory of the process in bytes (Linux `VmHWM`), when the platform
     /// reports it.
     pub peak_resident_bytes: Option<u64>,

@@ -282,6 +282,9 @@ impl fmt::Display for RenderStats {
             if let Some(s) = run.denoise_seconds {
                 write!(f, ", denoise {s:.3} s")?;
             }
+            if let Some(s) = run.output_seconds {
+                write!(f, ", output {s:.3} s")?;
+            }
             if let Some(bytes) = run.peak_resident_bytes {
                 write!(
                     f,
