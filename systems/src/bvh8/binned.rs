@@ -209,8 +209,8 @@ struct Ctx<'a> {
 
 /// The centroid-to-bin map of one set: bin `((c - min) * k)` per axis, on centroids scaled
 /// by the cost scale so the extents are finite, `bins` bins ([`BINS`], fewer for a small
-/// set). Binning and partitioning call the same function, so a primitive lands on the side
-/// its bin was counted on.
+/// set). Binning and partitioning compute the same operations (all axes, and the one axis
+/// split), so a primitive lands on the side its bin was counted on.
 #[derive(Clone, Copy)]
 struct Binning {
     min: Vec3A,
@@ -237,6 +237,14 @@ impl Binning {
             scale,
             bins,
         }
+    }
+
+    /// The bin of centroid `c` along `axis` alone: the same operations as that lane of
+    /// [`Self::bins`], so the same bin.
+    #[inline(always)]
+    fn bin(&self, c: Vec3A, axis: usize) -> usize {
+        let last = (self.bins - 1) as f32;
+        ((c[axis] * self.scale - self.min[axis]) * self.k[axis]).min(last) as usize
     }
 
     #[inline(always)]
@@ -272,7 +280,7 @@ fn split(refs: &mut Refs, set: &Set, ctx: &Ctx, sah: bool) -> (Set, Set) {
         while i < j {
             let (p, prim) = (part.boxes[i], part.prims[i]);
             let c = p.centroid();
-            let side = if binning.bins(c)[axis] < at {
+            let side = if binning.bin(c, axis) < at {
                 i += 1;
                 &mut l
             } else {
@@ -649,5 +657,60 @@ mod tests {
         assert!(whole.iter().flatten().all(|b| b.tris + b.others < n as u32));
         assert_eq!(bits(&whole), bits(&forward));
         assert_eq!(bits(&whole), bits(&backward));
+    }
+
+    /// The partition's one-axis bin is the binning's bin on that axis, for centroids inside,
+    /// beyond and below the set's, huge, tiny, signed zero and NaN: a primitive goes to the
+    /// side its bin was counted on.
+    #[test]
+    fn one_axis_bins_are_the_binnings() {
+        let mut rng = Rng(9);
+        let set = Set {
+            start: 0,
+            end: 1000,
+            bounds: Bounds::EMPTY,
+            centroids: Bounds {
+                min: Vec3A::new(-3.0, 0.0, 1e-30),
+                max: Vec3A::new(5.0, 0.0, 2e-30),
+            },
+            tris: 1000,
+        };
+        let special = [
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            f32::MAX,
+            1e-30,
+            2e-30,
+            -3.0,
+            5.0,
+        ];
+        for scale in [1.0, 0.5, 0.3, 1e-20] {
+            let binning = Binning::new(&set, scale);
+            let mut f = || rng.f32() * 12.0 - 5.0;
+            // And the floats at and beside every bin edge of x, where a rounding decides.
+            let edges = (0..=binning.bins).flat_map(|b| {
+                let v = (binning.min.x + b as f32 / binning.k.x) / scale;
+                [v.next_down(), v, v.next_up()].map(|x| Vec3A::new(x, 0.0, 0.0))
+            });
+            let centroids = (0..10_000)
+                .map(|_| Vec3A::new(f(), f(), f() * 1e-30))
+                .chain(special.iter().map(|&v| Vec3A::splat(v)))
+                .chain(edges);
+            let mut spread = [0usize; BINS];
+            for c in centroids {
+                let all = binning.bins(c);
+                for axis in 0..3 {
+                    assert_eq!(binning.bin(c, axis), all[axis], "{c} axis {axis}");
+                }
+                spread[all[0]] += 1;
+            }
+            assert!(
+                spread.iter().all(|&n| n > 0),
+                "every bin reached: {spread:?}"
+            );
+        }
     }
 }
