@@ -406,8 +406,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         );
     }
     result.stats.render_command = Some(replay_base_command(&args));
-    // Without --threads the render ran on rayon's global pool.
-    let threads = args.threads.unwrap_or_else(rayon::current_num_threads);
+    // The global pool's threads: `--threads` sized it (`check_threads`), and the render's
+    // own pool has as many.
+    let threads = rayon::current_num_threads();
     result.stats.run = Some(run_info::run_info(
         &compiled,
         &result,
@@ -608,10 +609,18 @@ pub(crate) fn check_exposure(stops: f32) -> Result<()> {
 }
 
 /// `--threads`, checked by the engine's rule before the scene is loaded so a typo costs
-/// nothing.
-fn check_threads(threads: Option<usize>) -> Result<()> {
+/// nothing, and made the size of rayon's global pool: loading and compiling (the parallel
+/// OBJ read, the BVH build's bins and subtrees) run there, and a render limited to N
+/// threads uses N in every phase, as pbrt-v4's `--nthreads` and Mitsuba's `-t` do. Before
+/// the scene is loaded, so nothing has started the global pool yet.
+pub(crate) fn check_threads(threads: Option<usize>) -> Result<()> {
     let Some(n) = threads else { return Ok(()) };
-    risotto::engine::render::check_threads(n).map_err(|why| anyhow::anyhow!("--threads {n}: {why}"))
+    risotto::engine::render::check_threads(n)
+        .map_err(|why| anyhow::anyhow!("--threads {n}: {why}"))?;
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| anyhow::anyhow!("--threads {n}: cannot start the thread pool: {e}"))
 }
 
 fn compare_command(test: &Path, reference: &Path) -> Result<()> {
