@@ -125,6 +125,8 @@ fn parse_noise_targets(s: &str) -> Result<Vec<f64>> {
 }
 
 pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
+    // First: it sizes rayon's global pool, which loading and compiling start.
+    check_threads(args.threads)?;
     let registry = MaterialRegistry::with_builtins();
     let input = SceneInput::read(&args.scene, &args.defines, None)?;
     let mut compiled = compile_scene(input.load(&registry)?)?;
@@ -211,7 +213,6 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
             }
         }
     };
-    check_threads(args.threads)?;
     anyhow::ensure!(
         args.batch_size > 0,
         "--batch-size 0: need at least one path per batch"

@@ -253,6 +253,63 @@ fn stats_say_which_build_image_threads_and_where_the_time_went() {
     }
 }
 
+/// `--threads 1` holds for the whole run, loading and compiling too (they run on rayon's
+/// global pool, which `--threads` sizes before the scene is read): on a mesh large enough
+/// for the parallel BVH build (a 20,000-triangle grid), `render` reports one thread, and
+/// `converge`, which compiles the scene before it reads its other options, starts (sizing
+/// the pool after the build had started it failed).
+#[test]
+fn threads_bound_loading_and_compiling() {
+    let (dir, scene) = setup("threads");
+    let n = 100;
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            obj += &format!(
+                "v {} 0 {}\n",
+                i as f32 / n as f32 - 0.5,
+                j as f32 / n as f32 - 0.5
+            );
+        }
+    }
+    let v = |i: usize, j: usize| j * (n + 1) + i + 1;
+    for j in 0..n {
+        for i in 0..n {
+            obj += &format!("f {} {} {}\n", v(i, j), v(i, j + 1), v(i + 1, j));
+            obj += &format!("f {} {} {}\n", v(i + 1, j), v(i, j + 1), v(i + 1, j + 1));
+        }
+    }
+    std::fs::write(dir.join("grid.obj"), obj).unwrap();
+    let mut text = std::fs::read_to_string(&scene).unwrap();
+    text += "\n[[shapes]]\nname = \"grid\"\ntype = \"mesh\"\npath = \"grid.obj\"\n\
+             material = \"floor\"\ntransform = [{ translate = [0, 0.5, 0] }]\n";
+    std::fs::write(&scene, text).unwrap();
+    let (out, stats) = (dir.join("t.exr"), dir.join("t.json"));
+    ok(
+        "render -t 1",
+        render(&scene, &out, &["--stats", stats.to_str().unwrap()]),
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(v["run"]["threads"].as_u64(), Some(1));
+    let converge_dir = dir.join("converge");
+    let args = [
+        "converge",
+        scene.to_str().unwrap(),
+        "--techniques",
+        "lighting=mis",
+        "--spp",
+        "1",
+        "--reference-spp",
+        "2",
+        "--threads",
+        "1",
+        "--out",
+        converge_dir.to_str().unwrap(),
+    ];
+    ok("converge --threads 1", risotto(&args));
+}
+
 /// `convert` refuses what it cannot convert, with the reason: a TOML scene (nothing to
 /// convert) and an output that would overwrite its input.
 #[test]
