@@ -61,7 +61,10 @@ pub fn check_threads(threads: usize) -> Result<(), String> {
 /// Options of one render that are not part of the scene.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
-    /// Worker threads, 1 to [`MAX_THREADS`]. Defaults to `None`: all cores.
+    /// Worker threads of the render, 1 to [`MAX_THREADS`]. Defaults to `None`: all cores.
+    /// Loading and compiling a scene run on the calling thread's rayon pool (the global one
+    /// unless inside `rayon::ThreadPool::install`), which this does not size: the `risotto`
+    /// driver sizes the global pool to `--threads` before it reads the scene.
     pub threads: Option<usize>,
     /// Paths per batch. Defaults to 4096.
     pub batch_size: usize,
