@@ -2,12 +2,13 @@
 //!
 //! `ply-rs-bw` reads an element by looking each property up by name and handing it over as
 //! an enum (`Property`), with a list allocated per element; on a 2-million-triangle mesh that
-//! was most of the load (0.45 s of 0.58 s, issue 36's "serial stretches"). Here the header is
+//! was most of the load (issue 36's "serial stretches": 0.47-0.56 s before this decoder,
+//! 0.32-0.42 s with it, `benches/README.md`). Here the header is
 //! still `ply-rs-bw`'s, but each property's place in the element, its type and the record
 //! field it fills are worked out once ([`ElementLayout`]); an element is then read from the
 //! buffered file's bytes in place, with no lookup and no allocation. The values are the ones
 //! the generic path makes (every scalar type widened to `f64` exactly, lists to `i64`), so a
-//! file loads to the same mesh either way (`tests` below compares them on every type).
+//! file loads to the same mesh either way (the `tests` module compares them on every type).
 
 use std::io::{BufRead, ErrorKind};
 
@@ -25,7 +26,8 @@ pub(super) enum ByteOrder {
 /// Where a property's value goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Slot {
-    /// [`super::VertexRecord`]'s `values` entry (x, y, z, nx, ny, nz, then the texture names' pairs).
+    /// [`super::VertexRecord`]'s `values` entry (x, y, z, nx, ny, nz, then the texture
+    /// names' pairs).
     Vertex(usize),
     /// The face's index list (under the name the loader chose).
     Indices,
