@@ -63,7 +63,8 @@ pub(crate) struct ConvergeArgs {
     /// Output directory.
     #[arg(long, default_value = "converge")]
     out: PathBuf,
-    /// Worker threads (defaults to all cores).
+    /// Worker threads (defaults to all cores), for every phase: reading the scene, building it
+    /// and rendering
     #[arg(long)]
     threads: Option<usize>,
     /// Paths per batch.

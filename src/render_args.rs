@@ -31,7 +31,8 @@ pub(crate) struct RenderArgs {
     /// Write render statistics as JSON to this file.
     #[arg(long)]
     pub(crate) stats: Option<PathBuf>,
-    /// Worker threads (defaults to all cores).
+    /// Worker threads (defaults to all cores), for every phase: reading the scene, building it
+    /// and rendering
     #[arg(short = 't', long)]
     pub(crate) threads: Option<usize>,
     /// Sampler seed (overrides the scene).
