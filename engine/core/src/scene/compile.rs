@@ -92,36 +92,30 @@ impl Scene {
                 ShapeGeometry::Triangles(_) | ShapeGeometry::Mesh(_) => {
                     let first = triangles.len() as u32;
                     let count = geom.num_triangles();
-                    let attrs = world.remove_one::<VertexAttributes>(entity).ok();
+                    let mut attrs = world.remove_one::<VertexAttributes>(entity).ok();
                     tri_shape_runs.push((i as u32, count));
                     // The first shape's vectors are moved, not copied (issue 36, peak memory).
-                    match geom {
+                    let lent = match geom {
                         ShapeGeometry::Mesh(m) => {
-                            let mut attrs = attrs;
                             let lends = attrs.as_ref().is_some_and(|a| a.corners == m.triangles);
                             if let (Some(a), true) = (&mut attrs, lends) {
                                 a.corners = Vec::new();
                             }
                             let base = triangles.push_mesh(m);
-                            if let Some(attributes) = attrs {
-                                shape_attributes.push(ShapeAttributes {
-                                    first,
-                                    attributes,
-                                    lent: lends.then_some(LentCorners { count, base }),
-                                });
-                            }
+                            lends.then_some(LentCorners { count, base })
                         }
                         ShapeGeometry::Triangles(t) => {
                             triangles.push_soup(t);
-                            if let Some(attributes) = attrs {
-                                shape_attributes.push(ShapeAttributes {
-                                    first,
-                                    attributes,
-                                    lent: None,
-                                });
-                            }
+                            None
                         }
                         ShapeGeometry::Sphere(_) => unreachable!("matched above"),
+                    };
+                    if let Some(attributes) = attrs {
+                        shape_attributes.push(ShapeAttributes {
+                            first,
+                            attributes,
+                            lent,
+                        });
                     }
                 }
             }

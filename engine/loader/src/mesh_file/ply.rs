@@ -100,11 +100,10 @@ pub fn load_ply(path: &Path) -> Result<MeshData, String> {
     for (name, def) in &header.elements {
         let what = what.as_str();
         let count = def.count;
-        let cannot = |i: usize| {
-            move |e: String| format!("{what}: cannot read `{name}` element {i} (of {count}): {e}")
+        let cannot = |i: usize, e: String| {
+            format!("{what}: cannot read `{name}` element {i} (of {count}): {e}")
         };
         let layout = ElementLayout::of(def, (name == "face").then_some(index_name));
-        let cannot = |i: usize, e: String| cannot(i)(e);
         match name.as_str() {
             "vertex" => elements.for_each(def, &layout, cannot, |i, v| {
                 let [x, y, z, nx, ny, nz] = [0, 1, 2, 3, 4, 5].map(|k| v.values[k]);
@@ -193,9 +192,6 @@ impl<R: BufRead> ElementReader<R> {
             return binary.for_each(reader, layout, def.count, cannot, f);
         }
         let mut element = Element::new();
-        let index_name = INDEX_NAMES
-            .into_iter()
-            .find(|n| def.properties.contains_key(*n));
         for i in 0..def.count {
             match def.name.as_str() {
                 "vertex" => {
@@ -205,7 +201,7 @@ impl<R: BufRead> ElementReader<R> {
                 "face" => {
                     let face = self.next(&Parser::<FaceRecord>::new(), def);
                     let face = face.map_err(|e| cannot(i, e))?;
-                    let name = index_name.unwrap_or_default();
+                    let name = layout.index_name.unwrap_or_default();
                     element.integer_list = face.indices_into(name, &mut element.indices);
                 }
                 _ => {

@@ -54,6 +54,8 @@ struct VertexScalar {
 
 /// The properties of one element in file order, with where each goes.
 pub(super) struct ElementLayout {
+    /// The face list the mesh takes (the `face` element's; `None` elsewhere).
+    pub(super) index_name: Option<&'static str>,
     fields: Vec<Field>,
     /// The element's size in bytes when it has no list.
     fixed: Option<usize>,
@@ -66,53 +68,41 @@ pub(super) struct ElementLayout {
 impl ElementLayout {
     /// The layout of `def`; `index_name` is the face list the mesh takes (for the `face`
     /// element; `None` elsewhere).
-    pub(super) fn of(def: &ElementDef, index_name: Option<&str>) -> Self {
+    pub(super) fn of(def: &ElementDef, index_name: Option<&'static str>) -> Self {
         let vertex = def.name == "vertex";
-        let fields: Vec<Field> = def
-            .properties
-            .values()
-            .map(|p| {
-                let slot = if vertex {
-                    vertex_slot(&p.name).map_or(Slot::Ignored, Slot::Vertex)
-                } else if Some(p.name.as_str()) == index_name {
-                    Slot::Indices
-                } else {
-                    Slot::Ignored
-                };
-                Field {
-                    data: p.data_type.clone(),
-                    slot,
+        let mut layout = ElementLayout {
+            index_name,
+            fields: Vec::with_capacity(def.properties.len()),
+            fixed: Some(0),
+            vertex_scalars: Vec::new(),
+            scalar_in_index_slot: false,
+        };
+        for p in def.properties.values() {
+            let slot = if vertex {
+                vertex_slot(&p.name).map_or(Slot::Ignored, Slot::Vertex)
+            } else if Some(p.name.as_str()) == index_name {
+                Slot::Indices
+            } else {
+                Slot::Ignored
+            };
+            match (&p.data_type, layout.fixed) {
+                (PropertyType::Scalar(s), Some(offset)) => {
+                    if let Slot::Vertex(slot) = slot {
+                        let (data, offset) = (s.clone(), offset);
+                        layout
+                            .vertex_scalars
+                            .push(VertexScalar { data, offset, slot });
+                    }
+                    layout.scalar_in_index_slot |= slot == Slot::Indices;
+                    layout.fixed = Some(offset + scalar_size(s));
                 }
-            })
-            .collect();
-        let fixed = fields
-            .iter()
-            .map(|f| match &f.data {
-                PropertyType::Scalar(s) => Some(scalar_size(s)),
-                PropertyType::List(..) => None,
-            })
-            .sum();
-        let mut vertex_scalars = Vec::new();
-        let mut offset = 0;
-        for f in &fields {
-            if let PropertyType::Scalar(s) = &f.data {
-                if let Slot::Vertex(slot) = f.slot {
-                    vertex_scalars.push(VertexScalar {
-                        data: s.clone(),
-                        offset,
-                        slot,
-                    });
-                }
-                offset += scalar_size(s);
+                (PropertyType::List(..), _) => layout.fixed = None,
+                (PropertyType::Scalar(_), None) => {}
             }
+            let data = p.data_type.clone();
+            layout.fields.push(Field { data, slot });
         }
-        let scalar_in_index_slot = fields.iter().any(|f| f.slot == Slot::Indices);
-        ElementLayout {
-            fields,
-            fixed,
-            vertex_scalars,
-            scalar_in_index_slot,
-        }
+        layout
     }
 }
 
