@@ -1,12 +1,14 @@
 //! Criterion benches of the systems that are not benched elsewhere: camera ray generation,
 //! partition and splat (the tile film and the light tracer's shared `SplatFilm`), the
-//! bidirectional integrators' camera connection and hash grid (light sampling is in
+//! bidirectional integrators' camera connection and hash grid, adaptive sampling's error
+//! estimates over a 1920x1080 film (light sampling is in
 //! `benches/path.rs`, with the other per-vertex
 //! systems). Realistic batch size (4096 items), black_box on
 //! inputs and outputs, throughput in elements.
 
 use criterion::{black_box, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Vec2, Vec3};
+use risotto::systems::adaptive::{pooled_relative_error, windowed_relative_error, Neighbourhood};
 use risotto::systems::camera::{generate_camera_rays, Camera, Projection};
 use risotto::systems::film::{splat, Film, SplatFilm};
 use risotto::systems::hash_grid::HashGrid;
@@ -200,6 +202,56 @@ fn bidirectional(c: &mut Criterion) {
     g.finish();
 }
 
+/// Adaptive sampling's per-pass error estimates over a 1920x1080 film: the window rule's
+/// 3 x 3 worst, and the unbiased rule's pooled estimates (its pilot's 9 x 9 square, its
+/// preceding pixels at radius 8). Throughput in pixels.
+fn adaptive(c: &mut Criterion) {
+    let (w, h) = (1920usize, 1080usize);
+    let value: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| [0.2 + (pixel_seed(1, i as u32) % 1000) as f32 * 1e-3; 3])
+        .collect();
+    let variance: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| [(pixel_seed(2, i as u32) % 1000) as f32 * 1e-4; 3])
+        .collect();
+    let mut error = vec![0.0f32; w * h];
+    let mut g = c.benchmark_group("adaptive");
+    g.throughput(Throughput::Elements((w * h) as u64));
+    g.sample_size(10);
+    g.bench_function("windowed_3x3", |b| {
+        b.iter(|| {
+            windowed_relative_error(
+                w,
+                h,
+                black_box(&value),
+                black_box(&variance),
+                [0.01; 3],
+                &mut error,
+            );
+            black_box(&error);
+        })
+    });
+    for (name, neighbourhood) in [
+        ("pooled_square_r4", Neighbourhood::Square(4)),
+        ("pooled_preceding_r8", Neighbourhood::Preceding(8)),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                pooled_relative_error(
+                    w,
+                    h,
+                    black_box(&value),
+                    black_box(&variance),
+                    neighbourhood,
+                    [0.01; 3],
+                    &mut error,
+                );
+                black_box(&error);
+            })
+        });
+    }
+    g.finish();
+}
+
 // criterion_group! expands to an undocumented `pub fn`; a private module keeps it out of the
 // `missing_docs` lint without an allow attribute.
 mod group {
@@ -208,7 +260,8 @@ mod group {
         super::camera,
         super::partition,
         super::splat_bench,
-        super::bidirectional
+        super::bidirectional,
+        super::adaptive
     );
 }
 criterion_main!(group::benches);

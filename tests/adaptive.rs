@@ -8,8 +8,9 @@
 //! - the pixels it stops are at the target: their measured relative error, RMS over them,
 //!   is within 1.5 times the target;
 //! - the stopping rule's bias stays below 2 % (it is measurable here: see the test);
-//! - the unbiased rule's mean agrees with the reference within noise, and it too stops
-//!   pixels at the target.
+//! - the unbiased rule's mean agrees with the reference within noise, it too stops pixels
+//!   at the target, and its MSE is about uniform sampling's at equal samples (no unbiased
+//!   rule can do much better here: README, and `examples/adaptive_bound.rs`).
 
 use risotto::engine::render::{render, NoiseTarget, RenderOptions, RenderOutput, StoppingRule};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
@@ -169,10 +170,13 @@ fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
 
 /// The unbiased rule ([`StoppingRule::Unbiased`]) on the same scene: its image mean agrees
 /// with the reference's within three standard errors (of both), where the window rule's is
-/// 5.7 standard errors low; its samples still go unevenly, and the pixels it stops are at
-/// the target. Its MSE is not asserted: at equal samples it is 0.95-2.1x uniform
-/// sampling's (README: a pixel that draws a rare bright sample the estimates did not
-/// foresee keeps it at its count).
+/// 5.7 standard errors low; its samples still go unevenly, the pixels it stops are at the
+/// target, and its MSE at equal samples is at most 1.25x uniform sampling's. Measured here
+/// 0.80x; over ten seeds at target 0.1, 1.01x, where a rule that knew every pixel's
+/// variance would reach 0.90x (`examples/adaptive_bound.rs`). The rule before its
+/// estimates were pooled had 1.45x here (1.8x over ten seeds): a wall pixel's own few
+/// samples, and its 3 x 3 neighbours', mostly miss the rare caustic paths that make its
+/// variance.
 #[test]
 fn the_unbiased_rule_stops_at_the_target_with_an_unbiased_mean() {
     let target = NoiseTarget {
@@ -183,17 +187,24 @@ fn the_unbiased_rule_stops_at_the_target_with_an_unbiased_mean() {
     let reference = reference();
     let (adaptive, seconds) = render_with(2048, Some(target));
     let summary = adaptive.stats.adaptive.clone().unwrap();
+    let equal_spp = summary.spp_mean.round() as u32;
+    let (uniform, uniform_seconds) = render_with(equal_spp, None);
+    let (mse_a, mse_u) = (mse(&adaptive, reference), mse(&uniform, reference));
     println!(
-        "unbiased rule: {summary:?}, {seconds:.2} s, MSE {:.3e}",
-        mse(&adaptive, reference)
+        "unbiased rule: {summary:?}, {seconds:.2} s, MSE {mse_a:.3e}; uniform at {equal_spp} \
+         spp: {uniform_seconds:.2} s, MSE {mse_u:.3e}"
     );
     assert_eq!(summary.pilot_spp, 16, "{summary:?}");
     assert!(
-        summary.spp_min == 32 && summary.spp_max > 16 * 32,
+        summary.spp_min >= 32 && summary.spp_max >= 8 * summary.spp_min,
         "{summary:?}"
     );
-    // Fewer stop than under the window rule (39 % against 55 %): the pilot's estimate at
-    // the pixels' counts is more cautious than their own.
+    assert!(
+        mse_a < 1.25 * mse_u,
+        "unbiased rule's MSE {mse_a:e} vs uniform {mse_u:e}"
+    );
+    // Fewer stop than under the window rule: the pooled estimates are more cautious than a
+    // pixel's own.
     let achieved = achieved_error(&adaptive, reference, 2048, target, 1.0 / 3.0);
     let (ma, mr) = (image_mean(&adaptive), image_mean(reference));
     let sigma = image_mean_sigma(&adaptive).hypot(image_mean_sigma(reference));

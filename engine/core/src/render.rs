@@ -137,14 +137,15 @@ pub enum StoppingRule {
     /// bright sample samples on until the sample is averaged down.
     #[default]
     Window,
-    /// The worst of two estimates that never read the pixel's own samples: a pilot of
-    /// `min_spp` independently scrambled samples of every pixel, rendered first and
-    /// discarded (its 3 x 3 window's per-sample error at the pixel's count), and the
-    /// image's pixels before it in raster order
-    /// ([`risotto_systems::adaptive::preceding_relative_error`]). A pixel's sample count is
-    /// then independent of its samples, and its mean unbiased. Costs the pilot (`min_spp`
-    /// more samples a pixel) and, where a pixel draws a rare bright sample the estimates
-    /// did not foresee, keeps it at the pixel's count.
+    /// The worst of two estimates that never read the pixel's own samples, each a
+    /// per-sample error pooled over a neighbourhood
+    /// ([`risotto_systems::adaptive::pooled_relative_error`]) and taken at the pixel's
+    /// count: a pilot of `min_spp` independently scrambled samples of every pixel,
+    /// rendered first and discarded (its 9 x 9 pixels around the pixel), and the image's
+    /// pixels before it in raster order (the 8 rows above, 17 pixels each, and the 8 to
+    /// its left). A pixel's sample count is then independent of its samples, and its mean
+    /// unbiased. Costs the pilot (`min_spp` more samples a pixel) and, where a pixel draws
+    /// a rare bright sample the estimates did not foresee, keeps it at the pixel's count.
     Unbiased,
 }
 

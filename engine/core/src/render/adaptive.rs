@@ -74,31 +74,56 @@ fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> V
     error
 }
 
+/// How far [`StoppingRule::Unbiased`]'s pilot estimate pools: the 9 x 9 pilot pixels
+/// around a pixel, 81 x `min_spp` samples (1296 at the default 16).
+const PILOT_POOL_RADIUS: usize = 4;
+
+/// How far its estimate from the image's preceding pixels pools: the 8 rows above a pixel
+/// (17 pixels each) and the 8 pixels to its left, 144 pixels of the image's samples.
+const PRECEDING_POOL_RADIUS: usize = 8;
+
 /// The error [`StoppingRule::Unbiased`] estimates for each pixel of the window: the worst
-/// of the pilot's (its 3 x 3 window's per-sample relative error over the square root of the
-/// pixel's count in `image`) and that of the image's preceding pixels, both against the
-/// pilot's floor.
+/// of two per-sample relative errors, each pooled over a neighbourhood
+/// ([`risotto_systems::adaptive::pooled_relative_error`]), over the square root of the
+/// pixel's count in `image`: the pilot's around the pixel, and the image's pixels before
+/// it in raster order; both against the pilot's floor.
+///
+/// Pooled, not the worst of each pixel's own estimate: where a pixel's variance is rare
+/// bright paths, its own few samples mostly miss them; pooled over a neighbourhood they
+/// are seen at their rate. Both estimates are needed: the pilot sees the pixel's own
+/// region (the first rows of a noisy region have only smooth pixels before them), the
+/// preceding pixels hold many more samples than the pilot.
 fn unbiased_errors(image: &Estimates, pilot: &Estimates, window: Window) -> Vec<f32> {
-    use risotto_systems::adaptive::{error_floor, preceding_relative_error};
+    use risotto_systems::adaptive::{error_floor, pooled_relative_error, Neighbourhood};
     let (w, h) = (window.width() as usize, window.height() as usize);
     let floor = error_floor(&pilot.value, NOISE_FLOOR_FRACTION);
-    // The pilot's per-sample variances: every pilot pixel has its `min_spp` samples.
-    let per_sample: Vec<[f32; 3]> = (pilot.variance.iter().zip(&pilot.count))
-        .map(|(v, &n)| v.map(|v| v * n as f32))
-        .collect();
-    let mut per_sample_error = vec![0.0; w * h];
-    risotto_systems::adaptive::windowed_relative_error(
+    let per_sample = |e: &Estimates| -> Vec<[f32; 3]> {
+        (e.variance.iter().zip(&e.count))
+            .map(|(v, &n)| v.map(|v| v * n as f32))
+            .collect()
+    };
+    let mut pilot_error = vec![0.0; w * h];
+    pooled_relative_error(
         w,
         h,
         &pilot.value,
-        &per_sample,
+        &per_sample(pilot),
+        Neighbourhood::Square(PILOT_POOL_RADIUS),
         floor,
-        &mut per_sample_error,
+        &mut pilot_error,
     );
     let mut error = vec![0.0; w * h];
-    preceding_relative_error(w, h, &image.value, &image.variance, floor, &mut error);
-    for ((e, pilot_error), &n) in error.iter_mut().zip(&per_sample_error).zip(&image.count) {
-        *e = e.max(pilot_error / (n.max(1) as f32).sqrt());
+    pooled_relative_error(
+        w,
+        h,
+        &image.value,
+        &per_sample(image),
+        Neighbourhood::Preceding(PRECEDING_POOL_RADIUS),
+        floor,
+        &mut error,
+    );
+    for ((e, pilot_error), &n) in error.iter_mut().zip(&pilot_error).zip(&image.count) {
+        *e = e.max(*pilot_error) / (n.max(1) as f32).sqrt();
     }
     error
 }
@@ -185,7 +210,7 @@ mod tests {
         let image = uniform(0.0001, 64);
         let error = unbiased_errors(&image, &pilot, window);
         // The pilot's per-sample relative error is sqrt(0.0004 x 16) = 0.08, at 64 samples
-        // 0.01; the image's preceding pixels say sqrt(0.0001) = 0.01 too.
+        // 0.01; the image's preceding pixels say sqrt(0.0001 x 64) / 8 = 0.01 too.
         assert!(error.iter().all(|e| (e - 0.01).abs() < 1e-6), "{error:?}");
         // Whatever a pixel's own samples say (its mean, its variance), its error stays.
         let i = 5;
@@ -193,18 +218,22 @@ mod tests {
         own.value[i] = [0.01; 3];
         own.variance[i] = [9.0; 3];
         assert_eq!(unbiased_errors(&own, &pilot, window)[i], error[i]);
-        // A noisier pixel before it, or a noisier pilot around it, raises it.
+        // A noisier pixel before it raises it: pixel 5's preceding pixels are the first
+        // row's four and pixel 4, one of them now of per-sample variance 0.0025 x 64.
         let mut before = uniform(0.0001, 64);
         before.variance[i - 1] = [0.0025; 3];
-        assert!((unbiased_errors(&before, &pilot, window)[i] - 0.05).abs() < 1e-6);
+        let pooled = ((4.0 * 0.0064 + 0.16) / 5.0f32).sqrt() / 8.0;
+        assert!((unbiased_errors(&before, &pilot, window)[i] - pooled).abs() < 1e-6);
+        // So does a noisier pilot pixel anywhere in its 9 x 9 window (here the whole
+        // film): one of twelve at per-sample variance 0.0016 x 16.
         let mut noisy_pilot = uniform(0.0004, 16);
         noisy_pilot.variance[i + 1] = [0.0016; 3];
-        assert!((unbiased_errors(&image, &noisy_pilot, window)[i] - 0.02).abs() < 1e-6);
-        // The pilot's error falls with the pixel's own count: it is the image's error at
-        // that count.
+        let pooled = ((11.0 * 0.0064 + 0.0256) / 12.0f32).sqrt() / 8.0;
+        assert!((unbiased_errors(&image, &noisy_pilot, window)[i] - pooled).abs() < 1e-6);
+        // The error falls with the pixel's own count: it is the image's error at that
+        // count.
         let mut more = uniform(0.0001, 64);
         more.count[i] = 256;
-        more.variance = vec![[0.0; 3]; 12];
         assert!((unbiased_errors(&more, &pilot, window)[i] - 0.005).abs() < 1e-6);
     }
 }
