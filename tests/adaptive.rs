@@ -172,9 +172,9 @@ fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
 /// with the reference's within three standard errors (of both), where the window rule's is
 /// 5.7 standard errors low; its samples still go unevenly, the pixels it stops are at the
 /// target, and its MSE at equal samples is at most 1.25x uniform sampling's. Measured here
-/// 0.80x; over ten seeds at target 0.1, 1.01x, where a rule that knew every pixel's
+/// 0.80x; over ten seeds at target 0.1, 1.00x, where a rule that knew every pixel's
 /// variance would reach 0.90x (`examples/adaptive_bound.rs`). The rule before its
-/// estimates were pooled had 1.45x here (1.8x over ten seeds): a wall pixel's own few
+/// estimates were pooled had 1.45x here (1.9x over ten seeds): a wall pixel's own few
 /// samples, and its 3 x 3 neighbours', mostly miss the rare caustic paths that make its
 /// variance.
 #[test]

@@ -114,8 +114,8 @@ impl Neighbourhood {
 /// mostly those paths, and its own few dozen samples usually hold none of them, so its own
 /// estimate is low. A mean over a neighbourhood's hundreds of pixels pools enough samples
 /// to see them at their rate: on `tests/adaptive.rs`'s scene it took the unbiased stopping
-/// rule's MSE at equal samples from 2.5x and 1.8x uniform sampling's (targets 0.2 and 0.1,
-/// ten seeds) to 1.24x and 1.01x (README, "Renders that stop at a requested accuracy").
+/// rule's MSE at equal samples from 2.6x and 1.9x uniform sampling's (targets 0.2 and 0.1,
+/// ten seeds) to 1.28x and 1.00x (README, "Renders that stop at a requested accuracy").
 ///
 /// The sums are plain sums, never running sums that subtract what leaves the window: a
 /// firefly's variance (10^6 and more) subtracted back out of a running sum leaves rounding
