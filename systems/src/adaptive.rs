@@ -21,6 +21,8 @@
 //! [`pooled_relative_error`] over [`Neighbourhood::Preceding`] reads no pixel's own
 //! samples: the renderer's unbiased rule is built on it.
 
+use rayon::prelude::*;
+
 /// The relative error of each pixel of a `width` x `height` film, the worst over its 3 x 3
 /// window (clipped at the border) of each pixel's own `max_c sqrt(var_c) / max(value_c,
 /// floor_c)`.
@@ -120,7 +122,8 @@ impl Neighbourhood {
 /// The sums are plain sums, never running sums that subtract what leaves the window: a
 /// firefly's variance (10^6 and more) subtracted back out of a running sum leaves rounding
 /// errors as large as a dim pixel's whole variance. Rows are summed once (`2r + 1`
-/// pixels), then `2r + 1` row sums a pixel: about `(4r + 2) x 6` additions a pixel.
+/// pixels), then `2r + 1` row sums a pixel: about `(4r + 2) x 6` additions a pixel, bands
+/// of rows on the calling thread's rayon pool.
 pub fn pooled_relative_error(
     width: usize,
     height: usize,
@@ -168,46 +171,67 @@ pub fn pooled_relative_error(
         }
     };
     let ring = (2 * radius + 1).min(height);
-    // Row `r`'s sums over each pixel's columns, at `r % ring`.
-    let mut row_sums = vec![[0.0f64; 6]; ring * width];
-    let mut summed_to = 0;
-    for y in 0..height {
-        let pooled_rows = rows(y);
-        while summed_to < pooled_rows.end {
-            let at = (summed_to % ring) * width;
-            for x in 0..width {
-                let c = columns(x);
-                row_sums[at + x] = row_sum(summed_to, c.start, c.end);
-            }
-            summed_to += 1;
-        }
-        for x in 0..width {
-            let c = columns(x);
-            let mut sum = [0.0f64; 6];
-            for r in pooled_rows.clone() {
-                add(&mut sum, row_sums[(r % ring) * width + x]);
-            }
-            let mut count = pooled_rows.len() * c.len();
-            if preceding {
-                add(&mut sum, row_sum(y, c.start, x));
-                count += x - c.start;
-            }
-            let mut worst = 0.0f64;
-            if count > 0 {
-                let count = count as f64;
-                for c in 0..3 {
-                    let denominator = (sum[3 + c] / count).max(floor[c] as f64);
-                    let numerator = (sum[c] / count).max(0.0).sqrt();
-                    if denominator > 0.0 {
-                        worst = worst.max(numerator / denominator);
-                    } else if numerator > 0.0 {
-                        worst = f64::INFINITY;
+    // Bands of rows run in parallel, each summing the rows it pools itself (a few more
+    // than it holds): every pixel's sums are the same additions in the same order, so the
+    // result does not depend on the bands or the threads.
+    let band_rows = (4 * ring).max(BAND_ROWS);
+    error
+        .par_chunks_mut(band_rows * width)
+        .enumerate()
+        .for_each(|(band, band_error)| {
+            let first_row = band * band_rows;
+            // Row `r`'s sums over each pixel's columns, at `r % ring`.
+            let mut row_sums = vec![[0.0f64; 6]; ring * width];
+            let mut summed_to = rows(first_row).start;
+            for (y, row_error) in (first_row..).zip(band_error.chunks_mut(width)) {
+                let pooled_rows = rows(y);
+                while summed_to < pooled_rows.end {
+                    let at = (summed_to % ring) * width;
+                    for x in 0..width {
+                        let c = columns(x);
+                        row_sums[at + x] = row_sum(summed_to, c.start, c.end);
                     }
+                    summed_to += 1;
+                }
+                for (x, e) in row_error.iter_mut().enumerate() {
+                    let c = columns(x);
+                    let mut sum = [0.0f64; 6];
+                    for r in pooled_rows.clone() {
+                        add(&mut sum, row_sums[(r % ring) * width + x]);
+                    }
+                    let mut count = pooled_rows.len() * c.len();
+                    if preceding {
+                        add(&mut sum, row_sum(y, c.start, x));
+                        count += x - c.start;
+                    }
+                    *e = relative_error(sum, count, floor);
                 }
             }
-            error[y * width + x] = worst as f32;
+        });
+}
+
+/// Rows a band of [`pooled_relative_error`] holds at least: enough that the rows it sums
+/// beyond its own are a small part of its work.
+const BAND_ROWS: usize = 32;
+
+/// `max_c sqrt(variance_c / count) / max(value_c / count, floor_c)` of the sums
+/// `[variance; 3, value; 3]` of `count` pixels (infinite where a channel has variance but
+/// neither value nor floor; 0 for no pixels).
+fn relative_error(sum: [f64; 6], count: usize, floor: [f32; 3]) -> f32 {
+    let mut worst = 0.0f64;
+    if count > 0 {
+        let count = count as f64;
+        for c in 0..3 {
+            let denominator = (sum[3 + c] / count).max(floor[c] as f64);
+            let numerator = (sum[c] / count).max(0.0).sqrt();
+            if denominator > 0.0 {
+                worst = worst.max(numerator / denominator);
+            } else if numerator > 0.0 {
+                worst = f64::INFINITY;
+            }
         }
     }
+    worst as f32
 }
 
 /// Per-channel floors for [`windowed_relative_error`]: `fraction` of the image's mean value
@@ -412,7 +436,7 @@ mod tests {
 
     #[test]
     fn pooled_errors_are_the_neighbourhoods_means() {
-        for (width, height) in [(1, 1), (5, 1), (1, 6), (7, 4), (23, 17)] {
+        for (width, height) in [(1, 1), (5, 1), (1, 6), (7, 4), (23, 17), (5, 100), (3, 70)] {
             let test_film = film(width, height, (width * 31 + height) as u64);
             let (value, variance) = (&test_film.value, &test_film.variance);
             for radius in [0, 1, 3, 40, usize::MAX] {
