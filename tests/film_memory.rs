@@ -103,13 +103,14 @@ fn adaptive(rule: &str) -> [&str; 6] {
     ]
 }
 
-/// Asserts that `measured` bytes a pixel are within a quarter of `documented` (`what` names
-/// the constant).
+/// Asserts that `measured` bytes a pixel are within a quarter of `documented`, or 2 bytes
+/// for the smallest constants (`what` names the constant).
 fn assert_documented(measured: f64, documented: u64, what: &str) {
-    eprintln!("{what}: {measured:.0} bytes a pixel (documented {documented})");
+    eprintln!("{what}: {measured:.1} bytes a pixel (documented {documented})");
     let documented = documented as f64;
+    let tolerance = (0.25 * documented).max(2.0);
     assert!(
-        (0.75 * documented..=1.25 * documented).contains(&measured),
+        (documented - tolerance..=documented + tolerance).contains(&measured),
         "{what} is {documented} bytes a pixel, measured {measured:.0}: update it or the code"
     );
 }
@@ -140,9 +141,10 @@ fn adaptive_sampling_costs_the_documented_bytes_per_pixel() {
     );
 }
 
-/// The unbiased stopping rule's pilot keeps its tiles' beauty sums for the whole render and
-/// no AOVs: it adds `PILOT_BYTES_PER_PIXEL` to the window rule's render (with AOV sums it
-/// added 126, which fails this).
+/// The unbiased stopping rule keeps of its pilot only the pooled errors (its tiles' films,
+/// without AOVs, are dropped before the image's passes): it adds `PILOT_BYTES_PER_PIXEL` to
+/// the window rule's render (with the films kept for the whole render it added 68, with
+/// AOV sums in them 126: both fail this).
 #[test]
 fn the_unbiased_rules_pilot_costs_the_documented_bytes_per_pixel() {
     assert_added_bytes(

@@ -567,11 +567,17 @@ fn render_passes<I: Integrator>(
             .saturating_add(target.min_spp.max(1))
             .min(samples.end);
         // The unbiased rule's pilot (`adaptive`): the first `min_spp` sample indices of every
-        // pixel, independently scrambled, counted in the work but not in the progress.
-        let mut pilots = Vec::new();
+        // pixel, independently scrambled, counted in the work but not in the progress. Its
+        // films are dropped once its pooled errors are made; its work is the render's (its
+        // rays and time), not its image.
+        let mut pilot = None;
         if target.rule == StoppingRule::Unbiased {
-            pilots = adaptive::pilot_tiles(&tiles);
+            let mut pilots = adaptive::pilot_tiles(&tiles);
             run_tiles(&mut pilots, done..next, false, &|_| {});
+            pilot = Some(adaptive::PilotErrors::of(&pilots, window));
+            for ((_, stats), (_, pilot_stats)) in tiles.iter_mut().zip(&pilots) {
+                stats.merge(pilot_stats);
+            }
         }
         loop {
             let t = std::time::Instant::now();
@@ -581,7 +587,7 @@ fn render_passes<I: Integrator>(
             if interrupted() || done >= samples.end {
                 break;
             }
-            if stop_converged_pixels(&mut tiles, &pilots, window, target) == 0 {
+            if stop_converged_pixels(&mut tiles, pilot.as_ref(), window, target) == 0 {
                 break;
             }
             let mut chunk = done - samples.start;
@@ -608,10 +614,6 @@ fn render_passes<I: Integrator>(
             }
             next = done.saturating_add(chunk.max(1)).min(samples.end);
         }
-        // The pilot's work is the render's (its rays and time), not its image.
-        for ((_, stats), (_, pilot_stats)) in tiles.iter_mut().zip(&pilots) {
-            stats.merge(pilot_stats);
-        }
         let mut out = gather(
             scene,
             window,
@@ -620,7 +622,7 @@ fn render_passes<I: Integrator>(
             start,
             integrator.splats(),
         );
-        out.stats.adaptive = Some(adaptive_summary(&out, target, &pilots));
+        out.stats.adaptive = Some(adaptive_summary(&out, target, pilot.as_ref()));
         return Ok(out);
     }
     match every {

@@ -2,15 +2,16 @@
 //! pixel's estimated relative error from the tiles' films, which pixels stop, and the
 //! summary the stats report.
 //!
-//! Under [`StoppingRule::Unbiased`] the decisions read a pilot (tiles of `min_spp` samples
-//! of every pixel from an independent scramble, [`PILOT_SEED_SALT`], rendered before the
-//! image and never part of it) and the image's pixels before each pixel in raster order,
-//! never the pixel's own samples; the floor of dark pixels is the pilot's too. So a
-//! pixel's sample count is a function of samples independent of its own, and its mean is
-//! unbiased (the pass lengths of an interruptible render follow the wall time, which a
-//! pixel's samples move by microseconds: not a dependence worth the name).
+//! Under [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased) the decisions read a
+//! pilot (tiles of `min_spp` samples of every pixel from an independent scramble,
+//! [`PILOT_SEED_SALT`], rendered before the image and never part of it) and the image's
+//! pixels before each pixel in raster order, never the pixel's own samples; the floor of
+//! dark pixels is the pilot's too. So a pixel's sample count is a function of samples
+//! independent of its own, and its mean is unbiased (the pass lengths of an interruptible
+//! render follow the wall time, which a pixel's samples move by microseconds: not a
+//! dependence worth the name).
 
-use super::{NoiseTarget, RenderOutput, StoppingRule, Tile, Window, NOISE_FLOOR_FRACTION};
+use super::{NoiseTarget, RenderOutput, Tile, Window, NOISE_FLOOR_FRACTION};
 use crate::integrator::TileFilm;
 use crate::stats::SystemStats;
 use risotto_systems::adaptive::AdaptiveSummary;
@@ -74,76 +75,114 @@ fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> V
     error
 }
 
-/// How far [`StoppingRule::Unbiased`]'s pilot estimate pools: the 9 x 9 pilot pixels
-/// around a pixel, 81 x `min_spp` samples (1296 at the default 16).
+/// How far [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s pilot estimate
+/// pools: the 9 x 9 pilot pixels around a pixel, 81 x `min_spp` samples (1296 at the
+/// default 16).
 const PILOT_POOL_RADIUS: usize = 4;
 
 /// How far its estimate from the image's preceding pixels pools: the 8 rows above a pixel
 /// (17 pixels each) and the 8 pixels to its left, 144 pixels of the image's samples.
 const PRECEDING_POOL_RADIUS: usize = 8;
 
-/// The error [`StoppingRule::Unbiased`] estimates for each pixel of the window: the worst
-/// of two per-sample relative errors, each pooled over a neighbourhood
-/// ([`risotto_systems::adaptive::pooled_relative_error`]), over the square root of the
-/// pixel's count in `image`: the pilot's around the pixel, and the image's pixels before
-/// it in raster order; both against the pilot's floor.
+/// What [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased) keeps of its pilot for
+/// the rest of the render, made once the pilot is rendered: its tiles' films are then
+/// dropped.
+pub(super) struct PilotErrors {
+    /// Each pixel's per-sample relative error, pooled over the pilot's 9 x 9 pixels around
+    /// it ([`risotto_systems::adaptive::pooled_relative_error`]).
+    per_sample_error: Vec<f32>,
+    /// The floor of dark pixels, from the pilot's means.
+    floor: [f32; 3],
+    /// The pilot's samples a pixel.
+    pub(super) spp: u32,
+}
+
+impl PilotErrors {
+    /// The pooled errors of the pilot's `tiles`, which cover `window`.
+    pub(super) fn of(tiles: &[Tile], window: Window) -> PilotErrors {
+        PilotErrors::from_estimates(&window_estimates(tiles, window), window)
+    }
+
+    /// The pooled errors of the pilot's estimates of `window`'s pixels.
+    fn from_estimates(pilot: &Estimates, window: Window) -> PilotErrors {
+        use risotto_systems::adaptive::{error_floor, pooled_relative_error, Neighbourhood};
+        let (w, h) = (window.width() as usize, window.height() as usize);
+        let floor = error_floor(&pilot.value, NOISE_FLOOR_FRACTION);
+        let mut per_sample_error = vec![0.0; w * h];
+        pooled_relative_error(
+            w,
+            h,
+            &pilot.value,
+            &pilot.per_sample_variance(),
+            Neighbourhood::Square(PILOT_POOL_RADIUS),
+            floor,
+            &mut per_sample_error,
+        );
+        PilotErrors {
+            per_sample_error,
+            floor,
+            spp: pilot.count.first().copied().unwrap_or(0),
+        }
+    }
+}
+
+impl Estimates {
+    /// The variances of one sample: the variances of the means times the counts.
+    fn per_sample_variance(&self) -> Vec<[f32; 3]> {
+        (self.variance.iter().zip(&self.count))
+            .map(|(v, &n)| v.map(|v| v * n as f32))
+            .collect()
+    }
+}
+
+/// The error [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased) estimates for each
+/// pixel of the window: the worst of two per-sample relative errors, each pooled over a
+/// neighbourhood ([`risotto_systems::adaptive::pooled_relative_error`]), over the square
+/// root of the pixel's count in `image`: the pilot's around the pixel, and the image's
+/// pixels before it in raster order; both against the pilot's floor.
 ///
 /// Pooled, not the worst of each pixel's own estimate: where a pixel's variance is rare
 /// bright paths, its own few samples mostly miss them; pooled over a neighbourhood they
 /// are seen at their rate. Both estimates are needed: the pilot sees the pixel's own
 /// region (the first rows of a noisy region have only smooth pixels before them), the
 /// preceding pixels hold many more samples than the pilot.
-fn unbiased_errors(image: &Estimates, pilot: &Estimates, window: Window) -> Vec<f32> {
-    use risotto_systems::adaptive::{error_floor, pooled_relative_error, Neighbourhood};
+fn unbiased_errors(image: &Estimates, pilot: &PilotErrors, window: Window) -> Vec<f32> {
+    use risotto_systems::adaptive::{pooled_relative_error, Neighbourhood};
     let (w, h) = (window.width() as usize, window.height() as usize);
-    let floor = error_floor(&pilot.value, NOISE_FLOOR_FRACTION);
-    let per_sample = |e: &Estimates| -> Vec<[f32; 3]> {
-        (e.variance.iter().zip(&e.count))
-            .map(|(v, &n)| v.map(|v| v * n as f32))
-            .collect()
-    };
-    let mut pilot_error = vec![0.0; w * h];
-    pooled_relative_error(
-        w,
-        h,
-        &pilot.value,
-        &per_sample(pilot),
-        Neighbourhood::Square(PILOT_POOL_RADIUS),
-        floor,
-        &mut pilot_error,
-    );
     let mut error = vec![0.0; w * h];
     pooled_relative_error(
         w,
         h,
         &image.value,
-        &per_sample(image),
+        &image.per_sample_variance(),
         Neighbourhood::Preceding(PRECEDING_POOL_RADIUS),
-        floor,
+        pilot.floor,
         &mut error,
     );
-    for ((e, pilot_error), &n) in error.iter_mut().zip(&pilot_error).zip(&image.count) {
+    for ((e, pilot_error), &n) in (error.iter_mut())
+        .zip(&pilot.per_sample_error)
+        .zip(&image.count)
+    {
         *e = e.max(*pilot_error) / (n.max(1) as f32).sqrt();
     }
     error
 }
 
-/// Stops, for good, the pixels whose estimated error (by `target.rule`; `pilots` beside
-/// `tiles` under [`StoppingRule::Unbiased`]) has been at or below the target at two
+/// Stops, for good, the pixels whose estimated error has been at or below the target at two
 /// consecutive pass ends (the guard against stopping on an unluckily low estimate: the
-/// second look has twice the samples); returns how many still take samples.
+/// second look has twice the samples); returns how many still take samples. The error is
+/// [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s with a `pilot` (which only
+/// that rule renders), [`StoppingRule::Window`](super::StoppingRule::Window)'s without.
 pub(super) fn stop_converged_pixels(
     tiles: &mut [Tile],
-    pilots: &[Tile],
+    pilot: Option<&PilotErrors>,
     window: Window,
     target: NoiseTarget,
 ) -> usize {
     let image = window_estimates(tiles, window);
-    let error = match target.rule {
-        StoppingRule::Window => window_errors(&image.value, &image.variance, window),
-        StoppingRule::Unbiased => {
-            unbiased_errors(&image, &window_estimates(pilots, window), window)
-        }
+    let error = match pilot {
+        None => window_errors(&image.value, &image.variance, window),
+        Some(pilot) => unbiased_errors(&image, pilot, window),
     };
     let w = window.width() as usize;
     let mut active = 0;
@@ -178,13 +217,13 @@ pub(super) fn stop_converged_pixels(
 pub(super) fn adaptive_summary(
     out: &RenderOutput,
     target: NoiseTarget,
-    pilots: &[Tile],
+    pilot: Option<&PilotErrors>,
 ) -> AdaptiveSummary {
     let value: Vec<[f32; 3]> = out.beauty.pixels.iter().map(|p| p.to_array()).collect();
     let variance: Vec<[f32; 3]> = out.variance.pixels.iter().map(|p| p.to_array()).collect();
     let error = window_errors(&value, &variance, out.window);
     AdaptiveSummary {
-        pilot_spp: pilots.first().map_or(0, |(t, _)| t.film.count[0]),
+        pilot_spp: pilot.map_or(0, |p| p.spp),
         ..AdaptiveSummary::new(target.relative_error, &out.film.count, &error)
     }
 }
@@ -206,7 +245,7 @@ mod tests {
     #[test]
     fn the_unbiased_rule_never_reads_a_pixels_own_samples() {
         let window = Window::full(4, 3);
-        let pilot = uniform(0.0004, 16);
+        let pilot = PilotErrors::from_estimates(&uniform(0.0004, 16), window);
         let image = uniform(0.0001, 64);
         let error = unbiased_errors(&image, &pilot, window);
         // The pilot's per-sample relative error is sqrt(0.0004 x 16) = 0.08, at 64 samples
@@ -228,6 +267,7 @@ mod tests {
         // film): one of twelve at per-sample variance 0.0016 x 16.
         let mut noisy_pilot = uniform(0.0004, 16);
         noisy_pilot.variance[i + 1] = [0.0016; 3];
+        let noisy_pilot = PilotErrors::from_estimates(&noisy_pilot, window);
         let pooled = ((11.0 * 0.0064 + 0.0256) / 12.0f32).sqrt() / 8.0;
         assert!((unbiased_errors(&image, &noisy_pilot, window)[i] - pooled).abs() < 1e-6);
         // The error falls with the pixel's own count: it is the image's error at that

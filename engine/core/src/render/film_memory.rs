@@ -28,14 +28,15 @@ pub fn film_bytes(pixels: u64) -> u64 {
 pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 100;
 
 /// What the unbiased stopping rule ([`StoppingRule::Unbiased`](super::StoppingRule)) adds
-/// on top of [`ADAPTIVE_BYTES_PER_PIXEL`], measured the same way (68 bytes): its pilot's
-/// tile films, held for the whole render (a [`Film`]'s radiance sums, squared sums and
-/// count, 52 bytes: the pilot keeps no AOVs, [`TileFilm::without_aovs`]), and the pilot's
-/// estimates at each pass end.
+/// on top of [`ADAPTIVE_BYTES_PER_PIXEL`], measured the same way (4 bytes, 2026-12-07): the
+/// pilot's pooled per-sample errors, held for the whole render. The pilot's tile films (a
+/// [`Film`]'s radiance sums, squared sums and count, 52 bytes: no AOVs,
+/// [`TileFilm::without_aovs`]) and its estimates are dropped before the image's passes,
+/// and their peak is below the render's later one.
 ///
 /// [`Film`]: risotto_systems::film::Film
 /// [`TileFilm::without_aovs`]: crate::integrator::TileFilm::without_aovs
-pub const PILOT_BYTES_PER_PIXEL: u64 = 68;
+pub const PILOT_BYTES_PER_PIXEL: u64 = 4;
 
 /// `Err(message)` when a film of `pixels` pixels, `bytes_per_pixel` each (the renderer's:
 /// [`FILM_BYTES_PER_PIXEL`], plus [`ADAPTIVE_BYTES_PER_PIXEL`] when adaptive and
