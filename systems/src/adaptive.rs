@@ -37,17 +37,24 @@ pub fn windowed_relative_error(
     error: &mut [f32],
 ) {
     let own = own_relative_errors(width * height, value, variance, floor, error);
-    for y in 0..height {
-        for x in 0..width {
-            let mut worst = 0.0f32;
-            for wy in y.saturating_sub(1)..(y + 2).min(height) {
-                for wx in x.saturating_sub(1)..(x + 2).min(width) {
-                    worst = worst.max(own[wy * width + wx]);
-                }
-            }
-            error[y * width + x] = worst;
-        }
+    if own.is_empty() {
+        return;
     }
+    // Rows in parallel (the calling thread's rayon pool): each reads `own` alone.
+    error
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, e) in row.iter_mut().enumerate() {
+                let mut worst = 0.0f32;
+                for wy in y.saturating_sub(1)..(y + 2).min(height) {
+                    for wx in x.saturating_sub(1)..(x + 2).min(width) {
+                        worst = worst.max(own[wy * width + wx]);
+                    }
+                }
+                *e = worst;
+            }
+        });
 }
 
 /// Each of the `n` pixels' own relative error, `max_c sqrt(var_c) / max(value_c, floor_c)`
@@ -62,7 +69,7 @@ fn own_relative_errors(
 ) -> Vec<f32> {
     assert!(value.len() == n && variance.len() == n && error.len() == n);
     value
-        .iter()
+        .par_iter()
         .zip(variance)
         .map(|(value, variance)| {
             let mut worst = 0.0f32;
@@ -471,6 +478,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn windowed_errors_are_the_worst_of_each_three_by_three() {
+        let film = film(23, 17, 3);
+        let (w, h) = (film.width, film.height);
+        let mut error = vec![-1.0; w * h];
+        windowed_relative_error(w, h, &film.value, &film.variance, [0.01; 3], &mut error);
+        for y in 0..h {
+            for x in 0..w {
+                let mut worst = 0.0f32;
+                for wy in y.saturating_sub(1)..(y + 2).min(h) {
+                    for wx in x.saturating_sub(1)..(x + 2).min(w) {
+                        worst = worst.max(own_error(&film, wy * w + wx));
+                    }
+                }
+                assert_eq!(error[y * w + x], worst, "({x}, {y})");
+            }
+        }
+    }
+
+    /// Pixel `i`'s own relative error in `film`, floor 0.01: a 1 x 1 film of it alone.
+    fn own_error(film: &TestFilm, i: usize) -> f32 {
+        let mut e = [0.0];
+        windowed_relative_error(
+            1,
+            1,
+            &film.value[i..=i],
+            &film.variance[i..=i],
+            [0.01; 3],
+            &mut e,
+        );
+        e[0]
     }
 
     #[test]
