@@ -26,6 +26,7 @@
 use risotto::engine::render::{render, RenderOptions, NOISE_FLOOR_FRACTION};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::parse_scene_with;
+use risotto::systems::adaptive::{error_floor, pooled_relative_error, Neighbourhood};
 
 /// The targets the README's table sweeps.
 const TARGETS: [f64; 4] = [0.4, 0.2, 0.1, 0.05];
@@ -57,35 +58,27 @@ fn main() -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let out = render(&scene, &RenderOptions::default(), &|_| {}).map_err(|e| e.to_string())?;
 
-    let value: Vec<[f64; 3]> = out
-        .beauty
-        .pixels
-        .iter()
-        .map(|p| p.to_array().map(f64::from))
-        .collect();
-    let variance: Vec<[f64; 3]> = out
-        .variance
-        .pixels
-        .iter()
-        .map(|v| v.to_array().map(|v| v as f64 * spp as f64))
+    let value: Vec<[f32; 3]> = out.beauty.pixels.iter().map(|p| p.to_array()).collect();
+    let variance: Vec<[f32; 3]> = (out.variance.pixels.iter())
+        .map(|v| v.to_array().map(|v| v * spp as f32))
         .collect();
     let pixels = value.len() as f64;
-    let floor: Vec<f64> = (0..3)
-        .map(|c| {
-            NOISE_FLOOR_FRACTION as f64 * value.iter().map(|v| v[c].max(0.0)).sum::<f64>() / pixels
-        })
-        .collect();
-    // Each pixel's per-sample relative error (the worst channel) and mean variance.
-    let relative: Vec<f64> = (value.iter().zip(&variance))
-        .map(|(v, s)| {
-            (0..3)
-                .map(|c| s[c].max(0.0).sqrt() / v[c].max(floor[c]).max(f64::MIN_POSITIVE))
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    // Each pixel's per-sample relative error (the worst channel), by the renderer's own
+    // measure and floor: a neighbourhood of the pixel alone.
+    let floor = error_floor(&value, NOISE_FLOOR_FRACTION);
+    let mut relative = vec![0.0f32; value.len()];
+    pooled_relative_error(
+        out.window.width() as usize,
+        out.window.height() as usize,
+        &value,
+        &variance,
+        Neighbourhood::Square(0),
+        floor,
+        &mut relative,
+    );
     let mean_variance: Vec<f64> = variance
         .iter()
-        .map(|s| s.iter().sum::<f64>() / 3.0)
+        .map(|s| s.iter().map(|&s| s as f64).sum::<f64>() / 3.0)
         .collect();
     let sigma_mean = mean_variance.iter().map(|s| s.sqrt()).sum::<f64>() / pixels;
 
@@ -96,7 +89,7 @@ fn main() -> Result<(), String> {
     for target in TARGETS {
         let counts: Vec<f64> = relative
             .iter()
-            .map(|e| (e / target).powi(2).clamp(COUNTS.0, COUNTS.1))
+            .map(|&e| (e as f64 / target).powi(2).clamp(COUNTS.0, COUNTS.1))
             .collect();
         let mean_count = counts.iter().sum::<f64>() / pixels;
         let mse_rule = (mean_variance.iter().zip(&counts))

@@ -57,9 +57,8 @@ pub fn windowed_relative_error(
         });
 }
 
-/// Each of the `n` pixels' own relative error, `max_c sqrt(var_c) / max(value_c, floor_c)`
-/// (infinite where a channel has variance but neither value nor floor), after checking that
-/// every column (`error`, the caller's output, too) has `n`.
+/// Each of the `n` pixels' own relative error ([`relative_error`] of the pixel alone),
+/// after checking that every column (`error`, the caller's output, too) has `n`.
 fn own_relative_errors(
     n: usize,
     value: &[[f32; 3]],
@@ -71,19 +70,7 @@ fn own_relative_errors(
     value
         .par_iter()
         .zip(variance)
-        .map(|(value, variance)| {
-            let mut worst = 0.0f32;
-            for c in 0..3 {
-                let denominator = value[c].max(floor[c]);
-                let numerator = variance[c].max(0.0).sqrt();
-                if denominator > 0.0 {
-                    worst = worst.max(numerator / denominator);
-                } else if numerator > 0.0 {
-                    worst = f32::INFINITY;
-                }
-            }
-            worst
-        })
+        .map(|(v, s)| relative_error(entry(*v, *s), 1, floor))
         .collect()
 }
 
@@ -149,11 +136,6 @@ pub fn pooled_relative_error(
     if n == 0 {
         return;
     }
-    // A pixel's variance then value, per channel, in f64.
-    let entry = |i: usize| -> [f64; 6] {
-        let (s, v) = (per_sample_variance[i], value[i]);
-        [s[0], s[1], s[2], v[0], v[1], v[2]].map(|x| x as f64)
-    };
     let add = |sum: &mut [f64; 6], e: [f64; 6]| {
         for k in 0..6 {
             sum[k] += e[k];
@@ -163,7 +145,8 @@ pub fn pooled_relative_error(
     let row_sum = |y: usize, from: usize, to: usize| {
         let mut sum = [0.0f64; 6];
         for x in from..to {
-            add(&mut sum, entry(y * width + x));
+            let i = y * width + x;
+            add(&mut sum, entry(value[i], per_sample_variance[i]));
         }
         sum
     };
@@ -220,6 +203,12 @@ pub fn pooled_relative_error(
 /// Rows a band of [`pooled_relative_error`] holds at least: enough that the rows it sums
 /// beyond its own are a small part of its work.
 const BAND_ROWS: usize = 32;
+
+/// A pixel's variance then value, per channel, in f64: what [`relative_error`] sums.
+fn entry(value: [f32; 3], variance: [f32; 3]) -> [f64; 6] {
+    let (s, v) = (variance, value);
+    [s[0], s[1], s[2], v[0], v[1], v[2]].map(|x| x as f64)
+}
 
 /// `max_c sqrt(variance_c / count) / max(value_c / count, floor_c)` of the sums
 /// `[variance; 3, value; 3]` of `count` pixels (infinite where a channel has variance but

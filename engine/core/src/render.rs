@@ -570,15 +570,14 @@ fn render_passes<I: Integrator>(
         // pixel, independently scrambled, counted in the work but not in the progress. Its
         // films are dropped once its pooled errors are made; its work is the render's (its
         // rays and time), not its image.
-        let mut pilot = None;
-        if target.rule == StoppingRule::Unbiased {
+        let pilot = (target.rule == StoppingRule::Unbiased).then(|| {
             let mut pilots = adaptive::pilot_tiles(&tiles);
             run_tiles(&mut pilots, done..next, false, &|_| {});
-            pilot = Some(adaptive::PilotErrors::of(&pilots, window));
             for ((_, stats), (_, pilot_stats)) in tiles.iter_mut().zip(&pilots) {
                 stats.merge(pilot_stats);
             }
-        }
+            adaptive::PilotErrors::of(&pilots, window)
+        });
         loop {
             let t = std::time::Instant::now();
             pass(&mut tiles, done..next);
