@@ -6,13 +6,17 @@
 //!   equal samples is equal time up to that; `--nocapture` prints both times), the
 //!   adaptive image's MSE is lower than uniform sampling's;
 //! - the pixels it stops are at the target: their measured relative error, RMS over them,
-//!   is within 1.5 times the target;
+//!   is at most 1.5 times the target (the window rule's is about half of it: a pixel stops
+//!   when the worst of its 3 x 3 window is at the target);
 //! - the stopping rule's bias stays below 2 % (it is measurable here: see the test);
 //! - the unbiased rule's mean agrees with the reference within noise, it too stops pixels
-//!   at the target, and its MSE is about uniform sampling's at equal samples (no unbiased
-//!   rule can do much better here: README, and `examples/adaptive_bound.rs`).
+//!   at the target, within a factor of 1.5 either way, and its MSE is about uniform
+//!   sampling's at equal samples (no unbiased rule can do much better here: README, and
+//!   `examples/adaptive_bound.rs`).
 
-use risotto::engine::render::{render, NoiseTarget, RenderOptions, RenderOutput, StoppingRule};
+use risotto::engine::render::{
+    render, NoiseTarget, RenderOptions, RenderOutput, StoppingRule, Window,
+};
 use risotto::loader::load::{scene_from_desc, MaterialRegistry};
 use risotto::loader::scene_file::parse_scene_with;
 
@@ -75,6 +79,14 @@ radius = 0.5
 "#;
 
 fn render_with(spp: u32, target: Option<NoiseTarget>) -> (RenderOutput, f64) {
+    render_window(spp, target, None)
+}
+
+fn render_window(
+    spp: u32,
+    target: Option<NoiseTarget>,
+    crop: Option<Window>,
+) -> (RenderOutput, f64) {
     let desc = parse_scene_with(
         SCENE,
         std::path::Path::new("adaptive.toml"),
@@ -88,6 +100,7 @@ fn render_with(spp: u32, target: Option<NoiseTarget>) -> (RenderOutput, f64) {
     let options = RenderOptions {
         threads: Some(2),
         noise_target: target,
+        crop,
         ..RenderOptions::default()
     };
     let t = std::time::Instant::now();
@@ -139,8 +152,8 @@ fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
         "adaptive: {summary:?}, {adaptive_seconds:.2} s, MSE {mse_a:.3e}; uniform at {equal_spp} \
          spp: {uniform_seconds:.2} s, MSE {mse_u:.3e}"
     );
-    // The samples went unevenly (the test would say nothing if they had not); a pixel stops
-    // after two looks at its target, the second after twice the minimum.
+    // The samples went unevenly (the test would say nothing if they had not); no pixel
+    // stops before twice the minimum.
     assert!(
         summary.spp_min == 32 && summary.spp_max > 16 * 32,
         "{summary:?}"
@@ -152,13 +165,16 @@ fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
 
     // Pixels that stopped: measured relative error against the reference (with the
     // renderer's floor of 1 % of the image mean), RMS over them, within 1.5 x the target.
-    let achieved = achieved_error(&adaptive, reference, 2048, target, 0.5);
+    let achieved = achieved_error(&adaptive, reference, 2048, target, 0.5, 0.0);
 
-    // The stopping rule's bias. Measured here: -1.1 % (adaptive 0.1176, reference 0.1189,
-    // 5 standard errors): the walls' light includes rare caustic paths through the ball, and
-    // a pixel that has not yet drawn one shows a low mean *and* a low variance, so a rule
-    // that reads the samples it stops on stops it low (Kirk and Arvo 1991). The window and
-    // the second look bound it; the assertion keeps it below 2 % so a worse rule fails.
+    // The stopping rule's bias. Measured here: -1.4 % (adaptive 0.1173, reference 0.1189,
+    // 6.5 standard errors): the walls' light includes rare caustic paths through the ball,
+    // and a pixel that has not yet drawn one shows a low mean *and* a low variance, so a
+    // rule that reads the samples it stops on stops it low (Kirk and Arvo 1991). The window
+    // and the earliest stop at twice the minimum bound it. Passes sized to each pixel's
+    // need, which stop pixels with a third fewer samples than doubling passes did, raised
+    // it from 1.1 % (-1.4 % against -1.1 % over six seeds); the assertion keeps it below
+    // 2 % so a worse rule fails.
     let (ma, mr) = (image_mean(&adaptive), image_mean(reference));
     println!("uniform mean {:.5}", image_mean(&uniform));
     println!(
@@ -170,9 +186,9 @@ fn adaptive_sampling_beats_uniform_at_equal_samples_and_reaches_its_target() {
 
 /// The unbiased rule ([`StoppingRule::Unbiased`]) on the same scene: its image mean agrees
 /// with the reference's within three standard errors (of both), where the window rule's is
-/// 5.7 standard errors low; its samples still go unevenly, the pixels it stops are at the
+/// 6.5 standard errors low; its samples still go unevenly, the pixels it stops are at the
 /// target, and its MSE at equal samples is at most 1.25x uniform sampling's. Measured here
-/// 0.80x; over ten seeds at target 0.1, 1.00x, where a rule that knew every pixel's
+/// 0.75x (0.80x with doubling passes); over ten seeds at target 0.1, 1.00x, where a rule that knew every pixel's
 /// variance would reach 0.90x (`examples/adaptive_bound.rs`). The rule before its
 /// estimates were pooled had 1.45x here (1.9x over ten seeds): a wall pixel's own few
 /// samples, and its 3 x 3 neighbours', mostly miss the rare caustic paths that make its
@@ -204,8 +220,10 @@ fn the_unbiased_rule_stops_at_the_target_with_an_unbiased_mean() {
         "unbiased rule's MSE {mse_a:e} vs uniform {mse_u:e}"
     );
     // Fewer stop than under the window rule: the pooled estimates are more cautious than a
-    // pixel's own.
-    let achieved = achieved_error(&adaptive, reference, 2048, target, 1.0 / 3.0);
+    // pixel's own. Those that stop are within a factor of 1.5 of the target either way: the
+    // passes are sized to each pixel's need (doubling passes that stopped a pixel after two
+    // looks at its target left them at 0.66x here).
+    let achieved = achieved_error(&adaptive, reference, 2048, target, 1.0 / 3.0, 1.0 / 1.5);
     let (ma, mr) = (image_mean(&adaptive), image_mean(reference));
     let sigma = image_mean_sigma(&adaptive).hypot(image_mean_sigma(reference));
     println!(
@@ -247,13 +265,15 @@ fn image_mean_sigma(img: &RenderOutput) -> f64 {
 
 /// The relative error against `reference` (the renderer's floor: 1 % of the image mean),
 /// RMS over the pixels that stopped before `cap` samples, after asserting that more than
-/// `min_stopped` of them (a fraction) did and that it is within 1.5 x the target.
+/// `min_stopped` of them (a fraction) did and that it is between `lower` and 1.5 times the
+/// target.
 fn achieved_error(
     adaptive: &RenderOutput,
     reference: &RenderOutput,
     cap: u32,
     target: NoiseTarget,
     min_stopped: f64,
+    lower: f64,
 ) -> f64 {
     let floor = 0.01 * image_mean(reference);
     let (mut sum_sq, mut stopped) = (0.0, 0usize);
@@ -276,9 +296,10 @@ fn achieved_error(
         "only {stopped} of {pixels} pixels stopped"
     );
     let achieved = (sum_sq / stopped as f64).sqrt();
+    let target = target.relative_error as f64;
     assert!(
-        achieved < 1.5 * target.relative_error as f64,
-        "achieved {achieved} over {stopped} stopped pixels"
+        (lower * target..1.5 * target).contains(&achieved),
+        "achieved {achieved} over {stopped} stopped pixels, target {target}"
     );
     achieved
 }
@@ -299,6 +320,49 @@ fn a_target_every_pixel_meets_stops_all_after_the_minimum() {
     let (uniform, _) = render_with(16, None);
     assert!(adaptive.sample_count.iter().all(|&c| c == 16.0));
     assert_eq!(adaptive.beauty, uniform.beauty);
+}
+
+/// Each pass gives each pixel its own range of samples, sized from its estimate; a pixel's
+/// samples are still the first indices of its sequence, added in order: its value and
+/// variance are the bits of a one-pixel render (`crop`) of as many samples. Pixels of
+/// every count the render gave are checked (the test would say nothing if the counts were
+/// few).
+#[test]
+fn each_pixel_holds_the_first_samples_of_its_own_sequence() {
+    let target = NoiseTarget {
+        relative_error: 0.15,
+        min_spp: 8,
+        rule: StoppingRule::Window,
+    };
+    let (adaptive, _) = render_with(512, Some(target));
+    let width = 32;
+    let mut by_count = std::collections::BTreeMap::new();
+    for (i, &count) in adaptive.sample_count.iter().enumerate() {
+        by_count.entry(count as u32).or_insert(i as u32);
+    }
+    assert!(by_count.len() >= 6, "counts {:?}", by_count.keys());
+    // Sized passes give counts that are not the doublings of 8.
+    assert!(
+        by_count.keys().any(|c| !c.is_power_of_two()),
+        "counts {:?}",
+        by_count.keys()
+    );
+    for (&count, &i) in &by_count {
+        let (x, y) = (i % width, i / width);
+        let crop = Window {
+            x0: x,
+            y0: y,
+            x1: x + 1,
+            y1: y + 1,
+        };
+        let (one, _) = render_window(count, None, Some(crop));
+        let i = i as usize;
+        assert_eq!(
+            (one.beauty.pixels[0], one.variance.pixels[0]),
+            (adaptive.beauty.pixels[i], adaptive.variance.pixels[i]),
+            "pixel ({x}, {y}), {count} samples"
+        );
+    }
 }
 
 /// The driver: `--noise-target` writes the adaptive stats, and refuses what it cannot do.

@@ -120,12 +120,10 @@ pub struct TileFilm {
     pub x0: u32,
     /// Tile origin in the image.
     pub y0: u32,
-    /// Which pixels (row-major in the tile) still take samples: adaptive sampling stops
-    /// those that reached their target. Empty: all of them.
-    pub active: Vec<bool>,
-    /// Adaptive sampling's guard: how many consecutive pass ends found each pixel at its
-    /// target (it stops at two). Empty when not adaptive.
-    pub converged_passes: Vec<u8>,
+    /// Adaptive sampling's sample indices for the next pass, one range per pixel (row-major
+    /// in the tile): pixel `local` takes `sample_ranges[local]`, nothing when it is empty (a
+    /// pixel that stopped). Empty: every pixel takes the pass's range.
+    pub sample_ranges: Vec<std::ops::Range<u32>>,
     /// XORed into the scene's seed for this tile's pixel seeds: 0 for an image's tiles.
     pub seed_salt: u64,
 }
@@ -149,8 +147,7 @@ impl TileFilm {
             aovs,
             x0,
             y0,
-            active: Vec::new(),
-            converged_passes: Vec::new(),
+            sample_ranges: Vec::new(),
             seed_salt: 0,
         }
     }
@@ -164,8 +161,15 @@ impl TileFilm {
     /// Whether the pixel `local` (row-major in the tile) takes samples.
     #[inline]
     pub fn is_active(&self, local: usize) -> bool {
-        self.active.get(local).copied().unwrap_or(true)
+        self.sample_ranges.get(local).is_none_or(|r| !r.is_empty())
     }
+
+    /// The sample indices pixel `local` takes in a pass of `samples`.
+    #[inline]
+    fn pixel_samples(&self, local: usize, samples: &std::ops::Range<u32>) -> std::ops::Range<u32> {
+        self.sample_ranges.get(local).unwrap_or(samples).clone()
+    }
+
     fn local(&self, pixel: u32, image_width: u32) -> u32 {
         let (x, y) = (pixel % image_width, pixel / image_width);
         (y - self.y0) * self.film.width + (x - self.x0)
@@ -182,6 +186,8 @@ pub struct TileWorker<W> {
     pub batch: PathBatch,
     /// The film pixel (row in the tile) of each path.
     film_pixel: Vec<u32>,
+    /// The next sample index of each pixel of the tile in the pass under way.
+    next_sample: Vec<u32>,
 }
 
 /// Renders the samples `samples` of every pixel of `tile` with `integrator`, in batches of
@@ -203,6 +209,7 @@ pub fn render_tile<I: Integrator>(
             integrator: state,
             batch,
             film_pixel,
+            ..
         } = w;
         integrator.run_batch(scene, batch, state, stats, arena);
         splat_batch(tile, film_pixel, &batch.paths, stats);
@@ -233,9 +240,16 @@ pub fn light_pass_tile<I: Integrator>(
     })
 }
 
-/// Cuts the samples `samples` of `tile`'s pixels that take samples into batches of about
+/// Cuts the samples of `tile`'s pixels in a pass of `samples` (each pixel's own range when
+/// adaptive sampling gave it one, [`TileFilm::sample_ranges`]) into batches of about
 /// `batch_size` paths (one path per pixel and sample, pixel-major) and hands each, filled
 /// into `worker`, to `run`.
+///
+/// Each batch takes the same number of samples from every pixel that has some left, as many
+/// as fill the batch: so a pass whose pixels all take the same range is cut as it always
+/// was, and one whose pixels take ranges of different lengths still fills its batches as
+/// pixels run out. A pixel's samples go in their order, so its sums are added in sample
+/// order however the pass is cut.
 fn for_each_batch<W>(
     scene: &CompiledScene,
     tile: &mut TileFilm,
@@ -245,53 +259,56 @@ fn for_each_batch<W>(
     mut run: impl FnMut(&mut TileFilm, &mut TileWorker<W>),
 ) {
     let w = tile.film.width;
-    let h = tile.film.height;
-    // The pixels that take samples (all but those adaptive sampling has stopped).
-    let pixels = tile.active_pixels();
-    if pixels == 0 {
-        return;
-    }
-    // Saturating: a batch size of 2^40 paths must mean "all samples at once", not a
-    // truncated or wrapped sample range (which never advanced `s0`).
-    let per_batch = (batch_size / pixels.max(1)).clamp(1, u32::MAX as usize) as u32;
-    let mut s0 = samples.start;
-    while s0 < samples.end {
-        let s1 = s0.saturating_add(per_batch).min(samples.end);
+    let n = (w * tile.film.height) as usize;
+    worker.next_sample.clear();
+    (worker.next_sample).extend((0..n).map(|local| tile.pixel_samples(local, &samples).start));
+    loop {
         let TileWorker {
-            batch, film_pixel, ..
+            batch,
+            film_pixel,
+            next_sample,
+            ..
         } = &mut *worker;
+        // The samples each pixel has left, and how many of them this batch takes.
+        let left = |next_sample: &[u32], local: usize| {
+            let end = tile.pixel_samples(local, &samples).end;
+            end.saturating_sub(next_sample[local])
+        };
+        let pixels = (0..n).filter(|&local| left(next_sample, local) > 0).count();
+        if pixels == 0 {
+            return;
+        }
+        // Saturating: a batch size of 2^40 paths must mean "all samples at once", not a
+        // truncated or wrapped sample range (which never advanced a pixel).
+        let per_pixel = (batch_size / pixels).clamp(1, u32::MAX as usize) as u32;
+        let count = (0..n)
+            .map(|local| left(next_sample, local).min(per_pixel) as usize)
+            .sum();
         // One path per pixel and sample, pixel-major; radiance, albedo and normal start
-        // black (the defaults), depth at infinity (no hit yet).
+        // black (the defaults), depth at infinity (no hit yet). `film_pixel` is the film
+        // pixel of each path: row `y * w + x` of the tile for the run of pixel (x, y)
+        // (`TileFilm::local` of its image pixel, without two integer divisions per path).
         batch.paths.clear();
-        let count = pixels * (s1 - s0) as usize;
+        film_pixel.clear();
         let paths = batch.paths.append_default(count);
-        let spp = (s1 - s0) as usize;
-        let mut rows = paths
-            .pixel
-            .chunks_exact_mut(spp)
-            .zip(paths.sample.chunks_exact_mut(spp));
-        for y in 0..h {
-            for x in 0..w {
-                if !tile.is_active((y * w + x) as usize) {
-                    continue;
-                }
-                let (pixel, sample) = rows.next().expect("one run of rows per pixel");
-                pixel.fill((tile.y0 + y) * scene.camera.width + tile.x0 + x);
-                for (v, s) in sample.iter_mut().zip(s0..s1) {
-                    *v = s;
-                }
+        let mut at = 0;
+        for local in 0..n {
+            let take = left(next_sample, local).min(per_pixel);
+            if take == 0 {
+                continue;
             }
+            let (x, y) = (local as u32 % w, local as u32 / w);
+            let s0 = next_sample[local];
+            paths.pixel[at..at + take as usize]
+                .fill((tile.y0 + y) * scene.camera.width + tile.x0 + x);
+            for (v, s) in paths.sample[at..at + take as usize].iter_mut().zip(s0..) {
+                *v = s;
+            }
+            film_pixel.extend(std::iter::repeat_n(local as u32, take as usize));
+            next_sample[local] = s0 + take;
+            at += take as usize;
         }
         paths.depth.fill(f32::INFINITY);
-        // The film pixel of each path: row `y * w + x` of the tile for the run of pixel
-        // (x, y) (`TileFilm::local` of its image pixel, without two integer divisions per
-        // path).
-        film_pixel.clear();
-        for local in 0..w * h {
-            if tile.is_active(local as usize) {
-                film_pixel.extend(std::iter::repeat_n(local, spp));
-            }
-        }
         debug_assert!(film_pixel
             .iter()
             .zip(&batch.paths.pixel)
@@ -311,7 +328,6 @@ fn for_each_batch<W>(
                 }
             }));
         run(tile, worker);
-        s0 = s1;
     }
 }
 

@@ -26,7 +26,7 @@ mod adaptive;
 mod film_memory;
 mod gather;
 mod splats;
-use adaptive::{adaptive_summary, stop_converged_pixels};
+use adaptive::{adaptive_summary, plan_next_pass};
 pub use film_memory::{
     check_film_memory, film_bytes, physical_memory, proc_bytes, ADAPTIVE_BYTES_PER_PIXEL,
     FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
@@ -108,8 +108,11 @@ pub struct RenderOptions {
 /// Every pixel first takes `min_spp` samples; then, after each pass, the pixels whose
 /// relative error (estimated from film variances as the [`StoppingRule`] says, relative to
 /// 1 % of the image's mean for dark pixels: [`risotto_systems::adaptive`]) is at or below
-/// `relative_error` stop for good, and the others take as many samples again as they have
-/// (doubling passes, shorter when the render is interruptible or checkpointed). A pixel's
+/// `relative_error` stop for good (none before `2 min_spp` samples), and each of the others
+/// takes the samples its estimate says bring it to the target, 10 % more, at least a
+/// quarter and at most as many again as it has
+/// ([`risotto_systems::adaptive::next_sample_count`]; fewer when the render is
+/// interruptible or checkpointed). A pixel's
 /// samples are the first indices of its sequence, so the `sampleCount` layer says how many
 /// it took; the output's [`RenderOutput::samples`] is the range the most-sampled pixels
 /// took. Which samples decide that a pixel stops is the [`StoppingRule`].
@@ -560,9 +563,10 @@ fn render_passes<I: Integrator>(
         (None, None) => None,
     };
     if let Some(target) = options.noise_target {
-        // Adaptive: a first pass of `min_spp`, then passes that double the samples of the
-        // pixels still above the target (or take `every`, whichever is shorter).
-        let mut next = samples
+        // Adaptive: a first pass of `min_spp`, then passes in which each pixel still above
+        // the target takes the samples its estimate says it needs (at most as many again as
+        // it has; `adaptive::plan_next_pass`), or what `every` allows, whichever is fewer.
+        let next = samples
             .start
             .saturating_add(target.min_spp.max(1))
             .min(samples.end);
@@ -578,18 +582,31 @@ fn render_passes<I: Integrator>(
             }
             adaptive::PilotErrors::of(&pilots, window)
         });
+        // The passes' ranges: the first is every pixel's `done..next`; later ones are each
+        // pixel's own (`TileFilm::sample_ranges`), `pass` taking them from the tiles.
+        let mut range = done..next;
+        let mut limit = u32::MAX;
         loop {
             let t = std::time::Instant::now();
-            pass(&mut tiles, done..next);
-            let per_sample = t.elapsed().as_secs_f64() / (next - done) as f64;
-            done = next;
-            if interrupted() || done >= samples.end {
+            pass(&mut tiles, range.clone());
+            // The pass's time per sample of its longest pixel range.
+            let longest = (tiles.iter())
+                .flat_map(|(t, _)| t.sample_ranges.iter().map(|r| r.len()))
+                .max()
+                .unwrap_or(range.len())
+                .max(1);
+            let per_sample = t.elapsed().as_secs_f64() / longest as f64;
+            done = (tiles.iter())
+                .flat_map(|(t, _)| t.film.count.iter())
+                .max()
+                .map_or(done, |&c| samples.start + c);
+            if interrupted() {
                 break;
             }
-            if stop_converged_pixels(&mut tiles, pilot.as_ref(), window, target) == 0 {
+            let all = samples.start..samples.end;
+            if plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit) == 0 {
                 break;
             }
-            let mut chunk = done - samples.start;
             if let Some(every) = every {
                 let mut write_seconds = 0.0;
                 if let Some(cp) = &mut checkpoints {
@@ -605,13 +622,10 @@ fn render_passes<I: Integrator>(
                     (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
                     write_seconds = t.elapsed().as_secs_f64();
                 }
-                chunk = chunk.min(next_pass_samples(
-                    every.as_secs_f64(),
-                    write_seconds,
-                    per_sample,
-                ));
+                limit = next_pass_samples(every.as_secs_f64(), write_seconds, per_sample);
             }
-            next = done.saturating_add(chunk.max(1)).min(samples.end);
+            // Each pixel's range is in its tile; the pass's own is not read.
+            range = samples.start..samples.end;
         }
         let mut out = gather(
             scene,

@@ -168,45 +168,65 @@ fn unbiased_errors(image: &Estimates, pilot: &PilotErrors, window: Window) -> Ve
     error
 }
 
-/// Stops, for good, the pixels whose estimated error has been at or below the target at two
-/// consecutive pass ends (the guard against stopping on an unluckily low estimate: the
-/// second look has twice the samples); returns how many still take samples. The error is
-/// [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s with a `pilot` (which only
-/// that rule renders), [`StoppingRule::Window`](super::StoppingRule::Window)'s without.
-pub(super) fn stop_converged_pixels(
+/// Plans the next pass of an adaptive render from the error each pixel's estimate gives
+/// at its count: a pixel at its target stops for good, the others get the sample indices
+/// that should bring them to it ([`risotto_systems::adaptive::next_sample_count`]; at
+/// least `2 min_spp` samples before any stops, at most `samples.end`), at most `limit` more
+/// (an interruptible or checkpointed render's pass length). Sets each tile's
+/// [`TileFilm::sample_ranges`] and returns how many pixels still take samples. The error
+/// is [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s with a `pilot` (which
+/// only that rule renders), [`StoppingRule::Window`](super::StoppingRule::Window)'s
+/// without.
+pub(super) fn plan_next_pass(
     tiles: &mut [Tile],
     pilot: Option<&PilotErrors>,
     window: Window,
     target: NoiseTarget,
+    samples: std::ops::Range<u32>,
+    limit: u32,
 ) -> usize {
+    use risotto_systems::adaptive::next_sample_count;
     let image = window_estimates(tiles, window);
     let error = match pilot {
         None => window_errors(&image.value, &image.variance, window),
         Some(pilot) => unbiased_errors(&image, pilot, window),
     };
     let w = window.width() as usize;
+    let cap = samples.end - samples.start;
+    let min_stop = target.min_spp.max(1).saturating_mul(2);
     let mut active = 0;
     for (tile, _) in tiles.iter_mut() {
         let (tw, th) = (tile.film.width as usize, tile.film.height as usize);
-        if tile.active.is_empty() {
-            tile.active = vec![true; tw * th];
-            tile.converged_passes = vec![0; tw * th];
+        // Before the first plan every pixel took the first pass.
+        let first = tile.sample_ranges.is_empty();
+        if first {
+            tile.sample_ranges = vec![samples.start..samples.start; tw * th];
         }
         for ty in 0..th {
             for tx in 0..tw {
                 let local = ty * tw + tx;
                 let x = (tile.x0 - window.x0) as usize + tx;
                 let y = (tile.y0 - window.y0) as usize + ty;
-                if tile.active[local] {
-                    let passes = &mut tile.converged_passes[local];
-                    *passes = if error[y * w + x] <= target.relative_error {
-                        *passes + 1
-                    } else {
-                        0
-                    };
-                    tile.active[local] = *passes < 2;
-                }
-                active += usize::from(tile.active[local]);
+                let range = &mut tile.sample_ranges[local];
+                // A pixel that took nothing in the pass just done had stopped.
+                let stopped = !first && range.start >= range.end;
+                let count = tile.film.count[local];
+                let next = match stopped {
+                    true => None,
+                    false => next_sample_count(
+                        count,
+                        error[y * w + x],
+                        target.relative_error,
+                        min_stop,
+                        cap,
+                    ),
+                };
+                let begin = samples.start + count;
+                *range = match next {
+                    Some(next) => begin..samples.start + next.min(count.saturating_add(limit)),
+                    None => begin..begin,
+                };
+                active += usize::from(range.start < range.end);
             }
         }
     }

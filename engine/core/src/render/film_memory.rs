@@ -21,11 +21,14 @@ pub fn film_bytes(pixels: u64) -> u64 {
 }
 
 /// What adaptive sampling ([`NoiseTarget`](super::NoiseTarget), either rule) adds to a
-/// render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (101 bytes on Linux,
+/// render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (108.8 bytes on Linux,
 /// 2026-12-07): the estimates made at each pass end (means, variances, counts and errors,
-/// 32 bytes), the tiles' flags of which pixels still sample, and the summary's copies of
-/// the means and variances beside the gathered output.
-pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 100;
+/// 32 bytes), the tiles' sample ranges for the next pass (8 bytes,
+/// [`TileFilm::sample_ranges`]), and the summary's copies of the means and variances beside
+/// the gathered output.
+///
+/// [`TileFilm::sample_ranges`]: crate::integrator::TileFilm::sample_ranges
+pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 108;
 
 /// What the unbiased stopping rule ([`StoppingRule::Unbiased`](super::StoppingRule)) adds
 /// on top of [`ADAPTIVE_BYTES_PER_PIXEL`], measured the same way (4 bytes, 2026-12-07): the
@@ -103,12 +106,12 @@ mod tests {
         assert!(check_film_memory(pixels, film, Some(32 << 30)).is_ok());
         assert!(check_film_memory(pixels, film, None).is_ok());
         assert!(check_film_memory(u64::MAX, film, Some(1)).is_err());
-        // Adaptive with the unbiased rule: 328 bytes a pixel, 22.0 GB, over a 16 GB machine
+        // Adaptive with the unbiased rule: 336 bytes a pixel, 22.5 GB, over a 16 GB machine
         // (17.2 GB) that holds the plain film.
         let adaptive = film + ADAPTIVE_BYTES_PER_PIXEL + PILOT_BYTES_PER_PIXEL;
         assert!(check_film_memory(pixels, film, Some(16 << 30)).is_ok());
         let err = check_film_memory(pixels, adaptive, Some(16 << 30)).unwrap_err();
-        assert!(err.contains("328 bytes a pixel"), "{err}");
-        assert!(err.contains("22.0 GB"), "{err}");
+        assert!(err.contains("336 bytes a pixel"), "{err}");
+        assert!(err.contains("22.5 GB"), "{err}");
     }
 }

@@ -98,8 +98,9 @@ impl AdaptivePlan {
         Ok(())
     }
 
-    /// Whether a pixel can stop before `cap` samples: it stops after two looks at its
-    /// error, at `min_spp` and `2 min_spp` samples, so only below a cap above `2 min_spp`.
+    /// Whether a pixel can stop before `cap` samples: it stops at the earliest after two
+    /// looks at its error, at `min_spp` and `2 min_spp` samples, so only below a cap above
+    /// `2 min_spp`.
     pub fn can_stop_below(&self, cap: u32) -> bool {
         self.min_spp.saturating_mul(2) < cap
     }
