@@ -319,6 +319,8 @@ fn a_target_every_pixel_meets_stops_all_after_the_minimum() {
     );
     let (uniform, _) = render_with(16, None);
     assert!(adaptive.sample_count.iter().all(|&c| c == 16.0));
+    // Two passes: `min_spp`, then the rest of the earliest stop's.
+    assert_eq!(adaptive.stats.adaptive.as_ref().map(|a| a.passes), Some(2));
     assert_eq!(adaptive.beauty, uniform.beauty);
 }
 
@@ -405,6 +407,10 @@ fn the_driver_reports_adaptive_stats_and_refuses_splitting() {
     assert!(a["spp_max"].as_u64().unwrap() <= 64);
     assert!(a["spp_min"].as_u64().unwrap() >= 8);
     assert_eq!(a["pilot_spp"].as_u64(), Some(0));
+    // The passes (at least the first and the one to the earliest stop) and what deciding
+    // between them cost.
+    assert!(a["passes"].as_u64().unwrap() >= 2, "{a}");
+    assert!(a["plan_seconds"].as_f64().unwrap() >= 0.0, "{a}");
     // The unbiased rule renders its pilot of --min-spp samples a pixel and says so.
     assert_eq!(adaptive_stats("unbiased")["pilot_spp"].as_u64(), Some(4));
     for (args, needle) in [

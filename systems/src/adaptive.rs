@@ -313,6 +313,11 @@ pub struct AdaptiveSummary {
     /// Samples a pixel of the unbiased stopping rule's pilot, rendered and discarded (not
     /// in the spp above); 0 under the window rule.
     pub pilot_spp: u32,
+    /// Passes rendered, the first (every pixel's `min_spp`) included; the pilot is not one.
+    pub passes: u32,
+    /// Wall time spent between passes estimating every pixel's error and planning the next
+    /// pass's samples: what deciding cost.
+    pub plan_seconds: f64,
 }
 
 impl AdaptiveSummary {
@@ -341,6 +346,8 @@ impl AdaptiveSummary {
             error_median: at(0.5),
             error_p95: at(0.95),
             pilot_spp: 0,
+            passes: 0,
+            plan_seconds: 0.0,
         }
     }
 }

@@ -190,8 +190,9 @@ pub struct TileWorker<W> {
     next_sample: Vec<u32>,
 }
 
-/// Renders the samples `samples` of every pixel of `tile` with `integrator`, in batches of
-/// about `batch_size` paths, splatting into `tile`.
+/// Renders the samples `samples` of every pixel of `tile` (or each pixel's own range, when
+/// the tile has [`TileFilm::sample_ranges`]) with `integrator`, in batches of about
+/// `batch_size` paths, splatting into `tile`.
 #[allow(clippy::too_many_arguments, reason = "the scheduler's inputs, named")]
 pub fn render_tile<I: Integrator>(
     integrator: &I,

@@ -34,6 +34,7 @@ pub use film_memory::{
 pub use gather::aov_means;
 use gather::gather;
 pub(crate) use gather::name_non_finite_cases;
+use risotto_systems::adaptive::AdaptiveSummary;
 mod window;
 pub use window::{SampleRange, Window};
 
@@ -586,9 +587,11 @@ fn render_passes<I: Integrator>(
         // pixel's own (`TileFilm::sample_ranges`), `pass` taking them from the tiles.
         let mut range = done..next;
         let mut limit = u32::MAX;
+        let (mut passes, mut plan_seconds) = (0u32, 0.0f64);
         loop {
             let t = std::time::Instant::now();
             pass(&mut tiles, range.clone());
+            passes += 1;
             // The pass's time per sample of its longest pixel range.
             let longest = (tiles.iter())
                 .flat_map(|(t, _)| t.sample_ranges.iter().map(|r| r.len()))
@@ -603,8 +606,10 @@ fn render_passes<I: Integrator>(
             if interrupted() {
                 break;
             }
-            let all = samples.start..samples.end;
-            if plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit) == 0 {
+            let (all, t) = (samples.start..samples.end, std::time::Instant::now());
+            let active = plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit);
+            plan_seconds += t.elapsed().as_secs_f64();
+            if active == 0 {
                 break;
             }
             if let Some(every) = every {
@@ -635,7 +640,11 @@ fn render_passes<I: Integrator>(
             start,
             integrator.splats(),
         );
-        out.stats.adaptive = Some(adaptive_summary(&out, target, pilot.as_ref()));
+        out.stats.adaptive = Some(AdaptiveSummary {
+            passes,
+            plan_seconds,
+            ..adaptive_summary(&out, target, pilot.as_ref())
+        });
         return Ok(out);
     }
     match every {

@@ -122,6 +122,8 @@ impl Serialize for RenderStats {
                     "error_median": finite_or_null(a.error_median),
                     "error_p95": finite_or_null(a.error_p95),
                     "pilot_spp": a.pilot_spp,
+                    "passes": a.passes,
+                    "plan_seconds": a.plan_seconds,
                 }),
             )?;
         }
@@ -237,14 +239,17 @@ impl fmt::Display for RenderStats {
             writeln!(
                 f,
                 "adaptive: target {:.4}, spp {} / {:.1} / {} (min / mean / max), {:.1} % of \
-                 pixels at the target, estimated error median {:.4}, 95th percentile {:.4}",
+                 pixels at the target, estimated error median {:.4}, 95th percentile {:.4}; \
+                 {} passes, {:.3} s deciding between them",
                 a.target,
                 a.spp_min,
                 a.spp_mean,
                 a.spp_max,
                 100.0 * a.converged_fraction,
                 a.error_median,
-                a.error_p95
+                a.error_p95,
+                a.passes,
+                a.plan_seconds
             )?;
             if a.pilot_spp > 0 {
                 writeln!(
