@@ -87,6 +87,16 @@ fn render_window(
     target: Option<NoiseTarget>,
     crop: Option<Window>,
 ) -> (RenderOutput, f64) {
+    render_interruptible(spp, target, crop, None, &|_| {})
+}
+
+fn render_interruptible(
+    spp: u32,
+    target: Option<NoiseTarget>,
+    crop: Option<Window>,
+    interrupt: Option<&'static std::sync::atomic::AtomicBool>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (RenderOutput, f64) {
     let desc = parse_scene_with(
         SCENE,
         std::path::Path::new("adaptive.toml"),
@@ -101,10 +111,11 @@ fn render_window(
         threads: Some(2),
         noise_target: target,
         crop,
+        interrupt,
         ..RenderOptions::default()
     };
     let t = std::time::Instant::now();
-    let out = render(&scene, &options, &|_| {}).unwrap();
+    let out = render(&scene, &options, progress).unwrap();
     (out, t.elapsed().as_secs_f64())
 }
 
@@ -337,18 +348,23 @@ fn each_pixel_holds_the_first_samples_of_its_own_sequence() {
         rule: StoppingRule::Window,
     };
     let (adaptive, _) = render_with(512, Some(target));
-    let width = 32;
-    let mut by_count = std::collections::BTreeMap::new();
-    for (i, &count) in adaptive.sample_count.iter().enumerate() {
-        by_count.entry(count as u32).or_insert(i as u32);
-    }
-    assert!(by_count.len() >= 6, "counts {:?}", by_count.keys());
+    let counts = assert_pixels_hold_their_first_samples(&adaptive);
+    assert!(counts.len() >= 6, "counts {counts:?}");
     // Sized passes give counts that are not the doublings of 8.
     assert!(
-        by_count.keys().any(|c| !c.is_power_of_two()),
-        "counts {:?}",
-        by_count.keys()
+        counts.iter().any(|c| !c.is_power_of_two()),
+        "counts {counts:?}"
     );
+}
+
+/// Asserts that one pixel of each sample count of `out` has the value and variance of a
+/// one-pixel render (`crop`) of that count; returns the counts.
+fn assert_pixels_hold_their_first_samples(out: &RenderOutput) -> Vec<u32> {
+    let width = 32;
+    let mut by_count = std::collections::BTreeMap::new();
+    for (i, &count) in out.sample_count.iter().enumerate() {
+        by_count.entry(count as u32).or_insert(i as u32);
+    }
     for (&count, &i) in &by_count {
         let (x, y) = (i % width, i / width);
         let crop = Window {
@@ -361,10 +377,45 @@ fn each_pixel_holds_the_first_samples_of_its_own_sequence() {
         let i = i as usize;
         assert_eq!(
             (one.beauty.pixels[0], one.variance.pixels[0]),
-            (adaptive.beauty.pixels[i], adaptive.variance.pixels[i]),
+            (out.beauty.pixels[i], out.variance.pixels[i]),
             "pixel ({x}, {y}), {count} samples"
         );
     }
+    by_count.into_keys().collect()
+}
+
+/// Interrupted mid-render (the flag set once a fifth of the uninterrupted render's samples
+/// are in), an adaptive render ends after the pass in flight with what it has: fewer
+/// samples than the whole render, and each pixel still holding the first samples of its
+/// sequence (the bits of a one-pixel render of its count).
+#[test]
+fn an_interrupted_adaptive_render_keeps_each_pixels_first_samples() {
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    static STOP: AtomicBool = AtomicBool::new(false);
+    let target = NoiseTarget {
+        relative_error: 0.05,
+        min_spp: 8,
+        rule: StoppingRule::Window,
+    };
+    let (whole, _) = render_with(1024, Some(target));
+    let total = |o: &RenderOutput| o.sample_count.iter().map(|&c| c as f64).sum::<f64>();
+    let done = AtomicU64::new(0);
+    let fifth = (total(&whole) / 5.0) as u64;
+    let progress = |n: u64| {
+        if done.fetch_add(n, Ordering::Relaxed) + n >= fifth {
+            STOP.store(true, Ordering::Relaxed);
+        }
+    };
+    let (cut, _) = render_interruptible(1024, Some(target), None, Some(&STOP), &progress);
+    assert!(STOP.load(Ordering::Relaxed));
+    println!("interrupted: {} of {} samples", total(&cut), total(&whole));
+    assert!(
+        total(&cut) < 0.9 * total(&whole),
+        "{} of {} samples",
+        total(&cut),
+        total(&whole)
+    );
+    assert_pixels_hold_their_first_samples(&cut);
 }
 
 /// The driver: `--noise-target` writes the adaptive stats, and refuses what it cannot do.
