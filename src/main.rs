@@ -300,13 +300,18 @@ fn render_command(args: RenderArgs) -> Result<()> {
         e => e.into(),
     })?;
     let total = range.len() as u64 * window.pixels() as u64;
+    // An adaptive render's total is the most it can take: it stops at the noise target.
+    let adaptive = options.noise_target.is_some();
     let json = (args.progress == ProgressMode::Json)
-        .then(|| progress::JsonProgress::new(total, std::time::Duration::from_secs(1)));
+        .then(|| progress::JsonProgress::new(total, adaptive, std::time::Duration::from_secs(1)));
     let bar = if args.quiet || args.progress != ProgressMode::Bar {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(total);
-        b.set_style(progress::bar_style());
+        b.set_style(match adaptive {
+            true => progress::adaptive_bar_style(),
+            false => progress::bar_style(),
+        });
         b
     };
     let settings = &compiled.settings;
