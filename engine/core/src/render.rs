@@ -437,6 +437,16 @@ pub fn checked_extent(
 /// One tile of a render: its film (kept across passes) and its workers' counters.
 type Tile = (TileFilm, SystemStats);
 
+/// Runs `f` on `pool` (the render's, when `threads` asked for one) or on rayon's global
+/// pool: adaptive sampling's estimates between passes run in parallel too, and `threads`
+/// holds for them as for the passes.
+fn in_pool<R: Send>(pool: Option<&rayon::ThreadPool>, f: impl FnOnce() -> R + Send) -> R {
+    match pool {
+        Some(pool) => pool.install(f),
+        None => f(),
+    }
+}
+
 fn render_passes<I: Integrator>(
     integrator: &I,
     scene: &CompiledScene,
@@ -581,7 +591,7 @@ fn render_passes<I: Integrator>(
             for ((_, stats), (_, pilot_stats)) in tiles.iter_mut().zip(&pilots) {
                 stats.merge(pilot_stats);
             }
-            adaptive::PilotErrors::of(&pilots, window)
+            in_pool(pool.as_ref(), || adaptive::PilotErrors::of(&pilots, window))
         });
         // The passes' ranges: the first is every pixel's `done..next`; later ones are each
         // pixel's own (`TileFilm::sample_ranges`), `pass` taking them from the tiles.
@@ -607,7 +617,9 @@ fn render_passes<I: Integrator>(
                 break;
             }
             let (all, t) = (samples.start..samples.end, std::time::Instant::now());
-            let active = plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit);
+            let active = in_pool(pool.as_ref(), || {
+                plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit)
+            });
             plan_seconds += t.elapsed().as_secs_f64();
             if active == 0 {
                 break;
@@ -640,10 +652,13 @@ fn render_passes<I: Integrator>(
             start,
             integrator.splats(),
         );
+        let summary = in_pool(pool.as_ref(), || {
+            adaptive_summary(&out, target, pilot.as_ref())
+        });
         out.stats.adaptive = Some(AdaptiveSummary {
             passes,
             plan_seconds,
-            ..adaptive_summary(&out, target, pilot.as_ref())
+            ..summary
         });
         return Ok(out);
     }

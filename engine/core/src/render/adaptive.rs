@@ -42,23 +42,35 @@ struct Estimates {
 }
 
 fn window_estimates(tiles: &[Tile], window: Window) -> Estimates {
+    use rayon::prelude::*;
     let (w, h) = (window.width() as usize, window.height() as usize);
     let mut value = vec![[0.0f32; 3]; w * h];
     let mut variance = vec![[0.0f32; 3]; w * h];
     let mut count = vec![0u32; w * h];
-    for (tile, _) in tiles {
-        let film = &tile.film;
-        for ty in 0..film.height {
-            for tx in 0..film.width {
-                let src = (ty * film.width + tx) as usize;
-                let x = (tile.x0 - window.x0 + tx) as usize;
-                let y = (tile.y0 - window.y0 + ty) as usize;
-                value[y * w + x] = film.mean(src).to_array();
-                variance[y * w + x] = film.variance_of_mean(src).to_array();
-                count[y * w + x] = film.count[src];
+    // The tiles are a grid (`render_passes` and `pilot_tiles` make them row by row, left to
+    // right, every tile but the last of a row or column as wide and high as the first): so
+    // image row `y` is in tile row `y / tile height`, and rows fill in parallel.
+    let per_row = tiles.iter().take_while(|(t, _)| t.y0 == window.y0).count();
+    let tile_height = tiles.first().map_or(1, |(t, _)| t.film.height.max(1)) as usize;
+    (value.par_chunks_mut(w))
+        .zip(variance.par_chunks_mut(w))
+        .zip(count.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, ((value, variance), count))| {
+            let row = (y / tile_height) * per_row;
+            for (tile, _) in &tiles[row..row + per_row] {
+                let film = &tile.film;
+                let ty = (window.y0 as usize + y) - tile.y0 as usize;
+                debug_assert!(ty < film.height as usize);
+                let x0 = (tile.x0 - window.x0) as usize;
+                for tx in 0..film.width as usize {
+                    let src = ty * film.width as usize + tx;
+                    value[x0 + tx] = film.mean(src).to_array();
+                    variance[x0 + tx] = film.variance_of_mean(src).to_array();
+                    count[x0 + tx] = film.count[src];
+                }
             }
-        }
-    }
+        });
     Estimates {
         value,
         variance,
@@ -194,14 +206,14 @@ pub(super) fn plan_next_pass(
     let w = window.width() as usize;
     let cap = samples.end - samples.start;
     let min_stop = target.min_spp.max(1).saturating_mul(2);
-    let mut active = 0;
-    for (tile, _) in tiles.iter_mut() {
+    let plan_tile = |tile: &mut TileFilm| {
         let (tw, th) = (tile.film.width as usize, tile.film.height as usize);
         // Before the first plan every pixel took the first pass.
         let first = tile.sample_ranges.is_empty();
         if first {
             tile.sample_ranges = vec![samples.start..samples.start; tw * th];
         }
+        let mut active = 0;
         for ty in 0..th {
             for tx in 0..tw {
                 let local = ty * tw + tx;
@@ -229,8 +241,10 @@ pub(super) fn plan_next_pass(
                 active += usize::from(range.start < range.end);
             }
         }
-    }
-    active
+        active
+    };
+    use rayon::prelude::*;
+    tiles.par_iter_mut().map(|(tile, _)| plan_tile(tile)).sum()
 }
 
 /// The stats of an adaptive render: its sample counts and final error estimates.
