@@ -576,7 +576,8 @@ fn render_passes<I: Integrator>(
     if let Some(target) = options.noise_target {
         // Adaptive: a first pass of `min_spp`, then passes in which each pixel still above
         // the target takes the samples its estimate says it needs (at most as many again as
-        // it has; `adaptive::plan_next_pass`), or what `every` allows, whichever is fewer.
+        // it has; `adaptive::plan_next_pass`), or what `every` allows at the last pass's
+        // speed, whichever is fewer.
         let next = samples
             .start
             .saturating_add(target.min_spp.max(1))
@@ -596,7 +597,6 @@ fn render_passes<I: Integrator>(
         // The passes' ranges: the first is every pixel's `done..next`; later ones are each
         // pixel's own (`TileFilm::sample_ranges`), `pass` taking them from the tiles.
         let mut range = done..next;
-        let mut limit = u32::MAX;
         let (mut passes, mut plan_seconds) = (0u32, 0.0f64);
         loop {
             let t = std::time::Instant::now();
@@ -618,7 +618,7 @@ fn render_passes<I: Integrator>(
             }
             let (all, t) = (samples.start..samples.end, std::time::Instant::now());
             let active = in_pool(pool.as_ref(), || {
-                plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all, limit)
+                plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all)
             });
             plan_seconds += t.elapsed().as_secs_f64();
             if active == 0 {
@@ -639,7 +639,14 @@ fn render_passes<I: Integrator>(
                     (cp.write)(&so_far).map_err(RenderError::Checkpoint)?;
                     write_seconds = t.elapsed().as_secs_f64();
                 }
-                limit = next_pass_samples(every.as_secs_f64(), write_seconds, per_sample);
+                // At most what takes `every` at this pass's speed, for every pixel.
+                let limit = next_pass_samples(every.as_secs_f64(), write_seconds, per_sample);
+                for r in tiles
+                    .iter_mut()
+                    .flat_map(|(t, _)| t.sample_ranges.iter_mut())
+                {
+                    r.end = r.end.min(r.start.saturating_add(limit));
+                }
             }
             // Each pixel's range is in its tile; the pass's own is not read.
             range = samples.start..samples.end;

@@ -183,8 +183,7 @@ fn unbiased_errors(image: &Estimates, pilot: &PilotErrors, window: Window) -> Ve
 /// Plans the next pass of an adaptive render from the error each pixel's estimate gives
 /// at its count: a pixel at its target stops for good, the others get the sample indices
 /// that should bring them to it ([`risotto_systems::adaptive::next_sample_count`]; at
-/// least `2 min_spp` samples before any stops, at most `samples.end`), at most `limit` more
-/// (an interruptible or checkpointed render's pass length). Sets each tile's
+/// least `2 min_spp` samples before any stops, at most `samples.end`). Sets each tile's
 /// [`TileFilm::sample_ranges`] and returns how many pixels still take samples. The error
 /// is [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s with a `pilot` (which
 /// only that rule renders), [`StoppingRule::Window`](super::StoppingRule::Window)'s
@@ -195,7 +194,6 @@ pub(super) fn plan_next_pass(
     window: Window,
     target: NoiseTarget,
     samples: std::ops::Range<u32>,
-    limit: u32,
 ) -> usize {
     use risotto_systems::adaptive::next_sample_count;
     let image = window_estimates(tiles, window);
@@ -235,7 +233,7 @@ pub(super) fn plan_next_pass(
                 };
                 let begin = samples.start + count;
                 *range = match next {
-                    Some(next) => begin..samples.start + next.min(count.saturating_add(limit)),
+                    Some(next) => begin..samples.start + next,
                     None => begin..begin,
                 };
                 active += usize::from(range.start < range.end);
