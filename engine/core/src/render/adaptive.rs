@@ -1,6 +1,6 @@
 //! Adaptive sampling's decisions between passes ([`RenderOptions::noise_target`]): each
-//! pixel's estimated relative error from the tiles' films, which pixels stop, and the
-//! summary the stats report.
+//! pixel's estimated relative error from the tiles' films, which pixels stop, how many
+//! samples each of the others takes in the next pass, and the summary the stats report.
 //!
 //! Under [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased) the decisions read a
 //! pilot (tiles of `min_spp` samples of every pixel from an independent scramble,
