@@ -598,6 +598,7 @@ fn render_passes<I: Integrator>(
         // pixel's own (`TileFilm::sample_ranges`), `pass` taking them from the tiles.
         let mut range = done..next;
         let (mut passes, mut plan_seconds) = (0u32, 0.0f64);
+        let mut buffers = adaptive::PlanBuffers::new(window);
         loop {
             let t = std::time::Instant::now();
             pass(&mut tiles, range.clone());
@@ -618,7 +619,14 @@ fn render_passes<I: Integrator>(
             }
             let (all, t) = (samples.start..samples.end, std::time::Instant::now());
             let active = in_pool(pool.as_ref(), || {
-                plan_next_pass(&mut tiles, pilot.as_ref(), window, target, all)
+                plan_next_pass(
+                    &mut tiles,
+                    pilot.as_ref(),
+                    window,
+                    target,
+                    all,
+                    &mut buffers,
+                )
             });
             plan_seconds += t.elapsed().as_secs_f64();
             if active == 0 {
@@ -651,6 +659,8 @@ fn render_passes<I: Integrator>(
             // Each pixel's range is in its tile; the pass's own is not read.
             range = samples.start..samples.end;
         }
+        // Not held beside the gathered image: the render's peak is there.
+        drop(buffers);
         let mut out = gather(
             scene,
             window,

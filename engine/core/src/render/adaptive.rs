@@ -41,12 +41,33 @@ struct Estimates {
     count: Vec<u32>,
 }
 
+impl Estimates {
+    /// Estimates of `window`'s pixels, all 0.
+    fn new(window: Window) -> Estimates {
+        let n = window.pixels();
+        Estimates {
+            value: vec![[0.0; 3]; n],
+            variance: vec![[0.0; 3]; n],
+            count: vec![0; n],
+        }
+    }
+}
+
 fn window_estimates(tiles: &[Tile], window: Window) -> Estimates {
+    let mut estimates = Estimates::new(window);
+    gather_estimates(tiles, window, &mut estimates);
+    estimates
+}
+
+/// Gathers the estimates of `window`'s pixels from `tiles` into `into`.
+fn gather_estimates(tiles: &[Tile], window: Window, into: &mut Estimates) {
     use rayon::prelude::*;
-    let (w, h) = (window.width() as usize, window.height() as usize);
-    let mut value = vec![[0.0f32; 3]; w * h];
-    let mut variance = vec![[0.0f32; 3]; w * h];
-    let mut count = vec![0u32; w * h];
+    let w = window.width() as usize;
+    let Estimates {
+        value,
+        variance,
+        count,
+    } = into;
     // The tiles are a grid (`render_passes` and `pilot_tiles` make them row by row, left to
     // right, every tile but the last of a row or column as wide and high as the first): so
     // image row `y` is in tile row `y / tile height`, and rows fill in parallel.
@@ -71,20 +92,25 @@ fn window_estimates(tiles: &[Tile], window: Window) -> Estimates {
                 }
             }
         });
-    Estimates {
-        value,
-        variance,
-        count,
-    }
 }
 
 /// The estimated relative error of each pixel of the window ([`NoiseTarget`]).
 fn window_errors(value: &[[f32; 3]], variance: &[[f32; 3]], window: Window) -> Vec<f32> {
+    let mut error = vec![0.0; window.pixels()];
+    window_errors_into(value, variance, window, &mut error);
+    error
+}
+
+/// [`window_errors`] into `error`.
+fn window_errors_into(
+    value: &[[f32; 3]],
+    variance: &[[f32; 3]],
+    window: Window,
+    error: &mut [f32],
+) {
     let (w, h) = (window.width() as usize, window.height() as usize);
     let floor = risotto_systems::adaptive::error_floor(value, NOISE_FLOOR_FRACTION);
-    let mut error = vec![0.0; w * h];
-    risotto_systems::adaptive::windowed_relative_error(w, h, value, variance, floor, &mut error);
-    error
+    risotto_systems::adaptive::windowed_relative_error(w, h, value, variance, floor, error);
 }
 
 /// How far [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s pilot estimate
@@ -141,9 +167,15 @@ impl PilotErrors {
 impl Estimates {
     /// The variances of one sample: the variances of the means times the counts.
     fn per_sample_variance(&self) -> Vec<[f32; 3]> {
-        (self.variance.iter().zip(&self.count))
-            .map(|(v, &n)| v.map(|v| v * n as f32))
-            .collect()
+        let mut out = Vec::new();
+        self.per_sample_variance_into(&mut out);
+        out
+    }
+
+    /// [`Estimates::per_sample_variance`] into `out`.
+    fn per_sample_variance_into(&self, out: &mut Vec<[f32; 3]>) {
+        out.clear();
+        out.extend((self.variance.iter().zip(&self.count)).map(|(v, &n)| v.map(|v| v * n as f32)));
     }
 }
 
@@ -158,18 +190,32 @@ impl Estimates {
 /// are seen at their rate. Both estimates are needed: the pilot sees the pixel's own
 /// region (the first rows of a noisy region have only smooth pixels before them), the
 /// preceding pixels hold many more samples than the pilot.
+#[cfg(test)]
 fn unbiased_errors(image: &Estimates, pilot: &PilotErrors, window: Window) -> Vec<f32> {
+    let mut error = vec![0.0; window.pixels()];
+    unbiased_errors_into(image, pilot, window, &mut Vec::new(), &mut error);
+    error
+}
+
+/// [`unbiased_errors`] into `error`, with `per_sample_variance` as scratch.
+fn unbiased_errors_into(
+    image: &Estimates,
+    pilot: &PilotErrors,
+    window: Window,
+    per_sample_variance: &mut Vec<[f32; 3]>,
+    error: &mut [f32],
+) {
     use risotto_systems::adaptive::{pooled_relative_error, Neighbourhood};
     let (w, h) = (window.width() as usize, window.height() as usize);
-    let mut error = vec![0.0; w * h];
+    image.per_sample_variance_into(per_sample_variance);
     pooled_relative_error(
         w,
         h,
         &image.value,
-        &image.per_sample_variance(),
+        per_sample_variance,
         Neighbourhood::Preceding(PRECEDING_POOL_RADIUS),
         pilot.floor,
-        &mut error,
+        error,
     );
     for ((e, pilot_error), &n) in (error.iter_mut())
         .zip(&pilot.per_sample_error)
@@ -177,14 +223,35 @@ fn unbiased_errors(image: &Estimates, pilot: &PilotErrors, window: Window) -> Ve
     {
         *e = e.max(*pilot_error) / (n.max(1) as f32).sqrt();
     }
-    error
+}
+
+/// What [`plan_next_pass`] works in, made once a render and reused at every pass end: made
+/// on the render's calling thread, not on its pool's, where made and freed pass after pass
+/// the allocator's per-thread arenas kept freed copies (4 bytes a pixel more peak under
+/// the unbiased rule, `tests/film_memory.rs`).
+pub(super) struct PlanBuffers {
+    image: Estimates,
+    per_sample_variance: Vec<[f32; 3]>,
+    error: Vec<f32>,
+}
+
+impl PlanBuffers {
+    /// Buffers for `window`'s pixels.
+    pub(super) fn new(window: Window) -> PlanBuffers {
+        PlanBuffers {
+            image: Estimates::new(window),
+            per_sample_variance: Vec::with_capacity(window.pixels()),
+            error: vec![0.0; window.pixels()],
+        }
+    }
 }
 
 /// Plans the next pass of an adaptive render from the error each pixel's estimate gives
 /// at its count: a pixel at its target stops for good, the others get the sample indices
 /// that should bring them to it ([`risotto_systems::adaptive::next_sample_count`]; at
 /// least `2 min_spp` samples before any stops, at most `samples.end`). Sets each tile's
-/// [`TileFilm::sample_ranges`] and returns how many pixels still take samples. The error
+/// [`TileFilm::sample_ranges`] and returns how many pixels still take samples, working in
+/// `buffers`. The error
 /// is [`StoppingRule::Unbiased`](super::StoppingRule::Unbiased)'s with a `pilot` (which
 /// only that rule renders), [`StoppingRule::Window`](super::StoppingRule::Window)'s
 /// without.
@@ -194,13 +261,20 @@ pub(super) fn plan_next_pass(
     window: Window,
     target: NoiseTarget,
     samples: std::ops::Range<u32>,
+    buffers: &mut PlanBuffers,
 ) -> usize {
     use risotto_systems::adaptive::next_sample_count;
-    let image = window_estimates(tiles, window);
-    let error = match pilot {
-        None => window_errors(&image.value, &image.variance, window),
-        Some(pilot) => unbiased_errors(&image, pilot, window),
-    };
+    let PlanBuffers {
+        image,
+        per_sample_variance,
+        error,
+    } = buffers;
+    gather_estimates(tiles, window, image);
+    match pilot {
+        None => window_errors_into(&image.value, &image.variance, window, error),
+        Some(pilot) => unbiased_errors_into(image, pilot, window, per_sample_variance, error),
+    }
+    let error = &*error;
     let w = window.width() as usize;
     let cap = samples.end - samples.start;
     let min_stop = target.min_spp.max(1).saturating_mul(2);
