@@ -53,6 +53,7 @@ impl Estimates {
     }
 }
 
+/// The estimates of `window`'s pixels, gathered from `tiles` (the pilot's, once a render).
 fn window_estimates(tiles: &[Tile], window: Window) -> Estimates {
     let mut estimates = Estimates::new(window);
     gather_estimates(tiles, window, &mut estimates);
