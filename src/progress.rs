@@ -19,10 +19,19 @@ pub fn human_rate(per_second: f64) -> String {
     if !per_second.is_finite() || per_second <= 0.0 {
         return "- samples/s".into();
     }
-    let (value, prefix) = [(1e9, " G "), (1e6, " M "), (1e3, " k ")]
+    format!("{} samples/s", human_count(per_second))
+}
+
+/// A count, three significant digits with an SI prefix: `1.23 M`, `999`, `4.50`; `0` for
+/// nothing (and for what is not a count: negative or not finite).
+fn human_count(n: f64) -> String {
+    if !n.is_finite() || n <= 0.0 {
+        return "0".into();
+    }
+    let (value, prefix) = [(1e9, " G"), (1e6, " M"), (1e3, " k")]
         .into_iter()
-        .find(|&(scale, _)| per_second >= scale)
-        .map_or((per_second, " "), |(scale, p)| (per_second / scale, p));
+        .find(|&(scale, _)| n >= scale)
+        .map_or((n, ""), |(scale, p)| (n / scale, p));
     let decimals = if value >= 100.0 {
         0
     } else if value >= 10.0 {
@@ -30,7 +39,7 @@ pub fn human_rate(per_second: f64) -> String {
     } else {
         2
     };
-    format!("{value:.decimals$}{prefix}samples/s")
+    format!("{value:.decimals$}{prefix}")
 }
 
 /// The progress bar's style: elapsed time, bar, percentage, [`human_rate`], time left.
@@ -75,12 +84,6 @@ pub fn adaptive_bar_style() -> indicatif::ProgressStyle {
             let _ = w.write_str(&human_count(state.len().unwrap_or(0) as f64));
         },
     )
-}
-
-/// A count, three significant digits with an SI prefix: `1.23 M`.
-fn human_count(n: f64) -> String {
-    let rate = human_rate(n);
-    rate.strip_suffix(" samples/s").unwrap_or(&rate).to_owned()
 }
 
 /// Counts samples from the render's workers and prints a line when one is due.
@@ -183,6 +186,8 @@ mod tests {
         assert_eq!(human_rate(4.5), "4.50 samples/s");
         assert_eq!(human_rate(3.2e9), "3.20 G samples/s");
         assert_eq!(human_rate(f64::NAN), "- samples/s");
+        assert_eq!(human_count(999.0), "999");
+        assert_eq!(human_count(0.0), "0");
     }
 
     #[test]

@@ -287,8 +287,9 @@ pub fn next_sample_count(
         f64::INFINITY
     };
     let next = need.clamp(n * (1.0 + MIN_GROWTH), 2.0 * n).ceil();
-    // In f64 the clamp is exact for any u32 count; the cast saturates.
-    let next = (next as u32).max(count + 1).max(min_stop);
+    // In f64 the clamp is exact for any u32 count, and its floor, `ceil(1.25 max(count,
+    // 1))`, is above `count`; the cast saturates.
+    let next = (next as u32).max(min_stop);
     Some(next.min(cap))
 }
 

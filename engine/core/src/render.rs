@@ -499,7 +499,7 @@ fn render_passes<I: Integrator>(
         // The sampler travels in the sample addresses (`SamplerKind::address`).
         let addresses = options.sampler.addresses(range);
         let workers = &workers;
-        let mut work = move || {
+        let work = move || {
             tiles.par_iter_mut().for_each(|(tile, stats)| {
                 let i = rayon::current_thread_index().unwrap_or(0) % workers.len();
                 // A worker is plain scratch: one left poisoned by a panicking tile is as good.
@@ -533,10 +533,7 @@ fn render_passes<I: Integrator>(
                 }
             })
         };
-        match &pool {
-            Some(pool) => pool.install(work),
-            None => work(),
-        }
+        in_pool(pool.as_ref(), work)
     };
     // A render in iterations: one sample index of a group of tiles each, the groups as
     // large as the integrator's bound allows (at least one tile).
