@@ -124,3 +124,61 @@ fn the_paths_technique_leaves_the_emission_to_the_paths_own_camera_rays() {
         pixels * u64::from(EXTRA_CAMERA_SAMPLES + 1)
     );
 }
+
+/// A small emitter off the centre of a perspective view, seen through a box filter of
+/// radius 3 (a pixel's camera points fall up to two and a half pixels past its square):
+/// only the pixels whose rays may reach it take the extra camera points (the stats count
+/// them), and none that sees it is left out: the image's total emission is the same as
+/// from the paths' own camera rays alone (`VisibleEmitters::Paths`). Leaving out the pixels
+/// that see the emitter only through their filter's reach would take three quarters of
+/// their share away.
+#[test]
+fn only_the_pixels_near_a_small_emitter_take_the_extra_points_and_all_that_see_it_do() {
+    use risotto::engine::path_tracer::visible_emitters::VisibleEmitters;
+    use risotto::engine::render::{render, RenderOptions};
+    use risotto::systems::camera::PixelFilter;
+    let (w, h, spp) = (64, 48, 64);
+    let view = perspective(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 40.0, w, h)
+        .with_filter(PixelFilter::Box { radius: 3.0 });
+    let mut scene = Scene::new(view, settings(w, h, spp, 1));
+    let black = scene.add_material(
+        "black",
+        0,
+        mat(Surface::Diffuse {
+            reflectance: Rgb::BLACK,
+        }),
+    );
+    // Facing the camera (e1 x e2 = +z), about 5 x 5 pixels, up and right of the centre.
+    let lamp = quad(Vec3::new(0.6, 0.4, 0.0), Vec3::X * 0.3, Vec3::Y * 0.3);
+    scene.add_shape("lamp", lamp, black, Some(Rgb::splat(LE)));
+    let compiled = scene.compile().unwrap();
+    let total = |out: &RenderOutput| {
+        let mut sum = 0.0f64;
+        for y in 0..h as usize {
+            for x in 0..w as usize {
+                sum += f64::from(out.beauty.get(x, y).r);
+            }
+        }
+        sum
+    };
+    let paths_only = RenderOptions {
+        visible_emitters: VisibleEmitters::Paths,
+        ..RenderOptions::default()
+    };
+    let reference = total(&render(&compiled, &paths_only, &|_| {}).unwrap());
+    let out = render(&compiled, &RenderOptions::default(), &|_| {}).unwrap();
+    let supersampled = total(&out);
+    assert!(reference > 0.0);
+    assert!(
+        (supersampled / reference - 1.0).abs() < 0.02,
+        "total emission {supersampled} with the extra points, {reference} without"
+    );
+    // The extra points of the pixels near the lamp alone: more camera rays than paths, far
+    // fewer than K + 1 a path.
+    let paths = u64::from(w * h * spp);
+    let camera = out.stats.counters.system(System::Camera).items;
+    assert!(
+        camera > paths && camera < paths + paths / 4,
+        "{camera} camera points for {paths} paths"
+    );
+}

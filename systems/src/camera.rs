@@ -23,6 +23,8 @@
 //! the film position, sensor importance and pdfs), is [`CameraConnection`]'s module,
 //! `camera/importance.rs`.
 
+mod box_pixels;
+pub use box_pixels::PixelRect;
 mod importance;
 pub use importance::{CameraConnection, CameraEndpoint};
 

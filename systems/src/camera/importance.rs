@@ -204,7 +204,7 @@ impl CameraEndpoint {
     /// (perspective projections; `None` unless in front) or a point (orthographic). The
     /// inverse of `RayGenerator::screen` and the ray construction.
     #[inline]
-    fn project(&self, v: Vec3) -> Option<Vec2> {
+    pub(super) fn project(&self, v: Vec3) -> Option<Vec2> {
         let gen = &self.gen;
         let c = &gen.camera;
         let (a, b) = match c.projection {

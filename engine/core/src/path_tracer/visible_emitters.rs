@@ -17,9 +17,12 @@
 //! is uniform over the pixel, so each of the `K + 1` estimates of `E` is unbiased and so is
 //! their mean; `S` is the paths' as before.
 //!
-//! The extra rays cost little: most miss every emitter, which a test against the emitters'
-//! triangles alone (at most [`MAX_EMITTER_TRIANGLES`]) tells, and only those that may hit one
-//! are traced through the scene, where the closest hit decides as for any camera ray.
+//! The extra rays cost little. They are made only for the pixels whose rays may reach the
+//! box around the emitters (a conservative screen-space bound,
+//! [`Camera::pixels_seeing_box`](risotto_systems::camera::Camera::pixels_seeing_box)); of
+//! those, most miss every emitter, which a test against the emitters' triangles alone (at
+//! most [`MAX_EMITTER_TRIANGLES`]) tells, and only those that may hit one are traced through
+//! the scene, where the closest hit decides as for any camera ray.
 //!
 //! Only where a camera ray's first hit decides `E` alone: no volumes and no surface a path
 //! ray can pass (transmissive, partly opaque), a camera in no volume, and emissive triangles
@@ -108,6 +111,10 @@ fn few_triangle_emitters(scene: &CompiledScene) -> bool {
 #[derive(Debug, Default)]
 pub struct VisibleEmitterScratch {
     emitters: Vec<[Vec3; 3]>,
+    /// The batch's paths whose pixels may see the emitters, and their pixels and seeds.
+    path: Vec<u32>,
+    pixel: Vec<u32>,
+    seed: Vec<u32>,
     camera_origin: Vec<Vec3>,
     camera_direction: Vec<Vec3>,
     sample: Vec<u32>,
@@ -139,18 +146,38 @@ pub(super) fn add_extra_samples(
             _ => None,
         }));
     let bounds = &emitter_bounds(&s.emitters);
+    // The paths whose pixels' rays may reach the emitters' box at all (on `cornell` a few
+    // hundred of the 65,536 pixels): no other path's extra rays are made.
+    let camera = &scene.camera;
+    let (pixel, seeds) = (&batch.paths.pixel[..n], &batch.seeds[..n]);
+    s.path.clear();
+    match camera.pixels_seeing_box(bounds[0], bounds[1]) {
+        Some(rect) => s
+            .path
+            .extend((0..n as u32).filter(|&k| rect.contains(pixel[k as usize], camera.width))),
+        None => s.path.extend(0..n as u32),
+    }
+    let seen = s.path.len();
+    if seen == 0 {
+        return;
+    }
+    s.pixel.clear();
+    s.pixel.extend(s.path.iter().map(|&k| pixel[k as usize]));
+    s.seed.clear();
+    s.seed.extend(s.path.iter().map(|&k| seeds[k as usize]));
     for j in 1..=EXTRA_CAMERA_SAMPLES {
         s.sample.clear();
+        let sample = &batch.paths.sample[..n];
         s.sample
-            .extend(batch.paths.sample[..n].iter().map(|&i| i + j * spp));
+            .extend(s.path.iter().map(|&k| sample[k as usize] + j * spp));
         s.camera_origin.clear();
         s.camera_direction.clear();
-        stats.time(System::Camera, n, || {
+        stats.time(System::Camera, seen, || {
             push_camera_ray_geometry(
-                &scene.camera,
-                &batch.paths.pixel,
+                camera,
+                &s.pixel,
                 &s.sample,
-                &batch.seeds,
+                &s.seed,
                 &mut s.camera_origin,
                 &mut s.camera_direction,
             )
@@ -161,8 +188,9 @@ pub(super) fn add_extra_samples(
         let (origin, direction) = (&s.camera_origin, &s.camera_direction);
         let (tmin, tmax) = (FREE_ORIGIN, f32::INFINITY);
         let emitters = &s.emitters;
+        // Indices into the seen paths' rays.
         s.candidate.clear();
-        s.candidate.extend((0..n as u32).filter(|&k| {
+        s.candidate.extend((0..seen as u32).filter(|&k| {
             let (o, d) = (origin[k as usize], direction[k as usize]);
             may_hit_box(bounds, o, d, tmin, tmax)
                 && emitters.iter().any(|tri| may_hit(tri, o, d, tmin, tmax))
@@ -207,8 +235,8 @@ pub(super) fn add_extra_samples(
             let surf = (scene.geometry).surface_at(s.prim[i], o, d, s.t[i], s.b1[i], s.b2[i]);
             // One-sided emitters, as `PathTracer::surface_emission`.
             if d.dot(surf.ng) < 0.0 {
-                let k = k as usize;
-                batch.paths.radiance[k] += le * weight;
+                let path = s.path[k as usize] as usize;
+                batch.paths.radiance[path] += le * weight;
             }
         }
     }
