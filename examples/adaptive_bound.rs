@@ -15,6 +15,8 @@
 //! count at which the renderer's rules can stop a pixel at the default `--min-spp 16`, and
 //! the cap the README's measurements use). Its expected MSE is `mean over pixels of
 //! mean_c var_c / n`; uniform sampling's at the same mean count `N` is `mean var / N`.
+//! Without the clamps the ratio is the same at every target, printed last: what the
+//! relative-error allocation itself gives, before the clamps bound it.
 //!
 //! Such a rule is unbiased (its counts depend on no pixel's samples), so the ratio bounds
 //! what an unbiased stopping rule that estimates the variances can reach; the Neyman
@@ -105,5 +107,26 @@ fn main() -> Result<(), String> {
             mse_neyman / mse_uniform
         );
     }
+    // Without the clamps the counts `(e / t)^2` scale with `1 / t^2` alone, so the ratio is
+    // the same at every target: `mean(s / e^2) mean(e^2) / mean(s)`, with `s` a pixel's
+    // variance and `e` its relative error. For one channel and no floor that is `mean(v^2)
+    // mean(e^2) / mean(v^2 e^2)` (`v` the pixel's value): below 1 only where the brighter
+    // pixels are the relatively noisier ones. A pixel without variance takes no samples
+    // and adds nothing.
+    let (mut per_count, mut count_sum) = (0.0f64, 0.0f64);
+    for (s, &e) in mean_variance.iter().zip(&relative) {
+        let n = (e as f64).powi(2);
+        if n > 0.0 {
+            per_count += s / n;
+            count_sum += n;
+        }
+    }
+    let mean_variance_all = mean_variance.iter().sum::<f64>() / pixels;
+    println!(
+        "without the [{}, {}] clamps, at every target: known-variance rule / uniform {:.2}",
+        COUNTS.0,
+        COUNTS.1,
+        (per_count / pixels) * (count_sum / pixels) / mean_variance_all
+    );
     Ok(())
 }
