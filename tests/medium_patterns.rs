@@ -196,10 +196,30 @@ fn bad_medium_patterns_are_located_errors() {
             r#"density = { pattern = "noise", octaves = 0 }"#,
             &["octaves", "0"][..],
         ),
+        // An extinction bound no tracker can walk: it would render for ever.
+        (
+            r#"density = { pattern = "constant", value = 1 }, scale = 1e30"#,
+            &["density", "1e30", "at most 1e6", "grid"][..],
+        ),
     ];
     let cases =
         cases.map(|(case, needles)| (format!(r#"type = "heterogeneous", {case}"#), needles));
     assert_located_errors(&d, &cases);
+    // The same bound for a homogeneous interior's sigma_t pattern.
+    assert_located_errors(
+        &d,
+        &[(
+            r#"type = "homogeneous", sigma_t = { pattern = "constant", value = 2e6 }"#.into(),
+            &["sigma_t", "2e6", "at most 1e6"][..],
+        )],
+    );
+    // At the bound, a pattern density loads.
+    let at_bound = ball(
+        r#"{ type = "heterogeneous", density = { pattern = "constant", value = 1 }, scale = 1e6 }"#,
+        1,
+        0,
+    );
+    assert!(common::load_scene_text(&d, &at_bound).is_ok());
 }
 
 #[test]

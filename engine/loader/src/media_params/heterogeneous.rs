@@ -265,8 +265,31 @@ fn density_pattern(t: &MaterialParams, key: &str, scale: f32) -> Result<PatternG
             ),
         ));
     }
+    if scale * high > MAX_PATTERN_EXTINCTION {
+        return Err(t.error(
+            Some(key),
+            format!(
+                "the {key} pattern's upper bound {high} times scale {scale} is an extinction \
+                 of up to {:e} per unit of length: a pattern density is tracked one tentative \
+                 collision at a time, about that many per unit of path (a grid's dense \
+                 stretches are integrated exactly instead), so at most {:e} is accepted: lower \
+                 the scale, or bake the pattern into a grid",
+                scale * high,
+                MAX_PATTERN_EXTINCTION
+            ),
+        ));
+    }
     Ok(graph)
 }
+
+/// The largest extinction bound (`scale` times the density pattern's upper bound, per unit
+/// of length) a pattern density may have. Null-collision trackers take about `majorant x
+/// length` tentative collisions along a path, each a pattern evaluation; a grid's dense
+/// stretches are integrated exactly past `risotto_systems::tracking::dense::TRACKING_CAP`,
+/// but a pattern's optical depth has no closed form. At this bound a unit of path costs a
+/// million evaluations (tens of milliseconds); media meant to be seen through are below a
+/// few thousand. Without it a mistyped scale (`1e30`) renders for ever.
+const MAX_PATTERN_EXTINCTION: f32 = 1e6;
 
 /// Why a homogeneous interior refuses an emission grid.
 const HOMOGENEOUS_EMISSION: &str = "a homogeneous interior's emission is a colour or a \
