@@ -279,6 +279,19 @@ fn render_command(args: RenderArgs) -> Result<()> {
         }
         None => None,
     };
+    if let Some(target) = &noise_target {
+        // A pixel may stop from `2 min_spp` samples on and takes at most the scene's spp:
+        // when the first is not below the second, no pixel stops early.
+        let (earliest, cap) = (target.min_spp.saturating_mul(2), compiled.settings.spp);
+        if earliest >= cap {
+            eprintln!(
+                "warning: --min-spp {}: no pixel can stop before {earliest} samples, and a \
+                 pixel takes at most {cap} (the scene's spp or --spp): every pixel takes all \
+                 {cap}, as without --noise-target",
+                target.min_spp
+            );
+        }
+    }
     let options = techniques.render_options(RenderOptions {
         threads: args.threads,
         batch_size: args.batch_size,

@@ -464,6 +464,19 @@ fn the_driver_reports_adaptive_stats_and_refuses_splitting() {
     assert!(a["plan_seconds"].as_f64().unwrap() >= 0.0, "{a}");
     // The unbiased rule renders its pilot of --min-spp samples a pixel and says so.
     assert_eq!(adaptive_stats("unbiased")["pilot_spp"].as_u64(), Some(4));
+    // A minimum that leaves no pixel a chance to stop before the cap is warned about, and
+    // one that does is not.
+    let warnings = |min_spp: &str| {
+        let o = run(&["--noise-target", "0.2", "--min-spp", min_spp, "--quiet"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = warnings("32");
+    assert!(
+        err.contains("warning: --min-spp 32: no pixel can stop before 64 samples"),
+        "{err}"
+    );
+    assert!(!warnings("31").contains("warning"));
     for (args, needle) in [
         (
             &["--noise-target", "0"][..],
