@@ -417,7 +417,13 @@ fn group_by_material(
     }
     escaped.clear();
     let prim_material = &scene.prim_material[..];
-    let mut add = |i: usize, prim: u32| {
+    // One loop for both cases, its body inline (as a closure called from two loops it was
+    // a call per hit).
+    let keep = keep.map(|k| &k[..prims.len()]);
+    for (i, &prim) in prims.iter().enumerate() {
+        if keep.is_some_and(|k| !k[i]) {
+            continue;
+        }
         if prim == NO_HIT {
             escaped.push(i as u32);
         } else {
@@ -427,16 +433,6 @@ fn group_by_material(
                 None => scene.material_of_prim(prim),
             };
             buckets[m as usize].push(i as u32);
-        }
-    };
-    match keep {
-        None => prims.iter().enumerate().for_each(|(i, &prim)| add(i, prim)),
-        Some(keep) => {
-            for (i, (&prim, &k)) in prims.iter().zip(keep).enumerate() {
-                if k {
-                    add(i, prim);
-                }
-            }
         }
     }
 }
