@@ -121,27 +121,22 @@ mod tests {
     /// boxes anywhere in front of the camera, for both projections and wide filters.
     #[test]
     fn every_pixel_whose_rays_meet_the_box_is_inside() {
+        // Each projection with the pixel box and with a filter reaching past the pixel.
         let cameras = [
-            camera(
-                Projection::Perspective { fov_deg: 50.0 },
-                PixelFilter::PIXEL_BOX,
-            ),
-            camera(
+            (
                 Projection::Perspective { fov_deg: 50.0 },
                 PixelFilter::Tent { radius: 2.0 },
             ),
-            camera(
-                Projection::Orthographic { width: 3.0 },
-                PixelFilter::PIXEL_BOX,
-            ),
-            camera(
+            (
                 Projection::Orthographic { width: 3.0 },
                 PixelFilter::Box { radius: 1.5 },
             ),
-        ];
+        ]
+        .into_iter()
+        .flat_map(|(p, wide)| [camera(p, PixelFilter::PIXEL_BOX), camera(p, wide)]);
         let mut rng = SplitMix64(7);
         let mut u = || rng.f32();
-        for cam in &cameras {
+        for cam in cameras {
             let reach = cam.filter.radius().max(0.5);
             let (mut inside_some, mut smaller) = (0, 0);
             for _ in 0..40 {

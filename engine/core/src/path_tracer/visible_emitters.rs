@@ -150,6 +150,7 @@ pub(super) fn add_extra_samples(
     // hundred of the 65,536 pixels): no other path's extra rays are made.
     let camera = &scene.camera;
     let (pixel, seeds) = (&batch.paths.pixel[..n], &batch.seeds[..n]);
+    let sample = &batch.paths.sample[..n];
     s.path.clear();
     match camera.pixels_seeing_box(bounds[0], bounds[1]) {
         Some(rect) => s
@@ -167,7 +168,6 @@ pub(super) fn add_extra_samples(
     s.seed.extend(s.path.iter().map(|&k| seeds[k as usize]));
     for j in 1..=EXTRA_CAMERA_SAMPLES {
         s.sample.clear();
-        let sample = &batch.paths.sample[..n];
         s.sample
             .extend(s.path.iter().map(|&k| sample[k as usize] + j * spp));
         s.camera_origin.clear();
