@@ -227,6 +227,8 @@ pub(crate) fn converge_command(args: ConvergeArgs) -> Result<()> {
         render: RenderOptions {
             threads: args.threads,
             batch_size: args.batch_size,
+            // A curve reads the beauty and the sample counts alone.
+            aovs: false,
             ..RenderOptions::default()
         },
         metric: args.metric,

@@ -299,6 +299,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         samples,
         interrupt: Some(interrupt::install()?),
         noise_target,
+        // The first-hit AOVs cost 140 bytes a pixel (`AOV_BYTES_PER_PIXEL`): kept only for
+        // the layers `--aovs` writes and the guides `--denoise` reads.
+        aovs: args.aovs || args.denoise,
         ..RenderOptions::default()
     });
     let (window, range) = checked_extent(&compiled, &options).map_err(|e| match e {

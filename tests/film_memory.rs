@@ -7,9 +7,12 @@
 //! ([`ADAPTIVE_BYTES_PER_PIXEL`]), and with the unbiased rule what its pilot adds
 //! ([`PILOT_BYTES_PER_PIXEL`]).
 
+use risotto::engine::render::{render, RenderOptions};
 use risotto::engine::render::{
-    ADAPTIVE_BYTES_PER_PIXEL, FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
+    ADAPTIVE_BYTES_PER_PIXEL, AOV_BYTES_PER_PIXEL, FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
 };
+use risotto::loader::load::{compile_scene, scene_from_desc, MaterialRegistry};
+use risotto::loader::scene_file::parse_scene;
 use std::path::Path;
 
 mod common;
@@ -90,6 +93,19 @@ fn a_renders_film_costs_the_documented_bytes_per_pixel() {
     );
 }
 
+/// Keeping the first-hit AOVs (`--aovs`; `--denoise` too) adds what `AOV_BYTES_PER_PIXEL`
+/// says; a render without them does not pay it (`FILM_BYTES_PER_PIXEL` is measured
+/// without).
+#[test]
+fn the_aovs_cost_the_documented_bytes_per_pixel() {
+    assert_added_bytes(
+        "AOV_BYTES_PER_PIXEL",
+        AOV_BYTES_PER_PIXEL,
+        ("aov-memory-plain", &[]),
+        ("aov-memory-kept", &["--aovs"]),
+    );
+}
+
 /// Adaptive sampling's options with stopping rule `rule` (a loose target: the memory, not
 /// the image, is measured).
 fn adaptive(rule: &str) -> [&str; 6] {
@@ -153,4 +169,82 @@ fn the_unbiased_rules_pilot_costs_the_documented_bytes_per_pixel() {
         ("pilot-memory-window", &adaptive("window")),
         ("pilot-memory-unbiased", &adaptive("unbiased")),
     );
+}
+
+// ---------------------------------------------------------------------------------------
+// Without AOVs the image is the same and no AOV sums are kept.
+
+fn scene() -> risotto::engine::scene::CompiledScene {
+    let desc = parse_scene(&SCENE.replace("SIZE", "16"), Path::new("aovs.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let scene =
+        scene_from_desc(desc, &MaterialRegistry::with_builtins()).unwrap_or_else(|e| panic!("{e}"));
+    compile_scene(scene).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_render_without_aovs_is_the_same_image_with_no_aov_sums() {
+    let scene = scene();
+    let with = render(&scene, &RenderOptions::default(), &|_| {}).unwrap();
+    let options = RenderOptions {
+        aovs: false,
+        ..RenderOptions::default()
+    };
+    let without = render(&scene, &options, &|_| {}).unwrap();
+    let bits = |p: &[risotto_components::Rgb]| -> Vec<u32> {
+        p.iter()
+            .flat_map(|c| c.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert_eq!(bits(&with.beauty.pixels), bits(&without.beauty.pixels));
+    assert_eq!(bits(&with.variance.pixels), bits(&without.variance.pixels));
+    assert_eq!(with.sample_count, without.sample_count);
+    // Kept: a mean per pixel, the sphere's albedo where it is seen.
+    assert!(with.aovs.holds_sums());
+    assert_eq!(with.albedo.pixels.len(), 16 * 16);
+    assert_eq!(with.depth.len(), 16 * 16);
+    let centre = with.albedo.pixels[8 * 16 + 8];
+    assert!((centre.r - 0.5).abs() < 1e-4, "{centre:?}");
+    // Not kept: no sums and empty layers, and no layer written for them.
+    assert!(!without.aovs.holds_sums());
+    assert!(without.albedo.pixels.is_empty() && without.normal.pixels.is_empty());
+    assert!(without.depth.is_empty());
+    let layers = without.film_output(true);
+    assert!(layers.albedo.is_none() && layers.normal.is_none() && layers.depth.is_none());
+}
+
+/// The names of the layers of an EXR's parts.
+fn layer_names(path: &Path) -> Vec<String> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+    image
+        .layer_data
+        .iter()
+        .flat_map(|l| {
+            let part = l
+                .attributes
+                .layer_name
+                .as_ref()
+                .map_or(String::new(), |n| n.to_string());
+            l.channel_data
+                .list
+                .iter()
+                .map(move |c| format!("{part}.{}", c.name))
+        })
+        .collect()
+}
+
+#[test]
+fn the_driver_writes_aov_layers_with_aovs_only() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("aovs");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // `peak_resident` renders the scene at 16^2 into `s16.exr`.
+    let layers = |extra: &[&str]| {
+        peak_resident(&dir, 16, extra);
+        layer_names(&dir.join("s16.exr"))
+    };
+    let (plain, kept) = (layers(&[]), layers(&["--aovs"]));
+    let albedo = |names: &[String]| names.iter().any(|n| n.contains("albedo"));
+    assert!(!albedo(&plain), "{plain:?}");
+    assert!(albedo(&kept), "{kept:?}");
 }

@@ -165,7 +165,7 @@ pub fn offset_origin_scalar(p: Vec3, ng: Vec3, offset: f32, wi: Vec3) -> Vec3 {
 }
 
 /// [`offset_origin`] with the three components in the lanes of one SSE2 register (SSE2 is
-/// part of x86-64, so no run-time check): [`round_away`]'s selects lane-wise. The sign test
+/// part of x86-64, so no run-time check): `round_away`'s selects lane-wise. The sign test
 /// `(x ^ dir) >> 31` becomes an arithmetic shift, all ones for opposite signs, so the step
 /// `select(same sign, 1, -1)` is `shift | 1`; `x == 0` and `dir != 0` are the float compares
 /// of the scalar form (`!=` true, `==` false for NaN in both).

@@ -29,7 +29,7 @@ mod splats;
 use adaptive::{adaptive_summary, plan_next_pass};
 pub use film_memory::{
     check_film_memory, film_bytes, physical_memory, proc_bytes, ADAPTIVE_BYTES_PER_PIXEL,
-    FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
+    AOV_BYTES_PER_PIXEL, FILM_BYTES_PER_PIXEL, PILOT_BYTES_PER_PIXEL,
 };
 pub use gather::aov_means;
 use gather::gather;
@@ -39,7 +39,8 @@ mod window;
 pub use window::{SampleRange, Window};
 
 /// Largest `width * height` of a render's image ([`risotto_systems::film::MAX_PIXELS`]:
-/// 2^26 pixels, 8192 x 8192, whose render takes about 15 GB at [`FILM_BYTES_PER_PIXEL`]).
+/// 2^26 pixels, 8192 x 8192, whose render takes about 7 GB at [`FILM_BYTES_PER_PIXEL`],
+/// 15 GB with [`AOV_BYTES_PER_PIXEL`]).
 /// Scene files, scenes built in code and partial renders asking for more are an error
 /// naming the value rather than an allocation abort; a smaller film that needs more than
 /// the machine's memory is refused when the render starts ([`check_film_memory`]).
@@ -102,6 +103,14 @@ pub struct RenderOptions {
     /// Whether the path tracer samples the directly visible emission with extra camera
     /// points (the `visible_emitters` technique). Defaults to supersampled.
     pub visible_emitters: crate::path_tracer::visible_emitters::VisibleEmitters,
+    /// Whether the render keeps the first-hit AOVs (the sums of albedo, shading normal and
+    /// depth in every tile and in the gathered image, and their means in
+    /// [`RenderOutput::albedo`], [`RenderOutput::normal`] and [`RenderOutput::depth`]):
+    /// [`AOV_BYTES_PER_PIXEL`] of the film's memory. Without them those layers are empty
+    /// (0 x 0) and [`RenderOutput::aovs`] holds no sums. What the denoiser and `--aovs`
+    /// read. Defaults to `true`; the `risotto` driver keeps them only for `--aovs` and
+    /// `--denoise`.
+    pub aovs: bool,
 }
 
 /// Adaptive sampling's request ([`RenderOptions::noise_target`]).
@@ -181,6 +190,7 @@ impl Default for RenderOptions {
             noise_target: None,
             integrator: None,
             visible_emitters: Default::default(),
+            aovs: true,
         }
     }
 }
@@ -194,16 +204,18 @@ pub struct RenderOutput {
     pub variance: Image,
     /// Samples per pixel.
     pub sample_count: Vec<f32>,
-    /// Mean first-hit albedo.
+    /// Mean first-hit albedo (empty, 0 x 0, without [`RenderOptions::aovs`]).
     pub albedo: Image,
-    /// Mean first-hit shading normal.
+    /// Mean first-hit shading normal (empty without [`RenderOptions::aovs`]).
     pub normal: Image,
-    /// Mean first-hit distance (0 where the camera saw nothing).
+    /// Mean first-hit distance, 0 where the camera saw nothing (empty without
+    /// [`RenderOptions::aovs`]).
     pub depth: Vec<f32>,
     /// The per-pixel sums (f64) and counts the means come from, over the window: what
     /// merging partial renders adds up.
     pub film: Film,
-    /// The per-pixel sums (f64) the AOV means come from (divided by `film.count`).
+    /// The per-pixel sums (f64) the AOV means come from (divided by `film.count`); none
+    /// ([`AovFilm::holds_sums`] false) without [`RenderOptions::aovs`].
     pub aovs: AovFilm,
     /// The window of the full image these pixels are.
     pub window: Window,
@@ -215,8 +227,10 @@ pub struct RenderOutput {
 
 impl RenderOutput {
     /// The layers [`write_exr`](crate::output::write_exr) writes: beauty, variance and
-    /// sample count, and with `aovs` the albedo, normal and depth means.
+    /// sample count, and with `aovs` the albedo, normal and depth means (when the render
+    /// kept them, [`RenderOptions::aovs`]).
     pub fn film_output(&self, aovs: bool) -> crate::output::FilmOutput<'_> {
+        let aovs = aovs && self.aovs.holds_sums();
         crate::output::FilmOutput {
             beauty: &self.beauty,
             variance: &self.variance,
@@ -409,9 +423,10 @@ pub fn checked_extent(
         }
         Some(_) => ADAPTIVE_BYTES_PER_PIXEL,
     };
+    let aovs = if options.aovs { AOV_BYTES_PER_PIXEL } else { 0 };
     check_film_memory(
         window.pixels() as u64,
-        FILM_BYTES_PER_PIXEL + adaptive,
+        FILM_BYTES_PER_PIXEL + aovs + adaptive,
         physical_memory(),
     )
     .map_err(|reason| RenderError::FilmMemory { window, reason })?;
@@ -466,7 +481,12 @@ fn render_passes<I: Integrator>(
     let mut tiles: Vec<Tile> = Vec::new();
     for y0 in (window.y0..window.y1).step_by(ts as usize) {
         for x0 in (window.x0..window.x1).step_by(ts as usize) {
-            let tile = TileFilm::new(x0, y0, ts.min(window.x1 - x0), ts.min(window.y1 - y0));
+            let (w, h) = (ts.min(window.x1 - x0), ts.min(window.y1 - y0));
+            let tile = if options.aovs {
+                TileFilm::new(x0, y0, w, h)
+            } else {
+                TileFilm::without_aovs(x0, y0, w, h)
+            };
             tiles.push((tile, SystemStats::default()));
         }
     }

@@ -114,7 +114,8 @@ pub fn scene_hash(pieces: &[&[u8]]) -> String {
 
 impl Partial {
     /// The partial of a render's output: `resolution`, `spp`, `seed` and `scene_hash` say
-    /// what it is a piece of; with `aovs` it carries the output's AOV sums.
+    /// what it is a piece of; with `aovs` it carries the output's AOV sums (when the render
+    /// kept them: `RenderOptions::aovs`).
     pub fn of_render(
         out: &RenderOutput,
         resolution: (u32, u32),
@@ -134,7 +135,7 @@ impl Partial {
                 stats: serde_json::from_str(&out.stats.to_json()).unwrap_or(Value::Null),
             },
             film: out.film.clone(),
-            aovs: aovs.then(|| out.aovs.clone()),
+            aovs: (aovs && out.aovs.holds_sums()).then(|| out.aovs.clone()),
         }
     }
 

@@ -10,10 +10,19 @@
 //! hold, with both figures in the message, rather than letting the operating system kill
 //! the process part way through.
 
-/// Peak resident bytes a render's film takes per pixel of its window (measured: see the
-/// module docs). A bidirectional integrator's splat film adds
-/// [`SplatFilm`](risotto_systems::film::SplatFilm)'s 24 bytes.
-pub const FILM_BYTES_PER_PIXEL: u64 = 224;
+/// Peak resident bytes a render's film takes per pixel of its window, without AOVs
+/// (measured: see the module docs). A bidirectional integrator's splat film adds
+/// [`SplatFilm`](risotto_systems::film::SplatFilm)'s 24 bytes, the AOVs
+/// [`AOV_BYTES_PER_PIXEL`].
+pub const FILM_BYTES_PER_PIXEL: u64 = 108;
+
+/// What keeping the first-hit AOVs ([`RenderOptions::aovs`](super::RenderOptions::aovs))
+/// adds to a render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (111.6 bytes
+/// on Linux, 2026-12-07): the f64 sums of albedo, normal and depth in every tile and again
+/// in the gathered image (56 bytes each; their means in the output, 28 bytes, come after
+/// the tiles are freed). Without them a render's peak is half what it was when every render
+/// kept them (224 bytes a pixel).
+pub const AOV_BYTES_PER_PIXEL: u64 = 112;
 
 /// The memory a film of `pixels` pixels needs, in bytes (saturating).
 pub fn film_bytes(pixels: u64) -> u64 {
@@ -21,14 +30,14 @@ pub fn film_bytes(pixels: u64) -> u64 {
 }
 
 /// What adaptive sampling ([`NoiseTarget`](super::NoiseTarget), either rule) adds to a
-/// render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (108.8 bytes on Linux,
-/// 2026-12-07): the estimates made at each pass end (means, variances, counts and errors,
+/// render's peak a pixel, measured as [`FILM_BYTES_PER_PIXEL`] is (80.3 bytes on Linux,
+/// 2026-12-07, without AOVs; 108.8 with them): the estimates made at each pass end (means, variances, counts and errors,
 /// 32 bytes), the tiles' sample ranges for the next pass (8 bytes,
 /// [`TileFilm::sample_ranges`]), and the summary's copies of the means and variances beside
 /// the gathered output.
 ///
 /// [`TileFilm::sample_ranges`]: crate::integrator::TileFilm::sample_ranges
-pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 108;
+pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 80;
 
 /// What the unbiased stopping rule ([`StoppingRule::Unbiased`](super::StoppingRule)) adds
 /// on top of [`ADAPTIVE_BYTES_PER_PIXEL`], measured the same way (4 bytes, 2026-12-07): the

@@ -21,7 +21,8 @@ pub(super) fn gather(
 ) -> RenderOutput {
     let (w, h) = (window.width(), window.height());
     let mut film = Film::new(w, h);
-    let mut aovs = AovFilm::new(w, h);
+    // The AOV sums only where the tiles keep them (`RenderOptions::aovs`): 56 bytes a pixel.
+    let mut aov_sums: Option<AovFilm> = None;
     let n = (w * h) as usize;
     let mut counters = SystemStats::default();
     // A final gather is handed the tiles by value and frees each once added.
@@ -29,9 +30,13 @@ pub(super) fn gather(
         let (tile, stats) = std::borrow::Borrow::<Tile>::borrow(&tile);
         let (x0, y0) = (tile.x0 - window.x0, tile.y0 - window.y0);
         film.add_tile(&tile.film, x0, y0);
-        aovs.add_tile(&tile.aovs, x0, y0);
+        if tile.aovs.holds_sums() {
+            let sums = aov_sums.get_or_insert_with(|| AovFilm::new(w, h));
+            sums.add_tile(&tile.aovs, x0, y0);
+        }
         counters.merge(stats);
     }
+    let aovs = aov_sums.unwrap_or_else(|| AovFilm::without_sums(w, h));
     if let Some((splat, scale)) = splats {
         add_splats(&mut film, window, splat, scale);
     }
@@ -42,7 +47,16 @@ pub(super) fn gather(
     };
     let beauty = image(&|i| film.mean(i));
     let variance = image(&|i| film.variance_of_mean(i));
-    let (albedo, normal, depth) = aov_means(&aovs, &film.count);
+    let (albedo, normal, depth) = if aovs.holds_sums() {
+        aov_means(&aovs, &film.count)
+    } else {
+        let empty = || Image {
+            width: 0,
+            height: 0,
+            pixels: Vec::new(),
+        };
+        (empty(), empty(), Vec::new())
+    };
     let sample_count = film.count.iter().map(|&c| c as f32).collect();
     let mut stats = RenderStats::new(counters, start.elapsed().as_secs_f64());
     stats.features = scene.features.names();
