@@ -104,23 +104,29 @@ mod tests {
 
     #[test]
     fn a_film_larger_than_memory_is_refused_with_both_figures() {
-        // 8192^2 pixels need about 15 GB: refused on an 8 GB machine, accepted on 32 GB and
+        // 8192^2 pixels need about 7.2 GB: refused on a 4 GB machine, accepted on 8 GB and
         // where the memory is unknown.
         let pixels = 8192 * 8192;
         let film = FILM_BYTES_PER_PIXEL;
-        let err = check_film_memory(pixels, film, Some(8 << 30)).unwrap_err();
+        let err = check_film_memory(pixels, film, Some(4 << 30)).unwrap_err();
         assert!(err.contains("67108864 pixels"), "{err}");
-        assert!(err.contains("15.0 GB"), "{err}");
-        assert!(err.contains("8.6 GB"), "{err}");
-        assert!(check_film_memory(pixels, film, Some(32 << 30)).is_ok());
+        assert!(err.contains("7.2 GB"), "{err}");
+        assert!(err.contains("4.3 GB"), "{err}");
+        assert!(check_film_memory(pixels, film, Some(8 << 30)).is_ok());
         assert!(check_film_memory(pixels, film, None).is_ok());
         assert!(check_film_memory(u64::MAX, film, Some(1)).is_err());
-        // Adaptive with the unbiased rule: 336 bytes a pixel, 22.5 GB, over a 16 GB machine
-        // (17.2 GB) that holds the plain film.
+        // With the AOVs (220 bytes a pixel, 14.8 GB) and adaptive with the unbiased rule
+        // (192 bytes a pixel, 12.9 GB): over an 8 GB machine (8.6 GB) that holds the plain
+        // film.
+        let aovs = film + AOV_BYTES_PER_PIXEL;
+        let err = check_film_memory(pixels, aovs, Some(8 << 30)).unwrap_err();
+        assert!(
+            err.contains("220 bytes a pixel") && err.contains("14.8 GB"),
+            "{err}"
+        );
         let adaptive = film + ADAPTIVE_BYTES_PER_PIXEL + PILOT_BYTES_PER_PIXEL;
-        assert!(check_film_memory(pixels, film, Some(16 << 30)).is_ok());
-        let err = check_film_memory(pixels, adaptive, Some(16 << 30)).unwrap_err();
-        assert!(err.contains("336 bytes a pixel"), "{err}");
-        assert!(err.contains("22.5 GB"), "{err}");
+        let err = check_film_memory(pixels, adaptive, Some(8 << 30)).unwrap_err();
+        assert!(err.contains("192 bytes a pixel"), "{err}");
+        assert!(err.contains("12.9 GB"), "{err}");
     }
 }
