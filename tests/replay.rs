@@ -113,6 +113,50 @@ fn replay_records_volume_scatter_vertices_and_their_samples() {
     );
 }
 
+/// What the recorder sees of the shadow rays: in a scene of opaque surfaces each arrives
+/// whole or blocked (black), in the smoke some arrive attenuated by the medium. Counted over
+/// the nonzero contributions of the paths of a few pixels and samples, every kind the scene
+/// can have turns up.
+#[test]
+fn replay_records_what_shadow_rays_transmit() {
+    use risotto::components::Rgb;
+    for (path, medium) in [
+        ("scenes/cornell-box.toml", false),
+        ("scenes/smoke.toml", true),
+    ] {
+        let scene = load(path);
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let (mut whole, mut blocked, mut attenuated) = (0, 0, 0);
+        for (x, y) in [(w / 2, h / 2), (w / 4, 3 * h / 4), (3 * w / 4, h / 3)] {
+            for sample in 0..8 {
+                let r = replay(&scene, &RenderOptions::default(), x, y, sample).unwrap();
+                let records = r.trace.vertices.iter().flat_map(|v| &v.shadow_rays);
+                for s in records.filter(|s| s.unoccluded != Rgb::BLACK) {
+                    let (u, t) = (s.unoccluded, s.transmitted);
+                    if t == u {
+                        whole += 1;
+                    } else if t == Rgb::BLACK {
+                        blocked += 1;
+                    } else {
+                        attenuated += 1;
+                        assert!(t.r <= u.r && t.g <= u.g && t.b <= u.b, "{path}: {r}");
+                    }
+                }
+            }
+        }
+        assert!(whole > 0, "{path}: no shadow ray arrived whole");
+        if medium {
+            assert!(
+                attenuated > 0,
+                "{path}: no shadow ray attenuated by the smoke"
+            );
+        } else {
+            assert!(blocked > 0, "{path}: no shadow ray blocked");
+            assert_eq!(attenuated, 0, "{path}: opaque surfaces only attenuate");
+        }
+    }
+}
+
 #[test]
 fn replay_rejects_pixels_and_samples_outside_the_render() {
     let scene = load("scenes/cornell-box.toml");

@@ -17,7 +17,13 @@ use risotto_systems::terminator::terminator_lifts;
 /// the per-bounce path does not allocate.
 #[derive(Debug, Default)]
 pub struct HitScratch {
+    /// The hits of the last [`IntegratorContext::trace`] in the first `traced` rows. The
+    /// columns only grow: a batch's first bounce traces more rays than the last bounce of
+    /// the batch before, and rows kept from earlier calls spare writing defaults into rows
+    /// `intersect_closest` overwrites (it writes every row it is given).
     hits: Hits,
+    /// Rays of the last `trace` (rows of `hits` that are its answers).
+    traced: usize,
     /// Rays that hit a surface of material `m`, in ray order.
     buckets: Vec<Vec<u32>>,
     /// Rays that hit nothing.
@@ -225,10 +231,13 @@ impl IntegratorContext for RenderContext<'_> {
         let n = rays.len();
         let geometry = &self.scene.geometry;
         let hits = &mut self.scratch.hits;
-        hits.t.resize(n, 0.0);
-        hits.prim.resize(n, NO_HIT);
-        hits.b1.resize(n, 0.0);
-        hits.b2.resize(n, 0.0);
+        if hits.len() < n {
+            hits.t.resize(n, 0.0);
+            hits.prim.resize(n, NO_HIT);
+            hits.b1.resize(n, 0.0);
+            hits.b2.resize(n, 0.0);
+        }
+        self.scratch.traced = n;
         if n > 0 {
             self.stats.time(System::Intersect, n, || {
                 intersect_closest(
@@ -237,10 +246,10 @@ impl IntegratorContext for RenderContext<'_> {
                     &rays.direction,
                     &rays.tmin,
                     &rays.tmax,
-                    &mut hits.t,
-                    &mut hits.prim,
-                    &mut hits.b1,
-                    &mut hits.b2,
+                    &mut hits.t[..n],
+                    &mut hits.prim[..n],
+                    &mut hits.b1[..n],
+                    &mut hits.b2[..n],
                 )
             });
         }
@@ -254,6 +263,10 @@ impl IntegratorContext for RenderContext<'_> {
     }
 
     fn traced_surface(&self, rays: &Rays, i: usize) -> Option<SurfaceSample> {
+        assert!(
+            i < self.scratch.traced,
+            "traced_surface of a ray not traced"
+        );
         let h = &self.scratch.hits;
         if h.prim[i] == NO_HIT {
             return None;
@@ -272,8 +285,7 @@ impl IntegratorContext for RenderContext<'_> {
     fn shade_traced(&mut self, rays: &Rays, keep: Option<&[bool]>, out: &mut ShadeGroups) {
         let n = rays.len();
         assert_eq!(
-            self.scratch.hits.len(),
-            n,
+            self.scratch.traced, n,
             "shade_traced after trace of these rays"
         );
         if let Some(keep) = keep {
@@ -305,11 +317,12 @@ impl IntegratorContext for RenderContext<'_> {
         out.misses.extend_from_slice(&s.escaped);
         out.miss_transmission
             .extend_from_slice(&s.whites[..s.escaped.len()]);
-        // The shading points of all hits, in sorted order. The columns that vary per point are
-        // sized first (12-byte ones by copying from prepared constants: `Vec::resize` writes
-        // 12-byte values one at a time) and then written by index in passes over the sorted
-        // rays; the columns that are constant per group or copies of another column are
-        // filled in bulk afterwards.
+        // The shading points of all hits, in sorted order. The columns of `write_surfaces`
+        // and those only some points overwrite are sized first (12-byte ones by copying from
+        // prepared constants: `Vec::resize` writes 12-byte values one at a time) and then
+        // written by index in passes over the sorted rays; `write_ray_columns` appends the
+        // columns it computes for every point; the columns that are constant per group or
+        // copies of another column are filled in bulk afterwards.
         let base = out.points.len();
         let pts = &mut out.points;
         let end = base + count;
@@ -317,12 +330,8 @@ impl IntegratorContext for RenderContext<'_> {
         pts.ng.extend_from_slice(&s.zeros[..count]);
         pts.p_offset.resize(end, 0.0);
         pts.terminator_lift.extend_from_slice(&s.zeros[..count]);
-        pts.vn.extend_from_slice(&s.zeros[..count]);
-        pts.vlen.resize(end, 0.0);
         pts.u.resize(end, 0.0);
         pts.v.resize(end, 0.0);
-        pts.shape.resize(end, 0);
-        pts.front_face.resize(end, false);
         // Vacuum unless the ray travels inside volumes (`write_ray_columns`).
         pts.ior_outside.resize(end, 1.0);
         let sorted = &s.sorted[..count];
@@ -574,8 +583,10 @@ fn write_mesh_attributes(
     }
 }
 
-/// Pass 2 (after [`write_surfaces`], it reads `ng`): `vn`, `vlen`, `front_face`, `shape`,
-/// `ior_outside`.
+/// Pass 2 (after [`write_surfaces`], it reads `ng`): appends `vn`, `vlen`, `front_face` and
+/// `shape`, and writes `ior_outside` (sized by the caller). Every point gets a value of the
+/// appended columns, so they are appended (one loop per column, each a few pointers) rather
+/// than sized with defaults first and written by index.
 #[inline(never)]
 fn write_ray_columns(
     scene: &CompiledScene,
@@ -586,31 +597,29 @@ fn write_ray_columns(
     base: usize,
 ) {
     let (n, count) = (hits.len(), sorted.len());
-    let (ng, vn, vlen) = (
-        &pts.ng[base..][..count],
-        &mut pts.vn[base..][..count],
-        &mut pts.vlen[base..][..count],
-    );
-    let (shape, front_face, ior) = (
-        &mut pts.shape[base..][..count],
-        &mut pts.front_face[base..][..count],
-        &mut pts.ior_outside[base..][..count],
-    );
     let (prims, t) = (&hits.prim[..n], &hits.t[..n]);
-    let (direction, stacks) = (&rays.direction[..n], &rays.volume_stack[..n]);
+    let (direction, stacks) = (
+        &rays.direction[..rays.len()],
+        &rays.volume_stack[..rays.len()],
+    );
+    pts.vn
+        .extend(sorted.iter().map(|&i| -direction[i as usize]));
+    pts.vlen.extend(sorted.iter().map(|&i| t[i as usize]));
+    // `d.dot(ng) < 0` with the ray's direction `d = -vn` (negation is exact).
+    let (ng, vn) = (&pts.ng[base..][..count], &pts.vn[base..][..count]);
+    (pts.front_face).extend(vn.iter().zip(ng).map(|(&vn, &ng)| (-vn).dot(ng) < 0.0));
     let prim_shape = &scene.prim_shape[..];
-    for k in 0..count {
-        let i = sorted[k] as usize;
-        let d = direction[i];
-        vn[k] = -d;
-        vlen[k] = t[i];
-        front_face[k] = d.dot(ng[k]) < 0.0;
-        let prim = prims[i];
-        shape[k] = match prim_shape.get(prim as usize) {
+    pts.shape.extend(sorted.iter().map(|&i| {
+        let prim = prims[i as usize];
+        match prim_shape.get(prim as usize) {
             Some(&s) => s,
             None => scene.shape_of_prim(prim),
-        };
-    }
+        }
+    }));
+    let (shape, ior) = (
+        &pts.shape[base..][..count],
+        &mut pts.ior_outside[base..][..count],
+    );
     // Stacks get entries only in scenes with volumes, transmissive materials or a camera
     // inside a shape (only such shapes are tracked, `CompiledScene::tracks_interior`);
     // elsewhere the stack column is not read at all.

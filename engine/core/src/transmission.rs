@@ -75,6 +75,39 @@ pub fn trace_shadow_rays(
     );
 }
 
+/// Whether every surface of `scene` blocks shadow rays and nothing between surfaces
+/// attenuates them (no volumes, no surfaces that let shadows pass or have opacity): a shadow
+/// ray's contribution then arrives whole or not at all ([`block_occluded`]).
+pub(crate) fn shadows_only_blocked(scene: &CompiledScene) -> bool {
+    let f = scene.features;
+    !f.volumes && !f.transmission_shadows && !f.transmissive && !f.opacity
+}
+
+/// The walk of shadow rays in a scene where [`shadows_only_blocked`]: a single any-hit query
+/// per ray `(origin, direction, tmax)` (counted as `occlusion`, so the stats show which path
+/// shadow rays took), and the contribution of each ray that hits something set to black.
+/// Nothing becomes non-finite.
+pub(crate) fn block_occluded(
+    scene: &CompiledScene,
+    (origin, direction, tmax): (&[Vec3], &[Vec3], &[f32]),
+    contribution: &mut [Rgb],
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
+    let n = origin.len();
+    // Scratch from the batch arena (reset after each batch): no heap traffic per bounce.
+    let occluded = arena.alloc_slice_fill_copy(n, false);
+    let tmin = arena.alloc_slice_fill_copy(n, 0.0f32);
+    stats.time(System::Occlusion, n, || {
+        intersect_occluded(&scene.geometry, origin, direction, tmin, tmax, occluded)
+    });
+    for (c, &occluded) in contribution[..n].iter_mut().zip(&*occluded) {
+        if occluded {
+            *c = Rgb::BLACK;
+        }
+    }
+}
+
 /// [`trace_shadow_rays`], adding the emission of the volumes `gather` names, with the walk's
 /// buffers in `scratch`.
 #[allow(clippy::too_many_arguments, reason = "the stage's inputs, named")]
@@ -91,27 +124,9 @@ pub fn trace_shadow_rays_with(
 ) {
     let n = shadow.len();
     let f = scene.features;
-    if !f.volumes && !f.transmission_shadows && !f.transmissive && !f.opacity {
-        // Fast path: opaque surfaces only, a single any-hit query per ray (counted as
-        // `occlusion`, so the stats show which path shadow rays took).
-        // Scratch from the batch arena (reset after each batch): no heap traffic per bounce.
-        let occluded = arena.alloc_slice_fill_copy(n, false);
-        let tmin = arena.alloc_slice_fill_copy(n, 0.0f32);
-        stats.time(System::Occlusion, n, || {
-            intersect_occluded(
-                &scene.geometry,
-                &shadow.origin,
-                &shadow.direction,
-                tmin,
-                &shadow.tmax,
-                occluded,
-            )
-        });
-        for i in 0..n {
-            if occluded[i] {
-                contribution[i] = Rgb::BLACK;
-            }
-        }
+    if shadows_only_blocked(scene) {
+        let rays = (&shadow.origin[..], &shadow.direction[..], &shadow.tmax[..]);
+        block_occluded(scene, rays, contribution, stats, arena);
         return;
     }
 

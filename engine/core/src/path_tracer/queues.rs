@@ -69,7 +69,9 @@ pub struct ShadowRayQueue {
     /// Storage for the shade stage's rows: the dead rows of the last transmission stage,
     /// overwritten (`ShadowRays::reuse_rows`) and then moved to `rays`.
     pub spare: ShadowRays,
-    /// Contributions after transmission (parallel to `rays`).
+    /// The walk's copy of the contributions in scenes where shadow rays may pass surfaces
+    /// or cross volumes (the transmission stage then swaps it into `rays`: the contributions
+    /// after transmission are those of the dead rows of `spare` until the next shade stage).
     pub contribution: Vec<Rgb>,
     /// The transmission walk's buffers.
     pub walk: crate::transmission::ShadowWalkScratch,

@@ -248,7 +248,9 @@ impl Recorder {
             .into_iter()
             .find(|&t| stats.terminated[t as usize] > self.terminated_before[t as usize]);
         let transmitted = if shadow_rays == self.shadow.len() {
-            &q.shadow.contribution[..shadow_rays.min(q.shadow.contribution.len())]
+            // The traced table is the spare now, its contributions transmitted.
+            let traced = &q.shadow.spare.contribution;
+            &traced[..shadow_rays.min(traced.len())]
         } else {
             &[]
         };

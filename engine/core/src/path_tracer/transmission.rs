@@ -7,6 +7,7 @@ use super::queues::ShadowRayQueue;
 use crate::integrator::PathBatch;
 use crate::scene::CompiledScene;
 use crate::stats::{Stage, System, SystemStats};
+use crate::transmission::block_occluded;
 use bumpalo::Bump;
 use risotto_components::Rays;
 
@@ -27,6 +28,39 @@ pub(super) fn shadow_rays(
         return;
     }
     let start = std::time::Instant::now();
+    if crate::transmission::shadows_only_blocked(scene) {
+        // Each contribution arrives whole or is blocked: attenuated in place, without the
+        // copy the general walk below keeps for NaN provenance (blocking makes nothing
+        // non-finite).
+        let rays = &mut shadow.rays;
+        let geometry = (&rays.origin[..], &rays.direction[..], &rays.tmax[..]);
+        let contribution = &mut rays.contribution[..];
+        block_occluded(scene, geometry, contribution, stats, arena);
+        for (&path, &c) in rays.path.iter().zip(&rays.contribution) {
+            batch.paths.radiance[path as usize] += c;
+        }
+    } else {
+        walk_shadow_rays(scene, volume, shadow, incoming, batch, stats, arena);
+    }
+    stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
+    // Keep the dead rows as storage for the next shade stage's shadow rays (until then they
+    // hold the contributions after transmission, which the path-trace recorder reads).
+    std::mem::swap(&mut shadow.rays, &mut shadow.spare);
+    shadow.rays.clear();
+}
+
+/// The transmission stage in scenes where shadow rays may pass surfaces or cross volumes:
+/// the walk attenuates a copy of the contributions (`shadow.contribution`), which then
+/// replaces them in `shadow.rays`.
+fn walk_shadow_rays(
+    scene: &CompiledScene,
+    volume: crate::plugin::PluginTechniques,
+    shadow: &mut ShadowRayQueue,
+    incoming: &Rays,
+    batch: &mut PathBatch,
+    stats: &mut SystemStats,
+    arena: &Bump,
+) {
     shadow.contribution.clear();
     shadow
         .contribution
@@ -78,8 +112,6 @@ pub(super) fn shadow_rays(
             }
         }
     }
-    stats.record(System::Transmission, n, start.elapsed().as_secs_f64());
-    // Keep the dead rows as storage for the next shade stage's shadow rays.
-    std::mem::swap(&mut shadow.rays, &mut shadow.spare);
-    shadow.rays.clear();
+    // The same length: the table stays consistent.
+    std::mem::swap(&mut shadow.contribution, &mut shadow.rays.contribution);
 }
