@@ -30,9 +30,11 @@ pub use crate::primitive::{
 };
 
 mod instances;
+mod surfaces;
 pub use crate::triangle_mesh::{TriangleMesh, TriangleSet};
 pub(crate) use instances::ray_to_object;
 pub use instances::Instance;
+pub use surfaces::SurfaceColumns;
 
 /// All primitives of a compiled scene and the BVH over them.
 ///

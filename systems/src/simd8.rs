@@ -89,6 +89,9 @@ pub(crate) trait Simd: Copy {
     fn load(self, r: &Row8) -> Self::F;
     /// The x, y and z coordinates of eight points, as three rows (lane `l` point `l`).
     fn load_xyz(self, v: &[Vec3; 8]) -> [Self::F; 3];
+    /// The inverse of [`Self::load_xyz`]: point `l` of `out` made of lane `l` of the
+    /// three rows.
+    fn store_xyz(self, xyz: [Self::F; 3], out: &mut [Vec3; 8]);
     /// Lane `l` is `table.0[index[l]]`, with every lane of `index` one of the whole
     /// numbers `0..8`.
     fn lookup(self, table: &Row8, index: Self::F) -> Self::F;
@@ -126,6 +129,13 @@ impl Simd for Portable {
             ])
         };
         [row(0), row(1), row(2)]
+    }
+    #[inline(always)]
+    fn store_xyz(self, [x, y, z]: [P8; 3], out: &mut [Vec3; 8]) {
+        let (x, y, z) = (x.to_array(), y.to_array(), z.to_array());
+        for l in 0..8 {
+            out[l] = Vec3::new(x[l], y[l], z[l]);
+        }
     }
     #[inline(always)]
     fn lookup(self, table: &Row8, index: P8) -> P8 {

@@ -7,7 +7,7 @@ use crate::shade_groups::{ShadeGroup, ShadeGroups, ShadingMode};
 use crate::stats::{System, SystemStats, VolumeEvent};
 use glam::Vec3;
 use risotto_components::{Hits, Rays, Rgb, ShadingPoints, VolumeStack, NO_HIT};
-use risotto_systems::geometry::{SceneGeometry, SurfaceSample};
+use risotto_systems::geometry::{SceneGeometry, SurfaceColumns, SurfaceSample};
 use risotto_systems::intersect::intersect_closest;
 use risotto_systems::lights::LightSet;
 use risotto_systems::mesh_attributes::{arbitrary_tangent, sphere_tangent};
@@ -464,20 +464,15 @@ fn write_surfaces(
     let (u, v) = (&mut pts.u[base..][..count], &mut pts.v[base..][..count]);
     let (prims, b1, b2) = (&hits.prim[..n], &hits.b1[..n], &hits.b2[..n]);
     let triangles = geometry.triangles();
-    let mut spheres = false;
-    for k in 0..count {
-        let i = sorted[k] as usize;
-        if let Some(surf) = triangles.surface_at(prims[i], b1[i], b2[i]) {
-            p[k] = surf.p;
-            ng[k] = surf.ng;
-            p_offset[k] = surf.offset();
-            u[k] = surf.uv.x;
-            v[k] = surf.uv.y;
-        } else {
-            spheres = true;
-        }
-    }
-    if spheres {
+    // Triangles eight at a time; spheres and instances' primitives are left to the loop below.
+    let out = SurfaceColumns {
+        p: &mut *p,
+        ng: &mut *ng,
+        p_offset: &mut *p_offset,
+        u: &mut *u,
+        v: &mut *v,
+    };
+    if triangles.write_surfaces(sorted, prims, b1, b2, out) {
         for (k, &i) in sorted.iter().enumerate() {
             let i = i as usize;
             if triangles.surface_at(prims[i], b1[i], b2[i]).is_none() {

@@ -102,6 +102,36 @@ impl Simd for Avx2 {
         ]
     }
     #[inline(always)]
+    fn store_xyz(self, [x, y, z]: [A8; 3], out: &mut [Vec3; 8]) {
+        // `load_xyz` backwards: each coordinate permuted so that its lanes for `m0`, `m1`
+        // and `m2` (x: points 0-2, 3-5, 6-7) sit where those rows hold that coordinate
+        // (x: m0 {0, 3, 6}, m1 {1, 4, 7}, m2 {2, 5}), then two blends per row.
+        let px = permute(x.0, [0, 3, 6, 1, 4, 7, 2, 5]);
+        let py = permute(y.0, [5, 0, 3, 6, 1, 4, 7, 2]);
+        let pz = permute(z.0, [2, 5, 0, 3, 6, 1, 4, 7]);
+        let m0 = avx!(_mm256_blend_ps::<0b0010_0100>(
+            _mm256_blend_ps::<0b1001_0010>(px, py),
+            pz
+        ));
+        let m1 = avx!(_mm256_blend_ps::<0b0100_1001>(
+            _mm256_blend_ps::<0b0010_0100>(px, py),
+            pz
+        ));
+        let m2 = avx!(_mm256_blend_ps::<0b1001_0010>(
+            _mm256_blend_ps::<0b0100_1001>(px, py),
+            pz
+        ));
+        let p = out.as_mut_ptr().cast::<f32>();
+        // SAFETY: `Vec3` is `#[repr(C)]` with three `f32` fields and no padding (12
+        // bytes), so `out` is 24 contiguous writable `f32`: the stores write floats 0..8,
+        // 8..16 and 16..24 (unaligned stores); the token guarantees AVX.
+        unsafe {
+            _mm256_storeu_ps(p, m0);
+            _mm256_storeu_ps(p.add(8), m1);
+            _mm256_storeu_ps(p.add(16), m2);
+        }
+    }
+    #[inline(always)]
     fn lookup(self, table: &Row8, index: A8) -> A8 {
         let index = avx!(_mm256_cvttps_epi32(index.0));
         A8(avx!(_mm256_permutevar8x32_ps(self.load(table).0, index)))
@@ -121,6 +151,16 @@ fn gather<const FROM1: i32, const FROM2: i32>(
     let [a, b, c, d, e, f, g, h] = order;
     avx!(_mm256_permutevar8x32_ps(
         _mm256_blend_ps::<FROM2>(_mm256_blend_ps::<FROM1>(m0, m1), m2),
+        _mm256_setr_epi32(a, b, c, d, e, f, g, h)
+    ))
+}
+
+/// Lane `order[i]` of `v` moved to lane `i`.
+#[inline(always)]
+fn permute(v: __m256, order: [i32; 8]) -> __m256 {
+    let [a, b, c, d, e, f, g, h] = order;
+    avx!(_mm256_permutevar8x32_ps(
+        v,
         _mm256_setr_epi32(a, b, c, d, e, f, g, h)
     ))
 }
