@@ -201,6 +201,34 @@ pub fn spawn_shadow_rays(
     count
 }
 
+/// The number of rows `k` with `active[k]` whose `c[k]` or `x[k]` is not finite (NaN or
+/// infinite): the non-finite count of a stage's outputs (a Bxdf's value and pdf, a light
+/// sample's radiance and pdf). Non-finite values are rare, so a branch-free pass first asks
+/// whether every value of the columns, active or not, is finite (`|v| < inf`, false for NaN:
+/// `f32::is_finite`), four rows (sixteen values) in four `Vec4` compares; only when one is
+/// not are the rows counted one by one.
+pub fn non_finite_rows(active: &[bool], c: &[Rgb], x: &[f32]) -> usize {
+    let m = active.len();
+    let (c, x) = (&c[..m], &x[..m]);
+    let (c4, c_rest) = c.as_chunks::<4>();
+    let (x4, x_rest) = x.as_chunks::<4>();
+    let mut finite = BVec4A::splat(true);
+    for (c, x) in c4.iter().zip(x4) {
+        let c = c.map(Rgb::to_array);
+        let (c, _) = c.as_flattened().as_chunks::<4>();
+        for v in [c[0], c[1], c[2], *x] {
+            finite &= Vec4::from_array(v).is_finite_mask();
+        }
+    }
+    let rest = c_rest.iter().zip(x_rest);
+    if finite.all() && rest.fold(true, |f, (c, x)| f & c.is_finite() & x.is_finite()) {
+        return 0;
+    }
+    (0..m)
+        .filter(|&k| active[k] & !(c[k].is_finite() & x[k].is_finite()))
+        .count()
+}
+
 /// `c.is_black()` without a branch per channel.
 #[inline]
 pub fn is_black(c: Rgb) -> bool {
@@ -210,6 +238,43 @@ pub fn is_black(c: Rgb) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn non_finite_rows_counts_the_active_rows_with_a_non_finite_value() {
+        // Eleven rows (two blocks of four and a rest of three); one non-finite value at a
+        // time in each of the four values of each row, active or not.
+        let n = 11;
+        let active: Vec<bool> = (0..n).map(|k| k % 3 != 1).collect();
+        let c0: Vec<Rgb> = (0..n)
+            .map(|k| Rgb::new(k as f32, -1e38, f32::MAX))
+            .collect();
+        let x0: Vec<f32> = (0..n).map(|k| 0.5 - k as f32).collect();
+        assert_eq!(non_finite_rows(&active, &c0, &x0), 0);
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for k in 0..n {
+                for value in 0..4 {
+                    let (mut c, mut x) = (c0.clone(), x0.clone());
+                    match value {
+                        0 => c[k].r = bad,
+                        1 => c[k].g = bad,
+                        2 => c[k].b = bad,
+                        _ => x[k] = bad,
+                    }
+                    let expected = active[k] as usize;
+                    assert_eq!(
+                        non_finite_rows(&active, &c, &x),
+                        expected,
+                        "row {k} {value}"
+                    );
+                }
+            }
+        }
+        // Several rows at once (row 10 inactive).
+        let (mut c, mut x) = (c0.clone(), x0.clone());
+        (c[0].g, x[2], c[9].b, x[10]) = (f32::NAN, f32::INFINITY, f32::NAN, f32::NAN);
+        assert_eq!(non_finite_rows(&active, &c, &x), 3);
+        assert_eq!(non_finite_rows(&[true; 3], &c, &x), 2);
+    }
 
     #[test]
     fn light_weights_match_the_scalar_formula() {

@@ -25,7 +25,9 @@ use crate::scene::CompiledScene;
 use crate::stats::{Stage, System, SystemStats, VolumeEvent};
 use glam::Vec3;
 use risotto_components::{Paths, Rays, Rgb, ShadowRayColumns, ShadowRays};
-use risotto_systems::direct_lighting::{spawn_shadow_rays, LightColumns, LightMis};
+use risotto_systems::direct_lighting::{
+    non_finite_rows, spawn_shadow_rays, LightColumns, LightMis,
+};
 use risotto_systems::lights::{LightSampleColumns, LightSet};
 use risotto_systems::path::Vertices;
 use risotto_systems::sampler::PathSampler;
@@ -116,11 +118,8 @@ pub(super) fn sample_lights(
     let bxdf_bad = |k: usize| active[k] & !(value[k].is_finite() & pdf[k].is_finite());
     let light_bad =
         |k: usize| active[k] & !(light.radiance[k].is_finite() & light.pdf[k].is_finite());
-    let (mut bad_bxdf, mut bad_light) = (0, 0);
-    for k in 0..m {
-        bad_bxdf += bxdf_bad(k) as usize;
-        bad_light += light_bad(k) as usize;
-    }
+    let bad_bxdf = non_finite_rows(active, value, pdf);
+    let bad_light = non_finite_rows(active, light.radiance, light.pdf);
     let stage = if vertices.on_surface {
         Stage::Bxdf
     } else {
